@@ -1,0 +1,1 @@
+//! IEC 104 stations.
