@@ -230,7 +230,8 @@ impl Asdu {
     /// [`AsduError::ObjectCountMismatch`] when the payload is shorter than the VSQ count
     /// needs, [`AsduError::TrailingBytes`] when it is longer, [`AsduError::IoaOverflow`]
     /// for SQ = 1 running past the address range, [`AsduError::Time`] for time fields out
-    /// of range.
+    /// of range. The link's [`AsduParams::max_asdu_len`] is not enforced here (the
+    /// framing layer bounds what arrives); [`Asdu::encode`] enforces it.
     pub fn decode(bytes: &[u8], params: &AsduParams) -> Result<Asdu, AsduError> {
         let header = AsduHeader::decode(bytes, params)?;
         let header_len = params.header_len();

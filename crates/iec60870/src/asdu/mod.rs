@@ -34,6 +34,42 @@
 //!
 //! Nothing here panics on peer input: every read is bounds-checked and returns
 //! [`AsduError`].
+//!
+//! # Example
+//!
+//! ```
+//! use iec60870::asdu::*;
+//!
+//! // A double command ON to IOA 2100, activation, common address 1 (IEC 104 sizes).
+//! let bytes = [0x2E, 0x01, 0x06, 0x00, 0x01, 0x00, 0x34, 0x08, 0x00, 0x02];
+//! let params = AsduParams::IEC104;
+//! let command = Asdu::decode(&bytes, &params)?;
+//! assert_eq!(command.type_id, TypeId::C_DC_NA_1);
+//! assert_eq!(command.cot.cause, Cause::ACTIVATION);
+//! let object = command.objects.first().expect("one object");
+//! assert_eq!(object.ioa.get(), 2100);
+//! assert!(matches!(
+//!     object.element,
+//!     Element::DoubleCommand { state: DoublePointState::On, .. }
+//! ));
+//!
+//! // Confirm it by mirroring the request with COT 7.
+//! let confirmation = mirror_with_cause(&bytes, &params, Cause::ACTIVATION_CON, false)?;
+//! assert_eq!(confirmation[2], 7);
+//!
+//! // Build and encode the resulting indication.
+//! let time = Cp56Time2a::new(17, 4, 26, 9, 59, 30_424)?;
+//! let event = Asdu::new(TypeId::M_DP_TB_1, Cause::RETURN_REMOTE, CommonAddress::new(1))
+//!     .with_object(InformationObject::with_time(
+//!         Ioa::from(2000u16),
+//!         Element::DoublePoint { state: DoublePointState::On, quality: Quality::GOOD },
+//!         time,
+//!     ));
+//! let mut out = Vec::new();
+//! event.encode(&params, &mut out)?;
+//! assert_eq!(out.len(), 17);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 mod address;
 mod cause;
