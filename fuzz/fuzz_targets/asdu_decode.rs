@@ -29,7 +29,10 @@ fn check(data: &[u8], params: &AsduParams) {
     let _ = asdu.to_string();
     if data.len() > params.max_asdu_len() {
         // Decoding is lenient about the link's maximum, encoding is not.
-        assert!(matches!(asdu.to_bytes(params), Err(AsduError::TooLong { .. })));
+        assert!(matches!(
+            asdu.to_bytes(params),
+            Err(AsduError::TooLong { .. })
+        ));
         return;
     }
     let first = asdu.to_bytes(params).expect("a decoded ASDU re-encodes");
