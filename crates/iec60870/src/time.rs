@@ -103,6 +103,25 @@ pub struct Cp56Time2a {
     substituted: bool,
 }
 
+/// 2000-01-01 00:00:00.000 with IV set: a tag that says it is not a valid time, for
+/// when no real time can be given (a host clock outside 2000..=2099).
+impl Default for Cp56Time2a {
+    fn default() -> Self {
+        Self {
+            millisecond: 0,
+            minute: 0,
+            hour: 0,
+            day: 1,
+            day_of_week: 0,
+            month: 1,
+            year: 0,
+            invalid: true,
+            summer_time: false,
+            substituted: false,
+        }
+    }
+}
+
 impl Cp56Time2a {
     /// Octets on the wire.
     pub const LEN: usize = 7;

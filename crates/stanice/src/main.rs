@@ -1,1 +1,69 @@
-fn main(){}
+//! `stanice`: the command-line tool of the Stanice telecontrol platform.
+//!
+//! One binary, one subcommand per capability:
+//! - `stanice iec104 ...`: the IEC 60870-5-104 test tool (outstation, client, single
+//!   commands, frame decoder), what CPTT and QTester104 do for commissioning engineers.
+//! - `stanice demo`: runs the railway-station demo.
+
+mod demo;
+mod iec104;
+
+use clap::{Parser, Subcommand};
+use tracing_subscriber::EnvFilter;
+
+#[derive(Parser)]
+#[command(
+    name = "stanice",
+    version,
+    about = "Stanice telecontrol and SCADA platform"
+)]
+struct Cli {
+    /// Log filter (tracing syntax, e.g. `info`, `iec60870=debug`); also `RUST_LOG`.
+    #[arg(long, global = true)]
+    log: Option<String>,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// IEC 60870-5-104 test tool: outstation, client, commands, decoder.
+    #[command(subcommand)]
+    Iec104(iec104::Iec104Command),
+    /// Run the railway-station demo.
+    Demo(demo::DemoArgs),
+}
+
+fn main() -> std::process::ExitCode {
+    let cli = Cli::parse();
+    let filter = cli.log.clone().map(EnvFilter::new).unwrap_or_else(|| {
+        EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new("warn"))
+    });
+    tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .init();
+    let runtime = match tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()
+    {
+        Ok(runtime) => runtime,
+        Err(error) => {
+            eprintln!("error: cannot start the async runtime: {error}");
+            return std::process::ExitCode::FAILURE;
+        }
+    };
+    let result = runtime.block_on(async {
+        match cli.command {
+            Command::Iec104(command) => iec104::run(command).await,
+            Command::Demo(args) => demo::run(args).await,
+        }
+    });
+    match result {
+        Ok(code) => code,
+        Err(error) => {
+            eprintln!("error: {error:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}

@@ -1,7 +1,10 @@
 //! IEC 104 stations.
 
+pub mod client;
 pub mod config;
+pub mod server;
 pub mod session;
+pub mod tls;
 
 pub use config::{ApciConfig, ConfigError, ConfigWarning};
 pub use session::{

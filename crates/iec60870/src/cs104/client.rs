@@ -1,0 +1,724 @@
+//! The IEC 104 controlling station (client).
+//!
+//! [`spawn_client`] starts a task that connects (trying each configured address in turn,
+//! with exponential back-off between rounds), completes the TLS handshake if configured,
+//! starts data transfer, optionally sends a general interrogation and a clock
+//! synchronisation, and then hands every received ASDU to the application as a
+//! [`ClientEvent`]. A [`ClientHandle`] sends requests; commands resolve when their
+//! confirmation (and, where the standard has one, their termination) arrives, or time out.
+//!
+//! ```text
+//! ClientHandle ──mpsc──> client task ── Session ── TCP/TLS ── server
+//!      ^  oneshot reply       │
+//!      └──────────────────────┘──> mpsc<ClientEvent> ──> application
+//! ```
+
+use std::collections::VecDeque;
+use std::net::SocketAddr;
+use std::sync::Arc;
+use std::time::Duration;
+
+use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt};
+use tokio::net::TcpStream;
+use tokio::sync::{mpsc, oneshot};
+use tokio_rustls::rustls::pki_types::ServerName;
+
+use crate::asdu::{
+    Asdu, AsduParams, Cause, CommonAddress, Cot, Element, InformationObject, Ioa, TypeId,
+};
+use crate::cs104::config::ApciConfig;
+use crate::cs104::session::{Role, Session, SessionEvent, SessionState};
+use crate::time::Cp56Time2a;
+
+/// Configuration of a client.
+#[derive(Debug, Clone)]
+#[non_exhaustive]
+pub struct ClientConfig {
+    /// Server addresses (`host:port`), tried in order: the first is the main one, the
+    /// others alternates.
+    pub addresses: Vec<String>,
+    /// The station's common address (for interrogation, clock sync and commands).
+    pub common_address: CommonAddress,
+    /// Our originator address (0 when unused).
+    pub originator: u8,
+    /// APCI parameters (k, w, t0..t3).
+    pub apci: ApciConfig,
+    /// ASDU field sizes.
+    pub asdu: AsduParams,
+    /// Send a station interrogation after each start of data transfer.
+    pub interrogate_on_start: bool,
+    /// Send a clock synchronisation (the host's UTC time) after each start.
+    pub clock_sync_on_start: bool,
+    /// Connect again after a connection is lost or refused.
+    pub reconnect: bool,
+    /// Back-off after the first failed round of addresses; doubles each round.
+    pub reconnect_delay: Duration,
+    /// Back-off ceiling.
+    pub reconnect_delay_max: Duration,
+    /// How long a command waits for its confirmation, and again for its termination.
+    pub command_timeout: Duration,
+    /// Received events the application may fall behind by before the client stops
+    /// reading the socket (TCP then slows the server down).
+    pub event_capacity: usize,
+    /// TLS (IEC 62351-3): client configuration and the server's name in its certificate.
+    pub tls: Option<(Arc<tokio_rustls::rustls::ClientConfig>, ServerName<'static>)>,
+}
+
+impl ClientConfig {
+    /// A configuration with the standard's defaults for one server.
+    pub fn new(address: impl Into<String>, common_address: CommonAddress) -> Self {
+        Self {
+            addresses: vec![address.into()],
+            common_address,
+            originator: 0,
+            apci: ApciConfig::default(),
+            asdu: AsduParams::IEC104,
+            interrogate_on_start: false,
+            clock_sync_on_start: false,
+            reconnect: true,
+            reconnect_delay: Duration::from_millis(500),
+            reconnect_delay_max: Duration::from_secs(30),
+            command_timeout: Duration::from_secs(10),
+            event_capacity: 10_000,
+            tls: None,
+        }
+    }
+}
+
+/// What the client tells the application.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ClientEvent {
+    /// A TCP (and TLS) connection to a server is up.
+    Connected {
+        /// The server's address.
+        peer: SocketAddr,
+    },
+    /// The server confirmed STARTDT: data flows.
+    Started,
+    /// An ASDU from the server (data, confirmations, terminations).
+    Asdu(Asdu),
+    /// An ASDU that could not be decoded, with the reason; shown rather than hidden, as
+    /// a test tool must.
+    Undecodable {
+        /// Why it could not be decoded.
+        error: String,
+        /// Its bytes.
+        raw: Vec<u8>,
+    },
+    /// The connection ended.
+    Disconnected {
+        /// Why.
+        reason: String,
+    },
+}
+
+/// Why a request failed.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum ClientError {
+    /// No started connection.
+    #[error("not connected (no started connection to the server)")]
+    NotConnected,
+    /// The connection ended before the request finished.
+    #[error("connection lost before the request finished")]
+    Disconnected,
+    /// The confirmation or termination did not arrive in time.
+    #[error("timed out waiting for {0}")]
+    Timeout(&'static str),
+    /// A request of the same type to the same address is still open.
+    #[error("a request of this type to this address is still open")]
+    Busy,
+    /// The request could not be encoded.
+    #[error("cannot encode the request: {0}")]
+    Encode(String),
+    /// The client task has ended.
+    #[error("the client has stopped")]
+    Stopped,
+}
+
+/// The confirmation a request received.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RequestOutcome {
+    /// The server confirmed positively (P/N = 0).
+    pub positive: bool,
+    /// The cause of the confirmation (7 actcon, 9 deactcon, or 44..47 for refusals).
+    pub cause: Cause,
+    /// An activation termination arrived (commands, interrogations).
+    pub terminated: bool,
+    /// Every ASDU of the exchange as received (confirmation, termination), in order.
+    pub responses: Vec<Asdu>,
+}
+
+enum Request {
+    Exchange {
+        asdu: Asdu,
+        reply: oneshot::Sender<Result<RequestOutcome, ClientError>>,
+    },
+    Close,
+}
+
+/// Sends requests to a running client. Cloning is cheap.
+#[derive(Debug, Clone)]
+pub struct ClientHandle {
+    requests: mpsc::Sender<Request>,
+    common_address: CommonAddress,
+    originator: u8,
+}
+
+/// Starts a client on the current tokio runtime. Returns the handle and the stream of
+/// events; the client stops when [`ClientHandle::close`] is called or every handle is
+/// dropped.
+pub fn spawn_client(config: ClientConfig) -> (ClientHandle, mpsc::Receiver<ClientEvent>) {
+    let (requests_tx, requests_rx) = mpsc::channel(64);
+    let (events_tx, events_rx) = mpsc::channel(config.event_capacity.max(16));
+    let handle = ClientHandle {
+        requests: requests_tx,
+        common_address: config.common_address,
+        originator: config.originator,
+    };
+    tokio::spawn(run(config, requests_rx, events_tx));
+    (handle, events_rx)
+}
+
+impl ClientHandle {
+    async fn exchange(&self, asdu: Asdu) -> Result<RequestOutcome, ClientError> {
+        let (reply, answer) = oneshot::channel();
+        self.requests
+            .send(Request::Exchange { asdu, reply })
+            .await
+            .map_err(|_| ClientError::Stopped)?;
+        answer.await.map_err(|_| ClientError::Stopped)?
+    }
+
+    fn request(&self, type_id: TypeId, cause: Cause, object: InformationObject) -> Asdu {
+        let mut cot = Cot::new(cause);
+        cot.originator = self.originator;
+        let mut asdu = Asdu::new(type_id, cot, self.common_address);
+        asdu.objects.push(object);
+        asdu
+    }
+
+    /// Sends a command (types 45..=64) and waits for its confirmation and, for an
+    /// executed (not select) command confirmed positively, its termination.
+    pub async fn command(
+        &self,
+        type_id: TypeId,
+        ioa: Ioa,
+        element: Element,
+        time: Option<Cp56Time2a>,
+    ) -> Result<RequestOutcome, ClientError> {
+        let object = InformationObject {
+            ioa,
+            element,
+            time: time.map(crate::asdu::TimeTag::Cp56),
+        };
+        self.exchange(self.request(type_id, Cause::ACTIVATION, object))
+            .await
+    }
+
+    /// Sends a general interrogation (qualifier 20 = station, 21..=36 = group 1..=16)
+    /// and waits for its termination. The data arrive as [`ClientEvent::Asdu`].
+    pub async fn interrogate(&self, qualifier: u8) -> Result<RequestOutcome, ClientError> {
+        let object = InformationObject {
+            ioa: Ioa::default(),
+            element: Element::Interrogation { qualifier },
+            time: None,
+        };
+        self.exchange(self.request(TypeId::C_IC_NA_1, Cause::ACTIVATION, object))
+            .await
+    }
+
+    /// Sends a counter interrogation (request 1..=4 group, 5 general; freeze 0..=3).
+    pub async fn interrogate_counters(
+        &self,
+        request: u8,
+        freeze: u8,
+    ) -> Result<RequestOutcome, ClientError> {
+        let object = InformationObject {
+            ioa: Ioa::default(),
+            element: Element::CounterInterrogation { request, freeze },
+            time: None,
+        };
+        self.exchange(self.request(TypeId::C_CI_NA_1, Cause::ACTIVATION, object))
+            .await
+    }
+
+    /// Synchronises the server's clock.
+    pub async fn clock_sync(&self, time: Cp56Time2a) -> Result<RequestOutcome, ClientError> {
+        let object = InformationObject {
+            ioa: Ioa::default(),
+            element: Element::ClockSync { time },
+            time: None,
+        };
+        self.exchange(self.request(TypeId::C_CS_NA_1, Cause::ACTIVATION, object))
+            .await
+    }
+
+    /// Sends a test command with time tag (C_TS_TA_1).
+    pub async fn test(
+        &self,
+        counter: u16,
+        time: Cp56Time2a,
+    ) -> Result<RequestOutcome, ClientError> {
+        let object = InformationObject {
+            ioa: Ioa::default(),
+            element: Element::TestWithTime { counter },
+            time: Some(crate::asdu::TimeTag::Cp56(time)),
+        };
+        self.exchange(self.request(TypeId::C_TS_TA_1, Cause::ACTIVATION, object))
+            .await
+    }
+
+    /// Sends a read request (C_RD_NA_1); the value arrives as an ASDU with cause 5, a
+    /// refusal as the mirrored request with cause 47.
+    pub async fn read(&self, ioa: Ioa) -> Result<RequestOutcome, ClientError> {
+        let object = InformationObject {
+            ioa,
+            element: Element::Read,
+            time: None,
+        };
+        self.exchange(self.request(TypeId::C_RD_NA_1, Cause::REQUEST, object))
+            .await
+    }
+
+    /// Sends any ASDU and waits for the server's answer to it: confirmation and (for
+    /// commands and interrogations) termination, or the data answering a read.
+    pub async fn send(&self, asdu: Asdu) -> Result<RequestOutcome, ClientError> {
+        self.exchange(asdu).await
+    }
+
+    /// Closes the connection and stops the client.
+    pub async fn close(&self) {
+        let _ = self.requests.send(Request::Close).await;
+    }
+}
+
+/// An open request: what it matches and where its answer goes.
+struct Pending {
+    type_id: TypeId,
+    ioa: Ioa,
+    expects_termination: bool,
+    is_read: bool,
+    responses: Vec<Asdu>,
+    confirmation: Option<(bool, Cause)>,
+    deadline: tokio::time::Instant,
+    reply: Option<oneshot::Sender<Result<RequestOutcome, ClientError>>>,
+}
+
+impl Pending {
+    fn finish(&mut self, result: Result<RequestOutcome, ClientError>) {
+        if let Some(reply) = self.reply.take() {
+            let _ = reply.send(result);
+        }
+    }
+
+    fn outcome(&self, terminated: bool) -> RequestOutcome {
+        let (positive, cause) = self.confirmation.unwrap_or((false, Cause::ACTIVATION_CON));
+        RequestOutcome {
+            positive,
+            cause,
+            terminated,
+            responses: self.responses.clone(),
+        }
+    }
+
+    /// Offers a received ASDU; returns whether the request is now finished.
+    fn offer(&mut self, asdu: &Asdu, timeout: Duration) -> bool {
+        let Some(first) = asdu.objects.first() else {
+            return false;
+        };
+        if self.is_read {
+            if first.ioa != self.ioa {
+                return false;
+            }
+            if asdu.cot.cause == Cause::REQUEST && !asdu.cot.negative {
+                self.responses.push(asdu.clone());
+                self.confirmation = Some((true, Cause::REQUEST));
+                return true;
+            }
+            if asdu.type_id == self.type_id && asdu.cot.negative {
+                self.responses.push(asdu.clone());
+                self.confirmation = Some((false, asdu.cot.cause));
+                return true;
+            }
+            return false;
+        }
+        if asdu.type_id != self.type_id || first.ioa != self.ioa {
+            return false;
+        }
+        let cause = asdu.cot.cause;
+        let is_confirmation = cause == Cause::ACTIVATION_CON
+            || cause == Cause::DEACTIVATION_CON
+            || (44..=47).contains(&cause.value());
+        if is_confirmation && self.confirmation.is_none() {
+            self.responses.push(asdu.clone());
+            let positive = !asdu.cot.negative;
+            self.confirmation = Some((positive, cause));
+            if !positive || !self.expects_termination {
+                return true;
+            }
+            // The termination has its own time allowance.
+            self.deadline = tokio::time::Instant::now() + timeout;
+            return false;
+        }
+        if cause == Cause::ACTIVATION_TERMINATION {
+            self.responses.push(asdu.clone());
+            if self.confirmation.is_none() {
+                // Termination without confirmation: some stations skip ACT_CON.
+                self.confirmation = Some((true, Cause::ACTIVATION_TERMINATION));
+            }
+            return true;
+        }
+        false
+    }
+}
+
+fn expects_termination(asdu: &Asdu) -> bool {
+    match asdu.type_id {
+        TypeId::C_IC_NA_1 | TypeId::C_CI_NA_1 => asdu.cot.cause == Cause::ACTIVATION,
+        type_id if type_id.is_command() => {
+            asdu.cot.cause == Cause::ACTIVATION
+                && !asdu
+                    .objects
+                    .first()
+                    .is_some_and(|object| element_is_select(&object.element))
+        }
+        _ => false,
+    }
+}
+
+fn element_is_select(element: &Element) -> bool {
+    match element {
+        Element::SingleCommand { qualifier, .. }
+        | Element::DoubleCommand { qualifier, .. }
+        | Element::RegulatingStep { qualifier, .. } => qualifier.is_select(),
+        Element::SetpointNormalized { qualifier, .. }
+        | Element::SetpointScaled { qualifier, .. }
+        | Element::SetpointFloat { qualifier, .. } => qualifier.is_select(),
+        _ => false,
+    }
+}
+
+async fn run(
+    config: ClientConfig,
+    mut requests: mpsc::Receiver<Request>,
+    events: mpsc::Sender<ClientEvent>,
+) {
+    let mut delay = config.reconnect_delay;
+    loop {
+        let mut connected_once = false;
+        for address in &config.addresses {
+            match connect(&config, address).await {
+                Ok((stream, peer)) => {
+                    connected_once = true;
+                    delay = config.reconnect_delay;
+                    if events.send(ClientEvent::Connected { peer }).await.is_err() {
+                        return;
+                    }
+                    let outcome = match stream {
+                        Transport::Plain(stream) => {
+                            drive(&config, stream, &mut requests, &events).await
+                        }
+                        Transport::Tls(stream) => {
+                            drive(&config, *stream, &mut requests, &events).await
+                        }
+                    };
+                    let reason = match outcome {
+                        DriveEnd::Closed => return,
+                        DriveEnd::Lost(reason) => reason,
+                    };
+                    tracing::info!(%peer, %reason, "disconnected");
+                    if events
+                        .send(ClientEvent::Disconnected { reason })
+                        .await
+                        .is_err()
+                    {
+                        return;
+                    }
+                    if !config.reconnect {
+                        return;
+                    }
+                }
+                Err(reason) => {
+                    tracing::warn!(%address, %reason, "connection failed");
+                    if !config.reconnect && config.addresses.len() == 1 {
+                        let _ = events.send(ClientEvent::Disconnected { reason }).await;
+                        return;
+                    }
+                }
+            }
+        }
+        if !config.reconnect {
+            return;
+        }
+        if !connected_once {
+            // Requests made while nobody is connected fail at once rather than hang.
+            let wait = tokio::time::sleep(delay);
+            tokio::pin!(wait);
+            loop {
+                tokio::select! {
+                    () = &mut wait => break,
+                    request = requests.recv() => match request {
+                        None | Some(Request::Close) => return,
+                        Some(Request::Exchange { reply, .. }) => {
+                            let _ = reply.send(Err(ClientError::NotConnected));
+                        }
+                    },
+                }
+            }
+            delay = (delay * 2).min(config.reconnect_delay_max);
+        }
+    }
+}
+
+enum Transport {
+    Plain(TcpStream),
+    Tls(Box<tokio_rustls::client::TlsStream<TcpStream>>),
+}
+
+async fn connect(config: &ClientConfig, address: &str) -> Result<(Transport, SocketAddr), String> {
+    let stream = tokio::time::timeout(config.apci.t0, TcpStream::connect(address))
+        .await
+        .map_err(|_| format!("t0 expired connecting to {address}"))?
+        .map_err(|error| format!("cannot connect to {address}: {error}"))?;
+    let _ = stream.set_nodelay(true);
+    let peer = stream
+        .peer_addr()
+        .map_err(|error| format!("cannot connect to {address}: {error}"))?;
+    match &config.tls {
+        None => Ok((Transport::Plain(stream), peer)),
+        Some((tls, name)) => {
+            let connector = tokio_rustls::TlsConnector::from(Arc::clone(tls));
+            let stream =
+                tokio::time::timeout(config.apci.t0, connector.connect(name.clone(), stream))
+                    .await
+                    .map_err(|_| format!("t0 expired in the TLS handshake with {address}"))?
+                    .map_err(|error| format!("TLS handshake with {address} failed: {error}"))?;
+            Ok((Transport::Tls(Box::new(stream)), peer))
+        }
+    }
+}
+
+enum DriveEnd {
+    /// The application closed the client.
+    Closed,
+    /// The connection was lost; reconnect if configured.
+    Lost(String),
+}
+
+async fn drive<S>(
+    config: &ClientConfig,
+    stream: S,
+    requests: &mut mpsc::Receiver<Request>,
+    events: &mpsc::Sender<ClientEvent>,
+) -> DriveEnd
+where
+    S: AsyncRead + AsyncWrite + Unpin,
+{
+    let (mut reader, mut writer) = tokio::io::split(stream);
+    let now = tokio::time::Instant::now().into_std();
+    let mut session = Session::new(config.apci.clone(), Role::ControllingStation, now);
+    if let Err(error) = session.start_data_transfer(now) {
+        return DriveEnd::Lost(format!("cannot start data transfer: {error}"));
+    }
+    let mut pending: Vec<Pending> = Vec::new();
+    let mut outgoing: VecDeque<Vec<u8>> = VecDeque::new();
+    let mut input = vec![0u8; 16 * 1024];
+    let mut output = Vec::with_capacity(16 * 1024);
+    let mut started = false;
+    let result = 'connection: loop {
+        let now = tokio::time::Instant::now().into_std();
+        while let Some(event) = session.poll_event() {
+            match event {
+                SessionEvent::Asdu(raw) => {
+                    let event = match Asdu::decode(&raw, &config.asdu) {
+                        Ok(asdu) => {
+                            tracing::debug!(%asdu, "received");
+                            let mut finished = Vec::new();
+                            for (index, request) in pending.iter_mut().enumerate() {
+                                if request.offer(&asdu, config.command_timeout) {
+                                    finished.push(index);
+                                    break;
+                                }
+                            }
+                            for index in finished.into_iter().rev() {
+                                let mut request = pending.swap_remove(index);
+                                let outcome = request.outcome(
+                                    request.expects_termination
+                                        && request
+                                            .confirmation
+                                            .is_some_and(|(positive, _)| positive),
+                                );
+                                request.finish(Ok(outcome));
+                            }
+                            ClientEvent::Asdu(asdu)
+                        }
+                        Err(error) => {
+                            tracing::warn!(%error, "undecodable ASDU");
+                            ClientEvent::Undecodable {
+                                error: error.to_string(),
+                                raw,
+                            }
+                        }
+                    };
+                    if events.send(event).await.is_err() {
+                        break 'connection DriveEnd::Closed;
+                    }
+                }
+                SessionEvent::Started => {
+                    started = true;
+                    if events.send(ClientEvent::Started).await.is_err() {
+                        break 'connection DriveEnd::Closed;
+                    }
+                    if config.clock_sync_on_start {
+                        let time = crate::cs104::server::time_tag_now(
+                            crate::cs104::server::TimeZonePolicy::Utc,
+                        );
+                        let mut asdu = Asdu::new(
+                            TypeId::C_CS_NA_1,
+                            Cot::new(Cause::ACTIVATION),
+                            config.common_address,
+                        );
+                        asdu.cot.originator = config.originator;
+                        asdu.objects.push(InformationObject {
+                            ioa: Ioa::default(),
+                            element: Element::ClockSync { time },
+                            time: None,
+                        });
+                        queue(&mut outgoing, &asdu, &config.asdu);
+                    }
+                    if config.interrogate_on_start {
+                        let mut asdu = Asdu::new(
+                            TypeId::C_IC_NA_1,
+                            Cot::new(Cause::ACTIVATION),
+                            config.common_address,
+                        );
+                        asdu.cot.originator = config.originator;
+                        asdu.objects.push(InformationObject {
+                            ioa: Ioa::default(),
+                            element: Element::Interrogation { qualifier: 20 },
+                            time: None,
+                        });
+                        queue(&mut outgoing, &asdu, &config.asdu);
+                    }
+                }
+                SessionEvent::Stopped => started = false,
+                SessionEvent::Acknowledged { .. } => {}
+                SessionEvent::Closed(reason) => {
+                    return end(pending, DriveEnd::Lost(reason.to_string()));
+                }
+            }
+        }
+        while session.can_send() {
+            let Some(asdu) = outgoing.pop_front() else {
+                break;
+            };
+            if let Err(error) = session.send_asdu(now, &asdu) {
+                tracing::debug!(%error, "send deferred");
+                outgoing.push_front(asdu);
+                break;
+            }
+        }
+        while session.poll_transmit(&mut output) {}
+        if !output.is_empty() {
+            if let Err(error) = writer.write_all(&output).await {
+                break DriveEnd::Lost(format!("write failed: {error}"));
+            }
+            output.clear();
+        }
+        if matches!(session.state(), SessionState::Closed(_)) {
+            continue;
+        }
+        let protocol_deadline = session.poll_timeout().map(tokio::time::Instant::from_std);
+        let request_deadline = pending.iter().map(|request| request.deadline).min();
+        let deadline = match (protocol_deadline, request_deadline) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+        let reading_allowed = events.capacity() > 0;
+        tokio::select! {
+            read = reader.read(&mut input), if reading_allowed => match read {
+                Ok(0) => break DriveEnd::Lost("closed by the server".to_owned()),
+                Ok(count) => {
+                    let now = tokio::time::Instant::now().into_std();
+                    session.handle_input(now, input.get(..count).unwrap_or_default());
+                }
+                Err(error) => break DriveEnd::Lost(format!("read failed: {error}")),
+            },
+            () = sleep_until(deadline) => {
+                let now = tokio::time::Instant::now();
+                session.handle_timeout(now.into_std());
+                let mut index = 0;
+                while index < pending.len() {
+                    if pending.get(index).is_some_and(|request| request.deadline <= now) {
+                        let mut request = pending.swap_remove(index);
+                        let waited_for = if request.confirmation.is_some() { "the activation termination" } else { "the confirmation" };
+                        tracing::warn!(type_id = %request.type_id, ioa = %request.ioa, waited_for, "request timed out");
+                        request.finish(Err(ClientError::Timeout(waited_for)));
+                    } else {
+                        index += 1;
+                    }
+                }
+            }
+            request = requests.recv() => match request {
+                None | Some(Request::Close) => break DriveEnd::Closed,
+                Some(Request::Exchange { asdu, reply }) => {
+                    if !started {
+                        let _ = reply.send(Err(ClientError::NotConnected));
+                        continue;
+                    }
+                    let ioa = asdu.objects.first().map(|object| object.ioa).unwrap_or_default();
+                    if pending.iter().any(|request| request.type_id == asdu.type_id && request.ioa == ioa) {
+                        let _ = reply.send(Err(ClientError::Busy));
+                        continue;
+                    }
+                    let mut bytes = Vec::new();
+                    if let Err(error) = asdu.encode(&config.asdu, &mut bytes) {
+                        let _ = reply.send(Err(ClientError::Encode(error.to_string())));
+                        continue;
+                    }
+                    outgoing.push_back(bytes);
+                    pending.push(Pending {
+                        type_id: asdu.type_id,
+                        ioa,
+                        expects_termination: expects_termination(&asdu),
+                        is_read: asdu.type_id == TypeId::C_RD_NA_1,
+                        responses: Vec::new(),
+                        confirmation: None,
+                        deadline: tokio::time::Instant::now() + config.command_timeout,
+                        reply: Some(reply),
+                    });
+                }
+            },
+        }
+    };
+    if let DriveEnd::Closed = result {
+        // Leave politely: acknowledge what we received and close the socket.
+        session.close(crate::cs104::session::CloseReason::LocalRequest);
+        while session.poll_transmit(&mut output) {}
+        let _ = writer.write_all(&output).await;
+        let _ = writer.shutdown().await;
+    }
+    end(pending, result)
+}
+
+fn end(mut pending: Vec<Pending>, result: DriveEnd) -> DriveEnd {
+    for request in &mut pending {
+        request.finish(Err(ClientError::Disconnected));
+    }
+    result
+}
+
+fn queue(outgoing: &mut VecDeque<Vec<u8>>, asdu: &Asdu, params: &AsduParams) {
+    let mut bytes = Vec::new();
+    match asdu.encode(params, &mut bytes) {
+        Ok(()) => outgoing.push_back(bytes),
+        Err(error) => tracing::error!(%error, "cannot encode request"),
+    }
+}
+
+async fn sleep_until(deadline: Option<tokio::time::Instant>) {
+    match deadline {
+        Some(deadline) => tokio::time::sleep_until(deadline).await,
+        None => std::future::pending().await,
+    }
+}

@@ -1,0 +1,857 @@
+//! One server connection: a task that drives a sans-IO [`Session`] over a socket and
+//! answers the client's requests.
+//!
+//! Each turn of the loop handles the session's events, fills the send window (responses
+//! first, then the group's buffered events alternating with the running interrogation),
+//! writes what the session has to send, and waits for the socket, the next protocol
+//! deadline, new events or a finished command.
+
+use std::collections::VecDeque;
+use std::net::SocketAddr;
+use std::sync::Arc;
+
+use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt};
+use tokio::sync::{mpsc, watch};
+use tracing::Instrument;
+
+use crate::asdu::{
+    mirror_with_cause, object_len, pack_objects, Asdu, AsduHeader, AsduParams, Cause,
+    CommandQualifier, CommonAddress, Cot, DoublePointState, Element, InformationObject, Ioa,
+    SetpointQualifier, TypeId,
+};
+use crate::cs104::session::{Role, Session, SessionEvent};
+
+use super::group::Group;
+use super::handler::{Command, CommandOutcome};
+use super::{Selection, Shared};
+
+/// Bytes read from the socket at a time.
+const READ_BUFFER: usize = 16 * 1024;
+
+/// A command whose outcome the handler has decided.
+struct CommandReply {
+    request: Vec<u8>,
+    select: bool,
+    ioa: u32,
+    selection: Option<Selection>,
+    outcome: CommandOutcome,
+}
+
+/// An interrogation being streamed to the client, a chunk at a time as the window allows.
+struct Interrogation {
+    request: Vec<u8>,
+    qualifier: u8,
+    cause: Cause,
+    after: Option<Ioa>,
+    /// ASDUs of the current chunk not yet sent.
+    pending: VecDeque<Vec<u8>>,
+    finished: bool,
+}
+
+struct Connection {
+    shared: Arc<Shared>,
+    id: u64,
+    group: usize,
+    peer: SocketAddr,
+    session: Session,
+    /// Confirmations and other answers: sent before anything else.
+    responses: VecDeque<Vec<u8>>,
+    interrogation: Option<Interrogation>,
+    /// For each sent and unacknowledged I frame, whether it came from the group's buffer.
+    sent_from_group: VecDeque<bool>,
+    /// Whether this connection is its group's started connection.
+    active: bool,
+    /// Alternates group events and interrogation chunks so neither starves the other.
+    prefer_interrogation: bool,
+    replies: mpsc::UnboundedSender<CommandReply>,
+}
+
+pub(super) async fn run<S>(
+    shared: Arc<Shared>,
+    id: u64,
+    group: usize,
+    peer: SocketAddr,
+    stream: S,
+    shutdown: watch::Receiver<bool>,
+) where
+    S: AsyncRead + AsyncWrite + Unpin + Send + 'static,
+{
+    let span = tracing::info_span!("iec104_connection", %peer, id);
+    async move {
+        tracing::info!(group = %shared.groups.get(group).map(|g| g.config.name.as_str()).unwrap_or("?"), "client connected");
+        shared.handler.connection_changed(peer, true, false);
+        let (replies_tx, replies_rx) = mpsc::unbounded_channel();
+        let now = tokio::time::Instant::now().into_std();
+        let mut connection = Connection {
+            session: Session::new(shared.config.apci.clone(), Role::ControlledStation, now),
+            shared: Arc::clone(&shared),
+            id,
+            group,
+            peer,
+            responses: VecDeque::new(),
+            interrogation: None,
+            sent_from_group: VecDeque::new(),
+            active: false,
+            prefer_interrogation: false,
+            replies: replies_tx,
+        };
+        let reason = connection.drive(stream, replies_rx, shutdown).await;
+        connection.release_group();
+        shared.handler.connection_changed(peer, false, false);
+        tracing::info!(%reason, "connection closed");
+    }
+    .instrument(span)
+    .await
+}
+
+impl Connection {
+    fn group(&self) -> Option<&Group> {
+        self.shared.groups.get(self.group)
+    }
+
+    fn params(&self) -> &AsduParams {
+        &self.shared.config.asdu
+    }
+
+    async fn drive<S>(
+        &mut self,
+        stream: S,
+        mut replies: mpsc::UnboundedReceiver<CommandReply>,
+        mut shutdown: watch::Receiver<bool>,
+    ) -> String
+    where
+        S: AsyncRead + AsyncWrite + Unpin + Send + 'static,
+    {
+        let (mut reader, mut writer) = tokio::io::split(stream);
+        let mut input = vec![0u8; READ_BUFFER];
+        let mut output = Vec::with_capacity(READ_BUFFER);
+        let shared = Arc::clone(&self.shared);
+        let notify = shared.groups.get(self.group).map(|group| &group.notify);
+        loop {
+            let now = tokio::time::Instant::now().into_std();
+            self.check_still_active();
+            while let Some(event) = self.session.poll_event() {
+                match event {
+                    SessionEvent::Asdu(asdu) => self.handle_asdu(now, asdu),
+                    SessionEvent::Started => self.activate(),
+                    SessionEvent::Stopped => self.release_group(),
+                    SessionEvent::Acknowledged { .. } => {}
+                    SessionEvent::Closed(reason) => return reason.to_string(),
+                }
+            }
+            self.forget_acknowledged();
+            self.fill_window(now);
+            while self.session.poll_transmit(&mut output) {}
+            if !output.is_empty() {
+                if let Err(error) = writer.write_all(&output).await {
+                    return format!("write failed: {error}");
+                }
+                output.clear();
+            }
+            let deadline = self
+                .session
+                .poll_timeout()
+                .map(tokio::time::Instant::from_std);
+            let active = self.active;
+            tokio::select! {
+                read = reader.read(&mut input) => match read {
+                    Ok(0) => return "closed by the client".to_owned(),
+                    Ok(count) => {
+                        let now = tokio::time::Instant::now().into_std();
+                        self.session.handle_input(now, input.get(..count).unwrap_or_default());
+                    }
+                    Err(error) => return format!("read failed: {error}"),
+                },
+                () = sleep_until(deadline) => {
+                    self.session.handle_timeout(tokio::time::Instant::now().into_std());
+                }
+                () = notified(notify), if active => {}
+                Some(reply) = replies.recv() => self.finish_command(reply),
+                _ = shutdown.changed() => return "server shut down".to_owned(),
+            }
+        }
+    }
+
+    /// Another connection of the group was started: this one stops carrying data,
+    /// silently (a client must never get an unsolicited STOPDT).
+    fn check_still_active(&mut self) {
+        if !self.active {
+            return;
+        }
+        let still = self
+            .group()
+            .map(|group| group.lock().active == Some(self.id))
+            .unwrap_or(false);
+        if !still {
+            tracing::info!(
+                "another connection of the group was started: this one is now on standby"
+            );
+            self.session.deactivate();
+            self.active = false;
+            self.interrogation = None;
+            self.responses.clear();
+            // The group took over what this connection had in flight.
+            for from_group in self.sent_from_group.iter_mut() {
+                *from_group = false;
+            }
+        }
+    }
+
+    fn activate(&mut self) {
+        let Some(group) = self.shared.groups.get(self.group) else {
+            return;
+        };
+        let mut state = group.lock();
+        if let Some(previous) = state.active {
+            if previous != self.id {
+                tracing::info!(
+                    previous,
+                    "switch-over: this connection takes over the group"
+                );
+                let in_flight = std::mem::take(&mut state.in_flight);
+                for asdu in in_flight.into_iter().rev() {
+                    state.retransmit.push_front(asdu);
+                }
+            }
+        }
+        state.active = Some(self.id);
+        drop(state);
+        self.active = true;
+        // Wake the connection that lost the group (and ourselves).
+        group.notify.notify_waiters();
+        self.shared
+            .handler
+            .connection_changed(self.peer, true, true);
+        tracing::info!("data transfer started");
+    }
+
+    /// Gives the group up (STOPDT or connection end): what this connection sent from the
+    /// group's buffer without acknowledgement goes back to the front of the buffer.
+    fn release_group(&mut self) {
+        if !self.active {
+            return;
+        }
+        self.active = false;
+        if let Some(group) = self.shared.groups.get(self.group) {
+            let mut state = group.lock();
+            if state.active == Some(self.id) {
+                state.active = None;
+                let in_flight = std::mem::take(&mut state.in_flight);
+                if !in_flight.is_empty() {
+                    tracing::info!(
+                        count = in_flight.len(),
+                        "unacknowledged events kept for the next connection"
+                    );
+                }
+                for asdu in in_flight.into_iter().rev() {
+                    state.retransmit.push_front(asdu);
+                }
+            }
+        }
+        self.sent_from_group.clear();
+    }
+
+    /// Drops bookkeeping of I frames the client acknowledged.
+    fn forget_acknowledged(&mut self) {
+        let unacknowledged = self.session.unacknowledged_count();
+        let mut acknowledged_group_frames = 0;
+        while self.sent_from_group.len() > unacknowledged {
+            if self.sent_from_group.pop_front() == Some(true) {
+                acknowledged_group_frames += 1;
+            }
+        }
+        if acknowledged_group_frames > 0 && self.active {
+            if let Some(group) = self.group() {
+                let mut state = group.lock();
+                if state.active == Some(self.id) {
+                    for _ in 0..acknowledged_group_frames {
+                        state.in_flight.pop_front();
+                    }
+                }
+            }
+        }
+    }
+
+    fn send(&mut self, now: std::time::Instant, asdu: Vec<u8>, from_group: bool) -> bool {
+        match self.session.send_asdu(now, &asdu) {
+            Ok(()) => {
+                self.sent_from_group.push_back(from_group);
+                if from_group {
+                    if let Some(group) = self.group() {
+                        group.lock().in_flight.push_back(asdu);
+                    }
+                }
+                true
+            }
+            Err(error) => {
+                tracing::debug!(%error, "could not send");
+                false
+            }
+        }
+    }
+
+    fn fill_window(&mut self, now: std::time::Instant) {
+        while self.session.can_send() {
+            if let Some(response) = self.responses.pop_front() {
+                if !self.send(now, response, false) {
+                    break;
+                }
+                continue;
+            }
+            let from_interrogation = if self.prefer_interrogation {
+                self.next_interrogation_asdu()
+            } else {
+                None
+            };
+            if let Some(asdu) = from_interrogation {
+                self.prefer_interrogation = false;
+                if !self.send(now, asdu, false) {
+                    break;
+                }
+                continue;
+            }
+            if self.active {
+                if let Some(asdu) = self.next_group_asdu() {
+                    self.prefer_interrogation = true;
+                    if !self.send(now, asdu, true) {
+                        break;
+                    }
+                    continue;
+                }
+            }
+            match self.next_interrogation_asdu() {
+                Some(asdu) => {
+                    if !self.send(now, asdu, false) {
+                        break;
+                    }
+                }
+                None => break,
+            }
+        }
+    }
+
+    /// The next ASDU from the group: a retransmission, or the oldest buffered events of
+    /// one type and cause packed together.
+    fn next_group_asdu(&mut self) -> Option<Vec<u8>> {
+        let params = self.shared.config.asdu;
+        let common_address = self.shared.config.common_address;
+        let group = self.shared.groups.get(self.group)?;
+        let mut state = group.lock();
+        if let Some(asdu) = state.retransmit.pop_front() {
+            return Some(asdu);
+        }
+        let first = state.events.pop_front()?;
+        let capacity = objects_per_asdu(first.type_id, &params);
+        let mut asdu = Asdu::new(first.type_id, Cot::new(first.cause), common_address);
+        asdu.objects.push(first.object);
+        while asdu.objects.len() < capacity {
+            match state.events.front() {
+                Some(next) if next.type_id == asdu.type_id && next.cause == asdu.cot.cause => {
+                    if let Some(next) = state.events.pop_front() {
+                        asdu.objects.push(next.object);
+                    }
+                }
+                _ => break,
+            }
+        }
+        drop(state);
+        encode(&asdu, &params)
+    }
+
+    /// The next ASDU of the running interrogation, reading the image a chunk at a time so
+    /// that a large interrogation neither copies the whole image nor blocks updates.
+    fn next_interrogation_asdu(&mut self) -> Option<Vec<u8>> {
+        let params = self.shared.config.asdu;
+        let common_address = self.shared.config.common_address;
+        let interrogation = self.interrogation.as_mut()?;
+        if let Some(asdu) = interrogation.pending.pop_front() {
+            return Some(asdu);
+        }
+        if interrogation.finished {
+            let termination = mirror_with_cause(
+                &interrogation.request,
+                &params,
+                Cause::ACTIVATION_TERMINATION,
+                false,
+            )
+            .ok();
+            self.interrogation = None;
+            return termination;
+        }
+        // One run of points of the same type, as long as one ASDU can hold with SQ=1.
+        let image = self.shared.read_image();
+        let mut run: Vec<InformationObject> = Vec::new();
+        let mut run_type: Option<TypeId> = None;
+        let mut last = interrogation.after;
+        let mut exhausted = true;
+        for point in image.monitor_after(interrogation.after) {
+            if !answers(point, interrogation.qualifier, interrogation.cause) {
+                last = Some(point.ioa);
+                continue;
+            }
+            let gi_type = untagged(point.event_type);
+            match run_type {
+                None => run_type = Some(gi_type),
+                Some(current) if current != gi_type => {
+                    exhausted = false;
+                    break;
+                }
+                Some(_) => {}
+            }
+            if run.len() >= 127 {
+                exhausted = false;
+                break;
+            }
+            run.push(point.as_object());
+            last = Some(point.ioa);
+        }
+        drop(image);
+        interrogation.after = last;
+        if exhausted {
+            interrogation.finished = true;
+        }
+        if let Some(type_id) = run_type {
+            let cot = Cot::new(interrogation.cause);
+            for asdu in pack_objects(type_id, cot, common_address, run, &params, true) {
+                if let Some(bytes) = encode(&asdu, &params) {
+                    interrogation.pending.push_back(bytes);
+                }
+            }
+        }
+        self.next_interrogation_asdu()
+    }
+
+    fn reply(&mut self, request: &[u8], cause: Cause, negative: bool) {
+        match mirror_with_cause(request, self.params(), cause, negative) {
+            Ok(asdu) => self.responses.push_back(asdu),
+            Err(error) => tracing::warn!(%error, "cannot mirror request"),
+        }
+    }
+
+    fn handle_asdu(&mut self, now: std::time::Instant, raw: Vec<u8>) {
+        let params = self.shared.config.asdu;
+        let header = match AsduHeader::decode(&raw, &params) {
+            Ok(header) => header,
+            Err(error) => {
+                tracing::warn!(%error, "ASDU too short for its header: ignored");
+                return;
+            }
+        };
+        let Some(type_id) = TypeId::from_u8(header.type_byte) else {
+            tracing::warn!(type_id = header.type_byte, "unknown type identification");
+            self.reply(&raw, Cause::UNKNOWN_TYPE, true);
+            return;
+        };
+        let station = self.shared.config.common_address;
+        let broadcast = header.common_address.is_broadcast(&params);
+        let broadcast_allowed = matches!(
+            type_id,
+            TypeId::C_IC_NA_1 | TypeId::C_CI_NA_1 | TypeId::C_CS_NA_1 | TypeId::C_RP_NA_1
+        );
+        if header.common_address != station && !(broadcast && broadcast_allowed) {
+            tracing::warn!(common_address = %header.common_address, "unknown common address");
+            self.reply(&raw, Cause::UNKNOWN_COMMON_ADDRESS, true);
+            return;
+        }
+        let asdu = match Asdu::decode(&raw, &params) {
+            Ok(asdu) => asdu,
+            Err(error) => {
+                tracing::warn!(%error, %type_id, "malformed ASDU: refused");
+                self.reply(&raw, Cause::UNKNOWN_TYPE, true);
+                return;
+            }
+        };
+        tracing::debug!(%asdu, "request");
+        let cause = asdu.cot.cause;
+        match type_id {
+            TypeId::C_IC_NA_1 => self.handle_interrogation(raw, &asdu),
+            TypeId::C_CI_NA_1 => self.handle_counter_interrogation(raw, &asdu),
+            TypeId::C_RD_NA_1 => self.handle_read(raw, &asdu),
+            TypeId::C_CS_NA_1 => {
+                if cause != Cause::ACTIVATION {
+                    return self.reply(&raw, Cause::UNKNOWN_CAUSE, true);
+                }
+                let accepted = match asdu.objects.first().map(|object| &object.element) {
+                    Some(Element::ClockSync { time }) => {
+                        self.shared.handler.handle_clock_sync(*time, self.peer)
+                    }
+                    _ => false,
+                };
+                self.reply(&raw, Cause::ACTIVATION_CON, !accepted);
+            }
+            TypeId::C_TS_TA_1 => {
+                if cause != Cause::ACTIVATION {
+                    return self.reply(&raw, Cause::UNKNOWN_CAUSE, true);
+                }
+                self.reply(&raw, Cause::ACTIVATION_CON, false);
+            }
+            TypeId::C_RP_NA_1 => {
+                if cause != Cause::ACTIVATION {
+                    return self.reply(&raw, Cause::UNKNOWN_CAUSE, true);
+                }
+                let accepted = match asdu.objects.first().map(|object| &object.element) {
+                    Some(Element::ResetProcess { qualifier }) => self
+                        .shared
+                        .handler
+                        .handle_reset_process(*qualifier, self.peer),
+                    _ => false,
+                };
+                self.reply(&raw, Cause::ACTIVATION_CON, !accepted);
+            }
+            TypeId::C_CD_NA_1 => {
+                if cause != Cause::ACTIVATION && cause != Cause::SPONTANEOUS {
+                    return self.reply(&raw, Cause::UNKNOWN_CAUSE, true);
+                }
+                self.reply(&raw, Cause::ACTIVATION_CON, false);
+            }
+            TypeId::P_ME_NA_1 | TypeId::P_ME_NB_1 | TypeId::P_ME_NC_1 | TypeId::P_AC_NA_1 => {
+                if cause != Cause::ACTIVATION {
+                    return self.reply(&raw, Cause::UNKNOWN_CAUSE, true);
+                }
+                let accepted = asdu.objects.first().is_some_and(|object| {
+                    self.shared
+                        .handler
+                        .handle_parameter(object.ioa, &object.element, self.peer)
+                });
+                self.reply(&raw, Cause::ACTIVATION_CON, !accepted);
+            }
+            _ if type_id.is_command() => self.handle_command(now, raw, asdu),
+            _ => {
+                // Monitor-direction types from a client, file transfer (not served by this
+                // station), and C_TS_NA_1 (not used in IEC 104).
+                tracing::warn!(%type_id, "type not served by this station");
+                self.reply(&raw, Cause::UNKNOWN_TYPE, true);
+            }
+        }
+    }
+
+    fn handle_interrogation(&mut self, raw: Vec<u8>, asdu: &Asdu) {
+        let qualifier = match asdu.objects.first().map(|object| &object.element) {
+            Some(Element::Interrogation { qualifier }) => *qualifier,
+            _ => return self.reply(&raw, Cause::ACTIVATION_CON, true),
+        };
+        match asdu.cot.cause {
+            Cause::ACTIVATION => {}
+            Cause::DEACTIVATION => {
+                let running = self.interrogation.take().is_some();
+                return self.reply(&raw, Cause::DEACTIVATION_CON, !running);
+            }
+            _ => return self.reply(&raw, Cause::UNKNOWN_CAUSE, true),
+        }
+        let Some(cause) = (match qualifier {
+            20 => Some(Cause::INTERROGATED_BY_STATION),
+            21..=36 => Cause::interrogated_by_group(qualifier - 20),
+            _ => None,
+        }) else {
+            return self.reply(&raw, Cause::ACTIVATION_CON, true);
+        };
+        if self.interrogation.is_some() {
+            tracing::warn!("interrogation refused: another one is still running");
+            return self.reply(&raw, Cause::ACTIVATION_CON, true);
+        }
+        self.reply(&raw, Cause::ACTIVATION_CON, false);
+        // Answer with the station's own address even to a broadcast request.
+        let request = with_station_address(
+            &raw,
+            &self.shared.config.asdu,
+            self.shared.config.common_address,
+        );
+        self.interrogation = Some(Interrogation {
+            request,
+            qualifier,
+            cause,
+            after: None,
+            pending: VecDeque::new(),
+            finished: false,
+        });
+    }
+
+    fn handle_counter_interrogation(&mut self, raw: Vec<u8>, asdu: &Asdu) {
+        let (request, freeze) = match asdu.objects.first().map(|object| &object.element) {
+            Some(Element::CounterInterrogation { request, freeze }) => (*request, *freeze),
+            _ => return self.reply(&raw, Cause::ACTIVATION_CON, true),
+        };
+        if asdu.cot.cause != Cause::ACTIVATION {
+            return self.reply(&raw, Cause::UNKNOWN_CAUSE, true);
+        }
+        // RQT 1..=4 counter groups, 5 general.
+        if !(1..=5).contains(&request) {
+            return self.reply(&raw, Cause::ACTIVATION_CON, true);
+        }
+        self.reply(&raw, Cause::ACTIVATION_CON, false);
+        if freeze == 0 {
+            let params = self.shared.config.asdu;
+            let cause = Cause::new(
+                Cause::REQUESTED_BY_GENERAL_COUNTER.value()
+                    + if request == 5 { 0 } else { request },
+            )
+            .unwrap_or(Cause::REQUESTED_BY_GENERAL_COUNTER);
+            let counters: Vec<(TypeId, InformationObject)> = self
+                .shared
+                .read_image()
+                .monitor_points()
+                .filter(|point| matches!(point.element, Element::IntegratedTotal(_)))
+                .filter(|point| request == 5 || point.groups & (1 << (request - 1)) != 0)
+                .map(|point| (untagged(point.event_type), point.as_object()))
+                .collect();
+            let common_address = self.shared.config.common_address;
+            let objects = counters.into_iter().map(|(_, object)| object);
+            for asdu in pack_objects(
+                TypeId::M_IT_NA_1,
+                Cot::new(cause),
+                common_address,
+                objects,
+                &params,
+                true,
+            ) {
+                if let Some(bytes) = encode(&asdu, &params) {
+                    self.responses.push_back(bytes);
+                }
+            }
+        }
+        self.reply(&raw, Cause::ACTIVATION_TERMINATION, false);
+    }
+
+    fn handle_read(&mut self, raw: Vec<u8>, asdu: &Asdu) {
+        if asdu.cot.cause != Cause::REQUEST {
+            return self.reply(&raw, Cause::UNKNOWN_CAUSE, true);
+        }
+        let Some(object) = asdu.objects.first() else {
+            return self.reply(&raw, Cause::UNKNOWN_OBJECT_ADDRESS, true);
+        };
+        let point = self.shared.read_image().monitor(object.ioa).cloned();
+        let Some(point) = point else {
+            return self.reply(&raw, Cause::UNKNOWN_OBJECT_ADDRESS, true);
+        };
+        let (type_id, time) = match point.time {
+            Some(time) => (point.event_type, Some(time)),
+            None => (untagged(point.event_type), None),
+        };
+        let mut answer = Asdu::new(
+            type_id,
+            Cot::new(Cause::REQUEST),
+            self.shared.config.common_address,
+        );
+        answer.objects.push(InformationObject {
+            ioa: point.ioa,
+            element: point.element,
+            time,
+        });
+        if let Some(bytes) = encode(&answer, self.params()) {
+            self.responses.push_back(bytes);
+        }
+    }
+
+    fn handle_command(&mut self, now: std::time::Instant, raw: Vec<u8>, asdu: Asdu) {
+        let _ = now;
+        let mut cause = asdu.cot.cause;
+        if cause == Cause::REQUEST && self.shared.config.accept_request_as_activation {
+            cause = Cause::ACTIVATION;
+        }
+        if cause != Cause::ACTIVATION && cause != Cause::DEACTIVATION {
+            tracing::warn!(%cause, "command with a cause other than activation or deactivation");
+            return self.reply(&raw, Cause::UNKNOWN_CAUSE, true);
+        }
+        let [object] = asdu.objects.as_slice() else {
+            tracing::warn!(
+                count = asdu.objects.len(),
+                "a command must carry exactly one object"
+            );
+            return self.reply(&raw, Cause::ACTIVATION_CON, true);
+        };
+        let point = self.shared.read_image().command(object.ioa).cloned();
+        let Some(point) = point else {
+            tracing::warn!(ioa = %object.ioa, "command to an unknown address");
+            return self.reply(&raw, Cause::UNKNOWN_OBJECT_ADDRESS, true);
+        };
+        if base_command_type(point.command_type) != base_command_type(asdu.type_id) {
+            tracing::warn!(ioa = %object.ioa, expected = %point.command_type, got = %asdu.type_id, "command of the wrong type");
+            return self.reply(&raw, Cause::ACTIVATION_CON, true);
+        }
+        if let Element::DoubleCommand { state, .. } = &object.element {
+            if !matches!(state, DoublePointState::On | DoublePointState::Off) {
+                tracing::warn!(ioa = %object.ioa, "double command with a state that is not permitted");
+                return self.reply(&raw, Cause::ACTIVATION_CON, true);
+            }
+        }
+        let select = command_is_select(&object.element);
+        let key = object.ioa.get();
+        if cause == Cause::DEACTIVATION {
+            let mut selections = self.shared.lock_selections();
+            let ours = selections
+                .get(&key)
+                .is_some_and(|selection| selection.connection == self.id);
+            if ours {
+                selections.remove(&key);
+            }
+            drop(selections);
+            return self.reply(&raw, Cause::DEACTIVATION_CON, !ours);
+        }
+        let originator = asdu.cot.originator;
+        let tokio_now = tokio::time::Instant::now();
+        let mut pending_selection = None;
+        if select {
+            pending_selection = Some(Selection {
+                connection: self.id,
+                originator,
+                type_id: asdu.type_id,
+                element: without_select(&object.element),
+                deadline: tokio_now + self.shared.config.select_timeout,
+            });
+        } else if point.select_required {
+            let mut selections = self.shared.lock_selections();
+            let matches = selections.get(&key).is_some_and(|selection| {
+                selection.connection == self.id
+                    && selection.originator == originator
+                    && selection.type_id == asdu.type_id
+                    && selection.element == without_select(&object.element)
+                    && selection.deadline >= tokio_now
+            });
+            // A selection is used once, matched or not.
+            selections.remove(&key);
+            drop(selections);
+            if !matches {
+                tracing::warn!(ioa = %object.ioa, "execute without a matching selection: refused");
+                return self.reply(&raw, Cause::ACTIVATION_CON, true);
+            }
+        }
+        let command = Command {
+            type_id: asdu.type_id,
+            common_address: asdu.common_address,
+            ioa: object.ioa,
+            element: object.element.clone(),
+            time: object.time.clone(),
+            originator,
+            select,
+            peer: self.peer,
+        };
+        tracing::info!(%command.type_id, ioa = %command.ioa, element = %command.element, select, "command");
+        let future = self.shared.handler.handle_command(command);
+        let replies = self.replies.clone();
+        tokio::spawn(async move {
+            let outcome = future.await;
+            let _ = replies.send(CommandReply {
+                request: raw,
+                select,
+                ioa: key,
+                selection: pending_selection,
+                outcome,
+            });
+        });
+    }
+
+    fn finish_command(&mut self, reply: CommandReply) {
+        let executed = reply.outcome == CommandOutcome::Executed;
+        tracing::info!(ioa = reply.ioa, select = reply.select, ?reply.outcome, "command outcome");
+        if executed {
+            if let Some(selection) = reply.selection {
+                self.shared.lock_selections().insert(reply.ioa, selection);
+            }
+        }
+        self.reply(&reply.request, Cause::ACTIVATION_CON, !executed);
+        if executed && !reply.select {
+            self.reply(&reply.request, Cause::ACTIVATION_TERMINATION, false);
+        }
+    }
+}
+
+fn answers(point: &super::MonitorPoint, qualifier: u8, _cause: Cause) -> bool {
+    // Integrated totals answer counter interrogation, not station interrogation.
+    !matches!(point.element, Element::IntegratedTotal(_)) && point.answers_interrogation(qualifier)
+}
+
+/// The type without time tag (`M_SP_TB_1` -> `M_SP_NA_1`); a type that has no such
+/// twin stays as it is.
+fn untagged(type_id: TypeId) -> TypeId {
+    type_id.without_time().unwrap_or(type_id)
+}
+
+/// The untagged command type: `C_SC_TA_1` (58) -> `C_SC_NA_1` (45), and so on.
+fn base_command_type(type_id: TypeId) -> u8 {
+    let value = type_id as u8;
+    if (58..=64).contains(&value) {
+        value - 13
+    } else {
+        value
+    }
+}
+
+fn command_is_select(element: &Element) -> bool {
+    match element {
+        Element::SingleCommand { qualifier, .. }
+        | Element::DoubleCommand { qualifier, .. }
+        | Element::RegulatingStep { qualifier, .. } => qualifier.is_select(),
+        Element::SetpointNormalized { qualifier, .. }
+        | Element::SetpointScaled { qualifier, .. }
+        | Element::SetpointFloat { qualifier, .. } => qualifier.is_select(),
+        _ => false,
+    }
+}
+
+/// The element with its select bit cleared, to compare a select with its execute.
+fn without_select(element: &Element) -> Element {
+    let mut element = element.clone();
+    match &mut element {
+        Element::SingleCommand { qualifier, .. }
+        | Element::DoubleCommand { qualifier, .. }
+        | Element::RegulatingStep { qualifier, .. } => {
+            *qualifier = CommandQualifier::from_bits(qualifier.bits() & 0x7F);
+        }
+        Element::SetpointNormalized { qualifier, .. }
+        | Element::SetpointScaled { qualifier, .. }
+        | Element::SetpointFloat { qualifier, .. } => {
+            *qualifier = SetpointQualifier::from_bits(qualifier.bits() & 0x7F);
+        }
+        _ => {}
+    }
+    element
+}
+
+fn objects_per_asdu(type_id: TypeId, params: &AsduParams) -> usize {
+    let header = AsduHeader::header_len(params);
+    let per_object = object_len(type_id, params, false).max(1);
+    (params.max_asdu_len().saturating_sub(header) / per_object).clamp(1, 127)
+}
+
+fn encode(asdu: &Asdu, params: &AsduParams) -> Option<Vec<u8>> {
+    let mut bytes = Vec::with_capacity(params.max_asdu_len());
+    match asdu.encode(params, &mut bytes) {
+        Ok(()) => Some(bytes),
+        Err(error) => {
+            tracing::error!(%error, type_id = %asdu.type_id, "cannot encode ASDU: dropped");
+            None
+        }
+    }
+}
+
+/// A copy of a request with the common address replaced (a broadcast interrogation is
+/// terminated with the station's own address).
+fn with_station_address(raw: &[u8], params: &AsduParams, station: CommonAddress) -> Vec<u8> {
+    let mut copy = raw.to_vec();
+    let offset = 2 + usize::from(params.cot_size());
+    let address = station.get().to_le_bytes();
+    for (index, byte) in address
+        .iter()
+        .take(usize::from(params.common_address_size()))
+        .enumerate()
+    {
+        if let Some(slot) = copy.get_mut(offset + index) {
+            *slot = *byte;
+        }
+    }
+    copy
+}
+
+async fn sleep_until(deadline: Option<tokio::time::Instant>) {
+    match deadline {
+        Some(deadline) => tokio::time::sleep_until(deadline).await,
+        None => std::future::pending().await,
+    }
+}
+
+async fn notified(notify: Option<&tokio::sync::Notify>) {
+    match notify {
+        Some(notify) => notify.notified().await,
+        None => std::future::pending().await,
+    }
+}

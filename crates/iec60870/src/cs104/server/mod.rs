@@ -1,0 +1,500 @@
+//! The IEC 104 controlled station (server).
+//!
+//! # Shape
+//!
+//! ```text
+//!  accept loop ──(allow-list, connection cap, group by client IP, TLS)──> connection tasks
+//!                                                                         │  own a Session
+//!  ServerHandle::update ──> ProcessImage (current values) ──> GI / read   │  and a socket
+//!                      └──> every Group's event buffer ──> the group's started connection
+//! ```
+//!
+//! - [`image`]: the process image, answering interrogation and read.
+//! - [`group`]: redundancy groups; one started connection per group, one bounded event
+//!   buffer per group that keeps events while nobody is started and survives switch-over.
+//! - [`handler`]: the application's hooks (commands, clock sync, reset, parameters).
+//! - `connection`: one task per TCP (or TLS) connection, driving a sans-IO
+//!   [`Session`](super::session::Session) and answering requests.
+//!
+//! Time tags stamped by the server (for points updated without a time) follow
+//! [`ServerConfig::time_zone`]; the default is UTC.
+
+mod connection;
+pub mod group;
+pub mod handler;
+pub mod image;
+
+use std::collections::HashMap;
+use std::net::{IpAddr, SocketAddr};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex, RwLock};
+use std::time::Duration;
+
+use tokio::net::TcpListener;
+use tokio::sync::watch;
+
+use crate::asdu::{
+    AsduParams, Cause, CommonAddress, Element, InformationObject, Ioa, TimeTag, TypeId,
+};
+use crate::cs104::config::ApciConfig;
+use crate::time::Cp56Time2a;
+
+pub use group::{GroupStats, OverflowPolicy, RedundancyGroupConfig};
+pub use handler::{ready, Command, CommandFuture, CommandOutcome, ReadOnlyStation, StationHandler};
+pub use image::{CommandPoint, ImageError, MonitorPoint, ProcessImage};
+
+use group::{Group, QueuedEvent};
+
+/// Which clock a time tag stamped by the server reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum TimeZonePolicy {
+    /// Coordinated universal time, SU bit clear (the default: unambiguous across DST).
+    #[default]
+    Utc,
+    /// The host's local time, SU bit set in summer time.
+    Local,
+}
+
+/// Configuration of a server.
+#[derive(Debug, Clone)]
+#[non_exhaustive]
+pub struct ServerConfig {
+    /// Address to listen on (port 2404 by standard).
+    pub listen: SocketAddr,
+    /// The station's common address.
+    pub common_address: CommonAddress,
+    /// APCI parameters (k, w, t1, t2, t3).
+    pub apci: ApciConfig,
+    /// ASDU field sizes (IEC 104: COT 2, CA 2, IOA 3 octets, 249 octets at most).
+    pub asdu: AsduParams,
+    /// Redundancy groups; empty means one group that takes every client.
+    pub redundancy_groups: Vec<RedundancyGroupConfig>,
+    /// Clients allowed to connect; empty allows every client.
+    pub allowed_clients: Vec<IpAddr>,
+    /// Connections served at once; further clients are refused.
+    pub max_connections: usize,
+    /// Events each redundancy group buffers.
+    pub event_buffer_capacity: usize,
+    /// What a full event buffer does.
+    pub overflow_policy: OverflowPolicy,
+    /// How long a selection (select-before-operate) waits for its execute.
+    pub select_timeout: Duration,
+    /// Accept commands with cause 5 (request) as activation, as some gateways do
+    /// (spec IEC-A3). Off by default: such commands get a negative confirmation with
+    /// cause 45.
+    pub accept_request_as_activation: bool,
+    /// Send an end of initialisation (M_EI_NA_1) to the first started connection.
+    pub send_end_of_initialisation: bool,
+    /// Clock used for time tags the server stamps itself.
+    pub time_zone: TimeZonePolicy,
+    /// TLS (IEC 62351-3): when set, every connection must complete a TLS handshake.
+    pub tls: Option<Arc<tokio_rustls::rustls::ServerConfig>>,
+}
+
+impl ServerConfig {
+    /// A configuration with the standard's defaults for the given address and station.
+    pub fn new(listen: SocketAddr, common_address: CommonAddress) -> Self {
+        Self {
+            listen,
+            common_address,
+            apci: ApciConfig::default(),
+            asdu: AsduParams::IEC104,
+            redundancy_groups: Vec::new(),
+            allowed_clients: Vec::new(),
+            max_connections: 64,
+            event_buffer_capacity: 100_000,
+            overflow_policy: OverflowPolicy::DropOldest,
+            select_timeout: Duration::from_secs(10),
+            accept_request_as_activation: false,
+            send_end_of_initialisation: true,
+            time_zone: TimeZonePolicy::Utc,
+            tls: None,
+        }
+    }
+}
+
+/// Why a server could not start or a request to it failed.
+#[derive(Debug, thiserror::Error)]
+pub enum ServerError {
+    /// The listening socket could not be opened.
+    #[error("cannot listen on {address}: {source}")]
+    Listen {
+        /// The address.
+        address: SocketAddr,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// The configuration is inconsistent.
+    #[error("invalid server configuration: {0}")]
+    Config(String),
+    /// A point update did not fit the process image.
+    #[error(transparent)]
+    Image(#[from] ImageError),
+}
+
+/// Statistics of a running server.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ServerStats {
+    /// Connections open now.
+    pub connections: usize,
+    /// Connections accepted since start.
+    pub accepted: u64,
+    /// Connections refused (allow-list, cap, no group) since start.
+    pub refused: u64,
+    /// Per redundancy group.
+    pub groups: Vec<GroupStats>,
+}
+
+/// A selection waiting for its execute.
+#[derive(Debug, Clone)]
+pub(crate) struct Selection {
+    connection: u64,
+    originator: u8,
+    type_id: TypeId,
+    element: Element,
+    deadline: tokio::time::Instant,
+}
+
+/// State shared by the accept loop, the connections and the handle.
+pub(crate) struct Shared {
+    pub(crate) config: ServerConfig,
+    pub(crate) image: RwLock<ProcessImage>,
+    pub(crate) groups: Vec<Group>,
+    pub(crate) handler: Arc<dyn StationHandler>,
+    pub(crate) selections: Mutex<HashMap<u32, Selection>>,
+    next_connection_id: AtomicU64,
+    open_connections: AtomicUsize,
+    accepted: AtomicU64,
+    refused: AtomicU64,
+}
+
+impl Shared {
+    pub(crate) fn read_image(&self) -> std::sync::RwLockReadGuard<'_, ProcessImage> {
+        self.image
+            .read()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    fn write_image(&self) -> std::sync::RwLockWriteGuard<'_, ProcessImage> {
+        self.image
+            .write()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    pub(crate) fn lock_selections(&self) -> std::sync::MutexGuard<'_, HashMap<u32, Selection>> {
+        self.selections
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    /// The group a client belongs to: the first naming its address, else the first
+    /// catch-all group.
+    fn group_for(&self, ip: IpAddr) -> Option<usize> {
+        self.groups
+            .iter()
+            .position(|group| group.accepts(ip))
+            .or_else(|| self.groups.iter().position(Group::is_catch_all))
+    }
+
+    pub(crate) fn now_time_tag(&self) -> Cp56Time2a {
+        time_tag_now(self.config.time_zone)
+    }
+}
+
+/// The host's time as a CP56Time2a in the given zone. Outside the years the tag can hold
+/// (2000..=2099) the tag says 2000-01-01 00:00 with IV set rather than lie.
+pub fn time_tag_now(zone: TimeZonePolicy) -> Cp56Time2a {
+    let (naive, summer) = match zone {
+        TimeZonePolicy::Utc => (chrono::Utc::now().naive_utc(), false),
+        TimeZonePolicy::Local => {
+            let local = chrono::Local::now();
+            (local.naive_local(), is_summer_time(&local))
+        }
+    };
+    match Cp56Time2a::from_naive(naive) {
+        Ok(time) => time.with_summer_time(summer),
+        Err(_) => Cp56Time2a::default(),
+    }
+}
+
+/// Whether a local time is in daylight-saving time: its offset is larger than the
+/// smaller of the offsets in January and July of its year.
+fn is_summer_time(local: &chrono::DateTime<chrono::Local>) -> bool {
+    use chrono::{Datelike, Offset, TimeZone};
+    let offset_at = |month: u32| {
+        chrono::Local
+            .with_ymd_and_hms(local.year(), month, 1, 12, 0, 0)
+            .single()
+            .map(|t| t.offset().fix().local_minus_utc())
+    };
+    match (offset_at(1), offset_at(7)) {
+        (Some(january), Some(july)) => local.offset().fix().local_minus_utc() > january.min(july),
+        _ => false,
+    }
+}
+
+/// A handle to a running server: update points, read statistics, shut down.
+/// Cloning is cheap; the server runs until [`ServerHandle::shutdown`] or until every
+/// handle is dropped.
+#[derive(Clone)]
+pub struct ServerHandle {
+    shared: Arc<Shared>,
+    local_addr: SocketAddr,
+    shutdown: Arc<watch::Sender<bool>>,
+}
+
+impl std::fmt::Debug for ServerHandle {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ServerHandle")
+            .field("local_addr", &self.local_addr)
+            .finish_non_exhaustive()
+    }
+}
+
+/// Starts a server: binds the listening socket and spawns the accept loop on the current
+/// tokio runtime.
+pub async fn spawn_server(
+    config: ServerConfig,
+    image: ProcessImage,
+    handler: Arc<dyn StationHandler>,
+) -> Result<ServerHandle, ServerError> {
+    config
+        .apci
+        .validate()
+        .map_err(|error| ServerError::Config(error.to_string()))?;
+    let groups: Vec<Group> = if config.redundancy_groups.is_empty() {
+        vec![Group::new(
+            RedundancyGroupConfig::catch_all("default"),
+            config.event_buffer_capacity,
+            config.overflow_policy,
+        )]
+    } else {
+        config
+            .redundancy_groups
+            .iter()
+            .map(|group| {
+                Group::new(
+                    group.clone(),
+                    config.event_buffer_capacity,
+                    config.overflow_policy,
+                )
+            })
+            .collect()
+    };
+    if config.send_end_of_initialisation {
+        for group in &groups {
+            group.push(QueuedEvent {
+                type_id: TypeId::M_EI_NA_1,
+                cause: Cause::INITIALISED,
+                object: InformationObject {
+                    ioa: Ioa::default(),
+                    element: Element::EndOfInitialisation {
+                        cause: 0,
+                        after_parameter_change: false,
+                    },
+                    time: None,
+                },
+            });
+        }
+    }
+    let listener =
+        TcpListener::bind(config.listen)
+            .await
+            .map_err(|source| ServerError::Listen {
+                address: config.listen,
+                source,
+            })?;
+    let local_addr = listener
+        .local_addr()
+        .map_err(|source| ServerError::Listen {
+            address: config.listen,
+            source,
+        })?;
+    let (shutdown_tx, shutdown_rx) = watch::channel(false);
+    let shared = Arc::new(Shared {
+        config,
+        image: RwLock::new(image),
+        groups,
+        handler,
+        selections: Mutex::new(HashMap::new()),
+        next_connection_id: AtomicU64::new(1),
+        open_connections: AtomicUsize::new(0),
+        accepted: AtomicU64::new(0),
+        refused: AtomicU64::new(0),
+    });
+    tracing::info!(%local_addr, common_address = %shared.config.common_address, "IEC 104 server listening");
+    tokio::spawn(accept_loop(listener, Arc::clone(&shared), shutdown_rx));
+    Ok(ServerHandle {
+        shared,
+        local_addr,
+        shutdown: Arc::new(shutdown_tx),
+    })
+}
+
+async fn accept_loop(
+    listener: TcpListener,
+    shared: Arc<Shared>,
+    mut shutdown: watch::Receiver<bool>,
+) {
+    let tls = shared
+        .config
+        .tls
+        .clone()
+        .map(tokio_rustls::TlsAcceptor::from);
+    loop {
+        let (stream, peer) = tokio::select! {
+            accepted = listener.accept() => match accepted {
+                Ok(pair) => pair,
+                Err(error) => {
+                    // Out of file descriptors and the like: back off instead of spinning.
+                    tracing::warn!(%error, "accept failed");
+                    tokio::time::sleep(Duration::from_millis(100)).await;
+                    continue;
+                }
+            },
+            _ = shutdown.changed() => break,
+        };
+        let ip = peer.ip().to_canonical();
+        let allowed = &shared.config.allowed_clients;
+        if !allowed.is_empty() && !allowed.contains(&ip) {
+            shared.refused.fetch_add(1, Ordering::Relaxed);
+            tracing::warn!(%peer, "connection refused: client not in the allow-list");
+            continue;
+        }
+        let open = shared.open_connections.load(Ordering::Relaxed);
+        if open >= shared.config.max_connections {
+            shared.refused.fetch_add(1, Ordering::Relaxed);
+            tracing::warn!(%peer, open, "connection refused: connection limit reached");
+            continue;
+        }
+        let Some(group) = shared.group_for(ip) else {
+            shared.refused.fetch_add(1, Ordering::Relaxed);
+            tracing::warn!(%peer, "connection refused: no redundancy group takes this client");
+            continue;
+        };
+        let _ = stream.set_nodelay(true);
+        shared.accepted.fetch_add(1, Ordering::Relaxed);
+        shared.open_connections.fetch_add(1, Ordering::Relaxed);
+        let id = shared.next_connection_id.fetch_add(1, Ordering::Relaxed);
+        let shared = Arc::clone(&shared);
+        let shutdown = shutdown.clone();
+        let tls = tls.clone();
+        tokio::spawn(async move {
+            match tls {
+                None => {
+                    connection::run(Arc::clone(&shared), id, group, peer, stream, shutdown).await
+                }
+                Some(acceptor) => {
+                    let handshake =
+                        tokio::time::timeout(shared.config.apci.t1, acceptor.accept(stream)).await;
+                    match handshake {
+                        Ok(Ok(stream)) => {
+                            connection::run(Arc::clone(&shared), id, group, peer, stream, shutdown)
+                                .await
+                        }
+                        Ok(Err(error)) => tracing::warn!(%peer, %error, "TLS handshake failed"),
+                        Err(_) => tracing::warn!(%peer, "TLS handshake timed out"),
+                    }
+                }
+            }
+            shared.open_connections.fetch_sub(1, Ordering::Relaxed);
+        });
+    }
+    tracing::info!("IEC 104 server stopped accepting");
+}
+
+impl ServerHandle {
+    /// The address the server listens on (useful with port 0).
+    pub fn local_addr(&self) -> SocketAddr {
+        self.local_addr
+    }
+
+    /// Sets a point's value and sends it spontaneously (cause 3) to every redundancy
+    /// group. A point whose type carries a time tag and is given none is stamped now.
+    pub fn update(
+        &self,
+        ioa: Ioa,
+        element: Element,
+        time: Option<Cp56Time2a>,
+    ) -> Result<(), ServerError> {
+        self.update_with_cause(ioa, element, time, Cause::SPONTANEOUS)
+    }
+
+    /// As [`update`](Self::update), with another cause: 1 periodic, 11 return information
+    /// after a remote command, 12 after a local command.
+    pub fn update_with_cause(
+        &self,
+        ioa: Ioa,
+        element: Element,
+        time: Option<Cp56Time2a>,
+        cause: Cause,
+    ) -> Result<(), ServerError> {
+        let type_id = self
+            .shared
+            .read_image()
+            .monitor(ioa)
+            .map(|point| point.event_type)
+            .ok_or(ImageError::UnknownPoint(ioa))?;
+        let time = match type_id.time_tag() {
+            crate::asdu::TimeTagKind::Cp56 => Some(TimeTag::Cp56(
+                time.unwrap_or_else(|| self.shared.now_time_tag()),
+            )),
+            crate::asdu::TimeTagKind::Cp24 => {
+                let full = time.unwrap_or_else(|| self.shared.now_time_tag());
+                Some(TimeTag::Cp24(
+                    match crate::time::Cp24Time2a::new(full.minute(), full.millisecond()) {
+                        Ok(short) => short.with_invalid(full.is_invalid()),
+                        Err(_) => {
+                            crate::time::Cp24Time2a::from_naive(chrono::NaiveDateTime::default())
+                                .with_invalid(true)
+                        }
+                    },
+                ))
+            }
+            crate::asdu::TimeTagKind::None => None,
+        };
+        self.shared
+            .write_image()
+            .set(ioa, element.clone(), time.clone())?;
+        let object = InformationObject { ioa, element, time };
+        for group in &self.shared.groups {
+            group.push(QueuedEvent {
+                type_id,
+                cause,
+                object: object.clone(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Sets a point's value without sending it: interrogation and read will show it.
+    pub fn set(
+        &self,
+        ioa: Ioa,
+        element: Element,
+        time: Option<TimeTag>,
+    ) -> Result<(), ServerError> {
+        self.shared.write_image().set(ioa, element, time)?;
+        Ok(())
+    }
+
+    /// The current value of a monitor point.
+    pub fn get(&self, ioa: Ioa) -> Option<MonitorPoint> {
+        self.shared.read_image().monitor(ioa).cloned()
+    }
+
+    /// Statistics: connections and event buffers.
+    pub fn stats(&self) -> ServerStats {
+        ServerStats {
+            connections: self.shared.open_connections.load(Ordering::Relaxed),
+            accepted: self.shared.accepted.load(Ordering::Relaxed),
+            refused: self.shared.refused.load(Ordering::Relaxed),
+            groups: self.shared.groups.iter().map(Group::stats).collect(),
+        }
+    }
+
+    /// Stops accepting and closes every connection.
+    pub fn shutdown(&self) {
+        let _ = self.shutdown.send(true);
+    }
+}

@@ -1,0 +1,111 @@
+//! `stanice iec104 client`: connect, start data transfer, print every ASDU.
+
+use std::process::ExitCode;
+use std::time::Duration;
+
+use clap::Args;
+use iec60870::asdu::CommonAddress;
+use iec60870::cs104::client::{spawn_client, ClientConfig, ClientEvent};
+
+use super::render;
+use super::LinkOptions;
+
+/// Arguments of `stanice iec104 client`.
+#[derive(Args, Debug)]
+pub(crate) struct ClientArgs {
+    /// Server address `HOST:PORT`; alternates may follow, separated by commas.
+    address: String,
+    /// Common address of the station (for interrogation and clock sync).
+    #[arg(long, default_value_t = 1)]
+    ca: u16,
+    /// Send a general interrogation after the start of data transfer.
+    #[arg(long)]
+    gi: bool,
+    /// Send a clock synchronisation (UTC) after the start of data transfer.
+    #[arg(long)]
+    clock_sync: bool,
+    /// Stop after this many seconds (runs until Ctrl-C otherwise).
+    #[arg(long)]
+    duration: Option<f64>,
+    /// One JSON object per information object instead of analyser lines.
+    #[arg(long)]
+    json: bool,
+    /// Stop when the general interrogation has terminated (with --gi).
+    #[arg(long, requires = "gi")]
+    exit_after_gi: bool,
+    /// Do not reconnect after the connection is lost: exit non-zero instead.
+    #[arg(long)]
+    no_reconnect: bool,
+    #[command(flatten)]
+    link: LinkOptions,
+}
+
+pub(crate) async fn run(args: ClientArgs) -> anyhow::Result<ExitCode> {
+    let addresses: Vec<String> = args
+        .address
+        .split(',')
+        .map(|address| address.trim().to_owned())
+        .collect();
+    let mut config = ClientConfig::new(
+        addresses.first().cloned().unwrap_or_default(),
+        CommonAddress::new(args.ca),
+    );
+    config.addresses = addresses;
+    config.apci = args.link.apci()?;
+    config.interrogate_on_start = args.gi;
+    config.clock_sync_on_start = args.clock_sync;
+    config.reconnect = !args.no_reconnect;
+    if let Some(pem) = args.link.tls()? {
+        let host = config
+            .addresses
+            .first()
+            .and_then(|address| {
+                address
+                    .rsplit_once(':')
+                    .map(|(host, _)| host.trim_matches(['[', ']']).to_owned())
+            })
+            .unwrap_or_default();
+        let name = iec60870::cs104::tls::server_name(&host)?;
+        config.tls = Some((iec60870::cs104::tls::client_config(&pem)?, name));
+    }
+    let (client, mut events) = spawn_client(config);
+    let deadline = args.duration.map(|seconds| {
+        tokio::time::Instant::now() + Duration::from_secs_f64(seconds.clamp(0.0, 1e9))
+    });
+    let mut exit = ExitCode::SUCCESS;
+    loop {
+        let event = tokio::select! {
+            event = events.recv() => event,
+            () = sleep_until(deadline) => break,
+            _ = tokio::signal::ctrl_c() => break,
+        };
+        let Some(event) = event else { break };
+        let gi_terminated = matches!(&event, ClientEvent::Asdu(asdu)
+            if asdu.type_id == iec60870::asdu::TypeId::C_IC_NA_1
+                && asdu.cot.cause == iec60870::asdu::Cause::ACTIVATION_TERMINATION);
+        let lost = matches!(event, ClientEvent::Disconnected { .. });
+        if args.json {
+            for line in render::json_lines(&event) {
+                println!("{line}");
+            }
+        } else {
+            println!("{}", render::analyser_text(&event));
+        }
+        if args.exit_after_gi && gi_terminated {
+            break;
+        }
+        if lost && args.no_reconnect {
+            exit = ExitCode::from(1);
+            break;
+        }
+    }
+    client.close().await;
+    Ok(exit)
+}
+
+async fn sleep_until(deadline: Option<tokio::time::Instant>) {
+    match deadline {
+        Some(deadline) => tokio::time::sleep_until(deadline).await,
+        None => std::future::pending().await,
+    }
+}

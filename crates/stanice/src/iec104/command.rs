@@ -1,0 +1,172 @@
+//! `stanice iec104 command`: send one command, print its confirmation sequence.
+//!
+//! Exit codes: 0 positive confirmation (and termination), 1 negative confirmation,
+//! 2 timeout or no connection.
+
+use std::process::ExitCode;
+use std::time::Duration;
+
+use clap::Args;
+use iec60870::asdu::{CommonAddress, Ioa, TypeId};
+use iec60870::cs104::client::{
+    spawn_client, ClientConfig, ClientError, ClientEvent, RequestOutcome,
+};
+
+use super::render;
+use super::value::parse_command;
+use super::LinkOptions;
+
+/// Arguments of `stanice iec104 command`.
+#[derive(Args, Debug)]
+pub(crate) struct CommandArgs {
+    /// Server address `HOST:PORT`.
+    address: String,
+    /// Common address of the station.
+    #[arg(long)]
+    ca: u16,
+    /// Address of the command point.
+    #[arg(long)]
+    ioa: u32,
+    /// Command type: C_SC_NA_1, C_DC_NA_1, C_RC_NA_1, C_SE_NA_1, C_SE_NB_1, C_SE_NC_1,
+    /// C_BO_NA_1 or a time-tagged form (C_SC_TA_1, ...).
+    #[arg(long = "type")]
+    type_id: TypeId,
+    /// Value: 0/1 or ON/OFF for single and double commands, LOWER/HIGHER for regulating
+    /// steps, a number for set-points, a number or 0x... for bit strings.
+    #[arg(long, allow_hyphen_values = true)]
+    value: String,
+    /// Select before operate: send a select, and on its confirmation the execute.
+    #[arg(long)]
+    select: bool,
+    /// Qualifier of command (QU 0..=31: 0 none, 1 short pulse, 2 long pulse, 3 persistent)
+    /// or of set-point (QL 0..=127).
+    #[arg(long, default_value_t = 0)]
+    qualifier: u8,
+    /// Seconds to wait for the connection, the confirmation and the termination.
+    #[arg(long, default_value_t = 10.0)]
+    timeout: f64,
+    #[command(flatten)]
+    link: LinkOptions,
+}
+
+pub(crate) async fn run(args: CommandArgs) -> anyhow::Result<ExitCode> {
+    if !args.type_id.is_command() {
+        anyhow::bail!("{} is not a command type", args.type_id);
+    }
+    let ioa = Ioa::try_new(args.ioa).map_err(|error| anyhow::anyhow!("--ioa: {error}"))?;
+    let execute = parse_command(args.type_id, &args.value, false, args.qualifier)?;
+    let timeout = Duration::from_secs_f64(args.timeout.clamp(0.1, 3600.0));
+    let mut config = ClientConfig::new(args.address.clone(), CommonAddress::new(args.ca));
+    config.apci = args.link.apci()?;
+    config.reconnect = false;
+    config.command_timeout = timeout;
+    if let Some(pem) = args.link.tls()? {
+        let host = args
+            .address
+            .rsplit_once(':')
+            .map(|(host, _)| host.trim_matches(['[', ']']).to_owned())
+            .unwrap_or_default();
+        config.tls = Some((
+            iec60870::cs104::tls::client_config(&pem)?,
+            iec60870::cs104::tls::server_name(&host)?,
+        ));
+    }
+    let (client, mut events) = spawn_client(config);
+    // Wait for the start of data transfer.
+    let started = tokio::time::timeout(timeout, async {
+        while let Some(event) = events.recv().await {
+            match event {
+                ClientEvent::Started => return Ok(()),
+                ClientEvent::Disconnected { reason } => return Err(reason),
+                _ => {}
+            }
+        }
+        Err("client stopped".to_owned())
+    })
+    .await;
+    match started {
+        Ok(Ok(())) => {}
+        Ok(Err(reason)) => {
+            eprintln!("no connection: {reason}");
+            return Ok(ExitCode::from(2));
+        }
+        Err(_) => {
+            eprintln!("no connection within {:.1} s", timeout.as_secs_f64());
+            return Ok(ExitCode::from(2));
+        }
+    }
+    // Print everything else the station sends meanwhile (return information).
+    let printer = tokio::spawn(async move {
+        while let Some(event) = events.recv().await {
+            if let ClientEvent::Asdu(asdu) = &event {
+                if !asdu.type_id.is_command() {
+                    println!("{}", render::analyser_text(&event));
+                }
+            }
+        }
+    });
+    let mut steps = Vec::new();
+    if args.select {
+        steps.push((
+            "select",
+            parse_command(args.type_id, &args.value, true, args.qualifier)?,
+        ));
+    }
+    steps.push(("execute", execute));
+    let mut code = ExitCode::SUCCESS;
+    for (step, element) in steps {
+        println!("-> {step} {} ioa={} {}", args.type_id, ioa, element);
+        let outcome = client
+            .command(args.type_id, ioa, element, command_time(args.type_id))
+            .await;
+        if !report(step, &outcome) {
+            code = match outcome {
+                Ok(_) => ExitCode::from(1),
+                Err(_) => ExitCode::from(2),
+            };
+            break;
+        }
+    }
+    // Let return information arrive before closing.
+    tokio::time::sleep(Duration::from_millis(200)).await;
+    client.close().await;
+    printer.abort();
+    Ok(code)
+}
+
+/// A time tag for the time-tagged command types: now, in UTC.
+fn command_time(type_id: TypeId) -> Option<iec60870::time::Cp56Time2a> {
+    (type_id.time_tag() == iec60870::asdu::TimeTagKind::Cp56)
+        .then(|| iec60870::time::Cp56Time2a::from_naive(chrono::Utc::now().naive_utc()).ok())
+        .flatten()
+}
+
+/// Prints the confirmation sequence; returns whether it was positive and complete.
+fn report(step: &str, outcome: &Result<RequestOutcome, ClientError>) -> bool {
+    match outcome {
+        Ok(outcome) => {
+            for asdu in &outcome.responses {
+                println!(
+                    "<- {}",
+                    render::analyser_text(&ClientEvent::Asdu(asdu.clone()))
+                );
+            }
+            if outcome.positive {
+                let termination = if outcome.terminated {
+                    " and terminated"
+                } else {
+                    ""
+                };
+                println!("{step}: positive confirmation{termination}");
+                true
+            } else {
+                println!("{step}: NEGATIVE confirmation (cause {})", outcome.cause);
+                false
+            }
+        }
+        Err(error) => {
+            println!("{step}: {error}");
+            false
+        }
+    }
+}

@@ -1,0 +1,112 @@
+//! `stanice iec104`: the IEC 104 test tool.
+//!
+//! - `server`: an outstation serving a CSV point list ([`points_file`]), optionally
+//!   simulating changes ([`simulate`]), confirming and logging commands.
+//! - `client`: connects, starts data transfer and prints every ASDU like a protocol
+//!   analyser, or one JSON object per information object ([`render`]).
+//! - `command`: sends one command and reports its confirmation sequence.
+//! - `decode`: decodes APDUs given as hex.
+
+mod client;
+mod command;
+mod decode;
+pub(crate) mod points_file;
+mod render;
+mod server;
+pub(crate) mod simulate;
+mod value;
+
+use std::process::ExitCode;
+
+use clap::{Args, Subcommand};
+
+pub(crate) use server::serve_points;
+
+/// Options shared by the tool's network commands.
+#[derive(Args, Clone, Debug)]
+pub(crate) struct LinkOptions {
+    /// t1: seconds to wait for an acknowledgement or a confirmation.
+    #[arg(long, default_value_t = 15.0)]
+    pub(crate) t1: f64,
+    /// t2: seconds before acknowledging received frames when there is nothing to send.
+    #[arg(long, default_value_t = 10.0)]
+    pub(crate) t2: f64,
+    /// t3: seconds of silence before a test frame.
+    #[arg(long, default_value_t = 20.0)]
+    pub(crate) t3: f64,
+    /// k: unacknowledged frames sent at most.
+    #[arg(long, default_value_t = 12)]
+    pub(crate) k: u16,
+    /// w: received frames acknowledged at the latest.
+    #[arg(long, default_value_t = 8)]
+    pub(crate) w: u16,
+    /// TLS: this station's certificate (PEM). With --tls-key and --tls-ca.
+    #[arg(long, requires_all = ["tls_key", "tls_ca"])]
+    pub(crate) tls_cert: Option<std::path::PathBuf>,
+    /// TLS: this station's private key (PEM).
+    #[arg(long)]
+    pub(crate) tls_key: Option<std::path::PathBuf>,
+    /// TLS: the certificate authority that signs the peers' certificates (PEM).
+    #[arg(long)]
+    pub(crate) tls_ca: Option<std::path::PathBuf>,
+}
+
+impl LinkOptions {
+    pub(crate) fn apci(&self) -> anyhow::Result<iec60870::cs104::config::ApciConfig> {
+        let seconds = |value: f64, name: &str| {
+            if value.is_finite() && value > 0.0 && value < 86_400.0 {
+                Ok(std::time::Duration::from_secs_f64(value))
+            } else {
+                Err(anyhow::anyhow!(
+                    "{name} must be a positive number of seconds"
+                ))
+            }
+        };
+        let mut config = iec60870::cs104::config::ApciConfig::default();
+        config.k = self.k;
+        config.w = self.w;
+        config.t1 = seconds(self.t1, "--t1")?;
+        config.t2 = seconds(self.t2, "--t2")?;
+        config.t3 = seconds(self.t3, "--t3")?;
+        config
+            .validate()
+            .map_err(|error| anyhow::anyhow!("invalid link parameters: {error}"))?;
+        Ok(config)
+    }
+
+    pub(crate) fn tls(&self) -> anyhow::Result<Option<iec60870::cs104::tls::TlsPem>> {
+        match (&self.tls_cert, &self.tls_key, &self.tls_ca) {
+            (Some(certificate), Some(private_key), Some(trust_anchors)) => {
+                let files = iec60870::cs104::tls::TlsFiles {
+                    certificate: certificate.clone(),
+                    private_key: private_key.clone(),
+                    trust_anchors: trust_anchors.clone(),
+                };
+                Ok(Some(files.load()?))
+            }
+            _ => Ok(None),
+        }
+    }
+}
+
+/// The `stanice iec104` subcommands.
+#[derive(Subcommand)]
+pub(crate) enum Iec104Command {
+    /// Run an outstation (controlled station) serving the points of a CSV file.
+    Server(server::ServerArgs),
+    /// Connect to an outstation and print what it sends.
+    Client(client::ClientArgs),
+    /// Send one command and print its confirmation sequence.
+    Command(command::CommandArgs),
+    /// Decode APDUs (or bare ASDUs) given as hex.
+    Decode(decode::DecodeArgs),
+}
+
+pub(crate) async fn run(command: Iec104Command) -> anyhow::Result<ExitCode> {
+    match command {
+        Iec104Command::Server(args) => server::run(args).await,
+        Iec104Command::Client(args) => client::run(args).await,
+        Iec104Command::Command(args) => command::run(args).await,
+        Iec104Command::Decode(args) => decode::run(&args),
+    }
+}

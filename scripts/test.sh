@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# The full test suite, as CI runs it: installs what the tests need (tshark, the c104
+# peer), then formatting, lints, unit/property/state-machine tests, interoperability
+# tests against c104 with tshark capture checks, and a short fuzz smoke run.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+echo "== installing test dependencies"
+bash scripts/install-test-deps.sh
+
+echo "== formatting"
+cargo fmt --all -- --check
+
+echo "== lints"
+cargo clippy --workspace --all-targets --locked -- -D warnings
+
+echo "== tests (unit, property, state machine, interoperability with c104, tshark)"
+# The interoperability tests refuse to skip when STANICE_REQUIRE_PEERS=1.
+export STANICE_REQUIRE_PEERS=1
+cargo test --workspace --locked
+
+echo "== fuzz smoke"
+bash scripts/fuzz-smoke.sh
