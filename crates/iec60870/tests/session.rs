@@ -1111,6 +1111,16 @@ fn redundancy_switch_over_retransmits_in_order() {
 }
 
 #[test]
+fn i_frame_on_a_deactivated_connection_closes_it() {
+    let t0 = Instant::now();
+    let mut server = started_server(ApciConfig::default(), t0);
+    server.handle_input(t0, &i_frame(0, 0, b"a"));
+    server.deactivate();
+    server.handle_input(t0, &i_frame(1, 0, b"b"));
+    assert_eq!(closed_reason(&server), Some(CloseReason::IFrameWhileStopped));
+}
+
+#[test]
 fn deactivate_is_ignored_on_a_client_and_during_pending_stop() {
     let t0 = Instant::now();
     let mut client = started_client(ApciConfig::default(), t0);
