@@ -1117,7 +1117,10 @@ fn i_frame_on_a_deactivated_connection_closes_it() {
     server.handle_input(t0, &i_frame(0, 0, b"a"));
     server.deactivate();
     server.handle_input(t0, &i_frame(1, 0, b"b"));
-    assert_eq!(closed_reason(&server), Some(CloseReason::IFrameWhileStopped));
+    assert_eq!(
+        closed_reason(&server),
+        Some(CloseReason::IFrameWhileStopped)
+    );
 }
 
 #[test]
