@@ -1,0 +1,109 @@
+#!/usr/bin/env bash
+# Install the tools the IEC 60870-5-104 interoperability tests need:
+#   * tshark  (Debian package; its iec60870_104 / iec60870_asdu dissectors
+#              check captures of our traffic)
+#   * c104    (PyPI; Python bindings of lib60870-C, the independent 104 peer
+#              used by tests/peer/c104_server.py and c104_client.py)
+#
+# Choice of Python environment: c104 is installed with pip into the machine's
+# own python3 (no venv). c104 ships a manylinux wheel for CPython 3.11 on
+# x86_64, so nothing is compiled and no build dependencies are needed. A venv
+# would only add an activation step to every CI command; the tests call plain
+# `python3`. If a future machine lacks a wheel, pip falls back to the sdist,
+# which needs cmake and a C++ compiler: we install those (Debian packages
+# cmake, g++) only in that case.
+#
+# Safe to run repeatedly: every step checks first and does nothing when the
+# pinned version is already there. Non-interactive (CI=true, no stdin).
+#
+# Usage: bash scripts/install-test-deps.sh
+set -euo pipefail
+
+C104_VERSION="2.2.1"   # verified against tests/peer/*.py (see tests/peer/README.md)
+PYTHON="${PYTHON:-python3}"
+
+export DEBIAN_FRONTEND=noninteractive
+export PIP_DISABLE_PIP_VERSION_CHECK=1
+export PIP_ROOT_USER_ACTION=ignore
+
+log() { echo "[install-test-deps] $*"; }
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then
+    if command -v sudo >/dev/null 2>&1; then SUDO="sudo -n"; else
+        log "not root and no sudo: cannot install Debian packages"; fi
+fi
+
+APT_UPDATED=0
+apt_update_once() {
+    if [ "$APT_UPDATED" -eq 0 ]; then
+        log "apt-get update"
+        $SUDO apt-get update -qq
+        APT_UPDATED=1
+    fi
+}
+
+apt_install() {
+    # apt_install PKG...: installs only the packages that are missing.
+    local missing=()
+    for p in "$@"; do
+        if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+            missing+=("$p")
+        fi
+    done
+    if [ "${#missing[@]}" -eq 0 ]; then
+        log "already installed: $*"
+        return 0
+    fi
+    apt_update_once
+    log "apt-get install ${missing[*]}"
+    $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}" </dev/null
+}
+
+# ---------------------------------------------------------------- tshark
+if command -v tshark >/dev/null 2>&1; then
+    log "tshark present: $(tshark --version 2>/dev/null | head -n1)"
+else
+    # wireshark-common asks whether non-root users may capture; answer "no"
+    # up front so the install never prompts.
+    echo "wireshark-common wireshark-common/install-setuid boolean false" \
+        | $SUDO debconf-set-selections
+    apt_install tshark
+    log "tshark installed: $(tshark --version 2>/dev/null | head -n1)"
+fi
+
+# ---------------------------------------------------------------- c104
+c104_installed_version() {
+    "$PYTHON" - <<'EOF' 2>/dev/null || true
+import importlib.metadata as m
+try:
+    import c104  # noqa: F401  (the import itself must work, not only the metadata)
+    print(m.version("c104"))
+except Exception:
+    pass
+EOF
+}
+
+have="$(c104_installed_version)"
+if [ "$have" = "$C104_VERSION" ]; then
+    log "c104 $have present"
+else
+    log "c104 present: '${have:-none}', want $C104_VERSION"
+    if ! "$PYTHON" -m pip install -q --only-binary=:all: "c104==$C104_VERSION"; then
+        log "no binary wheel for this platform; building c104 from source"
+        apt_install cmake g++ make
+        "$PYTHON" -m pip install -q "c104==$C104_VERSION"
+    fi
+    have="$(c104_installed_version)"
+    if [ "$have" != "$C104_VERSION" ]; then
+        log "ERROR: c104 $C104_VERSION did not install (found '${have:-none}')"
+        exit 1
+    fi
+    log "c104 $have installed"
+fi
+
+# ---------------------------------------------------------------- verify
+# c104 2.2.1 has no c104.__version__ attribute (its .pyi claims one); the
+# compiled module c104._c104 carries it.
+log "verify: $("$PYTHON" -c 'import c104, c104._c104 as m; print("c104", m.__version__)')"
+log "verify: $(tshark --version 2>/dev/null | head -n1)"
