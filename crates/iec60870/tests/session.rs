@@ -618,6 +618,30 @@ fn w_received_frames_are_acknowledged_at_once() {
 }
 
 #[test]
+fn acknowledge_received_sends_an_s_frame_at_once() {
+    let t0 = Instant::now();
+    let mut client = started_client(ApciConfig::default(), t0);
+    for n in 0..3u16 {
+        client.handle_input(t0, &i_frame(n, 0, &[n as u8]));
+    }
+    assert_eq!(transmitted(&mut client), vec![], "3 < w: waiting for t2");
+    assert_eq!(client.poll_timeout(), Some(t0 + 10 * SEC));
+    client.acknowledge_received();
+    assert_eq!(transmitted(&mut client), vec![s(3)]);
+    assert_eq!(client.poll_timeout(), Some(t0 + 20 * SEC), "t2 stopped");
+    client.acknowledge_received();
+    assert_eq!(
+        transmitted(&mut client),
+        vec![],
+        "nothing left to acknowledge"
+    );
+    client.handle_input(t0, &i_frame(3, 0, &[3]));
+    client.close(CloseReason::LocalRequest);
+    client.acknowledge_received();
+    assert_eq!(transmitted(&mut client), vec![]);
+}
+
+#[test]
 fn frames_read_together_get_one_acknowledgement() {
     let t0 = Instant::now();
     let mut client = started_client(ApciConfig::default(), t0);

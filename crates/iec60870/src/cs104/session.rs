@@ -546,6 +546,21 @@ impl Session {
             .collect()
     }
 
+    /// Acknowledges at once every I frame received so far: queues an S frame carrying
+    /// V(R) if any received I frame is not yet acknowledged (does nothing otherwise, nor
+    /// once closed), and stops t2.
+    ///
+    /// Call it before closing a connection politely, so that what the application has
+    /// already received is not retransmitted by the peer to the next connection (a
+    /// controlled station keeps unacknowledged events for its redundancy group). Then
+    /// call [`Session::poll_transmit`] and write the bytes out *before*
+    /// [`Session::close`], which drops whatever is still queued.
+    pub fn acknowledge_received(&mut self) {
+        if !self.core.is_closed() {
+            self.core.send_ack();
+        }
+    }
+
     /// Closes the session (local request, peer closed, transport error): emits
     /// [`SessionEvent::Closed`] and drops queued bytes. Unacknowledged ASDUs stay
     /// available to [`Session::take_unacknowledged`]. Does nothing if already closed.
