@@ -156,6 +156,8 @@ class Outstation:
         self._build_points()
         self.server.on_connect(callable=self._on_connect)
         self.server.on_receive_raw(callable=self._on_receive_raw)
+        self.wire_spont_objects = 0
+        self.server.on_send_raw(callable=self._on_send_raw)
         self.server.on_unexpected_message(callable=self._on_unexpected)
 
     # ------------------------------------------------------------ points
@@ -255,6 +257,15 @@ class Outstation:
                       "select": True, "cot": COT_NAMES.get(d["cot"], d["cot"]),
                       "raw": data[12:].hex()})
 
+    def _on_send_raw(self, server: c104.Server, data: bytes) -> None:
+        # count spontaneous objects that really left (c104's transmit() also
+        # returns True for messages its full queue later drops)
+        if len(data) > 8 and not data[2] & 0x01 and (data[8] & 0x3F) == 3:
+            self.wire_spont_objects += data[7] & 0x7F
+        if self.args.raw_log:
+            emit({"event": "raw", "dir": "tx", "hex": data.hex(),
+                  "explain": c104.explain_bytes(apdu=data)})
+
     def _on_command(self, point: c104.Point, previous_info: c104.Information,
                     message: c104.IncomingMessage) -> c104.ResponseState:
         ioa = point.io_address
@@ -329,9 +340,20 @@ class Outstation:
             # next event time, sleeping at least 1 ms and at most 50 ms
             nxt = t0 + (k + 1) / rate
             self.stop_event.wait(min(0.05, max(0.001, nxt - time.monotonic())))
+        gen_seconds = time.monotonic() - t0
+        # let the send queue drain (bounded): wait until the wire count rests
+        last, rest_since = -1, time.monotonic()
+        dl = Deadline(3.0)
+        while not dl.expired() and not self.stop_event.is_set():
+            cur = self.wire_spont_objects
+            if cur != last:
+                last, rest_since = cur, time.monotonic()
+            elif time.monotonic() - rest_since > 0.3:
+                break
+            time.sleep(0.05)
         emit({"event": "spontaneous_done", "sent": self.spont_sent,
-              "failed": self.spont_failed,
-              "seconds": round(time.monotonic() - t0, 3)})
+              "failed": self.spont_failed, "on_wire": self.wire_spont_objects,
+              "seconds": round(gen_seconds, 3)})
 
     # ------------------------------------------------------------ run
     def request_stop(self, reason):

@@ -190,7 +190,7 @@ def analyse(path, port, allow_undecoded=False):
     }
     expert_candidates = set()
     nfields = len(FIELDS)
-    for line in out.splitlines():
+    for line in out.split("\n"):  # not splitlines(): it splits on \x1e too
         if not line.strip():
             continue
         cols = line.split("\t", nfields - 1)
