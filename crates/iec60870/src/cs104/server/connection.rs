@@ -28,6 +28,10 @@ use super::{Selection, Shared};
 /// Bytes read from the socket at a time.
 const READ_BUFFER: usize = 16 * 1024;
 
+/// Points an interrogation reads from the image at a time (two full SQ=1 ASDUs of single
+/// points; the image's lock is held only while they are copied).
+const INTERROGATION_CHUNK: usize = 2 * 127;
+
 /// A command whose outcome the handler has decided.
 struct CommandReply {
     request: Vec<u8>,
@@ -126,8 +130,16 @@ impl Connection {
         let mut input = vec![0u8; READ_BUFFER];
         let mut output = Vec::with_capacity(READ_BUFFER);
         let shared = Arc::clone(&self.shared);
-        let notify = shared.groups.get(self.group).map(|group| &group.notify);
+        let Some(group) = shared.groups.get(self.group) else {
+            return "no such redundancy group".to_owned();
+        };
         loop {
+            // Registered before the group's queue is looked at, so that an event queued
+            // from now on wakes this connection (no lost wake-up between the check and the
+            // wait).
+            let notified = group.notify.notified();
+            tokio::pin!(notified);
+            notified.as_mut().enable();
             let now = tokio::time::Instant::now().into_std();
             self.check_still_active();
             while let Some(event) = self.session.poll_event() {
@@ -135,11 +147,12 @@ impl Connection {
                     SessionEvent::Asdu(asdu) => self.handle_asdu(now, asdu),
                     SessionEvent::Started => self.activate(),
                     SessionEvent::Stopped => self.release_group(),
-                    SessionEvent::Acknowledged { .. } => {}
+                    // At once: a STOPDT con or a close may follow in the same batch, and
+                    // what the client acknowledged must not go back to the group's queue.
+                    SessionEvent::Acknowledged { .. } => self.forget_acknowledged(),
                     SessionEvent::Closed(reason) => return reason.to_string(),
                 }
             }
-            self.forget_acknowledged();
             self.fill_window(now);
             while self.session.poll_transmit(&mut output) {}
             if !output.is_empty() {
@@ -165,7 +178,7 @@ impl Connection {
                 () = sleep_until(deadline) => {
                     self.session.handle_timeout(tokio::time::Instant::now().into_std());
                 }
-                () = notified(notify), if active => {}
+                () = &mut notified, if active => {}
                 Some(reply) = replies.recv() => self.finish_command(reply),
                 _ = shutdown.changed() => return "server shut down".to_owned(),
             }
@@ -190,7 +203,16 @@ impl Connection {
             self.active = false;
             self.interrogation = None;
             self.responses.clear();
-            // The group took over what this connection had in flight.
+            // The group gave what this connection had in flight to the new connection;
+            // t1 must not close this (now standby) connection for frames whose delivery
+            // is no longer its business. The client may still acknowledge them here.
+            let handed_over = self.session.take_unacknowledged();
+            if !handed_over.is_empty() {
+                tracing::debug!(
+                    count = handed_over.len(),
+                    "unacknowledged frames handed to the new connection"
+                );
+            }
             for from_group in self.sent_from_group.iter_mut() {
                 *from_group = false;
             }
@@ -231,6 +253,7 @@ impl Connection {
         if !self.active {
             return;
         }
+        self.forget_acknowledged();
         self.active = false;
         if let Some(group) = self.shared.groups.get(self.group) {
             let mut state = group.lock();
@@ -272,15 +295,11 @@ impl Connection {
         }
     }
 
-    fn send(&mut self, now: std::time::Instant, asdu: Vec<u8>, from_group: bool) -> bool {
+    /// Sends a response or interrogation ASDU (not from the group's queue).
+    fn send(&mut self, now: std::time::Instant, asdu: Vec<u8>) -> bool {
         match self.session.send_asdu(now, &asdu) {
             Ok(()) => {
-                self.sent_from_group.push_back(from_group);
-                if from_group {
-                    if let Some(group) = self.group() {
-                        group.lock().in_flight.push_back(asdu);
-                    }
-                }
+                self.sent_from_group.push_back(false);
                 true
             }
             Err(error) => {
@@ -293,7 +312,7 @@ impl Connection {
     fn fill_window(&mut self, now: std::time::Instant) {
         while self.session.can_send() {
             if let Some(response) = self.responses.pop_front() {
-                if !self.send(now, response, false) {
+                if !self.send(now, response) {
                     break;
                 }
                 continue;
@@ -305,23 +324,18 @@ impl Connection {
             };
             if let Some(asdu) = from_interrogation {
                 self.prefer_interrogation = false;
-                if !self.send(now, asdu, false) {
+                if !self.send(now, asdu) {
                     break;
                 }
                 continue;
             }
-            if self.active {
-                if let Some(asdu) = self.next_group_asdu() {
-                    self.prefer_interrogation = true;
-                    if !self.send(now, asdu, true) {
-                        break;
-                    }
-                    continue;
-                }
+            if self.active && self.send_group_asdu(now) {
+                self.prefer_interrogation = true;
+                continue;
             }
             match self.next_interrogation_asdu() {
                 Some(asdu) => {
-                    if !self.send(now, asdu, false) {
+                    if !self.send(now, asdu) {
                         break;
                     }
                 }
@@ -330,32 +344,62 @@ impl Connection {
         }
     }
 
-    /// The next ASDU from the group: a retransmission, or the oldest buffered events of
-    /// one type and cause packed together.
-    fn next_group_asdu(&mut self) -> Option<Vec<u8>> {
+    /// Sends the next ASDU of the group: a retransmission, or the oldest buffered events
+    /// of one type and cause packed together. Returns whether one was sent.
+    ///
+    /// Everything happens under the group's lock, after checking that this connection
+    /// still owns the group: another connection may have been started since this one
+    /// last looked, and must then get every event.
+    fn send_group_asdu(&mut self, now: std::time::Instant) -> bool {
         let params = self.shared.config.asdu;
         let common_address = self.shared.config.common_address;
-        let group = self.shared.groups.get(self.group)?;
+        let Some(group) = self.shared.groups.get(self.group) else {
+            return false;
+        };
         let mut state = group.lock();
-        if let Some(asdu) = state.retransmit.pop_front() {
-            return Some(asdu);
+        if state.active != Some(self.id) {
+            return false;
         }
-        let first = state.events.pop_front()?;
-        let capacity = objects_per_asdu(first.type_id, &params);
-        let mut asdu = Asdu::new(first.type_id, Cot::new(first.cause), common_address);
-        asdu.objects.push(first.object);
-        while asdu.objects.len() < capacity {
-            match state.events.front() {
-                Some(next) if next.type_id == asdu.type_id && next.cause == asdu.cot.cause => {
-                    if let Some(next) = state.events.pop_front() {
-                        asdu.objects.push(next.object);
+        let asdu = match state.retransmit.pop_front() {
+            Some(asdu) => asdu,
+            None => {
+                let Some(first) = state.events.pop_front() else {
+                    return false;
+                };
+                let capacity = objects_per_asdu(first.type_id, &params);
+                let mut asdu = Asdu::new(first.type_id, Cot::new(first.cause), common_address);
+                asdu.objects.push(first.object);
+                while asdu.objects.len() < capacity {
+                    match state.events.front() {
+                        Some(next)
+                            if next.type_id == asdu.type_id && next.cause == asdu.cot.cause =>
+                        {
+                            if let Some(next) = state.events.pop_front() {
+                                asdu.objects.push(next.object);
+                            }
+                        }
+                        _ => break,
                     }
                 }
-                _ => break,
+                match encode(&asdu, &params) {
+                    Some(bytes) => bytes,
+                    // Logged by encode; the events are lost, but the queue goes on.
+                    None => return true,
+                }
+            }
+        };
+        match self.session.send_asdu(now, &asdu) {
+            Ok(()) => {
+                state.in_flight.push_back(asdu);
+                self.sent_from_group.push_back(true);
+                true
+            }
+            Err(error) => {
+                tracing::debug!(%error, "could not send");
+                state.retransmit.push_front(asdu);
+                false
             }
         }
-        drop(state);
-        encode(&asdu, &params)
     }
 
     /// The next ASDU of the running interrogation, reading the image a chunk at a time so
@@ -363,62 +407,75 @@ impl Connection {
     fn next_interrogation_asdu(&mut self) -> Option<Vec<u8>> {
         let params = self.shared.config.asdu;
         let common_address = self.shared.config.common_address;
-        let interrogation = self.interrogation.as_mut()?;
-        if let Some(asdu) = interrogation.pending.pop_front() {
-            return Some(asdu);
-        }
-        if interrogation.finished {
-            let termination = mirror_with_cause(
-                &interrogation.request,
-                &params,
-                Cause::ACTIVATION_TERMINATION,
-                false,
-            )
-            .ok();
-            self.interrogation = None;
-            return termination;
-        }
-        // One run of points of the same type, as long as one ASDU can hold with SQ=1.
-        let image = self.shared.read_image();
-        let mut run: Vec<InformationObject> = Vec::new();
-        let mut run_type: Option<TypeId> = None;
-        let mut last = interrogation.after;
-        let mut exhausted = true;
-        for point in image.monitor_after(interrogation.after) {
-            if !answers(point, interrogation.qualifier, interrogation.cause) {
-                last = Some(point.ioa);
-                continue;
+        loop {
+            let interrogation = self.interrogation.as_mut()?;
+            if let Some(asdu) = interrogation.pending.pop_front() {
+                return Some(asdu);
             }
-            let gi_type = untagged(point.event_type);
-            match run_type {
-                None => run_type = Some(gi_type),
-                Some(current) if current != gi_type => {
-                    exhausted = false;
+            if interrogation.finished {
+                let termination = mirror_with_cause(
+                    &interrogation.request,
+                    &params,
+                    Cause::ACTIVATION_TERMINATION,
+                    false,
+                )
+                .ok();
+                self.interrogation = None;
+                return termination;
+            }
+            // One run of points of the same type, at most CHUNK of them.
+            let image = self.shared.read_image();
+            let mut run: Vec<InformationObject> = Vec::new();
+            let mut run_type: Option<TypeId> = None;
+            let mut scanned = interrogation.after;
+            let mut more = false;
+            let mut cut = false;
+            for point in image.monitor_after(interrogation.after) {
+                if !answers(point, interrogation.qualifier) {
+                    scanned = Some(point.ioa);
+                    continue;
+                }
+                let gi_type = untagged(point.event_type);
+                match run_type {
+                    None => run_type = Some(gi_type),
+                    Some(current) if current != gi_type => {
+                        more = true;
+                        break;
+                    }
+                    Some(_) => {}
+                }
+                if run.len() >= INTERROGATION_CHUNK {
+                    more = true;
+                    cut = true;
                     break;
                 }
-                Some(_) => {}
+                run.push(point.as_object());
+                scanned = Some(point.ioa);
             }
-            if run.len() >= 127 {
-                exhausted = false;
-                break;
-            }
-            run.push(point.as_object());
-            last = Some(point.ioa);
-        }
-        drop(image);
-        interrogation.after = last;
-        if exhausted {
-            interrogation.finished = true;
-        }
-        if let Some(type_id) = run_type {
+            drop(image);
+            let Some(type_id) = run_type else {
+                interrogation.finished = true;
+                continue;
+            };
             let cot = Cot::new(interrogation.cause);
-            for asdu in pack_objects(type_id, cot, common_address, run, &params, true) {
-                if let Some(bytes) = encode(&asdu, &params) {
+            let mut asdus: Vec<Asdu> =
+                pack_objects(type_id, cot, common_address, run, &params, true).collect();
+            // A chunk cut by its size ends in an ASDU that may be partly filled: leave its
+            // objects to the next chunk, so that only the last ASDU of a run is not full.
+            if cut && asdus.len() > 1 {
+                asdus.pop();
+                if let Some(object) = asdus.last().and_then(|asdu| asdu.objects.last()) {
+                    scanned = Some(object.ioa);
+                }
+            }
+            interrogation.after = scanned;
+            interrogation.finished = !more;
+            for asdu in &asdus {
+                if let Some(bytes) = encode(asdu, &params) {
                     interrogation.pending.push_back(bytes);
                 }
             }
         }
-        self.next_interrogation_asdu()
     }
 
     fn reply(&mut self, request: &[u8], cause: Cause, negative: bool) {
@@ -456,12 +513,20 @@ impl Connection {
         let asdu = match Asdu::decode(&raw, &params) {
             Ok(asdu) => asdu,
             Err(error) => {
-                tracing::warn!(%error, %type_id, "malformed ASDU: refused");
-                self.reply(&raw, Cause::UNKNOWN_TYPE, true);
+                // Not answered: a mirror would be just as malformed (the client could not
+                // decode it either), and no cause says "malformed". The connection stays.
+                tracing::warn!(%error, %type_id, bytes = ?raw, "malformed ASDU ignored");
                 return;
             }
         };
         tracing::debug!(%asdu, "request");
+        // A request to the broadcast address is answered once, as this station: every
+        // confirmation, datum and termination carries the station's own address.
+        let raw = if broadcast {
+            with_station_address(&raw, &params, station)
+        } else {
+            raw
+        };
         let cause = asdu.cot.cause;
         match type_id {
             TypeId::C_IC_NA_1 => self.handle_interrogation(raw, &asdu),
@@ -550,14 +615,8 @@ impl Connection {
             return self.reply(&raw, Cause::ACTIVATION_CON, true);
         }
         self.reply(&raw, Cause::ACTIVATION_CON, false);
-        // Answer with the station's own address even to a broadcast request.
-        let request = with_station_address(
-            &raw,
-            &self.shared.config.asdu,
-            self.shared.config.common_address,
-        );
         self.interrogation = Some(Interrogation {
-            request,
+            request: raw,
             qualifier,
             cause,
             after: None,
@@ -623,10 +682,20 @@ impl Connection {
         let Some(point) = point else {
             return self.reply(&raw, Cause::UNKNOWN_OBJECT_ADDRESS, true);
         };
+        // The event type with the value's time tag when it has one of the type's kind,
+        // else the type without time tag (a value set without time, or with a tag of
+        // another kind through `ServerHandle::set`, must still be answered).
         let (type_id, time) = match point.time {
-            Some(time) => (point.event_type, Some(time)),
-            None => (untagged(point.event_type), None),
+            Some(time) if time.kind() == point.event_type.time_tag() => {
+                (point.event_type, Some(time))
+            }
+            _ => (untagged(point.event_type), None),
         };
+        if time.is_none() && type_id.time_tag() != crate::asdu::TimeTagKind::None {
+            // A type that exists only with a time tag and has none: nothing to answer with.
+            tracing::warn!(ioa = %point.ioa, %type_id, "read of a point without a time tag");
+            return self.reply(&raw, Cause::UNKNOWN_OBJECT_ADDRESS, true);
+        }
         let mut answer = Asdu::new(
             type_id,
             Cot::new(Cause::REQUEST),
@@ -707,8 +776,14 @@ impl Connection {
                     && selection.element == without_select(&object.element)
                     && selection.deadline >= tokio_now
             });
-            // A selection is used once, matched or not.
-            selections.remove(&key);
+            // A selection is used once, matched or not, but only by the connection that
+            // made it: another connection's attempt must not cancel it.
+            if selections
+                .get(&key)
+                .is_some_and(|selection| selection.connection == self.id)
+            {
+                selections.remove(&key);
+            }
             drop(selections);
             if !matches {
                 tracing::warn!(ioa = %object.ioa, "execute without a matching selection: refused");
@@ -720,7 +795,7 @@ impl Connection {
             common_address: asdu.common_address,
             ioa: object.ioa,
             element: object.element.clone(),
-            time: object.time.clone(),
+            time: object.time,
             originator,
             select,
             peer: self.peer,
@@ -755,9 +830,13 @@ impl Connection {
     }
 }
 
-fn answers(point: &super::MonitorPoint, qualifier: u8, _cause: Cause) -> bool {
-    // Integrated totals answer counter interrogation, not station interrogation.
-    !matches!(point.element, Element::IntegratedTotal(_)) && point.answers_interrogation(qualifier)
+/// Whether a point answers a (station or group) interrogation. Integrated totals answer
+/// counter interrogation instead, and types that exist only with a time tag (protection
+/// events) cannot be sent without one, as an interrogation must.
+fn answers(point: &super::MonitorPoint, qualifier: u8) -> bool {
+    !matches!(point.element, Element::IntegratedTotal(_))
+        && untagged(point.event_type).time_tag() == crate::asdu::TimeTagKind::None
+        && point.answers_interrogation(qualifier)
 }
 
 /// The type without time tag (`M_SP_TB_1` -> `M_SP_NA_1`); a type that has no such
@@ -845,13 +924,6 @@ fn with_station_address(raw: &[u8], params: &AsduParams, station: CommonAddress)
 async fn sleep_until(deadline: Option<tokio::time::Instant>) {
     match deadline {
         Some(deadline) => tokio::time::sleep_until(deadline).await,
-        None => std::future::pending().await,
-    }
-}
-
-async fn notified(notify: Option<&tokio::sync::Notify>) {
-    match notify {
-        Some(notify) => notify.notified().await,
         None => std::future::pending().await,
     }
 }

@@ -94,7 +94,8 @@ pub(crate) struct GroupState {
 pub(crate) struct Group {
     pub(crate) config: RedundancyGroupConfig,
     pub(crate) state: Mutex<GroupState>,
-    /// Wakes the active connection when something was queued.
+    /// Wakes the group's connections when something was queued or the group changed
+    /// hands (`notify_waiters`: connections register before looking at the queue).
     pub(crate) notify: Notify,
     capacity: usize,
     policy: OverflowPolicy,
@@ -158,7 +159,10 @@ impl Group {
             state.events.push_back(event);
         }
         drop(state);
-        self.notify.notify_one();
+        // Every connection of the group registers for this before it looks at the queue,
+        // so waking all of them loses nothing; waking one (notify_one) could wake a
+        // connection that has just lost the group to another and leave the new one asleep.
+        self.notify.notify_waiters();
     }
 
     pub(crate) fn stats(&self) -> GroupStats {

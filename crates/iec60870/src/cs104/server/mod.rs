@@ -453,9 +453,7 @@ impl ServerHandle {
             }
             crate::asdu::TimeTagKind::None => None,
         };
-        self.shared
-            .write_image()
-            .set(ioa, element.clone(), time.clone())?;
+        self.shared.write_image().set(ioa, element.clone(), time)?;
         let object = InformationObject { ioa, element, time };
         for group in &self.shared.groups {
             group.push(QueuedEvent {
