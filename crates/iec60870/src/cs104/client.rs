@@ -153,7 +153,8 @@ enum Request {
         asdu: Asdu,
         reply: oneshot::Sender<Result<RequestOutcome, ClientError>>,
     },
-    Close,
+    /// Stop; the sender is dropped once the connection is closed.
+    Close(oneshot::Sender<()>),
 }
 
 /// Sends requests to a running client. Cloning is cheap.
@@ -286,9 +287,17 @@ impl ClientHandle {
         self.exchange(asdu).await
     }
 
-    /// Closes the connection and stops the client.
+    /// Closes the connection politely and stops the client: acknowledges every ASDU
+    /// received (so that the server does not send them again to the next connection of
+    /// its redundancy group), closes the socket, and returns once that is done. Requests
+    /// still open fail with [`ClientError::Disconnected`]; later ones with
+    /// [`ClientError::Stopped`].
     pub async fn close(&self) {
-        let _ = self.requests.send(Request::Close).await;
+        let (done, closed) = oneshot::channel();
+        if self.requests.send(Request::Close(done)).await.is_ok() {
+            // Err once the client task dropped the sender: it has finished.
+            let _ = closed.await;
+        }
     }
 }
 
@@ -407,7 +416,21 @@ async fn run(
     loop {
         let mut connected_once = false;
         for address in &config.addresses {
-            match connect(&config, address).await {
+            let attempt = connect(&config, address);
+            tokio::pin!(attempt);
+            // Requests made while connecting fail at once rather than wait for t0.
+            let attempt = loop {
+                tokio::select! {
+                    result = &mut attempt => break result,
+                    request = requests.recv() => match request {
+                        None | Some(Request::Close(_)) => return,
+                        Some(Request::Exchange { reply, .. }) => {
+                            let _ = reply.send(Err(ClientError::NotConnected));
+                        }
+                    },
+                }
+            };
+            match attempt {
                 Ok((stream, peer)) => {
                     connected_once = true;
                     delay = config.reconnect_delay;
@@ -458,7 +481,7 @@ async fn run(
                 tokio::select! {
                     () = &mut wait => break,
                     request = requests.recv() => match request {
-                        None | Some(Request::Close) => return,
+                        None | Some(Request::Close(_)) => return,
                         Some(Request::Exchange { reply, .. }) => {
                             let _ = reply.send(Err(ClientError::NotConnected));
                         }
@@ -525,6 +548,7 @@ where
     let mut input = vec![0u8; 16 * 1024];
     let mut output = Vec::with_capacity(16 * 1024);
     let mut started = false;
+    let mut closing: Option<oneshot::Sender<()>> = None;
     let result = 'connection: loop {
         let now = tokio::time::Instant::now().into_std();
         while let Some(event) = session.poll_event() {
@@ -660,7 +684,11 @@ where
                 }
             }
             request = requests.recv() => match request {
-                None | Some(Request::Close) => break DriveEnd::Closed,
+                None => break DriveEnd::Closed,
+                Some(Request::Close(done)) => {
+                    closing = Some(done);
+                    break DriveEnd::Closed;
+                }
                 Some(Request::Exchange { asdu, reply }) => {
                     if !started {
                         let _ = reply.send(Err(ClientError::NotConnected));
@@ -692,12 +720,28 @@ where
         }
     };
     if let DriveEnd::Closed = result {
-        // Leave politely: acknowledge what we received and close the socket.
-        session.close(crate::cs104::session::CloseReason::LocalRequest);
+        // Leave politely: acknowledge what we received (the S frame must be written
+        // before `close`, which drops whatever is still queued), then close the socket.
+        // A server that stopped reading must not hold the close up beyond t1.
+        session.acknowledge_received();
+        output.clear();
         while session.poll_transmit(&mut output) {}
-        let _ = writer.write_all(&output).await;
-        let _ = writer.shutdown().await;
+        let farewell = async {
+            if !output.is_empty() {
+                let _ = writer.write_all(&output).await;
+            }
+            let _ = writer.shutdown().await;
+        };
+        if tokio::time::timeout(config.apci.t1, farewell)
+            .await
+            .is_err()
+        {
+            tracing::warn!("the server did not take the closing acknowledgement within t1");
+        }
+        session.close(crate::cs104::session::CloseReason::LocalRequest);
     }
+    // Dropping the sender tells `ClientHandle::close` that the connection is closed.
+    drop(closing);
     end(pending, result)
 }
 
