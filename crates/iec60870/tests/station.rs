@@ -1,0 +1,33 @@
+//! Integration tests of the IEC 104 server and client over real loopback TCP.
+//!
+//! Every test starts its own server on 127.0.0.1 port 0 and talks to it with the library's
+//! client or with `RawPeer`, a hand-driven controlling station for what the client cannot
+//! do (stay stopped, send garbage or raw ASDUs, act as a standby connection). Every wait is
+//! bounded by a time-out.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing,
+    missing_docs
+)]
+
+#[path = "station/common.rs"]
+mod common;
+
+#[path = "station/client.rs"]
+mod client;
+#[path = "station/commands.rs"]
+mod commands;
+#[path = "station/events.rs"]
+mod events;
+#[path = "station/interrogation.rs"]
+mod interrogation;
+#[path = "station/redundancy.rs"]
+mod redundancy;
+#[path = "station/requests.rs"]
+mod requests;
+#[path = "station/robustness.rs"]
+mod robustness;
+#[path = "station/tls.rs"]
+mod tls;
