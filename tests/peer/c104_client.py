@@ -34,8 +34,9 @@ import time
 
 import c104
 
-from peer_common import (Deadline, c104_version, emit, info_extra, parse_apdu,
-                         quality_to_json, time_to_json, value_to_json)
+from peer_common import (Deadline, c104_version, command_select_bit, emit,
+                         info_extra, parse_apdu, quality_to_json, time_to_json,
+                         value_to_json)
 
 T = c104.Type
 
@@ -166,6 +167,10 @@ class Station:
         self.spont_first = None
         self.spont_last = None
         self.spont_last_raw = None
+        # (type id, ioa) -> [(cot, negative, select bit)] of command
+        # responses seen on the wire, for the command being sent
+        self.cmd_wire = {}
+        self.cmd_wire_event = threading.Event()
 
         timeout_s = max(args.gi_timeout if args.gi else 0, args.command_timeout)
         self.client = c104.Client(tick_rate_ms=100,
@@ -204,6 +209,12 @@ class Station:
                 return
             tid, cot, n = d["type_id"], d["cot"], d["n"]
             tn = TYPE_NAMES.get(tid, str(tid))
+            if 45 <= tid <= 64 and "ioa" in d:
+                key = (tid, d["ioa"])
+                if key in self.cmd_wire:
+                    self.cmd_wire[key].append((cot, d["negative"],
+                                               command_select_bit(data)))
+                    self.cmd_wire_event.set()
             self.raw_asdus_by_type[tn] = self.raw_asdus_by_type.get(tn, 0) + 1
             if tid < 45:  # monitor direction information objects
                 cn = COT_NAMES.get(cot, str(cot))
@@ -340,13 +351,53 @@ class Station:
         p.command_mode = (c104.CommandMode.SELECT_AND_EXECUTE if spec.select
                           else c104.CommandMode.DIRECT)
         p.value = spec.value
+        key = (int(typ.value), spec.ioa)
+        with self.lock:
+            self.cmd_wire[key] = []
+        self.cmd_wire_event.clear()
         t0 = time.perf_counter()
-        ok = bool(p.transmit(cause=c104.Cot.ACTIVATION))
+        c104_ok = bool(p.transmit(cause=c104.Cot.ACTIVATION))
         dt = time.perf_counter() - t0
+        confirm, terminated, cots = self._wire_result(key, spec.select)
+        with self.lock:
+            self.cmd_wire.pop(key, None)
+        # c104 2.2.1 can report success for a refused command: a negative
+        # ACT_CON followed at once by e.g. COT 47 (unknown IOA) flips its
+        # result back to "success". Trust the frames on the wire as well.
+        ok = c104_ok and confirm == "positive" and (terminated or not spec.select)
         emit({"event": "command_result", "type": spec.type_name, "ioa": spec.ioa,
               "value": value_to_json(p.value), "select": spec.select, "ok": ok,
-              "expected_ok": not spec.expect_fail, "seconds": round(dt, 6)})
+              "expected_ok": not spec.expect_fail, "c104_ok": c104_ok,
+              "confirm": confirm, "terminated": terminated, "cots": cots,
+              "seconds": round(dt, 6)})
         return ok == (not spec.expect_fail), ok
+
+    def _wire_result(self, key, select):
+        """Wait (at most 2 s; c104 runs callbacks from a queue) for the
+        confirmation of the EXECUTE on the wire and read it:
+        confirm = positive | negative | none, terminated = ACT_TERM seen."""
+        dl = Deadline(2.0)
+        while True:
+            with self.lock:
+                seen = list(self.cmd_wire.get(key, []))
+            confirm = "none"
+            terminated = False
+            for cot, neg, sel in seen:
+                if cot == 7 and not sel:
+                    confirm = "negative" if neg else ("positive" if confirm != "negative" else confirm)
+                elif cot == 7 and sel and neg:
+                    confirm = "negative"   # select refused
+                elif cot in (44, 45, 46, 47):
+                    confirm = "negative"
+                elif cot == 10:
+                    terminated = True
+            done = confirm == "negative" or (confirm == "positive" and (terminated or not select))
+            if done or dl.expired():
+                # a refusal may be followed by a COT 44..47 mirror: give it a moment
+                return confirm, terminated, [COT_NAMES.get(c, str(c)) + (":negative" if n else "")
+                                             for c, n, _ in seen]
+            self.cmd_wire_event.wait(0.05)
+            self.cmd_wire_event.clear()
 
     def listen(self, seconds, expect_spont):
         dl = Deadline(seconds)

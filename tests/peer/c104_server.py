@@ -262,6 +262,14 @@ class Outstation:
         # returns True for messages its full queue later drops)
         if len(data) > 8 and not data[2] & 0x01 and (data[8] & 0x3F) == 3:
             self.wire_spont_objects += data[7] & 0x7F
+        elif len(data) >= 15 and not data[2] & 0x01 and 45 <= data[6] <= 64:
+            # what c104 answered to a command (including refusals it makes
+            # on its own, e.g. EXECUTE without SELECT, which never reach
+            # on_receive)
+            d = parse_apdu(data)
+            emit({"event": "command_response", "type": _type_name(d["type_id"]),
+                  "ioa": d.get("ioa"), "cot": COT_NAMES.get(d["cot"], d["cot"]),
+                  "negative": d["negative"], "select": command_select_bit(data)})
         if self.args.raw_log:
             emit({"event": "raw", "dir": "tx", "hex": data.hex(),
                   "explain": c104.explain_bytes(apdu=data)})
