@@ -1,0 +1,1271 @@
+//! Checking of statements, expressions and initial values.
+
+use super::*;
+use crate::stdlib::{self, Builtin};
+use std::collections::HashSet;
+
+pub(super) fn check_bodies(c: &mut Checked, diags: &mut Vec<Diagnostic>) {
+    let mut calls: HashMap<PouId, Vec<(PouId, Span)>> = HashMap::new();
+    // globals' initial values
+    for gi in 0..c.globals.len() {
+        let (init, ty) = match c.globals.get(gi) {
+            Some(g) => (g.init.clone(), g.ty.clone()),
+            None => continue,
+        };
+        if let Some(init) = init {
+            let mut bc = BodyCx {
+                c,
+                diags,
+                pou: None,
+                loops: 0,
+                calls: Vec::new(),
+            };
+            bc.init(&init, &ty);
+        }
+    }
+    for pi in 0..c.pous.len() {
+        let id = PouId(pi);
+        let Some(item) = c.pous.get(pi).map(|p| p.item) else {
+            continue;
+        };
+        let Some(Item::Pou(pou)) = c.unit.items.get(item).cloned() else {
+            continue;
+        };
+        let vars = c.pous.get(pi).map(|p| p.vars.clone()).unwrap_or_default();
+        let mut bc = BodyCx {
+            c,
+            diags,
+            pou: Some(id),
+            loops: 0,
+            calls: Vec::new(),
+        };
+        for v in &vars {
+            if let Some(init) = &v.init {
+                if v.kind == VarKind::External {
+                    continue;
+                }
+                bc.init(init, &v.ty);
+            }
+        }
+        bc.stmts(&pou.body);
+        let found = std::mem::take(&mut bc.calls);
+        calls.insert(id, found);
+    }
+    // recursion: a cycle in the call graph of functions and FB bodies
+    let mut state: HashMap<PouId, u8> = HashMap::new();
+    let ids: Vec<PouId> = calls.keys().copied().collect();
+    let mut reported = HashSet::new();
+    for id in ids {
+        detect_cycle(
+            id,
+            &calls,
+            &mut state,
+            &mut Vec::new(),
+            diags,
+            c,
+            &mut reported,
+        );
+    }
+}
+
+fn detect_cycle(
+    id: PouId,
+    calls: &HashMap<PouId, Vec<(PouId, Span)>>,
+    state: &mut HashMap<PouId, u8>,
+    stack: &mut Vec<PouId>,
+    diags: &mut Vec<Diagnostic>,
+    c: &Checked,
+    reported: &mut HashSet<PouId>,
+) {
+    match state.get(&id) {
+        Some(2) => return,
+        Some(1) => return,
+        _ => {}
+    }
+    if stack.len() > 1000 {
+        return;
+    }
+    state.insert(id, 1);
+    stack.push(id);
+    for (callee, span) in calls.get(&id).map(Vec::as_slice).unwrap_or(&[]) {
+        if state.get(callee) == Some(&1) {
+            if reported.insert(*callee) {
+                let name = c.pou(*callee).map(|p| p.name.clone()).unwrap_or_default();
+                diags.push(Diagnostic::error(
+                    Code::Recursion,
+                    *span,
+                    format!("recursive call of '{name}' (IEC 61131-3 forbids recursion)"),
+                ));
+            }
+        } else {
+            detect_cycle(*callee, calls, state, stack, diags, c, reported);
+        }
+    }
+    stack.pop();
+    state.insert(id, 2);
+}
+
+struct BodyCx<'a> {
+    c: &'a mut Checked,
+    diags: &'a mut Vec<Diagnostic>,
+    pou: Option<PouId>,
+    loops: u32,
+    calls: Vec<(PouId, Span)>,
+}
+
+fn is_untyped_literal(e: &Expr) -> bool {
+    matches!(
+        e.kind,
+        ExprKind::Literal(Literal::Int(_, None)) | ExprKind::Literal(Literal::Real(_, None))
+    )
+}
+
+impl BodyCx<'_> {
+    fn err(&mut self, code: Code, span: Span, msg: impl Into<String>) {
+        self.diags.push(Diagnostic::error(code, span, msg));
+    }
+    fn set(&mut self, e: &Expr, t: Ty) -> Ty {
+        if let Some(slot) = self.c.expr_ty.get_mut(e.id.0 as usize) {
+            *slot = Some(t.clone());
+        }
+        t
+    }
+    fn name(&self, t: &Ty) -> String {
+        self.c.type_name(t)
+    }
+
+    fn init(&mut self, init: &Init, ty: &Ty) {
+        match init {
+            Init::Expr(e) => {
+                let t = self.expr(e, Some(ty));
+                self.coerce_to(e, &t, ty, "initial value");
+            }
+            Init::Array(items, span) => match ty {
+                Ty::Array(a) => {
+                    let elem = a.elem.clone();
+                    for (count, v) in items {
+                        if let Some(n) = count {
+                            let t = self.expr(n, Some(&Ty::DInt));
+                            if !t.is_int() {
+                                self.err(
+                                    Code::TypeMismatch,
+                                    n.span,
+                                    "repetition count must be an integer",
+                                );
+                            }
+                        }
+                        self.init(v, &elem);
+                    }
+                }
+                _ => self.err(
+                    Code::TypeMismatch,
+                    *span,
+                    format!("array initializer for a variable of type {}", self.name(ty)),
+                ),
+            },
+            Init::Struct(fields, span) => match ty {
+                Ty::Struct(id) => {
+                    let def = self.c.types.struct_def(*id).cloned();
+                    for (name, v) in fields {
+                        match def
+                            .as_ref()
+                            .and_then(|d| d.fields.iter().find(|f| f.key == name.key))
+                        {
+                            Some(f) => {
+                                let ft = f.ty.clone();
+                                self.init(v, &ft);
+                            }
+                            None => self.err(
+                                Code::Undeclared,
+                                name.span,
+                                format!("no field '{}' in {}", name.name, self.name(ty)),
+                            ),
+                        }
+                    }
+                }
+                Ty::Fb(id) => {
+                    let pou = self.c.pou(*id).cloned();
+                    for (name, v) in fields {
+                        match pou
+                            .as_ref()
+                            .and_then(|p| p.var(&name.key))
+                            .map(|(_, v)| v.ty.clone())
+                        {
+                            Some(ft) => self.init(v, &ft),
+                            None => self.err(
+                                Code::Undeclared,
+                                name.span,
+                                format!("no variable '{}' in {}", name.name, self.name(ty)),
+                            ),
+                        }
+                    }
+                }
+                _ => self.err(
+                    Code::TypeMismatch,
+                    *span,
+                    format!(
+                        "structure initializer for a variable of type {}",
+                        self.name(ty)
+                    ),
+                ),
+            },
+        }
+    }
+
+    /// Records an implicit conversion of `e` (natural type `from`) to `to`, or reports.
+    fn coerce_to(&mut self, e: &Expr, from: &Ty, to: &Ty, what: &str) -> bool {
+        if *from == Ty::Void || *to == Ty::Void {
+            return true;
+        }
+        if from == to {
+            return true;
+        }
+        let ok = match (from, to) {
+            (Ty::Array(a), Ty::Array(b)) => {
+                a.dims
+                    .iter()
+                    .map(|(l, h)| h - l)
+                    .eq(b.dims.iter().map(|(l, h)| h - l))
+                    && (a.elem == b.elem
+                        || matches!((&a.elem, &b.elem), (Ty::String(_), Ty::String(_))))
+            }
+            _ => from.converts_to(to),
+        };
+        if ok {
+            if from.is_elementary() && from != to {
+                self.c.coerce.insert(e.id, to.clone());
+            }
+            true
+        } else {
+            let msg = format!(
+                "type mismatch: {what} of type {} where {} is expected",
+                self.name(from),
+                self.name(to)
+            );
+            self.diags.push(
+                Diagnostic::error(Code::TypeMismatch, e.span, msg)
+                    .with_note("IEC 61131-3 converts implicitly only to wider types; use an explicit *_TO_* conversion"),
+            );
+            false
+        }
+    }
+
+    // ------------------------------------------------------------------ statements
+
+    fn stmts(&mut self, body: &[Stmt]) {
+        for s in body {
+            self.stmt(s);
+        }
+    }
+
+    fn cond(&mut self, e: &Expr) {
+        let t = self.expr(e, Some(&Ty::Bool));
+        if t != Ty::Bool && t != Ty::Void {
+            let n = self.name(&t);
+            self.err(
+                Code::TypeMismatch,
+                e.span,
+                format!("type mismatch: condition must be BOOL, found {n}"),
+            );
+        }
+    }
+
+    fn stmt(&mut self, s: &Stmt) {
+        match &s.kind {
+            StmtKind::Assign(target, value) => {
+                let tt = self.lvalue(target);
+                let vt = self.expr(value, Some(&tt));
+                if matches!(vt, Ty::Fb(_)) || matches!(tt, Ty::Fb(_)) {
+                    self.err(
+                        Code::TypeMismatch,
+                        s.span,
+                        "function block instances cannot be assigned",
+                    );
+                    return;
+                }
+                self.coerce_to(value, &vt, &tt, "value");
+            }
+            StmtKind::Call(e) => {
+                self.expr_stmt_call(e);
+            }
+            StmtKind::If(arms, els) => {
+                for (c, b) in arms {
+                    self.cond(c);
+                    self.stmts(b);
+                }
+                if let Some(b) = els {
+                    self.stmts(b);
+                }
+            }
+            StmtKind::Case(sel, arms, els) => {
+                let st = self.expr(sel, None);
+                if !(st.is_int() || st.is_bits() || matches!(st, Ty::Enum(_)) || st == Ty::Void) {
+                    let n = self.name(&st);
+                    self.err(Code::TypeMismatch, sel.span, format!("type mismatch: CASE selector must be an integer or enumeration, found {n}"));
+                }
+                for (labels, body) in arms {
+                    for l in labels {
+                        let es: Vec<&Expr> = match l {
+                            CaseLabel::Value(e) => vec![e],
+                            CaseLabel::Range(a, b) => vec![a, b],
+                        };
+                        for e in es {
+                            let lt = self.expr(e, Some(&st));
+                            if lt != Ty::Void
+                                && st != Ty::Void
+                                && Ty::common(&lt, &st).is_none()
+                                && lt != st
+                            {
+                                let (a, b) = (self.name(&lt), self.name(&st));
+                                self.err(Code::TypeMismatch, e.span, format!("type mismatch: CASE label of type {a} for a selector of type {b}"));
+                            }
+                        }
+                    }
+                    self.stmts(body);
+                }
+                if let Some(b) = els {
+                    self.stmts(b);
+                }
+            }
+            StmtKind::For {
+                var,
+                from,
+                to,
+                by,
+                body,
+            } => {
+                let vt = self.lvalue(var);
+                if !vt.is_int() && vt != Ty::Void {
+                    let n = self.name(&vt);
+                    self.err(
+                        Code::TypeMismatch,
+                        var.span,
+                        format!(
+                            "type mismatch: FOR control variable must be an integer, found {n}"
+                        ),
+                    );
+                }
+                for e in [Some(from), Some(to), by.as_ref()].into_iter().flatten() {
+                    let t = self.expr(e, Some(&vt));
+                    if vt.is_int() {
+                        self.coerce_to(e, &t, &vt, "FOR bound");
+                    }
+                }
+                self.loops += 1;
+                self.stmts(body);
+                self.loops -= 1;
+            }
+            StmtKind::While(c, body) => {
+                self.cond(c);
+                self.loops += 1;
+                self.stmts(body);
+                self.loops -= 1;
+            }
+            StmtKind::Repeat(body, c) => {
+                self.loops += 1;
+                self.stmts(body);
+                self.loops -= 1;
+                self.cond(c);
+            }
+            StmtKind::Exit | StmtKind::Continue => {
+                if self.loops == 0 {
+                    let w = if matches!(s.kind, StmtKind::Exit) {
+                        "EXIT"
+                    } else {
+                        "CONTINUE"
+                    };
+                    self.err(Code::Syntax, s.span, format!("{w} outside of a loop"));
+                }
+            }
+            StmtKind::Return | StmtKind::Empty => {}
+        }
+    }
+
+    fn expr_stmt_call(&mut self, e: &Expr) {
+        let ExprKind::Call(callee, args) = &e.kind else {
+            self.expr(e, None);
+            return;
+        };
+        // FB instance call?
+        let ct = self.callee_instance_type(callee);
+        if let Some(Ty::Fb(id)) = ct {
+            self.c.res.insert(e.id, Res::CallFb(id));
+            self.call_args(id, args, e.span, true);
+            self.set(e, Ty::Void);
+            self.calls.push((id, e.span));
+            return;
+        }
+        self.expr(e, None);
+    }
+
+    /// Type of a callee expression if it designates a variable (FB instance).
+    fn callee_instance_type(&mut self, callee: &Expr) -> Option<Ty> {
+        if let ExprKind::Name { ident, .. } = &callee.kind {
+            let is_var = self
+                .pou
+                .and_then(|p| self.c.pou(p))
+                .and_then(|p| p.var(&ident.key))
+                .is_some()
+                || self.c.global_index.contains_key(&ident.key);
+            if !is_var {
+                return None;
+            }
+        }
+        let t = self.expr(callee, None);
+        Some(t)
+    }
+
+    fn lvalue(&mut self, e: &Expr) -> Ty {
+        let t = self.expr(e, None);
+        match &e.kind {
+            ExprKind::Name { ident, .. } => match self.c.res.get(&e.id) {
+                Some(Res::Local(i)) => {
+                    let v = self
+                        .pou
+                        .and_then(|p| self.c.pou(p))
+                        .and_then(|p| p.vars.get(*i));
+                    if v.map(|v| v.constant).unwrap_or(false) {
+                        self.err(
+                            Code::NotAssignable,
+                            e.span,
+                            format!("cannot assign to constant '{}'", ident.name),
+                        );
+                    }
+                }
+                Some(Res::Global(i)) => {
+                    if self.c.globals.get(*i).map(|v| v.constant).unwrap_or(false) {
+                        self.err(
+                            Code::NotAssignable,
+                            e.span,
+                            format!("cannot assign to constant '{}'", ident.name),
+                        );
+                    }
+                }
+                None => {}
+                _ => self.err(
+                    Code::NotAssignable,
+                    e.span,
+                    format!("'{}' is not a variable", ident.name),
+                ),
+            },
+            ExprKind::Member(..)
+            | ExprKind::Index(..)
+            | ExprKind::Bit(..)
+            | ExprKind::Direct(_) => {}
+            _ => self.err(
+                Code::NotAssignable,
+                e.span,
+                "the left side of an assignment must be a variable",
+            ),
+        }
+        t
+    }
+
+    // ------------------------------------------------------------------ expressions
+
+    fn expr(&mut self, e: &Expr, hint: Option<&Ty>) -> Ty {
+        let t = self.expr_inner(e, hint);
+        self.set(e, t)
+    }
+
+    fn literal(&mut self, e: &Expr, l: &Literal, hint: Option<&Ty>) -> Ty {
+        match l {
+            Literal::Int(v, Some(ty)) => {
+                let t = Ty::elementary(ty).unwrap_or(Ty::DInt);
+                if let Some((lo, hi)) = t.int_range() {
+                    if *v < lo || *v > hi {
+                        self.err(
+                            Code::BadLiteral,
+                            e.span,
+                            format!("literal {v} is out of range for {t}"),
+                        );
+                    }
+                } else if !t.is_real() && t != Ty::Bool {
+                    self.err(
+                        Code::BadLiteral,
+                        e.span,
+                        format!("{t}# cannot prefix an integer"),
+                    );
+                }
+                t
+            }
+            Literal::Int(v, None) => {
+                if let Some(h) = hint {
+                    if let Some((lo, hi)) = h.int_range() {
+                        if *v >= lo && *v <= hi && *h != Ty::Bool {
+                            return h.clone();
+                        }
+                    }
+                    if h.is_real() {
+                        return h.clone();
+                    }
+                }
+                if *v >= i128::from(i32::MIN) && *v <= i128::from(i32::MAX) {
+                    if let Some(h) = hint {
+                        if h.is_int() || h.is_bits() {
+                            // does not fit the hint: smallest type that holds it
+                            return smallest_int(*v);
+                        }
+                    }
+                    Ty::DInt
+                } else {
+                    smallest_int(*v)
+                }
+            }
+            Literal::Real(_, Some(ty)) => {
+                Ty::elementary(ty).filter(Ty::is_real).unwrap_or(Ty::LReal)
+            }
+            Literal::Real(_, None) => match hint {
+                Some(Ty::Real) => Ty::Real,
+                _ => Ty::LReal,
+            },
+            Literal::Bool(_) => Ty::Bool,
+            Literal::String(s, wide) => {
+                let n = u32::try_from(s.chars().count()).unwrap_or(65535).max(1);
+                let len = match hint {
+                    Some(Ty::String(h)) | Some(Ty::WString(h)) => (*h).max(n),
+                    _ => n.max(DEFAULT_STRING_LEN),
+                };
+                if *wide {
+                    Ty::WString(len)
+                } else {
+                    Ty::String(len)
+                }
+            }
+            Literal::Time(_, long) => {
+                if *long || hint == Some(&Ty::LTime) {
+                    Ty::LTime
+                } else {
+                    Ty::Time
+                }
+            }
+            Literal::Date(_) => Ty::Date,
+            Literal::Tod(_) => Ty::Tod,
+            Literal::Dt(_) => Ty::Dt,
+        }
+    }
+
+    fn resolve_name(&mut self, e: &Expr, ident: &Ident, quoted: bool, hint: Option<&Ty>) -> Ty {
+        if let Some(p) = self.pou.and_then(|p| self.c.pou(p)) {
+            if let Some((i, v)) = p.var(&ident.key) {
+                let t = v.ty.clone();
+                if v.kind == VarKind::External {
+                    if let Some(&g) = self.c.global_index.get(&ident.key) {
+                        self.c.res.insert(e.id, Res::Global(g));
+                        return t;
+                    }
+                }
+                self.c.res.insert(e.id, Res::Local(i));
+                return t;
+            }
+        }
+        if let Some(&g) = self.c.global_index.get(&ident.key) {
+            let t = self
+                .c
+                .globals
+                .get(g)
+                .map(|g| g.ty.clone())
+                .unwrap_or(Ty::Void);
+            self.c.res.insert(e.id, Res::Global(g));
+            return t;
+        }
+        // enum values: prefer the hinted enum
+        if let Some(Ty::Enum(eid)) = hint {
+            if let Some(v) = self
+                .c
+                .types
+                .enum_def(*eid)
+                .and_then(|d| d.values.iter().find(|(n, _)| n.to_uppercase() == ident.key))
+            {
+                self.c.res.insert(e.id, Res::EnumValue(v.1));
+                return Ty::Enum(*eid);
+            }
+        }
+        for (i, d) in self.c.types.enums.iter().enumerate() {
+            if let Some((_, v)) = d.values.iter().find(|(n, _)| n.to_uppercase() == ident.key) {
+                self.c.res.insert(e.id, Res::EnumValue(*v));
+                return Ty::Enum(EnumId(i));
+            }
+        }
+        if let Some(&pid) = self.c.pou_index.get(&ident.key) {
+            if self.c.pou(pid).map(|p| p.kind) == Some(PouKind::Program) {
+                self.c.res.insert(e.id, Res::Program(pid));
+                return Ty::Void;
+            }
+        }
+        if quoted {
+            self.c
+                .res
+                .insert(e.id, Res::WStringLiteral(ident.name.clone()));
+            let n = u32::try_from(ident.name.chars().count())
+                .unwrap_or(65535)
+                .max(DEFAULT_STRING_LEN);
+            return Ty::WString(n);
+        }
+        self.err(
+            Code::Undeclared,
+            e.span,
+            format!("undeclared name '{}'", ident.name),
+        );
+        Ty::Void
+    }
+
+    fn expr_inner(&mut self, e: &Expr, hint: Option<&Ty>) -> Ty {
+        match &e.kind {
+            ExprKind::Literal(l) => self.literal(e, l, hint),
+            ExprKind::Name { ident, quoted } => self.resolve_name(e, ident, *quoted, hint),
+            ExprKind::TypedEnum(ty, v) => {
+                let found = self
+                    .c
+                    .types
+                    .enums
+                    .iter()
+                    .enumerate()
+                    .find(|(_, d)| d.name.to_uppercase() == ty.key);
+                match found {
+                    Some((i, d)) => {
+                        match d.values.iter().find(|(n, _)| n.to_uppercase() == v.key) {
+                            Some((_, val)) => {
+                                let val = *val;
+                                self.c.res.insert(e.id, Res::EnumValue(val));
+                                Ty::Enum(EnumId(i))
+                            }
+                            None => {
+                                self.err(
+                                    Code::Undeclared,
+                                    v.span,
+                                    format!("enumeration {} has no value '{}'", ty.name, v.name),
+                                );
+                                Ty::Void
+                            }
+                        }
+                    }
+                    None => {
+                        self.err(
+                            Code::UnknownType,
+                            ty.span,
+                            format!("unknown enumeration type '{}'", ty.name),
+                        );
+                        Ty::Void
+                    }
+                }
+            }
+            ExprKind::Direct(addr) => direct_type(addr).unwrap_or_else(|| {
+                self.err(
+                    Code::BadLiteral,
+                    e.span,
+                    format!("malformed direct address %{addr}"),
+                );
+                Ty::Void
+            }),
+            ExprKind::Member(base, field) => {
+                let bt = self.expr(base, None);
+                if let Some(Res::Program(pid)) = self.c.res.get(&base.id).cloned() {
+                    let found = self
+                        .c
+                        .pou(pid)
+                        .and_then(|p| p.var(&field.key))
+                        .map(|(i, v)| (i, v.ty.clone()));
+                    return match found {
+                        Some((i, t)) => {
+                            self.c.res.insert(e.id, Res::PouVar(pid, i));
+                            t
+                        }
+                        None => {
+                            self.err(
+                                Code::Undeclared,
+                                field.span,
+                                format!("program has no variable '{}'", field.name),
+                            );
+                            Ty::Void
+                        }
+                    };
+                }
+                match &bt {
+                    Ty::Struct(id) => {
+                        let found = self
+                            .c
+                            .types
+                            .struct_def(*id)
+                            .and_then(|d| {
+                                d.fields
+                                    .iter()
+                                    .enumerate()
+                                    .find(|(_, f)| f.key == field.key)
+                            })
+                            .map(|(i, f)| (i, f.ty.clone()));
+                        match found {
+                            Some((i, t)) => {
+                                self.c.res.insert(e.id, Res::Field(i));
+                                t
+                            }
+                            None => {
+                                let n = self.name(&bt);
+                                self.err(
+                                    Code::Undeclared,
+                                    field.span,
+                                    format!("{n} has no field '{}'", field.name),
+                                );
+                                Ty::Void
+                            }
+                        }
+                    }
+                    Ty::Fb(id) => {
+                        let found = self
+                            .c
+                            .pou(*id)
+                            .and_then(|p| p.var(&field.key))
+                            .map(|(i, v)| (i, v.ty.clone(), v.kind));
+                        match found {
+                            Some((i, t, _)) => {
+                                self.c.res.insert(e.id, Res::PouVar(*id, i));
+                                t
+                            }
+                            None => {
+                                let n = self.name(&bt);
+                                self.err(
+                                    Code::Undeclared,
+                                    field.span,
+                                    format!("function block {n} has no variable '{}'", field.name),
+                                );
+                                Ty::Void
+                            }
+                        }
+                    }
+                    Ty::Void => Ty::Void,
+                    other => {
+                        let n = self.name(other);
+                        self.err(
+                            Code::TypeMismatch,
+                            field.span,
+                            format!("type mismatch: {n} has no members"),
+                        );
+                        Ty::Void
+                    }
+                }
+            }
+            ExprKind::Bit(base, bit) => {
+                let bt = self.expr(base, None);
+                if bt == Ty::Void {
+                    return Ty::Bool;
+                }
+                if !(bt.is_bits() || bt.is_int()) || *bit >= bt.bits() {
+                    let n = self.name(&bt);
+                    self.err(
+                        Code::TypeMismatch,
+                        e.span,
+                        format!("bit {bit} does not exist in {n}"),
+                    );
+                }
+                Ty::Bool
+            }
+            ExprKind::Index(base, idx) => {
+                let bt = self.expr(base, None);
+                for i in idx {
+                    let it = self.expr(i, Some(&Ty::DInt));
+                    if !it.is_int() && !it.is_bits() && it != Ty::Void && !matches!(it, Ty::Enum(_))
+                    {
+                        let n = self.name(&it);
+                        self.err(
+                            Code::TypeMismatch,
+                            i.span,
+                            format!("type mismatch: array index must be an integer, found {n}"),
+                        );
+                    }
+                }
+                match &bt {
+                    Ty::Array(a) => {
+                        if a.dims.len() != idx.len() {
+                            self.err(
+                                Code::WrongArguments,
+                                e.span,
+                                format!(
+                                    "array has {} dimension(s), {} index(es) given",
+                                    a.dims.len(),
+                                    idx.len()
+                                ),
+                            );
+                        }
+                        a.elem.clone()
+                    }
+                    Ty::String(_) | Ty::WString(_) => {
+                        self.err(
+                            Code::Unsupported,
+                            e.span,
+                            "indexing strings is not supported; use MID",
+                        );
+                        Ty::Void
+                    }
+                    Ty::Void => Ty::Void,
+                    other => {
+                        let n = self.name(other);
+                        self.err(
+                            Code::TypeMismatch,
+                            base.span,
+                            format!("type mismatch: {n} is not an array"),
+                        );
+                        Ty::Void
+                    }
+                }
+            }
+            ExprKind::Deref(_) => {
+                self.err(Code::Unsupported, e.span, "pointers are not supported");
+                Ty::Void
+            }
+            ExprKind::Unary(op, a) => {
+                let t = self.expr(a, hint);
+                match op {
+                    UnOp::Not => {
+                        if t == Ty::Bool || t.is_bits() || t.is_int() || t == Ty::Void {
+                            t
+                        } else {
+                            let n = self.name(&t);
+                            self.err(
+                                Code::TypeMismatch,
+                                e.span,
+                                format!("type mismatch: NOT applied to {n}"),
+                            );
+                            Ty::Void
+                        }
+                    }
+                    UnOp::Neg | UnOp::Plus => {
+                        if t.is_num() || t.is_duration() || t == Ty::Void {
+                            t
+                        } else {
+                            let n = self.name(&t);
+                            self.err(
+                                Code::TypeMismatch,
+                                e.span,
+                                format!(
+                                    "type mismatch: unary {} applied to {n}",
+                                    if *op == UnOp::Neg { "-" } else { "+" }
+                                ),
+                            );
+                            Ty::Void
+                        }
+                    }
+                }
+            }
+            ExprKind::Binary(op, a, b) => self.binary(e, *op, a, b, hint),
+            ExprKind::Call(callee, args) => self.call(e, callee, args),
+        }
+    }
+
+    fn binary(&mut self, e: &Expr, op: BinOp, a: &Expr, b: &Expr, hint: Option<&Ty>) -> Ty {
+        let cmp = matches!(
+            op,
+            BinOp::Lt | BinOp::Gt | BinOp::Le | BinOp::Ge | BinOp::Eq | BinOp::Ne
+        );
+        let logic = matches!(op, BinOp::And | BinOp::Or | BinOp::Xor);
+        let h = if cmp { None } else { hint };
+        let (ta, tb) = if is_untyped_literal(a) && !is_untyped_literal(b) {
+            let tb = self.expr(b, h);
+            (self.expr(a, Some(&tb)), tb)
+        } else {
+            let ta = self.expr(a, h);
+            (ta.clone(), self.expr(b, Some(&ta)))
+        };
+        let ta = if is_untyped_literal(a) && is_untyped_literal(b) && ta != tb {
+            self.expr(a, Some(&tb))
+        } else {
+            ta
+        };
+        if ta == Ty::Void || tb == Ty::Void {
+            return if cmp { Ty::Bool } else { Ty::Void };
+        }
+        let mismatch = |s: &mut Self| {
+            let (x, y) = (s.name(&ta), s.name(&tb));
+            s.err(
+                Code::TypeMismatch,
+                e.span,
+                format!(
+                    "type mismatch: operator {} cannot be applied to {x} and {y}",
+                    op.symbol()
+                ),
+            );
+            if cmp {
+                Ty::Bool
+            } else {
+                Ty::Void
+            }
+        };
+        // time arithmetic
+        let timey = |t: &Ty| matches!(t, Ty::Time | Ty::LTime | Ty::Tod | Ty::Dt | Ty::Date);
+        if timey(&ta) || timey(&tb) {
+            let r = match (op, &ta, &tb) {
+                (BinOp::Add, Ty::Time, Ty::Time) | (BinOp::Sub, Ty::Time, Ty::Time) => {
+                    Some(Ty::Time)
+                }
+                (BinOp::Add | BinOp::Sub, Ty::LTime | Ty::Time, Ty::LTime | Ty::Time) => {
+                    Some(Ty::LTime)
+                }
+                (BinOp::Add, Ty::Tod, Ty::Time | Ty::LTime)
+                | (BinOp::Sub, Ty::Tod, Ty::Time | Ty::LTime) => Some(Ty::Tod),
+                (BinOp::Add, Ty::Time | Ty::LTime, Ty::Tod) => Some(Ty::Tod),
+                (BinOp::Add, Ty::Dt, Ty::Time | Ty::LTime)
+                | (BinOp::Sub, Ty::Dt, Ty::Time | Ty::LTime) => Some(Ty::Dt),
+                (BinOp::Sub, Ty::Tod, Ty::Tod)
+                | (BinOp::Sub, Ty::Dt, Ty::Dt)
+                | (BinOp::Sub, Ty::Date, Ty::Date) => Some(Ty::Time),
+                (BinOp::Mul | BinOp::Div, Ty::Time | Ty::LTime, n) if n.is_num() => {
+                    Some(ta.clone())
+                }
+                (BinOp::Mul, n, Ty::Time | Ty::LTime) if n.is_num() => Some(tb.clone()),
+                _ if cmp => {
+                    if let Some(c) = Ty::common(&ta, &tb) {
+                        self.coerce_pair(a, &ta, b, &tb, &c);
+                        return Ty::Bool;
+                    }
+                    None
+                }
+                _ => None,
+            };
+            return match r {
+                Some(t) => t,
+                None => mismatch(self),
+            };
+        }
+        if cmp {
+            if ta == tb {
+                return Ty::Bool;
+            }
+            return match Ty::common(&ta, &tb) {
+                Some(c) if ta.is_elementary() && tb.is_elementary() => {
+                    self.coerce_pair(a, &ta, b, &tb, &c);
+                    Ty::Bool
+                }
+                _ => mismatch(self),
+            };
+        }
+        if logic {
+            let ok = |t: &Ty| *t == Ty::Bool || t.is_bits() || t.is_int();
+            if !ok(&ta) || !ok(&tb) {
+                return mismatch(self);
+            }
+            return match Ty::common(&ta, &tb) {
+                Some(c) => {
+                    self.coerce_pair(a, &ta, b, &tb, &c);
+                    c
+                }
+                None => mismatch(self),
+            };
+        }
+        // arithmetic
+        if op == BinOp::Pow {
+            if !ta.is_num() || !tb.is_num() {
+                return mismatch(self);
+            }
+            let r = if ta == Ty::Real && (tb.is_int() || tb == Ty::Real) {
+                Ty::Real
+            } else {
+                Ty::LReal
+            };
+            self.coerce_pair(a, &ta, b, &tb, &r);
+            return r;
+        }
+        if !(ta.is_num() || ta.is_bits()) || !(tb.is_num() || tb.is_bits()) {
+            return mismatch(self);
+        }
+        if op == BinOp::Mod && (ta.is_real() || tb.is_real()) {
+            return mismatch(self);
+        }
+        match Ty::common(&ta, &tb) {
+            Some(c) => {
+                self.coerce_pair(a, &ta, b, &tb, &c);
+                c
+            }
+            None => mismatch(self),
+        }
+    }
+
+    fn coerce_pair(&mut self, a: &Expr, ta: &Ty, b: &Expr, tb: &Ty, c: &Ty) {
+        if ta != c && ta.is_elementary() {
+            self.c.coerce.insert(a.id, c.clone());
+        }
+        if tb != c && tb.is_elementary() {
+            self.c.coerce.insert(b.id, c.clone());
+        }
+    }
+
+    fn call(&mut self, e: &Expr, callee: &Expr, args: &[Arg]) -> Ty {
+        let name = match &callee.kind {
+            ExprKind::Name { ident, .. } => Some(ident.clone()),
+            _ => None,
+        };
+        if let Some(ident) = &name {
+            let is_var = self
+                .pou
+                .and_then(|p| self.c.pou(p))
+                .and_then(|p| p.var(&ident.key))
+                .is_some()
+                && !matches!(self.pou.and_then(|p| self.c.pou(p)).map(|p| p.kind), Some(PouKind::Function) if self.pou.and_then(|p| self.c.pou(p)).and_then(|p| p.var(&ident.key)).map(|(i, _)| i) == Some(0));
+            if !is_var && !self.c.global_index.contains_key(&ident.key) {
+                if let Some(&pid) = self.c.pou_index.get(&ident.key) {
+                    let kind = self.c.pou(pid).map(|p| p.kind);
+                    if kind == Some(PouKind::Function) {
+                        self.c.res.insert(e.id, Res::CallFunction(pid));
+                        self.calls.push((pid, e.span));
+                        self.call_args(pid, args, e.span, false);
+                        let r = self
+                            .c
+                            .pou(pid)
+                            .and_then(|p| p.ret.clone())
+                            .unwrap_or(Ty::Void);
+                        return r;
+                    }
+                    self.err(
+                        Code::WrongArguments,
+                        callee.span,
+                        format!(
+                            "'{}' is a {} and cannot be called like a function",
+                            ident.name,
+                            if kind == Some(PouKind::Program) {
+                                "program"
+                            } else {
+                                "function block type; call an instance"
+                            }
+                        ),
+                    );
+                    return Ty::Void;
+                }
+                if let Some(b) = stdlib::lookup(&ident.key) {
+                    return self.builtin(e, ident, b, args);
+                }
+                self.err(
+                    Code::Undeclared,
+                    callee.span,
+                    format!("undeclared function '{}'", ident.name),
+                );
+                for a in args {
+                    self.expr(&a.value, None);
+                }
+                return Ty::Void;
+            }
+        }
+        let t = self.expr(callee, None);
+        if let Ty::Fb(_) = t {
+            self.err(Code::WrongArguments, e.span, "a function block call is a statement, not an expression; read its outputs as inst.Q");
+        } else if t != Ty::Void {
+            self.err(Code::WrongArguments, callee.span, "this is not a function");
+        }
+        Ty::Void
+    }
+
+    fn builtin(&mut self, e: &Expr, ident: &Ident, b: Builtin, args: &[Arg]) -> Ty {
+        if let Some(a) = args.iter().find(|a| a.output) {
+            self.err(
+                Code::WrongArguments,
+                a.value.span,
+                format!("{} has no outputs", ident.name),
+            );
+            return Ty::Void;
+        }
+        // natural types first (untyped literals typed after the others)
+        let mut tys: Vec<Ty> = vec![Ty::Void; args.len()];
+        for (i, a) in args.iter().enumerate() {
+            if !is_untyped_literal(&a.value) {
+                if let Some(s) = tys.get_mut(i) {
+                    *s = self.expr(&a.value, None);
+                }
+            }
+        }
+        let typed_hint = tys
+            .iter()
+            .skip(usize::from(matches!(b, Builtin::Mux | Builtin::Sel)))
+            .find(|t| **t != Ty::Void)
+            .cloned();
+        for (i, a) in args.iter().enumerate() {
+            if is_untyped_literal(&a.value) {
+                let h = typed_hint.clone();
+                if let Some(s) = tys.get_mut(i) {
+                    *s = self.expr(&a.value, h.as_ref());
+                }
+            }
+        }
+        if tys.contains(&Ty::Void) {
+            return Ty::Void;
+        }
+        match stdlib::signature(&b, &tys) {
+            Ok((params, ret)) => {
+                for ((a, t), p) in args.iter().zip(&tys).zip(&params) {
+                    if !self.coerce_to(&a.value, t, p, "argument") {
+                        return Ty::Void;
+                    }
+                }
+                self.c.res.insert(e.id, Res::CallBuiltin(b));
+                ret
+            }
+            Err(msg) => {
+                self.err(
+                    Code::WrongArguments,
+                    e.span,
+                    format!("wrong arguments to {}: {msg}", ident.name),
+                );
+                Ty::Void
+            }
+        }
+    }
+
+    fn call_args(&mut self, pid: PouId, args: &[Arg], span: Span, is_fb: bool) {
+        let Some(pou) = self.c.pou(pid).cloned() else {
+            return;
+        };
+        let positional: Vec<usize> = pou
+            .vars
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| matches!(v.kind, VarKind::Input | VarKind::InOut))
+            .map(|(i, _)| i)
+            .collect();
+        let mut pos = 0usize;
+        let mut seen_named = false;
+        let mut assigned = HashSet::new();
+        for a in args {
+            let idx = match &a.name {
+                Some(n) => {
+                    seen_named = true;
+                    match pou.var(&n.key) {
+                        Some((i, v)) => {
+                            let ok = if a.output {
+                                v.kind == VarKind::Output
+                                    && !(pou.kind == PouKind::Function && i == 0)
+                            } else {
+                                matches!(v.kind, VarKind::Input | VarKind::InOut)
+                            };
+                            if !ok {
+                                let what = if a.output { "output" } else { "input" };
+                                self.err(
+                                    Code::WrongArguments,
+                                    n.span,
+                                    format!("'{}' is not an {what} of '{}'", n.name, pou.name),
+                                );
+                                self.expr(&a.value, None);
+                                continue;
+                            }
+                            i
+                        }
+                        None => {
+                            self.err(
+                                Code::WrongArguments,
+                                n.span,
+                                format!("'{}' has no parameter '{}'", pou.name, n.name),
+                            );
+                            self.expr(&a.value, None);
+                            continue;
+                        }
+                    }
+                }
+                None => {
+                    if seen_named {
+                        self.err(
+                            Code::WrongArguments,
+                            a.value.span,
+                            "positional argument after named arguments",
+                        );
+                        self.expr(&a.value, None);
+                        continue;
+                    }
+                    match positional.get(pos) {
+                        Some(&i) => {
+                            pos += 1;
+                            i
+                        }
+                        None => {
+                            self.err(
+                                Code::WrongArguments,
+                                a.value.span,
+                                format!(
+                                    "too many arguments to '{}': it has {} input(s)",
+                                    pou.name,
+                                    positional.len()
+                                ),
+                            );
+                            self.expr(&a.value, None);
+                            continue;
+                        }
+                    }
+                }
+            };
+            if !assigned.insert((idx, a.output)) {
+                self.err(
+                    Code::WrongArguments,
+                    a.value.span,
+                    "parameter given more than once",
+                );
+            }
+            let Some(v) = pou.vars.get(idx) else { continue };
+            if a.output {
+                let tt = self.lvalue(&a.value);
+                let mut vt = v.ty.clone();
+                if a.negated {
+                    vt = Ty::Bool;
+                }
+                if tt != Ty::Void && !vt.converts_to(&tt) {
+                    let (x, y) = (self.name(&vt), self.name(&tt));
+                    self.err(Code::TypeMismatch, a.value.span, format!("type mismatch: output '{}' of type {x} bound to a variable of type {y}", v.name));
+                }
+            } else if v.kind == VarKind::InOut {
+                let t = self.lvalue(&a.value);
+                if t != Ty::Void && t != v.ty && !(t.is_string() && v.ty.is_string()) {
+                    let (x, y) = (self.name(&t), self.name(&v.ty));
+                    self.err(Code::TypeMismatch, a.value.span, format!("type mismatch: VAR_IN_OUT '{}' of type {y} needs a variable of the same type, found {x}", v.name));
+                }
+            } else {
+                let t = self.expr(&a.value, Some(&v.ty));
+                self.coerce_to(&a.value, &t, &v.ty, &format!("argument '{}'", v.name));
+            }
+        }
+        // every VAR_IN_OUT must be bound
+        for (i, v) in pou.vars.iter().enumerate() {
+            if v.kind == VarKind::InOut && !assigned.contains(&(i, false)) {
+                self.err(
+                    Code::WrongArguments,
+                    span,
+                    format!("VAR_IN_OUT '{}' of '{}' must be given", v.name, pou.name),
+                );
+            }
+        }
+        let _ = is_fb;
+    }
+}
+
+fn smallest_int(v: i128) -> Ty {
+    for t in [Ty::DInt, Ty::LInt, Ty::ULInt] {
+        if let Some((lo, hi)) = t.int_range() {
+            if v >= lo && v <= hi {
+                return t;
+            }
+        }
+    }
+    Ty::LInt
+}
+
+/// Type of a direct address like `IX0.0`, `QW4`, `MD8`.
+pub(crate) fn direct_type(addr: &str) -> Option<Ty> {
+    let mut ch = addr.chars();
+    let area = ch.next()?;
+    if !matches!(area, 'I' | 'Q' | 'M') {
+        return None;
+    }
+    let rest: String = ch.collect();
+    let (size, nums) = match rest.chars().next() {
+        Some(c) if c.is_ascii_digit() => ('X', rest.as_str()),
+        Some(c) => (c, rest.get(1..).unwrap_or("")),
+        None => return None,
+    };
+    let t = match size {
+        'X' => Ty::Bool,
+        'B' => Ty::Byte,
+        'W' => Ty::Word,
+        'D' => Ty::DWord,
+        'L' => Ty::LWord,
+        _ => return None,
+    };
+    let ok = nums
+        .split('.')
+        .all(|p| !p.is_empty() && p.chars().all(|c| c.is_ascii_digit()));
+    if !ok || nums.is_empty() {
+        return None;
+    }
+    Some(t)
+}

@@ -1,0 +1,781 @@
+//! Semantic analysis: declarations, memory layout, name resolution and types.
+//!
+//! The AST is never modified. Results are side tables keyed by [`NodeId`]:
+//! - [`Checked::expr_ty`]: the natural type of every expression;
+//! - [`Checked::coerce`]: the *expected* type where an implicit (widening) conversion applies,
+//!   kept apart from the natural type;
+//! - [`Checked::res`]: what a name, member access or call refers to.
+
+mod body;
+pub mod types;
+
+use crate::diagnostics::{Code, Diagnostic};
+use crate::syntax::*;
+use std::collections::HashMap;
+use std::rc::Rc;
+pub use types::*;
+
+/// What a name, member or call node refers to.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Res {
+    /// A variable of the POU being checked (index into its `vars`).
+    Local(usize),
+    /// A global variable (index into [`Checked::globals`]).
+    Global(usize),
+    /// An enumeration value.
+    EnumValue(i64),
+    /// The instance of a PROGRAM (`Main.x` from elsewhere).
+    Program(PouId),
+    /// A quoted name that is really a WSTRING literal.
+    WStringLiteral(String),
+    /// Struct field (index).
+    Field(usize),
+    /// Variable of a FB instance or program (POU, index).
+    PouVar(PouId, usize),
+    /// A call of a user FUNCTION.
+    CallFunction(PouId),
+    /// A call of a FB instance (the callee expression is the instance).
+    CallFb(PouId),
+    /// A call of a built-in function.
+    CallBuiltin(crate::stdlib::Builtin),
+}
+
+/// A declared variable.
+#[derive(Debug, Clone)]
+pub struct VarInfo {
+    /// Name as declared.
+    pub name: String,
+    /// Upper-case key.
+    pub key: String,
+    /// Section.
+    pub kind: VarKind,
+    /// Type.
+    pub ty: Ty,
+    /// Offset in the instance (or absolute for globals).
+    pub offset: Size,
+    /// CONSTANT.
+    pub constant: bool,
+    /// RETAIN.
+    pub retain: bool,
+    /// PERSISTENT.
+    pub persistent: bool,
+    /// Direct address.
+    pub at: Option<String>,
+    /// Initial value.
+    pub init: Option<Init>,
+    /// Declaration.
+    pub span: Span,
+}
+
+/// A checked POU.
+#[derive(Debug, Clone)]
+pub struct PouInfo {
+    /// Name.
+    pub name: String,
+    /// Kind.
+    pub kind: PouKind,
+    /// Variables; for functions, index 0 is the result variable (named like the function).
+    pub vars: Vec<VarInfo>,
+    /// Upper-case name to index.
+    pub var_index: HashMap<String, usize>,
+    /// Result type of functions.
+    pub ret: Option<Ty>,
+    /// Instance size.
+    pub size: Size,
+    /// Absolute base of the single instance of a PROGRAM and of the static frame of a
+    /// FUNCTION (IEC 61131-3 forbids recursion, so one frame per function suffices).
+    pub base: Option<Size>,
+    /// Index into the unit's items.
+    pub item: usize,
+    /// Declared in the standard library prelude.
+    pub stdlib: bool,
+}
+
+impl PouInfo {
+    /// Variable by upper-case key.
+    pub fn var(&self, key: &str) -> Option<(usize, &VarInfo)> {
+        let i = *self.var_index.get(key)?;
+        Some((i, self.vars.get(i)?))
+    }
+}
+
+/// The result of checking: the unit plus side tables. Only produced without errors.
+#[derive(Debug)]
+pub struct Checked {
+    /// The parsed program (immutable).
+    pub unit: CompilationUnit,
+    /// Structs and enums.
+    pub types: TypeTable,
+    /// All POUs.
+    pub pous: Vec<PouInfo>,
+    /// Upper-case name to POU.
+    pub pou_index: HashMap<String, PouId>,
+    /// Global variables (absolute offsets).
+    pub globals: Vec<VarInfo>,
+    /// Upper-case name to global.
+    pub global_index: HashMap<String, usize>,
+    /// Total memory size.
+    pub memory_size: Size,
+    /// Natural type of every expression, by node id.
+    pub expr_ty: Vec<Option<Ty>>,
+    /// Expected type where an implicit conversion is applied.
+    pub coerce: HashMap<NodeId, Ty>,
+    /// Name resolution.
+    pub res: HashMap<NodeId, Res>,
+    /// Warnings.
+    pub warnings: Vec<Diagnostic>,
+}
+
+impl Checked {
+    /// Natural type of an expression.
+    pub fn ty(&self, id: NodeId) -> Ty {
+        self.expr_ty
+            .get(id.0 as usize)
+            .cloned()
+            .flatten()
+            .unwrap_or(Ty::Void)
+    }
+    /// Type after implicit conversion.
+    pub fn final_ty(&self, id: NodeId) -> Ty {
+        self.coerce.get(&id).cloned().unwrap_or_else(|| self.ty(id))
+    }
+    /// A POU.
+    pub fn pou(&self, id: PouId) -> Option<&PouInfo> {
+        self.pous.get(id.0)
+    }
+    /// The size of a type.
+    pub fn size_of(&self, ty: &Ty) -> Size {
+        size_of(ty, &self.types, &self.pous)
+    }
+    /// Human-readable type name.
+    pub fn type_name(&self, ty: &Ty) -> String {
+        type_name(ty, &self.types, &self.pous)
+    }
+}
+
+fn size_of(ty: &Ty, types: &TypeTable, pous: &[PouInfo]) -> Size {
+    match ty {
+        Ty::Real | Ty::LReal => Size { i: 0, r: 1, s: 0 },
+        Ty::String(_) | Ty::WString(_) => Size { i: 0, r: 0, s: 1 },
+        Ty::Array(a) => a.elem_size.mul(a.len()),
+        Ty::Struct(id) => types.struct_def(*id).map(|s| s.size).unwrap_or_default(),
+        Ty::Fb(id) => pous.get(id.0).map(|p| p.size).unwrap_or_default(),
+        Ty::Void => Size::default(),
+        _ => Size { i: 1, r: 0, s: 0 },
+    }
+}
+
+fn type_name(ty: &Ty, types: &TypeTable, pous: &[PouInfo]) -> String {
+    match ty {
+        Ty::Struct(id) => types
+            .struct_def(*id)
+            .map(|s| s.name.clone())
+            .unwrap_or_default(),
+        Ty::Enum(id) => types
+            .enum_def(*id)
+            .map(|s| s.name.clone())
+            .unwrap_or_default(),
+        Ty::Fb(id) => pous.get(id.0).map(|p| p.name.clone()).unwrap_or_default(),
+        Ty::Array(a) => {
+            let dims: Vec<String> = a.dims.iter().map(|(l, h)| format!("{l}..{h}")).collect();
+            format!(
+                "ARRAY[{}] OF {}",
+                dims.join(", "),
+                type_name(&a.elem, types, pous)
+            )
+        }
+        other => other.to_string(),
+    }
+}
+
+#[derive(Clone)]
+enum TypeSlot {
+    Pending(usize, usize),
+    InProgress,
+    Done(Ty),
+}
+
+enum PouSlot {
+    Pending,
+    InProgress,
+    Done,
+}
+
+/// Checks a parsed unit. `stdlib_items` is the number of leading items that come from the
+/// standard-library prelude.
+pub fn check(unit: CompilationUnit, stdlib_items: usize) -> Result<Checked, Vec<Diagnostic>> {
+    let mut cx = Decls {
+        unit: &unit,
+        diags: Vec::new(),
+        types: TypeTable::default(),
+        type_slots: HashMap::new(),
+        pous: Vec::new(),
+        pou_index: HashMap::new(),
+        pou_state: Vec::new(),
+        globals: Vec::new(),
+        global_index: HashMap::new(),
+        consts: HashMap::new(),
+    };
+    cx.register(stdlib_items);
+    cx.resolve_all();
+    // layout: globals, programs, functions
+    let mut base = Size::default();
+    let mut globals = std::mem::take(&mut cx.globals);
+    for g in &mut globals {
+        g.offset = base;
+        base = base.add(size_of(&g.ty, &cx.types, &cx.pous));
+    }
+    for p in &mut cx.pous {
+        if matches!(p.kind, PouKind::Program | PouKind::Function) {
+            p.base = Some(base);
+            base = base.add(p.size);
+        }
+    }
+    let Decls {
+        diags,
+        types,
+        pous,
+        pou_index,
+        global_index,
+        ..
+    } = cx;
+    let mut checked = Checked {
+        expr_ty: vec![None; unit.node_count as usize],
+        unit,
+        types,
+        pous,
+        pou_index,
+        globals,
+        global_index,
+        memory_size: base,
+        coerce: HashMap::new(),
+        res: HashMap::new(),
+        warnings: Vec::new(),
+    };
+    let mut diags = diags;
+    body::check_bodies(&mut checked, &mut diags);
+    let (errors, warnings): (Vec<_>, Vec<_>) = diags.into_iter().partition(Diagnostic::is_error);
+    if errors.is_empty() {
+        checked.warnings = warnings;
+        Ok(checked)
+    } else {
+        let mut all = errors;
+        all.extend(warnings);
+        all.sort_by_key(|d| (d.primary.file, d.primary.start));
+        Err(all)
+    }
+}
+
+struct Decls<'u> {
+    unit: &'u CompilationUnit,
+    diags: Vec<Diagnostic>,
+    types: TypeTable,
+    type_slots: HashMap<String, TypeSlot>,
+    pous: Vec<PouInfo>,
+    pou_index: HashMap<String, PouId>,
+    pou_state: Vec<PouSlot>,
+    globals: Vec<VarInfo>,
+    global_index: HashMap<String, usize>,
+    /// Integer constants for array bounds etc.: global and local CONSTANT values.
+    consts: HashMap<String, i128>,
+}
+
+impl<'u> Decls<'u> {
+    fn err(&mut self, code: Code, span: Span, msg: impl Into<String>) {
+        self.diags.push(Diagnostic::error(code, span, msg));
+    }
+
+    fn register(&mut self, stdlib_items: usize) {
+        for (idx, item) in self.unit.items.iter().enumerate() {
+            match item {
+                Item::Pou(p) => {
+                    if self.pou_index.contains_key(&p.name.key)
+                        || self.type_slots.contains_key(&p.name.key)
+                    {
+                        self.err(
+                            Code::Duplicate,
+                            p.name.span,
+                            format!("'{}' is declared more than once", p.name.name),
+                        );
+                        continue;
+                    }
+                    let id = PouId(self.pous.len());
+                    self.pou_index.insert(p.name.key.clone(), id);
+                    self.pous.push(PouInfo {
+                        name: p.name.name.clone(),
+                        kind: p.kind,
+                        vars: Vec::new(),
+                        var_index: HashMap::new(),
+                        ret: None,
+                        size: Size::default(),
+                        base: None,
+                        item: idx,
+                        stdlib: idx < stdlib_items,
+                    });
+                    self.pou_state.push(PouSlot::Pending);
+                }
+                Item::Types(decls) => {
+                    for (di, d) in decls.iter().enumerate() {
+                        if self.type_slots.contains_key(&d.name.key)
+                            || self.pou_index.contains_key(&d.name.key)
+                            || Ty::elementary(&d.name.key).is_some()
+                        {
+                            self.err(
+                                Code::Duplicate,
+                                d.name.span,
+                                format!("type '{}' is declared more than once", d.name.name),
+                            );
+                            continue;
+                        }
+                        self.type_slots
+                            .insert(d.name.key.clone(), TypeSlot::Pending(idx, di));
+                    }
+                }
+                Item::Globals(_) => {}
+            }
+        }
+    }
+
+    fn resolve_all(&mut self) {
+        // global constants first (for array bounds), then types, then globals, then POUs
+        let unit = self.unit;
+        for item in &unit.items {
+            if let Item::Globals(b) = item {
+                if b.constant {
+                    for d in &b.decls {
+                        if let Some(Init::Expr(e)) = &d.init {
+                            if let Some(v) = self.const_int(e) {
+                                for n in &d.names {
+                                    self.consts.insert(n.key.clone(), v);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let keys: Vec<String> = self.type_slots.keys().cloned().collect();
+        for k in keys {
+            self.named_type(&k, Span::default());
+        }
+        for item in &unit.items {
+            if let Item::Globals(b) = item {
+                for d in &b.decls {
+                    let ty = self.resolve_type(&d.ty, &d.names[..]);
+                    for n in &d.names {
+                        if self.global_index.contains_key(&n.key) {
+                            self.err(
+                                Code::Duplicate,
+                                n.span,
+                                format!("global variable '{}' is declared more than once", n.name),
+                            );
+                            continue;
+                        }
+                        self.global_index.insert(n.key.clone(), self.globals.len());
+                        self.globals.push(VarInfo {
+                            name: n.name.clone(),
+                            key: n.key.clone(),
+                            kind: VarKind::Global,
+                            ty: ty.clone(),
+                            offset: Size::default(),
+                            constant: b.constant,
+                            retain: b.retain,
+                            persistent: b.persistent,
+                            at: d.at.as_ref().map(|a| a.0.clone()),
+                            init: d.init.clone(),
+                            span: n.span,
+                        });
+                    }
+                }
+            }
+        }
+        for i in 0..self.pous.len() {
+            self.layout_pou(PouId(i));
+        }
+    }
+
+    fn const_int(&self, e: &Expr) -> Option<i128> {
+        match &e.kind {
+            ExprKind::Literal(Literal::Int(v, _)) => Some(*v),
+            ExprKind::Name { ident, .. } => self.consts.get(&ident.key).copied(),
+            ExprKind::Unary(UnOp::Neg, a) => self.const_int(a).map(|v| -v),
+            ExprKind::Unary(UnOp::Plus, a) => self.const_int(a),
+            ExprKind::Binary(op, a, b) => {
+                let (a, b) = (self.const_int(a)?, self.const_int(b)?);
+                match op {
+                    BinOp::Add => a.checked_add(b),
+                    BinOp::Sub => a.checked_sub(b),
+                    BinOp::Mul => a.checked_mul(b),
+                    BinOp::Div => a.checked_div(b),
+                    BinOp::Mod => a.checked_rem(b),
+                    _ => None,
+                }
+            }
+            _ => None,
+        }
+    }
+
+    fn named_type(&mut self, key: &str, span: Span) -> Option<Ty> {
+        if let Some(t) = Ty::elementary(key) {
+            return Some(t);
+        }
+        if let Some(id) = self.pou_index.get(key).copied() {
+            let kind = self.pous.get(id.0).map(|p| p.kind);
+            if kind == Some(PouKind::FunctionBlock) {
+                self.layout_pou(id);
+                return Some(Ty::Fb(id));
+            }
+            self.err(
+                Code::UnknownType,
+                span,
+                format!("'{key}' is a program or function, not a type"),
+            );
+            return None;
+        }
+        match self.type_slots.get(key).cloned() {
+            None => None,
+            Some(TypeSlot::Done(t)) => Some(t),
+            Some(TypeSlot::InProgress) => {
+                self.err(
+                    Code::UnknownType,
+                    span,
+                    format!("type '{key}' is defined in terms of itself"),
+                );
+                None
+            }
+            Some(TypeSlot::Pending(item, di)) => {
+                self.type_slots
+                    .insert(key.to_string(), TypeSlot::InProgress);
+                let unit = self.unit;
+                let decl = match unit.items.get(item) {
+                    Some(Item::Types(d)) => d.get(di),
+                    _ => None,
+                }?;
+                let ty = match &decl.ty {
+                    TypeRef::Struct(fields, _) => self.struct_type(&decl.name.name, fields),
+                    TypeRef::Enum(values, _) => self.enum_type(&decl.name.name, values),
+                    other => self.resolve_type(other, std::slice::from_ref(&decl.name)),
+                };
+                self.type_slots
+                    .insert(key.to_string(), TypeSlot::Done(ty.clone()));
+                Some(ty)
+            }
+        }
+    }
+
+    fn struct_type(&mut self, name: &str, fields: &[VarDecl]) -> Ty {
+        let mut out = Vec::new();
+        let mut off = Size::default();
+        let mut seen = HashMap::new();
+        for d in fields {
+            let ty = self.resolve_type(&d.ty, &d.names);
+            for n in &d.names {
+                if seen.insert(n.key.clone(), ()).is_some() {
+                    self.err(
+                        Code::Duplicate,
+                        n.span,
+                        format!("field '{}' is declared more than once", n.name),
+                    );
+                }
+                out.push(Field {
+                    name: n.name.clone(),
+                    key: n.key.clone(),
+                    ty: ty.clone(),
+                    offset: off,
+                    init: d.init.clone(),
+                });
+                off = off.add(size_of(&ty, &self.types, &self.pous));
+            }
+        }
+        let id = StructId(self.types.structs.len());
+        self.types.structs.push(StructDef {
+            name: name.to_string(),
+            fields: out,
+            size: off,
+        });
+        Ty::Struct(id)
+    }
+
+    fn enum_type(&mut self, name: &str, values: &[(Ident, Option<Expr>)]) -> Ty {
+        let mut out = Vec::new();
+        let mut next: i64 = 0;
+        for (n, v) in values {
+            if let Some(e) = v {
+                match self.const_int(e) {
+                    Some(v) => next = i64::try_from(v).unwrap_or(0),
+                    None => self.err(
+                        Code::NotConstant,
+                        e.span,
+                        "enumeration value must be a constant integer",
+                    ),
+                }
+            }
+            out.push((n.name.clone(), next));
+            next = next.wrapping_add(1);
+        }
+        let id = EnumId(self.types.enums.len());
+        self.types.enums.push(EnumDef {
+            name: name.to_string(),
+            values: out,
+        });
+        Ty::Enum(id)
+    }
+
+    fn resolve_type(&mut self, t: &TypeRef, names: &[Ident]) -> Ty {
+        match t {
+            TypeRef::Named(id) => match self.named_type(&id.key, id.span) {
+                Some(t) => t,
+                None => {
+                    if !self.diags.iter().any(|d| d.primary == id.span) {
+                        self.err(
+                            Code::UnknownType,
+                            id.span,
+                            format!("unknown type '{}'", id.name),
+                        );
+                    }
+                    Ty::Void
+                }
+            },
+            TypeRef::String { wide, len, .. } => {
+                let n = match len {
+                    Some(e) => match self.const_int(e) {
+                        Some(v) if (1..=65535).contains(&v) => v as u32,
+                        _ => {
+                            self.err(
+                                Code::NotConstant,
+                                e.span,
+                                "string length must be a constant between 1 and 65535",
+                            );
+                            DEFAULT_STRING_LEN
+                        }
+                    },
+                    None => DEFAULT_STRING_LEN,
+                };
+                if *wide {
+                    Ty::WString(n)
+                } else {
+                    Ty::String(n)
+                }
+            }
+            TypeRef::Array { dims, elem, .. } => {
+                let mut d = Vec::new();
+                for (lo, hi) in dims {
+                    match (self.const_int(lo), self.const_int(hi)) {
+                        (Some(a), Some(b)) if a <= b && b - a < 10_000_000 => {
+                            d.push((a as i64, b as i64));
+                        }
+                        (Some(_), Some(_)) => {
+                            self.err(
+                                Code::TypeMismatch,
+                                lo.span.to(hi.span),
+                                "array range is empty or too large",
+                            );
+                            d.push((0, 0));
+                        }
+                        _ => {
+                            self.err(
+                                Code::NotConstant,
+                                lo.span.to(hi.span),
+                                "array bounds must be constant integers",
+                            );
+                            d.push((0, 0));
+                        }
+                    }
+                }
+                let elem = self.resolve_type(elem, names);
+                let elem_size = size_of(&elem, &self.types, &self.pous);
+                let a = ArrayTy {
+                    dims: d,
+                    elem,
+                    elem_size,
+                };
+                if a.len()
+                    .saturating_mul(elem_size.i + elem_size.r + elem_size.s)
+                    > 50_000_000
+                {
+                    self.err(Code::TypeMismatch, t.span(), "array too large");
+                    return Ty::Void;
+                }
+                Ty::Array(Rc::new(a))
+            }
+            TypeRef::Struct(fields, _) => {
+                let name = names.first().map(|n| n.name.clone()).unwrap_or_default();
+                self.struct_type(&name, fields)
+            }
+            TypeRef::Enum(values, _) => {
+                let name = names.first().map(|n| n.name.clone()).unwrap_or_default();
+                self.enum_type(&name, values)
+            }
+            TypeRef::Subrange { base, lo, hi } => {
+                // Subranges are checked like their base type (range checks come later).
+                if self.const_int(lo).is_none() || self.const_int(hi).is_none() {
+                    self.err(
+                        Code::NotConstant,
+                        lo.span.to(hi.span),
+                        "subrange bounds must be constant",
+                    );
+                }
+                self.named_type(&base.key, base.span).unwrap_or(Ty::Void)
+            }
+        }
+    }
+
+    fn layout_pou(&mut self, id: PouId) {
+        match self.pou_state.get(id.0) {
+            Some(PouSlot::Pending) => {}
+            Some(PouSlot::InProgress) => {
+                let (name, span) = self.pou_name_span(id);
+                self.err(
+                    Code::Recursion,
+                    span,
+                    format!("function block '{name}' contains an instance of itself"),
+                );
+                return;
+            }
+            _ => return,
+        }
+        if let Some(s) = self.pou_state.get_mut(id.0) {
+            *s = PouSlot::InProgress;
+        }
+        let unit = self.unit;
+        let Some(Item::Pou(pou)) = self.pous.get(id.0).and_then(|p| unit.items.get(p.item)) else {
+            return;
+        };
+        let mut vars: Vec<VarInfo> = Vec::new();
+        let mut index = HashMap::new();
+        let mut off = Size::default();
+        let mut ret = None;
+        if pou.kind == PouKind::Function {
+            let rt = match &pou.return_type {
+                Some(t) => self.resolve_type(t, std::slice::from_ref(&pou.name)),
+                None => Ty::Void,
+            };
+            ret = Some(rt.clone());
+            index.insert(pou.name.key.clone(), 0);
+            let sz = size_of(&rt, &self.types, &self.pous);
+            vars.push(VarInfo {
+                name: pou.name.name.clone(),
+                key: pou.name.key.clone(),
+                kind: VarKind::Output,
+                ty: rt,
+                offset: off,
+                constant: false,
+                retain: false,
+                persistent: false,
+                at: None,
+                init: None,
+                span: pou.name.span,
+            });
+            off = off.add(sz);
+        }
+        // local constants usable in bounds
+        for b in &pou.vars {
+            if b.constant {
+                for d in &b.decls {
+                    if let Some(Init::Expr(e)) = &d.init {
+                        if let Some(v) = self.const_int(e) {
+                            for n in &d.names {
+                                self.consts.insert(n.key.clone(), v);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        for b in &pou.vars {
+            if b.kind == VarKind::Global {
+                self.err(
+                    Code::Unsupported,
+                    b.span,
+                    "VAR_GLOBAL inside a POU is not supported; declare globals at top level",
+                );
+                continue;
+            }
+            for d in &b.decls {
+                let mut ty = if b.kind == VarKind::External {
+                    // type comes from the global
+                    let g = d
+                        .names
+                        .first()
+                        .and_then(|n| self.global_index.get(&n.key))
+                        .and_then(|&g| self.globals.get(g))
+                        .map(|g| g.ty.clone());
+                    match g {
+                        Some(t) => t,
+                        None => {
+                            if let Some(n) = d.names.first() {
+                                self.err(
+                                    Code::Undeclared,
+                                    n.span,
+                                    format!("no global variable '{}' for VAR_EXTERNAL", n.name),
+                                );
+                            }
+                            Ty::Void
+                        }
+                    }
+                } else {
+                    self.resolve_type(&d.ty, &d.names)
+                };
+                if pou.kind == PouKind::Function
+                    && matches!(ty, Ty::Fb(_))
+                    && b.kind != VarKind::InOut
+                {
+                    // allowed in CODESYS (instance lives in the function frame); keep it
+                }
+                if ty == Ty::Void && b.kind != VarKind::External {
+                    ty = Ty::Void;
+                }
+                for n in &d.names {
+                    if index.contains_key(&n.key) {
+                        self.err(
+                            Code::Duplicate,
+                            n.span,
+                            format!("variable '{}' is declared more than once", n.name),
+                        );
+                        continue;
+                    }
+                    index.insert(n.key.clone(), vars.len());
+                    let sz = if b.kind == VarKind::External {
+                        Size::default()
+                    } else {
+                        size_of(&ty, &self.types, &self.pous)
+                    };
+                    vars.push(VarInfo {
+                        name: n.name.clone(),
+                        key: n.key.clone(),
+                        kind: b.kind,
+                        ty: ty.clone(),
+                        offset: off,
+                        constant: b.constant,
+                        retain: b.retain,
+                        persistent: b.persistent,
+                        at: d.at.as_ref().map(|a| a.0.clone()),
+                        init: d.init.clone(),
+                        span: n.span,
+                    });
+                    off = off.add(sz);
+                }
+            }
+        }
+        if let Some(p) = self.pous.get_mut(id.0) {
+            p.vars = vars;
+            p.var_index = index;
+            p.size = off;
+            p.ret = ret;
+        }
+        if let Some(s) = self.pou_state.get_mut(id.0) {
+            *s = PouSlot::Done;
+        }
+    }
+
+    fn pou_name_span(&self, id: PouId) -> (String, Span) {
+        match self
+            .pous
+            .get(id.0)
+            .and_then(|p| self.unit.items.get(p.item))
+        {
+            Some(Item::Pou(p)) => (p.name.name.clone(), p.name.span),
+            _ => (String::new(), Span::default()),
+        }
+    }
+}

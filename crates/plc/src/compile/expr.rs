@@ -1,0 +1,965 @@
+//! Expressions and places (l-values).
+
+use super::{AddrFn, Cx, IFn, RFn, SFn, CE};
+use crate::check::{Lane, PouId, Res, Size, Ty};
+use crate::diagnostics::{Code, Diagnostic};
+use crate::stdlib::{conv, string};
+use crate::syntax::*;
+use crate::vm::{DirectAddress, Fault, Flow, StmtFn, Vm};
+use std::rc::Rc;
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Base {
+    Frame,
+    Abs,
+    /// The instance or frame of the POU being called (`vm.callee`).
+    Callee,
+}
+
+/// Where a value lives.
+#[derive(Clone)]
+pub(crate) struct Place {
+    pub(crate) base: Base,
+    pub(crate) off: Size,
+    pub(crate) dynamic: Option<AddrFn>,
+    pub(crate) ty: Ty,
+    pub(crate) bit: Option<u32>,
+    pub(crate) direct: Option<DirectAddress>,
+}
+
+impl Place {
+    pub(crate) fn frame(off: Size, ty: Ty) -> Place {
+        Place {
+            base: Base::Frame,
+            off,
+            dynamic: None,
+            ty,
+            bit: None,
+            direct: None,
+        }
+    }
+    pub(crate) fn abs(off: Size, ty: Ty) -> Place {
+        Place {
+            base: Base::Abs,
+            ..Place::frame(off, ty)
+        }
+    }
+
+    /// Absolute address of the value.
+    pub(crate) fn addr(&self) -> AddrFn {
+        let off = self.off;
+        match (self.base, self.dynamic.clone()) {
+            (Base::Frame, None) => Rc::new(move |vm: &mut Vm| Ok(vm.frame.add(off))),
+            (Base::Abs, None) => Rc::new(move |_: &mut Vm| Ok(off)),
+            (Base::Frame, Some(d)) => Rc::new(move |vm: &mut Vm| {
+                let x = d(vm)?;
+                Ok(vm.frame.add(off).add(x))
+            }),
+            (Base::Abs, Some(d)) => Rc::new(move |vm: &mut Vm| Ok(off.add(d(vm)?))),
+            (Base::Callee, None) => Rc::new(move |vm: &mut Vm| Ok(vm.callee.add(off))),
+            (Base::Callee, Some(d)) => Rc::new(move |vm: &mut Vm| {
+                let x = d(vm)?;
+                Ok(vm.callee.add(off).add(x))
+            }),
+        }
+    }
+}
+
+fn ty_is_u64(t: &Ty) -> bool {
+    matches!(t, Ty::ULInt | Ty::LWord)
+}
+
+pub(crate) fn konst_i(v: i64) -> IFn {
+    Box::new(move |_| Ok(v))
+}
+
+impl Cx<'_> {
+    pub(crate) fn error(&mut self, span: Span, msg: impl Into<String>) {
+        self.diags
+            .push(Diagnostic::error(Code::Unsupported, span, msg));
+    }
+
+    fn var_place(&self, res: &Res) -> Option<Place> {
+        match res {
+            Res::Local(i) => {
+                let p = self.c.pou(self.pou?)?;
+                let v = p.vars.get(*i)?;
+                Some(Place::frame(v.offset, v.ty.clone()))
+            }
+            Res::Global(g) => {
+                let v = self.c.globals.get(*g)?;
+                Some(Place::abs(v.offset, v.ty.clone()))
+            }
+            _ => None,
+        }
+    }
+
+    /// The place an l-value expression designates.
+    pub(crate) fn place(&mut self, e: &Expr) -> Option<Place> {
+        match &e.kind {
+            ExprKind::Name { .. } => {
+                let r = self.c.res.get(&e.id)?.clone();
+                self.var_place(&r)
+            }
+            ExprKind::Direct(d) => {
+                let da = DirectAddress::parse(d)?;
+                let mut p = Place::abs(Size::default(), self.c.ty(e.id));
+                p.direct = Some(da);
+                Some(p)
+            }
+            ExprKind::Member(base, _) => {
+                let r = self.c.res.get(&e.id)?.clone();
+                if let Some(Res::Program(pid)) = self.c.res.get(&base.id) {
+                    let p = self.c.pou(*pid)?;
+                    let Res::PouVar(_, i) = r else { return None };
+                    let v = p.vars.get(i)?;
+                    return Some(Place::abs(p.base?.add(v.offset), v.ty.clone()));
+                }
+                let mut bp = self.place(base)?;
+                let (off, ty) = match (&bp.ty, r) {
+                    (Ty::Struct(id), Res::Field(i)) => {
+                        let f = self.c.types.struct_def(*id)?.fields.get(i)?;
+                        (f.offset, f.ty.clone())
+                    }
+                    (Ty::Fb(_), Res::PouVar(pid, i)) => {
+                        let v = self.c.pou(pid)?.vars.get(i)?;
+                        (v.offset, v.ty.clone())
+                    }
+                    _ => return None,
+                };
+                bp.off = bp.off.add(off);
+                bp.ty = ty;
+                Some(bp)
+            }
+            ExprKind::Bit(base, bit) => {
+                let mut bp = self.place(base)?;
+                bp.bit = Some(*bit);
+                bp.ty = Ty::Bool;
+                Some(bp)
+            }
+            ExprKind::Index(base, idx) => {
+                let mut bp = self.place(base)?;
+                let Ty::Array(a) = bp.ty.clone() else {
+                    return None;
+                };
+                // strides in elements
+                let mut strides = vec![1usize; a.dims.len()];
+                let mut acc = 1usize;
+                for (k, (lo, hi)) in a.dims.iter().enumerate().rev() {
+                    if let Some(s) = strides.get_mut(k) {
+                        *s = acc;
+                    }
+                    acc = acc.saturating_mul(usize::try_from(hi - lo + 1).unwrap_or(0));
+                }
+                let mut static_lin = 0usize;
+                let mut dyn_parts: Vec<(IFn, i64, i64, usize, Span)> = Vec::new();
+                for ((ix, (lo, hi)), stride) in idx.iter().zip(a.dims.iter()).zip(strides.iter()) {
+                    if let ExprKind::Literal(Literal::Int(v, _)) = &ix.kind {
+                        let v = *v as i64;
+                        if v < *lo || v > *hi {
+                            self.diags.push(Diagnostic::error(
+                                Code::TypeMismatch,
+                                ix.span,
+                                format!("array index {v} out of range {lo}..{hi}"),
+                            ));
+                            return None;
+                        }
+                        static_lin += usize::try_from(v - lo).unwrap_or(0) * stride;
+                        continue;
+                    }
+                    let CE::I(f) = self.expr(ix) else { return None };
+                    dyn_parts.push((f, *lo, *hi, *stride, ix.span));
+                }
+                bp.off = bp.off.add(a.elem_size.mul(static_lin));
+                if !dyn_parts.is_empty() {
+                    let es = a.elem_size;
+                    let prev = bp.dynamic.take();
+                    let d: AddrFn = if dyn_parts.len() == 1 && prev.is_none() {
+                        let Some((f, lo, hi, stride, span)) = dyn_parts.pop() else {
+                            return None;
+                        };
+                        Rc::new(move |vm: &mut Vm| {
+                            let v = f(vm)?;
+                            if v < lo || v > hi {
+                                return Err(Fault::IndexOutOfRange {
+                                    span,
+                                    index: v,
+                                    lo,
+                                    hi,
+                                });
+                            }
+                            Ok(es.mul(((v - lo) as usize) * stride))
+                        })
+                    } else {
+                        Rc::new(move |vm: &mut Vm| {
+                            let mut lin = 0usize;
+                            for (f, lo, hi, stride, span) in &dyn_parts {
+                                let v = f(vm)?;
+                                if v < *lo || v > *hi {
+                                    return Err(Fault::IndexOutOfRange {
+                                        span: *span,
+                                        index: v,
+                                        lo: *lo,
+                                        hi: *hi,
+                                    });
+                                }
+                                lin += ((v - lo) as usize) * stride;
+                            }
+                            let base = match &prev {
+                                Some(p) => p(vm)?,
+                                None => Size::default(),
+                            };
+                            Ok(base.add(es.mul(lin)))
+                        })
+                    };
+                    bp.dynamic = Some(d);
+                }
+                bp.ty = a.elem.clone();
+                Some(bp)
+            }
+            _ => None,
+        }
+    }
+
+    /// Loads a scalar from a place.
+    pub(crate) fn load(&self, p: &Place) -> CE {
+        if let Some(d) = p.direct {
+            return CE::I(Box::new(move |vm| {
+                Ok(vm.io_read(d.area, d.byte, d.bit, d.bits))
+            }));
+        }
+        if let Some(bit) = p.bit {
+            let a = p.addr();
+            return CE::I(Box::new(move |vm| {
+                let at = a(vm)?;
+                Ok((vm.geti(at.i)? >> bit) & 1)
+            }));
+        }
+        let off = p.off;
+        match (p.ty.lane(), p.base, p.dynamic.is_some()) {
+            (Some(Lane::Int), Base::Frame, false) => {
+                CE::I(Box::new(move |vm| vm.geti(vm.frame.i + off.i)))
+            }
+            (Some(Lane::Int), Base::Abs, false) => CE::I(Box::new(move |vm| vm.geti(off.i))),
+            (Some(Lane::Real), Base::Frame, false) => {
+                CE::R(Box::new(move |vm| vm.getr(vm.frame.r + off.r)))
+            }
+            (Some(Lane::Real), Base::Abs, false) => CE::R(Box::new(move |vm| vm.getr(off.r))),
+            (Some(Lane::Str), _, _) => {
+                let a = p.addr();
+                CE::S(Box::new(move |vm| {
+                    let at = a(vm)?;
+                    vm.gets(at.s)
+                }))
+            }
+            (Some(Lane::Real), _, true) => {
+                let a = p.addr();
+                CE::R(Box::new(move |vm| {
+                    let at = a(vm)?;
+                    vm.getr(at.r)
+                }))
+            }
+            _ => {
+                let a = p.addr();
+                CE::I(Box::new(move |vm| {
+                    let at = a(vm)?;
+                    vm.geti(at.i)
+                }))
+            }
+        }
+    }
+
+    /// Stores a scalar value into a place (string truncation, bit insertion, I/O image).
+    pub(crate) fn store(&self, p: &Place, v: CE) -> StmtFn {
+        let off = p.off;
+        if let Some(d) = p.direct {
+            let CE::I(f) = v else {
+                return Box::new(|_| Ok(Flow::Normal));
+            };
+            return Box::new(move |vm| {
+                let x = f(vm)?;
+                vm.io_write(d.area, d.byte, d.bit, d.bits, x);
+                Ok(Flow::Normal)
+            });
+        }
+        if let Some(bit) = p.bit {
+            let a = p.addr();
+            let CE::I(f) = v else {
+                return Box::new(|_| Ok(Flow::Normal));
+            };
+            return Box::new(move |vm| {
+                let x = f(vm)?;
+                let at = a(vm)?;
+                let old = vm.geti(at.i)?;
+                let m = 1i64 << bit;
+                vm.seti(at.i, if x != 0 { old | m } else { old & !m })?;
+                Ok(Flow::Normal)
+            });
+        }
+        match (v, p.base, p.dynamic.is_some()) {
+            (CE::I(f), Base::Frame, false) => Box::new(move |vm| {
+                let x = f(vm)?;
+                vm.seti(vm.frame.i + off.i, x)?;
+                Ok(Flow::Normal)
+            }),
+            (CE::I(f), Base::Abs, false) => Box::new(move |vm| {
+                let x = f(vm)?;
+                vm.seti(off.i, x)?;
+                Ok(Flow::Normal)
+            }),
+            (CE::I(f), _, _) => {
+                let a = p.addr();
+                Box::new(move |vm| {
+                    let x = f(vm)?;
+                    let at = a(vm)?;
+                    vm.seti(at.i, x)?;
+                    Ok(Flow::Normal)
+                })
+            }
+            (CE::R(f), Base::Frame, false) => Box::new(move |vm| {
+                let x = f(vm)?;
+                vm.setr(vm.frame.r + off.r, x)?;
+                Ok(Flow::Normal)
+            }),
+            (CE::R(f), _, _) => {
+                let a = p.addr();
+                Box::new(move |vm| {
+                    let x = f(vm)?;
+                    let at = a(vm)?;
+                    vm.setr(at.r, x)?;
+                    Ok(Flow::Normal)
+                })
+            }
+            (CE::S(f), _, _) => {
+                let a = p.addr();
+                let max = match p.ty {
+                    Ty::String(n) | Ty::WString(n) => n,
+                    _ => u32::MAX,
+                };
+                Box::new(move |vm| {
+                    let x = string::truncate(f(vm)?, max);
+                    let at = a(vm)?;
+                    vm.sets(at.s, x)?;
+                    Ok(Flow::Normal)
+                })
+            }
+        }
+    }
+
+    /// Compiles an expression including its implicit conversion.
+    pub(crate) fn expr(&mut self, e: &Expr) -> CE {
+        let v = self.expr_natural(e);
+        match self.c.coerce.get(&e.id) {
+            Some(to) => {
+                let from = self.c.ty(e.id);
+                convert(v, &from, &to.clone(), self.c)
+            }
+            None => v,
+        }
+    }
+
+    fn expr_natural(&mut self, e: &Expr) -> CE {
+        let ty = self.c.ty(e.id);
+        match &e.kind {
+            ExprKind::Literal(l) => literal(l, &ty),
+            ExprKind::Name { .. }
+            | ExprKind::Member(..)
+            | ExprKind::Index(..)
+            | ExprKind::Bit(..)
+            | ExprKind::Direct(_) => {
+                match self.c.res.get(&e.id) {
+                    Some(Res::EnumValue(v)) => return CE::I(konst_i(*v)),
+                    Some(Res::WStringLiteral(s)) => {
+                        let s = s.clone();
+                        return CE::S(Box::new(move |_| Ok(s.clone())));
+                    }
+                    _ => {}
+                }
+                match self.place(e) {
+                    Some(p) => self.load(&p),
+                    None => {
+                        self.error(e.span, "cannot compile this access");
+                        CE::I(konst_i(0))
+                    }
+                }
+            }
+            ExprKind::TypedEnum(..) => match self.c.res.get(&e.id) {
+                Some(Res::EnumValue(v)) => CE::I(konst_i(*v)),
+                _ => CE::I(konst_i(0)),
+            },
+            ExprKind::Deref(_) => CE::I(konst_i(0)),
+            ExprKind::Unary(op, a) => {
+                let v = self.expr(a);
+                unary(*op, v, &ty)
+            }
+            ExprKind::Binary(op, a, b) => {
+                let ta = self.c.final_ty(a.id);
+                let tb = self.c.final_ty(b.id);
+                let va = self.expr(a);
+                let vb = self.expr(b);
+                binary(*op, va, vb, &ta, &tb, &ty, e.span)
+            }
+            ExprKind::Call(_, args) => match self.c.res.get(&e.id).cloned() {
+                Some(Res::CallBuiltin(b)) => self.builtin(&b, args, e),
+                Some(Res::CallFunction(pid)) => {
+                    let (call, result) = self.call_function(pid, args);
+                    let Some(result) = result else {
+                        return CE::I(Box::new(move |vm| {
+                            call(vm)?;
+                            Ok(0)
+                        }));
+                    };
+                    match self.load(&result) {
+                        CE::I(l) => CE::I(Box::new(move |vm| {
+                            call(vm)?;
+                            l(vm)
+                        })),
+                        CE::R(l) => CE::R(Box::new(move |vm| {
+                            call(vm)?;
+                            l(vm)
+                        })),
+                        CE::S(l) => CE::S(Box::new(move |vm| {
+                            call(vm)?;
+                            l(vm)
+                        })),
+                    }
+                }
+                _ => {
+                    self.error(e.span, "cannot compile this call");
+                    CE::I(konst_i(0))
+                }
+            },
+        }
+    }
+
+    /// Compiles a call of a user FUNCTION: returns the call (args, body, outputs) and the
+    /// absolute place of its result.
+    pub(crate) fn call_function(&mut self, pid: PouId, args: &[Arg]) -> (StmtFn, Option<Place>) {
+        let Some(pou) = self.c.pou(pid).cloned() else {
+            return (Box::new(|_| Ok(Flow::Normal)), None);
+        };
+        let base = pou.base.unwrap_or_default();
+        let (pre, post) = self.bind_args(&pou, args);
+        let id = pid.0;
+        let has_args_calls = args.iter().any(|a| contains_call(&a.value));
+        let call: StmtFn = if has_args_calls {
+            // evaluate into temporaries first (a nested call may use the same frame)
+            let pre = Rc::new(pre);
+            Box::new(move |vm| {
+                let mut vals = Vec::with_capacity(pre.len());
+                for (get, _) in pre.iter() {
+                    vals.push(get(vm)?);
+                }
+                vm.init(id, base)?;
+                let saved = std::mem::replace(&mut vm.callee, base);
+                let r = (|| {
+                    for ((_, put), v) in pre.iter().zip(vals) {
+                        put(vm, v)?;
+                    }
+                    vm.call(id, base)?;
+                    for p in &post {
+                        p(vm)?;
+                    }
+                    Ok(Flow::Normal)
+                })();
+                vm.callee = saved;
+                r
+            })
+        } else {
+            Box::new(move |vm| {
+                vm.init(id, base)?;
+                let saved = std::mem::replace(&mut vm.callee, base);
+                let r = (|| {
+                    for (get, put) in &pre {
+                        let v = get(vm)?;
+                        put(vm, v)?;
+                    }
+                    vm.call(id, base)?;
+                    for p in &post {
+                        p(vm)?;
+                    }
+                    Ok(Flow::Normal)
+                })();
+                vm.callee = saved;
+                r
+            })
+        };
+        let result = match &pou.ret {
+            Some(t) if *t != Ty::Void => pou
+                .vars
+                .first()
+                .map(|v| Place::abs(base.add(v.offset), t.clone())),
+            _ => None,
+        };
+        (call, result)
+    }
+
+    /// Argument binding for a call: `pre` = (evaluate in the caller, write into the callee),
+    /// `post` = outputs and in-out copy-back. Callee variables are addressed relative to
+    /// `vm.callee`, which the call sets (and restores) around the binding.
+    pub(crate) fn bind_args(
+        &mut self,
+        pou: &crate::check::PouInfo,
+        args: &[Arg],
+    ) -> (Vec<ArgBind>, Vec<StmtFn>) {
+        let mut pre: Vec<ArgBind> = Vec::new();
+        let mut post: Vec<StmtFn> = Vec::new();
+        let positional: Vec<usize> = pou
+            .vars
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| matches!(v.kind, VarKind::Input | VarKind::InOut))
+            .map(|(i, _)| i)
+            .collect();
+        let mut pos = 0;
+        for a in args {
+            let idx = match &a.name {
+                Some(n) => match pou.var(&n.key) {
+                    Some((i, _)) => i,
+                    None => continue,
+                },
+                None => {
+                    let Some(&i) = positional.get(pos) else {
+                        continue;
+                    };
+                    pos += 1;
+                    i
+                }
+            };
+            let Some(v) = pou.vars.get(idx) else { continue };
+            let target = Place {
+                base: Base::Callee,
+                ..Place::frame(v.offset, v.ty.clone())
+            };
+            if a.output {
+                // callee output -> caller variable
+                let Some(dst) = self.place(&a.value) else {
+                    continue;
+                };
+                let mut src = self.load(&target);
+                if a.negated {
+                    if let CE::I(f) = src {
+                        src = CE::I(Box::new(move |vm| Ok(i64::from(f(vm)? == 0))));
+                    }
+                }
+                let dt = dst.ty.clone();
+                let src = convert(src, &v.ty, &dt, self.c);
+                post.push(self.store(&dst, src));
+                continue;
+            }
+            if v.kind == VarKind::InOut {
+                let Some(src) = self.place(&a.value) else {
+                    continue;
+                };
+                if v.ty.lane().is_none() {
+                    let size = self.c.size_of(&v.ty);
+                    let sa = src.addr();
+                    let ta = target.addr();
+                    let (sa2, ta2) = (sa.clone(), ta.clone());
+                    pre.push(ArgBind::copy(sa, ta, size));
+                    post.push(Box::new(move |vm| {
+                        let s = sa2(vm)?;
+                        let t = ta2(vm)?;
+                        vm.copy(t, s, size)?;
+                        Ok(Flow::Normal)
+                    }));
+                } else {
+                    let get = self.load(&src);
+                    pre.push(ArgBind::scalar(get, self.store_val(&target)));
+                    let back = self.load(&target);
+                    post.push(self.store(&src, back));
+                }
+                continue;
+            }
+            if v.ty.lane().is_none() {
+                // aggregate input: copy
+                let Some(src) = self.agg_source(&a.value) else {
+                    continue;
+                };
+                let size = self.c.size_of(&v.ty);
+                let ta = target.addr();
+                pre.push(ArgBind::agg(src, ta, size));
+                continue;
+            }
+            let get = self.expr(&a.value);
+            pre.push(ArgBind::scalar(get, self.store_val(&target)));
+        }
+        (pre, post)
+    }
+
+    /// A writer for a place that takes an already evaluated value.
+    pub(crate) fn store_val(
+        &self,
+        p: &Place,
+    ) -> Rc<dyn Fn(&mut Vm, crate::vm::Val) -> Result<(), Fault>> {
+        let a = p.addr();
+        let max = match p.ty {
+            Ty::String(n) | Ty::WString(n) => n,
+            _ => u32::MAX,
+        };
+        Rc::new(move |vm, v| {
+            let at = a(vm)?;
+            match v {
+                crate::vm::Val::Int(x) => vm.seti(at.i, x),
+                crate::vm::Val::Real(x) => vm.setr(at.r, x),
+                crate::vm::Val::Str(x) => vm.sets(at.s, string::truncate(x, max)),
+            }
+        })
+    }
+
+    /// Source address of an aggregate value: a place, or a function call's result.
+    pub(crate) fn agg_source(&mut self, e: &Expr) -> Option<AddrFn> {
+        if let ExprKind::Call(_, args) = &e.kind {
+            if let Some(Res::CallFunction(pid)) = self.c.res.get(&e.id).cloned() {
+                let (call, result) = self.call_function(pid, args);
+                let a = result?.addr();
+                return Some(Rc::new(move |vm: &mut Vm| {
+                    call(vm)?;
+                    a(vm)
+                }));
+            }
+            return None;
+        }
+        Some(self.place(e)?.addr())
+    }
+}
+
+/// How one argument is passed.
+pub(crate) type ArgGet = Box<dyn Fn(&mut Vm) -> Result<crate::vm::Val, Fault>>;
+/// Writes an evaluated argument into the callee.
+pub(crate) type ArgPut = Box<dyn Fn(&mut Vm, crate::vm::Val) -> Result<(), Fault>>;
+
+/// An argument binding: get in the caller, put into the callee.
+pub(crate) type ArgBind = (ArgGet, ArgPut);
+
+trait ArgBindExt {
+    fn scalar(get: CE, put: Rc<dyn Fn(&mut Vm, crate::vm::Val) -> Result<(), Fault>>) -> ArgBind;
+    fn copy(src: AddrFn, dst: AddrFn, size: Size) -> ArgBind;
+    fn agg(src: AddrFn, dst: AddrFn, size: Size) -> ArgBind;
+}
+
+impl ArgBindExt for ArgBind {
+    fn scalar(get: CE, put: Rc<dyn Fn(&mut Vm, crate::vm::Val) -> Result<(), Fault>>) -> ArgBind {
+        let g: ArgGet = match get {
+            CE::I(f) => Box::new(move |vm| Ok(crate::vm::Val::Int(f(vm)?))),
+            CE::R(f) => Box::new(move |vm| Ok(crate::vm::Val::Real(f(vm)?))),
+            CE::S(f) => Box::new(move |vm| Ok(crate::vm::Val::Str(f(vm)?))),
+        };
+        (g, Box::new(move |vm, v| put(vm, v)))
+    }
+    fn copy(src: AddrFn, dst: AddrFn, size: Size) -> ArgBind {
+        Self::agg(src, dst, size)
+    }
+    fn agg(src: AddrFn, dst: AddrFn, size: Size) -> ArgBind {
+        // the source address is taken in the caller; the copy happens on put
+        (
+            Box::new(move |vm| {
+                let s = src(vm)?;
+                Ok(crate::vm::Val::Int(pack(s)))
+            }),
+            Box::new(move |vm, v| {
+                let crate::vm::Val::Int(p) = v else {
+                    return Ok(());
+                };
+                let s = unpack(p);
+                let d = dst(vm)?;
+                vm.copy(s, d, size)
+            }),
+        )
+    }
+}
+
+// An aggregate source address travels through `Val::Int` between get and put: lanes packed
+// 21 bits each (memory images are far below 2 M cells per lane).
+fn pack(s: Size) -> i64 {
+    ((s.i as i64) << 42) | ((s.r as i64 & 0x1F_FFFF) << 21) | (s.s as i64 & 0x1F_FFFF)
+}
+fn unpack(p: i64) -> Size {
+    Size {
+        i: (p >> 42) as usize,
+        r: ((p >> 21) & 0x1F_FFFF) as usize,
+        s: (p & 0x1F_FFFF) as usize,
+    }
+}
+
+pub(crate) fn contains_call(e: &Expr) -> bool {
+    match &e.kind {
+        ExprKind::Call(..) => true,
+        ExprKind::Unary(_, a)
+        | ExprKind::Member(a, _)
+        | ExprKind::Bit(a, _)
+        | ExprKind::Deref(a) => contains_call(a),
+        ExprKind::Binary(_, a, b) => contains_call(a) || contains_call(b),
+        ExprKind::Index(a, ix) => contains_call(a) || ix.iter().any(contains_call),
+        _ => false,
+    }
+}
+
+fn literal(l: &Literal, ty: &Ty) -> CE {
+    match l {
+        Literal::Int(v, _) => {
+            if ty.is_real() {
+                let x = conv::fit_real(*v as f64, ty);
+                CE::R(Box::new(move |_| Ok(x)))
+            } else {
+                CE::I(konst_i(*v as i64))
+            }
+        }
+        Literal::Real(v, _) => {
+            let x = conv::fit_real(*v, ty);
+            CE::R(Box::new(move |_| Ok(x)))
+        }
+        Literal::Bool(b) => CE::I(konst_i(i64::from(*b))),
+        Literal::String(s, _) => {
+            let s = s.clone();
+            CE::S(Box::new(move |_| Ok(s.clone())))
+        }
+        Literal::Time(v, _) => CE::I(konst_i(i64::try_from(*v).unwrap_or(i64::MAX))),
+        Literal::Date(v) | Literal::Tod(v) | Literal::Dt(v) => CE::I(konst_i(*v)),
+    }
+}
+
+/// Converts a value between types (implicit widening and `*_TO_*`).
+pub(crate) fn convert(v: CE, from: &Ty, to: &Ty, c: &crate::check::Checked) -> CE {
+    if from == to {
+        return v;
+    }
+    let (from, to) = (from.clone(), to.clone());
+    match v {
+        CE::I(f) => match to.lane() {
+            Some(Lane::Int) => {
+                let same_repr = (from.is_int() || from.is_bits() || from == Ty::Bool)
+                    && (to.is_int() || to.is_bits())
+                    && from.converts_to(&to);
+                if same_repr || (from.is_duration() && to.is_duration()) {
+                    CE::I(f)
+                } else {
+                    CE::I(Box::new(move |vm| Ok(conv::int_to_int(f(vm)?, &from, &to))))
+                }
+            }
+            Some(Lane::Real) => CE::R(Box::new(move |vm| {
+                Ok(conv::fit_real(conv::int_to_f64(f(vm)?, &from), &to))
+            })),
+            Some(Lane::Str) => {
+                let names: Option<Vec<(String, i64)>> = match &from {
+                    Ty::Enum(id) => c.types.enum_def(*id).map(|d| d.values.clone()),
+                    _ => None,
+                };
+                CE::S(Box::new(move |vm| {
+                    let x = f(vm)?;
+                    let n = names
+                        .as_ref()
+                        .and_then(|n| n.iter().find(|(_, v)| *v == x))
+                        .map(|(n, _)| n.as_str());
+                    Ok(conv::int_to_string(x, &from, n))
+                }))
+            }
+            None => CE::I(f),
+        },
+        CE::R(f) => match to.lane() {
+            Some(Lane::Int) => CE::I(Box::new(move |vm| Ok(conv::real_to_int(f(vm)?, &to)))),
+            Some(Lane::Real) => CE::R(Box::new(move |vm| Ok(conv::fit_real(f(vm)?, &to)))),
+            Some(Lane::Str) => {
+                let single = from == Ty::Real;
+                CE::S(Box::new(move |vm| {
+                    Ok(crate::vm::format::real(f(vm)?, single))
+                }))
+            }
+            None => CE::R(f),
+        },
+        CE::S(f) => match to.lane() {
+            Some(Lane::Int) => CE::I(Box::new(move |vm| Ok(conv::string_to_int(&f(vm)?, &to)))),
+            Some(Lane::Real) => CE::R(Box::new(move |vm| {
+                Ok(conv::fit_real(conv::string_to_real(&f(vm)?), &to))
+            })),
+            _ => CE::S(f),
+        },
+    }
+}
+
+fn unary(op: UnOp, v: CE, ty: &Ty) -> CE {
+    let ty = ty.clone();
+    match (op, v) {
+        (UnOp::Plus, v) => v,
+        (UnOp::Neg, CE::I(f)) => CE::I(Box::new(move |vm| Ok(ty.wrap(f(vm)?.wrapping_neg())))),
+        (UnOp::Neg, CE::R(f)) => CE::R(Box::new(move |vm| Ok(-f(vm)?))),
+        (UnOp::Not, CE::I(f)) => {
+            if ty == Ty::Bool {
+                CE::I(Box::new(move |vm| Ok(i64::from(f(vm)? == 0))))
+            } else {
+                CE::I(Box::new(move |vm| Ok(ty.wrap(!f(vm)?))))
+            }
+        }
+        (_, v) => v,
+    }
+}
+
+const DAY: i64 = 86_400_000_000_000;
+
+#[allow(clippy::too_many_arguments)]
+fn binary(op: BinOp, a: CE, b: CE, ta: &Ty, tb: &Ty, ty: &Ty, span: Span) -> CE {
+    use BinOp::*;
+    let cmp = matches!(op, Lt | Gt | Le | Ge | Eq | Ne);
+    match (a, b) {
+        (CE::I(a), CE::I(b)) => {
+            if cmp {
+                let unsigned = ty_is_u64(ta) || ty_is_u64(tb);
+                return CE::I(int_cmp(op, a, b, unsigned));
+            }
+            // time arithmetic
+            let timey = |t: &Ty| matches!(t, Ty::Time | Ty::LTime | Ty::Tod | Ty::Dt | Ty::Date);
+            if timey(ta) || timey(tb) {
+                let tod = *ty == Ty::Tod;
+                return CE::I(match op {
+                    Add => Box::new(move |vm| {
+                        let r = a(vm)?.wrapping_add(b(vm)?);
+                        Ok(if tod { r.rem_euclid(DAY) } else { r })
+                    }),
+                    Sub => Box::new(move |vm| {
+                        let r = a(vm)?.wrapping_sub(b(vm)?);
+                        Ok(if tod { r.rem_euclid(DAY) } else { r })
+                    }),
+                    Mul => Box::new(move |vm| Ok(a(vm)?.wrapping_mul(b(vm)?))),
+                    Div => Box::new(move |vm| {
+                        let x = a(vm)?;
+                        let y = b(vm)?;
+                        if y == 0 {
+                            return Err(Fault::DivisionByZero(span));
+                        }
+                        Ok(x.wrapping_div(y))
+                    }),
+                    _ => Box::new(move |vm| a(vm)),
+                });
+            }
+            let t = ty.clone();
+            let u64op = ty_is_u64(ty);
+            CE::I(match op {
+                Add => match t {
+                    Ty::LInt | Ty::ULInt | Ty::LWord => {
+                        Box::new(move |vm| Ok(a(vm)?.wrapping_add(b(vm)?)))
+                    }
+                    Ty::DInt => {
+                        Box::new(move |vm| Ok(i64::from((a(vm)?.wrapping_add(b(vm)?)) as i32)))
+                    }
+                    Ty::Int => {
+                        Box::new(move |vm| Ok(i64::from((a(vm)?.wrapping_add(b(vm)?)) as i16)))
+                    }
+                    _ => Box::new(move |vm| Ok(t.wrap(a(vm)?.wrapping_add(b(vm)?)))),
+                },
+                Sub => match t {
+                    Ty::DInt => {
+                        Box::new(move |vm| Ok(i64::from((a(vm)?.wrapping_sub(b(vm)?)) as i32)))
+                    }
+                    _ => Box::new(move |vm| Ok(t.wrap(a(vm)?.wrapping_sub(b(vm)?)))),
+                },
+                Mul => Box::new(move |vm| Ok(t.wrap(a(vm)?.wrapping_mul(b(vm)?)))),
+                Div => Box::new(move |vm| {
+                    let x = a(vm)?;
+                    let y = b(vm)?;
+                    if y == 0 {
+                        return Err(Fault::DivisionByZero(span));
+                    }
+                    if u64op {
+                        return Ok(((x as u64) / (y as u64)) as i64);
+                    }
+                    Ok(t.wrap(x.wrapping_div(y)))
+                }),
+                Mod => Box::new(move |vm| {
+                    let x = a(vm)?;
+                    let y = b(vm)?;
+                    if y == 0 {
+                        return Err(Fault::DivisionByZero(span));
+                    }
+                    if u64op {
+                        return Ok(((x as u64) % (y as u64)) as i64);
+                    }
+                    Ok(t.wrap(x.wrapping_rem(y)))
+                }),
+                And => Box::new(move |vm| {
+                    let x = a(vm)?;
+                    if x == 0 && t == Ty::Bool {
+                        return Ok(0);
+                    }
+                    Ok(x & b(vm)?)
+                }),
+                Or => Box::new(move |vm| {
+                    let x = a(vm)?;
+                    if x == 1 && t == Ty::Bool {
+                        return Ok(1);
+                    }
+                    Ok(x | b(vm)?)
+                }),
+                Xor => Box::new(move |vm| Ok(a(vm)? ^ b(vm)?)),
+                Pow => Box::new(move |vm| Ok(t.wrap(crate::stdlib::numeric::ipow(a(vm)?, b(vm)?)))),
+                _ => Box::new(move |vm| a(vm)),
+            })
+        }
+        (CE::R(a), CE::R(b)) => {
+            if cmp {
+                return CE::I(match op {
+                    Lt => Box::new(move |vm| Ok(i64::from(a(vm)? < b(vm)?))),
+                    Gt => Box::new(move |vm| Ok(i64::from(a(vm)? > b(vm)?))),
+                    Le => Box::new(move |vm| Ok(i64::from(a(vm)? <= b(vm)?))),
+                    Ge => Box::new(move |vm| Ok(i64::from(a(vm)? >= b(vm)?))),
+                    Eq => Box::new(move |vm| Ok(i64::from(a(vm)? == b(vm)?))),
+                    _ => Box::new(move |vm| Ok(i64::from(a(vm)? != b(vm)?))),
+                });
+            }
+            let single = *ty == Ty::Real;
+            let fit = move |x: f64| if single { f64::from(x as f32) } else { x };
+            CE::R(match op {
+                Add => Box::new(move |vm| Ok(fit(a(vm)? + b(vm)?))),
+                Sub => Box::new(move |vm| Ok(fit(a(vm)? - b(vm)?))),
+                Mul => Box::new(move |vm| Ok(fit(a(vm)? * b(vm)?))),
+                Div => Box::new(move |vm| Ok(fit(a(vm)? / b(vm)?))),
+                Pow => Box::new(move |vm| Ok(fit(a(vm)?.powf(b(vm)?)))),
+                _ => Box::new(move |vm| a(vm)),
+            })
+        }
+        (CE::I(a), CE::R(b)) => {
+            // TIME * REAL, TIME / REAL
+            CE::I(match op {
+                Mul => Box::new(move |vm| Ok((a(vm)? as f64 * b(vm)?).round() as i64)),
+                Div => Box::new(move |vm| Ok((a(vm)? as f64 / b(vm)?).round() as i64)),
+                _ => Box::new(move |vm| a(vm)),
+            })
+        }
+        (CE::R(a), CE::I(b)) => CE::I(Box::new(move |vm| {
+            Ok((a(vm)? * b(vm)? as f64).round() as i64)
+        })),
+        (CE::S(a), CE::S(b)) => CE::I(match op {
+            Lt => Box::new(move |vm| Ok(i64::from(a(vm)? < b(vm)?))),
+            Gt => Box::new(move |vm| Ok(i64::from(a(vm)? > b(vm)?))),
+            Le => Box::new(move |vm| Ok(i64::from(a(vm)? <= b(vm)?))),
+            Ge => Box::new(move |vm| Ok(i64::from(a(vm)? >= b(vm)?))),
+            Eq => Box::new(move |vm| Ok(i64::from(a(vm)? == b(vm)?))),
+            _ => Box::new(move |vm| Ok(i64::from(a(vm)? != b(vm)?))),
+        }),
+        (a, _) => a,
+    }
+}
+
+fn int_cmp(op: BinOp, a: IFn, b: IFn, unsigned: bool) -> IFn {
+    use BinOp::*;
+    if unsigned {
+        return match op {
+            Lt => Box::new(move |vm| Ok(i64::from((a(vm)? as u64) < (b(vm)? as u64)))),
+            Gt => Box::new(move |vm| Ok(i64::from((a(vm)? as u64) > (b(vm)? as u64)))),
+            Le => Box::new(move |vm| Ok(i64::from((a(vm)? as u64) <= (b(vm)? as u64)))),
+            Ge => Box::new(move |vm| Ok(i64::from((a(vm)? as u64) >= (b(vm)? as u64)))),
+            Eq => Box::new(move |vm| Ok(i64::from(a(vm)? == b(vm)?))),
+            _ => Box::new(move |vm| Ok(i64::from(a(vm)? != b(vm)?))),
+        };
+    }
+    match op {
+        Lt => Box::new(move |vm| Ok(i64::from(a(vm)? < b(vm)?))),
+        Gt => Box::new(move |vm| Ok(i64::from(a(vm)? > b(vm)?))),
+        Le => Box::new(move |vm| Ok(i64::from(a(vm)? <= b(vm)?))),
+        Ge => Box::new(move |vm| Ok(i64::from(a(vm)? >= b(vm)?))),
+        Eq => Box::new(move |vm| Ok(i64::from(a(vm)? == b(vm)?))),
+        _ => Box::new(move |vm| Ok(i64::from(a(vm)? != b(vm)?))),
+    }
+}
+
+#[allow(dead_code)]
+fn unused(_: RFn, _: SFn) {}

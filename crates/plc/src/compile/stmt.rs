@@ -1,0 +1,328 @@
+//! Statements.
+
+use super::expr::konst_i;
+use super::{Cx, IFn, CE};
+use crate::check::{PouId, Res, Ty};
+use crate::syntax::*;
+use crate::vm::{Fault, Flow, StmtFn, Vm};
+
+/// Runs statements in order until one does not finish normally.
+#[inline]
+pub(crate) fn run_block(block: &[StmtFn], vm: &mut Vm) -> Result<Flow, Fault> {
+    for s in block {
+        let f = s(vm)?;
+        if f != Flow::Normal {
+            return Ok(f);
+        }
+    }
+    Ok(Flow::Normal)
+}
+
+#[inline]
+fn tick(vm: &mut Vm, span: Span) -> Result<(), Fault> {
+    if vm.budget == 0 {
+        return Err(Fault::LoopBudget(span));
+    }
+    vm.budget -= 1;
+    Ok(())
+}
+
+fn nop() -> StmtFn {
+    Box::new(|_| Ok(Flow::Normal))
+}
+
+impl Cx<'_> {
+    pub(crate) fn block(&mut self, stmts: &[Stmt]) -> Vec<StmtFn> {
+        stmts
+            .iter()
+            .filter(|s| !matches!(s.kind, StmtKind::Empty))
+            .map(|s| self.stmt(s))
+            .collect()
+    }
+
+    fn cond(&mut self, e: &Expr) -> IFn {
+        match self.expr(e) {
+            CE::I(f) => f,
+            _ => konst_i(0),
+        }
+    }
+
+    fn stmt(&mut self, s: &Stmt) -> StmtFn {
+        match &s.kind {
+            StmtKind::Assign(target, value) => {
+                let tt = self.c.ty(target.id);
+                if tt.lane().is_none() {
+                    // aggregate copy
+                    let size = self.c.size_of(&tt);
+                    let (Some(dst), Some(src)) = (self.place(target), self.agg_source(value))
+                    else {
+                        self.error(s.span, "cannot compile this assignment");
+                        return nop();
+                    };
+                    let da = dst.addr();
+                    return Box::new(move |vm| {
+                        let from = src(vm)?;
+                        let to = da(vm)?;
+                        vm.copy(from, to, size)?;
+                        Ok(Flow::Normal)
+                    });
+                }
+                let Some(p) = self.place(target) else {
+                    self.error(target.span, "cannot compile this assignment target");
+                    return nop();
+                };
+                let v = self.expr(value);
+                self.store(&p, v)
+            }
+            StmtKind::Call(e) => self.call_stmt(e),
+            StmtKind::If(arms, els) => {
+                let arms: Vec<(IFn, Vec<StmtFn>)> = arms
+                    .iter()
+                    .map(|(c, b)| (self.cond(c), self.block(b)))
+                    .collect();
+                let els = els.as_ref().map(|b| self.block(b)).unwrap_or_default();
+                if arms.len() == 1 {
+                    let Some((c, b)) = arms.into_iter().next() else {
+                        return nop();
+                    };
+                    return Box::new(move |vm| {
+                        if c(vm)? != 0 {
+                            run_block(&b, vm)
+                        } else {
+                            run_block(&els, vm)
+                        }
+                    });
+                }
+                Box::new(move |vm| {
+                    for (c, b) in &arms {
+                        if c(vm)? != 0 {
+                            return run_block(b, vm);
+                        }
+                    }
+                    run_block(&els, vm)
+                })
+            }
+            StmtKind::Case(sel, arms, els) => {
+                let sel = self.cond(sel);
+                let mut table: Vec<(Vec<(i64, i64)>, Vec<StmtFn>)> = Vec::new();
+                for (labels, body) in arms {
+                    let mut ranges = Vec::new();
+                    for l in labels {
+                        match l {
+                            CaseLabel::Value(e) => match self.const_value(e) {
+                                Some(v) => ranges.push((v, v)),
+                                None => self.error(e.span, "CASE label must be a constant"),
+                            },
+                            CaseLabel::Range(a, b) => {
+                                match (self.const_value(a), self.const_value(b)) {
+                                    (Some(x), Some(y)) => ranges.push((x, y)),
+                                    _ => self.error(a.span, "CASE range must be constant"),
+                                }
+                            }
+                        }
+                    }
+                    table.push((ranges, self.block(body)));
+                }
+                let els = els.as_ref().map(|b| self.block(b)).unwrap_or_default();
+                Box::new(move |vm| {
+                    let v = sel(vm)?;
+                    for (ranges, body) in &table {
+                        if ranges.iter().any(|(lo, hi)| v >= *lo && v <= *hi) {
+                            return run_block(body, vm);
+                        }
+                    }
+                    run_block(&els, vm)
+                })
+            }
+            StmtKind::For {
+                var,
+                from,
+                to,
+                by,
+                body,
+            } => {
+                let Some(p) = self.place(var) else {
+                    self.error(var.span, "cannot compile FOR variable");
+                    return nop();
+                };
+                let vt = p.ty.clone();
+                let load = match self.load(&p) {
+                    CE::I(f) => f,
+                    _ => konst_i(0),
+                };
+                let from_v = self.expr(from);
+                let set_from = self.store(&p, from_v);
+                let to = self.cond(to);
+                let by = by
+                    .as_ref()
+                    .map(|b| self.cond(b))
+                    .unwrap_or_else(|| konst_i(1));
+                let a = p.addr();
+                let body = self.block(body);
+                let span = s.span;
+                Box::new(move |vm| {
+                    set_from(vm)?;
+                    let end = to(vm)?;
+                    let step = by(vm)?;
+                    let mut cur = load(vm)?;
+                    loop {
+                        if (step >= 0 && cur > end) || (step < 0 && cur < end) {
+                            break;
+                        }
+                        tick(vm, span)?;
+                        match run_block(&body, vm)? {
+                            Flow::Exit => return Ok(Flow::Normal),
+                            Flow::Return => return Ok(Flow::Return),
+                            _ => {}
+                        }
+                        // the body may have changed the variable
+                        let at = a(vm)?;
+                        cur = vm.geti(at.i)?.saturating_add(step);
+                        vm.seti(at.i, vt.wrap(cur))?;
+                    }
+                    Ok(Flow::Normal)
+                })
+            }
+            StmtKind::While(c, body) => {
+                let c = self.cond(c);
+                let body = self.block(body);
+                let span = s.span;
+                Box::new(move |vm| {
+                    while c(vm)? != 0 {
+                        tick(vm, span)?;
+                        match run_block(&body, vm)? {
+                            Flow::Exit => break,
+                            Flow::Return => return Ok(Flow::Return),
+                            _ => {}
+                        }
+                    }
+                    Ok(Flow::Normal)
+                })
+            }
+            StmtKind::Repeat(body, c) => {
+                let c = self.cond(c);
+                let body = self.block(body);
+                let span = s.span;
+                Box::new(move |vm| {
+                    loop {
+                        tick(vm, span)?;
+                        match run_block(&body, vm)? {
+                            Flow::Exit => break,
+                            Flow::Return => return Ok(Flow::Return),
+                            _ => {}
+                        }
+                        if c(vm)? != 0 {
+                            break;
+                        }
+                    }
+                    Ok(Flow::Normal)
+                })
+            }
+            StmtKind::Exit => Box::new(|_| Ok(Flow::Exit)),
+            StmtKind::Continue => Box::new(|_| Ok(Flow::Continue)),
+            StmtKind::Return => Box::new(|_| Ok(Flow::Return)),
+            StmtKind::Empty => nop(),
+        }
+    }
+
+    /// Value of a constant CASE label.
+    fn const_value(&mut self, e: &Expr) -> Option<i64> {
+        match &e.kind {
+            ExprKind::Literal(Literal::Int(v, _)) => Some(*v as i64),
+            ExprKind::Literal(Literal::Bool(b)) => Some(i64::from(*b)),
+            ExprKind::Unary(UnOp::Neg, a) => self.const_value(a).map(|v| -v),
+            _ => match self.c.res.get(&e.id) {
+                Some(Res::EnumValue(v)) => Some(*v),
+                _ => {
+                    // constant variables: evaluate their initialiser
+                    let var = match self.c.res.get(&e.id) {
+                        Some(Res::Local(i)) => self
+                            .pou
+                            .and_then(|p| self.c.pou(p))
+                            .and_then(|p| p.vars.get(*i)),
+                        Some(Res::Global(g)) => self.c.globals.get(*g),
+                        _ => None,
+                    };
+                    match var {
+                        Some(v) if v.constant => match &v.init {
+                            Some(Init::Expr(x)) => {
+                                let x = x.clone();
+                                self.const_value(&x)
+                            }
+                            _ => Some(0),
+                        },
+                        _ => None,
+                    }
+                }
+            },
+        }
+    }
+
+    fn call_stmt(&mut self, e: &Expr) -> StmtFn {
+        let ExprKind::Call(callee, args) = &e.kind else {
+            return nop();
+        };
+        match self.c.res.get(&e.id).cloned() {
+            Some(Res::CallFb(pid)) => self.fb_call(pid, callee, args),
+            Some(Res::CallFunction(pid)) => self.call_function(pid, args).0,
+            Some(Res::CallBuiltin(_)) => match self.expr(e) {
+                CE::I(f) => Box::new(move |vm| f(vm).map(|_| Flow::Normal)),
+                CE::R(f) => Box::new(move |vm| f(vm).map(|_| Flow::Normal)),
+                CE::S(f) => Box::new(move |vm| f(vm).map(|_| Flow::Normal)),
+            },
+            _ => nop(),
+        }
+    }
+
+    fn fb_call(&mut self, pid: PouId, callee: &Expr, args: &[Arg]) -> StmtFn {
+        let Some(pou) = self.c.pou(pid).cloned() else {
+            return nop();
+        };
+        let Some(inst) = self.place(callee) else {
+            self.error(callee.span, "cannot compile this instance");
+            return nop();
+        };
+        let _ = Ty::Void;
+        let addr = inst.addr();
+        let (pre, post) = self.bind_args(&pou, args);
+        let id = pid.0;
+        let needs_temps = args.iter().any(|a| super::expr::contains_call(&a.value));
+        Box::new(move |vm| {
+            let base = addr(vm)?;
+            let saved = vm.callee;
+            if needs_temps {
+                let mut vals = Vec::with_capacity(pre.len());
+                for (get, _) in &pre {
+                    vals.push(get(vm)?);
+                }
+                vm.callee = base;
+                for ((_, put), v) in pre.iter().zip(vals) {
+                    if let Err(e) = put(vm, v) {
+                        vm.callee = saved;
+                        return Err(e);
+                    }
+                }
+            } else {
+                for (get, put) in &pre {
+                    let v = get(vm)?;
+                    vm.callee = base;
+                    let r = put(vm, v);
+                    vm.callee = saved;
+                    r?;
+                }
+            }
+            vm.callee = base;
+            let r = (|| {
+                vm.call(id, base)?;
+                vm.callee = base;
+                for p in &post {
+                    p(vm)?;
+                    vm.callee = base;
+                }
+                Ok(Flow::Normal)
+            })();
+            vm.callee = saved;
+            r
+        })
+    }
+}

@@ -1,0 +1,90 @@
+//! IEC 61131-3 Structured Text: compiler, scan-cycle runtime and standard library.
+//!
+//! # Layout and data flow
+//!
+//! ```text
+//! source files ──► syntax::lexer ──► syntax::parser ──► CompilationUnit (AST, immutable)
+//!                                                             │
+//!                 check: declarations, layout, names, types ◄─┘
+//!                 (side tables keyed by NodeId: expr_ty, coerce, res)
+//!                                                             │
+//!                 compile: closures per expression/statement ◄┘ ──► Compiled
+//!                                                             │
+//!                 task::Plc: memory image (vm), tasks, scan cycle, watchdog,
+//!                 retain/persistent, forcing, I/O image, paths ◄┘
+//! ```
+//!
+//! - [`syntax`]: [`syntax::SourceMap`] (files, `file:line:col`), the lexer (case-insensitive
+//!   keywords, typed/based/time literals, SCL `#local` and `"global"` names), a
+//!   recursive-descent parser with error recovery and the AST. Every node has a span
+//!   `(FileId, byte range)`; expressions have a [`syntax::NodeId`].
+//! - [`diagnostics`]: [`diagnostics::Diagnostic`] with a [`diagnostics::Code`], severity,
+//!   primary and secondary labels and notes; rendered as `file:line:col: error: message`.
+//! - [`check`]: stages as types — parsed [`syntax::CompilationUnit`] to
+//!   [`check::Checked`]: types and their three-lane memory layout, POU signatures, name
+//!   resolution and IEC implicit (widening) conversions. The AST is not modified.
+//! - [`compile`]: [`check::Checked`] to [`compile::Compiled`], closure-compiled code
+//!   (see the module for why closures).
+//! - [`vm`]: memory image, values, run-time faults, value formatting.
+//! - [`stdlib`]: standard FBs written in ST (timers, edges, counters, bistables, DTL) and
+//!   native built-in functions (numeric, bit, selection, string, conversion, time).
+//! - [`task`]: the runtime — [`task::Plc`] with a deterministic `run_cycle(now)`.
+//!
+//! # Run-time rules
+//! - Integer overflow wraps at the declared width (two's complement), as on most PLCs.
+//! - Integer division/MOD by zero, array index out of range and an exhausted per-cycle loop
+//!   budget are *faults*: the task stops with a diagnostic; the host never panics.
+//! - REAL arithmetic follows IEC 60559 (division by zero gives ±INF/NaN).
+//! - Functions have one static frame each (IEC 61131-3 forbids recursion, which the
+//!   checker rejects); VAR_IN_OUT is passed by copy-in/copy-out.
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+#![cfg_attr(not(test), deny(clippy::indexing_slicing))]
+
+pub mod check;
+pub mod compile;
+pub mod diagnostics;
+pub mod stdlib;
+pub mod syntax;
+pub mod task;
+pub mod vm;
+
+pub use compile::Compiled;
+pub use diagnostics::{Code, Diagnostic, Severity};
+pub use syntax::SourceMap;
+pub use task::{Plc, PlcError};
+
+/// Name of the standard-library file in the source map.
+pub const PRELUDE_NAME: &str = "<stdlib>";
+
+/// Parses, checks and compiles `files` (name, text) together with the standard library.
+/// The returned source map renders the diagnostics; warnings come back with success too.
+pub fn build(files: &[(String, String)]) -> (SourceMap, Result<Compiled, Vec<Diagnostic>>) {
+    let mut sources = SourceMap::new();
+    sources.add(PRELUDE_NAME, stdlib::PRELUDE);
+    for (name, text) in files {
+        sources.add(name.clone(), text.clone());
+    }
+    let result = build_sources(&sources);
+    (sources, result)
+}
+
+/// Like [`build`] for a prepared source map whose first file is the prelude.
+pub fn build_sources(sources: &SourceMap) -> Result<Compiled, Vec<Diagnostic>> {
+    let mut unit = syntax::CompilationUnit::default();
+    let mut diags = Vec::new();
+    let mut stdlib_items = 0;
+    for (i, (id, file)) in sources.files().enumerate() {
+        syntax::parser::parse_into(id, &file.text, &mut unit, &mut diags);
+        if i == 0 {
+            stdlib_items = unit.items.len();
+        }
+    }
+    if diags.iter().any(Diagnostic::is_error) {
+        return Err(diags);
+    }
+    let checked = check::check(unit, stdlib_items)?;
+    compile::compile(checked)
+}

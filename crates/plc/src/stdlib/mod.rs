@@ -1,0 +1,447 @@
+//! The standard library.
+//!
+//! Two kinds of members:
+//! - **Function blocks written in ST** ([`PRELUDE`]): timers, edge detection, counters and
+//!   bistables, plus the `DTL` struct and its conversions. They are compiled with the user's
+//!   program like any other POU, so they are inspectable (`Main.t1.ET`) and the compiler is
+//!   exercised by them. Their only hook into the host is the `__NOW()` intrinsic (the
+//!   scan's monotonic time from the injected clock).
+//! - **Built-in functions** ([`Builtin`]): generic or overloaded functions (`MAX`, `LEN`,
+//!   `*_TO_*`, ...) typed by [`signature`] and compiled to native closures by
+//!   [`crate::compile`]. One module per family holds the implementations.
+//!
+//! Extension point: a new FB is added to the prelude (ST) or, if it needs native code, as a
+//! builtin plus an ST wrapper; PID, RAMP, HYSTERESIS, the weekly time switch and the
+//! astronomical clock go there.
+
+pub mod bits;
+pub mod conv;
+pub mod numeric;
+pub mod string;
+pub mod time;
+
+use crate::check::Ty;
+
+/// The ST source of the standard function blocks.
+pub const PRELUDE: &str = include_str!("prelude.st");
+
+/// A built-in function.
+#[derive(Debug, Clone, PartialEq)]
+#[allow(missing_docs)]
+pub enum Builtin {
+    Abs,
+    Sqrt,
+    Ln,
+    Log,
+    Exp,
+    Sin,
+    Cos,
+    Tan,
+    Asin,
+    Acos,
+    Atan,
+    Atan2,
+    Expt,
+    Trunc,
+    Round,
+    Floor,
+    Ceil,
+    Mod,
+    Shl,
+    Shr,
+    Rol,
+    Ror,
+    Sel,
+    Max,
+    Min,
+    Limit,
+    Mux,
+    Move,
+    Len,
+    Left,
+    Right,
+    Mid,
+    Concat,
+    Insert,
+    Delete,
+    Replace,
+    Find,
+    /// `X_TO_Y` (source checked) or `TO_Y` (source `None`).
+    Convert(Option<Ty>, Ty),
+    AddTime,
+    SubTime,
+    MulTime,
+    DivTime,
+    AddTodTime,
+    SubTodTime,
+    SubTodTod,
+    AddDtTime,
+    SubDtTime,
+    SubDtDt,
+    SubDateDate,
+    ConcatDateTod,
+    DtToTod,
+    DtToDate,
+    TDiff,
+    /// Monotonic scan time (`__NOW()`, also `TIME()`).
+    Now,
+    /// Local wall-clock time as DT.
+    LocalTime,
+    /// UTC wall-clock time as DT.
+    SystemTime,
+    /// Day of week of a DATE/DT, 1 = Monday .. 7 = Sunday (ISO).
+    DayOfWeek,
+}
+
+fn type_by_conv_name(name: &str) -> Option<Ty> {
+    Ty::elementary(name)
+}
+
+/// Looks up a built-in by upper-case name.
+pub fn lookup(name: &str) -> Option<Builtin> {
+    use Builtin::*;
+    Some(match name {
+        "ABS" => Abs,
+        "SQRT" => Sqrt,
+        "LN" => Ln,
+        "LOG" => Log,
+        "EXP" => Exp,
+        "SIN" => Sin,
+        "COS" => Cos,
+        "TAN" => Tan,
+        "ASIN" => Asin,
+        "ACOS" => Acos,
+        "ATAN" => Atan,
+        "ATAN2" => Atan2,
+        "EXPT" => Expt,
+        "TRUNC" => Trunc,
+        "ROUND" => Round,
+        "FLOOR" => Floor,
+        "CEIL" => Ceil,
+        "MOD" => Mod,
+        "SHL" => Shl,
+        "SHR" => Shr,
+        "ROL" => Rol,
+        "ROR" => Ror,
+        "SEL" => Sel,
+        "MAX" => Max,
+        "MIN" => Min,
+        "LIMIT" => Limit,
+        "MUX" => Mux,
+        "MOVE" => Move,
+        "LEN" => Len,
+        "LEFT" => Left,
+        "RIGHT" => Right,
+        "MID" => Mid,
+        "CONCAT" => Concat,
+        "INSERT" => Insert,
+        "DELETE" => Delete,
+        "REPLACE" => Replace,
+        "FIND" => Find,
+        "ADD_TIME" => AddTime,
+        "SUB_TIME" => SubTime,
+        "MUL_TIME" | "MULTIME" => MulTime,
+        "DIV_TIME" | "DIVTIME" => DivTime,
+        "ADD_TOD_TIME" => AddTodTime,
+        "SUB_TOD_TIME" => SubTodTime,
+        "SUB_TOD_TOD" => SubTodTod,
+        "ADD_DT_TIME" => AddDtTime,
+        "SUB_DT_TIME" => SubDtTime,
+        "SUB_DT_DT" => SubDtDt,
+        "SUB_DATE_DATE" => SubDateDate,
+        "CONCAT_DATE_TOD" => ConcatDateTod,
+        "DT_TO_TOD" | "DATE_AND_TIME_TO_TIME_OF_DAY" => DtToTod,
+        "DT_TO_DATE" | "DATE_AND_TIME_TO_DATE" => DtToDate,
+        "__NOW" | "TIME" => Now,
+        "LOCAL_TIME" | "__LOCAL_TIME" => LocalTime,
+        "SYSTEM_TIME" | "__SYSTEM_TIME" => SystemTime,
+        "DAY_OF_WEEK" => DayOfWeek,
+        _ => {
+            if let Some(rest) = name.strip_prefix("TO_") {
+                return Some(Convert(None, type_by_conv_name(rest)?));
+            }
+            if let Some((a, b)) = name.split_once("_TO_") {
+                let from = type_by_conv_name(a)?;
+                let to = type_by_conv_name(b)?;
+                return Some(Convert(Some(from), to));
+            }
+            // TRUNC_INT / TRUNC_DINT style
+            return None;
+        }
+    })
+}
+
+/// Parameter types (for implicit conversion of each argument) and result type of a built-in
+/// applied to arguments of the given natural types. `Err` is a message for a
+/// `WrongArguments`/`TypeMismatch` diagnostic.
+pub fn signature(b: &Builtin, args: &[Ty]) -> Result<(Vec<Ty>, Ty), String> {
+    use Builtin::*;
+    let n = args.len();
+    let need = |k: usize| -> Result<(), String> {
+        if n == k {
+            Ok(())
+        } else {
+            Err(format!(
+                "expects {k} argument{}, got {n}",
+                if k == 1 { "" } else { "s" }
+            ))
+        }
+    };
+    let arg = |i: usize| args.get(i).cloned().unwrap_or(Ty::Void);
+    let common = |tys: &[Ty]| -> Result<Ty, String> {
+        let mut t = tys.first().cloned().unwrap_or(Ty::Void);
+        for x in tys.iter().skip(1) {
+            t = Ty::common(&t, x)
+                .ok_or_else(|| format!("arguments of types {t} and {x} do not match"))?;
+        }
+        Ok(t)
+    };
+    let real_of = |t: &Ty| if *t == Ty::LReal { Ty::LReal } else { Ty::Real };
+    Ok(match b {
+        Abs => {
+            need(1)?;
+            let t = arg(0);
+            if !t.is_num() {
+                return Err(format!("expects a number, got {t}"));
+            }
+            (vec![t.clone()], t)
+        }
+        Sqrt | Ln | Log | Exp | Sin | Cos | Tan | Asin | Acos | Atan | Round | Floor | Ceil => {
+            need(1)?;
+            let t = arg(0);
+            if !t.is_num() {
+                return Err(format!("expects a number, got {t}"));
+            }
+            let r = if t.is_real() {
+                t.clone()
+            } else {
+                real_of(&if t.converts_to(&Ty::Real) {
+                    Ty::Real
+                } else {
+                    Ty::LReal
+                })
+            };
+            (vec![r.clone()], r)
+        }
+        Atan2 => {
+            need(2)?;
+            let t = common(args)?;
+            let r = if t == Ty::LReal || !t.converts_to(&Ty::Real) {
+                Ty::LReal
+            } else {
+                Ty::Real
+            };
+            (vec![r.clone(), r.clone()], r)
+        }
+        Trunc => {
+            need(1)?;
+            let t = arg(0);
+            if !t.is_real() {
+                return Err(format!("expects REAL or LREAL, got {t}"));
+            }
+            (vec![t.clone()], Ty::DInt)
+        }
+        Expt => {
+            need(2)?;
+            let t = arg(0);
+            if !t.is_num() || !arg(1).is_num() {
+                return Err("expects numbers".into());
+            }
+            let r = if t.is_real() { t } else { Ty::LReal };
+            let e = if arg(1).is_int() { arg(1) } else { r.clone() };
+            (vec![r.clone(), e], r)
+        }
+        Mod => {
+            need(2)?;
+            let t = common(args)?;
+            if !t.is_int() && !t.is_bits() {
+                return Err(format!("expects integers, got {t}"));
+            }
+            (vec![t.clone(), t.clone()], t)
+        }
+        Shl | Shr | Rol | Ror => {
+            need(2)?;
+            let t = arg(0);
+            if !t.is_bits() && !t.is_int() {
+                return Err(format!("expects a bit string, got {t}"));
+            }
+            if !arg(1).is_int() {
+                return Err("shift count must be an integer".into());
+            }
+            (vec![t.clone(), arg(1)], t)
+        }
+        Sel => {
+            need(3)?;
+            let t = common(args.get(1..).unwrap_or(&[]))?;
+            (vec![Ty::Bool, t.clone(), t.clone()], t)
+        }
+        Max | Min => {
+            if n < 2 {
+                return Err(format!("expects at least 2 arguments, got {n}"));
+            }
+            let t = common(args)?;
+            (vec![t.clone(); n], t)
+        }
+        Limit => {
+            need(3)?;
+            let t = common(args)?;
+            (vec![t.clone(); 3], t)
+        }
+        Mux => {
+            if n < 2 {
+                return Err(format!("expects a selector and at least 1 input, got {n}"));
+            }
+            if !arg(0).is_int() {
+                return Err("MUX selector must be an integer".into());
+            }
+            let t = common(args.get(1..).unwrap_or(&[]))?;
+            let mut v = vec![arg(0)];
+            v.extend(std::iter::repeat_n(t.clone(), n - 1));
+            (v, t)
+        }
+        Move => {
+            need(1)?;
+            (vec![arg(0)], arg(0))
+        }
+        Len => {
+            need(1)?;
+            if !arg(0).is_string() {
+                return Err(format!("expects a string, got {}", arg(0)));
+            }
+            (vec![arg(0)], Ty::Int)
+        }
+        Left | Right => {
+            need(2)?;
+            if !arg(0).is_string() || !arg(1).is_int() {
+                return Err("expects (string, integer)".into());
+            }
+            (vec![arg(0), Ty::DInt], arg(0))
+        }
+        Mid => {
+            need(3)?;
+            if !arg(0).is_string() || !arg(1).is_int() || !arg(2).is_int() {
+                return Err("expects (string, length, position)".into());
+            }
+            (vec![arg(0), Ty::DInt, Ty::DInt], arg(0))
+        }
+        Concat => {
+            if n < 2 || !args.iter().all(Ty::is_string) {
+                return Err("expects at least 2 strings".into());
+            }
+            let t = common(args)?;
+            let len = args
+                .iter()
+                .map(|a| match a {
+                    Ty::String(l) | Ty::WString(l) => *l,
+                    _ => 0,
+                })
+                .fold(0u32, u32::saturating_add)
+                .min(65535);
+            let r = if matches!(t, Ty::WString(_)) {
+                Ty::WString(len)
+            } else {
+                Ty::String(len)
+            };
+            (args.to_vec(), r)
+        }
+        Insert => {
+            need(3)?;
+            if !arg(0).is_string() || !arg(1).is_string() || !arg(2).is_int() {
+                return Err("expects (string, string, position)".into());
+            }
+            (vec![arg(0), arg(1), Ty::DInt], arg(0))
+        }
+        Delete => {
+            need(3)?;
+            if !arg(0).is_string() || !arg(1).is_int() || !arg(2).is_int() {
+                return Err("expects (string, length, position)".into());
+            }
+            (vec![arg(0), Ty::DInt, Ty::DInt], arg(0))
+        }
+        Replace => {
+            need(4)?;
+            if !arg(0).is_string() || !arg(1).is_string() || !arg(2).is_int() || !arg(3).is_int() {
+                return Err("expects (string, string, length, position)".into());
+            }
+            (vec![arg(0), arg(1), Ty::DInt, Ty::DInt], arg(0))
+        }
+        Find => {
+            need(2)?;
+            if !arg(0).is_string() || !arg(1).is_string() {
+                return Err("expects two strings".into());
+            }
+            (vec![arg(0), arg(1)], Ty::Int)
+        }
+        Convert(from, to) => {
+            need(1)?;
+            let a = arg(0);
+            let src = match from {
+                Some(f) => {
+                    if !a.converts_to(f) {
+                        return Err(format!("expects {f}, got {a}"));
+                    }
+                    f.clone()
+                }
+                None => a,
+            };
+            if !conv::convertible(&src, to) {
+                return Err(format!("cannot convert {src} to {to}"));
+            }
+            (vec![src], to.clone())
+        }
+        AddTime | SubTime => {
+            need(2)?;
+            (vec![Ty::Time, Ty::Time], Ty::Time)
+        }
+        MulTime | DivTime => {
+            need(2)?;
+            let k = if arg(1).is_num() { arg(1) } else { Ty::LReal };
+            (vec![Ty::Time, k], Ty::Time)
+        }
+        AddTodTime | SubTodTime => {
+            need(2)?;
+            (vec![Ty::Tod, Ty::Time], Ty::Tod)
+        }
+        SubTodTod => {
+            need(2)?;
+            (vec![Ty::Tod, Ty::Tod], Ty::Time)
+        }
+        AddDtTime | SubDtTime => {
+            need(2)?;
+            (vec![Ty::Dt, Ty::Time], Ty::Dt)
+        }
+        SubDtDt | TDiff => {
+            need(2)?;
+            (vec![Ty::Dt, Ty::Dt], Ty::Time)
+        }
+        SubDateDate => {
+            need(2)?;
+            (vec![Ty::Date, Ty::Date], Ty::Time)
+        }
+        ConcatDateTod => {
+            need(2)?;
+            (vec![Ty::Date, Ty::Tod], Ty::Dt)
+        }
+        DtToTod => {
+            need(1)?;
+            (vec![Ty::Dt], Ty::Tod)
+        }
+        DtToDate => {
+            need(1)?;
+            (vec![Ty::Dt], Ty::Date)
+        }
+        Now => {
+            need(0)?;
+            (vec![], Ty::Time)
+        }
+        LocalTime | SystemTime => {
+            need(0)?;
+            (vec![], Ty::Dt)
+        }
+        DayOfWeek => {
+            need(1)?;
+            let t = if arg(0) == Ty::Date { Ty::Date } else { Ty::Dt };
+            (vec![t], Ty::USInt)
+        }
+    })
+}

@@ -1,0 +1,1019 @@
+//! The runtime: scan cycle, tasks, watchdog, cycle statistics, retain, forcing, I/O image
+//! and variable access by path.
+//!
+//! A [`Plc`] never reads a clock. The caller passes the time of every cycle
+//! ([`ClockReading`]) — from a virtual clock in tests and simulations, from the system
+//! clock in production — and, for execution-time statistics and the watchdog, a
+//! [`Stopwatch`] that says how long the cycle's work took.
+//!
+//! One cycle of a due task: copy `%I`/`%M` into the variables declared `AT` those
+//! addresses, apply forced values, run the task's programs in order, apply forced values
+//! again, copy `AT %Q`/`%M` variables into the output image, update statistics and the
+//! watchdog.
+
+use crate::check::{Checked, PouId, Size, Ty};
+use crate::compile::Compiled;
+use crate::diagnostics::{Code, Diagnostic};
+use crate::syntax::{PouKind, SourceMap};
+use crate::vm::{format, DirectAddress, Fault, Val, Vm};
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::rc::Rc;
+
+/// Errors of the runtime API.
+#[derive(Debug, thiserror::Error)]
+pub enum PlcError {
+    /// No variable at this path.
+    #[error("no variable '{0}'")]
+    UnknownPath(String),
+    /// The path names an aggregate where a scalar was needed.
+    #[error("'{0}' is not a scalar variable")]
+    NotScalar(String),
+    /// The text is not a valid literal for the variable's type.
+    #[error("'{text}' is not a valid {ty} value")]
+    BadValue {
+        /// The text.
+        text: String,
+        /// The type.
+        ty: String,
+    },
+    /// Unknown program name.
+    #[error("no program '{0}'")]
+    UnknownProgram(String),
+    /// Malformed direct address.
+    #[error("malformed direct address '{0}'")]
+    BadAddress(String),
+    /// Persistence file I/O.
+    #[error("retain file: {0}")]
+    Io(#[from] std::io::Error),
+}
+
+/// The time of one cycle.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct ClockReading {
+    /// Monotonic time since the PLC started (ns). Drives timers.
+    pub monotonic_ns: i64,
+    /// Wall-clock UTC (ns since 1970-01-01).
+    pub utc_ns: i64,
+    /// Local time offset from UTC (ns), e.g. 3 600 000 000 000 for CET.
+    pub utc_offset_ns: i64,
+}
+
+/// A virtual clock: starts at a given UTC time and advances only when told.
+#[derive(Debug, Clone, Copy)]
+pub struct VirtualClock {
+    reading: ClockReading,
+}
+
+impl VirtualClock {
+    /// A clock at `utc_ns` with a fixed local offset.
+    pub fn new(utc_ns: i64, utc_offset_ns: i64) -> Self {
+        VirtualClock {
+            reading: ClockReading {
+                monotonic_ns: 0,
+                utc_ns,
+                utc_offset_ns,
+            },
+        }
+    }
+    /// The current reading.
+    pub fn now(&self) -> ClockReading {
+        self.reading
+    }
+    /// Advances by `ns`.
+    pub fn advance(&mut self, ns: i64) {
+        self.reading.monotonic_ns = self.reading.monotonic_ns.saturating_add(ns);
+        self.reading.utc_ns = self.reading.utc_ns.saturating_add(ns);
+    }
+    /// Sets the local offset (daylight-saving changes).
+    pub fn set_offset(&mut self, utc_offset_ns: i64) {
+        self.reading.utc_offset_ns = utc_offset_ns;
+    }
+}
+
+/// Measures how long a cycle's work took (ns). Production uses a monotonic system timer;
+/// tests script it to exercise the watchdog deterministically.
+pub trait Stopwatch {
+    /// Starts a measurement.
+    fn start(&mut self);
+    /// Nanoseconds since `start`.
+    fn elapsed_ns(&mut self) -> i64;
+}
+
+/// A stopwatch that always reports zero (virtual-time runs).
+#[derive(Debug, Default, Clone, Copy)]
+pub struct NoStopwatch;
+
+impl Stopwatch for NoStopwatch {
+    fn start(&mut self) {}
+    fn elapsed_ns(&mut self) -> i64 {
+        0
+    }
+}
+
+/// Watchdog settings.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Watchdog {
+    /// Maximum execution time of one cycle (ns).
+    pub time_ns: i64,
+    /// Consecutive overruns that make a fault (1 = the first).
+    pub sensitivity: u32,
+}
+
+/// Configuration of a task.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub struct TaskConfig {
+    /// Name.
+    pub name: String,
+    /// Cycle interval (ns); 0 = every `run_cycle`.
+    pub interval_ns: i64,
+    /// Priority: 0 is the highest; equal priorities run in configuration order.
+    pub priority: u8,
+    /// Programs, run in order.
+    pub programs: Vec<String>,
+    /// Watchdog.
+    pub watchdog: Option<Watchdog>,
+}
+
+impl TaskConfig {
+    /// A cyclic task running `programs` every `interval_ns`.
+    pub fn cyclic(name: impl Into<String>, interval_ns: i64, programs: &[&str]) -> Self {
+        TaskConfig {
+            name: name.into(),
+            interval_ns,
+            priority: 10,
+            programs: programs.iter().map(|s| s.to_string()).collect(),
+            watchdog: None,
+        }
+    }
+    /// With a priority.
+    #[must_use]
+    pub fn with_priority(mut self, priority: u8) -> Self {
+        self.priority = priority;
+        self
+    }
+    /// With a watchdog.
+    #[must_use]
+    pub fn with_watchdog(mut self, time_ns: i64, sensitivity: u32) -> Self {
+        self.watchdog = Some(Watchdog {
+            time_ns,
+            sensitivity: sensitivity.max(1),
+        });
+        self
+    }
+}
+
+/// Cycle statistics of a task (times in ns).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct CycleStats {
+    /// Cycles run.
+    pub cycles: u64,
+    /// Last execution time.
+    pub last_ns: i64,
+    /// Minimum execution time.
+    pub min_ns: i64,
+    /// Maximum execution time.
+    pub max_ns: i64,
+    /// Average execution time.
+    pub avg_ns: f64,
+    /// Largest deviation of a cycle start from its due time.
+    pub jitter_ns: i64,
+    /// Cycles whose execution exceeded the watchdog time.
+    pub overruns: u64,
+}
+
+/// State of a task.
+#[derive(Debug, Clone, PartialEq)]
+pub enum TaskState {
+    /// Runs when due.
+    Running,
+    /// Stopped by a fault; the diagnostic says why and where.
+    Faulted(Diagnostic),
+}
+
+struct Task {
+    config: TaskConfig,
+    programs: Vec<(usize, Size)>,
+    next_due: Option<i64>,
+    stats: CycleStats,
+    state: TaskState,
+    consecutive_overruns: u32,
+}
+
+/// A scalar variable reached by path.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Leaf {
+    /// `Main.lights[3].Q`
+    pub path: String,
+    /// Type.
+    pub ty: Ty,
+    /// Absolute address.
+    pub addr: Size,
+    /// Declared RETAIN (or inside a RETAIN variable).
+    pub retain: bool,
+    /// Declared PERSISTENT.
+    pub persistent: bool,
+}
+
+/// Loop iterations allowed per task cycle before a fault.
+pub const DEFAULT_LOOP_BUDGET: u64 = 100_000_000;
+
+/// A soft PLC: compiled program, memory, tasks.
+pub struct Plc {
+    compiled: Compiled,
+    sources: SourceMap,
+    vm: Vm,
+    tasks: Vec<Task>,
+    forces: BTreeMap<String, (Ty, Size, Val)>,
+    io_bindings: Vec<(Size, Ty, DirectAddress)>,
+    stopwatch: Box<dyn Stopwatch>,
+    /// Loop iterations per cycle.
+    pub loop_budget: u64,
+}
+
+impl Plc {
+    /// A PLC for a compiled program; memory is cold-started. No tasks yet.
+    pub fn new(compiled: Compiled, sources: SourceMap) -> Self {
+        let vm = Vm::new(compiled.checked.memory_size, Rc::clone(&compiled.code));
+        let mut plc = Plc {
+            compiled,
+            sources,
+            vm,
+            tasks: Vec::new(),
+            forces: BTreeMap::new(),
+            io_bindings: Vec::new(),
+            stopwatch: Box::new(NoStopwatch),
+            loop_budget: DEFAULT_LOOP_BUDGET,
+        };
+        plc.io_bindings = plc.collect_io_bindings();
+        // initialisation faults are impossible for constant initialisers; report if any
+        let _ = plc.cold_start();
+        plc
+    }
+
+    /// The checked program (types, POUs, globals).
+    pub fn checked(&self) -> &Checked {
+        &self.compiled.checked
+    }
+
+    /// The source map (for rendering diagnostics).
+    pub fn sources(&self) -> &SourceMap {
+        &self.sources
+    }
+
+    /// Replaces the stopwatch used for statistics and the watchdog.
+    pub fn set_stopwatch(&mut self, s: Box<dyn Stopwatch>) {
+        self.stopwatch = s;
+    }
+
+    /// Adds a task.
+    pub fn add_task(&mut self, config: TaskConfig) -> Result<(), PlcError> {
+        let mut programs = Vec::new();
+        for name in &config.programs {
+            let key = name.to_uppercase();
+            let c = &self.compiled.checked;
+            let pid = c
+                .pou_index
+                .get(&key)
+                .copied()
+                .filter(|p| c.pou(*p).map(|p| p.kind) == Some(PouKind::Program))
+                .ok_or_else(|| PlcError::UnknownProgram(name.clone()))?;
+            let base = c.pou(pid).and_then(|p| p.base).unwrap_or_default();
+            programs.push((pid.0, base));
+        }
+        self.tasks.push(Task {
+            config,
+            programs,
+            next_due: None,
+            stats: CycleStats::default(),
+            state: TaskState::Running,
+            consecutive_overruns: 0,
+        });
+        // stable sort by priority keeps configuration order among equals
+        self.tasks.sort_by_key(|t| t.config.priority);
+        Ok(())
+    }
+
+    /// Cold start: every variable gets its initial value (PERSISTENT ones are restored by
+    /// the caller with [`Plc::load_retain`] if desired). Faulted tasks are restarted.
+    pub fn cold_start(&mut self) -> Result<(), Fault> {
+        let size = self.compiled.checked.memory_size;
+        self.vm.ints = vec![0; size.i];
+        self.vm.reals = vec![0.0; size.r];
+        self.vm.strs = vec![String::new(); size.s];
+        self.vm.frame = Size::default();
+        self.vm.budget = self.loop_budget;
+        let gi = Rc::clone(&self.compiled.global_init);
+        (gi)(&mut self.vm)?;
+        for (i, p) in self.compiled.checked.pous.iter().enumerate() {
+            if p.kind == PouKind::Program {
+                if let Some(b) = p.base {
+                    self.vm.init(i, b)?;
+                }
+            }
+        }
+        for t in &mut self.tasks {
+            t.state = TaskState::Running;
+            t.next_due = None;
+            t.consecutive_overruns = 0;
+        }
+        Ok(())
+    }
+
+    /// Warm start: like a cold start, but RETAIN and PERSISTENT variables keep their values.
+    pub fn warm_start(&mut self) -> Result<(), Fault> {
+        let kept: Vec<(Leaf, Val)> = self
+            .leaves()
+            .into_iter()
+            .filter(|l| l.retain || l.persistent)
+            .filter_map(|l| {
+                let v = self.read_leaf(&l).ok()?;
+                Some((l, v))
+            })
+            .collect();
+        self.cold_start()?;
+        for (l, v) in kept {
+            self.write_leaf(&l, v);
+        }
+        Ok(())
+    }
+
+    /// Writes RETAIN and PERSISTENT variables to `path` atomically (temporary file, then
+    /// rename). One `path = value` line each, values in IEC literal syntax.
+    pub fn save_retain(&self, path: &Path) -> Result<(), PlcError> {
+        let mut text = String::new();
+        for l in self.leaves() {
+            if l.retain || l.persistent {
+                let kind = if l.persistent { "PERSISTENT" } else { "RETAIN" };
+                let v = self.format_leaf(&l).unwrap_or_default();
+                text.push_str(&format!("{kind} {} = {v}\n", l.path));
+            }
+        }
+        let tmp = path.with_extension("tmp");
+        std::fs::write(&tmp, text)?;
+        std::fs::rename(&tmp, path)?;
+        Ok(())
+    }
+
+    /// Restores variables saved by [`Plc::save_retain`]. With `persistent_only`, only
+    /// PERSISTENT values are applied (cold start, program download). Unknown paths and
+    /// values that no longer fit their type are skipped; returns how many were restored.
+    pub fn load_retain(&mut self, path: &Path, persistent_only: bool) -> Result<usize, PlcError> {
+        let text = std::fs::read_to_string(path)?;
+        let mut n = 0;
+        for line in text.lines() {
+            let Some((kind, rest)) = line.split_once(' ') else {
+                continue;
+            };
+            let Some((p, v)) = rest.split_once(" = ") else {
+                continue;
+            };
+            if persistent_only && kind != "PERSISTENT" {
+                continue;
+            }
+            if let Ok(l) = self.leaf(p) {
+                if (l.retain || l.persistent) && self.write(p, v).is_ok() {
+                    n += 1;
+                }
+            }
+        }
+        Ok(n)
+    }
+
+    /// Runs every task that is due at `now`. Returns the diagnostics of tasks that faulted
+    /// in this call.
+    pub fn run_cycle(&mut self, now: ClockReading) -> Vec<Diagnostic> {
+        let mut faults = Vec::new();
+        self.vm.now = now.monotonic_ns;
+        self.vm.utc = now.utc_ns;
+        self.vm.local_offset = now.utc_offset_ns;
+        for ti in 0..self.tasks.len() {
+            let (due, interval) = match self.tasks.get(ti) {
+                Some(t) if t.state == TaskState::Running => {
+                    (t.next_due.unwrap_or(now.monotonic_ns), t.config.interval_ns)
+                }
+                _ => continue,
+            };
+            if now.monotonic_ns < due {
+                continue;
+            }
+            self.sync_inputs();
+            self.apply_forces();
+            self.vm.budget = self.loop_budget;
+            self.stopwatch.start();
+            let programs = self
+                .tasks
+                .get(ti)
+                .map(|t| t.programs.clone())
+                .unwrap_or_default();
+            let mut result = Ok(());
+            for (pid, base) in programs {
+                result = self.vm.call(pid, base);
+                if result.is_err() {
+                    break;
+                }
+            }
+            let elapsed = self.stopwatch.elapsed_ns();
+            self.apply_forces();
+            self.sync_outputs();
+            let Some(t) = self.tasks.get_mut(ti) else {
+                continue;
+            };
+            // schedule
+            let mut next = due.saturating_add(interval.max(0));
+            if interval > 0 {
+                while next <= now.monotonic_ns {
+                    next = next.saturating_add(interval);
+                }
+            }
+            t.next_due = Some(if interval > 0 { next } else { now.monotonic_ns });
+            // statistics
+            let s = &mut t.stats;
+            s.cycles += 1;
+            s.last_ns = elapsed;
+            s.min_ns = if s.cycles == 1 {
+                elapsed
+            } else {
+                s.min_ns.min(elapsed)
+            };
+            s.max_ns = s.max_ns.max(elapsed);
+            s.avg_ns += (elapsed as f64 - s.avg_ns) / s.cycles as f64;
+            s.jitter_ns = s.jitter_ns.max((now.monotonic_ns - due).abs());
+            if let Err(fault) = result {
+                let span = fault.span().unwrap_or_default();
+                let d = Diagnostic::error(
+                    Code::RuntimeFault,
+                    span,
+                    format!("task '{}' stopped: {fault}", t.config.name),
+                );
+                t.state = TaskState::Faulted(d.clone());
+                faults.push(d);
+                continue;
+            }
+            if let Some(w) = t.config.watchdog {
+                if elapsed > w.time_ns {
+                    s.overruns += 1;
+                    t.consecutive_overruns += 1;
+                    if t.consecutive_overruns >= w.sensitivity {
+                        let d = Diagnostic::error(
+                            Code::RuntimeFault,
+                            crate::syntax::Span::default(),
+                            format!(
+                                "task '{}' stopped by the watchdog: {} consecutive cycle(s) over {} ns (last {} ns)",
+                                t.config.name, t.consecutive_overruns, w.time_ns, elapsed
+                            ),
+                        );
+                        t.state = TaskState::Faulted(d.clone());
+                        faults.push(d);
+                    }
+                } else {
+                    t.consecutive_overruns = 0;
+                }
+            }
+        }
+        faults
+    }
+
+    /// Statistics of a task.
+    pub fn stats(&self, task: &str) -> Option<CycleStats> {
+        self.tasks
+            .iter()
+            .find(|t| t.config.name == task)
+            .map(|t| t.stats)
+    }
+
+    /// State of a task.
+    pub fn task_state(&self, task: &str) -> Option<&TaskState> {
+        self.tasks
+            .iter()
+            .find(|t| t.config.name == task)
+            .map(|t| &t.state)
+    }
+
+    /// Earliest next due time of a running task (monotonic ns).
+    pub fn next_due(&self) -> Option<i64> {
+        self.tasks
+            .iter()
+            .filter(|t| t.state == TaskState::Running)
+            .map(|t| t.next_due.unwrap_or(0))
+            .min()
+    }
+
+    // ------------------------------------------------------------------ paths
+
+    /// Every scalar variable: globals by name, program variables as `Prog.var`, arrays and
+    /// structs element by element, FB instances variable by variable.
+    pub fn leaves(&self) -> Vec<Leaf> {
+        let c = &self.compiled.checked;
+        let mut out = Vec::new();
+        for g in &c.globals {
+            push_leaves(
+                c,
+                &g.name,
+                &g.ty,
+                g.offset,
+                g.retain,
+                g.persistent,
+                &mut out,
+            );
+        }
+        for p in &c.pous {
+            if p.kind != PouKind::Program || p.stdlib {
+                continue;
+            }
+            let Some(base) = p.base else { continue };
+            for v in &p.vars {
+                if matches!(v.kind, crate::syntax::VarKind::External) {
+                    continue;
+                }
+                push_leaves(
+                    c,
+                    &format!("{}.{}", p.name, v.name),
+                    &v.ty,
+                    base.add(v.offset),
+                    v.retain,
+                    v.persistent,
+                    &mut out,
+                );
+            }
+        }
+        out
+    }
+
+    /// Variables of one program instance.
+    pub fn program_leaves(&self, program: &str) -> Result<Vec<Leaf>, PlcError> {
+        let c = &self.compiled.checked;
+        let pid = c
+            .pou_index
+            .get(&program.to_uppercase())
+            .copied()
+            .filter(|p| c.pou(*p).map(|p| p.kind) == Some(PouKind::Program))
+            .ok_or_else(|| PlcError::UnknownProgram(program.to_string()))?;
+        let prefix = format!(
+            "{}.",
+            c.pou(pid).map(|p| p.name.clone()).unwrap_or_default()
+        );
+        Ok(self
+            .leaves()
+            .into_iter()
+            .filter(|l| l.path.starts_with(&prefix))
+            .collect())
+    }
+
+    /// The scalar at `path` (`Main.lights[3].Q`, `counter`, `Main.m[1, 2]`).
+    pub fn leaf(&self, path: &str) -> Result<Leaf, PlcError> {
+        let c = &self.compiled.checked;
+        let segs = split_path(path).ok_or_else(|| PlcError::UnknownPath(path.into()))?;
+        let mut it = segs.into_iter();
+        let unknown = || PlcError::UnknownPath(path.to_string());
+        let (first, first_idx) = it.next().ok_or_else(unknown)?;
+        let key = first.to_uppercase();
+        let (mut ty, mut addr, retain, persistent, mut pending_idx) =
+            if let Some(&g) = c.global_index.get(&key) {
+                let g = c.globals.get(g).ok_or_else(unknown)?;
+                (g.ty.clone(), g.offset, g.retain, g.persistent, first_idx)
+            } else {
+                let pid = c.pou_index.get(&key).copied().ok_or_else(unknown)?;
+                let p = c.pou(pid).ok_or_else(unknown)?;
+                let base = p
+                    .base
+                    .filter(|_| p.kind == PouKind::Program)
+                    .ok_or_else(unknown)?;
+                let (name, idx) = it.next().ok_or_else(unknown)?;
+                let (_, v) = p.var(&name.to_uppercase()).ok_or_else(unknown)?;
+                (
+                    v.ty.clone(),
+                    base.add(v.offset),
+                    v.retain,
+                    v.persistent,
+                    idx,
+                )
+            };
+        loop {
+            for ix in pending_idx.drain(..) {
+                let Ty::Array(a) = &ty else {
+                    return Err(unknown());
+                };
+                if ix.len() != a.dims.len() {
+                    return Err(unknown());
+                }
+                let mut lin = 0usize;
+                for (v, (lo, hi)) in ix.iter().zip(&a.dims) {
+                    if v < lo || v > hi {
+                        return Err(unknown());
+                    }
+                    lin = lin * usize::try_from(hi - lo + 1).unwrap_or(0)
+                        + usize::try_from(v - lo).unwrap_or(0);
+                }
+                addr = addr.add(a.elem_size.mul(lin));
+                ty = a.elem.clone();
+            }
+            let Some((name, idx)) = it.next() else { break };
+            let k = name.to_uppercase();
+            let (off, t) = match &ty {
+                Ty::Struct(id) => {
+                    let f = c
+                        .types
+                        .struct_def(*id)
+                        .and_then(|d| d.fields.iter().find(|f| f.key == k))
+                        .ok_or_else(unknown)?;
+                    (f.offset, f.ty.clone())
+                }
+                Ty::Fb(id) => {
+                    let (_, v) = c.pou(*id).and_then(|p| p.var(&k)).ok_or_else(unknown)?;
+                    (v.offset, v.ty.clone())
+                }
+                _ => return Err(unknown()),
+            };
+            addr = addr.add(off);
+            ty = t;
+            pending_idx = idx;
+        }
+        if ty.lane().is_none() {
+            return Err(PlcError::NotScalar(path.to_string()));
+        }
+        Ok(Leaf {
+            path: path.to_string(),
+            ty,
+            addr,
+            retain,
+            persistent,
+        })
+    }
+
+    fn read_leaf(&self, l: &Leaf) -> Result<Val, PlcError> {
+        let bad = || PlcError::UnknownPath(l.path.clone());
+        Ok(match l.ty.lane() {
+            Some(crate::check::Lane::Real) => Val::Real(self.vm.getr(l.addr.r).map_err(|_| bad())?),
+            Some(crate::check::Lane::Str) => Val::Str(self.vm.gets(l.addr.s).map_err(|_| bad())?),
+            _ => Val::Int(self.vm.geti(l.addr.i).map_err(|_| bad())?),
+        })
+    }
+
+    fn write_leaf(&mut self, l: &Leaf, v: Val) {
+        let _ = match v {
+            Val::Int(x) => self.vm.seti(l.addr.i, x),
+            Val::Real(x) => self.vm.setr(l.addr.r, x),
+            Val::Str(x) => self.vm.sets(l.addr.s, x),
+        };
+    }
+
+    /// Reads a scalar by path.
+    pub fn read(&self, path: &str) -> Result<Val, PlcError> {
+        let l = self.leaf(path)?;
+        self.read_leaf(&l)
+    }
+
+    fn format_leaf(&self, l: &Leaf) -> Result<String, PlcError> {
+        let v = self.read_leaf(l)?;
+        Ok(format_value(&self.compiled.checked, &l.ty, &v))
+    }
+
+    /// Reads a scalar by path as an IEC literal (`TRUE`, `T#5s`, `'text'`).
+    pub fn read_text(&self, path: &str) -> Result<String, PlcError> {
+        let l = self.leaf(path)?;
+        self.format_leaf(&l)
+    }
+
+    /// Writes a scalar once (the program may overwrite it in the next cycle). `text` is an
+    /// IEC literal of the variable's type.
+    pub fn write(&mut self, path: &str, text: &str) -> Result<(), PlcError> {
+        let l = self.leaf(path)?;
+        let v = parse_value(&self.compiled.checked, &l.ty, text)?;
+        self.write_leaf(&l, v);
+        Ok(())
+    }
+
+    /// Forces a variable: the value is applied before and after the programs of every
+    /// cycle until [`Plc::release`].
+    pub fn force(&mut self, path: &str, text: &str) -> Result<(), PlcError> {
+        let l = self.leaf(path)?;
+        let v = parse_value(&self.compiled.checked, &l.ty, text)?;
+        self.write_leaf(&l, v.clone());
+        self.forces.insert(path.to_string(), (l.ty, l.addr, v));
+        Ok(())
+    }
+
+    /// Releases a forced variable; returns whether it was forced.
+    pub fn release(&mut self, path: &str) -> bool {
+        self.forces.remove(path).is_some()
+    }
+
+    /// Forced paths.
+    pub fn forced(&self) -> Vec<String> {
+        self.forces.keys().cloned().collect()
+    }
+
+    fn apply_forces(&mut self) {
+        let forces: Vec<(Size, Val)> = self
+            .forces
+            .values()
+            .map(|(_, a, v)| (*a, v.clone()))
+            .collect();
+        for (a, v) in forces {
+            let _ = match v {
+                Val::Int(x) => self.vm.seti(a.i, x),
+                Val::Real(x) => self.vm.setr(a.r, x),
+                Val::Str(x) => self.vm.sets(a.s, x),
+            };
+        }
+    }
+
+    // ------------------------------------------------------------------ I/O image
+
+    fn collect_io_bindings(&self) -> Vec<(Size, Ty, DirectAddress)> {
+        let c = &self.compiled.checked;
+        let mut out = Vec::new();
+        for g in &c.globals {
+            if let Some(d) = g.at.as_deref().and_then(DirectAddress::parse) {
+                out.push((g.offset, g.ty.clone(), d));
+            }
+        }
+        for p in &c.pous {
+            if p.kind != PouKind::Program {
+                continue;
+            }
+            let Some(base) = p.base else { continue };
+            for v in &p.vars {
+                if let Some(d) = v.at.as_deref().and_then(DirectAddress::parse) {
+                    out.push((base.add(v.offset), v.ty.clone(), d));
+                }
+            }
+        }
+        out
+    }
+
+    fn sync_inputs(&mut self) {
+        for (a, ty, d) in &self.io_bindings {
+            if d.area == 'I' || d.area == 'M' {
+                let v = self.vm.io_read(d.area, d.byte, d.bit, d.bits);
+                let _ = self.vm.seti(a.i, ty.wrap(v));
+            }
+        }
+    }
+
+    fn sync_outputs(&mut self) {
+        for (a, _, d) in &self.io_bindings {
+            if d.area == 'Q' || d.area == 'M' {
+                if let Ok(v) = self.vm.geti(a.i) {
+                    self.vm.io_write(d.area, d.byte, d.bit, d.bits, v);
+                }
+            }
+        }
+    }
+
+    /// Sets an input (or marker) in the process image by direct address (`%IX0.3`,
+    /// `IW4`). Takes effect at the start of the next cycle.
+    pub fn set_io(&mut self, address: &str, value: i64) -> Result<(), PlcError> {
+        let d = DirectAddress::parse(address.trim_start_matches('%'))
+            .ok_or_else(|| PlcError::BadAddress(address.to_string()))?;
+        self.vm.io_write(d.area, d.byte, d.bit, d.bits, value);
+        Ok(())
+    }
+
+    /// Reads the process image by direct address (`%QX0.0`, `%QW2`).
+    pub fn get_io(&self, address: &str) -> Result<i64, PlcError> {
+        let d = DirectAddress::parse(address.trim_start_matches('%'))
+            .ok_or_else(|| PlcError::BadAddress(address.to_string()))?;
+        Ok(self.vm.io_read(d.area, d.byte, d.bit, d.bits))
+    }
+
+    /// Renders a diagnostic against this PLC's sources.
+    pub fn render(&self, d: &Diagnostic) -> String {
+        d.render(&self.sources)
+    }
+}
+
+type Seg = (String, Vec<Vec<i64>>);
+
+fn split_path(path: &str) -> Option<Vec<Seg>> {
+    let mut out: Vec<Seg> = Vec::new();
+    let mut rest = path.trim();
+    while !rest.is_empty() {
+        let end = rest.find(['.', '[']).unwrap_or(rest.len());
+        let name = rest.get(..end)?.trim().to_string();
+        rest = rest.get(end..)?;
+        let mut idx = Vec::new();
+        while let Some(r) = rest.strip_prefix('[') {
+            let close = r.find(']')?;
+            let inner = r.get(..close)?;
+            let v: Option<Vec<i64>> = inner.split(',').map(|x| x.trim().parse().ok()).collect();
+            idx.push(v?);
+            rest = r.get(close + 1..)?;
+        }
+        if name.is_empty() {
+            return None;
+        }
+        out.push((name, idx));
+        if let Some(r) = rest.strip_prefix('.') {
+            rest = r;
+        } else if !rest.is_empty() {
+            return None;
+        }
+    }
+    Some(out)
+}
+
+fn push_leaves(
+    c: &Checked,
+    path: &str,
+    ty: &Ty,
+    addr: Size,
+    retain: bool,
+    persistent: bool,
+    out: &mut Vec<Leaf>,
+) {
+    match ty {
+        Ty::Array(a) => {
+            let n = a.len();
+            for k in 0..n {
+                // multi-dimensional index from linear k
+                let mut rem = k;
+                let mut idx = vec![0i64; a.dims.len()];
+                for (d, (lo, hi)) in a.dims.iter().enumerate().rev() {
+                    let span = usize::try_from(hi - lo + 1).unwrap_or(1).max(1);
+                    if let Some(s) = idx.get_mut(d) {
+                        *s = lo + (rem % span) as i64;
+                    }
+                    rem /= span;
+                }
+                let ix: Vec<String> = idx.iter().map(i64::to_string).collect();
+                push_leaves(
+                    c,
+                    &format!("{path}[{}]", ix.join(", ")),
+                    &a.elem,
+                    addr.add(a.elem_size.mul(k)),
+                    retain,
+                    persistent,
+                    out,
+                );
+            }
+        }
+        Ty::Struct(id) => {
+            if let Some(d) = c.types.struct_def(*id) {
+                for f in &d.fields {
+                    push_leaves(
+                        c,
+                        &format!("{path}.{}", f.name),
+                        &f.ty,
+                        addr.add(f.offset),
+                        retain,
+                        persistent,
+                        out,
+                    );
+                }
+            }
+        }
+        Ty::Fb(id) => {
+            if let Some(p) = c.pou(PouId(id.0)) {
+                for v in &p.vars {
+                    if matches!(
+                        v.kind,
+                        crate::syntax::VarKind::External | crate::syntax::VarKind::Temp
+                    ) {
+                        continue;
+                    }
+                    push_leaves(
+                        c,
+                        &format!("{path}.{}", v.name),
+                        &v.ty,
+                        addr.add(v.offset),
+                        retain || v.retain,
+                        persistent || v.persistent,
+                        out,
+                    );
+                }
+            }
+        }
+        Ty::Void => {}
+        _ => out.push(Leaf {
+            path: path.to_string(),
+            ty: ty.clone(),
+            addr,
+            retain,
+            persistent,
+        }),
+    }
+}
+
+/// Formats a scalar value of `ty` as an IEC literal.
+pub fn format_value(c: &Checked, ty: &Ty, v: &Val) -> String {
+    match (ty, v) {
+        (Ty::Bool, Val::Int(x)) => if *x != 0 { "TRUE" } else { "FALSE" }.into(),
+        (Ty::Time, Val::Int(x)) => format::time(*x, false),
+        (Ty::LTime, Val::Int(x)) => format::time(*x, true),
+        (Ty::Tod, Val::Int(x)) => format::tod(*x),
+        (Ty::Date, Val::Int(x)) => format::date(*x),
+        (Ty::Dt, Val::Int(x)) => format::dt(*x),
+        (Ty::ULInt | Ty::LWord, Val::Int(x)) => (*x as u64).to_string(),
+        (Ty::Enum(id), Val::Int(x)) => match c.types.enum_def(*id) {
+            Some(d) => match d.values.iter().find(|(_, v)| v == x) {
+                Some((n, _)) => format!("{}#{n}", d.name),
+                None => x.to_string(),
+            },
+            None => x.to_string(),
+        },
+        (_, Val::Int(x)) => x.to_string(),
+        (t, Val::Real(x)) => format::real(*x, *t == Ty::Real),
+        (Ty::WString(_), Val::Str(s)) => format::string(s, true),
+        (_, Val::Str(s)) => format::string(s, false),
+    }
+}
+
+/// Parses an IEC literal (`TRUE`, `42`, `16#FF`, `1.5`, `T#5s`, `'text'`, `Color#Red`) as a
+/// value of `ty`.
+pub fn parse_value(c: &Checked, ty: &Ty, text: &str) -> Result<Val, PlcError> {
+    let bad = || PlcError::BadValue {
+        text: text.to_string(),
+        ty: c.type_name(ty),
+    };
+    let mut diags = Vec::new();
+    let toks = crate::syntax::lexer::lex(crate::syntax::FileId(0), text.trim(), &mut diags);
+    if !diags.is_empty() {
+        return Err(bad());
+    }
+    use crate::syntax::lexer::Tok;
+    let kinds: Vec<&Tok> = toks
+        .iter()
+        .map(|t| &t.tok)
+        .filter(|t| !matches!(t, Tok::Eof))
+        .collect();
+    let (neg, rest) = match kinds.first() {
+        Some(Tok::Punct("-")) => (true, kinds.get(1..).unwrap_or(&[])),
+        _ => (false, kinds.as_slice()),
+    };
+    let rest: Vec<&Tok> = match rest.first() {
+        Some(Tok::TypePrefix(_)) => rest.get(1..).unwrap_or(&[]).to_vec(),
+        _ => rest.to_vec(),
+    };
+    let one = match rest.as_slice() {
+        [t] => *t,
+        [Tok::Ident(_), Tok::HashIdent(v)] => {
+            if let Ty::Enum(id) = ty {
+                let d = c.types.enum_def(*id).ok_or_else(bad)?;
+                let (_, x) = d
+                    .values
+                    .iter()
+                    .find(|(n, _)| n.eq_ignore_ascii_case(v))
+                    .ok_or_else(bad)?;
+                return Ok(Val::Int(*x));
+            }
+            return Err(bad());
+        }
+        [Tok::Punct("-"), t] if !neg => *t,
+        _ => return Err(bad()),
+    };
+    let sign = |x: i128| if neg { -x } else { x };
+    let v = match (ty.lane(), one) {
+        (Some(crate::check::Lane::Int), Tok::Ident(s)) if *ty == Ty::Bool => {
+            match s.to_ascii_uppercase().as_str() {
+                "TRUE" => Val::Int(1),
+                "FALSE" => Val::Int(0),
+                _ => return Err(bad()),
+            }
+        }
+        (Some(crate::check::Lane::Int), Tok::Ident(s)) => {
+            let Ty::Enum(id) = ty else { return Err(bad()) };
+            let d = c.types.enum_def(*id).ok_or_else(bad)?;
+            let (_, x) = d
+                .values
+                .iter()
+                .find(|(n, _)| n.eq_ignore_ascii_case(s))
+                .ok_or_else(bad)?;
+            Val::Int(*x)
+        }
+        (Some(crate::check::Lane::Int), Tok::Int(x)) => {
+            let x = sign(i128::try_from(*x).map_err(|_| bad())?);
+            if let Some((lo, hi)) = ty.int_range() {
+                if x < lo || x > hi {
+                    return Err(bad());
+                }
+            }
+            Val::Int(x as i64)
+        }
+        (Some(crate::check::Lane::Int), Tok::Time(ns, _)) if ty.is_duration() => {
+            Val::Int(i64::try_from(sign(*ns)).map_err(|_| bad())?)
+        }
+        (Some(crate::check::Lane::Int), Tok::Tod(x)) if *ty == Ty::Tod => Val::Int(*x),
+        (Some(crate::check::Lane::Int), Tok::Date(x)) if *ty == Ty::Date => Val::Int(*x),
+        (Some(crate::check::Lane::Int), Tok::Dt(x)) if *ty == Ty::Dt => Val::Int(*x),
+        (Some(crate::check::Lane::Real), Tok::Real(x)) => Val::Real(crate::stdlib::conv::fit_real(
+            if neg { -*x } else { *x },
+            ty,
+        )),
+        (Some(crate::check::Lane::Real), Tok::Int(x)) => Val::Real(crate::stdlib::conv::fit_real(
+            sign(i128::try_from(*x).map_err(|_| bad())?) as f64,
+            ty,
+        )),
+        (Some(crate::check::Lane::Str), Tok::SqString(s) | Tok::DqString(s)) => {
+            let n = match ty {
+                Ty::String(n) | Ty::WString(n) => *n,
+                _ => u32::MAX,
+            };
+            Val::Str(crate::stdlib::string::truncate(s.clone(), n))
+        }
+        _ => return Err(bad()),
+    };
+    Ok(v)
+}

@@ -1,0 +1,204 @@
+//! Runs every `tests/conformance/*.st` program and checks the expectations written in its
+//! comments:
+//!
+//! - `(* program: Main *)` the program to run (default `Main`);
+//! - `(* cycles: 10 *)`, `(* cycle-ms: 100 *)` how long (default 1 cycle of 10 ms);
+//! - `(* set: Main.x = 5 *)` write before the first cycle;
+//! - `(* expect: Main.x = 42 *)` value after the last cycle (IEC literal syntax);
+//! - `(* expect-error: 3:5: undeclared name 'y' *)` a diagnostic at line:col whose message
+//!   contains the text; the program must not compile;
+//! - `(* expect-fault: division by zero *)` the task faults with this text.
+
+use plc::task::{ClockReading, TaskConfig};
+use std::path::{Path, PathBuf};
+
+#[derive(Default, Debug)]
+struct Spec {
+    program: Option<String>,
+    cycles: u64,
+    cycle_ms: i64,
+    sets: Vec<(String, String)>,
+    expects: Vec<(String, String)>,
+    errors: Vec<(usize, usize, String)>,
+    fault: Option<String>,
+}
+
+fn directives(text: &str) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    let mut rest = text;
+    while let Some(start) = rest.find("(*") {
+        let Some(end) = rest[start..].find("*)") else {
+            break;
+        };
+        let body = rest[start + 2..start + end].trim();
+        if let Some((k, v)) = body.split_once(':') {
+            let k = k.trim();
+            if [
+                "program",
+                "cycles",
+                "cycle-ms",
+                "set",
+                "expect",
+                "expect-error",
+                "expect-fault",
+            ]
+            .contains(&k)
+            {
+                out.push((k.to_string(), v.trim().to_string()));
+            }
+        }
+        rest = &rest[start + end + 2..];
+    }
+    out
+}
+
+fn spec(text: &str) -> Spec {
+    let mut s = Spec {
+        cycles: 1,
+        cycle_ms: 10,
+        ..Spec::default()
+    };
+    for (k, v) in directives(text) {
+        match k.as_str() {
+            "program" => s.program = Some(v),
+            "cycles" => s.cycles = v.parse().expect("cycles"),
+            "cycle-ms" => s.cycle_ms = v.parse().expect("cycle-ms"),
+            "set" | "expect" => {
+                let (p, val) = v.split_once(" = ").expect("PATH = VALUE");
+                let pair = (p.trim().to_string(), val.trim().to_string());
+                if k == "set" {
+                    s.sets.push(pair)
+                } else {
+                    s.expects.push(pair)
+                }
+            }
+            "expect-error" => {
+                let mut it = v.splitn(3, ':');
+                let line = it.next().unwrap().trim().parse().expect("line");
+                let col = it.next().unwrap().trim().parse().expect("col");
+                s.errors
+                    .push((line, col, it.next().unwrap_or("").trim().to_string()));
+            }
+            "expect-fault" => s.fault = Some(v),
+            _ => {}
+        }
+    }
+    s
+}
+
+fn run_one(path: &Path) -> Result<(), String> {
+    let text = std::fs::read_to_string(path).map_err(|e| e.to_string())?;
+    let spec = spec(&text);
+    let name = path.file_name().unwrap().to_string_lossy().to_string();
+    let (sources, result) = plc::build(&[(name.clone(), text)]);
+    if !spec.errors.is_empty() {
+        let diags = match result {
+            Ok(_) => return Err("compiled, but errors were expected".into()),
+            Err(d) => d,
+        };
+        let rendered: Vec<(usize, usize, String)> = diags
+            .iter()
+            .filter(|d| d.is_error())
+            .map(|d| {
+                let lc = sources.line_col(d.primary);
+                (lc.line, lc.col, d.message.clone())
+            })
+            .collect();
+        for (line, col, msg) in &spec.errors {
+            if !rendered
+                .iter()
+                .any(|(l, c, m)| l == line && c == col && m.contains(msg.as_str()))
+            {
+                return Err(format!(
+                    "expected error {line}:{col}: {msg}\n got:\n{}",
+                    diags
+                        .iter()
+                        .map(|d| d.headline(&sources))
+                        .collect::<Vec<_>>()
+                        .join("\n")
+                ));
+            }
+        }
+        return Ok(());
+    }
+    let compiled = result.map_err(|d| {
+        d.iter()
+            .map(|d| d.render(&sources))
+            .collect::<Vec<_>>()
+            .join("\n")
+    })?;
+    let mut plc = plc::Plc::new(compiled, sources);
+    let program = spec.program.clone().unwrap_or_else(|| "Main".into());
+    plc.add_task(TaskConfig::cyclic(
+        "main",
+        spec.cycle_ms * 1_000_000,
+        &[&program],
+    ))
+    .map_err(|e| e.to_string())?;
+    for (p, v) in &spec.sets {
+        plc.write(p, v).map_err(|e| format!("set {p}: {e}"))?;
+    }
+    let mut faults = Vec::new();
+    for k in 0..spec.cycles {
+        let t = k as i64 * spec.cycle_ms * 1_000_000;
+        let now = ClockReading {
+            monotonic_ns: t,
+            utc_ns: 1_714_521_600_000_000_000 + t,
+            utc_offset_ns: 7_200_000_000_000,
+        };
+        faults.extend(plc.run_cycle(now));
+    }
+    match (&spec.fault, faults.first()) {
+        (Some(f), Some(d)) if d.message.contains(f.as_str()) => {}
+        (Some(f), other) => return Err(format!("expected fault '{f}', got {other:?}")),
+        (None, Some(d)) => return Err(format!("unexpected fault: {}", plc.render(d))),
+        (None, None) => {}
+    }
+    let mut errs = Vec::new();
+    for (p, want) in &spec.expects {
+        match plc.read_text(p) {
+            Ok(got) if &got == want => {}
+            Ok(got) => errs.push(format!("{p}: expected {want}, got {got}")),
+            Err(e) => errs.push(format!("{p}: {e}")),
+        }
+    }
+    if errs.is_empty() {
+        Ok(())
+    } else {
+        Err(errs.join("\n"))
+    }
+}
+
+#[test]
+fn conformance_suite() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/conformance");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "st"))
+        .collect();
+    files.sort();
+    let filter = std::env::var("PLC_CONFORMANCE").ok();
+    let mut failed = Vec::new();
+    let mut passed = 0;
+    for f in &files {
+        if let Some(flt) = &filter {
+            if !f.to_string_lossy().contains(flt.as_str()) {
+                continue;
+            }
+        }
+        match std::panic::catch_unwind(|| run_one(f)) {
+            Ok(Ok(())) => passed += 1,
+            Ok(Err(e)) => failed.push(format!("{}: {e}", f.display())),
+            Err(_) => failed.push(format!("{}: PANIC", f.display())),
+        }
+    }
+    eprintln!("conformance: {passed} passed, {} failed", failed.len());
+    assert!(
+        failed.is_empty(),
+        "{} conformance program(s) failed:\n{}",
+        failed.len(),
+        failed.join("\n\n")
+    );
+    assert!(passed >= 1);
+}

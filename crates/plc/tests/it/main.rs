@@ -1,0 +1,5 @@
+//! Integration tests of the plc crate (one test binary).
+
+mod conformance;
+mod fuzzish;
+mod runtime;

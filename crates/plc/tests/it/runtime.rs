@@ -1,0 +1,1 @@
+//! Runtime API: paths, forcing, retain, watchdog, statistics, I/O image, faults.
