@@ -230,3 +230,44 @@ async fn end_of_initialisation_goes_to_the_first_started_connection() {
         .await
         .is_none());
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn concurrent_updates_of_one_point_end_where_the_image_ends() {
+    init_logs();
+    let server = start_server(server_config(), event_image(), Arc::new(ReadOnlyStation)).await;
+    let mut client = Client::connect(server.local_addr()).await;
+    for round in 0..5 {
+        let writers: Vec<_> = (0..2i16)
+            .map(|writer| {
+                let server = server.clone();
+                std::thread::spawn(move || {
+                    for value in 0..1_000i16 {
+                        server
+                            .update(ioa(2), scaled(value * 2 + writer), None)
+                            .unwrap();
+                    }
+                })
+            })
+            .collect();
+        for writer in writers {
+            writer.join().unwrap();
+        }
+        let objects = client.spontaneous_objects(2_000).await;
+        let last = objects.last().unwrap().1.element.clone();
+        assert_eq!(last, server.get(ioa(2)).unwrap().element, "round {round}");
+        // Each writer's own updates stay in order.
+        for writer in 0..2i16 {
+            let mine: Vec<i16> = objects
+                .iter()
+                .filter_map(|(_, object)| match object.element {
+                    iec60870::asdu::Element::Scaled { value, .. } if value % 2 == writer => {
+                        Some(value)
+                    }
+                    _ => None,
+                })
+                .collect();
+            assert!(mine.windows(2).all(|pair| pair[0] < pair[1]));
+            assert_eq!(mine.len(), 1_000);
+        }
+    }
+}

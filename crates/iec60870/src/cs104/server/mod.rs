@@ -453,7 +453,12 @@ impl ServerHandle {
             }
             crate::asdu::TimeTagKind::None => None,
         };
-        self.shared.write_image().set(ioa, element.clone(), time)?;
+        // Queue while still holding the image's lock: concurrent updates of one point
+        // then reach the clients in the order the image took them, so the last event a
+        // client gets agrees with what interrogation and read report. (No code path takes
+        // the image's lock while holding a group's, so this nesting cannot deadlock.)
+        let mut image = self.shared.write_image();
+        image.set(ioa, element.clone(), time)?;
         let object = InformationObject { ioa, element, time };
         for group in &self.shared.groups {
             group.push(QueuedEvent {
@@ -462,6 +467,7 @@ impl ServerHandle {
                 object: object.clone(),
             });
         }
+        drop(image);
         Ok(())
     }
 
