@@ -415,6 +415,7 @@ async fn run(
     let mut delay = config.reconnect_delay;
     loop {
         let mut connected_once = false;
+        let mut last_failure = None;
         for address in &config.addresses {
             let attempt = connect(&config, address);
             tokio::pin!(attempt);
@@ -463,14 +464,16 @@ async fn run(
                 }
                 Err(reason) => {
                     tracing::warn!(%address, %reason, "connection failed");
-                    if !config.reconnect && config.addresses.len() == 1 {
-                        let _ = events.send(ClientEvent::Disconnected { reason }).await;
-                        return;
-                    }
+                    last_failure = Some(reason);
                 }
             }
         }
         if !config.reconnect {
+            // Without reconnection the client gives up after one round of addresses; it
+            // says so whatever the number of addresses.
+            if let Some(reason) = last_failure {
+                let _ = events.send(ClientEvent::Disconnected { reason }).await;
+            }
             return;
         }
         if !connected_once {

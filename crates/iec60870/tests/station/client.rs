@@ -323,3 +323,24 @@ async fn interrogation_and_clock_sync_on_start() {
     let delta = now - synced[0].to_naive().unwrap();
     assert!(delta.num_seconds().abs() < 5, "clock sync sent {delta} off");
 }
+
+#[tokio::test]
+async fn without_reconnection_the_client_reports_that_it_gave_up() {
+    init_logs();
+    for count in [1, 2] {
+        let mut addresses = Vec::new();
+        for _ in 0..count {
+            addresses.push(refusing_address().await.to_string());
+        }
+        let mut config = client_config(refusing_address().await);
+        config.addresses = addresses;
+        let (_handle, mut events) = spawn_client(config);
+        match next_event(&mut events).await {
+            ClientEvent::Disconnected { reason } => {
+                assert!(reason.contains("cannot connect"), "{reason}")
+            }
+            other => panic!("unexpected {other:?}"),
+        }
+        assert!(within(WAIT, "the end", events.recv()).await.is_none());
+    }
+}
