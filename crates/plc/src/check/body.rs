@@ -221,6 +221,8 @@ impl BodyCx<'_> {
             return true;
         }
         let ok = match (from, to) {
+            // enumerations read as integers (as CODESYS allows)
+            (Ty::Enum(_), t) if t.is_int() => true,
             (Ty::Array(a), Ty::Array(b)) => {
                 a.dims
                     .iter()
@@ -858,12 +860,22 @@ impl BodyCx<'_> {
         );
         let logic = matches!(op, BinOp::And | BinOp::Or | BinOp::Xor);
         let h = if cmp { None } else { hint };
+        // an untyped literal takes the other operand's type; a real literal next to an
+        // integer takes the expected REAL/LREAL of the whole expression
+        let lit_hint = |other: &Ty, lit: &Expr| -> Ty {
+            match (&lit.kind, h) {
+                (ExprKind::Literal(Literal::Real(..)), Some(o)) if other.is_int() && o.is_real() => o.clone(),
+                _ => other.clone(),
+            }
+        };
         let (ta, tb) = if is_untyped_literal(a) && !is_untyped_literal(b) {
             let tb = self.expr(b, h);
-            (self.expr(a, Some(&tb)), tb)
+            let hint = lit_hint(&tb, a);
+            (self.expr(a, Some(&hint)), tb)
         } else {
             let ta = self.expr(a, h);
-            (ta.clone(), self.expr(b, Some(&ta)))
+            let hint = lit_hint(&ta, b);
+            (ta.clone(), self.expr(b, Some(&hint)))
         };
         let ta = if is_untyped_literal(a) && is_untyped_literal(b) && ta != tb {
             self.expr(a, Some(&tb))
@@ -1069,11 +1081,14 @@ impl BodyCx<'_> {
                 }
             }
         }
-        let typed_hint = tys
-            .iter()
-            .skip(usize::from(matches!(b, Builtin::Mux | Builtin::Sel)))
-            .find(|t| **t != Ty::Void)
-            .cloned();
+        let typed_hint = match &b {
+            Builtin::Convert(Some(from), _) => Some(from.clone()),
+            _ => tys
+                .iter()
+                .skip(usize::from(matches!(b, Builtin::Mux | Builtin::Sel)))
+                .find(|t| **t != Ty::Void)
+                .cloned(),
+        };
         for (i, a) in args.iter().enumerate() {
             if is_untyped_literal(&a.value) {
                 let h = typed_hint.clone();
