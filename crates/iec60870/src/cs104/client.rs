@@ -57,8 +57,10 @@ pub struct ClientConfig {
     pub reconnect_delay_max: Duration,
     /// How long a command waits for its confirmation, and again for its termination.
     pub command_timeout: Duration,
-    /// Received events the application may fall behind by before the client stops
-    /// reading the socket (TCP then slows the server down).
+    /// Received events the application may fall behind by: the event channel holds this
+    /// many (at least 16), and as many more wait inside the client, which then stops
+    /// reading the socket (TCP then slows the server down). Requests and their time-outs
+    /// keep working meanwhile.
     pub event_capacity: usize,
     /// TLS (IEC 62351-3): client configuration and the server's name in its certificate.
     pub tls: Option<(Arc<tokio_rustls::rustls::ClientConfig>, ServerName<'static>)>,
@@ -552,6 +554,12 @@ where
     let mut output = Vec::with_capacity(16 * 1024);
     let mut started = false;
     let mut closing: Option<oneshot::Sender<()>> = None;
+    // Events the application has not taken yet. The task never waits for the
+    // application inside the loop (a command awaited while events pile up would never
+    // complete, nor time out); it stops reading the socket instead once this backlog is
+    // as large as the channel, and TCP then slows the server down.
+    let mut backlog: VecDeque<ClientEvent> = VecDeque::new();
+    let backlog_limit = config.event_capacity.max(16);
     let result = 'connection: loop {
         let now = tokio::time::Instant::now().into_std();
         while let Some(event) = session.poll_event() {
@@ -587,15 +595,11 @@ where
                             }
                         }
                     };
-                    if events.send(event).await.is_err() {
-                        break 'connection DriveEnd::Closed;
-                    }
+                    backlog.push_back(event);
                 }
                 SessionEvent::Started => {
                     started = true;
-                    if events.send(ClientEvent::Started).await.is_err() {
-                        break 'connection DriveEnd::Closed;
-                    }
+                    backlog.push_back(ClientEvent::Started);
                     if config.clock_sync_on_start {
                         let time = crate::cs104::server::time_tag_now(
                             crate::cs104::server::TimeZonePolicy::Utc,
@@ -631,7 +635,7 @@ where
                 SessionEvent::Stopped => started = false,
                 SessionEvent::Acknowledged { .. } => {}
                 SessionEvent::Closed(reason) => {
-                    return end(pending, DriveEnd::Lost(reason.to_string()));
+                    break 'connection DriveEnd::Lost(reason.to_string());
                 }
             }
         }
@@ -661,7 +665,17 @@ where
             (Some(a), Some(b)) => Some(a.min(b)),
             (a, b) => a.or(b),
         };
-        let reading_allowed = events.capacity() > 0;
+        while let Some(event) = backlog.pop_front() {
+            match events.try_send(event) {
+                Ok(()) => {}
+                Err(mpsc::error::TrySendError::Full(event)) => {
+                    backlog.push_front(event);
+                    break;
+                }
+                Err(mpsc::error::TrySendError::Closed(_)) => break 'connection DriveEnd::Closed,
+            }
+        }
+        let reading_allowed = backlog.len() < backlog_limit;
         tokio::select! {
             read = reader.read(&mut input), if reading_allowed => match read {
                 Ok(0) => break DriveEnd::Lost("closed by the server".to_owned()),
@@ -670,6 +684,14 @@ where
                     session.handle_input(now, input.get(..count).unwrap_or_default());
                 }
                 Err(error) => break DriveEnd::Lost(format!("read failed: {error}")),
+            },
+            permit = events.reserve(), if !backlog.is_empty() => match permit {
+                Ok(permit) => {
+                    if let Some(event) = backlog.pop_front() {
+                        permit.send(event);
+                    }
+                }
+                Err(_) => break DriveEnd::Closed,
             },
             () = sleep_until(deadline) => {
                 let now = tokio::time::Instant::now();
@@ -742,6 +764,14 @@ where
             tracing::warn!("the server did not take the closing acknowledgement within t1");
         }
         session.close(crate::cs104::session::CloseReason::LocalRequest);
+    }
+    if let DriveEnd::Lost(_) = result {
+        // What arrived before the loss comes before the news of it.
+        for event in backlog {
+            if events.send(event).await.is_err() {
+                break;
+            }
+        }
     }
     // Dropping the sender tells `ClientHandle::close` that the connection is closed.
     drop(closing);

@@ -344,3 +344,62 @@ async fn without_reconnection_the_client_reports_that_it_gave_up() {
         assert!(within(WAIT, "the end", events.recv()).await.is_none());
     }
 }
+
+#[tokio::test]
+async fn a_lagging_application_does_not_stall_requests() {
+    init_logs();
+    let server = start_server(server_config(), image(), Arc::new(ReadOnlyStation)).await;
+    let mut config = client_config(server.local_addr());
+    config.event_capacity = 16;
+    config.command_timeout = Duration::from_millis(500);
+    let mut client = Client::start(config).await;
+    // 100 events that cannot share ASDUs (the cause alternates), none read for now.
+    for value in 0..100 {
+        let cause = if value % 2 == 0 {
+            Cause::SPONTANEOUS
+        } else {
+            Cause::PERIODIC
+        };
+        server
+            .update_with_cause(ioa(1), scaled(value), None, cause)
+            .unwrap();
+    }
+    // Until the flow stops: the client passes 16 on, keeps as many, then stops reading,
+    // and the server stops at k = 12 unacknowledged frames.
+    within(WAIT, "the flow of events to stop", async {
+        let mut last = usize::MAX;
+        loop {
+            let queued = server.stats().groups[0].queued;
+            if queued == last && queued < 100 {
+                return;
+            }
+            last = queued;
+            tokio::time::sleep(Duration::from_millis(150)).await;
+        }
+    })
+    .await;
+    // A request still completes (answered, or timed out if the answer is behind what
+    // the application has not read) instead of hanging.
+    let result = within(
+        WAIT,
+        "a read while events pile up",
+        client.handle.read(ioa(1)),
+    )
+    .await;
+    match result {
+        Ok(outcome) => assert!(outcome.positive),
+        Err(error) => assert_eq!(error, ClientError::Timeout("the confirmation")),
+    }
+    // Nothing was lost, nothing reordered.
+    let mut values = Vec::new();
+    while values.len() < 100 {
+        let asdu = client.next_asdu().await;
+        if asdu.cot.cause == Cause::REQUEST {
+            continue;
+        }
+        for object in asdu.objects {
+            values.push(object.element);
+        }
+    }
+    assert_eq!(values, (0..100).map(scaled).collect::<Vec<_>>());
+}
