@@ -849,7 +849,7 @@ impl BodyCx<'_> {
                 }
             }
             ExprKind::Binary(op, a, b) => self.binary(e, *op, a, b, hint),
-            ExprKind::Call(callee, args) => self.call(e, callee, args),
+            ExprKind::Call(callee, args) => self.call(e, callee, args, hint),
         }
     }
 
@@ -864,7 +864,11 @@ impl BodyCx<'_> {
         // integer takes the expected REAL/LREAL of the whole expression
         let lit_hint = |other: &Ty, lit: &Expr| -> Ty {
             match (&lit.kind, h) {
-                (ExprKind::Literal(Literal::Real(..)), Some(o)) if other.is_int() && o.is_real() => o.clone(),
+                (ExprKind::Literal(Literal::Real(..)), Some(o))
+                    if other.is_int() && o.is_real() =>
+                {
+                    o.clone()
+                }
                 _ => other.clone(),
             }
         };
@@ -999,7 +1003,7 @@ impl BodyCx<'_> {
         }
     }
 
-    fn call(&mut self, e: &Expr, callee: &Expr, args: &[Arg]) -> Ty {
+    fn call(&mut self, e: &Expr, callee: &Expr, args: &[Arg], hint: Option<&Ty>) -> Ty {
         let name = match &callee.kind {
             ExprKind::Name { ident, .. } => Some(ident.clone()),
             _ => None,
@@ -1041,7 +1045,7 @@ impl BodyCx<'_> {
                     return Ty::Void;
                 }
                 if let Some(b) = stdlib::lookup(&ident.key) {
-                    return self.builtin(e, ident, b, args);
+                    return self.builtin(e, ident, b, args, hint);
                 }
                 self.err(
                     Code::Undeclared,
@@ -1063,7 +1067,14 @@ impl BodyCx<'_> {
         Ty::Void
     }
 
-    fn builtin(&mut self, e: &Expr, ident: &Ident, b: Builtin, args: &[Arg]) -> Ty {
+    fn builtin(
+        &mut self,
+        e: &Expr,
+        ident: &Ident,
+        b: Builtin,
+        args: &[Arg],
+        hint: Option<&Ty>,
+    ) -> Ty {
         if let Some(a) = args.iter().find(|a| a.output) {
             self.err(
                 Code::WrongArguments,
@@ -1087,7 +1098,8 @@ impl BodyCx<'_> {
                 .iter()
                 .skip(usize::from(matches!(b, Builtin::Mux | Builtin::Sel)))
                 .find(|t| **t != Ty::Void)
-                .cloned(),
+                .cloned()
+                .or_else(|| hint.filter(|h| h.is_num() || h.is_bits()).cloned()),
         };
         for (i, a) in args.iter().enumerate() {
             if is_untyped_literal(&a.value) {

@@ -536,6 +536,18 @@ impl Cx<'_> {
                 let Some(dst) = self.place(&a.value) else {
                     continue;
                 };
+                if v.ty.lane().is_none() {
+                    let size = self.c.size_of(&v.ty);
+                    let sa = target.addr();
+                    let da = dst.addr();
+                    post.push(Box::new(move |vm| {
+                        let s = sa(vm)?;
+                        let d = da(vm)?;
+                        vm.copy(s, d, size)?;
+                        Ok(Flow::Normal)
+                    }));
+                    continue;
+                }
                 let mut src = self.load(&target);
                 if a.negated {
                     if let CE::I(f) = src {

@@ -265,7 +265,7 @@ pub fn signature(b: &Builtin, args: &[Ty]) -> Result<(Vec<Ty>, Ty), String> {
             if !t.is_bits() && !t.is_int() {
                 return Err(format!("expects a bit string, got {t}"));
             }
-            if !arg(1).is_int() {
+            if !arg(1).is_int() && !arg(1).is_bits() {
                 return Err("shift count must be an integer".into());
             }
             (vec![t.clone(), arg(1)], t)

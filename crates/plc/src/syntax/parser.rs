@@ -1251,7 +1251,9 @@ impl Parser<'_> {
                 if up == "FALSE" {
                     return lit(self, Literal::Bool(false));
                 }
-                if RESERVED.contains(&up.as_str()) {
+                // MOD(a, b) in function form
+                let fn_form = up == "MOD" && matches!(self.tok_at(1), Tok::Punct("("));
+                if RESERVED.contains(&up.as_str()) && !fn_form {
                     return self.expected("an expression");
                 }
                 self.bump();
