@@ -630,7 +630,7 @@ impl Parser<'_> {
 
     fn stmts(&mut self, ends: &[&str]) -> PResult<Vec<Stmt>> {
         let mut out = Vec::new();
-        while !self.at_eof() && !self.at_any_kw(ends) {
+        while !self.at_eof() && !self.at_any_kw(ends) && !self.at_block_end() {
             let before = self.pos;
             match self.stmt() {
                 Ok(s) => out.push(s),
@@ -654,6 +654,14 @@ impl Parser<'_> {
             }
         }
         Ok(out)
+    }
+
+    /// A keyword that closes some block and can never start a statement.
+    fn at_block_end(&self) -> bool {
+        matches!(self.tok(), Tok::Ident(s) if {
+            let u = s.to_ascii_uppercase();
+            u.starts_with("END_") || u == "ELSE" || u == "ELSIF" || u == "UNTIL"
+        })
     }
 
     fn enter(&mut self) -> PResult<()> {

@@ -128,6 +128,7 @@ fn run_one(path: &Path) -> Result<(), String> {
             .join("\n")
     })?;
     let mut plc = plc::Plc::new(compiled, sources);
+    plc.loop_budget = 1_000_000;
     let program = spec.program.clone().unwrap_or_else(|| "Main".into());
     plc.add_task(TaskConfig::cyclic(
         "main",
