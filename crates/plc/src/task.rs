@@ -802,10 +802,7 @@ fn split_path(path: &str) -> Option<Vec<Seg>> {
             idx.push(v?);
             rest = r.get(close + 1..)?;
         }
-        let name = name
-            .trim_start_matches('#')
-            .trim_matches('"')
-            .to_string();
+        let name = name.trim_start_matches('#').trim_matches('"').to_string();
         if name.is_empty() {
             return None;
         }

@@ -1,1 +1,299 @@
-//! Runtime API: paths, forcing, retain, watchdog, statistics, I/O image, faults.
+//! Runtime API: paths, forcing, retain, watchdog, statistics, tasks, I/O image, faults.
+
+use plc::task::{ClockReading, Stopwatch, TaskConfig, TaskState};
+use plc::Plc;
+use std::cell::Cell;
+use std::rc::Rc;
+
+fn plc(src: &str) -> Plc {
+    let (sources, r) = plc::build(&[("t.st".to_string(), src.to_string())]);
+    match r {
+        Ok(c) => Plc::new(c, sources),
+        Err(d) => panic!(
+            "{}",
+            d.iter()
+                .map(|d| d.render(&sources))
+                .collect::<Vec<_>>()
+                .join("\n")
+        ),
+    }
+}
+
+fn at_ms(ms: i64) -> ClockReading {
+    ClockReading {
+        monotonic_ns: ms * 1_000_000,
+        utc_ns: 1_700_000_000_000_000_000 + ms * 1_000_000,
+        utc_offset_ns: 0,
+    }
+}
+
+const LIGHTS: &str = "
+PROGRAM Main
+VAR lights : ARRAY[1..4] OF TON; on : BOOL; count : INT; limit : INT := 100; END_VAR
+VAR RETAIN starts : INT; END_VAR
+VAR PERSISTENT total : DINT; END_VAR
+lights[3](IN := on, PT := T#20ms);
+count := count + 1;
+IF count > limit THEN count := limit; END_IF
+total := total + 1;
+END_PROGRAM
+";
+
+#[test]
+fn read_and_write_by_path() {
+    let mut p = plc(LIGHTS);
+    p.add_task(TaskConfig::cyclic("main", 10_000_000, &["Main"]))
+        .unwrap();
+    p.write("Main.on", "TRUE").unwrap();
+    for k in 0..4 {
+        p.run_cycle(at_ms(k * 10));
+    }
+    assert_eq!(p.read_text("Main.lights[3].Q").unwrap(), "TRUE");
+    assert_eq!(p.read_text("Main.lights[3].ET").unwrap(), "T#20ms");
+    assert_eq!(p.read_text("main.LIGHTS[3].pt").unwrap(), "T#20ms");
+    assert!(p.read_text("Main.lights[5].Q").is_err());
+    assert!(p.read_text("Main.nothing").is_err());
+    assert!(p.write("Main.count", "'text'").is_err());
+    assert!(p.write("Main.count", "70000").is_err());
+    let all: Vec<String> = p
+        .program_leaves("Main")
+        .unwrap()
+        .into_iter()
+        .map(|l| l.path)
+        .collect();
+    assert!(all.contains(&"Main.lights[1].IN".to_string()));
+    assert!(all.contains(&"Main.total".to_string()));
+}
+
+#[test]
+fn forcing_holds_a_value_until_released() {
+    let mut p = plc(LIGHTS);
+    p.add_task(TaskConfig::cyclic("main", 10_000_000, &["Main"]))
+        .unwrap();
+    p.force("Main.count", "7").unwrap();
+    for k in 0..3 {
+        p.run_cycle(at_ms(k * 10));
+        assert_eq!(p.read_text("Main.count").unwrap(), "7");
+    }
+    assert_eq!(p.forced(), vec!["Main.count".to_string()]);
+    assert!(p.release("Main.count"));
+    p.run_cycle(at_ms(30));
+    assert_eq!(p.read_text("Main.count").unwrap(), "8");
+    // write once: the program takes over in the next cycle
+    p.write("Main.count", "50").unwrap();
+    p.run_cycle(at_ms(40));
+    assert_eq!(p.read_text("Main.count").unwrap(), "51");
+}
+
+#[test]
+fn warm_start_keeps_retain_cold_start_does_not() {
+    let mut p = plc(LIGHTS);
+    p.add_task(TaskConfig::cyclic("main", 10_000_000, &["Main"]))
+        .unwrap();
+    p.write("Main.starts", "5").unwrap();
+    for k in 0..3 {
+        p.run_cycle(at_ms(k * 10));
+    }
+    p.warm_start().unwrap();
+    assert_eq!(p.read_text("Main.starts").unwrap(), "5");
+    assert_eq!(p.read_text("Main.total").unwrap(), "3");
+    assert_eq!(p.read_text("Main.count").unwrap(), "0");
+    p.cold_start().unwrap();
+    assert_eq!(p.read_text("Main.starts").unwrap(), "0");
+    assert_eq!(p.read_text("Main.total").unwrap(), "0");
+}
+
+#[test]
+fn retain_file_is_written_atomically_and_survives_download() {
+    let dir = std::env::temp_dir().join(format!("plc-retain-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("retain.txt");
+    let mut p = plc(LIGHTS);
+    p.add_task(TaskConfig::cyclic("main", 10_000_000, &["Main"]))
+        .unwrap();
+    p.write("Main.starts", "9").unwrap();
+    p.run_cycle(at_ms(0));
+    p.run_cycle(at_ms(10));
+    p.save_retain(&file).unwrap();
+    assert!(!file.with_extension("tmp").exists());
+    let text = std::fs::read_to_string(&file).unwrap();
+    assert!(text.contains("RETAIN Main.starts = 9"), "{text}");
+    assert!(text.contains("PERSISTENT Main.total = 2"), "{text}");
+    // a new download of a changed program: PERSISTENT only
+    let mut q = plc(&LIGHTS.replace("limit : INT := 100;", "limit : INT := 5; extra : BOOL;"));
+    assert_eq!(q.load_retain(&file, true).unwrap(), 1);
+    assert_eq!(q.read_text("Main.total").unwrap(), "2");
+    assert_eq!(q.read_text("Main.starts").unwrap(), "0");
+    assert_eq!(q.load_retain(&file, false).unwrap(), 2);
+    assert_eq!(q.read_text("Main.starts").unwrap(), "9");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+struct Scripted(Rc<Cell<i64>>);
+impl Stopwatch for Scripted {
+    fn start(&mut self) {}
+    fn elapsed_ns(&mut self) -> i64 {
+        self.0.get()
+    }
+}
+
+#[test]
+fn watchdog_faults_after_sensitivity_consecutive_overruns() {
+    let mut p = plc(LIGHTS);
+    let cost = Rc::new(Cell::new(1_000_000));
+    p.set_stopwatch(Box::new(Scripted(cost.clone())));
+    p.add_task(TaskConfig::cyclic("main", 10_000_000, &["Main"]).with_watchdog(5_000_000, 3))
+        .unwrap();
+    p.run_cycle(at_ms(0));
+    cost.set(8_000_000);
+    assert!(p.run_cycle(at_ms(10)).is_empty());
+    assert!(p.run_cycle(at_ms(20)).is_empty());
+    cost.set(1_000_000);
+    assert!(p.run_cycle(at_ms(30)).is_empty()); // resets the consecutive count
+    cost.set(8_000_000);
+    assert!(p.run_cycle(at_ms(40)).is_empty());
+    assert!(p.run_cycle(at_ms(50)).is_empty());
+    let faults = p.run_cycle(at_ms(60));
+    assert_eq!(faults.len(), 1);
+    assert!(
+        faults[0].message.contains("watchdog"),
+        "{}",
+        faults[0].message
+    );
+    assert!(matches!(p.task_state("main"), Some(TaskState::Faulted(_))));
+    let before = p.read_text("Main.count").unwrap();
+    p.run_cycle(at_ms(70));
+    assert_eq!(
+        p.read_text("Main.count").unwrap(),
+        before,
+        "a faulted task does not run"
+    );
+    let s = p.stats("main").unwrap();
+    assert_eq!(s.cycles, 7);
+    assert_eq!(s.overruns, 5);
+    assert_eq!(s.min_ns, 1_000_000);
+    assert_eq!(s.max_ns, 8_000_000);
+    assert_eq!(s.last_ns, 8_000_000);
+    p.cold_start().unwrap();
+    assert_eq!(p.task_state("main"), Some(&TaskState::Running));
+}
+
+#[test]
+fn statistics_and_jitter() {
+    let mut p = plc(LIGHTS);
+    p.add_task(TaskConfig::cyclic("main", 10_000_000, &["Main"]))
+        .unwrap();
+    p.run_cycle(at_ms(0));
+    p.run_cycle(at_ms(5)); // not due
+    p.run_cycle(at_ms(13)); // 3 ms late
+    p.run_cycle(at_ms(20));
+    let s = p.stats("main").unwrap();
+    assert_eq!(s.cycles, 3);
+    assert_eq!(s.jitter_ns, 3_000_000);
+    assert_eq!(p.read_text("Main.count").unwrap(), "3");
+    assert_eq!(p.next_due(), Some(30_000_000));
+}
+
+#[test]
+fn tasks_with_intervals_and_priorities() {
+    let src = "
+VAR_GLOBAL trace : STRING[200]; END_VAR
+PROGRAM Fast VAR n : INT; END_VAR n := n + 1; trace := CONCAT(trace, 'F'); END_PROGRAM
+PROGRAM Slow VAR n : INT; END_VAR n := n + 1; trace := CONCAT(trace, 'S'); END_PROGRAM
+";
+    let mut p = plc(src);
+    p.add_task(TaskConfig::cyclic("slow", 30_000_000, &["Slow"]).with_priority(5))
+        .unwrap();
+    p.add_task(TaskConfig::cyclic("fast", 10_000_000, &["Fast"]).with_priority(1))
+        .unwrap();
+    for k in 0..6 {
+        p.run_cycle(at_ms(k * 10));
+    }
+    assert_eq!(p.read_text("Fast.n").unwrap(), "6");
+    assert_eq!(p.read_text("Slow.n").unwrap(), "2");
+    // the higher-priority task runs first when both are due
+    assert_eq!(p.read_text("trace").unwrap(), "'FSFFFSFF'");
+}
+
+#[test]
+fn a_fault_stops_only_its_task() {
+    let src = "
+PROGRAM Bad VAR z : INT; x : INT; END_VAR x := 1 / z; END_PROGRAM
+PROGRAM Good VAR n : INT; END_VAR n := n + 1; END_PROGRAM
+";
+    let mut p = plc(src);
+    p.add_task(TaskConfig::cyclic("bad", 10_000_000, &["Bad"]))
+        .unwrap();
+    p.add_task(TaskConfig::cyclic("good", 10_000_000, &["Good"]))
+        .unwrap();
+    let f = p.run_cycle(at_ms(0));
+    assert_eq!(f.len(), 1);
+    let rendered = p.render(&f[0]);
+    assert!(
+        rendered.starts_with("t.st:2:48: error: task 'bad' stopped: division by zero"),
+        "{rendered}"
+    );
+    p.run_cycle(at_ms(10));
+    assert_eq!(p.read_text("Good.n").unwrap(), "2");
+}
+
+#[test]
+fn io_image_binds_direct_addresses() {
+    let src = "
+PROGRAM Main
+VAR
+    start AT %IX0.0 : BOOL;
+    level AT %IW2 : WORD;
+    lamp AT %QX1.3 : BOOL;
+    setpoint AT %QW4 : WORD;
+END_VAR
+lamp := start;
+setpoint := level + 1;
+END_PROGRAM
+";
+    let mut p = plc(src);
+    p.add_task(TaskConfig::cyclic("main", 10_000_000, &["Main"]))
+        .unwrap();
+    p.set_io("%IX0.0", 1).unwrap();
+    p.set_io("%IW2", 1234).unwrap();
+    p.run_cycle(at_ms(0));
+    assert_eq!(p.get_io("%QX1.3").unwrap(), 1);
+    assert_eq!(p.get_io("%QW4").unwrap(), 1235);
+    assert_eq!(p.get_io("%QB4").unwrap(), 1235 >> 8, "big-endian words");
+    assert!(p.set_io("%ZX0.0", 1).is_err());
+    // forcing an input variable overrides the image
+    p.force("Main.start", "FALSE").unwrap();
+    p.run_cycle(at_ms(10));
+    assert_eq!(p.get_io("%QX1.3").unwrap(), 0);
+}
+
+#[test]
+fn virtual_clock_drives_timers_exactly() {
+    let src = "PROGRAM Main VAR t : TON; END_VAR t(IN := TRUE, PT := T#1h); END_PROGRAM";
+    let mut p = plc(src);
+    p.add_task(TaskConfig::cyclic("main", 0, &["Main"]))
+        .unwrap();
+    let mut clock = plc::task::VirtualClock::new(0, 0);
+    p.run_cycle(clock.now());
+    clock.advance(3_600_000_000_000 - 1);
+    p.run_cycle(clock.now());
+    assert_eq!(p.read_text("Main.t.Q").unwrap(), "FALSE");
+    clock.advance(1);
+    p.run_cycle(clock.now());
+    assert_eq!(p.read_text("Main.t.Q").unwrap(), "TRUE");
+    assert_eq!(p.read_text("Main.t.ET").unwrap(), "T#1h");
+}
+
+#[test]
+fn diagnostics_render_with_file_line_col() {
+    let (sources, r) = plc::build(&[(
+        "a.st".into(),
+        "PROGRAM Main\nVAR x : INT; END_VAR\nx := nope;\nEND_PROGRAM\n".into(),
+    )]);
+    let d = r.err().unwrap();
+    assert_eq!(
+        d[0].headline(&sources),
+        "a.st:3:6: error: undeclared name 'nope'"
+    );
+    assert!(d[0].render(&sources).contains("[E0101]"));
+}
