@@ -131,7 +131,7 @@ def parse_args(argv=None):
     p.add_argument("--quiet-points", action="store_true",
                    help="no line per received object (counting only)")
     p.add_argument("--connect-timeout", type=float, default=10.0)
-    p.add_argument("--gi-timeout", type=float, default=300.0,
+    p.add_argument("--gi-timeout", type=float, default=120.0,
                    help="seconds to wait for ACT_TERM of the GI")
     p.add_argument("--command-timeout", type=float, default=10.0,
                    help="seconds to wait for ACT_CON / ACT_TERM of a command")

@@ -203,17 +203,18 @@ class Outstation:
             self.gi_points += a.points
             emit({"event": "bulk_points", "count": a.points, "type": a.points_type,
                   "first_ioa": a.points_base, "seconds": round(time.monotonic() - t0, 3)})
-            # c104 builds its GI answer into lib60870's outgoing queue of 100
-            # messages and drops the rest (see README)
-            per_asdu = {"M_SP_NA_1": 127, "M_DP_NA_1": 127, "M_ME_NA_1": 80,
-                        "M_ME_NB_1": 80, "M_ME_NC_1": 48}[a.points_type]
-            cap = 110 * per_asdu
-            if a.points > cap:
+            # c104 builds its whole GI answer at once into lib60870's
+            # outgoing queue (100 messages) + the k window (12): whatever
+            # does not fit is dropped silently, ACT_TERM included (README)
+            per_asdu = {"M_SP_NA_1": 60, "M_DP_NA_1": 60, "M_ME_NA_1": 40,
+                        "M_ME_NB_1": 40, "M_ME_NC_1": 30}[a.points_type]
+            est = 12 + (a.points + per_asdu - 1) // per_asdu
+            if est > 100:
                 emit({"event": "warning",
-                      "message": "c104 answers a GI with at most ~110 ASDUs "
-                                 "(~%d %s objects); the rest of the %d bulk "
-                                 "points will be missing from its GI"
-                                 % (cap, a.points_type, a.points)})
+                      "message": "c104 answers a GI with at most ~100-110 ASDUs and "
+                                 "drops the rest (ACT_TERM too); %d %s points need "
+                                 "~%d ASDUs: use at most ~%d, or raw104.py gi-server"
+                                 % (a.points, a.points_type, est, 88 * per_asdu)})
 
     # ------------------------------------------------------------ callbacks
     def _on_connect(self, server: c104.Server, ip: str) -> bool:

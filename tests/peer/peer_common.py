@@ -7,6 +7,7 @@ can follow the peer line by line.
 
 import json
 import math
+import os
 import sys
 import threading
 import time
@@ -29,8 +30,16 @@ def emit(obj):
     line = json.dumps(obj, separators=(",", ":"), allow_nan=False,
                       default=str)
     with _emit_lock:
-        sys.stdout.write(line + "\n")
-        sys.stdout.flush()
+        try:
+            sys.stdout.write(line + "\n")
+            sys.stdout.flush()
+        except BrokenPipeError:
+            # the reader went away: keep running, print nowhere
+            try:
+                devnull = os.open(os.devnull, os.O_WRONLY)
+                os.dup2(devnull, sys.stdout.fileno())
+            except OSError:
+                pass
 
 
 def _num(x):
