@@ -34,7 +34,7 @@ import time
 
 import c104
 
-from peer_common import (Deadline, c104_version, command_select_bit, emit,
+from peer_common import (Deadline, apply_apci, c104_version, command_select_bit, emit,
                          info_extra, parse_apdu, quality_to_json, time_to_json,
                          value_to_json)
 
@@ -139,6 +139,11 @@ def parse_args(argv=None):
                    help="max seconds to let c104 deliver queued callbacks after the GI")
     p.add_argument("--raw-log", action="store_true",
                    help="emit a 'raw' line per frame sent and received")
+    p.add_argument("--k", type=int, default=None, help="APCI k (c104 default 12)")
+    p.add_argument("--w", type=int, default=None, help="APCI w (c104 default 8)")
+    p.add_argument("--t1", type=int, default=None, help="APCI t1 seconds (default 15)")
+    p.add_argument("--t2", type=int, default=None, help="APCI t2 seconds (default 10)")
+    p.add_argument("--t3", type=int, default=None, help="APCI t3 seconds (default 20)")
     a = p.parse_args(argv)
     if a.measure_gi:
         a.gi = True
@@ -181,6 +186,7 @@ class Station:
                                               init=c104.Init.NONE)
         if self.con is None:
             raise SystemExit("cannot add connection")
+        apply_apci(self.con.protocol_parameters, args)
         self.con.on_receive_raw(callable=self._on_rx)
         if args.raw_log:
             self.con.on_send_raw(callable=self._on_tx)

@@ -43,7 +43,7 @@ import time
 
 import c104
 
-from peer_common import (Deadline, c104_version, command_select_bit,
+from peer_common import (Deadline, apply_apci, c104_version, command_select_bit,
                          decode_command_value, emit, info_extra, parse_apdu,
                          time_to_json, value_to_json)
 
@@ -134,7 +134,12 @@ def parse_args(argv=None):
     p.add_argument("--stdin", choices=["auto", "watch", "ignore"], default="auto",
                    help="exit when stdin reaches EOF: auto = only if stdin is a pipe")
     p.add_argument("--raw-log", action="store_true",
-                   help="emit a 'raw' line (hex + c104.explain_bytes) per received frame")
+                   help="emit a 'raw' line (hex + c104.explain_bytes) per frame")
+    p.add_argument("--k", type=int, default=None, help="APCI k (c104 default 12)")
+    p.add_argument("--w", type=int, default=None, help="APCI w (c104 default 8)")
+    p.add_argument("--t1", type=int, default=None, help="APCI t1 seconds (default 15)")
+    p.add_argument("--t2", type=int, default=None, help="APCI t2 seconds (default 10)")
+    p.add_argument("--t3", type=int, default=None, help="APCI t3 seconds (default 20)")
     return p.parse_args(argv)
 
 
@@ -147,6 +152,7 @@ class Outstation:
         self.server = c104.Server(ip=args.host, port=args.port,
                                   tick_rate_ms=args.tick_rate_ms,
                                   select_timeout_ms=args.select_timeout_ms)
+        apply_apci(self.server.protocol_parameters, args)
         self.station = self.server.add_station(common_address=args.ca)
         if self.station is None:
             raise SystemExit("cannot add station %d" % args.ca)

@@ -204,3 +204,13 @@ def decode_command_value(data):
     except (IndexError, struct.error):
         return None
     return None
+
+
+def apply_apci(params, args):
+    """Set k, w, t1, t2, t3 on a c104 ProtocolParameters when given."""
+    for attr, name in (("send_window_size", "k"), ("receive_window_size", "w"),
+                       ("message_timeout", "t1"), ("confirm_interval", "t2"),
+                       ("keep_alive_interval", "t3")):
+        v = getattr(args, name, None)
+        if v is not None:
+            setattr(params, attr, v)
