@@ -2,4 +2,5 @@
 
 mod conformance;
 mod fuzzish;
+mod railway;
 mod runtime;
