@@ -531,7 +531,7 @@ impl Plc {
                     c,
                     &format!("{}.{}", p.name, v.name),
                     &v.ty,
-                    base.add(v.offset),
+                    base.plus(v.offset),
                     v.retain,
                     v.persistent,
                     &mut out,
@@ -584,7 +584,7 @@ impl Plc {
                 let (_, v) = p.var(&name.to_uppercase()).ok_or_else(unknown)?;
                 (
                     v.ty.clone(),
-                    base.add(v.offset),
+                    base.plus(v.offset),
                     v.retain,
                     v.persistent,
                     idx,
@@ -606,7 +606,7 @@ impl Plc {
                     lin = lin * usize::try_from(hi - lo + 1).unwrap_or(0)
                         + usize::try_from(v - lo).unwrap_or(0);
                 }
-                addr = addr.add(a.elem_size.mul(lin));
+                addr = addr.plus(a.elem_size.times(lin));
                 ty = a.elem.clone();
             }
             let Some((name, idx)) = it.next() else { break };
@@ -626,7 +626,7 @@ impl Plc {
                 }
                 _ => return Err(unknown()),
             };
-            addr = addr.add(off);
+            addr = addr.plus(off);
             ty = t;
             pending_idx = idx;
         }
@@ -737,7 +737,7 @@ impl Plc {
             let Some(base) = p.base else { continue };
             for v in &p.vars {
                 if let Some(d) = v.at.as_deref().and_then(DirectAddress::parse) {
-                    out.push((base.add(v.offset), v.ty.clone(), d));
+                    out.push((base.plus(v.offset), v.ty.clone(), d));
                 }
             }
         }
@@ -844,7 +844,7 @@ fn push_leaves(
                     c,
                     &format!("{path}[{}]", ix.join(", ")),
                     &a.elem,
-                    addr.add(a.elem_size.mul(k)),
+                    addr.plus(a.elem_size.times(k)),
                     retain,
                     persistent,
                     out,
@@ -858,7 +858,7 @@ fn push_leaves(
                         c,
                         &format!("{path}.{}", f.name),
                         &f.ty,
-                        addr.add(f.offset),
+                        addr.plus(f.offset),
                         retain,
                         persistent,
                         out,
@@ -879,7 +879,7 @@ fn push_leaves(
                         c,
                         &format!("{path}.{}", v.name),
                         &v.ty,
-                        addr.add(v.offset),
+                        addr.plus(v.offset),
                         retain || v.retain,
                         persistent || v.persistent,
                         out,

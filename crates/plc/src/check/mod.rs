@@ -157,7 +157,7 @@ fn size_of(ty: &Ty, types: &TypeTable, pous: &[PouInfo]) -> Size {
     match ty {
         Ty::Real | Ty::LReal => Size { i: 0, r: 1, s: 0 },
         Ty::String(_) | Ty::WString(_) => Size { i: 0, r: 0, s: 1 },
-        Ty::Array(a) => a.elem_size.mul(a.len()),
+        Ty::Array(a) => a.elem_size.times(a.len()),
         Ty::Struct(id) => types.struct_def(*id).map(|s| s.size).unwrap_or_default(),
         Ty::Fb(id) => pous.get(id.0).map(|p| p.size).unwrap_or_default(),
         Ty::Void => Size::default(),
@@ -223,12 +223,12 @@ pub fn check(unit: CompilationUnit, stdlib_items: usize) -> Result<Checked, Vec<
     let mut globals = std::mem::take(&mut cx.globals);
     for g in &mut globals {
         g.offset = base;
-        base = base.add(size_of(&g.ty, &cx.types, &cx.pous));
+        base = base.plus(size_of(&g.ty, &cx.types, &cx.pous));
     }
     for p in &mut cx.pous {
         if matches!(p.kind, PouKind::Program | PouKind::Function) {
             p.base = Some(base);
-            base = base.add(p.size);
+            base = base.plus(p.size);
         }
     }
     let Decls {
@@ -484,7 +484,7 @@ impl<'u> Decls<'u> {
                     offset: off,
                     init: d.init.clone(),
                 });
-                off = off.add(size_of(&ty, &self.types, &self.pous));
+                off = off.plus(size_of(&ty, &self.types, &self.pous));
             }
         }
         let id = StructId(self.types.structs.len());
@@ -666,7 +666,7 @@ impl<'u> Decls<'u> {
                 init: None,
                 span: pou.name.span,
             });
-            off = off.add(sz);
+            off = off.plus(sz);
         }
         // local constants usable in bounds
         for b in &pou.vars {
@@ -753,7 +753,7 @@ impl<'u> Decls<'u> {
                         init: d.init.clone(),
                         span: n.span,
                     });
-                    off = off.add(sz);
+                    off = off.plus(sz);
                 }
             }
         }

@@ -29,7 +29,7 @@ pub struct Size {
 
 impl Size {
     /// Lane-wise sum.
-    pub fn add(self, o: Size) -> Size {
+    pub fn plus(self, o: Size) -> Size {
         Size {
             i: self.i + o.i,
             r: self.r + o.r,
@@ -37,7 +37,7 @@ impl Size {
         }
     }
     /// Lane-wise multiple (saturating).
-    pub fn mul(self, n: usize) -> Size {
+    pub fn times(self, n: usize) -> Size {
         Size {
             i: self.i.saturating_mul(n),
             r: self.r.saturating_mul(n),

@@ -49,17 +49,17 @@ impl Place {
     pub(crate) fn addr(&self) -> AddrFn {
         let off = self.off;
         match (self.base, self.dynamic.clone()) {
-            (Base::Frame, None) => Rc::new(move |vm: &mut Vm| Ok(vm.frame.add(off))),
+            (Base::Frame, None) => Rc::new(move |vm: &mut Vm| Ok(vm.frame.plus(off))),
             (Base::Abs, None) => Rc::new(move |_: &mut Vm| Ok(off)),
             (Base::Frame, Some(d)) => Rc::new(move |vm: &mut Vm| {
                 let x = d(vm)?;
-                Ok(vm.frame.add(off).add(x))
+                Ok(vm.frame.plus(off).plus(x))
             }),
-            (Base::Abs, Some(d)) => Rc::new(move |vm: &mut Vm| Ok(off.add(d(vm)?))),
-            (Base::Callee, None) => Rc::new(move |vm: &mut Vm| Ok(vm.callee.add(off))),
+            (Base::Abs, Some(d)) => Rc::new(move |vm: &mut Vm| Ok(off.plus(d(vm)?))),
+            (Base::Callee, None) => Rc::new(move |vm: &mut Vm| Ok(vm.callee.plus(off))),
             (Base::Callee, Some(d)) => Rc::new(move |vm: &mut Vm| {
                 let x = d(vm)?;
-                Ok(vm.callee.add(off).add(x))
+                Ok(vm.callee.plus(off).plus(x))
             }),
         }
     }
@@ -68,6 +68,9 @@ impl Place {
 fn ty_is_u64(t: &Ty) -> bool {
     matches!(t, Ty::ULInt | Ty::LWord)
 }
+
+/// A run-time array index: value, bounds, stride and its span for faults.
+type IndexPart = (IFn, i64, i64, usize, Span);
 
 pub(crate) fn konst_i(v: i64) -> IFn {
     Box::new(move |_| Ok(v))
@@ -113,7 +116,7 @@ impl Cx<'_> {
                     let p = self.c.pou(*pid)?;
                     let Res::PouVar(_, i) = r else { return None };
                     let v = p.vars.get(i)?;
-                    return Some(Place::abs(p.base?.add(v.offset), v.ty.clone()));
+                    return Some(Place::abs(p.base?.plus(v.offset), v.ty.clone()));
                 }
                 let mut bp = self.place(base)?;
                 let (off, ty) = match (&bp.ty, r) {
@@ -127,7 +130,7 @@ impl Cx<'_> {
                     }
                     _ => return None,
                 };
-                bp.off = bp.off.add(off);
+                bp.off = bp.off.plus(off);
                 bp.ty = ty;
                 Some(bp)
             }
@@ -152,7 +155,7 @@ impl Cx<'_> {
                     acc = acc.saturating_mul(usize::try_from(hi - lo + 1).unwrap_or(0));
                 }
                 let mut static_lin = 0usize;
-                let mut dyn_parts: Vec<(IFn, i64, i64, usize, Span)> = Vec::new();
+                let mut dyn_parts: Vec<IndexPart> = Vec::new();
                 for ((ix, (lo, hi)), stride) in idx.iter().zip(a.dims.iter()).zip(strides.iter()) {
                     if let ExprKind::Literal(Literal::Int(v, _)) = &ix.kind {
                         let v = *v as i64;
@@ -170,14 +173,12 @@ impl Cx<'_> {
                     let CE::I(f) = self.expr(ix) else { return None };
                     dyn_parts.push((f, *lo, *hi, *stride, ix.span));
                 }
-                bp.off = bp.off.add(a.elem_size.mul(static_lin));
+                bp.off = bp.off.plus(a.elem_size.times(static_lin));
                 if !dyn_parts.is_empty() {
                     let es = a.elem_size;
                     let prev = bp.dynamic.take();
                     let d: AddrFn = if dyn_parts.len() == 1 && prev.is_none() {
-                        let Some((f, lo, hi, stride, span)) = dyn_parts.pop() else {
-                            return None;
-                        };
+                        let (f, lo, hi, stride, span) = dyn_parts.pop()?;
                         Rc::new(move |vm: &mut Vm| {
                             let v = f(vm)?;
                             if v < lo || v > hi {
@@ -188,7 +189,7 @@ impl Cx<'_> {
                                     hi,
                                 });
                             }
-                            Ok(es.mul(((v - lo) as usize) * stride))
+                            Ok(es.times(((v - lo) as usize) * stride))
                         })
                     } else {
                         Rc::new(move |vm: &mut Vm| {
@@ -209,7 +210,7 @@ impl Cx<'_> {
                                 Some(p) => p(vm)?,
                                 None => Size::default(),
                             };
-                            Ok(base.add(es.mul(lin)))
+                            Ok(base.plus(es.times(lin)))
                         })
                     };
                     bp.dynamic = Some(d);
@@ -488,7 +489,7 @@ impl Cx<'_> {
             Some(t) if *t != Ty::Void => pou
                 .vars
                 .first()
-                .map(|v| Place::abs(base.add(v.offset), t.clone())),
+                .map(|v| Place::abs(base.plus(v.offset), t.clone())),
             _ => None,
         };
         (call, result)
@@ -600,10 +601,7 @@ impl Cx<'_> {
     }
 
     /// A writer for a place that takes an already evaluated value.
-    pub(crate) fn store_val(
-        &self,
-        p: &Place,
-    ) -> Rc<dyn Fn(&mut Vm, crate::vm::Val) -> Result<(), Fault>> {
+    pub(crate) fn store_val(&self, p: &Place) -> ValWriter {
         let a = p.addr();
         let max = match p.ty {
             Ty::String(n) | Ty::WString(n) => n,
@@ -643,15 +641,17 @@ pub(crate) type ArgPut = Box<dyn Fn(&mut Vm, crate::vm::Val) -> Result<(), Fault
 
 /// An argument binding: get in the caller, put into the callee.
 pub(crate) type ArgBind = (ArgGet, ArgPut);
+/// Writes an evaluated value into a place.
+pub(crate) type ValWriter = Rc<dyn Fn(&mut Vm, crate::vm::Val) -> Result<(), Fault>>;
 
 trait ArgBindExt {
-    fn scalar(get: CE, put: Rc<dyn Fn(&mut Vm, crate::vm::Val) -> Result<(), Fault>>) -> ArgBind;
+    fn scalar(get: CE, put: ValWriter) -> ArgBind;
     fn copy(src: AddrFn, dst: AddrFn, size: Size) -> ArgBind;
     fn agg(src: AddrFn, dst: AddrFn, size: Size) -> ArgBind;
 }
 
 impl ArgBindExt for ArgBind {
-    fn scalar(get: CE, put: Rc<dyn Fn(&mut Vm, crate::vm::Val) -> Result<(), Fault>>) -> ArgBind {
+    fn scalar(get: CE, put: ValWriter) -> ArgBind {
         let g: ArgGet = match get {
             CE::I(f) => Box::new(move |vm| Ok(crate::vm::Val::Int(f(vm)?))),
             CE::R(f) => Box::new(move |vm| Ok(crate::vm::Val::Real(f(vm)?))),

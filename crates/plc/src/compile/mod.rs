@@ -139,7 +139,7 @@ impl Cx<'_> {
                         .find(|(n, _)| n.key == f.key)
                         .map(|(_, i)| i)
                         .or(f.init.as_ref());
-                    self.init_value(&f.ty, i, off.add(f.offset), ops);
+                    self.init_value(&f.ty, i, off.plus(f.offset), ops);
                 }
             }
             Ty::Array(a) => {
@@ -161,30 +161,30 @@ impl Cx<'_> {
                 }
                 let simple = a.elem.is_elementary() || matches!(a.elem, Ty::Enum(_));
                 if simple && elems.is_empty() {
-                    let size = a.elem_size.mul(n);
+                    let size = a.elem_size.times(n);
                     let default = self.default_int(&a.elem);
                     ops.push(Box::new(move |vm| {
-                        let b = vm.frame.add(off);
+                        let b = vm.frame.plus(off);
                         fill(vm, b, size, default)
                     }));
                     return;
                 }
                 for k in 0..n {
                     let init = elems.get(k).copied().flatten();
-                    self.init_value(&a.elem, init, off.add(a.elem_size.mul(k)), ops);
+                    self.init_value(&a.elem, init, off.plus(a.elem_size.times(k)), ops);
                 }
             }
             Ty::Fb(id) => {
                 let id = id.0;
                 ops.push(Box::new(move |vm| {
-                    let f = vm.frame.add(off);
+                    let f = vm.frame.plus(off);
                     vm.init(id, f)
                 }));
                 if let Some(Init::Struct(fields, _)) = init {
                     let pou = self.c.pou(PouId(id)).cloned();
                     for (name, i) in fields {
                         if let Some((_, v)) = pou.as_ref().and_then(|p| p.var(&name.key)) {
-                            self.init_value(&v.ty.clone(), Some(i), off.add(v.offset), ops);
+                            self.init_value(&v.ty.clone(), Some(i), off.plus(v.offset), ops);
                         }
                     }
                 }

@@ -27,6 +27,9 @@ fn tick(vm: &mut Vm, span: Span) -> Result<(), Fault> {
     Ok(())
 }
 
+/// Label ranges and body of a CASE arm.
+type CaseArm = (Vec<(i64, i64)>, Vec<StmtFn>);
+
 fn nop() -> StmtFn {
     Box::new(|_| Ok(Flow::Normal))
 }
@@ -104,7 +107,7 @@ impl Cx<'_> {
             }
             StmtKind::Case(sel, arms, els) => {
                 let sel = self.cond(sel);
-                let mut table: Vec<(Vec<(i64, i64)>, Vec<StmtFn>)> = Vec::new();
+                let mut table: Vec<CaseArm> = Vec::new();
                 for (labels, body) in arms {
                     let mut ranges = Vec::new();
                     for l in labels {

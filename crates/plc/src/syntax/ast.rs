@@ -38,6 +38,7 @@ pub struct CompilationUnit {
 
 /// A top-level declaration.
 #[derive(Debug, Clone)]
+#[allow(clippy::large_enum_variant)] // built once per parse; boxing buys nothing
 pub enum Item {
     /// PROGRAM, FUNCTION_BLOCK or FUNCTION.
     Pou(Pou),
@@ -368,6 +369,7 @@ pub enum CaseLabel {
 
 /// Statement kinds.
 #[derive(Debug, Clone)]
+#[allow(clippy::large_enum_variant)] // built once per parse; boxing buys nothing
 pub enum StmtKind {
     /// `a := b`
     Assign(Expr, Expr),
