@@ -1,0 +1,157 @@
+//! Representative ST programs against the same algorithms in native Rust, side by side.
+//! Run: `cargo bench -p plc --bench st_vs_native`. Prints time per scan and the ratio.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use plc::task::{ClockReading, TaskConfig};
+use std::hint::black_box;
+use std::time::Instant;
+
+const INT_LOOP: &str = "PROGRAM Main VAR i : DINT; acc : DINT; END_VAR
+acc := 0;
+FOR i := 1 TO 100000 DO acc := acc + (i * i) MOD 7; END_FOR
+END_PROGRAM";
+
+fn int_loop() -> i32 {
+    let mut acc: i32 = 0;
+    for i in 1..=black_box(100_000i32) {
+        acc = acc.wrapping_add(i.wrapping_mul(i) % 7);
+    }
+    acc
+}
+
+const REAL_LOOP: &str = "PROGRAM Main VAR i : DINT; x : LREAL; END_VAR
+x := 0.0;
+FOR i := 1 TO 100000 DO x := x * 0.999999 + 0.5; END_FOR
+END_PROGRAM";
+
+fn real_loop() -> f64 {
+    let mut x = 0.0f64;
+    for _ in 1..=black_box(100_000) {
+        x = x * 0.999999 + 0.5;
+    }
+    x
+}
+
+const SORT: &str = "PROGRAM Main VAR a : ARRAY[1..200] OF DINT; i, j, t : DINT; seed : DINT := 12345; END_VAR
+FOR i := 1 TO 200 DO seed := (seed * 1103 + 12345) MOD 65536; a[i] := seed; END_FOR
+FOR i := 1 TO 199 DO
+  FOR j := 1 TO 200 - i DO
+    IF a[j] > a[j + 1] THEN t := a[j]; a[j] := a[j + 1]; a[j + 1] := t; END_IF
+  END_FOR
+END_FOR
+END_PROGRAM";
+
+fn sort() -> i32 {
+    let mut a = [0i32; 200];
+    let mut seed: i32 = black_box(12345);
+    for x in a.iter_mut() {
+        seed = (seed * 1103 + 12345) % 65536;
+        *x = seed;
+    }
+    for i in 1..200 {
+        for j in 0..200 - i {
+            if a[j] > a[j + 1] {
+                a.swap(j, j + 1);
+            }
+        }
+    }
+    a[0]
+}
+
+const STRINGS: &str = "PROGRAM Main VAR s : STRING[1000]; i : INT; END_VAR
+s := '';
+FOR i := 1 TO 100 DO s := CONCAT(s, INT_TO_STRING(i)); s := CONCAT(s, ','); END_FOR
+END_PROGRAM";
+
+fn strings() -> usize {
+    let mut s = String::new();
+    for i in 1..=black_box(100) {
+        s.push_str(&i.to_string());
+        s.push(',');
+        s.truncate(1000);
+    }
+    s.len()
+}
+
+const TONS: &str = "PROGRAM Main VAR t : ARRAY[1..1000] OF TON; i : INT; n : INT; END_VAR
+n := 0;
+FOR i := 1 TO 1000 DO t[i](IN := TRUE, PT := T#1h); IF t[i].Q THEN n := n + 1; END_IF END_FOR
+END_PROGRAM";
+
+#[derive(Clone, Copy, Default)]
+struct Ton {
+    q: bool,
+    et: i64,
+    running: bool,
+    start: i64,
+}
+
+fn tons(ts: &mut [Ton], now: i64) -> i32 {
+    let mut n = 0;
+    for t in ts.iter_mut() {
+        let (inp, pt) = (black_box(true), 3_600_000_000_000i64);
+        if inp {
+            if !t.running {
+                t.running = true;
+                t.start = now;
+            }
+            if !t.q {
+                t.et = now - t.start;
+                if t.et >= pt {
+                    t.et = pt;
+                    t.q = true;
+                }
+            }
+        } else {
+            t.running = false;
+            t.q = false;
+            t.et = 0;
+        }
+        if t.q {
+            n += 1;
+        }
+    }
+    n
+}
+
+fn time_st(src: &str, scans: u32) -> f64 {
+    let (sources, r) = plc::build(&[("bench.st".into(), src.into())]);
+    let mut p = plc::Plc::new(r.unwrap_or_else(|d| panic!("{d:?}")), sources);
+    p.add_task(TaskConfig::cyclic("t", 0, &["Main"])).unwrap();
+    let mut now = ClockReading::default();
+    p.run_cycle(now);
+    let start = Instant::now();
+    for _ in 0..scans {
+        now.monotonic_ns += 1_000_000;
+        assert!(p.run_cycle(now).is_empty());
+    }
+    start.elapsed().as_secs_f64() / f64::from(scans)
+}
+
+fn time_native(mut f: impl FnMut() -> i64, scans: u32) -> f64 {
+    black_box(f());
+    let start = Instant::now();
+    for _ in 0..scans {
+        black_box(f());
+    }
+    start.elapsed().as_secs_f64() / f64::from(scans)
+}
+
+fn main() {
+    let mut ts = vec![Ton::default(); 1000];
+    let mut now = 0i64;
+    let rows: Vec<(&str, f64, f64)> = vec![
+        ("integer loop (100k)", time_st(INT_LOOP, 20), time_native(|| i64::from(int_loop()), 200)),
+        ("REAL loop (100k)", time_st(REAL_LOOP, 20), time_native(|| real_loop() as i64, 200)),
+        ("bubble sort (200)", time_st(SORT, 20), time_native(|| i64::from(sort()), 200)),
+        ("string building (100)", time_st(STRINGS, 200), time_native(|| strings() as i64, 2000)),
+        ("1000 TON per scan", time_st(TONS, 200), time_native(|| {
+            now += 1_000_000;
+            i64::from(tons(&mut ts, now))
+        }, 2000)),
+    ];
+    println!("{:<24} {:>12} {:>12} {:>8}", "program", "ST/scan", "native/scan", "ratio");
+    for (name, st, native) in rows {
+        println!("{name:<24} {:>10.1}us {:>10.1}us {:>7.1}x", st * 1e6, native * 1e6, st / native);
+    }
+}
