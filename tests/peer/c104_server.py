@@ -119,6 +119,10 @@ def parse_args(argv=None):
                    help="stop after this many spontaneous events (0 = until exit)")
     p.add_argument("--spontaneous-delay", type=float, default=0.5,
                    help="seconds between the first STARTDT and the first event")
+    p.add_argument("--spontaneous-window", type=int, default=80,
+                   help="backpressure: at most this many events handed to c104 "
+                        "but not yet on the wire (c104 silently drops what "
+                        "overflows its 100-message queue); 0 = no limit")
     p.add_argument("--feedback-cot", choices=["spont", "retrem"], default="spont",
                    help="cause of the feedback point after a command: "
                         "spont = SPONTANEOUS (3), sent --feedback-delay-ms after "
@@ -345,6 +349,9 @@ class Outstation:
             if a.spontaneous_count:
                 due = min(due, a.spontaneous_count)
             while k < due:
+                if a.spontaneous_window and \
+                        self.spont_sent - self.wire_spont_objects >= a.spontaneous_window:
+                    break  # c104's queue is full enough: wait for the wire
                 k += 1
                 p = self.spont_points[(k - 1) % n_pts]
                 p.value = float(k)
@@ -366,9 +373,12 @@ class Outstation:
             elif time.monotonic() - rest_since > 0.3:
                 break
             time.sleep(0.05)
-        emit({"event": "spontaneous_done", "sent": self.spont_sent,
+        ev = {"event": "spontaneous_done", "sent": self.spont_sent,
               "failed": self.spont_failed, "on_wire": self.wire_spont_objects,
-              "seconds": round(gen_seconds, 3)})
+              "seconds": round(gen_seconds, 3)}
+        if gen_seconds > 0:
+            ev["per_second"] = round(self.spont_sent / gen_seconds, 1)
+        emit(ev)
 
     # ------------------------------------------------------------ run
     def request_stop(self, reason):
