@@ -32,7 +32,8 @@ fn real_loop() -> f64 {
     x
 }
 
-const SORT: &str = "PROGRAM Main VAR a : ARRAY[1..200] OF DINT; i, j, t : DINT; seed : DINT := 12345; END_VAR
+const SORT: &str =
+    "PROGRAM Main VAR a : ARRAY[1..200] OF DINT; i, j, t : DINT; seed : DINT := 12345; END_VAR
 FOR i := 1 TO 200 DO seed := (seed * 1103 + 12345) MOD 65536; a[i] := seed; END_FOR
 FOR i := 1 TO 199 DO
   FOR j := 1 TO 200 - i DO
@@ -141,17 +142,48 @@ fn main() {
     let mut ts = vec![Ton::default(); 1000];
     let mut now = 0i64;
     let rows: Vec<(&str, f64, f64)> = vec![
-        ("integer loop (100k)", time_st(INT_LOOP, 20), time_native(|| i64::from(int_loop()), 200)),
-        ("REAL loop (100k)", time_st(REAL_LOOP, 20), time_native(|| real_loop() as i64, 200)),
-        ("bubble sort (200)", time_st(SORT, 20), time_native(|| i64::from(sort()), 200)),
-        ("string building (100)", time_st(STRINGS, 200), time_native(|| strings() as i64, 2000)),
-        ("1000 TON per scan", time_st(TONS, 200), time_native(|| {
-            now += 1_000_000;
-            i64::from(tons(&mut ts, now))
-        }, 2000)),
+        (
+            "integer loop (100k)",
+            time_st(INT_LOOP, 20),
+            time_native(|| i64::from(int_loop()), 200),
+        ),
+        (
+            "REAL loop (100k)",
+            time_st(REAL_LOOP, 20),
+            time_native(|| real_loop() as i64, 200),
+        ),
+        (
+            "bubble sort (200)",
+            time_st(SORT, 20),
+            time_native(|| i64::from(sort()), 200),
+        ),
+        (
+            "string building (100)",
+            time_st(STRINGS, 200),
+            time_native(|| strings() as i64, 2000),
+        ),
+        (
+            "1000 TON per scan",
+            time_st(TONS, 200),
+            time_native(
+                || {
+                    now += 1_000_000;
+                    i64::from(tons(&mut ts, now))
+                },
+                2000,
+            ),
+        ),
     ];
-    println!("{:<24} {:>12} {:>12} {:>8}", "program", "ST/scan", "native/scan", "ratio");
+    println!(
+        "{:<24} {:>12} {:>12} {:>8}",
+        "program", "ST/scan", "native/scan", "ratio"
+    );
     for (name, st, native) in rows {
-        println!("{name:<24} {:>10.1}us {:>10.1}us {:>7.1}x", st * 1e6, native * 1e6, st / native);
+        println!(
+            "{name:<24} {:>10.1}us {:>10.1}us {:>7.1}x",
+            st * 1e6,
+            native * 1e6,
+            st / native
+        );
     }
 }

@@ -5,7 +5,7 @@ use super::{Cx, IFn, RFn, SFn, CE};
 use crate::check::Ty;
 use crate::stdlib::{bits, numeric, string, time, Builtin};
 use crate::syntax::{Arg, Expr};
-use crate::vm::Fault;
+use crate::vm::{Fault, FaultKind};
 
 fn as_i(v: CE) -> IFn {
     match v {
@@ -107,7 +107,7 @@ impl Cx<'_> {
                     let x = a(vm)?;
                     let y = b2(vm)?;
                     if y == 0 {
-                        return Err(Fault::DivisionByZero(span));
+                        return Err(Fault::from(FaultKind::DivisionByZero(span)));
                     }
                     Ok(if u {
                         ((x as u64) % (y as u64)) as i64
@@ -356,7 +356,7 @@ impl Cx<'_> {
                         if is_mul {
                             Ok(x.wrapping_mul(y))
                         } else if y == 0 {
-                            Err(Fault::DivisionByZero(span))
+                            Err(Fault::from(FaultKind::DivisionByZero(span)))
                         } else {
                             Ok(x.wrapping_div(y))
                         }

@@ -5,7 +5,7 @@ use crate::check::{Lane, PouId, Res, Size, Ty};
 use crate::diagnostics::{Code, Diagnostic};
 use crate::stdlib::{conv, string};
 use crate::syntax::*;
-use crate::vm::{DirectAddress, Fault, Flow, StmtFn, Vm};
+use crate::vm::{DirectAddress, Fault, FaultKind, Flow, StmtFn, Vm};
 use std::rc::Rc;
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -182,12 +182,13 @@ impl Cx<'_> {
                         Rc::new(move |vm: &mut Vm| {
                             let v = f(vm)?;
                             if v < lo || v > hi {
-                                return Err(Fault::IndexOutOfRange {
+                                return Err(FaultKind::IndexOutOfRange {
                                     span,
                                     index: v,
                                     lo,
                                     hi,
-                                });
+                                }
+                                .into());
                             }
                             Ok(es.times(((v - lo) as usize) * stride))
                         })
@@ -197,12 +198,13 @@ impl Cx<'_> {
                             for (f, lo, hi, stride, span) in &dyn_parts {
                                 let v = f(vm)?;
                                 if v < *lo || v > *hi {
-                                    return Err(Fault::IndexOutOfRange {
+                                    return Err(FaultKind::IndexOutOfRange {
                                         span: *span,
                                         index: v,
                                         lo: *lo,
                                         hi: *hi,
-                                    });
+                                    }
+                                    .into());
                                 }
                                 lin += ((v - lo) as usize) * stride;
                             }
@@ -242,6 +244,9 @@ impl Cx<'_> {
                 CE::I(Box::new(move |vm| vm.geti(vm.frame.i + off.i)))
             }
             (Some(Lane::Int), Base::Abs, false) => CE::I(Box::new(move |vm| vm.geti(off.i))),
+            (Some(Lane::Int), Base::Callee, false) => {
+                CE::I(Box::new(move |vm| vm.geti(vm.callee.i + off.i)))
+            }
             (Some(Lane::Real), Base::Frame, false) => {
                 CE::R(Box::new(move |vm| vm.getr(vm.frame.r + off.r)))
             }
@@ -301,6 +306,11 @@ impl Cx<'_> {
             (CE::I(f), Base::Frame, false) => Box::new(move |vm| {
                 let x = f(vm)?;
                 vm.seti(vm.frame.i + off.i, x)?;
+                Ok(Flow::Normal)
+            }),
+            (CE::I(f), Base::Callee, false) => Box::new(move |vm| {
+                let x = f(vm)?;
+                vm.seti(vm.callee.i + off.i, x)?;
                 Ok(Flow::Normal)
             }),
             (CE::I(f), Base::Abs, false) => Box::new(move |vm| {
@@ -440,9 +450,10 @@ impl Cx<'_> {
             return (Box::new(|_| Ok(Flow::Normal)), None);
         };
         let base = pou.base.unwrap_or_default();
-        let (pre, post) = self.bind_args(&pou, args);
         let id = pid.0;
         let has_args_calls = args.iter().any(|a| contains_call(&a.value));
+        let (pre, post) = self.bind_args(&pou, args, !has_args_calls);
+        let (direct, pre) = split_pre(pre);
         let call: StmtFn = if has_args_calls {
             // evaluate into temporaries first (a nested call may use the same frame)
             let pre = Rc::new(pre);
@@ -471,6 +482,9 @@ impl Cx<'_> {
                 vm.init(id, base)?;
                 let saved = std::mem::replace(&mut vm.callee, base);
                 let r = (|| {
+                    for b in &direct {
+                        b(vm)?;
+                    }
                     for (get, put) in &pre {
                         let v = get(vm)?;
                         put(vm, v)?;
@@ -502,8 +516,9 @@ impl Cx<'_> {
         &mut self,
         pou: &crate::check::PouInfo,
         args: &[Arg],
-    ) -> (Vec<ArgBind>, Vec<StmtFn>) {
-        let mut pre: Vec<ArgBind> = Vec::new();
+        direct: bool,
+    ) -> (Vec<Pre>, Vec<StmtFn>) {
+        let mut pre: Vec<Pre> = Vec::new();
         let mut post: Vec<StmtFn> = Vec::new();
         let positional: Vec<usize> = pou
             .vars
@@ -569,7 +584,7 @@ impl Cx<'_> {
                     let sa = src.addr();
                     let ta = target.addr();
                     let (sa2, ta2) = (sa.clone(), ta.clone());
-                    pre.push(ArgBind::copy(sa, ta, size));
+                    pre.push(Pre::Split(ArgBind::copy(sa, ta, size)));
                     post.push(Box::new(move |vm| {
                         let s = sa2(vm)?;
                         let t = ta2(vm)?;
@@ -578,7 +593,7 @@ impl Cx<'_> {
                     }));
                 } else {
                     let get = self.load(&src);
-                    pre.push(ArgBind::scalar(get, self.store_val(&target)));
+                    pre.push(self.scalar_pre(get, &target, direct));
                     let back = self.load(&target);
                     post.push(self.store(&src, back));
                 }
@@ -591,13 +606,21 @@ impl Cx<'_> {
                 };
                 let size = self.c.size_of(&v.ty);
                 let ta = target.addr();
-                pre.push(ArgBind::agg(src, ta, size));
+                pre.push(Pre::Split(ArgBind::agg(src, ta, size)));
                 continue;
             }
             let get = self.expr(&a.value);
-            pre.push(ArgBind::scalar(get, self.store_val(&target)));
+            pre.push(self.scalar_pre(get, &target, direct));
         }
         (pre, post)
+    }
+
+    fn scalar_pre(&self, get: CE, target: &Place, direct: bool) -> Pre {
+        if direct {
+            Pre::Direct(self.store(target, get))
+        } else {
+            Pre::Split(ArgBind::scalar(get, self.store_val(target)))
+        }
     }
 
     /// A writer for a place that takes an already evaluated value.
@@ -632,6 +655,28 @@ impl Cx<'_> {
         }
         Some(self.place(e)?.addr())
     }
+}
+
+/// An argument binding: written directly into the callee (`vm.callee` set), or evaluated
+/// first and written later.
+pub(crate) enum Pre {
+    /// Evaluate in the caller and store relative to `vm.callee`.
+    Direct(StmtFn),
+    /// Evaluate, keep, store.
+    Split(ArgBind),
+}
+
+/// Separates direct binders from split ones.
+pub(crate) fn split_pre(pre: Vec<Pre>) -> (Vec<StmtFn>, Vec<ArgBind>) {
+    let mut d = Vec::new();
+    let mut s = Vec::new();
+    for p in pre {
+        match p {
+            Pre::Direct(f) => d.push(f),
+            Pre::Split(b) => s.push(b),
+        }
+    }
+    (d, s)
 }
 
 /// How one argument is passed.
@@ -836,7 +881,7 @@ fn binary(op: BinOp, a: CE, b: CE, ta: &Ty, tb: &Ty, ty: &Ty, span: Span) -> CE 
                         let x = a(vm)?;
                         let y = b(vm)?;
                         if y == 0 {
-                            return Err(Fault::DivisionByZero(span));
+                            return Err(Fault::from(FaultKind::DivisionByZero(span)));
                         }
                         Ok(x.wrapping_div(y))
                     }),
@@ -869,7 +914,7 @@ fn binary(op: BinOp, a: CE, b: CE, ta: &Ty, tb: &Ty, ty: &Ty, span: Span) -> CE 
                     let x = a(vm)?;
                     let y = b(vm)?;
                     if y == 0 {
-                        return Err(Fault::DivisionByZero(span));
+                        return Err(Fault::from(FaultKind::DivisionByZero(span)));
                     }
                     if u64op {
                         return Ok(((x as u64) / (y as u64)) as i64);
@@ -880,7 +925,7 @@ fn binary(op: BinOp, a: CE, b: CE, ta: &Ty, tb: &Ty, ty: &Ty, span: Span) -> CE 
                     let x = a(vm)?;
                     let y = b(vm)?;
                     if y == 0 {
-                        return Err(Fault::DivisionByZero(span));
+                        return Err(Fault::from(FaultKind::DivisionByZero(span)));
                     }
                     if u64op {
                         return Ok(((x as u64) % (y as u64)) as i64);

@@ -86,7 +86,10 @@ pub fn compile(checked: Checked) -> Result<Compiled, Vec<Diagnostic>> {
                 Some(Item::Pou(pou)) => cx.block(&pou.body),
                 _ => Vec::new(),
             };
-            let body: StmtFn = Box::new(move |vm| stmt::run_block(&body, vm));
+            let body: StmtFn = match crate::stdlib::timers::native_body(p) {
+                Some(native) => native,
+                None => Box::new(move |vm| stmt::run_block(&body, vm)),
+            };
             pous.push(CompiledPou { body, init });
         }
     }

@@ -2,9 +2,9 @@
 
 use super::expr::konst_i;
 use super::{Cx, IFn, CE};
-use crate::check::{PouId, Res, Ty};
+use crate::check::{PouId, Res};
 use crate::syntax::*;
-use crate::vm::{Fault, Flow, StmtFn, Vm};
+use crate::vm::{Fault, FaultKind, Flow, StmtFn, Vm};
 
 /// Runs statements in order until one does not finish normally.
 #[inline]
@@ -21,7 +21,7 @@ pub(crate) fn run_block(block: &[StmtFn], vm: &mut Vm) -> Result<Flow, Fault> {
 #[inline]
 fn tick(vm: &mut Vm, span: Span) -> Result<(), Fault> {
     if vm.budget == 0 {
-        return Err(Fault::LoopBudget(span));
+        return Err(Fault::from(FaultKind::LoopBudget(span)));
     }
     vm.budget -= 1;
     Ok(())
@@ -285,37 +285,26 @@ impl Cx<'_> {
             self.error(callee.span, "cannot compile this instance");
             return nop();
         };
-        let _ = Ty::Void;
         let addr = inst.addr();
-        let (pre, post) = self.bind_args(&pou, args);
-        let id = pid.0;
         let needs_temps = args.iter().any(|a| super::expr::contains_call(&a.value));
+        let (pre, post) = self.bind_args(&pou, args, !needs_temps);
+        let (direct, split) = super::expr::split_pre(pre);
+        let id = pid.0;
         Box::new(move |vm| {
             let base = addr(vm)?;
             let saved = vm.callee;
-            if needs_temps {
-                let mut vals = Vec::with_capacity(pre.len());
-                for (get, _) in &pre {
-                    vals.push(get(vm)?);
-                }
-                vm.callee = base;
-                for ((_, put), v) in pre.iter().zip(vals) {
-                    if let Err(e) = put(vm, v) {
-                        vm.callee = saved;
-                        return Err(e);
-                    }
-                }
-            } else {
-                for (get, put) in &pre {
-                    let v = get(vm)?;
-                    vm.callee = base;
-                    let r = put(vm, v);
-                    vm.callee = saved;
-                    r?;
-                }
+            let mut vals = Vec::new();
+            for (get, _) in &split {
+                vals.push(get(vm)?);
             }
             vm.callee = base;
             let r = (|| {
+                for b in &direct {
+                    b(vm)?;
+                }
+                for ((_, put), v) in split.iter().zip(vals) {
+                    put(vm, v)?;
+                }
                 vm.call(id, base)?;
                 vm.callee = base;
                 for p in &post {

@@ -19,6 +19,7 @@ pub mod conv;
 pub mod numeric;
 pub mod string;
 pub mod time;
+pub mod timers;
 
 use crate::check::Ty;
 

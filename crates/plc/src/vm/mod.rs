@@ -25,9 +25,9 @@ use crate::check::Size;
 use crate::syntax::Span;
 use std::rc::Rc;
 
-/// A run-time fault. Stops the task that raised it.
+/// What went wrong at run time.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum Fault {
+pub enum FaultKind {
     /// Integer division or MOD by zero.
     #[error("division by zero")]
     DivisionByZero(Span),
@@ -51,13 +51,36 @@ pub enum Fault {
     Memory,
 }
 
+/// A run-time fault; stops the task that raised it. Boxed so that `Result<i64, Fault>`
+/// stays two words and is returned in registers on the hot path.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{0}")]
+pub struct Fault(pub Box<FaultKind>);
+
+impl From<FaultKind> for Fault {
+    fn from(k: FaultKind) -> Self {
+        Fault(Box::new(k))
+    }
+}
+
 impl Fault {
+    /// Internal memory error.
+    #[cold]
+    pub fn memory() -> Fault {
+        FaultKind::Memory.into()
+    }
+
+    /// What went wrong.
+    pub fn kind(&self) -> &FaultKind {
+        &self.0
+    }
+
     /// Source position, if known.
     pub fn span(&self) -> Option<Span> {
-        match self {
-            Fault::DivisionByZero(s) | Fault::LoopBudget(s) => Some(*s),
-            Fault::IndexOutOfRange { span, .. } => Some(*span),
-            Fault::Memory => None,
+        match &*self.0 {
+            FaultKind::DivisionByZero(s) | FaultKind::LoopBudget(s) => Some(*s),
+            FaultKind::IndexOutOfRange { span, .. } => Some(*span),
+            FaultKind::Memory => None,
         }
     }
 }
@@ -162,39 +185,42 @@ impl Vm {
     /// Integer cell.
     #[inline]
     pub fn geti(&self, a: usize) -> Result<i64, Fault> {
-        self.ints.get(a).copied().ok_or(Fault::Memory)
+        self.ints.get(a).copied().ok_or_else(Fault::memory)
     }
     /// Sets an integer cell.
     #[inline]
     pub fn seti(&mut self, a: usize, v: i64) -> Result<(), Fault> {
-        *self.ints.get_mut(a).ok_or(Fault::Memory)? = v;
+        *self.ints.get_mut(a).ok_or_else(Fault::memory)? = v;
         Ok(())
     }
     /// Real cell.
     #[inline]
     pub fn getr(&self, a: usize) -> Result<f64, Fault> {
-        self.reals.get(a).copied().ok_or(Fault::Memory)
+        self.reals.get(a).copied().ok_or_else(Fault::memory)
     }
     /// Sets a real cell.
     #[inline]
     pub fn setr(&mut self, a: usize, v: f64) -> Result<(), Fault> {
-        *self.reals.get_mut(a).ok_or(Fault::Memory)? = v;
+        *self.reals.get_mut(a).ok_or_else(Fault::memory)? = v;
         Ok(())
     }
     /// String cell (cloned).
     #[inline]
     pub fn gets(&self, a: usize) -> Result<String, Fault> {
-        self.strs.get(a).cloned().ok_or(Fault::Memory)
+        self.strs.get(a).cloned().ok_or_else(Fault::memory)
     }
     /// String cell by reference.
     #[inline]
     pub fn gets_ref(&self, a: usize) -> Result<&str, Fault> {
-        self.strs.get(a).map(String::as_str).ok_or(Fault::Memory)
+        self.strs
+            .get(a)
+            .map(String::as_str)
+            .ok_or_else(Fault::memory)
     }
     /// Sets a string cell.
     #[inline]
     pub fn sets(&mut self, a: usize, v: String) -> Result<(), Fault> {
-        *self.strs.get_mut(a).ok_or(Fault::Memory)? = v;
+        *self.strs.get_mut(a).ok_or_else(Fault::memory)? = v;
         Ok(())
     }
 
@@ -216,7 +242,7 @@ impl Vm {
     pub fn call(&mut self, pou: usize, frame: Size) -> Result<(), Fault> {
         let code = Rc::clone(&self.code);
         let Some(p) = code.pous.get(pou) else {
-            return Err(Fault::Memory);
+            return Err(Fault::memory());
         };
         let saved = std::mem::replace(&mut self.frame, frame);
         let r = (p.body)(self);
@@ -228,7 +254,7 @@ impl Vm {
     pub fn init(&mut self, pou: usize, frame: Size) -> Result<(), Fault> {
         let code = Rc::clone(&self.code);
         let Some(p) = code.pous.get(pou) else {
-            return Err(Fault::Memory);
+            return Err(Fault::memory());
         };
         let saved = std::mem::replace(&mut self.frame, frame);
         let r = (p.init)(self);
@@ -289,7 +315,7 @@ fn copy_within<T: Copy>(v: &mut [T], src: usize, dst: usize, n: usize) -> Result
     }
     let len = v.len();
     if src.checked_add(n).is_none_or(|e| e > len) || dst.checked_add(n).is_none_or(|e| e > len) {
-        return Err(Fault::Memory);
+        return Err(Fault::memory());
     }
     v.copy_within(src..src + n, dst);
     Ok(())
