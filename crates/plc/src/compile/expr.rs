@@ -25,6 +25,35 @@ pub(crate) struct Place {
     pub(crate) ty: Ty,
     pub(crate) bit: Option<u32>,
     pub(crate) direct: Option<DirectAddress>,
+    /// The single run-time index of a one-index access on a static base (fast path).
+    pub(crate) index1: Option<Rc<Index1>>,
+}
+
+/// One run-time array index: `cell = base + off + (value - lo) * stride` per lane.
+pub(crate) struct Index1 {
+    pub(crate) f: IFn,
+    pub(crate) lo: i64,
+    pub(crate) hi: i64,
+    pub(crate) stride: Size,
+    pub(crate) span: Span,
+}
+
+impl Index1 {
+    /// Offset (in elements times stride) for the current index value.
+    #[inline(always)]
+    pub(crate) fn eval(&self, vm: &mut Vm) -> Result<usize, Fault> {
+        let v = (self.f)(vm)?;
+        if v < self.lo || v > self.hi {
+            return Err(FaultKind::IndexOutOfRange {
+                span: self.span,
+                index: v,
+                lo: self.lo,
+                hi: self.hi,
+            }
+            .into());
+        }
+        Ok((v - self.lo) as usize)
+    }
 }
 
 impl Place {
@@ -36,6 +65,7 @@ impl Place {
             ty,
             bit: None,
             direct: None,
+            index1: None,
         }
     }
     pub(crate) fn abs(off: Size, ty: Ty) -> Place {
@@ -177,20 +207,20 @@ impl Cx<'_> {
                 if !dyn_parts.is_empty() {
                     let es = a.elem_size;
                     let prev = bp.dynamic.take();
+                    bp.index1 = None;
                     let d: AddrFn = if dyn_parts.len() == 1 && prev.is_none() {
                         let (f, lo, hi, stride, span) = dyn_parts.pop()?;
+                        let ix = Rc::new(Index1 {
+                            f,
+                            lo,
+                            hi,
+                            stride: es.times(stride),
+                            span,
+                        });
+                        bp.index1 = Some(Rc::clone(&ix));
                         Rc::new(move |vm: &mut Vm| {
-                            let v = f(vm)?;
-                            if v < lo || v > hi {
-                                return Err(FaultKind::IndexOutOfRange {
-                                    span,
-                                    index: v,
-                                    lo,
-                                    hi,
-                                }
-                                .into());
-                            }
-                            Ok(es.times(((v - lo) as usize) * stride))
+                            let k = ix.eval(vm)?;
+                            Ok(ix.stride.times(k))
                         })
                     } else {
                         Rc::new(move |vm: &mut Vm| {
@@ -239,6 +269,22 @@ impl Cx<'_> {
             }));
         }
         let off = p.off;
+        if let (Some(ix), Some(Lane::Int)) = (p.index1.clone(), p.ty.lane()) {
+            return CE::I(match p.base {
+                Base::Frame => Box::new(move |vm| {
+                    let k = ix.eval(vm)?;
+                    vm.geti(vm.frame.i + off.i + k * ix.stride.i)
+                }),
+                Base::Abs => Box::new(move |vm| {
+                    let k = ix.eval(vm)?;
+                    vm.geti(off.i + k * ix.stride.i)
+                }),
+                Base::Callee => Box::new(move |vm| {
+                    let k = ix.eval(vm)?;
+                    vm.geti(vm.callee.i + off.i + k * ix.stride.i)
+                }),
+            });
+        }
         match (p.ty.lane(), p.base, p.dynamic.is_some()) {
             (Some(Lane::Int), Base::Frame, false) => {
                 CE::I(Box::new(move |vm| vm.geti(vm.frame.i + off.i)))
@@ -299,6 +345,20 @@ impl Cx<'_> {
                 let old = vm.geti(at.i)?;
                 let m = 1i64 << bit;
                 vm.seti(at.i, if x != 0 { old | m } else { old & !m })?;
+                Ok(Flow::Normal)
+            });
+        }
+        if let (Some(ix), CE::I(f), Base::Frame | Base::Abs) = (p.index1.clone(), &v, p.base) {
+            let _ = f;
+            let CE::I(f) = v else {
+                return Box::new(|_| Ok(Flow::Normal));
+            };
+            let frame = p.base == Base::Frame;
+            return Box::new(move |vm| {
+                let x = f(vm)?;
+                let k = ix.eval(vm)?;
+                let b = if frame { vm.frame.i } else { 0 };
+                vm.seti(b + off.i + k * ix.stride.i, x)?;
                 Ok(Flow::Normal)
             });
         }
@@ -406,6 +466,23 @@ impl Cx<'_> {
             ExprKind::Binary(op, a, b) => {
                 let ta = self.c.final_ty(a.id);
                 let tb = self.c.final_ty(b.id);
+                let timey = |t: &Ty| matches!(t, Ty::Time | Ty::LTime | Ty::Tod | Ty::Dt | Ty::Date);
+                let fusable = matches!(
+                    op,
+                    BinOp::Add | BinOp::Sub | BinOp::Mul | BinOp::Lt | BinOp::Gt | BinOp::Le
+                        | BinOp::Ge | BinOp::Eq | BinOp::Ne | BinOp::Xor
+                ) && ta.lane() == Some(Lane::Int)
+                    && tb.lane() == Some(Lane::Int)
+                    && !timey(&ta)
+                    && !timey(&tb)
+                    && (self.simple_int(a).is_some() || self.simple_int(b).is_some());
+                if fusable {
+                    if let (Some(sa), Some(sb)) = (self.int_src(a), self.int_src(b)) {
+                        if let Some(f) = super::fused::int_binary(*op, sa, sb, &ta, &ty) {
+                            return CE::I(f);
+                        }
+                    }
+                }
                 let va = self.expr(a);
                 let vb = self.expr(b);
                 binary(*op, va, vb, &ta, &tb, &ty, e.span)

@@ -15,6 +15,7 @@
 
 mod builtins;
 mod expr;
+mod fused;
 mod stmt;
 
 use crate::check::{Checked, PouId, Size, Ty};

@@ -30,6 +30,38 @@ fn tick(vm: &mut Vm, span: Span) -> Result<(), Fault> {
 /// Label ranges and body of a CASE arm.
 type CaseArm = (Vec<(i64, i64)>, Vec<StmtFn>);
 
+/// Where a FOR control variable lives.
+enum Cell {
+    Frame(usize),
+    Abs(usize),
+    Dyn(super::AddrFn),
+}
+
+impl Cell {
+    #[inline(always)]
+    fn get(&self, vm: &mut Vm) -> Result<i64, Fault> {
+        match self {
+            Cell::Frame(o) => vm.geti(vm.frame.i + o),
+            Cell::Abs(o) => vm.geti(*o),
+            Cell::Dyn(a) => {
+                let at = a(vm)?;
+                vm.geti(at.i)
+            }
+        }
+    }
+    #[inline(always)]
+    fn set(&self, vm: &mut Vm, v: i64) -> Result<(), Fault> {
+        match self {
+            Cell::Frame(o) => vm.seti(vm.frame.i + o, v),
+            Cell::Abs(o) => vm.seti(*o, v),
+            Cell::Dyn(a) => {
+                let at = a(vm)?;
+                vm.seti(at.i, v)
+            }
+        }
+    }
+}
+
 fn nop() -> StmtFn {
     Box::new(|_| Ok(Flow::Normal))
 }
@@ -149,10 +181,6 @@ impl Cx<'_> {
                     return nop();
                 };
                 let vt = p.ty.clone();
-                let load = match self.load(&p) {
-                    CE::I(f) => f,
-                    _ => konst_i(0),
-                };
                 let from_v = self.expr(from);
                 let set_from = self.store(&p, from_v);
                 let to = self.cond(to);
@@ -160,14 +188,22 @@ impl Cx<'_> {
                     .as_ref()
                     .map(|b| self.cond(b))
                     .unwrap_or_else(|| konst_i(1));
-                let a = p.addr();
+                let cell = match (p.base, &p.dynamic, p.bit, p.direct) {
+                    (super::expr::Base::Frame, None, None, None) if p.index1.is_none() => {
+                        Cell::Frame(p.off.i)
+                    }
+                    (super::expr::Base::Abs, None, None, None) if p.index1.is_none() => {
+                        Cell::Abs(p.off.i)
+                    }
+                    _ => Cell::Dyn(p.addr()),
+                };
                 let body = self.block(body);
                 let span = s.span;
                 Box::new(move |vm| {
                     set_from(vm)?;
                     let end = to(vm)?;
                     let step = by(vm)?;
-                    let mut cur = load(vm)?;
+                    let mut cur = cell.get(vm)?;
                     loop {
                         if (step >= 0 && cur > end) || (step < 0 && cur < end) {
                             break;
@@ -179,9 +215,8 @@ impl Cx<'_> {
                             _ => {}
                         }
                         // the body may have changed the variable
-                        let at = a(vm)?;
-                        cur = vm.geti(at.i)?.saturating_add(step);
-                        vm.seti(at.i, vt.wrap(cur))?;
+                        cur = cell.get(vm)?.saturating_add(step);
+                        cell.set(vm, vt.wrap(cur))?;
                     }
                     Ok(Flow::Normal)
                 })

@@ -1,0 +1,147 @@
+//! Fused closures for the hot paths: integer operations whose operands are constants or
+//! statically addressed variables read their operands inline instead of through another
+//! closure, and one-index array accesses compute their address inline.
+
+use super::{Cx, IFn};
+use crate::check::{Lane, Res, Ty};
+use crate::syntax::{BinOp, Expr, ExprKind, Literal};
+use crate::vm::{Fault, Vm};
+
+/// An operand read without a closure call.
+#[derive(Clone, Copy)]
+pub(crate) enum Opnd {
+    /// Constant.
+    K(i64),
+    /// Integer cell relative to the frame.
+    F(usize),
+    /// Absolute integer cell.
+    A(usize),
+}
+
+impl Opnd {
+    #[inline(always)]
+    pub(crate) fn get(self, vm: &Vm) -> Result<i64, Fault> {
+        match self {
+            Opnd::K(v) => Ok(v),
+            Opnd::F(o) => vm.geti(vm.frame.i + o),
+            Opnd::A(o) => vm.geti(o),
+        }
+    }
+}
+
+/// A compiled integer operand: inline or a closure.
+pub(crate) enum Src {
+    /// Inline.
+    O(Opnd),
+    /// Closure.
+    E(IFn),
+}
+
+impl Cx<'_> {
+    /// The expression as an inline operand, if it is an integer constant or a plain
+    /// integer-lane variable whose implicit conversion (if any) does not change the value.
+    pub(crate) fn simple_int(&self, e: &Expr) -> Option<Opnd> {
+        let nat = self.c.ty(e.id);
+        let fin = self.c.final_ty(e.id);
+        if nat.lane() != Some(Lane::Int) || fin.lane() != Some(Lane::Int) {
+            return None;
+        }
+        if nat != fin {
+            let same = (nat.is_int() || nat.is_bits() || nat == Ty::Bool)
+                && (fin.is_int() || fin.is_bits())
+                && nat.converts_to(&fin);
+            if !same {
+                return None;
+            }
+        }
+        match &e.kind {
+            ExprKind::Literal(Literal::Int(v, _)) => i64::try_from(*v).ok().map(Opnd::K),
+            ExprKind::Literal(Literal::Bool(b)) => Some(Opnd::K(i64::from(*b))),
+            ExprKind::Name { .. } => match self.c.res.get(&e.id)? {
+                Res::Local(i) => {
+                    let v = self.c.pou(self.pou?)?.vars.get(*i)?;
+                    Some(Opnd::F(v.offset.i))
+                }
+                Res::Global(g) => Some(Opnd::A(self.c.globals.get(*g)?.offset.i)),
+                Res::EnumValue(v) => Some(Opnd::K(*v)),
+                _ => None,
+            },
+            _ => None,
+        }
+    }
+
+    /// An integer operand: inline when simple, else compiled.
+    pub(crate) fn int_src(&mut self, e: &Expr) -> Option<Src> {
+        if let Some(o) = self.simple_int(e) {
+            return Some(Src::O(o));
+        }
+        match self.expr(e) {
+            super::CE::I(f) => Some(Src::E(f)),
+            _ => None,
+        }
+    }
+}
+
+macro_rules! fuse {
+    ($a:expr, $b:expr, |$x:ident, $y:ident| $body:expr) => {
+        match ($a, $b) {
+            (Src::O(p), Src::O(q)) => Box::new(move |vm: &mut Vm| {
+                let $x = p.get(vm)?;
+                let $y = q.get(vm)?;
+                Ok($body)
+            }) as IFn,
+            (Src::E(f), Src::O(q)) => Box::new(move |vm: &mut Vm| {
+                let $x = f(vm)?;
+                let $y = q.get(vm)?;
+                Ok($body)
+            }) as IFn,
+            (Src::O(p), Src::E(g)) => Box::new(move |vm: &mut Vm| {
+                let $x = p.get(vm)?;
+                let $y = g(vm)?;
+                Ok($body)
+            }) as IFn,
+            (Src::E(f), Src::E(g)) => Box::new(move |vm: &mut Vm| {
+                let $x = f(vm)?;
+                let $y = g(vm)?;
+                Ok($body)
+            }) as IFn,
+        }
+    };
+}
+
+/// A fused integer operation, for operators without faults and non-time operand types.
+/// `operand` is the (common) operand type, `result` the result type.
+pub(crate) fn int_binary(op: BinOp, a: Src, b: Src, operand: &Ty, result: &Ty) -> Option<IFn> {
+    use BinOp::*;
+    let u64cmp = matches!(operand, Ty::ULInt | Ty::LWord);
+    let t = result.clone();
+    Some(match op {
+        Add => match t {
+            Ty::DInt => fuse!(a, b, |x, y| i64::from(x.wrapping_add(y) as i32)),
+            Ty::Int => fuse!(a, b, |x, y| i64::from(x.wrapping_add(y) as i16)),
+            Ty::LInt | Ty::ULInt | Ty::LWord => fuse!(a, b, |x, y| x.wrapping_add(y)),
+            _ => fuse!(a, b, |x, y| t.wrap(x.wrapping_add(y))),
+        },
+        Sub => match t {
+            Ty::DInt => fuse!(a, b, |x, y| i64::from(x.wrapping_sub(y) as i32)),
+            Ty::Int => fuse!(a, b, |x, y| i64::from(x.wrapping_sub(y) as i16)),
+            _ => fuse!(a, b, |x, y| t.wrap(x.wrapping_sub(y))),
+        },
+        Mul => match t {
+            Ty::DInt => fuse!(a, b, |x, y| i64::from(x.wrapping_mul(y) as i32)),
+            _ => fuse!(a, b, |x, y| t.wrap(x.wrapping_mul(y))),
+        },
+        Lt if u64cmp => fuse!(a, b, |x, y| i64::from((x as u64) < (y as u64))),
+        Gt if u64cmp => fuse!(a, b, |x, y| i64::from((x as u64) > (y as u64))),
+        Le if u64cmp => fuse!(a, b, |x, y| i64::from((x as u64) <= (y as u64))),
+        Ge if u64cmp => fuse!(a, b, |x, y| i64::from((x as u64) >= (y as u64))),
+        Lt => fuse!(a, b, |x, y| i64::from(x < y)),
+        Gt => fuse!(a, b, |x, y| i64::from(x > y)),
+        Le => fuse!(a, b, |x, y| i64::from(x <= y)),
+        Ge => fuse!(a, b, |x, y| i64::from(x >= y)),
+        Eq => fuse!(a, b, |x, y| i64::from(x == y)),
+        Ne => fuse!(a, b, |x, y| i64::from(x != y)),
+        Xor => fuse!(a, b, |x, y| x ^ y),
+        _ => return None,
+    })
+}
