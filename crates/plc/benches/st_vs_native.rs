@@ -139,6 +139,17 @@ fn time_native(mut f: impl FnMut() -> i64, scans: u32) -> f64 {
 }
 
 fn main() {
+    if let Ok(only) = std::env::var("ST_BENCH_ONLY") {
+        let (src, scans) = match only.as_str() {
+            "ton" => (TONS, 20000),
+            "sort" => (SORT, 500),
+            "real" => (REAL_LOOP, 200),
+            "string" => (STRINGS, 20000),
+            _ => (INT_LOOP, 200),
+        };
+        println!("{:.1}us", time_st(src, scans) * 1e6);
+        return;
+    }
     let mut ts = vec![Ton::default(); 1000];
     let mut now = 0i64;
     let rows: Vec<(&str, f64, f64)> = vec![

@@ -483,6 +483,18 @@ impl Cx<'_> {
                         }
                     }
                 }
+                let real_fusable = ta.is_real()
+                    && ta == tb
+                    && !matches!(op, BinOp::Pow | BinOp::Mod | BinOp::And | BinOp::Or | BinOp::Xor)
+                    && (self.simple_real(a).is_some() || self.simple_real(b).is_some());
+                if real_fusable {
+                    if let (Some(sa), Some(sb)) = (self.real_src(a), self.real_src(b)) {
+                        let single = if ty.is_real() { ty == Ty::Real } else { ta == Ty::Real };
+                        if let Some(f) = super::fused::real_binary(*op, sa, sb, single) {
+                            return f;
+                        }
+                    }
+                }
                 let va = self.expr(a);
                 let vb = self.expr(b);
                 binary(*op, va, vb, &ta, &tb, &ty, e.span)
@@ -686,10 +698,25 @@ impl Cx<'_> {
                 pre.push(Pre::Split(ArgBind::agg(src, ta, size)));
                 continue;
             }
-            let get = self.expr(&a.value);
-            pre.push(self.scalar_pre(get, &target, direct));
+            pre.push(self.arg_pre(&a.value, &target, direct));
         }
         (pre, post)
+    }
+
+    /// Stores an argument expression: inline operand when simple.
+    fn arg_pre(&mut self, e: &Expr, target: &Place, direct: bool) -> Pre {
+        if direct && target.base == Base::Callee && target.dynamic.is_none() && target.bit.is_none() {
+            if let Some(o) = self.simple_int(e) {
+                let off = target.off.i;
+                return Pre::Direct(Box::new(move |vm| {
+                    let x = o.get(vm)?;
+                    vm.seti(vm.callee.i + off, x)?;
+                    Ok(Flow::Normal)
+                }));
+            }
+        }
+        let get = self.expr(e);
+        self.scalar_pre(get, target, direct)
     }
 
     fn scalar_pre(&self, get: CE, target: &Place, direct: bool) -> Pre {

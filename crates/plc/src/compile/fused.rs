@@ -57,6 +57,10 @@ impl Cx<'_> {
         match &e.kind {
             ExprKind::Literal(Literal::Int(v, _)) => i64::try_from(*v).ok().map(Opnd::K),
             ExprKind::Literal(Literal::Bool(b)) => Some(Opnd::K(i64::from(*b))),
+            ExprKind::Literal(Literal::Time(v, _)) => i64::try_from(*v).ok().map(Opnd::K),
+            ExprKind::Literal(Literal::Date(v) | Literal::Tod(v) | Literal::Dt(v)) => {
+                Some(Opnd::K(*v))
+            }
             ExprKind::Name { .. } => match self.c.res.get(&e.id)? {
                 Res::Local(i) => {
                     let v = self.c.pou(self.pou?)?.vars.get(*i)?;
@@ -142,6 +146,119 @@ pub(crate) fn int_binary(op: BinOp, a: Src, b: Src, operand: &Ty, result: &Ty) -
         Eq => fuse!(a, b, |x, y| i64::from(x == y)),
         Ne => fuse!(a, b, |x, y| i64::from(x != y)),
         Xor => fuse!(a, b, |x, y| x ^ y),
+        _ => return None,
+    })
+}
+
+/// A real operand read without a closure call.
+#[derive(Clone, Copy)]
+pub(crate) enum ROpnd {
+    /// Constant.
+    K(f64),
+    /// Real cell relative to the frame.
+    F(usize),
+    /// Absolute real cell.
+    A(usize),
+}
+
+impl ROpnd {
+    #[inline(always)]
+    pub(crate) fn get(self, vm: &Vm) -> Result<f64, Fault> {
+        match self {
+            ROpnd::K(v) => Ok(v),
+            ROpnd::F(o) => vm.getr(vm.frame.r + o),
+            ROpnd::A(o) => vm.getr(o),
+        }
+    }
+}
+
+/// A compiled real operand.
+pub(crate) enum RSrc {
+    /// Inline.
+    O(ROpnd),
+    /// Closure.
+    E(super::RFn),
+}
+
+impl Cx<'_> {
+    /// The expression as an inline real operand (same type, no conversion).
+    pub(crate) fn simple_real(&self, e: &Expr) -> Option<ROpnd> {
+        let nat = self.c.ty(e.id);
+        let fin = self.c.final_ty(e.id);
+        if !nat.is_real() || nat != fin {
+            return None;
+        }
+        match &e.kind {
+            ExprKind::Literal(Literal::Real(v, _)) => {
+                Some(ROpnd::K(crate::stdlib::conv::fit_real(*v, &fin)))
+            }
+            ExprKind::Name { .. } => match self.c.res.get(&e.id)? {
+                Res::Local(i) => {
+                    let v = self.c.pou(self.pou?)?.vars.get(*i)?;
+                    Some(ROpnd::F(v.offset.r))
+                }
+                Res::Global(g) => Some(ROpnd::A(self.c.globals.get(*g)?.offset.r)),
+                _ => None,
+            },
+            _ => None,
+        }
+    }
+
+    /// A real operand: inline when simple, else compiled.
+    pub(crate) fn real_src(&mut self, e: &Expr) -> Option<RSrc> {
+        if let Some(o) = self.simple_real(e) {
+            return Some(RSrc::O(o));
+        }
+        match self.expr(e) {
+            super::CE::R(f) => Some(RSrc::E(f)),
+            _ => None,
+        }
+    }
+}
+
+macro_rules! rfuse {
+    ($a:expr, $b:expr, $ret:ty, |$x:ident, $y:ident| $body:expr) => {
+        match ($a, $b) {
+            (RSrc::O(p), RSrc::O(q)) => Box::new(move |vm: &mut Vm| {
+                let $x = p.get(vm)?;
+                let $y = q.get(vm)?;
+                Ok($body)
+            }) as $ret,
+            (RSrc::E(f), RSrc::O(q)) => Box::new(move |vm: &mut Vm| {
+                let $x = f(vm)?;
+                let $y = q.get(vm)?;
+                Ok($body)
+            }) as $ret,
+            (RSrc::O(p), RSrc::E(g)) => Box::new(move |vm: &mut Vm| {
+                let $x = p.get(vm)?;
+                let $y = g(vm)?;
+                Ok($body)
+            }) as $ret,
+            (RSrc::E(f), RSrc::E(g)) => Box::new(move |vm: &mut Vm| {
+                let $x = f(vm)?;
+                let $y = g(vm)?;
+                Ok($body)
+            }) as $ret,
+        }
+    };
+}
+
+/// A fused real operation: arithmetic gives a real, comparisons a BOOL.
+pub(crate) fn real_binary(op: BinOp, a: RSrc, b: RSrc, single: bool) -> Option<super::CE> {
+    use super::{RFn, CE};
+    use BinOp::*;
+    let fit = move |x: f64| if single { f64::from(x as f32) } else { x };
+    Some(match op {
+        Add => CE::R(rfuse!(a, b, RFn, |x, y| fit(x + y))),
+        Sub => CE::R(rfuse!(a, b, RFn, |x, y| fit(x - y))),
+        Mul => CE::R(rfuse!(a, b, RFn, |x, y| fit(x * y))),
+        Div => CE::R(rfuse!(a, b, RFn, |x, y| fit(x / y))),
+        Lt => CE::I(rfuse!(a, b, IFn, |x, y| i64::from(x < y))),
+        Gt => CE::I(rfuse!(a, b, IFn, |x, y| i64::from(x > y))),
+        Le => CE::I(rfuse!(a, b, IFn, |x, y| i64::from(x <= y))),
+        Ge => CE::I(rfuse!(a, b, IFn, |x, y| i64::from(x >= y))),
+        Eq => CE::I(rfuse!(a, b, IFn, |x, y| i64::from(x == y))),
+        Ne => CE::I(rfuse!(a, b, IFn, |x, y| i64::from(x != y))),
         _ => return None,
     })
 }

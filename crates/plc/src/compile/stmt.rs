@@ -102,6 +102,9 @@ impl Cx<'_> {
                         Ok(Flow::Normal)
                     });
                 }
+                if let Some(append) = self.concat_append(target, value) {
+                    return append;
+                }
                 let Some(p) = self.place(target) else {
                     self.error(target.span, "cannot compile this assignment target");
                     return nop();
@@ -261,6 +264,57 @@ impl Cx<'_> {
             StmtKind::Return => Box::new(|_| Ok(Flow::Return)),
             StmtKind::Empty => nop(),
         }
+    }
+
+    /// `s := CONCAT(s, a, b, ...)` appends in place instead of copying `s`.
+    fn concat_append(&mut self, target: &Expr, value: &Expr) -> Option<StmtFn> {
+        let ExprKind::Call(_, args) = &value.kind else {
+            return None;
+        };
+        if !matches!(self.c.res.get(&value.id), Some(Res::CallBuiltin(crate::stdlib::Builtin::Concat))) {
+            return None;
+        }
+        let first = args.first()?;
+        let (ExprKind::Name { .. }, ExprKind::Name { .. }) = (&target.kind, &first.value.kind) else {
+            return None;
+        };
+        let same = self.c.res.get(&target.id)? == self.c.res.get(&first.value.id)?;
+        if !same || first.name.is_some() {
+            return None;
+        }
+        let p = self.place(target)?;
+        let max = match p.ty {
+            crate::check::Ty::String(n) | crate::check::Ty::WString(n) => n as usize,
+            _ => return None,
+        };
+        let rest: Vec<super::SFn> = args
+            .iter()
+            .skip(1)
+            .map(|a| match self.expr(&a.value) {
+                CE::S(f) => Some(f),
+                _ => None,
+            })
+            .collect::<Option<_>>()?;
+        let addr = p.addr();
+        Some(Box::new(move |vm| {
+            let mut parts = Vec::with_capacity(rest.len());
+            for f in &rest {
+                parts.push(f(vm)?);
+            }
+            let at = addr(vm)?;
+            let cell = vm.strs.get_mut(at.s).ok_or_else(Fault::memory)?;
+            let mut count = cell.chars().count();
+            for part in parts {
+                for ch in part.chars() {
+                    if count >= max {
+                        break;
+                    }
+                    cell.push(ch);
+                    count += 1;
+                }
+            }
+            Ok(Flow::Normal)
+        }))
     }
 
     /// Value of a constant CASE label.

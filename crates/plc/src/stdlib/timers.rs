@@ -8,7 +8,7 @@ use crate::check::PouInfo;
 use crate::vm::{Fault, Flow, StmtFn, Vm};
 
 fn off(pou: &PouInfo, name: &str) -> Option<usize> {
-    pou.var(name).map(|(_, v)| v.offset.i)
+    pou.var(&name.to_uppercase()).map(|(_, v)| v.offset.i)
 }
 
 #[inline]

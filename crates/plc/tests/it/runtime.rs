@@ -360,3 +360,13 @@ impl WithMono for ClockReading {
         self
     }
 }
+
+#[test]
+fn standard_timers_have_native_bodies() {
+    let (_, r) = plc::build(&[]);
+    let c = r.unwrap();
+    for name in ["TON", "TOF", "TP", "R_TRIG", "F_TRIG"] {
+        let id = c.checked.pou_index[name];
+        assert!(plc::stdlib::timers::native_body(&c.checked.pous[id.0]).is_some(), "{name}");
+    }
+}
