@@ -29,9 +29,17 @@ pub(crate) struct Place {
     pub(crate) index1: Option<Rc<Index1>>,
 }
 
+/// How the index value is computed.
+pub(crate) enum IdxSrc {
+    /// `var + k` (or a constant), wrapped to the index expression's type.
+    Inline(super::fused::Opnd, i64, Ty),
+    /// Any expression.
+    Expr(IFn),
+}
+
 /// One run-time array index: `cell = base + off + (value - lo) * stride` per lane.
 pub(crate) struct Index1 {
-    pub(crate) f: IFn,
+    pub(crate) f: IdxSrc,
     pub(crate) lo: i64,
     pub(crate) hi: i64,
     pub(crate) stride: Size,
@@ -42,7 +50,17 @@ impl Index1 {
     /// Offset (in elements times stride) for the current index value.
     #[inline(always)]
     pub(crate) fn eval(&self, vm: &mut Vm) -> Result<usize, Fault> {
-        let v = (self.f)(vm)?;
+        let v = match &self.f {
+            IdxSrc::Inline(o, k, t) => {
+                let x = o.get(vm)?;
+                if *k == 0 {
+                    x
+                } else {
+                    t.wrap(x.wrapping_add(*k))
+                }
+            }
+            IdxSrc::Expr(f) => f(vm)?,
+        };
         if v < self.lo || v > self.hi {
             return Err(FaultKind::IndexOutOfRange {
                 span: self.span,
@@ -186,6 +204,7 @@ impl Cx<'_> {
                 }
                 let mut static_lin = 0usize;
                 let mut dyn_parts: Vec<IndexPart> = Vec::new();
+                let mut inline_src: Option<IdxSrc> = None;
                 for ((ix, (lo, hi)), stride) in idx.iter().zip(a.dims.iter()).zip(strides.iter()) {
                     if let ExprKind::Literal(Literal::Int(v, _)) = &ix.kind {
                         let v = *v as i64;
@@ -200,6 +219,13 @@ impl Cx<'_> {
                         static_lin += usize::try_from(v - lo).unwrap_or(0) * stride;
                         continue;
                     }
+                    if idx.len() == 1 && bp.dynamic.is_none() {
+                        if let Some(src) = self.inline_index(ix) {
+                            inline_src = Some(src);
+                            dyn_parts.push((konst_i(0), *lo, *hi, *stride, ix.span));
+                            continue;
+                        }
+                    }
                     let CE::I(f) = self.expr(ix) else { return None };
                     dyn_parts.push((f, *lo, *hi, *stride, ix.span));
                 }
@@ -211,7 +237,7 @@ impl Cx<'_> {
                     let d: AddrFn = if dyn_parts.len() == 1 && prev.is_none() {
                         let (f, lo, hi, stride, span) = dyn_parts.pop()?;
                         let ix = Rc::new(Index1 {
-                            f,
+                            f: inline_src.take().unwrap_or(IdxSrc::Expr(f)),
                             lo,
                             hi,
                             stride: es.times(stride),
@@ -252,6 +278,31 @@ impl Cx<'_> {
             }
             _ => None,
         }
+    }
+
+    /// An index of the form `var`, `var + k`, `var - k` or a constant, read inline.
+    fn inline_index(&self, e: &Expr) -> Option<IdxSrc> {
+        let t = self.c.final_ty(e.id);
+        if let Some(o) = self.simple_int(e) {
+            return Some(IdxSrc::Inline(o, 0, t));
+        }
+        if self.c.coerce.contains_key(&e.id) {
+            return None;
+        }
+        let ExprKind::Binary(op @ (BinOp::Add | BinOp::Sub), a, b) = &e.kind else {
+            return None;
+        };
+        let o = self.simple_int(a)?;
+        let ExprKind::Literal(Literal::Int(k, _)) = &b.kind else {
+            return None;
+        };
+        let k = i64::try_from(*k).ok()?;
+        let k = if *op == BinOp::Sub {
+            k.checked_neg()?
+        } else {
+            k
+        };
+        Some(IdxSrc::Inline(o, k, t))
     }
 
     /// Loads a scalar from a place.
@@ -466,11 +517,22 @@ impl Cx<'_> {
             ExprKind::Binary(op, a, b) => {
                 let ta = self.c.final_ty(a.id);
                 let tb = self.c.final_ty(b.id);
-                let timey = |t: &Ty| matches!(t, Ty::Time | Ty::LTime | Ty::Tod | Ty::Dt | Ty::Date);
+                let timey =
+                    |t: &Ty| matches!(t, Ty::Time | Ty::LTime | Ty::Tod | Ty::Dt | Ty::Date);
                 let fusable = matches!(
                     op,
-                    BinOp::Add | BinOp::Sub | BinOp::Mul | BinOp::Lt | BinOp::Gt | BinOp::Le
-                        | BinOp::Ge | BinOp::Eq | BinOp::Ne | BinOp::Xor
+                    BinOp::Add
+                        | BinOp::Div
+                        | BinOp::Mod
+                        | BinOp::Sub
+                        | BinOp::Mul
+                        | BinOp::Lt
+                        | BinOp::Gt
+                        | BinOp::Le
+                        | BinOp::Ge
+                        | BinOp::Eq
+                        | BinOp::Ne
+                        | BinOp::Xor
                 ) && ta.lane() == Some(Lane::Int)
                     && tb.lane() == Some(Lane::Int)
                     && !timey(&ta)
@@ -478,18 +540,25 @@ impl Cx<'_> {
                     && (self.simple_int(a).is_some() || self.simple_int(b).is_some());
                 if fusable {
                     if let (Some(sa), Some(sb)) = (self.int_src(a), self.int_src(b)) {
-                        if let Some(f) = super::fused::int_binary(*op, sa, sb, &ta, &ty) {
+                        if let Some(f) = super::fused::int_binary(*op, sa, sb, &ta, &ty, e.span) {
                             return CE::I(f);
                         }
                     }
                 }
                 let real_fusable = ta.is_real()
                     && ta == tb
-                    && !matches!(op, BinOp::Pow | BinOp::Mod | BinOp::And | BinOp::Or | BinOp::Xor)
+                    && !matches!(
+                        op,
+                        BinOp::Pow | BinOp::Mod | BinOp::And | BinOp::Or | BinOp::Xor
+                    )
                     && (self.simple_real(a).is_some() || self.simple_real(b).is_some());
                 if real_fusable {
                     if let (Some(sa), Some(sb)) = (self.real_src(a), self.real_src(b)) {
-                        let single = if ty.is_real() { ty == Ty::Real } else { ta == Ty::Real };
+                        let single = if ty.is_real() {
+                            ty == Ty::Real
+                        } else {
+                            ta == Ty::Real
+                        };
                         if let Some(f) = super::fused::real_binary(*op, sa, sb, single) {
                             return f;
                         }
@@ -705,7 +774,8 @@ impl Cx<'_> {
 
     /// Stores an argument expression: inline operand when simple.
     fn arg_pre(&mut self, e: &Expr, target: &Place, direct: bool) -> Pre {
-        if direct && target.base == Base::Callee && target.dynamic.is_none() && target.bit.is_none() {
+        if direct && target.base == Base::Callee && target.dynamic.is_none() && target.bit.is_none()
+        {
             if let Some(o) = self.simple_int(e) {
                 let off = target.off.i;
                 return Pre::Direct(Box::new(move |vm| {

@@ -115,11 +115,44 @@ macro_rules! fuse {
 
 /// A fused integer operation, for operators without faults and non-time operand types.
 /// `operand` is the (common) operand type, `result` the result type.
-pub(crate) fn int_binary(op: BinOp, a: Src, b: Src, operand: &Ty, result: &Ty) -> Option<IFn> {
+pub(crate) fn int_binary(
+    op: BinOp,
+    a: Src,
+    b: Src,
+    operand: &Ty,
+    result: &Ty,
+    span: crate::syntax::Span,
+) -> Option<IFn> {
     use BinOp::*;
     let u64cmp = matches!(operand, Ty::ULInt | Ty::LWord);
     let t = result.clone();
+    let zero = move || -> Fault { crate::vm::FaultKind::DivisionByZero(span).into() };
     Some(match op {
+        // 32-bit division is several times faster than 64-bit on common CPUs
+        Div if t.bits() <= 32 && t.is_signed_int() => fuse!(a, b, |x, y| {
+            if y == 0 {
+                return Err(zero());
+            }
+            t.wrap(i64::from((x as i32).wrapping_div(y as i32)))
+        }),
+        Mod if t.bits() <= 32 && t.is_signed_int() => fuse!(a, b, |x, y| {
+            if y == 0 {
+                return Err(zero());
+            }
+            t.wrap(i64::from((x as i32).wrapping_rem(y as i32)))
+        }),
+        Div if !u64cmp => fuse!(a, b, |x, y| {
+            if y == 0 {
+                return Err(zero());
+            }
+            t.wrap(x.wrapping_div(y))
+        }),
+        Mod if !u64cmp => fuse!(a, b, |x, y| {
+            if y == 0 {
+                return Err(zero());
+            }
+            t.wrap(x.wrapping_rem(y))
+        }),
         Add => match t {
             Ty::DInt => fuse!(a, b, |x, y| i64::from(x.wrapping_add(y) as i32)),
             Ty::Int => fuse!(a, b, |x, y| i64::from(x.wrapping_add(y) as i16)),

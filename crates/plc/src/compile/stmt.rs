@@ -271,11 +271,15 @@ impl Cx<'_> {
         let ExprKind::Call(_, args) = &value.kind else {
             return None;
         };
-        if !matches!(self.c.res.get(&value.id), Some(Res::CallBuiltin(crate::stdlib::Builtin::Concat))) {
+        if !matches!(
+            self.c.res.get(&value.id),
+            Some(Res::CallBuiltin(crate::stdlib::Builtin::Concat))
+        ) {
             return None;
         }
         let first = args.first()?;
-        let (ExprKind::Name { .. }, ExprKind::Name { .. }) = (&target.kind, &first.value.kind) else {
+        let (ExprKind::Name { .. }, ExprKind::Name { .. }) = (&target.kind, &first.value.kind)
+        else {
             return None;
         };
         let same = self.c.res.get(&target.id)? == self.c.res.get(&first.value.id)?;

@@ -367,6 +367,9 @@ fn standard_timers_have_native_bodies() {
     let c = r.unwrap();
     for name in ["TON", "TOF", "TP", "R_TRIG", "F_TRIG"] {
         let id = c.checked.pou_index[name];
-        assert!(plc::stdlib::timers::native_body(&c.checked.pous[id.0]).is_some(), "{name}");
+        assert!(
+            plc::stdlib::timers::native_body(&c.checked.pous[id.0]).is_some(),
+            "{name}"
+        );
     }
 }
