@@ -199,6 +199,8 @@ struct Task {
     stats: CycleStats,
     state: TaskState,
     consecutive_overruns: u32,
+    /// Last whole second and tenth of a second seen (system flags), and whether it ran.
+    last_tick: Option<(i64, i64)>,
 }
 
 /// A scalar variable reached by path.
@@ -227,6 +229,8 @@ pub struct Plc {
     tasks: Vec<Task>,
     forces: BTreeMap<String, (Ty, Size, Val)>,
     io_bindings: Vec<(Size, Ty, DirectAddress)>,
+    /// Integer cells of System_S.R_EDGE_1SEC, R_EDGE_100MS, FIRST_SCAN.
+    system_flags: Option<[usize; 3]>,
     stopwatch: Box<dyn Stopwatch>,
     /// Loop iterations per cycle.
     pub loop_budget: u64,
@@ -243,10 +247,16 @@ impl Plc {
             tasks: Vec::new(),
             forces: BTreeMap::new(),
             io_bindings: Vec::new(),
+            system_flags: None,
             stopwatch: Box::new(NoStopwatch),
             loop_budget: DEFAULT_LOOP_BUDGET,
         };
         plc.io_bindings = plc.collect_io_bindings();
+        plc.system_flags = ["System_S.R_EDGE_1SEC", "System_S.R_EDGE_100MS", "System_S.FIRST_SCAN"]
+            .iter()
+            .map(|p| plc.leaf(p).ok().map(|l| l.addr.i))
+            .collect::<Option<Vec<usize>>>()
+            .and_then(|v| <[usize; 3]>::try_from(v).ok());
         // initialisation faults are impossible for constant initialisers; report if any
         let _ = plc.cold_start();
         plc
@@ -289,6 +299,7 @@ impl Plc {
             stats: CycleStats::default(),
             state: TaskState::Running,
             consecutive_overruns: 0,
+            last_tick: None,
         });
         // stable sort by priority keeps configuration order among equals
         self.tasks.sort_by_key(|t| t.config.priority);
@@ -317,6 +328,7 @@ impl Plc {
             t.state = TaskState::Running;
             t.next_due = None;
             t.consecutive_overruns = 0;
+            t.last_tick = None;
         }
         Ok(())
     }
@@ -398,6 +410,7 @@ impl Plc {
             if now.monotonic_ns < due {
                 continue;
             }
+            self.update_system_flags(ti, now.monotonic_ns);
             self.sync_inputs();
             self.apply_forces();
             self.vm.budget = self.loop_budget;
@@ -473,6 +486,24 @@ impl Plc {
             }
         }
         faults
+    }
+
+    fn update_system_flags(&mut self, ti: usize, now: i64) {
+        let Some([sec, tenth, first]) = self.system_flags else {
+            return;
+        };
+        let Some(t) = self.tasks.get_mut(ti) else {
+            return;
+        };
+        let tick = (now.div_euclid(1_000_000_000), now.div_euclid(100_000_000));
+        let (s, h, f) = match t.last_tick {
+            None => (true, true, true),
+            Some((ls, lh)) => (tick.0 != ls, tick.1 != lh, false),
+        };
+        t.last_tick = Some(tick);
+        let _ = self.vm.seti(sec, i64::from(s));
+        let _ = self.vm.seti(tenth, i64::from(h));
+        let _ = self.vm.seti(first, i64::from(f));
     }
 
     /// Statistics of a task.
