@@ -252,11 +252,15 @@ impl Plc {
             loop_budget: DEFAULT_LOOP_BUDGET,
         };
         plc.io_bindings = plc.collect_io_bindings();
-        plc.system_flags = ["System_S.R_EDGE_1SEC", "System_S.R_EDGE_100MS", "System_S.FIRST_SCAN"]
-            .iter()
-            .map(|p| plc.leaf(p).ok().map(|l| l.addr.i))
-            .collect::<Option<Vec<usize>>>()
-            .and_then(|v| <[usize; 3]>::try_from(v).ok());
+        plc.system_flags = [
+            "System_S.R_EDGE_1SEC",
+            "System_S.R_EDGE_100MS",
+            "System_S.FIRST_SCAN",
+        ]
+        .iter()
+        .map(|p| plc.leaf(p).ok().map(|l| l.addr.i))
+        .collect::<Option<Vec<usize>>>()
+        .and_then(|v| <[usize; 3]>::try_from(v).ok());
         // initialisation faults are impossible for constant initialisers; report if any
         let _ = plc.cold_start();
         plc

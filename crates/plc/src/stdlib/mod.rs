@@ -10,9 +10,14 @@
 //!   `*_TO_*`, ...) typed by [`signature`] and compiled to native closures by
 //!   [`crate::compile`]. One module per family holds the implementations.
 //!
+//! Beyond the standard, the prelude has `HYSTERESIS`, `RAMP`, `PID` (CODESYS Util
+//! interface), `WEEKLY_SWITCH`, the astronomical clock `SUN_TIME` (NOAA), the Siemens DTL
+//! helpers (`RD_LOC_T`, `RD_SYS_T`, `T_DIFF`, `DT_TO_DTL`, ...) and the Mosaic `System_S`
+//! flags. TON, TOF, TP, R_TRIG and F_TRIG get native bodies ([`timers`]) checked against
+//! their ST text.
+//!
 //! Extension point: a new FB is added to the prelude (ST) or, if it needs native code, as a
-//! builtin plus an ST wrapper; PID, RAMP, HYSTERESIS, the weekly time switch and the
-//! astronomical clock go there.
+//! builtin plus an ST wrapper, or an ST declaration with a native body in [`timers`].
 
 pub mod bits;
 pub mod conv;

@@ -373,3 +373,61 @@ fn standard_timers_have_native_bodies() {
         );
     }
 }
+
+/// SUN_TIME against the Wikipedia "sunrise equation" (Julian-day based, a different
+/// algorithm) for every day of 2024 at Vsetín: within 3 minutes.
+#[test]
+fn sun_time_matches_an_independent_algorithm_over_a_year() {
+    let src = "PROGRAM Main VAR s : SUN_TIME; END_VAR s(LATITUDE := 49.3387, LONGITUDE := 17.9962); END_PROGRAM";
+    let mut p = plc(src);
+    p.add_task(TaskConfig::cyclic("main", 0, &["Main"]))
+        .unwrap();
+    let (lat, lon) = (49.3387f64, 17.9962f64);
+    let day_ns = 86_400_000_000_000i64;
+    let start_days = plc::syntax::lexer::days_from_civil(2024, 1, 1);
+    let mut worst = 0.0f64;
+    for d in 0..366 {
+        let days = start_days + d;
+        let utc_noon = days * day_ns + 11 * 3_600_000_000_000;
+        let offset = 3_600_000_000_000; // a fixed CET offset keeps the comparison simple
+        p.run_cycle(ClockReading {
+            monotonic_ns: d * day_ns,
+            utc_ns: utc_noon,
+            utc_offset_ns: offset,
+        });
+        let tod_min = |path: &str| -> f64 {
+            let t = p.read_text(path).unwrap();
+            let hms: Vec<f64> = t
+                .trim_start_matches("TOD#")
+                .split(':')
+                .map(|x| x.parse().unwrap())
+                .collect();
+            hms[0] * 60.0 + hms[1] + hms[2] / 60.0
+        };
+        // reference
+        let jd = (utc_noon as f64 / 1e9) / 86400.0 + 2440587.5;
+        let n = (jd - 2451545.0 + 0.0008).ceil();
+        let j_star = n - lon / 360.0;
+        let m = (357.5291 + 0.98560028 * j_star).rem_euclid(360.0);
+        let mr = m.to_radians();
+        let c = 1.9148 * mr.sin() + 0.02 * (2.0 * mr).sin() + 0.0003 * (3.0 * mr).sin();
+        let lambda = (m + c + 180.0 + 102.9372).rem_euclid(360.0).to_radians();
+        let transit = 2451545.0 + j_star + 0.0053 * mr.sin() - 0.0069 * (2.0 * lambda).sin();
+        let decl = (lambda.sin() * 23.4397f64.to_radians().sin()).asin();
+        let phi = lat.to_radians();
+        let w0 = (((-0.833f64).to_radians().sin() - phi.sin() * decl.sin())
+            / (phi.cos() * decl.cos()))
+        .acos()
+        .to_degrees();
+        let to_local_min = |jd: f64| ((jd - 2440587.5) * 1440.0 + 60.0).rem_euclid(1440.0);
+        let rise = to_local_min(transit - w0 / 360.0);
+        let set = to_local_min(transit + w0 / 360.0);
+        let (r, s) = (tod_min("Main.s.SUNRISE"), tod_min("Main.s.SUNSET"));
+        worst = worst.max((r - rise).abs()).max((s - set).abs());
+        assert!(
+            (r - rise).abs() < 3.0 && (s - set).abs() < 3.0,
+            "day {d}: SUN_TIME {r:.1}/{s:.1} min, reference {rise:.1}/{set:.1}"
+        );
+    }
+    assert!(worst < 3.0, "worst {worst} min");
+}
