@@ -27,7 +27,10 @@
 //!           -> ASDU bytes -> asdu::Asdu::decode -> server/client logic -> user
 //! user -> server/client logic -> asdu::Asdu::encode -> Session::send_asdu -> TCP bytes
 //! ```
-#![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used, clippy::panic))]
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
 #![cfg_attr(not(test), deny(clippy::indexing_slicing))]
 
 pub mod apci;

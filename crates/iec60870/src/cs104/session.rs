@@ -391,7 +391,9 @@ impl Session {
         config.w = w;
         let t3 = config.t3;
         let mut core = Core {
-            sent: VecDeque::with_capacity(usize::from(k.min(64))),
+            // Grown on first send: an idle connection keeps no window buffer (each
+            // slot holds a whole ASDU, about 280 octets).
+            sent: VecDeque::new(),
             config,
             role,
             state: SessionState::Stopped,

@@ -11,7 +11,7 @@ use std::net::SocketAddr;
 use std::sync::Arc;
 
 use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt};
-use tokio::sync::{mpsc, watch};
+use tokio::sync::watch;
 use tracing::Instrument;
 
 use crate::asdu::{
@@ -22,11 +22,11 @@ use crate::asdu::{
 use crate::cs104::session::{Role, Session, SessionEvent};
 
 use super::group::Group;
-use super::handler::{Command, CommandOutcome};
+use super::handler::{Command, CommandFuture, CommandOutcome};
 use super::{Selection, Shared};
 
 /// Bytes read from the socket at a time.
-const READ_BUFFER: usize = 16 * 1024;
+const READ_BUFFER: usize = 1024;
 
 /// Points an interrogation reads from the image at a time (two full SQ=1 ASDUs of single
 /// points; the image's lock is held only while they are copied).
@@ -39,6 +39,44 @@ struct CommandReply {
     ioa: u32,
     selection: Option<Selection>,
     outcome: CommandOutcome,
+}
+
+/// A command waiting for the handler's outcome. Polled by the connection's own loop
+/// rather than a spawned task and a channel: an idle connection then holds no channel
+/// buffers (memory per connection matters with a thousand clients).
+struct PendingCommand {
+    future: CommandFuture,
+    request: Vec<u8>,
+    select: bool,
+    ioa: u32,
+    selection: Option<Selection>,
+}
+
+/// Resolves when one of the pending commands has its outcome; pending while none has.
+fn next_outcome(
+    pending: &mut Vec<PendingCommand>,
+) -> impl std::future::Future<Output = CommandReply> + '_ {
+    std::future::poll_fn(move |context| {
+        let ready = pending.iter_mut().enumerate().find_map(|(index, command)| {
+            match command.future.as_mut().poll(context) {
+                std::task::Poll::Ready(outcome) => Some((index, outcome)),
+                std::task::Poll::Pending => None,
+            }
+        });
+        match ready {
+            Some((index, outcome)) => {
+                let command = pending.swap_remove(index);
+                std::task::Poll::Ready(CommandReply {
+                    request: command.request,
+                    select: command.select,
+                    ioa: command.ioa,
+                    selection: command.selection,
+                    outcome,
+                })
+            }
+            None => std::task::Poll::Pending,
+        }
+    })
 }
 
 /// An interrogation being streamed to the client, a chunk at a time as the window allows.
@@ -67,7 +105,7 @@ struct Connection {
     active: bool,
     /// Alternates group events and interrogation chunks so neither starves the other.
     prefer_interrogation: bool,
-    replies: mpsc::UnboundedSender<CommandReply>,
+    pending_commands: Vec<PendingCommand>,
 }
 
 pub(super) async fn run<S>(
@@ -84,7 +122,6 @@ pub(super) async fn run<S>(
     async move {
         tracing::info!(group = %shared.groups.get(group).map(|g| g.config.name.as_str()).unwrap_or("?"), "client connected");
         shared.handler.connection_changed(peer, true, false);
-        let (replies_tx, replies_rx) = mpsc::unbounded_channel();
         let now = tokio::time::Instant::now().into_std();
         let mut connection = Connection {
             session: Session::new(shared.config.apci.clone(), Role::ControlledStation, now),
@@ -97,9 +134,9 @@ pub(super) async fn run<S>(
             sent_from_group: VecDeque::new(),
             active: false,
             prefer_interrogation: false,
-            replies: replies_tx,
+            pending_commands: Vec::new(),
         };
-        let reason = connection.drive(stream, replies_rx, shutdown).await;
+        let reason = connection.drive(stream, shutdown).await;
         connection.release_group();
         shared.handler.connection_changed(peer, false, false);
         tracing::info!(%reason, "connection closed");
@@ -117,18 +154,13 @@ impl Connection {
         &self.shared.config.asdu
     }
 
-    async fn drive<S>(
-        &mut self,
-        stream: S,
-        mut replies: mpsc::UnboundedReceiver<CommandReply>,
-        mut shutdown: watch::Receiver<bool>,
-    ) -> String
+    async fn drive<S>(&mut self, stream: S, mut shutdown: watch::Receiver<bool>) -> String
     where
         S: AsyncRead + AsyncWrite + Unpin + Send + 'static,
     {
         let (mut reader, mut writer) = tokio::io::split(stream);
         let mut input = vec![0u8; READ_BUFFER];
-        let mut output = Vec::with_capacity(READ_BUFFER);
+        let mut output = Vec::new();
         let shared = Arc::clone(&self.shared);
         let Some(group) = shared.groups.get(self.group) else {
             return "no such redundancy group".to_owned();
@@ -179,7 +211,9 @@ impl Connection {
                     self.session.handle_timeout(tokio::time::Instant::now().into_std());
                 }
                 () = &mut notified, if active => {}
-                Some(reply) = replies.recv() => self.finish_command(reply),
+                reply = next_outcome(&mut self.pending_commands), if !self.pending_commands.is_empty() => {
+                    self.finish_command(reply);
+                }
                 _ = shutdown.changed() => return "server shut down".to_owned(),
             }
         }
@@ -802,16 +836,12 @@ impl Connection {
         };
         tracing::info!(%command.type_id, ioa = %command.ioa, element = %command.element, select, "command");
         let future = self.shared.handler.handle_command(command);
-        let replies = self.replies.clone();
-        tokio::spawn(async move {
-            let outcome = future.await;
-            let _ = replies.send(CommandReply {
-                request: raw,
-                select,
-                ioa: key,
-                selection: pending_selection,
-                outcome,
-            });
+        self.pending_commands.push(PendingCommand {
+            future,
+            request: raw,
+            select,
+            ioa: key,
+            selection: pending_selection,
         });
     }
 
