@@ -310,6 +310,20 @@ impl Plc {
         Ok(())
     }
 
+    /// Adds the tasks declared in the source (CONFIGURATION / RESOURCE / TASK) and
+    /// returns how many.
+    pub fn add_declared_tasks(&mut self) -> Result<usize, PlcError> {
+        let specs = self.compiled.checked.tasks.clone();
+        for t in &specs {
+            let programs: Vec<&str> = t.programs.iter().map(String::as_str).collect();
+            self.add_task(
+                TaskConfig::cyclic(t.name.clone(), t.interval_ns, &programs)
+                    .with_priority(t.priority),
+            )?;
+        }
+        Ok(specs.len())
+    }
+
     /// Cold start: every variable gets its initial value (PERSISTENT ones are restored by
     /// the caller with [`Plc::load_retain`] if desired). Faulted tasks are restarted.
     pub fn cold_start(&mut self) -> Result<(), Fault> {

@@ -124,6 +124,21 @@ pub struct Checked {
     pub res: HashMap<NodeId, Res>,
     /// Warnings.
     pub warnings: Vec<Diagnostic>,
+    /// Tasks declared in CONFIGURATION/RESOURCE blocks.
+    pub tasks: Vec<TaskSpec>,
+}
+
+/// A task declared in the source.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TaskSpec {
+    /// Name.
+    pub name: String,
+    /// Interval in ns (0 = every cycle).
+    pub interval_ns: i64,
+    /// Priority (0 = highest).
+    pub priority: u8,
+    /// PROGRAM types run by the task, in order.
+    pub programs: Vec<String>,
 }
 
 impl Checked {
@@ -251,8 +266,10 @@ pub fn check(unit: CompilationUnit, stdlib_items: usize) -> Result<Checked, Vec<
         coerce: HashMap::new(),
         res: HashMap::new(),
         warnings: Vec::new(),
+        tasks: Vec::new(),
     };
     let mut diags = diags;
+    checked.tasks = configure(&checked, &mut diags);
     body::check_bodies(&mut checked, &mut diags);
     let (errors, warnings): (Vec<_>, Vec<_>) = diags.into_iter().partition(Diagnostic::is_error);
     if errors.is_empty() {
@@ -264,6 +281,103 @@ pub fn check(unit: CompilationUnit, stdlib_items: usize) -> Result<Checked, Vec<
         all.sort_by_key(|d| (d.primary.file, d.primary.start));
         Err(all)
     }
+}
+
+/// Tasks and program bindings of CONFIGURATION/RESOURCE blocks.
+fn configure(c: &Checked, diags: &mut Vec<Diagnostic>) -> Vec<TaskSpec> {
+    let mut tasks: Vec<TaskSpec> = Vec::new();
+    for item in &c.unit.items {
+        if let Item::Task(t) = item {
+            if tasks
+                .iter()
+                .any(|x| x.name.eq_ignore_ascii_case(&t.name.name))
+            {
+                diags.push(Diagnostic::error(
+                    Code::Duplicate,
+                    t.name.span,
+                    format!("task '{}' is declared more than once", t.name.name),
+                ));
+                continue;
+            }
+            let interval_ns = match t.interval.as_ref().map(|e| &e.kind) {
+                None => 0,
+                Some(ExprKind::Literal(Literal::Time(ns, _))) => {
+                    i64::try_from(*ns).unwrap_or(i64::MAX)
+                }
+                Some(_) => {
+                    let span = t.interval.as_ref().map(|e| e.span).unwrap_or(t.span);
+                    diags.push(Diagnostic::error(
+                        Code::NotConstant,
+                        span,
+                        "INTERVAL must be a TIME literal",
+                    ));
+                    0
+                }
+            };
+            let priority = match t.priority.as_ref().map(|e| &e.kind) {
+                None => 10,
+                Some(ExprKind::Literal(Literal::Int(v, _))) if (0..=255).contains(v) => *v as u8,
+                Some(_) => {
+                    let span = t.priority.as_ref().map(|e| e.span).unwrap_or(t.span);
+                    diags.push(Diagnostic::error(
+                        Code::NotConstant,
+                        span,
+                        "PRIORITY must be an integer literal 0..255",
+                    ));
+                    10
+                }
+            };
+            tasks.push(TaskSpec {
+                name: t.name.name.clone(),
+                interval_ns,
+                priority,
+                programs: Vec::new(),
+            });
+        }
+    }
+    for item in &c.unit.items {
+        if let Item::ProgramConfig(pc) = item {
+            let is_program = c
+                .pou_index
+                .get(&pc.program.key)
+                .and_then(|id| c.pou(*id))
+                .is_some_and(|p| p.kind == PouKind::Program);
+            if !is_program {
+                diags.push(Diagnostic::error(
+                    Code::Undeclared,
+                    pc.program.span,
+                    format!("no PROGRAM '{}'", pc.program.name),
+                ));
+                continue;
+            }
+            let name = c
+                .pou_index
+                .get(&pc.program.key)
+                .and_then(|id| c.pou(*id))
+                .map(|p| p.name.clone())
+                .unwrap_or_default();
+            match &pc.task {
+                Some(t) => match tasks
+                    .iter_mut()
+                    .find(|x| x.name.eq_ignore_ascii_case(&t.name))
+                {
+                    Some(task) => task.programs.push(name),
+                    None => diags.push(Diagnostic::error(
+                        Code::Undeclared,
+                        t.span,
+                        format!("undeclared task '{}'", t.name),
+                    )),
+                },
+                None => tasks.push(TaskSpec {
+                    name: pc.instance.name.clone(),
+                    interval_ns: 0,
+                    priority: 10,
+                    programs: vec![name],
+                }),
+            }
+        }
+    }
+    tasks
 }
 
 struct Decls<'u> {
@@ -331,7 +445,7 @@ impl<'u> Decls<'u> {
                             .insert(d.name.key.clone(), TypeSlot::Pending(idx, di));
                     }
                 }
-                Item::Globals(_) => {}
+                Item::Globals(_) | Item::Task(_) | Item::ProgramConfig(_) => {}
             }
         }
     }

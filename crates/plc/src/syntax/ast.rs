@@ -46,6 +46,36 @@ pub enum Item {
     Types(Vec<TypeDecl>),
     /// VAR_GLOBAL ... END_VAR at top level (possibly inside a resource/configuration).
     Globals(VarBlock),
+    /// `TASK name (INTERVAL := ..., PRIORITY := ...);` in a configuration/resource.
+    Task(TaskDecl),
+    /// `PROGRAM inst WITH task : Type;` in a configuration/resource.
+    ProgramConfig(ProgramConfig),
+}
+
+/// A task declaration of a resource.
+#[derive(Debug, Clone)]
+pub struct TaskDecl {
+    /// Task name.
+    pub name: Ident,
+    /// INTERVAL (a TIME constant).
+    pub interval: Option<Expr>,
+    /// PRIORITY (an integer constant, 0 = highest).
+    pub priority: Option<Expr>,
+    /// Where.
+    pub span: Span,
+}
+
+/// A program instance bound to a task.
+#[derive(Debug, Clone)]
+pub struct ProgramConfig {
+    /// Instance name (programs have one instance named like their type in this runtime).
+    pub instance: Ident,
+    /// Task.
+    pub task: Option<Ident>,
+    /// PROGRAM type.
+    pub program: Ident,
+    /// Where.
+    pub span: Span,
 }
 
 /// Kind of program organisation unit.

@@ -279,34 +279,115 @@ impl Parser<'_> {
         } else if self.is_kw("VAR_GLOBAL") {
             let block = self.var_block()?;
             Ok(vec![Item::Globals(block)])
-        } else if self.eat_kw("CONFIGURATION") || self.eat_kw("RESOURCE") {
-            // Configurations: only their global variables are taken; tasks are configured
-            // through the runtime API.
+        } else if self.eat_kw("CONFIGURATION") {
             let _ = self.ident()?;
-            if self.eat_kw("ON") {
-                let _ = self.ident()?;
-            }
             let mut items = Vec::new();
-            while !self.at_eof() && !self.is_kw("END_CONFIGURATION") && !self.is_kw("END_RESOURCE")
-            {
+            while !self.at_eof() && !self.is_kw("END_CONFIGURATION") {
                 if self.is_kw("VAR_GLOBAL") {
                     items.push(Item::Globals(self.var_block()?));
                 } else if self.eat_kw("RESOURCE") {
-                    let _ = self.ident()?;
-                    if self.eat_kw("ON") {
-                        let _ = self.ident()?;
-                    }
+                    items.extend(self.resource()?);
                 } else {
-                    self.bump();
+                    let before = self.pos;
+                    items.extend(self.config_entry()?);
+                    if self.pos == before {
+                        return self.expected("VAR_GLOBAL, RESOURCE, TASK or PROGRAM");
+                    }
                 }
             }
-            if !self.eat_kw("END_CONFIGURATION") {
-                self.expect_kw("END_RESOURCE")?;
-            }
+            self.expect_kw("END_CONFIGURATION")?;
             Ok(items)
+        } else if self.eat_kw("RESOURCE") {
+            self.resource()
         } else {
             self.expected("PROGRAM, FUNCTION_BLOCK, FUNCTION, TYPE or VAR_GLOBAL")
         }
+    }
+
+    /// After RESOURCE: `name ON processor ... END_RESOURCE`.
+    fn resource(&mut self) -> PResult<Vec<Item>> {
+        let _ = self.ident()?;
+        if self.eat_kw("ON") {
+            let _ = self.ident()?;
+        }
+        let mut items = Vec::new();
+        while !self.at_eof() && !self.is_kw("END_RESOURCE") {
+            if self.is_kw("VAR_GLOBAL") {
+                items.push(Item::Globals(self.var_block()?));
+            } else {
+                let before = self.pos;
+                items.extend(self.config_entry()?);
+                if self.pos == before {
+                    return self.expected("VAR_GLOBAL, TASK or PROGRAM");
+                }
+            }
+        }
+        self.expect_kw("END_RESOURCE")?;
+        Ok(items)
+    }
+
+    /// `TASK name (INTERVAL := T#10ms, PRIORITY := 1);` or
+    /// `PROGRAM inst WITH task : Type;`
+    fn config_entry(&mut self) -> PResult<Vec<Item>> {
+        let start = self.span();
+        if self.eat_kw("TASK") {
+            let name = self.ident()?;
+            let mut interval = None;
+            let mut priority = None;
+            if self.eat_p("(") {
+                loop {
+                    let key = self.ident()?;
+                    self.expect_p(":=")?;
+                    let v = self.expr()?;
+                    match key.key.as_str() {
+                        "INTERVAL" => interval = Some(v),
+                        "PRIORITY" => priority = Some(v),
+                        _ => {}
+                    }
+                    if !self.eat_p(",") {
+                        break;
+                    }
+                }
+                self.expect_p(")")?;
+            }
+            self.expect_p(";")?;
+            return Ok(vec![Item::Task(TaskDecl {
+                name,
+                interval,
+                priority,
+                span: start.to(self.prev_span()),
+            })]);
+        }
+        if self.eat_kw("PROGRAM") {
+            let instance = self.ident()?;
+            let task = if self.eat_kw("WITH") {
+                Some(self.ident()?)
+            } else {
+                None
+            };
+            self.expect_p(":")?;
+            let program = self.ident()?;
+            if self.eat_p("(") {
+                // parameter connections are not supported; skip them
+                let mut depth = 1;
+                while depth > 0 && !self.at_eof() {
+                    if self.is_p("(") {
+                        depth += 1;
+                    } else if self.is_p(")") {
+                        depth -= 1;
+                    }
+                    self.bump();
+                }
+            }
+            self.expect_p(";")?;
+            return Ok(vec![Item::ProgramConfig(ProgramConfig {
+                instance,
+                task,
+                program,
+                span: start.to(self.prev_span()),
+            })]);
+        }
+        Ok(Vec::new())
     }
 
     fn pou(&mut self, kind: PouKind, end: &str) -> PResult<Pou> {

@@ -75,12 +75,32 @@ pub fn real(v: f64, single: bool) -> String {
     if v.is_infinite() {
         return if v > 0.0 { "INF".into() } else { "-INF".into() };
     }
+    let a = v.abs();
+    if a != 0.0 && !(1e-5..1e15).contains(&a) {
+        let e = if single {
+            format!("{:e}", v as f32)
+        } else {
+            format!("{v:e}")
+        };
+        let (m, x) = e.split_once('e').unwrap_or((e.as_str(), "0"));
+        let m = if m.contains('.') {
+            m.to_string()
+        } else {
+            format!("{m}.0")
+        };
+        let x = if x.starts_with('-') {
+            x.to_string()
+        } else {
+            format!("+{x}")
+        };
+        return format!("{m}E{x}");
+    }
     let s = if single {
         format!("{}", v as f32)
     } else {
         format!("{v}")
     };
-    if s.contains('.') || s.contains('e') || s.contains("inf") {
+    if s.contains('.') {
         s
     } else {
         format!("{s}.0")

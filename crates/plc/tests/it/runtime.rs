@@ -431,3 +431,26 @@ fn sun_time_matches_an_independent_algorithm_over_a_year() {
     }
     assert!(worst < 3.0, "worst {worst} min");
 }
+
+#[test]
+fn tasks_declared_in_a_configuration() {
+    let src = "
+CONFIGURATION Plant
+    RESOURCE Cpu ON PLC
+        TASK Fast (INTERVAL := T#10ms, PRIORITY := 1);
+        TASK Slow (INTERVAL := T#50ms, PRIORITY := 5);
+        PROGRAM P1 WITH Fast : Counter;
+        PROGRAM P2 WITH Slow : Other;
+    END_RESOURCE
+END_CONFIGURATION
+PROGRAM Counter VAR n : INT; END_VAR n := n + 1; END_PROGRAM
+PROGRAM Other VAR n : INT; END_VAR n := n + 1; END_PROGRAM
+";
+    let mut p = plc(src);
+    assert_eq!(p.add_declared_tasks().unwrap(), 2);
+    for k in 0..10 {
+        p.run_cycle(at_ms(k * 10));
+    }
+    assert_eq!(p.read_text("Counter.n").unwrap(), "10");
+    assert_eq!(p.read_text("Other.n").unwrap(), "2");
+}
