@@ -36,7 +36,8 @@
 //!   budget are *faults*: the task stops with a diagnostic; the host never panics.
 //! - REAL arithmetic follows IEC 60559 (division by zero gives ±INF/NaN).
 //! - Functions have one static frame each (IEC 61131-3 forbids recursion, which the
-//!   checker rejects); VAR_IN_OUT is passed by copy-in/copy-out.
+//!   checker rejects); VAR_IN_OUT is passed by reference (the callee holds the address of
+//!   the actual variable).
 #![cfg_attr(
     not(test),
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)

@@ -573,7 +573,10 @@ impl Plc {
             }
             let Some(base) = p.base else { continue };
             for v in &p.vars {
-                if matches!(v.kind, crate::syntax::VarKind::External) {
+                if matches!(
+                    v.kind,
+                    crate::syntax::VarKind::External | crate::syntax::VarKind::InOut
+                ) {
                     continue;
                 }
                 push_leaves(
@@ -630,7 +633,10 @@ impl Plc {
                     .filter(|_| p.kind == PouKind::Program)
                     .ok_or_else(unknown)?;
                 let (name, idx) = it.next().ok_or_else(unknown)?;
-                let (_, v) = p.var(&name.to_uppercase()).ok_or_else(unknown)?;
+                let (_, v) = p
+                    .var(&name.to_uppercase())
+                    .filter(|(_, v)| v.kind != crate::syntax::VarKind::InOut)
+                    .ok_or_else(unknown)?;
                 (
                     v.ty.clone(),
                     base.plus(v.offset),
@@ -670,7 +676,11 @@ impl Plc {
                     (f.offset, f.ty.clone())
                 }
                 Ty::Fb(id) => {
-                    let (_, v) = c.pou(*id).and_then(|p| p.var(&k)).ok_or_else(unknown)?;
+                    let (_, v) = c
+                        .pou(*id)
+                        .and_then(|p| p.var(&k))
+                        .filter(|(_, v)| v.kind != crate::syntax::VarKind::InOut)
+                        .ok_or_else(unknown)?;
                     (v.offset, v.ty.clone())
                 }
                 _ => return Err(unknown()),
@@ -920,7 +930,9 @@ fn push_leaves(
                 for v in &p.vars {
                     if matches!(
                         v.kind,
-                        crate::syntax::VarKind::External | crate::syntax::VarKind::Temp
+                        crate::syntax::VarKind::External
+                            | crate::syntax::VarKind::Temp
+                            | crate::syntax::VarKind::InOut
                     ) {
                         continue;
                     }

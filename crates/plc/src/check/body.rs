@@ -719,6 +719,10 @@ impl BodyCx<'_> {
                             .and_then(|p| p.var(&field.key))
                             .map(|(i, v)| (i, v.ty.clone(), v.kind));
                         match found {
+                            Some((_, _, VarKind::InOut)) => {
+                                self.err(Code::NotAssignable, field.span, format!("VAR_IN_OUT '{}' is a reference and cannot be accessed from outside the instance", field.name));
+                                Ty::Void
+                            }
                             Some((i, t, _)) => {
                                 self.c.res.insert(e.id, Res::PouVar(*id, i));
                                 t

@@ -15,6 +15,10 @@ use std::collections::HashMap;
 use std::rc::Rc;
 pub use types::*;
 
+/// A VAR_IN_OUT is a reference: the absolute address of the actual variable, one integer
+/// cell per lane.
+pub const REFERENCE_SIZE: Size = Size { i: 3, r: 0, s: 0 };
+
 /// What a name, member or call node refers to.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Res {
@@ -851,6 +855,8 @@ impl<'u> Decls<'u> {
                     index.insert(n.key.clone(), vars.len());
                     let sz = if b.kind == VarKind::External {
                         Size::default()
+                    } else if b.kind == VarKind::InOut {
+                        REFERENCE_SIZE
                     } else {
                         size_of(&ty, &self.types, &self.pous)
                     };

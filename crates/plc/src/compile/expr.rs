@@ -14,6 +14,8 @@ pub(crate) enum Base {
     Abs,
     /// The instance or frame of the POU being called (`vm.callee`).
     Callee,
+    /// Through the VAR_IN_OUT reference stored at this frame-relative integer cell.
+    Indirect(usize),
 }
 
 /// Where a value lives.
@@ -109,6 +111,19 @@ impl Place {
                 let x = d(vm)?;
                 Ok(vm.callee.plus(off).plus(x))
             }),
+            (Base::Indirect(r), d) => Rc::new(move |vm: &mut Vm| {
+                let b = vm.frame.i + r;
+                let target = Size {
+                    i: usize::try_from(vm.geti(b)?).map_err(|_| Fault::memory())?,
+                    r: usize::try_from(vm.geti(b + 1)?).map_err(|_| Fault::memory())?,
+                    s: usize::try_from(vm.geti(b + 2)?).map_err(|_| Fault::memory())?,
+                };
+                let x = match &d {
+                    Some(d) => d(vm)?,
+                    None => Size::default(),
+                };
+                Ok(target.plus(off).plus(x))
+            }),
         }
     }
 }
@@ -135,6 +150,12 @@ impl Cx<'_> {
             Res::Local(i) => {
                 let p = self.c.pou(self.pou?)?;
                 let v = p.vars.get(*i)?;
+                if v.kind == VarKind::InOut {
+                    return Some(Place {
+                        base: Base::Indirect(v.offset.i),
+                        ..Place::frame(Size::default(), v.ty.clone())
+                    });
+                }
                 Some(Place::frame(v.offset, v.ty.clone()))
             }
             Res::Global(g) => {
@@ -320,7 +341,9 @@ impl Cx<'_> {
             }));
         }
         let off = p.off;
-        if let (Some(ix), Some(Lane::Int)) = (p.index1.clone(), p.ty.lane()) {
+        if let (Some(ix), Some(Lane::Int), Base::Frame | Base::Abs | Base::Callee) =
+            (p.index1.clone(), p.ty.lane(), p.base)
+        {
             return CE::I(match p.base {
                 Base::Frame => Box::new(move |vm| {
                     let k = ix.eval(vm)?;
@@ -330,7 +353,7 @@ impl Cx<'_> {
                     let k = ix.eval(vm)?;
                     vm.geti(off.i + k * ix.stride.i)
                 }),
-                Base::Callee => Box::new(move |vm| {
+                _ => Box::new(move |vm| {
                     let k = ix.eval(vm)?;
                     vm.geti(vm.callee.i + off.i + k * ix.stride.i)
                 }),
@@ -734,26 +757,29 @@ impl Cx<'_> {
                 continue;
             }
             if v.kind == VarKind::InOut {
+                // by reference: the callee's cells get the caller variable's address
                 let Some(src) = self.place(&a.value) else {
                     continue;
                 };
-                if v.ty.lane().is_none() {
-                    let size = self.c.size_of(&v.ty);
-                    let sa = src.addr();
-                    let ta = target.addr();
-                    let (sa2, ta2) = (sa.clone(), ta.clone());
-                    pre.push(Pre::Split(ArgBind::copy(sa, ta, size)));
-                    post.push(Box::new(move |vm| {
-                        let s = sa2(vm)?;
-                        let t = ta2(vm)?;
-                        vm.copy(t, s, size)?;
+                let sa = src.addr();
+                let cell = v.offset.i;
+                let bind: Rc<crate::vm::InitFn> = Rc::new(Box::new(move |vm| {
+                    let at = sa(vm)?;
+                    let b = vm.callee.i + cell;
+                    vm.seti(b, at.i as i64)?;
+                    vm.seti(b + 1, at.r as i64)?;
+                    vm.seti(b + 2, at.s as i64)
+                }));
+                if direct {
+                    pre.push(Pre::Direct(Box::new(move |vm| {
+                        bind(vm)?;
                         Ok(Flow::Normal)
-                    }));
+                    })));
                 } else {
-                    let get = self.load(&src);
-                    pre.push(self.scalar_pre(get, &target, direct));
-                    let back = self.load(&target);
-                    post.push(self.store(&src, back));
+                    pre.push(Pre::Split((
+                        Box::new(|_| Ok(crate::vm::Val::Int(0))),
+                        Box::new(move |vm, _| bind(vm)),
+                    )));
                 }
                 continue;
             }
@@ -865,7 +891,6 @@ pub(crate) type ValWriter = Rc<dyn Fn(&mut Vm, crate::vm::Val) -> Result<(), Fau
 
 trait ArgBindExt {
     fn scalar(get: CE, put: ValWriter) -> ArgBind;
-    fn copy(src: AddrFn, dst: AddrFn, size: Size) -> ArgBind;
     fn agg(src: AddrFn, dst: AddrFn, size: Size) -> ArgBind;
 }
 
@@ -877,9 +902,6 @@ impl ArgBindExt for ArgBind {
             CE::S(f) => Box::new(move |vm| Ok(crate::vm::Val::Str(f(vm)?))),
         };
         (g, Box::new(move |vm, v| put(vm, v)))
-    }
-    fn copy(src: AddrFn, dst: AddrFn, size: Size) -> ArgBind {
-        Self::agg(src, dst, size)
     }
     fn agg(src: AddrFn, dst: AddrFn, size: Size) -> ArgBind {
         // the source address is taken in the caller; the copy happens on put

@@ -64,6 +64,9 @@ impl Cx<'_> {
             ExprKind::Name { .. } => match self.c.res.get(&e.id)? {
                 Res::Local(i) => {
                     let v = self.c.pou(self.pou?)?.vars.get(*i)?;
+                    if v.kind == crate::syntax::VarKind::InOut {
+                        return None;
+                    }
                     Some(Opnd::F(v.offset.i))
                 }
                 Res::Global(g) => Some(Opnd::A(self.c.globals.get(*g)?.offset.i)),
@@ -228,6 +231,9 @@ impl Cx<'_> {
             ExprKind::Name { .. } => match self.c.res.get(&e.id)? {
                 Res::Local(i) => {
                     let v = self.c.pou(self.pou?)?.vars.get(*i)?;
+                    if v.kind == crate::syntax::VarKind::InOut {
+                        return None;
+                    }
                     Some(ROpnd::F(v.offset.r))
                 }
                 Res::Global(g) => Some(ROpnd::A(self.c.globals.get(*g)?.offset.r)),

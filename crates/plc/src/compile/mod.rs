@@ -77,7 +77,7 @@ pub fn compile(checked: Checked) -> Result<Compiled, Vec<Diagnostic>> {
             };
             let mut ops = Vec::new();
             for v in &p.vars {
-                if matches!(v.kind, VarKind::External) {
+                if matches!(v.kind, VarKind::External | VarKind::InOut) {
                     continue;
                 }
                 cx.init_value(&v.ty, v.init.as_ref(), v.offset, &mut ops);
