@@ -55,8 +55,12 @@ pub struct ClientConfig {
     pub reconnect_delay: Duration,
     /// Back-off ceiling.
     pub reconnect_delay_max: Duration,
-    /// How long a command waits for its confirmation, and again for its termination.
+    /// How long a request waits for its confirmation, and an interrogation again for its
+    /// termination.
     pub command_timeout: Duration,
+    /// How long a positively confirmed command waits for its (optional) termination
+    /// before it is reported done with `terminated = false`.
+    pub termination_timeout: Duration,
     /// Received events the application may fall behind by: the event channel holds this
     /// many (at least 16), and as many more wait inside the client, which then stops
     /// reading the socket (TCP then slows the server down). Requests and their time-outs
@@ -81,6 +85,7 @@ impl ClientConfig {
             reconnect_delay: Duration::from_millis(500),
             reconnect_delay_max: Duration::from_secs(30),
             command_timeout: Duration::from_secs(10),
+            termination_timeout: Duration::from_secs(2),
             event_capacity: 10_000,
             tls: None,
         }
@@ -201,7 +206,10 @@ impl ClientHandle {
     }
 
     /// Sends a command (types 45..=64) and waits for its confirmation and, for an
-    /// executed (not select) command confirmed positively, its termination.
+    /// executed (not select) command confirmed positively, its termination. The standard
+    /// leaves the termination of a command to the station: when none comes within
+    /// [`ClientConfig::termination_timeout`] the outcome is positive with
+    /// `terminated = false`.
     pub async fn command(
         &self,
         type_id: TypeId,
@@ -308,6 +316,9 @@ struct Pending {
     type_id: TypeId,
     ioa: Ioa,
     expects_termination: bool,
+    /// The termination may not come: the standard leaves ACT_TERM of a command to the
+    /// station (c104 sends none after a direct execute). Interrogations must terminate.
+    termination_optional: bool,
     is_read: bool,
     responses: Vec<Asdu>,
     confirmation: Option<(bool, Cause)>,
@@ -333,7 +344,7 @@ impl Pending {
     }
 
     /// Offers a received ASDU; returns whether the request is now finished.
-    fn offer(&mut self, asdu: &Asdu, timeout: Duration) -> bool {
+    fn offer(&mut self, asdu: &Asdu, timeout: Duration, termination_timeout: Duration) -> bool {
         let Some(first) = asdu.objects.first() else {
             return false;
         };
@@ -368,7 +379,12 @@ impl Pending {
                 return true;
             }
             // The termination has its own time allowance.
-            self.deadline = tokio::time::Instant::now() + timeout;
+            let allowance = if self.termination_optional {
+                termination_timeout
+            } else {
+                timeout
+            };
+            self.deadline = tokio::time::Instant::now() + allowance;
             return false;
         }
         if cause == Cause::ACTIVATION_TERMINATION {
@@ -570,7 +586,11 @@ where
                             tracing::debug!(%asdu, "received");
                             let mut finished = Vec::new();
                             for (index, request) in pending.iter_mut().enumerate() {
-                                if request.offer(&asdu, config.command_timeout) {
+                                if request.offer(
+                                    &asdu,
+                                    config.command_timeout,
+                                    config.termination_timeout,
+                                ) {
                                     finished.push(index);
                                     break;
                                 }
@@ -700,6 +720,13 @@ where
                 while index < pending.len() {
                     if pending.get(index).is_some_and(|request| request.deadline <= now) {
                         let mut request = pending.swap_remove(index);
+                        let confirmed = request.confirmation.is_some_and(|(positive, _)| positive);
+                        if confirmed && request.termination_optional {
+                            // Confirmed, and the station sends no termination: done.
+                            let outcome = request.outcome(false);
+                            request.finish(Ok(outcome));
+                            continue;
+                        }
                         let waited_for = if request.confirmation.is_some() { "the activation termination" } else { "the confirmation" };
                         tracing::warn!(type_id = %request.type_id, ioa = %request.ioa, waited_for, "request timed out");
                         request.finish(Err(ClientError::Timeout(waited_for)));
@@ -734,6 +761,7 @@ where
                         type_id: asdu.type_id,
                         ioa,
                         expects_termination: expects_termination(&asdu),
+                        termination_optional: asdu.type_id.is_command(),
                         is_read: asdu.type_id == TypeId::C_RD_NA_1,
                         responses: Vec::new(),
                         confirmation: None,
