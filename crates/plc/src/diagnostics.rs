@@ -82,6 +82,28 @@ impl Code {
     }
 }
 
+impl Code {
+    /// What the error means and how to fix it (the per-code documentation page).
+    pub fn explanation(self) -> &'static str {
+        match self {
+            Code::UnexpectedCharacter => "A character that cannot start any token of Structured Text, e.g. `@` or `?` outside a string or comment.",
+            Code::Unterminated => "A comment `(* ... *)`, `/* ... */`, a pragma `{ ... }` or a string literal is not closed before the end of the line or file.",
+            Code::BadLiteral => "A literal is malformed or does not fit its type: `T#5x` (unknown unit), `16#G1`, `SINT#300`, `D#2024-13-01`.",
+            Code::Syntax => "The parser expected a different token. The message names what was expected and what was found; the position is where the parser gave up.",
+            Code::Undeclared => "A variable, function, type, task or program name that is declared nowhere in scope. Names are case-insensitive; globals need VAR_GLOBAL (and may be named in VAR_EXTERNAL).",
+            Code::Duplicate => "The same name is declared twice in one scope (variables of a POU, fields of a struct, POUs and types of the project).",
+            Code::UnknownType => "A type name that is neither elementary, a TYPE declaration, nor a function block.",
+            Code::TypeMismatch => "Operand or value types do not fit. IEC 61131-3 converts implicitly only to wider types (INT -> DINT -> LINT, INT -> REAL, REAL -> LREAL, ...); narrowing needs an explicit conversion such as DINT_TO_INT.",
+            Code::WrongArguments => "A call has the wrong number, names or kinds of arguments: an unknown parameter name, `:=` on an output, `=>` on an input, too many positional arguments, a missing VAR_IN_OUT, or a function-block call used as an expression.",
+            Code::NotAssignable => "The target of an assignment (or an output / in-out binding) is not a variable: a constant, an expression, an enumeration value, a program name, or an in-out member of another instance.",
+            Code::NotConstant => "A constant is required: array bounds, string lengths, enumeration values, CASE labels, task INTERVAL/PRIORITY.",
+            Code::Recursion => "A function calls itself directly or indirectly, or a function block contains an instance of itself. IEC 61131-3 forbids recursion; each function has one static frame.",
+            Code::Unsupported => "A construct this compiler does not support yet (pointers, string indexing).",
+            Code::RuntimeFault => "The task was stopped at run time: integer division by zero, array index out of range, or the per-cycle loop budget was exhausted (endless loop), or the watchdog tripped.",
+        }
+    }
+}
+
 /// A labelled span.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Label {

@@ -285,7 +285,26 @@ impl BodyCx<'_> {
                     );
                     return;
                 }
-                self.coerce_to(value, &vt, &tt, "value");
+                if !self.coerce_to(value, &vt, &tt, "value") {
+                    // point at the declaration of the target variable
+                    let decl = match self.c.res.get(&target.id) {
+                        Some(Res::Local(i)) => self
+                            .pou
+                            .and_then(|p| self.c.pou(p))
+                            .and_then(|p| p.vars.get(*i))
+                            .map(|v| (v.span, v.name.clone())),
+                        Some(Res::Global(g)) => {
+                            self.c.globals.get(*g).map(|v| (v.span, v.name.clone()))
+                        }
+                        _ => None,
+                    };
+                    if let (Some((span, name)), Some(last)) = (decl, self.diags.last_mut()) {
+                        let ty = self.c.type_name(&tt);
+                        *last = last
+                            .clone()
+                            .with_label(span, format!("'{name}' is declared as {ty} here"));
+                    }
+                }
             }
             StmtKind::Call(e) => {
                 self.expr_stmt_call(e);

@@ -392,10 +392,154 @@ impl Cx<'_> {
             Now => CE::I(Box::new(|vm| Ok(vm.now))),
             LocalTime => CE::I(Box::new(|vm| Ok(vm.utc.wrapping_add(vm.local_offset)))),
             SystemTime => CE::I(Box::new(|vm| Ok(vm.utc))),
+            Compare(op) => {
+                let n = nvals;
+                let all: Vec<CE> = (0..n).map(&mut take).collect();
+                let t = tys.first().cloned().unwrap_or(Ty::Void);
+                // a chain of pairwise comparisons, each operand evaluated once
+                let op = *op;
+                match t.lane() {
+                    Some(crate::check::Lane::Real) => {
+                        let fs: Vec<RFn> = all.into_iter().map(as_r).collect();
+                        CE::I(Box::new(move |vm| {
+                            let mut prev: Option<f64> = None;
+                            let mut ok = true;
+                            for f in &fs {
+                                let x = f(vm)?;
+                                if let Some(p) = prev {
+                                    ok &= cmp_f(op, p, x);
+                                }
+                                prev = Some(x);
+                            }
+                            Ok(i64::from(ok))
+                        }))
+                    }
+                    Some(crate::check::Lane::Str) => {
+                        let fs: Vec<SFn> = all.into_iter().map(as_s).collect();
+                        CE::I(Box::new(move |vm| {
+                            let mut prev: Option<String> = None;
+                            let mut ok = true;
+                            for f in &fs {
+                                let x = f(vm)?;
+                                if let Some(p) = &prev {
+                                    ok &= cmp_ord(op, p.as_str().cmp(x.as_str()));
+                                }
+                                prev = Some(x);
+                            }
+                            Ok(i64::from(ok))
+                        }))
+                    }
+                    _ => {
+                        let u = matches!(t, Ty::ULInt | Ty::LWord);
+                        let fs: Vec<IFn> = all.into_iter().map(as_i).collect();
+                        CE::I(Box::new(move |vm| {
+                            let mut prev: Option<i64> = None;
+                            let mut ok = true;
+                            for f in &fs {
+                                let x = f(vm)?;
+                                if let Some(p) = prev {
+                                    let ord = if u {
+                                        (p as u64).cmp(&(x as u64))
+                                    } else {
+                                        p.cmp(&x)
+                                    };
+                                    ok &= cmp_ord(op, ord);
+                                }
+                                prev = Some(x);
+                            }
+                            Ok(i64::from(ok))
+                        }))
+                    }
+                }
+            }
+            Arith(op) => {
+                use crate::syntax::BinOp as B;
+                let n = nvals;
+                let all: Vec<CE> = (0..n).map(&mut take).collect();
+                let t = ret.clone();
+                let op = *op;
+                match t.lane() {
+                    Some(crate::check::Lane::Real) => {
+                        let fs: Vec<RFn> = all.into_iter().map(as_r).collect();
+                        let single = t == Ty::Real;
+                        CE::R(Box::new(move |vm| {
+                            let mut acc = 0.0;
+                            for (k, f) in fs.iter().enumerate() {
+                                let x = f(vm)?;
+                                acc = if k == 0 {
+                                    x
+                                } else {
+                                    match op {
+                                        B::Add => acc + x,
+                                        B::Mul => acc * x,
+                                        B::Sub => acc - x,
+                                        _ => acc / x,
+                                    }
+                                };
+                            }
+                            Ok(if single { f64::from(acc as f32) } else { acc })
+                        }))
+                    }
+                    _ => {
+                        let fs: Vec<IFn> = all.into_iter().map(as_i).collect();
+                        CE::I(Box::new(move |vm| {
+                            let mut acc = 0i64;
+                            for (k, f) in fs.iter().enumerate() {
+                                let x = f(vm)?;
+                                acc = if k == 0 {
+                                    x
+                                } else {
+                                    match op {
+                                        B::Add => acc.wrapping_add(x),
+                                        B::Mul => acc.wrapping_mul(x),
+                                        B::Sub => acc.wrapping_sub(x),
+                                        B::And => acc & x,
+                                        B::Or => acc | x,
+                                        B::Xor => acc ^ x,
+                                        _ => {
+                                            if x == 0 {
+                                                return Err(FaultKind::DivisionByZero(span).into());
+                                            }
+                                            acc.wrapping_div(x)
+                                        }
+                                    }
+                                };
+                                acc = t.wrap(acc);
+                            }
+                            Ok(acc)
+                        }))
+                    }
+                }
+            }
             DayOfWeek => {
                 let a = as_i(take(0));
                 CE::I(Box::new(move |vm| Ok(time::day_of_week(a(vm)?))))
             }
         }
+    }
+}
+
+fn cmp_ord(op: crate::syntax::BinOp, o: std::cmp::Ordering) -> bool {
+    use crate::syntax::BinOp as B;
+    use std::cmp::Ordering::*;
+    match op {
+        B::Gt => o == Greater,
+        B::Ge => o != Less,
+        B::Eq => o == Equal,
+        B::Le => o != Greater,
+        B::Lt => o == Less,
+        _ => o != Equal,
+    }
+}
+
+fn cmp_f(op: crate::syntax::BinOp, a: f64, b: f64) -> bool {
+    use crate::syntax::BinOp as B;
+    match op {
+        B::Gt => a > b,
+        B::Ge => a >= b,
+        B::Eq => a == b,
+        B::Le => a <= b,
+        B::Lt => a < b,
+        _ => a != b,
     }
 }

@@ -97,6 +97,11 @@ pub enum Builtin {
     SystemTime,
     /// Day of week of a DATE/DT, 1 = Monday .. 7 = Sunday (ISO).
     DayOfWeek,
+    /// Extensible comparison chain `GT(a, b, c)` = `a > b AND b > c` (and GE, EQ, LE, LT, NE).
+    Compare(crate::syntax::BinOp),
+    /// Extensible arithmetic/logic in function form: `ADD(a, b, c)`, `MUL`, `AND`, `OR`, `XOR`,
+    /// and the binary `SUB`, `DIV`.
+    Arith(crate::syntax::BinOp),
 }
 
 fn type_by_conv_name(name: &str) -> Option<Ty> {
@@ -162,6 +167,19 @@ pub fn lookup(name: &str) -> Option<Builtin> {
         "LOCAL_TIME" | "__LOCAL_TIME" => LocalTime,
         "SYSTEM_TIME" | "__SYSTEM_TIME" => SystemTime,
         "DAY_OF_WEEK" => DayOfWeek,
+        "GT" => Compare(crate::syntax::BinOp::Gt),
+        "GE" => Compare(crate::syntax::BinOp::Ge),
+        "EQ" => Compare(crate::syntax::BinOp::Eq),
+        "LE" => Compare(crate::syntax::BinOp::Le),
+        "LT" => Compare(crate::syntax::BinOp::Lt),
+        "NE" => Compare(crate::syntax::BinOp::Ne),
+        "ADD" => Arith(crate::syntax::BinOp::Add),
+        "MUL" => Arith(crate::syntax::BinOp::Mul),
+        "SUB" => Arith(crate::syntax::BinOp::Sub),
+        "DIV" => Arith(crate::syntax::BinOp::Div),
+        "AND" => Arith(crate::syntax::BinOp::And),
+        "OR" => Arith(crate::syntax::BinOp::Or),
+        "XOR" => Arith(crate::syntax::BinOp::Xor),
         _ => {
             if let Some(rest) = name.strip_prefix("TO_") {
                 return Some(Convert(None, type_by_conv_name(rest)?));
@@ -443,6 +461,37 @@ pub fn signature(b: &Builtin, args: &[Ty]) -> Result<(Vec<Ty>, Ty), String> {
         LocalTime | SystemTime => {
             need(0)?;
             (vec![], Ty::Dt)
+        }
+        Compare(op) => {
+            if n < 2 || (*op == crate::syntax::BinOp::Ne && n != 2) {
+                return Err(format!("expects at least 2 arguments, got {n}"));
+            }
+            let t = common(args)?;
+            if !t.is_elementary() {
+                return Err(format!("cannot compare {t}"));
+            }
+            (vec![t; n], Ty::Bool)
+        }
+        Arith(op) => {
+            use crate::syntax::BinOp as B;
+            let binary = matches!(op, B::Sub | B::Div);
+            if n < 2 || (binary && n != 2) {
+                return Err(format!(
+                    "expects {} arguments, got {n}",
+                    if binary { "2" } else { "at least 2" }
+                ));
+            }
+            let t = common(args)?;
+            let logic = matches!(op, B::And | B::Or | B::Xor);
+            let ok = if logic {
+                t == Ty::Bool || t.is_bits() || t.is_int()
+            } else {
+                t.is_num()
+            };
+            if !ok {
+                return Err(format!("cannot apply to {t}"));
+            }
+            (vec![t.clone(); n], t)
         }
         DayOfWeek => {
             need(1)?;

@@ -1341,7 +1341,8 @@ impl Parser<'_> {
                     return lit(self, Literal::Bool(false));
                 }
                 // MOD(a, b) in function form
-                let fn_form = up == "MOD" && matches!(self.tok_at(1), Tok::Punct("("));
+                let fn_form = matches!(up.as_str(), "MOD" | "AND" | "OR" | "XOR")
+                    && matches!(self.tok_at(1), Tok::Punct("("));
                 if RESERVED.contains(&up.as_str()) && !fn_form {
                     return self.expected("an expression");
                 }

@@ -454,3 +454,30 @@ PROGRAM Other VAR n : INT; END_VAR n := n + 1; END_PROGRAM
     assert_eq!(p.read_text("Counter.n").unwrap(), "10");
     assert_eq!(p.read_text("Other.n").unwrap(), "2");
 }
+
+#[test]
+fn type_mismatch_points_at_the_declaration() {
+    let (sources, r) = plc::build(&[(
+        "m.st".into(),
+        "PROGRAM Main\nVAR\n  x : INT;\nEND_VAR\nx := 1.5;\nEND_PROGRAM\n".into(),
+    )]);
+    let d = r.err().unwrap();
+    let text = d[0].render(&sources);
+    assert!(
+        text.starts_with(
+            "m.st:5:6: error: type mismatch: value of type LREAL where INT is expected [E0201]"
+        ),
+        "{text}"
+    );
+    assert!(
+        text.contains("m.st:3:3: 'x' is declared as INT here"),
+        "{text}"
+    );
+    assert!(
+        text.contains("= note: IEC 61131-3 converts implicitly only to wider types"),
+        "{text}"
+    );
+    assert!(plc::Code::TypeMismatch
+        .explanation()
+        .contains("DINT_TO_INT"));
+}
