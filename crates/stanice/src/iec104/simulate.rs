@@ -17,7 +17,7 @@ pub(crate) async fn run(server: ServerHandle, points: Vec<PointRow>, interval: D
     if points.is_empty() {
         return;
     }
-    let mut random = StdRng::seed_from_u64(0x5354_414E_4943_45);
+    let mut random = StdRng::seed_from_u64(0x0053_5441_4E49_4345);
     let mut ticker = tokio::time::interval(interval);
     ticker.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
     loop {

@@ -1,0 +1,371 @@
+//! The `stanice` binary as a user runs it: real processes on loopback.
+
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
+
+use std::io::{BufRead, BufReader, Read};
+use std::path::PathBuf;
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use serde_json::Value;
+
+fn stanice() -> Command {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_stanice"));
+    command.stdin(Stdio::null());
+    command
+}
+
+fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
+}
+
+/// Runs a command to completion, killing it after `seconds`.
+fn run_bounded(mut command: Command, seconds: u64) -> Output {
+    let mut child = command
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let deadline = Instant::now() + Duration::from_secs(seconds);
+    while Instant::now() < deadline {
+        if child.try_wait().unwrap().is_some() {
+            return child.wait_with_output().unwrap();
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let _ = child.kill();
+    let output = child.wait_with_output().unwrap();
+    panic!(
+        "command did not finish within {seconds} s; stdout:\n{}",
+        String::from_utf8_lossy(&output.stdout)
+    );
+}
+
+/// A long-running process (outstation, demo), killed when dropped.
+struct Background(Child);
+
+impl Drop for Background {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// Starts a process and waits until a stdout line contains `marker`.
+fn start_until(mut command: Command, marker: &str) -> Background {
+    let mut child = command
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let stdout = child.stdout.take().unwrap();
+    let (sender, receiver) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+            if sender.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    let deadline = Instant::now() + Duration::from_secs(20);
+    let mut seen = Vec::new();
+    while Instant::now() < deadline {
+        if let Ok(line) = receiver.recv_timeout(Duration::from_millis(100)) {
+            if line.contains(marker) {
+                // Keep draining so the child never blocks on a full pipe.
+                std::thread::spawn(move || for _ in receiver {});
+                return Background(child);
+            }
+            seen.push(line);
+        }
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    panic!("never saw '{marker}'; saw {seen:?}");
+}
+
+fn write_points(text: &str) -> PathBuf {
+    let path = std::env::temp_dir().join(format!(
+        "stanice-cli-{}-{}.csv",
+        std::process::id(),
+        free_port()
+    ));
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+const POINTS: &str = "ioa,type,value,name\n\
+281,M_SP_TB_1,1,FA1 closed\n\
+282,M_SP_NA_1,0,FA1.1\n\
+2000,M_DP_TB_1,2,breaker\n\
+1100,M_ME_NA_1,0.335114,U12\n\
+5000,M_ME_NC_1,1904673.75,P\n\
+800,M_IT_NA_1,42,energy\n\
+2021,C_SC_NA_1,,open QF1\n\
+2100,C_DC_NA_1,,breaker command\n\
+2101,C_DC_NA_1,,breaker command (select first),\n";
+
+fn outstation(port: u16, extra: &[&str]) -> Background {
+    let points = write_points(POINTS);
+    let mut command = stanice();
+    command
+        .args([
+            "iec104",
+            "server",
+            "--listen",
+            &format!("127.0.0.1:{port}"),
+            "--ca",
+            "7",
+            "--points",
+        ])
+        .arg(points)
+        .args(extra);
+    start_until(command, "IEC 104 outstation on")
+}
+
+#[test]
+fn client_prints_every_point_as_json() {
+    let port = free_port();
+    let _server = outstation(port, &[]);
+    let mut client = stanice();
+    client.args([
+        "iec104",
+        "client",
+        &format!("127.0.0.1:{port}"),
+        "--ca",
+        "7",
+        "--gi",
+        "--json",
+        "--exit-after-gi",
+    ]);
+    let output = run_bounded(client, 20);
+    assert!(output.status.success());
+    let lines: Vec<Value> = String::from_utf8_lossy(&output.stdout)
+        .lines()
+        .map(|line| {
+            serde_json::from_str(line).unwrap_or_else(|error| panic!("not JSON ({error}): {line}"))
+        })
+        .collect();
+    let point = |ioa: u64| {
+        lines
+            .iter()
+            .find(|line| line["ioa"] == ioa && line["cot"] == "inrogen")
+            .unwrap_or_else(|| panic!("no GI line for {ioa} in {lines:#?}"))
+    };
+    for line in lines.iter().filter(|line| line.get("ioa").is_some()) {
+        for field in ["type", "cot", "ca", "ioa", "value", "quality", "time"] {
+            assert!(line.get(field).is_some(), "{field} missing in {line}");
+        }
+    }
+    assert_eq!(point(281)["type"], "M_SP_NA_1");
+    assert_eq!(point(281)["value"], true);
+    assert_eq!(point(281)["ca"], 7);
+    assert_eq!(point(2000)["type"], "M_DP_NA_1");
+    assert_eq!(point(2000)["value"], 2);
+    assert_eq!(point(1100)["raw"], 10981);
+    assert!((point(1100)["value"].as_f64().unwrap() - 0.335114).abs() < 1e-6);
+    assert_eq!(point(5000)["value"], 1904673.75);
+    assert_eq!(point(282)["quality"], serde_json::json!([]));
+    // Counters answer counter interrogation, not GI.
+    assert!(!lines.iter().any(|line| line["ioa"] == 800));
+}
+
+#[test]
+fn client_prints_analyser_lines_and_simulated_events() {
+    let port = free_port();
+    let _server = outstation(port, &["--simulate", "--simulate-interval", "0.05"]);
+    let mut client = stanice();
+    client.args([
+        "iec104",
+        "client",
+        &format!("127.0.0.1:{port}"),
+        "--ca",
+        "7",
+        "--gi",
+        "--duration",
+        "2",
+    ]);
+    let output = run_bounded(client, 20);
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        text.contains("C_IC_NA_1 (100) [sq=0 n=1] cot=actcon(7)"),
+        "{text}"
+    );
+    assert!(text.contains("M_DP_NA_1 (3)"), "{text}");
+    assert!(text.contains("cot=actterm(10)"), "{text}");
+    assert!(
+        text.contains("cot=spont(3)"),
+        "no simulated event in {text}"
+    );
+}
+
+#[test]
+fn command_exit_codes_follow_the_confirmation() {
+    let port = free_port();
+    let _server = outstation(port, &[]);
+    let address = format!("127.0.0.1:{port}");
+    let command = |ioa: &str, kind: &str, value: &str, select: bool| {
+        let mut command = stanice();
+        command.args([
+            "iec104",
+            "command",
+            &address,
+            "--ca",
+            "7",
+            "--ioa",
+            ioa,
+            "--type",
+            kind,
+            "--value",
+            value,
+            "--timeout",
+            "5",
+        ]);
+        if select {
+            command.arg("--select");
+        }
+        run_bounded(command, 20)
+    };
+    let positive = command("2021", "C_SC_NA_1", "1", false);
+    let text = String::from_utf8_lossy(&positive.stdout);
+    assert_eq!(positive.status.code(), Some(0), "{text}");
+    assert!(
+        text.contains("cot=actcon(7)") && text.contains("cot=actterm(10)"),
+        "{text}"
+    );
+
+    let unknown = command("9999", "C_SC_NA_1", "1", false);
+    let text = String::from_utf8_lossy(&unknown.stdout);
+    assert_eq!(unknown.status.code(), Some(1), "{text}");
+    assert!(
+        text.contains("unknown object address(47)") && text.contains("PN"),
+        "{text}"
+    );
+
+    let select_first = command("2100", "C_DC_NA_1", "ON", true);
+    assert_eq!(
+        select_first.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&select_first.stdout)
+    );
+
+    let wrong_type = command("2021", "C_DC_NA_1", "ON", false);
+    assert_eq!(wrong_type.status.code(), Some(1));
+
+    // Nobody listens: exit 2.
+    let mut nobody = stanice();
+    nobody.args([
+        "iec104",
+        "command",
+        &format!("127.0.0.1:{}", free_port()),
+        "--ca",
+        "7",
+        "--ioa",
+        "1",
+        "--type",
+        "C_SC_NA_1",
+        "--value",
+        "1",
+        "--timeout",
+        "2",
+    ]);
+    assert_eq!(run_bounded(nobody, 20).status.code(), Some(2));
+}
+
+#[test]
+fn decode_shows_the_thesis_vectors() {
+    let mut decode = stanice();
+    decode.args([
+        "iec104",
+        "decode",
+        "68 15 00 00 00 00 1F 01 03 00 01 00 D0 07 00 01 D8 76 BB 09 1A 04 11",
+    ]);
+    let output = run_bounded(decode, 10);
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{text}");
+    assert!(text.contains("I-format  N(S)=0 N(R)=0"), "{text}");
+    assert!(text.contains("M_DP_TB_1 (31)"), "{text}");
+    assert!(text.contains("2017-04-26 09:59:30.424"), "{text}");
+
+    let mut decode = stanice();
+    decode.args([
+        "iec104",
+        "decode",
+        "--asdu",
+        "0D 01 03 00 01 00 88 13 00 0E 81 E8 49 00",
+    ]);
+    let text = String::from_utf8_lossy(&run_bounded(decode, 10).stdout).to_string();
+    assert!(text.contains("1904673.75"), "{text}");
+
+    // A non-standard cause (COT 0 of the thesis log) is shown, not refused.
+    let mut decode = stanice();
+    decode.args([
+        "iec104",
+        "decode",
+        "--asdu",
+        "2E 01 00 00 01 00 34 08 00 02",
+    ]);
+    let output = run_bounded(decode, 10);
+    assert!(output.status.success());
+    assert!(String::from_utf8_lossy(&output.stdout).contains("not defined"));
+
+    // Garbage: reported, exit 1, no panic.
+    let mut decode = stanice();
+    decode.args(["iec104", "decode", "68 FF 01 02 03"]);
+    let output = run_bounded(decode, 10);
+    assert_eq!(output.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&output.stdout).contains("malformed"));
+}
+
+#[test]
+fn a_bad_point_file_names_its_line() {
+    let points = write_points("ioa,type,value\n1,M_SP_NA_1,1\n2,M_ME_NC_1,hello\n");
+    let mut server = stanice();
+    server
+        .args(["iec104", "server", "--listen", "127.0.0.1:0", "--points"])
+        .arg(&points);
+    let output = run_bounded(server, 10);
+    assert!(!output.status.success());
+    let mut stderr = String::new();
+    (&output.stderr[..]).read_to_string(&mut stderr).unwrap();
+    assert!(
+        stderr.contains(&format!("{}:3: ", points.display())),
+        "{stderr}"
+    );
+    assert!(stderr.contains("hello"), "{stderr}");
+}
+
+#[test]
+fn demo_serves_the_rh2_board() {
+    let port = free_port();
+    let mut demo = stanice();
+    demo.args(["demo", "--port-base", &port.to_string()]);
+    let _demo = start_until(demo, "Press Ctrl-C to stop");
+    let mut client = stanice();
+    client.args([
+        "iec104",
+        "client",
+        &format!("127.0.0.1:{port}"),
+        "--gi",
+        "--json",
+        "--exit-after-gi",
+    ]);
+    let output = run_bounded(client, 20);
+    let interrogated: Vec<u64> = String::from_utf8_lossy(&output.stdout)
+        .lines()
+        .filter_map(|line| serde_json::from_str::<Value>(line).ok())
+        .filter(|line| line["cot"] == "inrogen")
+        .filter_map(|line| line["ioa"].as_u64())
+        .collect();
+    assert_eq!(interrogated, (281..=298).collect::<Vec<u64>>());
+}
