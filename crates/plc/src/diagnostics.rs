@@ -183,9 +183,10 @@ impl Diagnostic {
         )
     }
 
-    /// The full rendering: headline, `[code]`, labels, notes, one per line.
+    /// The full rendering: the headline `file:line:col: error: message`, then secondary
+    /// labels, notes and the error code on indented lines.
     pub fn render(&self, sources: &SourceMap) -> String {
-        let mut out = format!("{} [{}]", self.headline(sources), self.code.as_str());
+        let mut out = self.headline(sources);
         for label in &self.secondary {
             out.push_str(&format!(
                 "\n  {}: {}",
@@ -196,6 +197,7 @@ impl Diagnostic {
         for note in &self.notes {
             out.push_str(&format!("\n  = note: {note}"));
         }
+        out.push_str(&format!("\n  = code: {}", self.code.as_str()));
         out
     }
 }

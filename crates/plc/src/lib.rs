@@ -84,6 +84,12 @@ pub fn build_sources(sources: &SourceMap) -> Result<Compiled, Vec<Diagnostic>> {
         }
     }
     if diags.iter().any(Diagnostic::is_error) {
+        // still check what the parser recovered, to report more than the first problem;
+        // undeclared names are left out (they may come from dropped declarations)
+        if let Err(more) = check::check(unit, stdlib_items) {
+            diags.extend(more.into_iter().filter(|d| d.code != Code::Undeclared));
+        }
+        diags.sort_by_key(|d| (d.primary.file, d.primary.start));
         return Err(diags);
     }
     let checked = check::check(unit, stdlib_items)?;
