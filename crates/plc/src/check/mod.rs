@@ -543,10 +543,15 @@ impl<'u> Decls<'u> {
                 self.layout_pou(id);
                 return Some(Ty::Fb(id));
             }
+            let name = self
+                .pous
+                .get(id.0)
+                .map(|p| p.name.clone())
+                .unwrap_or_default();
             self.err(
                 Code::UnknownType,
                 span,
-                format!("'{key}' is a program or function, not a type"),
+                format!("'{name}' is a program or function, not a type"),
             );
             return None;
         }
