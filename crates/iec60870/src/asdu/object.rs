@@ -497,6 +497,40 @@ fn family_of(type_id: TypeId) -> Family {
 }
 
 impl Element {
+    /// Whether this is the select step of a select-before-operate command (S/E = 1 in
+    /// the qualifier of SCO, DCO, RCO or QOS); false for every other element.
+    pub fn is_select(&self) -> bool {
+        match self {
+            Element::SingleCommand { qualifier, .. }
+            | Element::DoubleCommand { qualifier, .. }
+            | Element::RegulatingStep { qualifier, .. } => qualifier.is_select(),
+            Element::SetpointNormalized { qualifier, .. }
+            | Element::SetpointScaled { qualifier, .. }
+            | Element::SetpointFloat { qualifier, .. } => qualifier.is_select(),
+            _ => false,
+        }
+    }
+
+    /// The same command as an execute (S/E = 0): a select and its execute compare equal
+    /// after this.
+    pub fn as_execute(&self) -> Element {
+        let mut element = self.clone();
+        match &mut element {
+            Element::SingleCommand { qualifier, .. }
+            | Element::DoubleCommand { qualifier, .. }
+            | Element::RegulatingStep { qualifier, .. } => {
+                *qualifier = CommandQualifier::from_bits(qualifier.bits() & 0x7F);
+            }
+            Element::SetpointNormalized { qualifier, .. }
+            | Element::SetpointScaled { qualifier, .. }
+            | Element::SetpointFloat { qualifier, .. } => {
+                *qualifier = SetpointQualifier::from_bits(qualifier.bits() & 0x7F);
+            }
+            _ => {}
+        }
+        element
+    }
+
     /// The fraction of a normalized value: `raw / 32768`, in -1.0 ..= 1 - 2^-15
     /// (0x2AE5 = 10981 gives 0.335114).
     pub fn normalized_value(raw: i16) -> f32 {

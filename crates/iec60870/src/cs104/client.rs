@@ -407,20 +407,8 @@ fn expects_termination(asdu: &Asdu) -> bool {
                 && !asdu
                     .objects
                     .first()
-                    .is_some_and(|object| element_is_select(&object.element))
+                    .is_some_and(|object| object.element.is_select())
         }
-        _ => false,
-    }
-}
-
-fn element_is_select(element: &Element) -> bool {
-    match element {
-        Element::SingleCommand { qualifier, .. }
-        | Element::DoubleCommand { qualifier, .. }
-        | Element::RegulatingStep { qualifier, .. } => qualifier.is_select(),
-        Element::SetpointNormalized { qualifier, .. }
-        | Element::SetpointScaled { qualifier, .. }
-        | Element::SetpointFloat { qualifier, .. } => qualifier.is_select(),
         _ => false,
     }
 }

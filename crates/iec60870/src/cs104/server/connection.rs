@@ -16,8 +16,7 @@ use tracing::Instrument;
 
 use crate::asdu::{
     mirror_with_cause, object_len, pack_objects, Asdu, AsduHeader, AsduParams, Cause,
-    CommandQualifier, CommonAddress, Cot, DoublePointState, Element, InformationObject, Ioa,
-    SetpointQualifier, TypeId,
+    CommonAddress, Cot, DoublePointState, Element, InformationObject, Ioa, TypeId,
 };
 use crate::cs104::session::{Role, Session, SessionEvent};
 
@@ -777,7 +776,7 @@ impl Connection {
                 return self.reply(&raw, Cause::ACTIVATION_CON, true);
             }
         }
-        let select = command_is_select(&object.element);
+        let select = object.element.is_select();
         let key = object.ioa.get();
         if cause == Cause::DEACTIVATION {
             let mut selections = self.shared.lock_selections();
@@ -798,7 +797,7 @@ impl Connection {
                 connection: self.id,
                 originator,
                 type_id: asdu.type_id,
-                element: without_select(&object.element),
+                element: object.element.as_execute(),
                 deadline: tokio_now + self.shared.config.select_timeout,
             });
         } else if point.select_required {
@@ -807,7 +806,7 @@ impl Connection {
                 selection.connection == self.id
                     && selection.originator == originator
                     && selection.type_id == asdu.type_id
-                    && selection.element == without_select(&object.element)
+                    && selection.element == object.element.as_execute()
                     && selection.deadline >= tokio_now
             });
             // A selection is used once, matched or not, but only by the connection that
@@ -883,37 +882,6 @@ fn base_command_type(type_id: TypeId) -> u8 {
     } else {
         value
     }
-}
-
-fn command_is_select(element: &Element) -> bool {
-    match element {
-        Element::SingleCommand { qualifier, .. }
-        | Element::DoubleCommand { qualifier, .. }
-        | Element::RegulatingStep { qualifier, .. } => qualifier.is_select(),
-        Element::SetpointNormalized { qualifier, .. }
-        | Element::SetpointScaled { qualifier, .. }
-        | Element::SetpointFloat { qualifier, .. } => qualifier.is_select(),
-        _ => false,
-    }
-}
-
-/// The element with its select bit cleared, to compare a select with its execute.
-fn without_select(element: &Element) -> Element {
-    let mut element = element.clone();
-    match &mut element {
-        Element::SingleCommand { qualifier, .. }
-        | Element::DoubleCommand { qualifier, .. }
-        | Element::RegulatingStep { qualifier, .. } => {
-            *qualifier = CommandQualifier::from_bits(qualifier.bits() & 0x7F);
-        }
-        Element::SetpointNormalized { qualifier, .. }
-        | Element::SetpointScaled { qualifier, .. }
-        | Element::SetpointFloat { qualifier, .. } => {
-            *qualifier = SetpointQualifier::from_bits(qualifier.bits() & 0x7F);
-        }
-        _ => {}
-    }
-    element
 }
 
 fn objects_per_asdu(type_id: TypeId, params: &AsduParams) -> usize {
