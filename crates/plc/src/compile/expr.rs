@@ -664,7 +664,7 @@ impl Cx<'_> {
                 let saved = std::mem::replace(&mut vm.callee, base);
                 let r = (|| {
                     for b in &direct {
-                        b(vm)?;
+                        b.run(vm)?;
                     }
                     for (get, put) in &pre {
                         let v = get(vm)?;
@@ -771,10 +771,10 @@ impl Cx<'_> {
                     vm.seti(b + 2, at.s as i64)
                 }));
                 if direct {
-                    pre.push(Pre::Direct(Box::new(move |vm| {
+                    pre.push(Pre::Direct(Binder::Code(Box::new(move |vm| {
                         bind(vm)?;
                         Ok(Flow::Normal)
-                    })));
+                    }))));
                 } else {
                     pre.push(Pre::Split((
                         Box::new(|_| Ok(crate::vm::Val::Int(0))),
@@ -803,12 +803,7 @@ impl Cx<'_> {
         if direct && target.base == Base::Callee && target.dynamic.is_none() && target.bit.is_none()
         {
             if let Some(o) = self.simple_int(e) {
-                let off = target.off.i;
-                return Pre::Direct(Box::new(move |vm| {
-                    let x = o.get(vm)?;
-                    vm.seti(vm.callee.i + off, x)?;
-                    Ok(Flow::Normal)
-                }));
+                return Pre::Direct(Binder::Inline(target.off.i, o));
             }
         }
         let get = self.expr(e);
@@ -817,7 +812,7 @@ impl Cx<'_> {
 
     fn scalar_pre(&self, get: CE, target: &Place, direct: bool) -> Pre {
         if direct {
-            Pre::Direct(self.store(target, get))
+            Pre::Direct(Binder::Code(self.store(target, get)))
         } else {
             Pre::Split(ArgBind::scalar(get, self.store_val(target)))
         }
@@ -861,13 +856,35 @@ impl Cx<'_> {
 /// first and written later.
 pub(crate) enum Pre {
     /// Evaluate in the caller and store relative to `vm.callee`.
-    Direct(StmtFn),
+    Direct(Binder),
     /// Evaluate, keep, store.
     Split(ArgBind),
 }
 
+/// A direct argument binding.
+pub(crate) enum Binder {
+    /// Integer cell of the callee gets an inline operand.
+    Inline(usize, super::fused::Opnd),
+    /// Anything else.
+    Code(StmtFn),
+}
+
+impl Binder {
+    /// Runs the binding (`vm.callee` must be set).
+    #[inline(always)]
+    pub(crate) fn run(&self, vm: &mut Vm) -> Result<(), Fault> {
+        match self {
+            Binder::Inline(off, o) => {
+                let x = o.get(vm)?;
+                vm.seti(vm.callee.i + off, x)
+            }
+            Binder::Code(f) => f(vm).map(|_| ()),
+        }
+    }
+}
+
 /// Separates direct binders from split ones.
-pub(crate) fn split_pre(pre: Vec<Pre>) -> (Vec<StmtFn>, Vec<ArgBind>) {
+pub(crate) fn split_pre(pre: Vec<Pre>) -> (Vec<Binder>, Vec<ArgBind>) {
     let mut d = Vec::new();
     let mut s = Vec::new();
     for p in pre {

@@ -2,7 +2,7 @@
 
 use super::expr::konst_i;
 use super::{Cx, IFn, CE};
-use crate::check::{PouId, Res};
+use crate::check::{PouId, Res, Size};
 use crate::syntax::*;
 use crate::vm::{Fault, FaultKind, Flow, StmtFn, Vm};
 
@@ -29,6 +29,46 @@ fn tick(vm: &mut Vm, span: Span) -> Result<(), Fault> {
 
 /// Label ranges and body of a CASE arm.
 type CaseArm = (Vec<(i64, i64)>, Vec<StmtFn>);
+
+/// The address of a function-block instance, computed inline where possible.
+enum InstAddr {
+    Frame(Size),
+    Abs(Size),
+    FrameIndexed(Size, std::rc::Rc<super::expr::Index1>),
+    AbsIndexed(Size, std::rc::Rc<super::expr::Index1>),
+    Dyn(super::AddrFn),
+}
+
+impl InstAddr {
+    fn of(p: &super::expr::Place) -> InstAddr {
+        use super::expr::Base;
+        let plain = p.bit.is_none() && p.direct.is_none();
+        match (p.base, &p.dynamic, &p.index1) {
+            (Base::Frame, None, None) if plain => InstAddr::Frame(p.off),
+            (Base::Abs, None, None) if plain => InstAddr::Abs(p.off),
+            (Base::Frame, Some(_), Some(ix)) if plain => InstAddr::FrameIndexed(p.off, ix.clone()),
+            (Base::Abs, Some(_), Some(ix)) if plain => InstAddr::AbsIndexed(p.off, ix.clone()),
+            _ => InstAddr::Dyn(p.addr()),
+        }
+    }
+
+    #[inline(always)]
+    fn get(&self, vm: &mut Vm) -> Result<Size, Fault> {
+        match self {
+            InstAddr::Frame(o) => Ok(vm.frame.plus(*o)),
+            InstAddr::Abs(o) => Ok(*o),
+            InstAddr::FrameIndexed(o, ix) => {
+                let k = ix.eval(vm)?;
+                Ok(vm.frame.plus(*o).plus(ix.stride.times(k)))
+            }
+            InstAddr::AbsIndexed(o, ix) => {
+                let k = ix.eval(vm)?;
+                Ok(o.plus(ix.stride.times(k)))
+            }
+            InstAddr::Dyn(a) => a(vm),
+        }
+    }
+}
 
 /// Where a FOR control variable lives.
 enum Cell {
@@ -378,13 +418,28 @@ impl Cx<'_> {
             self.error(callee.span, "cannot compile this instance");
             return nop();
         };
-        let addr = inst.addr();
+        let addr = InstAddr::of(&inst);
         let needs_temps = args.iter().any(|a| super::expr::contains_call(&a.value));
         let (pre, post) = self.bind_args(&pou, args, !needs_temps);
         let (direct, split) = super::expr::split_pre(pre);
         let id = pid.0;
+        if split.is_empty() && post.is_empty() {
+            // the common case: inputs only
+            return Box::new(move |vm| {
+                let base = addr.get(vm)?;
+                let saved = std::mem::replace(&mut vm.callee, base);
+                let r = (|| {
+                    for b in &direct {
+                        b.run(vm)?;
+                    }
+                    vm.call(id, base)
+                })();
+                vm.callee = saved;
+                r.map(|_| Flow::Normal)
+            });
+        }
         Box::new(move |vm| {
-            let base = addr(vm)?;
+            let base = addr.get(vm)?;
             let saved = vm.callee;
             let mut vals = Vec::new();
             for (get, _) in &split {
@@ -393,7 +448,7 @@ impl Cx<'_> {
             vm.callee = base;
             let r = (|| {
                 for b in &direct {
-                    b(vm)?;
+                    b.run(vm)?;
                 }
                 for ((_, put), v) in split.iter().zip(vals) {
                     put(vm, v)?;
