@@ -9,8 +9,9 @@ use crate::diagnostics::{Code, Diagnostic};
 /// Maximum nesting of expressions and statements.
 pub const MAX_DEPTH: u32 = 64;
 
-/// Maximum number of binary operators in one left-associative chain.
-pub const MAX_CHAIN: u32 = 256;
+/// Maximum depth of an expression tree (nesting plus left-associative operator, member
+/// and index chains), so that later recursive stages cannot overflow the stack.
+pub const MAX_TREE: u32 = 400;
 
 /// Parses one file, appending nodes to `unit` (node ids continue from `unit.node_count`).
 pub fn parse_into(
@@ -26,6 +27,7 @@ pub fn parse_into(
         next_id: unit.node_count,
         diags,
         depth: 0,
+        tree: 0,
     };
     while !p.at_eof() {
         let before = p.pos;
@@ -109,6 +111,8 @@ struct Parser<'d> {
     next_id: u32,
     diags: &'d mut Vec<Diagnostic>,
     depth: u32,
+    /// Extra tree depth of open left-associative chains.
+    tree: u32,
 }
 
 type PResult<T> = Result<T, ()>;
@@ -1017,14 +1021,29 @@ impl Parser<'_> {
     fn binary(&mut self, min: u8) -> PResult<Expr> {
         let mut lhs = self.unary()?;
         let mut chain = 0u32;
+        let r = self.binary_chain(&mut lhs, min, &mut chain);
+        self.tree -= chain;
+        r.map(|()| lhs)
+    }
+
+    /// One more level of a left-deep tree.
+    fn grow(&mut self, chain: &mut u32) -> PResult<()> {
+        *chain += 1;
+        self.tree += 1;
+        if self.tree + self.depth > MAX_TREE {
+            return self.error(
+                "expression too long or too deeply nested; split it with intermediate variables",
+            );
+        }
+        Ok(())
+    }
+
+    fn binary_chain(&mut self, lhs: &mut Expr, min: u8, chain: &mut u32) -> PResult<()> {
         while let Some((op, prec)) = self.binop() {
             if prec < min {
                 break;
             }
-            chain += 1;
-            if chain > MAX_CHAIN {
-                return self.error("expression too long; split it with intermediate variables");
-            }
+            self.grow(chain)?;
             self.bump();
             // all binary operators are left-associative in IEC 61131-3 (** included)
             self.enter()?;
@@ -1032,13 +1051,21 @@ impl Parser<'_> {
             self.depth -= 1;
             let rhs = rhs?;
             let span = lhs.span.to(rhs.span);
-            lhs = Expr {
+            let left = std::mem::replace(
+                lhs,
+                Expr {
+                    id: NodeId(0),
+                    kind: ExprKind::Literal(Literal::Bool(false)),
+                    span,
+                },
+            );
+            *lhs = Expr {
                 id: self.id(),
-                kind: ExprKind::Binary(op, Box::new(lhs), Box::new(rhs)),
+                kind: ExprKind::Binary(op, Box::new(left), Box::new(rhs)),
                 span,
             };
         }
-        Ok(lhs)
+        Ok(())
     }
 
     fn unary(&mut self) -> PResult<Expr> {
@@ -1093,7 +1120,12 @@ impl Parser<'_> {
             return self.unary();
         }
         let mut lhs = self.postfix()?;
+        let mut chain = 0u32;
         while self.is_p("**") {
+            if let Err(()) = self.grow(&mut chain) {
+                self.tree -= chain;
+                return Err(());
+            }
             self.bump();
             let rhs = self.postfix_or_unary()?;
             let span = lhs.span.to(rhs.span);
@@ -1103,6 +1135,7 @@ impl Parser<'_> {
                 span,
             };
         }
+        self.tree -= chain;
         Ok(lhs)
     }
 
@@ -1123,8 +1156,18 @@ impl Parser<'_> {
     }
 
     fn postfix(&mut self) -> PResult<Expr> {
-        let mut e = self.primary()?;
+        let e = self.primary()?;
+        let mut chain = 0u32;
+        let r = self.postfix_chain(e, &mut chain);
+        self.tree -= chain;
+        r
+    }
+
+    fn postfix_chain(&mut self, mut e: Expr, chain: &mut u32) -> PResult<Expr> {
         loop {
+            if self.is_p(".") || self.is_p("[") || self.is_p("^") || self.is_p("(") {
+                self.grow(chain)?;
+            }
             if self.is_p(".") {
                 self.bump();
                 let span = self.span();

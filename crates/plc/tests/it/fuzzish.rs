@@ -72,6 +72,16 @@ fn deep_nesting_is_a_diagnostic_not_a_crash() {
     );
     let (_, r) = plc::build(&[("long.st".into(), long)]);
     assert!(r.is_err());
+    for body in [
+        format!("x := y{};", ".a".repeat(20000)),
+        format!("x := 2{};", " ** 2".repeat(20000)),
+        format!("x := a{};", "[1]".repeat(20000)),
+        format!("x := {}1{};", "(1 + ".repeat(60), " + 1)".repeat(60)),
+    ] {
+        let src = format!("PROGRAM Main VAR x : INT; END_VAR {body} END_PROGRAM");
+        let (_, r) = plc::build(&[("chain.st".into(), src)]);
+        assert!(r.is_err());
+    }
     let ok = format!(
         "PROGRAM Main VAR x : DINT; END_VAR x := 1{}; END_PROGRAM",
         " + 1".repeat(200)
