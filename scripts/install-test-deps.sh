@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
-# Install the tools the IEC 60870-5-104 interoperability tests need:
-#   * tshark  (Debian package; its iec60870_104 / iec60870_asdu dissectors
-#              check captures of our traffic)
-#   * c104    (PyPI; Python bindings of lib60870-C, the independent 104 peer
-#              used by tests/peer/c104_server.py and c104_client.py)
+# Install the tools the interoperability and storage tests need:
+#   * tshark      (Debian package; its iec60870_104 / iec60870_asdu dissectors
+#                  check captures of our traffic)
+#   * c104        (PyPI; Python bindings of lib60870-C, the independent 104 peer
+#                  used by tests/peer/c104_server.py and c104_client.py)
+#   * postgresql  (Debian package; the server binaries with which
+#                  scripts/with-postgres.sh runs a throwaway cluster for the
+#                  event store's PostgreSQL tests)
 #
 # Choice of Python environment: c104 is installed with pip into the machine's
 # own python3 (no venv). c104 ships a manylinux wheel for CPython 3.11 on
@@ -102,8 +105,25 @@ else
     log "c104 $have installed"
 fi
 
+# ---------------------------------------------------------------- postgresql
+# Only the server binaries under /usr/lib/postgresql/*/bin are used. The package
+# may create and start a system cluster on port 5432; that is harmless, the
+# throwaway cluster of scripts/with-postgres.sh listens on its own free port and
+# keeps its socket in its own temp dir.
+if ls /usr/lib/postgresql/*/bin/initdb >/dev/null 2>&1; then
+    log "postgresql present: $(ls -d /usr/lib/postgresql/*/bin | sort -V | tail -n1)"
+else
+    apt_install postgresql
+    if ! ls /usr/lib/postgresql/*/bin/initdb >/dev/null 2>&1; then
+        log "ERROR: postgresql installed but no initdb under /usr/lib/postgresql/*/bin"
+        exit 1
+    fi
+    log "postgresql installed: $(ls -d /usr/lib/postgresql/*/bin | sort -V | tail -n1)"
+fi
+
 # ---------------------------------------------------------------- verify
 # c104 2.2.1 has no c104.__version__ attribute (its .pyi claims one); the
 # compiled module c104._c104 carries it.
 log "verify: $("$PYTHON" -c 'import c104, c104._c104 as m; print("c104", m.__version__)')"
 log "verify: $(tshark --version 2>/dev/null | head -n1)"
+log "verify: $("$(ls -d /usr/lib/postgresql/*/bin | sort -V | tail -n1)/initdb" --version)"

@@ -17,7 +17,7 @@ cargo clippy --workspace --all-targets --locked -- -D warnings
 echo "== tests (unit, property, state machine, interoperability with c104, tshark)"
 # The interoperability tests refuse to skip when STANICE_REQUIRE_PEERS=1.
 export STANICE_REQUIRE_PEERS=1
-cargo test --workspace --locked
+bash scripts/with-postgres.sh cargo test --workspace --locked
 
 echo "== fuzz smoke"
 bash scripts/fuzz-smoke.sh

@@ -1,0 +1,21 @@
+//! The Stanice station runtime.
+//!
+//! A station is a hierarchy of nodes (controllers) run from a project folder: PLC programs
+//! feed point databases, nodes publish them over IEC 60870-5-104 and concentrate the nodes
+//! below them, and every value change and command is recorded. The runtime is being built
+//! module by module:
+//!
+//! | module        | what it does                                                      | state   |
+//! |---------------|-------------------------------------------------------------------|---------|
+//! | `config`      | the project folder: `station.toml`, nodes, points, links, errors with file:line | planned |
+//! | `pointdb`     | per-node typed values with quality and source time, report by exception | planned |
+//! | `links`       | IEC 104 server and client links of a node, communication-status points | planned |
+//! | `concentrator`| re-publishing lower nodes' points upward, commands downward       | planned |
+//! | [`store`]     | the event and command-audit store (SQLite, PostgreSQL), retention | present |
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+#![cfg_attr(not(test), deny(clippy::indexing_slicing))]
+
+pub mod store;

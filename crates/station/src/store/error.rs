@@ -1,0 +1,56 @@
+//! Errors of the event store.
+
+/// Everything that can go wrong in the event store.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum StoreError {
+    /// The store URL is not one of the accepted forms.
+    #[error(
+        "bad store URL {url:?}: {reason} (expected sqlite:PATH, sqlite::memory:, \
+         postgres://USER@HOST:PORT/DB or postgresql://...)"
+    )]
+    BadUrl {
+        /// The URL as given, with any password replaced by `***`.
+        url: String,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// The query cannot be run (page size out of range, malformed cursor).
+    #[error("invalid query: {0}")]
+    InvalidQuery(String),
+    /// A record cannot be stored as it is.
+    #[error("invalid record: {0}")]
+    InvalidRecord(String),
+    /// A stored row does not decode (written by a newer version, or damaged).
+    #[error("corrupt row: {0}")]
+    Corrupt(String),
+    /// The database was migrated by a newer version of Stanice.
+    #[error("database schema version {found} is newer than this program knows ({supported})")]
+    SchemaTooNew {
+        /// The version found in `schema_version`.
+        found: i64,
+        /// The newest version this program has migrations for.
+        supported: i64,
+    },
+    /// A migration failed.
+    #[error("migration {version} failed: {source}")]
+    Migration {
+        /// The version of the failing migration.
+        version: i64,
+        /// Why.
+        #[source]
+        source: Box<StoreError>,
+    },
+    /// The SQLite backend failed.
+    #[error("sqlite: {0}")]
+    Sqlite(#[from] rusqlite::Error),
+    /// The PostgreSQL backend failed.
+    #[error("postgres: {0}")]
+    Postgres(#[from] tokio_postgres::Error),
+    /// A worker thread of the SQLite backend could not be started.
+    #[error("cannot start a store thread: {0}")]
+    Thread(#[source] std::io::Error),
+    /// The store's worker thread is gone (the store is shutting down).
+    #[error("the store is closed")]
+    Closed,
+}

@@ -1,0 +1,177 @@
+//! The event and command-audit store.
+//!
+//! Every value change of every point ([`EventRecord`]) and every command with who issued it
+//! and what became of it ([`CommandRecord`]) goes into an [`EventStore`]. The railway
+//! station's regulator requires at least 60 days of events and a command audit with user
+//! and time; the lift's fault archive and the HMI's event list read the same store.
+//!
+//! Two backends implement the trait with the same schema and the same behaviour, checked by
+//! one shared test suite:
+//!
+//! - **SQLite** (`sqlite:PATH`, `sqlite::memory:`), embedded, the default. WAL mode; one
+//!   writer connection on a dedicated thread and reader connections on their own threads,
+//!   so async callers never block the runtime and queries never wait behind a batch.
+//! - **PostgreSQL** (`postgres://...`), the production backend, through `tokio-postgres`
+//!   with a small pool of connections.
+//!
+//! Open one with [`open_store`]; keep history bounded with [`spawn_retention`].
+//!
+//! # Schema
+//!
+//! Tables `events` and `commands`, versioned by `schema_version`; the migrations are SQL
+//! files under `migrations/sqlite/` and `migrations/postgres/`, applied at open. Times are
+//! milliseconds since the Unix epoch (UTC) in 64-bit integers; values are split into
+//! `value_kind` plus `value_int`/`value_float`/`value_text`; enums are stored as the stable
+//! codes of [`EventCause::code`], [`CommandOutcome::code`] and [`CommandPhase::code`].
+//! `events.event_ms` is the event time ([`EventRecord::event_time`]) that queries order by.
+//!
+//! # Example
+//!
+//! ```
+//! # async fn demo() -> Result<(), station::store::StoreError> {
+//! use station::store::{open_store, EventQuery, EventRecord, PointValue};
+//! let store = open_store("sqlite::memory:").await?;
+//! let now = chrono::Utc::now();
+//! store
+//!     .append_events(&[EventRecord::new("RH2", "RH2_V1_FA1_Zapnut", PointValue::Bool(true), now)])
+//!     .await?;
+//! let page = store.query_events(&EventQuery::default().with_point_prefix("RH2_")).await?;
+//! assert_eq!(page.items.len(), 1);
+//! # Ok(()) }
+//! ```
+
+mod error;
+mod model;
+mod postgres;
+mod query;
+mod retention;
+mod sqlite;
+
+use chrono::{DateTime, Utc};
+use std::future::Future;
+use std::pin::Pin;
+
+pub use error::StoreError;
+pub use model::{
+    Actor, CommandOutcome, CommandPhase, CommandRecord, EventCause, EventRecord, PointValue,
+    Quality, RecordId, SourceTime,
+};
+pub use postgres::{PostgresConfig, PostgresStore};
+pub use query::{
+    CommandQuery, Cursor, EventQuery, Order, Page, PointFilter, TimeBasis, DEFAULT_PAGE_SIZE,
+    MAX_PAGE_SIZE,
+};
+pub use retention::{spawn_retention, Retention, RetentionHandle};
+pub use sqlite::SqliteStore;
+
+/// A boxed future, so that [`EventStore`] can be used as `dyn EventStore`.
+pub type StoreFuture<'a, T> = Pin<Box<dyn Future<Output = Result<T, StoreError>> + Send + 'a>>;
+
+/// Row counts and the time span of what the store holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct StoreStats {
+    /// Number of stored events.
+    pub events: u64,
+    /// Number of stored command records.
+    pub commands: u64,
+    /// Received time of the oldest stored event.
+    pub oldest_event: Option<DateTime<Utc>>,
+    /// Received time of the newest stored event.
+    pub newest_event: Option<DateTime<Utc>>,
+}
+
+/// Which database a store runs on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Backend {
+    /// Embedded SQLite.
+    Sqlite,
+    /// PostgreSQL server.
+    Postgres,
+}
+
+/// The event and command-audit store. Implementations are cheap to share (`Arc<dyn
+/// EventStore>`) and safe to call from many tasks at once.
+pub trait EventStore: Send + Sync {
+    /// The database behind this store.
+    fn backend(&self) -> Backend;
+
+    /// Appends a batch of events in one transaction (all or nothing) and returns the ids the
+    /// store assigned, in the order of `events`. Ids grow with insertion order. Times keep
+    /// millisecond precision.
+    fn append_events<'a>(&'a self, events: &'a [EventRecord]) -> StoreFuture<'a, Vec<RecordId>>;
+
+    /// Appends one command record and returns its id.
+    fn append_command<'a>(&'a self, command: &'a CommandRecord) -> StoreFuture<'a, RecordId>;
+
+    /// One page of events matching `query`.
+    fn query_events<'a>(&'a self, query: &'a EventQuery) -> StoreFuture<'a, Page<EventRecord>>;
+
+    /// One page of command records matching `query`.
+    fn query_commands<'a>(
+        &'a self,
+        query: &'a CommandQuery,
+    ) -> StoreFuture<'a, Page<CommandRecord>>;
+
+    /// Deletes events received before `cutoff` and command records older than `cutoff`;
+    /// returns how many rows went.
+    fn purge_older_than(&self, cutoff: DateTime<Utc>) -> StoreFuture<'_, u64>;
+
+    /// Row counts and time span.
+    fn stats(&self) -> StoreFuture<'_, StoreStats>;
+}
+
+/// Opens (and migrates) the store named by `url`:
+///
+/// - `sqlite:PATH` (also `sqlite://PATH`): a database file, created when missing;
+/// - `sqlite::memory:`: a private in-memory database, gone when the store is dropped;
+/// - `postgres://USER[:PASSWORD]@HOST[:PORT]/DB[?options]` or `postgresql://...`: a
+///   PostgreSQL database (it must exist; the tables are created in the connection's
+///   `search_path` schema).
+pub async fn open_store(url: &str) -> Result<Box<dyn EventStore>, StoreError> {
+    let url = url.trim();
+    if let Some(rest) = url.strip_prefix("sqlite:") {
+        let path = rest.strip_prefix("//").unwrap_or(rest);
+        if path.is_empty() {
+            return Err(StoreError::BadUrl {
+                url: url.to_owned(),
+                reason: "no database path after sqlite:".to_owned(),
+            });
+        }
+        let store = if path == ":memory:" {
+            SqliteStore::open_in_memory().await?
+        } else {
+            SqliteStore::open(path).await?
+        };
+        Ok(Box::new(store))
+    } else if url.starts_with("postgres://") || url.starts_with("postgresql://") {
+        let config = PostgresConfig::from_url(url)?;
+        Ok(Box::new(PostgresStore::connect(config).await?))
+    } else {
+        let reason = match url.split_once(':') {
+            Some((scheme, _)) if !scheme.is_empty() => format!("unknown scheme {scheme:?}"),
+            _ => "no scheme".to_owned(),
+        };
+        Err(StoreError::BadUrl {
+            url: redact(url),
+            reason,
+        })
+    }
+}
+
+/// The URL with the password part of `user:password@` replaced by `***`.
+pub(crate) fn redact(url: &str) -> String {
+    let Some((scheme, rest)) = url.split_once("://") else {
+        return url.to_owned();
+    };
+    let (authority, tail) = match rest.find('/') {
+        Some(i) => rest.split_at(i),
+        None => (rest, ""),
+    };
+    match authority.rsplit_once('@') {
+        Some((userinfo, host)) => match userinfo.split_once(':') {
+            Some((user, _)) => format!("{scheme}://{user}:***@{host}{tail}"),
+            None => url.to_owned(),
+        },
+        None => url.to_owned(),
+    }
+}

@@ -1,0 +1,602 @@
+//! The records the store keeps: value changes ([`EventRecord`]) and the command audit
+//! ([`CommandRecord`]), with the small enums they are made of.
+//!
+//! Every enum has a stable numeric code ([`EventCause::code`] and friends): that code, not
+//! the Rust discriminant, is what the database holds, so reordering variants never changes
+//! stored data.
+
+use chrono::{DateTime, Utc};
+use std::fmt;
+
+use super::StoreError;
+
+/// Identifier of a stored row, assigned by the store in increasing order of insertion.
+pub type RecordId = i64;
+
+/// A typed point value, as the point database holds it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum PointValue {
+    /// Single-point information or a single command (on/off).
+    Bool(bool),
+    /// Double-point information or a double command: 0 and 3 indeterminate, 1 off, 2 on.
+    DoublePoint(u8),
+    /// Step position, scaled value, integrated total or any other integer.
+    Int(i64),
+    /// Normalized or short floating-point value.
+    Float(f64),
+    /// Bitstring of 32 bits.
+    Bits(u32),
+    /// Free text (device messages, fault descriptions).
+    Text(String),
+}
+
+impl PointValue {
+    /// The stable code of the value's kind as stored in the `value_kind` column.
+    pub fn kind_code(&self) -> i16 {
+        match self {
+            PointValue::Bool(_) => 1,
+            PointValue::DoublePoint(_) => 2,
+            PointValue::Int(_) => 3,
+            PointValue::Float(_) => 4,
+            PointValue::Bits(_) => 5,
+            PointValue::Text(_) => 6,
+        }
+    }
+
+    /// Splits the value into the `(value_kind, value_int, value_float, value_text)` columns.
+    pub(crate) fn to_columns(&self) -> (i16, Option<i64>, Option<f64>, Option<&str>) {
+        let kind = self.kind_code();
+        match self {
+            PointValue::Bool(b) => (kind, Some(i64::from(*b)), None, None),
+            PointValue::DoublePoint(d) => (kind, Some(i64::from(*d)), None, None),
+            PointValue::Int(i) => (kind, Some(*i), None, None),
+            // NaN is kept as a NULL float (SQLite turns NaN into NULL anyway).
+            PointValue::Float(f) => (kind, None, (!f.is_nan()).then_some(*f), None),
+            PointValue::Bits(b) => (kind, Some(i64::from(*b)), None, None),
+            PointValue::Text(t) => (kind, None, None, Some(t.as_str())),
+        }
+    }
+
+    /// Rebuilds a value from its columns; a row that does not fit is [`StoreError::Corrupt`].
+    pub(crate) fn from_columns(
+        kind: i16,
+        int: Option<i64>,
+        float: Option<f64>,
+        text: Option<String>,
+    ) -> Result<PointValue, StoreError> {
+        let need_int = || {
+            int.ok_or_else(|| StoreError::Corrupt(format!("value kind {kind} without an integer")))
+        };
+        let out_of_range =
+            |v: i64| StoreError::Corrupt(format!("value {v} out of range for value kind {kind}"));
+        Ok(match kind {
+            1 => match need_int()? {
+                0 => PointValue::Bool(false),
+                1 => PointValue::Bool(true),
+                v => return Err(out_of_range(v)),
+            },
+            2 => {
+                let v = need_int()?;
+                PointValue::DoublePoint(u8::try_from(v).map_err(|_| out_of_range(v))?)
+            }
+            3 => PointValue::Int(need_int()?),
+            4 => PointValue::Float(float.unwrap_or(f64::NAN)),
+            5 => {
+                let v = need_int()?;
+                PointValue::Bits(u32::try_from(v).map_err(|_| out_of_range(v))?)
+            }
+            6 => PointValue::Text(text.unwrap_or_default()),
+            other => return Err(StoreError::Corrupt(format!("unknown value kind {other}"))),
+        })
+    }
+}
+
+impl fmt::Display for PointValue {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            PointValue::Bool(b) => write!(f, "{}", if *b { "ON" } else { "OFF" }),
+            PointValue::DoublePoint(0) => f.write_str("INTERMEDIATE"),
+            PointValue::DoublePoint(1) => f.write_str("OFF"),
+            PointValue::DoublePoint(2) => f.write_str("ON"),
+            PointValue::DoublePoint(_) => f.write_str("INDETERMINATE"),
+            PointValue::Int(i) => write!(f, "{i}"),
+            PointValue::Float(x) => write!(f, "{x}"),
+            PointValue::Bits(b) => write!(f, "0x{b:08X}"),
+            PointValue::Text(t) => f.write_str(t),
+        }
+    }
+}
+
+/// Quality descriptor of a value (IEC 60870-5-101 7.2.6.3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
+pub struct Quality {
+    /// IV: the value is invalid (source failed, link down, module pulled).
+    pub invalid: bool,
+    /// NT: not topical, the value was not updated successfully at the last attempt.
+    pub not_topical: bool,
+    /// SB: substituted by an operator or an automatic source.
+    pub substituted: bool,
+    /// BL: blocked for transmission.
+    pub blocked: bool,
+    /// OV: overflow of the value range.
+    pub overflow: bool,
+}
+
+impl Quality {
+    /// Good quality: no flag set.
+    pub const GOOD: Quality = Quality {
+        invalid: false,
+        not_topical: false,
+        substituted: false,
+        blocked: false,
+        overflow: false,
+    };
+
+    /// Only IV set.
+    pub const INVALID: Quality = Quality {
+        invalid: true,
+        ..Quality::GOOD
+    };
+
+    /// The flags as the stored bit mask: IV = 1, NT = 2, SB = 4, BL = 8, OV = 16.
+    pub fn bits(self) -> u8 {
+        u8::from(self.invalid)
+            | u8::from(self.not_topical) << 1
+            | u8::from(self.substituted) << 2
+            | u8::from(self.blocked) << 3
+            | u8::from(self.overflow) << 4
+    }
+
+    /// The flags from the stored bit mask (unknown bits are ignored).
+    pub fn from_bits(bits: u8) -> Quality {
+        Quality {
+            invalid: bits & 1 != 0,
+            not_topical: bits & 2 != 0,
+            substituted: bits & 4 != 0,
+            blocked: bits & 8 != 0,
+            overflow: bits & 16 != 0,
+        }
+    }
+
+    /// True when no flag is set.
+    pub fn is_good(self) -> bool {
+        self.bits() == 0
+    }
+}
+
+impl fmt::Display for Quality {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let names = [
+            (self.invalid, "IV"),
+            (self.not_topical, "NT"),
+            (self.substituted, "SB"),
+            (self.blocked, "BL"),
+            (self.overflow, "OV"),
+        ];
+        let mut first = true;
+        for (set, name) in names {
+            if set {
+                if !first {
+                    f.write_str(",")?;
+                }
+                f.write_str(name)?;
+                first = false;
+            }
+        }
+        if first {
+            f.write_str("good")?;
+        }
+        Ok(())
+    }
+}
+
+/// The source time stamp of an event, as the outstation tagged it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct SourceTime {
+    /// The time, UTC; the store keeps milliseconds and drops anything finer.
+    pub time: DateTime<Utc>,
+    /// The time tag's IV bit: the outstation's clock was not synchronised or failed.
+    pub invalid: bool,
+}
+
+/// Why an event was produced (the cause of transmission, as the station sees it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum EventCause {
+    /// A spontaneous change (COT 3).
+    Spontaneous,
+    /// An answer to a (general or group) interrogation (COT 20..36).
+    Interrogated,
+    /// A cyclic or periodic transmission (COT 1).
+    Cyclic,
+    /// The result of a command (COT 11/12 as seen by the point database).
+    Command,
+    /// A local change at the node itself (local operation, PLC logic).
+    Local,
+    /// Return information caused by a remote command (COT 11).
+    ReturnRemote,
+    /// Return information caused by a local command (COT 12).
+    ReturnLocal,
+}
+
+impl EventCause {
+    /// Every cause, in code order.
+    pub const ALL: [EventCause; 7] = [
+        EventCause::Spontaneous,
+        EventCause::Interrogated,
+        EventCause::Cyclic,
+        EventCause::Command,
+        EventCause::Local,
+        EventCause::ReturnRemote,
+        EventCause::ReturnLocal,
+    ];
+
+    /// The stable stored code.
+    pub fn code(self) -> i16 {
+        match self {
+            EventCause::Spontaneous => 1,
+            EventCause::Interrogated => 2,
+            EventCause::Cyclic => 3,
+            EventCause::Command => 4,
+            EventCause::Local => 5,
+            EventCause::ReturnRemote => 6,
+            EventCause::ReturnLocal => 7,
+        }
+    }
+
+    /// The cause with this stored code, if any.
+    pub fn from_code(code: i16) -> Option<EventCause> {
+        EventCause::ALL.into_iter().find(|c| c.code() == code)
+    }
+}
+
+/// One recorded value change of a point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EventRecord {
+    /// Assigned by the store: `None` on append (any value given is ignored), `Some` in query
+    /// results.
+    pub id: Option<RecordId>,
+    /// The node (controller) that owns the point.
+    pub node: String,
+    /// The point's name in the node's point database.
+    pub point: String,
+    /// The information object address, when the point has one.
+    pub ioa: Option<u32>,
+    /// The new value.
+    pub value: PointValue,
+    /// Quality flags of the value.
+    pub quality: Quality,
+    /// The source time stamp; `None` when the value came without a time tag.
+    pub source_time: Option<SourceTime>,
+    /// When this station received or produced the event (its own clock), ms precision.
+    pub received_time: DateTime<Utc>,
+    /// Why the event was produced.
+    pub cause: EventCause,
+    /// Where it came from: the link or node name it arrived over (or the node itself).
+    pub origin: String,
+}
+
+impl EventRecord {
+    /// A spontaneous good-quality event without IOA or source time; adjust the fields as
+    /// needed.
+    pub fn new(
+        node: impl Into<String>,
+        point: impl Into<String>,
+        value: PointValue,
+        received_time: DateTime<Utc>,
+    ) -> EventRecord {
+        let node = node.into();
+        EventRecord {
+            id: None,
+            origin: node.clone(),
+            node,
+            point: point.into(),
+            ioa: None,
+            value,
+            quality: Quality::GOOD,
+            source_time: None,
+            received_time,
+            cause: EventCause::Spontaneous,
+        }
+    }
+
+    /// The time the event is filed under for [`super::TimeBasis::Source`]: the source time
+    /// when present and valid, otherwise the received time.
+    pub fn event_time(&self) -> DateTime<Utc> {
+        match self.source_time {
+            Some(SourceTime {
+                time,
+                invalid: false,
+            }) => time,
+            _ => self.received_time,
+        }
+    }
+}
+
+/// Who issued a command.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub enum Actor {
+    /// A logged-in user of the HMI or the command line.
+    User(String),
+    /// A controlling station over a link, by remote address (for example `10.0.0.5:40123`).
+    Remote(String),
+}
+
+impl Actor {
+    /// The user name or the remote address.
+    pub fn name(&self) -> &str {
+        match self {
+            Actor::User(n) | Actor::Remote(n) => n,
+        }
+    }
+
+    pub(crate) fn kind_code(&self) -> i16 {
+        match self {
+            Actor::User(_) => 1,
+            Actor::Remote(_) => 2,
+        }
+    }
+
+    pub(crate) fn from_columns(kind: i16, name: String) -> Result<Actor, StoreError> {
+        match kind {
+            1 => Ok(Actor::User(name)),
+            2 => Ok(Actor::Remote(name)),
+            other => Err(StoreError::Corrupt(format!("unknown actor kind {other}"))),
+        }
+    }
+}
+
+impl fmt::Display for Actor {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Actor::User(n) => write!(f, "user {n}"),
+            Actor::Remote(a) => write!(f, "remote {a}"),
+        }
+    }
+}
+
+/// The step of a select-before-operate sequence (or a direct execute).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum CommandPhase {
+    /// Select (S/E = 1).
+    Select,
+    /// Execute (S/E = 0), after a select or direct.
+    Execute,
+}
+
+impl CommandPhase {
+    /// The stable stored code.
+    pub fn code(self) -> i16 {
+        match self {
+            CommandPhase::Select => 1,
+            CommandPhase::Execute => 2,
+        }
+    }
+
+    /// The phase with this stored code, if any.
+    pub fn from_code(code: i16) -> Option<CommandPhase> {
+        match code {
+            1 => Some(CommandPhase::Select),
+            2 => Some(CommandPhase::Execute),
+            _ => None,
+        }
+    }
+}
+
+/// What became of a command.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum CommandOutcome {
+    /// Confirmed positively and carried out.
+    Executed,
+    /// Refused because the target board is in local mode (its Local/Remote switch).
+    RefusedLocalMode,
+    /// Refused because the user's permission level is too low.
+    RefusedPermission,
+    /// Refused for another reason (negative confirmation, interlock, unknown point).
+    Refused,
+    /// Accepted but the execution failed (no feedback, device error).
+    Failed,
+    /// No confirmation arrived in time.
+    TimedOut,
+}
+
+impl CommandOutcome {
+    /// Every outcome, in code order.
+    pub const ALL: [CommandOutcome; 6] = [
+        CommandOutcome::Executed,
+        CommandOutcome::RefusedLocalMode,
+        CommandOutcome::RefusedPermission,
+        CommandOutcome::Refused,
+        CommandOutcome::Failed,
+        CommandOutcome::TimedOut,
+    ];
+
+    /// The stable stored code.
+    pub fn code(self) -> i16 {
+        match self {
+            CommandOutcome::Executed => 1,
+            CommandOutcome::RefusedLocalMode => 2,
+            CommandOutcome::RefusedPermission => 3,
+            CommandOutcome::Refused => 4,
+            CommandOutcome::Failed => 5,
+            CommandOutcome::TimedOut => 6,
+        }
+    }
+
+    /// The outcome with this stored code, if any.
+    pub fn from_code(code: i16) -> Option<CommandOutcome> {
+        CommandOutcome::ALL.into_iter().find(|c| c.code() == code)
+    }
+}
+
+/// One audited command.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CommandRecord {
+    /// Assigned by the store: `None` on append (ignored), `Some` in query results.
+    pub id: Option<RecordId>,
+    /// When the command was issued (or its outcome became known), ms precision.
+    pub time: DateTime<Utc>,
+    /// Who issued it.
+    pub actor: Actor,
+    /// The node the command was addressed to.
+    pub node: String,
+    /// The target point's name.
+    pub point: String,
+    /// The target's information object address, when it has one.
+    pub ioa: Option<u32>,
+    /// The commanded value.
+    pub value: PointValue,
+    /// Select or execute.
+    pub phase: CommandPhase,
+    /// What became of it.
+    pub outcome: CommandOutcome,
+    /// Free text: the reason of a refusal, the device's answer, anything for the auditor.
+    pub detail: String,
+}
+
+/// Converts a time to stored milliseconds since the Unix epoch (finer parts are dropped).
+pub(crate) fn to_ms(t: DateTime<Utc>) -> i64 {
+    t.timestamp_millis()
+}
+
+/// Converts stored milliseconds back to a time.
+pub(crate) fn from_ms(ms: i64) -> Result<DateTime<Utc>, StoreError> {
+    DateTime::from_timestamp_millis(ms)
+        .ok_or_else(|| StoreError::Corrupt(format!("time {ms} ms out of range")))
+}
+
+/// Checks what both backends must refuse alike: empty names, NUL characters (PostgreSQL
+/// text cannot hold them), double-point values above 3.
+fn check_text(what: &str, s: &str, may_be_empty: bool) -> Result<(), StoreError> {
+    if !may_be_empty && s.is_empty() {
+        return Err(StoreError::InvalidRecord(format!("empty {what}")));
+    }
+    if s.contains('\0') {
+        return Err(StoreError::InvalidRecord(format!(
+            "{what} {s:?} contains a NUL character"
+        )));
+    }
+    Ok(())
+}
+
+fn check_value(v: &PointValue) -> Result<(), StoreError> {
+    match v {
+        PointValue::DoublePoint(d) if *d > 3 => Err(StoreError::InvalidRecord(format!(
+            "double-point value {d} out of range 0..=3"
+        ))),
+        PointValue::Text(t) => check_text("text value", t, true),
+        _ => Ok(()),
+    }
+}
+
+/// Refuses an event no backend can store faithfully.
+pub(crate) fn check_event(e: &EventRecord) -> Result<(), StoreError> {
+    check_text("node name", &e.node, false)?;
+    check_text("point name", &e.point, false)?;
+    check_text("origin", &e.origin, true)?;
+    check_value(&e.value)
+}
+
+/// Refuses a command record no backend can store faithfully.
+pub(crate) fn check_command(c: &CommandRecord) -> Result<(), StoreError> {
+    check_text("actor", c.actor.name(), false)?;
+    check_text("node name", &c.node, false)?;
+    check_text("point name", &c.point, false)?;
+    check_text("detail", &c.detail, true)?;
+    check_value(&c.value)
+}
+
+/// An event row as read from either backend, before decoding.
+pub(crate) struct RawEvent {
+    pub(crate) id: i64,
+    pub(crate) node: String,
+    pub(crate) point: String,
+    pub(crate) ioa: Option<i64>,
+    pub(crate) value_kind: i16,
+    pub(crate) value_int: Option<i64>,
+    pub(crate) value_float: Option<f64>,
+    pub(crate) value_text: Option<String>,
+    pub(crate) quality: i16,
+    pub(crate) source_ms: Option<i64>,
+    pub(crate) source_invalid: bool,
+    pub(crate) received_ms: i64,
+    pub(crate) cause: i16,
+    pub(crate) origin: String,
+}
+
+fn ioa_from(v: Option<i64>) -> Result<Option<u32>, StoreError> {
+    v.map(|i| u32::try_from(i).map_err(|_| StoreError::Corrupt(format!("IOA {i} out of range"))))
+        .transpose()
+}
+
+impl RawEvent {
+    pub(crate) fn decode(self) -> Result<EventRecord, StoreError> {
+        Ok(EventRecord {
+            id: Some(self.id),
+            node: self.node,
+            point: self.point,
+            ioa: ioa_from(self.ioa)?,
+            value: PointValue::from_columns(
+                self.value_kind,
+                self.value_int,
+                self.value_float,
+                self.value_text,
+            )?,
+            quality: Quality::from_bits(u8::try_from(self.quality & 0xFF).unwrap_or(0)),
+            source_time: self
+                .source_ms
+                .map(|ms| {
+                    Ok::<_, StoreError>(SourceTime {
+                        time: from_ms(ms)?,
+                        invalid: self.source_invalid,
+                    })
+                })
+                .transpose()?,
+            received_time: from_ms(self.received_ms)?,
+            cause: EventCause::from_code(self.cause)
+                .ok_or_else(|| StoreError::Corrupt(format!("unknown cause {}", self.cause)))?,
+            origin: self.origin,
+        })
+    }
+}
+
+/// A command row as read from either backend, before decoding.
+pub(crate) struct RawCommand {
+    pub(crate) id: i64,
+    pub(crate) time_ms: i64,
+    pub(crate) actor_kind: i16,
+    pub(crate) actor: String,
+    pub(crate) node: String,
+    pub(crate) point: String,
+    pub(crate) ioa: Option<i64>,
+    pub(crate) value_kind: i16,
+    pub(crate) value_int: Option<i64>,
+    pub(crate) value_float: Option<f64>,
+    pub(crate) value_text: Option<String>,
+    pub(crate) phase: i16,
+    pub(crate) outcome: i16,
+    pub(crate) detail: String,
+}
+
+impl RawCommand {
+    pub(crate) fn decode(self) -> Result<CommandRecord, StoreError> {
+        Ok(CommandRecord {
+            id: Some(self.id),
+            time: from_ms(self.time_ms)?,
+            actor: Actor::from_columns(self.actor_kind, self.actor)?,
+            node: self.node,
+            point: self.point,
+            ioa: ioa_from(self.ioa)?,
+            value: PointValue::from_columns(
+                self.value_kind,
+                self.value_int,
+                self.value_float,
+                self.value_text,
+            )?,
+            phase: CommandPhase::from_code(self.phase)
+                .ok_or_else(|| StoreError::Corrupt(format!("unknown phase {}", self.phase)))?,
+            outcome: CommandOutcome::from_code(self.outcome)
+                .ok_or_else(|| StoreError::Corrupt(format!("unknown outcome {}", self.outcome)))?,
+            detail: self.detail,
+        })
+    }
+}
