@@ -22,6 +22,7 @@ use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt};
 use tokio::net::TcpStream;
 use tokio::sync::{mpsc, oneshot};
 use tokio_rustls::rustls::pki_types::ServerName;
+use tracing::Instrument;
 
 use crate::asdu::{
     Asdu, AsduParams, Cause, CommonAddress, Cot, Element, InformationObject, Ioa, TypeId,
@@ -444,12 +445,19 @@ async fn run(
                     if events.send(ClientEvent::Connected { peer }).await.is_err() {
                         return;
                     }
+                    // One span per connection, as the server has: field engineers filter
+                    // logs by peer.
+                    let span = tracing::info_span!("iec104_client", %peer);
                     let outcome = match stream {
                         Transport::Plain(stream) => {
-                            drive(&config, stream, &mut requests, &events).await
+                            drive(&config, stream, &mut requests, &events)
+                                .instrument(span)
+                                .await
                         }
                         Transport::Tls(stream) => {
-                            drive(&config, *stream, &mut requests, &events).await
+                            drive(&config, *stream, &mut requests, &events)
+                                .instrument(span)
+                                .await
                         }
                     };
                     let reason = match outcome {
@@ -659,6 +667,7 @@ where
         }
         while session.poll_transmit(&mut output) {}
         if !output.is_empty() {
+            tracing::trace!(tx = ?format_args!("{output:02X?}"), "raw");
             if let Err(error) = writer.write_all(&output).await {
                 break DriveEnd::Lost(format!("write failed: {error}"));
             }
@@ -689,7 +698,10 @@ where
                 Ok(0) => break DriveEnd::Lost("closed by the server".to_owned()),
                 Ok(count) => {
                     let now = tokio::time::Instant::now().into_std();
-                    session.handle_input(now, input.get(..count).unwrap_or_default());
+                    let bytes = input.get(..count).unwrap_or_default();
+                    // The raw-bytes layer of the protocol log (APCI and ASDU log at debug).
+                    tracing::trace!(rx = ?format_args!("{bytes:02X?}"), "raw");
+                    session.handle_input(now, bytes);
                 }
                 Err(error) => break DriveEnd::Lost(format!("read failed: {error}")),
             },

@@ -187,6 +187,7 @@ impl Connection {
             self.fill_window(now);
             while self.session.poll_transmit(&mut output) {}
             if !output.is_empty() {
+                tracing::trace!(tx = ?format_args!("{output:02X?}"), "raw");
                 if let Err(error) = writer.write_all(&output).await {
                     return format!("write failed: {error}");
                 }
@@ -202,7 +203,10 @@ impl Connection {
                     Ok(0) => return "closed by the client".to_owned(),
                     Ok(count) => {
                         let now = tokio::time::Instant::now().into_std();
-                        self.session.handle_input(now, input.get(..count).unwrap_or_default());
+                        let bytes = input.get(..count).unwrap_or_default();
+                        // The raw-bytes layer of the protocol log (APCI and ASDU log at debug).
+                        tracing::trace!(rx = ?format_args!("{bytes:02X?}"), "raw");
+                        self.session.handle_input(now, bytes);
                     }
                     Err(error) => return format!("read failed: {error}"),
                 },
