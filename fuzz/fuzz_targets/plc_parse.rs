@@ -1,11 +1,18 @@
-//! Arbitrary bytes as Structured Text: lexing, parsing, checking and compiling must never
-//! panic; whatever compiles runs one cycle under a small loop budget without panicking.
+//! Arbitrary bytes as Structured Text: lexing and parsing must never panic; input that
+//! parses cleanly is also checked, compiled and run for one cycle under a small loop
+//! budget, none of which may panic either.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
     let text = String::from_utf8_lossy(data).into_owned();
+    let mut sources = plc::SourceMap::new();
+    sources.add("fuzz.st", text.clone());
+    let (_, diags) = plc::syntax::parse(&sources);
+    if diags.iter().any(plc::Diagnostic::is_error) {
+        return;
+    }
     let (sources, result) = plc::build(&[("fuzz.st".to_string(), text)]);
     if let Ok(compiled) = result {
         let mut p = plc::Plc::new(compiled, sources);

@@ -58,6 +58,8 @@ pub enum Code {
     Unsupported,
     /// A run-time fault: division by zero, array bounds, watchdog.
     RuntimeFault,
+    /// A local variable that is never used (warning).
+    UnusedVariable,
 }
 
 impl Code {
@@ -78,6 +80,7 @@ impl Code {
             Code::Recursion => "E0205",
             Code::Unsupported => "E0301",
             Code::RuntimeFault => "E0401",
+            Code::UnusedVariable => "W0001",
         }
     }
 }
@@ -99,6 +102,7 @@ impl Code {
             Code::NotConstant => "A constant is required: array bounds, string lengths, enumeration values, CASE labels, task INTERVAL/PRIORITY.",
             Code::Recursion => "A function calls itself directly or indirectly, or a function block contains an instance of itself. IEC 61131-3 forbids recursion; each function has one static frame.",
             Code::Unsupported => "A construct this compiler does not support yet (pointers, string indexing).",
+            Code::UnusedVariable => "A VAR/VAR_TEMP variable of a POU is never read or written. Remove it, or start its name with `_` to keep it deliberately.",
             Code::RuntimeFault => "The task was stopped at run time: integer division by zero, array index out of range, or the per-cycle loop budget was exhausted (endless loop), or the watchdog tripped.",
         }
     }

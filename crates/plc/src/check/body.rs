@@ -19,6 +19,7 @@ pub(super) fn check_bodies(c: &mut Checked, diags: &mut Vec<Diagnostic>) {
                 pou: None,
                 loops: 0,
                 calls: Vec::new(),
+                used: HashSet::new(),
             };
             bc.init(&init, &ty);
         }
@@ -38,6 +39,7 @@ pub(super) fn check_bodies(c: &mut Checked, diags: &mut Vec<Diagnostic>) {
             pou: Some(id),
             loops: 0,
             calls: Vec::new(),
+            used: HashSet::new(),
         };
         for v in &vars {
             if let Some(init) = &v.init {
@@ -48,6 +50,26 @@ pub(super) fn check_bodies(c: &mut Checked, diags: &mut Vec<Diagnostic>) {
             }
         }
         bc.stmts(&pou.body);
+        let used = std::mem::take(&mut bc.used);
+        let is_stdlib = bc.c.pou(id).is_some_and(|p| p.stdlib);
+        if !is_stdlib {
+            for (i, v) in vars.iter().enumerate() {
+                let local = matches!(v.kind, VarKind::Local | VarKind::Temp | VarKind::Static);
+                let result_var = pou.kind == PouKind::Function && i == 0;
+                if local
+                    && !result_var
+                    && !used.contains(&i)
+                    && !v.name.starts_with('_')
+                    && v.at.is_none()
+                {
+                    bc.diags.push(Diagnostic::warning(
+                        Code::UnusedVariable,
+                        v.span,
+                        format!("variable '{}' is declared but never used", v.name),
+                    ));
+                }
+            }
+        }
         let found = std::mem::take(&mut bc.calls);
         calls.insert(id, found);
     }
@@ -111,6 +133,8 @@ struct BodyCx<'a> {
     pou: Option<PouId>,
     loops: u32,
     calls: Vec<(PouId, Span)>,
+    /// Variables of the POU that are referenced.
+    used: HashSet<usize>,
 }
 
 fn is_untyped_literal(e: &Expr) -> bool {
@@ -577,6 +601,7 @@ impl BodyCx<'_> {
                     }
                 }
                 self.c.res.insert(e.id, Res::Local(i));
+                self.used.insert(i);
                 return t;
             }
         }

@@ -481,3 +481,22 @@ fn type_mismatch_points_at_the_declaration() {
         .explanation()
         .contains("DINT_TO_INT"));
 }
+
+#[test]
+fn unused_variables_are_warnings() {
+    let (sources, r) = plc::build(&[(
+        "w.st".into(),
+        "PROGRAM Main\nVAR used : INT; spare : BOOL; _kept : INT; END_VAR\nused := 1;\nEND_PROGRAM\n".into(),
+    )]);
+    let c = r.unwrap();
+    let w: Vec<String> = c
+        .checked
+        .warnings
+        .iter()
+        .map(|d| d.headline(&sources))
+        .collect();
+    assert_eq!(
+        w,
+        vec!["w.st:2:17: warning: variable 'spare' is declared but never used".to_string()]
+    );
+}
