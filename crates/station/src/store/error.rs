@@ -45,7 +45,7 @@ pub enum StoreError {
     #[error("sqlite: {0}")]
     Sqlite(#[from] rusqlite::Error),
     /// The PostgreSQL backend failed.
-    #[error("postgres: {0}")]
+    #[error("postgres: {}", postgres_message(.0))]
     Postgres(#[from] tokio_postgres::Error),
     /// A worker thread of the SQLite backend could not be started.
     #[error("cannot start a store thread: {0}")]
@@ -53,4 +53,27 @@ pub enum StoreError {
     /// The store's worker thread is gone (the store is shutting down).
     #[error("the store is closed")]
     Closed,
+}
+
+/// The error with the server's message: `tokio_postgres::Error` displays only "db error"
+/// and keeps the server's words (and connection failures' causes) in its source.
+fn postgres_message(e: &tokio_postgres::Error) -> String {
+    let mut text = e.to_string();
+    if let Some(db) = e.as_db_error() {
+        text = format!(
+            "{text}: {} {}: {}",
+            db.severity(),
+            db.code().code(),
+            db.message()
+        );
+        if let Some(detail) = db.detail() {
+            text.push_str(&format!(" ({detail})"));
+        }
+    } else if let Some(source) = std::error::Error::source(e) {
+        let cause = source.to_string();
+        if !text.contains(&cause) {
+            text = format!("{text}: {cause}");
+        }
+    }
+    text
 }

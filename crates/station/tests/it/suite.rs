@@ -1,0 +1,919 @@
+//! The shared suite: every function runs against SQLite and PostgreSQL alike.
+
+use chrono::{DateTime, Duration, TimeZone, Utc};
+use std::collections::HashSet;
+use std::sync::Arc;
+
+use station::store::{
+    Actor, CommandOutcome, CommandPhase, CommandQuery, CommandRecord, Cursor, EventCause,
+    EventQuery, EventRecord, EventStore, Order, Page, PointValue, Quality, SourceTime, StoreError,
+    TimeBasis, MAX_PAGE_SIZE,
+};
+
+/// 2026-03-01 00:00:00 UTC, the base of every test time.
+pub(crate) fn t0() -> DateTime<Utc> {
+    Utc.with_ymd_and_hms(2026, 3, 1, 0, 0, 0).unwrap()
+}
+
+pub(crate) fn at_ms(ms: i64) -> DateTime<Utc> {
+    t0() + Duration::milliseconds(ms)
+}
+
+pub(crate) fn ev(point: &str, value: PointValue, received_ms: i64) -> EventRecord {
+    EventRecord::new("RH2", point, value, at_ms(received_ms))
+}
+
+fn cmd(actor: Actor, point: &str, time_ms: i64, outcome: CommandOutcome) -> CommandRecord {
+    CommandRecord {
+        id: None,
+        time: at_ms(time_ms),
+        actor,
+        node: "RDRT".into(),
+        point: point.into(),
+        ioa: Some(2021),
+        value: PointValue::Bool(true),
+        phase: CommandPhase::Execute,
+        outcome,
+        detail: String::new(),
+    }
+}
+
+/// Compares records by their Debug form, so NaN equals NaN.
+fn same<T: std::fmt::Debug>(a: &T, b: &T) -> bool {
+    format!("{a:?}") == format!("{b:?}")
+}
+
+async fn all_events(store: &dyn EventStore, q: EventQuery) -> Vec<EventRecord> {
+    let mut out = Vec::new();
+    let mut after = None;
+    loop {
+        let page = store
+            .query_events(&q.clone().with_after(after))
+            .await
+            .unwrap();
+        assert!(page.items.len() <= q.limit);
+        out.extend(page.items);
+        match page.next {
+            Some(c) => after = Some(c),
+            None => return out,
+        }
+    }
+}
+
+fn points(events: &[EventRecord]) -> Vec<&str> {
+    events.iter().map(|e| e.point.as_str()).collect()
+}
+
+pub(crate) async fn round_trip_every_value_cause_and_quality(store: Arc<dyn EventStore>) {
+    let values = [
+        PointValue::Bool(false),
+        PointValue::Bool(true),
+        PointValue::DoublePoint(0),
+        PointValue::DoublePoint(1),
+        PointValue::DoublePoint(2),
+        PointValue::DoublePoint(3),
+        PointValue::Int(0),
+        PointValue::Int(i64::MIN),
+        PointValue::Int(i64::MAX),
+        PointValue::Int(-32768),
+        PointValue::Float(0.1),
+        PointValue::Float(-1.5e300),
+        PointValue::Float(f64::INFINITY),
+        PointValue::Float(f64::NEG_INFINITY),
+        PointValue::Float(f64::NAN),
+        PointValue::Float(f64::MIN_POSITIVE),
+        PointValue::Bits(0),
+        PointValue::Bits(u32::MAX),
+        PointValue::Bits(0x8000_0001),
+        PointValue::Text(String::new()),
+        PointValue::Text("Porucha osvětlení ŽST Vsetín – věž 12 ✓".into()),
+        PointValue::Text("quote ' and \" and \\ and %_".into()),
+    ];
+    let qualities = [
+        Quality::GOOD,
+        Quality::INVALID,
+        Quality::from_bits(0b11111),
+        Quality::from_bits(0b00110),
+        Quality::from_bits(0b11000),
+    ];
+    let mut input = Vec::new();
+    for (i, value) in values.iter().enumerate() {
+        for (j, cause) in EventCause::ALL.iter().enumerate() {
+            let k = (i * EventCause::ALL.len() + j) as i64;
+            let mut e = ev(&format!("P{i:02}"), value.clone(), 1000 + k);
+            e.cause = *cause;
+            e.quality = qualities[(i + j) % qualities.len()];
+            e.ioa = match k % 3 {
+                0 => None,
+                1 => Some(0xFF_FFFF),
+                _ => Some(k as u32),
+            };
+            e.source_time = match k % 3 {
+                0 => None,
+                1 => Some(SourceTime {
+                    time: at_ms(k),
+                    invalid: false,
+                }),
+                _ => Some(SourceTime {
+                    time: at_ms(-k * 1000),
+                    invalid: true,
+                }),
+            };
+            e.origin = format!("link-{j}");
+            e.node = format!("N{j}");
+            input.push(e);
+        }
+    }
+    let ids = store.append_events(&input).await.unwrap();
+    assert_eq!(ids.len(), input.len());
+    let got = all_events(
+        &*store,
+        EventQuery::default()
+            .with_time_basis(TimeBasis::Received)
+            .with_order(Order::OldestFirst)
+            .with_limit(MAX_PAGE_SIZE),
+    )
+    .await;
+    assert_eq!(got.len(), input.len());
+    for ((want, got), id) in input.iter().zip(&got).zip(&ids) {
+        let want = EventRecord {
+            id: Some(*id),
+            ..want.clone()
+        };
+        assert!(same(&want, got), "\nwant {want:?}\n got {got:?}");
+    }
+}
+
+pub(crate) async fn ids_increase_in_batch_order(store: Arc<dyn EventStore>) {
+    let mut all = Vec::new();
+    for batch in 0..5 {
+        let events: Vec<_> = (0..(batch * 7 + 1))
+            .map(|i| ev(&format!("B{batch}_{i}"), PointValue::Int(i), 0))
+            .collect();
+        let ids = store.append_events(&events).await.unwrap();
+        assert_eq!(ids.len(), events.len());
+        all.extend(ids);
+    }
+    assert!(all.windows(2).all(|w| w[0] < w[1]), "{all:?}");
+    // The ids belong to the right records.
+    let got = all_events(
+        &*store,
+        EventQuery::default()
+            .with_order(Order::OldestFirst)
+            .with_limit(1000),
+    )
+    .await;
+    let got_ids: Vec<_> = got.iter().map(|e| e.id.unwrap()).collect();
+    assert_eq!(got_ids, all);
+    assert_eq!(got[3].point, "B1_2");
+}
+
+pub(crate) async fn empty_batch_is_a_no_op(store: Arc<dyn EventStore>) {
+    assert!(store.append_events(&[]).await.unwrap().is_empty());
+    assert_eq!(store.stats().await.unwrap().events, 0);
+    let page = store.query_events(&EventQuery::default()).await.unwrap();
+    assert_eq!(
+        page,
+        Page {
+            items: vec![],
+            next: None
+        }
+    );
+}
+
+pub(crate) async fn filters_time_range_by_source_and_received(store: Arc<dyn EventStore>) {
+    // Received at 10 s steps; source times run backwards (the outstation buffered them).
+    let events: Vec<_> = (0..10)
+        .map(|i| {
+            let mut e = ev(&format!("T{i}"), PointValue::Int(i), i * 10_000);
+            e.source_time = Some(SourceTime {
+                time: at_ms(-(i * 1000)),
+                invalid: false,
+            });
+            e
+        })
+        .collect();
+    store.append_events(&events).await.unwrap();
+    let by_received = all_events(
+        &*store,
+        EventQuery::default()
+            .with_time_basis(TimeBasis::Received)
+            .with_range(Some(at_ms(20_000)), Some(at_ms(50_000)))
+            .with_order(Order::OldestFirst),
+    )
+    .await;
+    assert_eq!(points(&by_received), ["T2", "T3", "T4"]);
+    let by_source = all_events(
+        &*store,
+        EventQuery::default()
+            .with_range(Some(at_ms(-4000)), Some(at_ms(-1000)))
+            .with_order(Order::OldestFirst),
+    )
+    .await;
+    assert_eq!(points(&by_source), ["T4", "T3", "T2"]);
+    // Open ends.
+    let from_only = all_events(
+        &*store,
+        EventQuery::default().with_range(Some(at_ms(-1000)), None),
+    )
+    .await;
+    assert_eq!(points(&from_only), ["T0", "T1"]);
+    let to_only = all_events(
+        &*store,
+        EventQuery::default()
+            .with_time_basis(TimeBasis::Received)
+            .with_range(None, Some(at_ms(10_000))),
+    )
+    .await;
+    assert_eq!(points(&to_only), ["T0"]);
+    // An empty range.
+    let empty = all_events(
+        &*store,
+        EventQuery::default().with_range(Some(at_ms(5)), Some(at_ms(5))),
+    )
+    .await;
+    assert!(empty.is_empty());
+}
+
+pub(crate) async fn filters_point_exact_and_prefix(store: Arc<dyn EventStore>) {
+    let names = [
+        "RH2_V1_FA1",
+        "RH2_V1_FA1.1",
+        "RH2_P1",
+        "RH2",
+        "RH20_X",
+        "RH1_Q1",
+        "rh2_lower",
+        "RH2%odd",
+        "RH2_Ž",
+        "RH3",
+    ];
+    let events: Vec<_> = names
+        .iter()
+        .enumerate()
+        .map(|(i, n)| ev(n, PointValue::Bool(true), i as i64))
+        .collect();
+    store.append_events(&events).await.unwrap();
+    let q = EventQuery::default().with_order(Order::OldestFirst);
+    let exact = all_events(&*store, q.clone().with_point("RH2_V1_FA1")).await;
+    assert_eq!(points(&exact), ["RH2_V1_FA1"]);
+    let prefix = all_events(&*store, q.clone().with_point_prefix("RH2_")).await;
+    assert_eq!(
+        points(&prefix),
+        ["RH2_V1_FA1", "RH2_V1_FA1.1", "RH2_P1", "RH2_Ž"]
+    );
+    let prefix = all_events(&*store, q.clone().with_point_prefix("RH2")).await;
+    assert_eq!(
+        points(&prefix),
+        [
+            "RH2_V1_FA1",
+            "RH2_V1_FA1.1",
+            "RH2_P1",
+            "RH2",
+            "RH20_X",
+            "RH2%odd",
+            "RH2_Ž"
+        ]
+    );
+    // '%' and '_' are plain characters, not patterns.
+    let pct = all_events(&*store, q.clone().with_point_prefix("RH2%")).await;
+    assert_eq!(points(&pct), ["RH2%odd"]);
+    let none = all_events(&*store, q.clone().with_point("RH2_")).await;
+    assert!(none.is_empty());
+    let all = all_events(&*store, q.clone().with_point_prefix("")).await;
+    assert_eq!(all.len(), names.len());
+    let uni = all_events(&*store, q.with_point_prefix("RH2_Ž")).await;
+    assert_eq!(points(&uni), ["RH2_Ž"]);
+}
+
+pub(crate) async fn filters_node_cause_and_invalid(store: Arc<dyn EventStore>) {
+    let mut events = Vec::new();
+    for i in 0..60i64 {
+        let mut e = ev(&format!("P{i}"), PointValue::Int(i), i);
+        e.node = ["RH2", "RZS1", "RDRT"][(i % 3) as usize].into();
+        e.cause = EventCause::ALL[(i % 7) as usize];
+        e.quality = if i % 5 == 0 {
+            Quality::INVALID
+        } else if i % 5 == 1 {
+            Quality::from_bits(0b10) // NT only: not invalid
+        } else {
+            Quality::GOOD
+        };
+        events.push(e);
+    }
+    store.append_events(&events).await.unwrap();
+    let q = EventQuery::default()
+        .with_order(Order::OldestFirst)
+        .with_limit(7);
+    let rzs = all_events(&*store, q.clone().with_node("RZS1")).await;
+    assert_eq!(rzs.len(), 20);
+    assert!(rzs.iter().all(|e| e.node == "RZS1"));
+    let cyc = all_events(&*store, q.clone().with_causes([EventCause::Cyclic])).await;
+    assert_eq!(cyc.len(), (0..60).filter(|i| i % 7 == 2).count());
+    assert!(cyc.iter().all(|e| e.cause == EventCause::Cyclic));
+    let two = all_events(
+        &*store,
+        q.clone()
+            .with_causes([EventCause::ReturnLocal, EventCause::ReturnRemote]),
+    )
+    .await;
+    assert_eq!(
+        two.len(),
+        (0..60).filter(|i| i % 7 == 5 || i % 7 == 6).count()
+    );
+    let inv = all_events(&*store, q.clone().with_invalid_only(true)).await;
+    assert_eq!(inv.len(), 12);
+    assert!(inv.iter().all(|e| e.quality.invalid));
+    // Everything at once.
+    let mix = all_events(
+        &*store,
+        q.with_node("RH2")
+            .with_invalid_only(true)
+            .with_causes([EventCause::Spontaneous, EventCause::Interrogated])
+            .with_range(Some(at_ms(10)), None),
+    )
+    .await;
+    let want: Vec<String> = (10..60)
+        .filter(|i| i % 3 == 0 && i % 5 == 0 && (i % 7 == 0 || i % 7 == 1))
+        .map(|i| format!("P{i}"))
+        .collect();
+    assert_eq!(
+        points(&mix),
+        want.iter().map(String::as_str).collect::<Vec<_>>()
+    );
+}
+
+pub(crate) async fn ordering_by_event_time(store: Arc<dyn EventStore>) {
+    // Event time = valid source time, else received time.
+    let mut a = ev("A", PointValue::Bool(true), 5000);
+    a.source_time = Some(SourceTime {
+        time: at_ms(1000),
+        invalid: false,
+    });
+    let b = ev("B", PointValue::Bool(true), 2000); // no source time: 2000
+    let mut c = ev("C", PointValue::Bool(true), 3000);
+    c.source_time = Some(SourceTime {
+        time: at_ms(-99_000),
+        invalid: true, // an invalid time tag does not order: 3000
+    });
+    let mut d = ev("D", PointValue::Bool(true), 500);
+    d.source_time = Some(SourceTime {
+        time: at_ms(4000),
+        invalid: false,
+    });
+    store.append_events(&[a, b, c, d]).await.unwrap();
+    let newest = all_events(&*store, EventQuery::default()).await;
+    assert_eq!(points(&newest), ["D", "C", "B", "A"]);
+    let oldest = all_events(
+        &*store,
+        EventQuery::default().with_order(Order::OldestFirst),
+    )
+    .await;
+    assert_eq!(points(&oldest), ["A", "B", "C", "D"]);
+    let received = all_events(
+        &*store,
+        EventQuery::default().with_time_basis(TimeBasis::Received),
+    )
+    .await;
+    assert_eq!(points(&received), ["A", "C", "B", "D"]);
+}
+
+pub(crate) async fn pagination_with_equal_timestamps(store: Arc<dyn EventStore>) {
+    // 1000 events on only 7 distinct times, appended in shuffled batches.
+    let mut events: Vec<_> = (0..1000i64)
+        .map(|i| {
+            ev(
+                &format!("P{i:04}"),
+                PointValue::Int(i),
+                (i * 7919 % 7) * 1000,
+            )
+        })
+        .collect();
+    events.sort_by_key(|e| (e.point.len() * 31 + e.point.as_bytes()[3] as usize) % 13);
+    for chunk in events.chunks(97) {
+        store.append_events(chunk).await.unwrap();
+    }
+    for order in [Order::NewestFirst, Order::OldestFirst] {
+        for basis in [TimeBasis::Source, TimeBasis::Received] {
+            for limit in [1, 13, 999, 1000, 1001] {
+                if limit == 1 && basis == TimeBasis::Received {
+                    continue; // 1000 round trips once is enough
+                }
+                let got = all_events(
+                    &*store,
+                    EventQuery::default()
+                        .with_order(order)
+                        .with_time_basis(basis)
+                        .with_limit(limit),
+                )
+                .await;
+                assert_eq!(got.len(), 1000, "{order:?} {basis:?} {limit}");
+                let ids: HashSet<_> = got.iter().map(|e| e.id.unwrap()).collect();
+                assert_eq!(ids.len(), 1000, "duplicates with {order:?} {limit}");
+                let keys: Vec<_> = got
+                    .iter()
+                    .map(|e| (e.received_time, e.id.unwrap()))
+                    .collect();
+                let mut sorted = keys.clone();
+                sorted.sort();
+                if order == Order::NewestFirst {
+                    sorted.reverse();
+                }
+                assert_eq!(keys, sorted, "{order:?} {basis:?} {limit}");
+            }
+        }
+    }
+    // The last page's cursor is None; a page exactly at the end says so.
+    let page = store
+        .query_events(&EventQuery::default().with_limit(1000))
+        .await
+        .unwrap();
+    assert_eq!(page.items.len(), 1000);
+    assert_eq!(page.next, None);
+    // Filtered pagination (one time only, across several pages).
+    let some = all_events(
+        &*store,
+        EventQuery::default()
+            .with_range(Some(at_ms(3000)), Some(at_ms(4000)))
+            .with_limit(10),
+    )
+    .await;
+    assert_eq!(some.len(), (0..1000).filter(|i| i * 7919 % 7 == 3).count());
+    // A cursor travels as text.
+    let first = store
+        .query_events(&EventQuery::default().with_limit(10))
+        .await
+        .unwrap();
+    let cursor: Cursor = first.next.unwrap().to_string().parse().unwrap();
+    assert_eq!(Some(cursor), first.next);
+}
+
+pub(crate) async fn pagination_while_appending(store: Arc<dyn EventStore>) {
+    let events: Vec<_> = (0..100)
+        .map(|i| ev("P", PointValue::Int(i), i / 10))
+        .collect();
+    store.append_events(&events).await.unwrap();
+    let q = EventQuery::default().with_limit(15);
+    let mut seen = Vec::new();
+    let mut after = None;
+    let mut round = 0;
+    loop {
+        let page = store
+            .query_events(&q.clone().with_after(after))
+            .await
+            .unwrap();
+        seen.extend(page.items.iter().map(|e| e.id.unwrap()));
+        // New events arrive between pages, some with old times (late buffered events).
+        let late: Vec<_> = (0..5)
+            .map(|i| ev("NEW", PointValue::Int(i), 1000 + round))
+            .collect();
+        store.append_events(&late).await.unwrap();
+        round += 1;
+        match page.next {
+            Some(c) => after = Some(c),
+            None => break,
+        }
+    }
+    let unique: HashSet<_> = seen.iter().collect();
+    assert_eq!(unique.len(), seen.len(), "a row was handed out twice");
+    assert_eq!(seen.len(), 100, "newer rows do not slip into an older page");
+}
+
+pub(crate) async fn command_audit_round_trip_and_queries(store: Arc<dyn EventStore>) {
+    let outcomes = CommandOutcome::ALL;
+    let mut input = Vec::new();
+    for (i, outcome) in outcomes.iter().enumerate() {
+        for (j, actor) in [
+            Actor::User("dispecer.novak".into()),
+            Actor::User("Šárka".into()),
+            Actor::Remote("10.20.30.40:2404".into()),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let k = (i * 3 + j) as i64;
+            let mut c = cmd(actor, &format!("RH2_VypnoutQF{k}"), k * 100, *outcome);
+            c.phase = if k % 2 == 0 {
+                CommandPhase::Select
+            } else {
+                CommandPhase::Execute
+            };
+            c.value = match k % 4 {
+                0 => PointValue::Bool(false),
+                1 => PointValue::DoublePoint(2),
+                2 => PointValue::Float(12.5),
+                _ => PointValue::Int(-7),
+            };
+            c.ioa = (k % 2 == 0).then_some(2021 + k as u32);
+            c.detail = format!("detail {k}: negative confirmation ✗");
+            input.push(c);
+        }
+    }
+    let mut ids = Vec::new();
+    for c in &input {
+        ids.push(store.append_command(c).await.unwrap());
+    }
+    assert!(ids.windows(2).all(|w| w[0] < w[1]));
+    let all = store
+        .query_commands(&CommandQuery::default().with_order(Order::OldestFirst))
+        .await
+        .unwrap();
+    assert_eq!(all.items.len(), input.len());
+    for ((want, got), id) in input.iter().zip(&all.items).zip(&ids) {
+        let want = CommandRecord {
+            id: Some(*id),
+            ..want.clone()
+        };
+        assert_eq!(&want, got);
+    }
+    // By user.
+    let sarka = store
+        .query_commands(&CommandQuery::default().with_actor(&Actor::User("Šárka".into())))
+        .await
+        .unwrap();
+    assert_eq!(sarka.items.len(), outcomes.len());
+    assert!(sarka.items.iter().all(|c| c.actor.name() == "Šárka"));
+    assert!(sarka.items.windows(2).all(|w| w[0].time >= w[1].time));
+    // By remote address.
+    let remote = store
+        .query_commands(&CommandQuery::default().with_actor_name("10.20.30.40:2404"))
+        .await
+        .unwrap();
+    assert!(remote
+        .items
+        .iter()
+        .all(|c| matches!(c.actor, Actor::Remote(_))));
+    assert_eq!(remote.items.len(), outcomes.len());
+    // By outcome.
+    let refused = store
+        .query_commands(&CommandQuery::default().with_outcomes([
+            CommandOutcome::RefusedLocalMode,
+            CommandOutcome::RefusedPermission,
+        ]))
+        .await
+        .unwrap();
+    assert_eq!(refused.items.len(), 6);
+    let timed_out = store
+        .query_commands(
+            &CommandQuery::default()
+                .with_outcomes([CommandOutcome::TimedOut])
+                .with_actor_name("dispecer.novak"),
+        )
+        .await
+        .unwrap();
+    assert_eq!(timed_out.items.len(), 1);
+    assert_eq!(timed_out.items[0].outcome, CommandOutcome::TimedOut);
+    // By point and time.
+    let point = store
+        .query_commands(&CommandQuery::default().with_point("RH2_VypnoutQF4"))
+        .await
+        .unwrap();
+    assert_eq!(point.items.len(), 1);
+    let prefix = store
+        .query_commands(&CommandQuery::default().with_point_prefix("RH2_VypnoutQF1"))
+        .await
+        .unwrap();
+    assert_eq!(prefix.items.len(), 1 + 8); // QF1, QF10..QF17
+    let range = store
+        .query_commands(
+            &CommandQuery::default()
+                .with_range(Some(at_ms(300)), Some(at_ms(600)))
+                .with_node("RDRT"),
+        )
+        .await
+        .unwrap();
+    assert_eq!(range.items.len(), 3);
+    let other_node = store
+        .query_commands(&CommandQuery::default().with_node("RH2"))
+        .await
+        .unwrap();
+    assert!(other_node.items.is_empty());
+}
+
+pub(crate) async fn command_pagination(store: Arc<dyn EventStore>) {
+    for i in 0..95 {
+        store
+            .append_command(&cmd(
+                Actor::User(format!("u{}", i % 2)),
+                "P",
+                i / 10,
+                CommandOutcome::Executed,
+            ))
+            .await
+            .unwrap();
+    }
+    for order in [Order::NewestFirst, Order::OldestFirst] {
+        let q = CommandQuery::default()
+            .with_order(order)
+            .with_limit(9)
+            .with_actor_name("u1");
+        let mut after = None;
+        let mut seen = Vec::new();
+        loop {
+            let page = store
+                .query_commands(&q.clone().with_after(after))
+                .await
+                .unwrap();
+            seen.extend(page.items.iter().map(|c| (c.time, c.id.unwrap())));
+            match page.next {
+                Some(c) => after = Some(c),
+                None => break,
+            }
+        }
+        assert_eq!(seen.len(), 47);
+        let mut sorted = seen.clone();
+        sorted.sort();
+        sorted.dedup();
+        if order == Order::NewestFirst {
+            sorted.reverse();
+        }
+        assert_eq!(seen, sorted);
+    }
+}
+
+pub(crate) async fn purge_by_age(store: Arc<dyn EventStore>) {
+    let day = 86_400_000i64;
+    // 30 000 events over 100 days (purge works in chunks of 10 000).
+    let events: Vec<_> = (0..30_000i64)
+        .map(|i| {
+            let mut e = ev("P", PointValue::Int(i), i * (100 * day / 30_000));
+            // Source time does not matter for retention: the station's clock does.
+            e.source_time = Some(SourceTime {
+                time: at_ms(200 * day),
+                invalid: false,
+            });
+            e
+        })
+        .collect();
+    store.append_events(&events).await.unwrap();
+    for d in 0..100 {
+        store
+            .append_command(&cmd(
+                Actor::User("op".into()),
+                "P",
+                d * day,
+                CommandOutcome::Executed,
+            ))
+            .await
+            .unwrap();
+    }
+    let cutoff = at_ms(40 * day);
+    let expect_events = events.iter().filter(|e| e.received_time < cutoff).count() as u64;
+    let purged = store.purge_older_than(cutoff).await.unwrap();
+    assert_eq!(purged, expect_events + 40);
+    let stats = store.stats().await.unwrap();
+    assert_eq!(stats.events, 30_000 - expect_events);
+    assert_eq!(stats.commands, 60);
+    assert!(stats.oldest_event.unwrap() >= cutoff);
+    let oldest = store
+        .query_commands(&CommandQuery::default().with_order(Order::OldestFirst))
+        .await
+        .unwrap();
+    assert_eq!(oldest.items[0].time, cutoff);
+    // Purging again deletes nothing; appends still work.
+    assert_eq!(store.purge_older_than(cutoff).await.unwrap(), 0);
+    store
+        .append_events(&[ev("P", PointValue::Int(1), 0)])
+        .await
+        .unwrap();
+    assert_eq!(store.purge_older_than(cutoff).await.unwrap(), 1);
+}
+
+pub(crate) async fn stats_count_rows(store: Arc<dyn EventStore>) {
+    let empty = store.stats().await.unwrap();
+    assert_eq!((empty.events, empty.commands), (0, 0));
+    assert_eq!(empty.oldest_event, None);
+    let events: Vec<_> = (0..25)
+        .map(|i| ev("P", PointValue::Int(i), 1000 - i))
+        .collect();
+    store.append_events(&events).await.unwrap();
+    store
+        .append_command(&cmd(
+            Actor::Remote("1.2.3.4:5".into()),
+            "P",
+            0,
+            CommandOutcome::Failed,
+        ))
+        .await
+        .unwrap();
+    let s = store.stats().await.unwrap();
+    assert_eq!((s.events, s.commands), (25, 1));
+    assert_eq!(s.oldest_event, Some(at_ms(976)));
+    assert_eq!(s.newest_event, Some(at_ms(1000)));
+}
+
+pub(crate) async fn batch_of_100k_events(store: Arc<dyn EventStore>) {
+    let n = 100_000i64;
+    let events: Vec<_> = (0..n)
+        .map(|i| {
+            let mut e = ev(
+                &format!("ROV{:02}_P{}", i % 12, i % 50),
+                match i % 3 {
+                    0 => PointValue::Bool(i % 2 == 0),
+                    1 => PointValue::Float(i as f64 / 10.0),
+                    _ => PointValue::Int(i),
+                },
+                i,
+            );
+            e.ioa = Some((i % 5000) as u32);
+            e
+        })
+        .collect();
+    let started = std::time::Instant::now();
+    let ids = store.append_events(&events).await.unwrap();
+    let took = started.elapsed();
+    eprintln!(
+        "{:?}: 100000 events in one batch: {:.2} s",
+        store.backend(),
+        took.as_secs_f64()
+    );
+    assert_eq!(ids.len(), n as usize);
+    assert!(ids.windows(2).all(|w| w[0] < w[1]));
+    assert_eq!(store.stats().await.unwrap().events, n as u64);
+    let newest = store
+        .query_events(&EventQuery::default().with_limit(3))
+        .await
+        .unwrap();
+    assert_eq!(newest.items[0].received_time, at_ms(n - 1));
+    assert_eq!(newest.items[0].id, ids.last().copied());
+    let one_point = all_events(
+        &*store,
+        EventQuery::default()
+            .with_point("ROV07_P7")
+            .with_limit(MAX_PAGE_SIZE),
+    )
+    .await;
+    assert_eq!(
+        one_point.len(),
+        (0..n).filter(|i| i % 12 == 7 && i % 50 == 7).count()
+    );
+    let board = store
+        .query_events(
+            &EventQuery::default()
+                .with_point_prefix("ROV11_")
+                .with_range(Some(at_ms(50_000)), Some(at_ms(50_120)))
+                .with_limit(MAX_PAGE_SIZE),
+        )
+        .await
+        .unwrap();
+    assert_eq!(board.items.len(), 10);
+}
+
+pub(crate) async fn concurrent_writers(store: Arc<dyn EventStore>) {
+    let writers = 8;
+    let batches = 25;
+    let per_batch = 20;
+    let mut tasks = Vec::new();
+    for w in 0..writers {
+        let store = Arc::clone(&store);
+        tasks.push(tokio::spawn(async move {
+            let mut ids = Vec::new();
+            let mut command_ids = Vec::new();
+            for b in 0..batches {
+                let events: Vec<_> = (0..per_batch)
+                    .map(|i| {
+                        let mut e = ev(&format!("W{w}"), PointValue::Int(b * 100 + i), b);
+                        e.origin = format!("writer-{w}");
+                        e
+                    })
+                    .collect();
+                ids.extend(store.append_events(&events).await.unwrap());
+                command_ids.push(
+                    store
+                        .append_command(&cmd(
+                            Actor::User(format!("w{w}")),
+                            "P",
+                            b,
+                            CommandOutcome::Executed,
+                        ))
+                        .await
+                        .unwrap(),
+                );
+                // Readers run alongside.
+                store
+                    .query_events(&EventQuery::default().with_point(format!("W{w}")))
+                    .await
+                    .unwrap();
+            }
+            (ids, command_ids)
+        }));
+    }
+    let mut event_ids = HashSet::new();
+    let mut command_ids = HashSet::new();
+    for t in tasks {
+        let (events, commands) = t.await.unwrap();
+        for id in events {
+            assert!(event_ids.insert(id), "event id {id} handed out twice");
+        }
+        for id in commands {
+            assert!(command_ids.insert(id), "command id {id} handed out twice");
+        }
+    }
+    let s = store.stats().await.unwrap();
+    assert_eq!(s.events, (writers * batches * per_batch) as u64);
+    assert_eq!(s.commands, (writers * batches) as u64);
+    // Each writer's events are all there, in its order.
+    for w in 0..writers {
+        let got = all_events(
+            &*store,
+            EventQuery::default()
+                .with_point(format!("W{w}"))
+                .with_time_basis(TimeBasis::Received)
+                .with_order(Order::OldestFirst)
+                .with_limit(1000),
+        )
+        .await;
+        let values: Vec<_> = got
+            .iter()
+            .map(|e| match e.value {
+                PointValue::Int(v) => v,
+                _ => -1,
+            })
+            .collect();
+        let want: Vec<_> = (0..batches)
+            .flat_map(|b| (0..per_batch).map(move |i| b * 100 + i))
+            .collect();
+        assert_eq!(values, want);
+    }
+}
+
+pub(crate) async fn bad_input_is_refused_cleanly(store: Arc<dyn EventStore>) {
+    for limit in [0, MAX_PAGE_SIZE + 1, usize::MAX] {
+        let err = store
+            .query_events(&EventQuery::default().with_limit(limit))
+            .await
+            .unwrap_err();
+        assert!(matches!(err, StoreError::InvalidQuery(_)), "{err}");
+        let err = store
+            .query_commands(&CommandQuery::default().with_limit(limit))
+            .await
+            .unwrap_err();
+        assert!(matches!(err, StoreError::InvalidQuery(_)), "{err}");
+    }
+    for bad in [
+        "",
+        "12",
+        "a:b",
+        "1:",
+        ":2",
+        "1:2:3",
+        "99999999999999999999:1",
+    ] {
+        let err = bad.parse::<Cursor>().unwrap_err();
+        assert!(err.to_string().contains("cursor"), "{err}");
+    }
+    let good = ev("OK", PointValue::Bool(true), 0);
+    let bad_events = [
+        ev("", PointValue::Bool(true), 0),
+        ev("NUL\0point", PointValue::Bool(true), 0),
+        ev("P", PointValue::DoublePoint(4), 0),
+        ev("P", PointValue::Text("nul \0 inside".into()), 0),
+        EventRecord::new("", "P", PointValue::Int(1), at_ms(0)),
+    ];
+    for bad in bad_events {
+        // A batch with one bad record stores nothing.
+        let err = store
+            .append_events(&[good.clone(), bad.clone()])
+            .await
+            .unwrap_err();
+        assert!(matches!(err, StoreError::InvalidRecord(_)), "{err}");
+    }
+    let mut bad_cmd = cmd(Actor::User(String::new()), "P", 0, CommandOutcome::Refused);
+    assert!(matches!(
+        store.append_command(&bad_cmd).await.unwrap_err(),
+        StoreError::InvalidRecord(_)
+    ));
+    bad_cmd.actor = Actor::User("ok".into());
+    bad_cmd.detail = "nul\0".into();
+    assert!(matches!(
+        store.append_command(&bad_cmd).await.unwrap_err(),
+        StoreError::InvalidRecord(_)
+    ));
+    // Extreme but valid times and a cursor from nowhere work.
+    let mut far = ev("FAR", PointValue::Bool(true), 0);
+    far.received_time = Utc.with_ymd_and_hms(9999, 12, 31, 23, 59, 59).unwrap();
+    far.source_time = Some(SourceTime {
+        time: Utc.with_ymd_and_hms(1900, 1, 1, 0, 0, 0).unwrap(),
+        invalid: false,
+    });
+    store.append_events(&[far]).await.unwrap();
+    let page = store
+        .query_events(&EventQuery::default().with_after(Some(Cursor::new(i64::MAX, i64::MAX))))
+        .await
+        .unwrap();
+    assert_eq!(points(&page.items), ["FAR"]);
+    let page = store
+        .query_events(
+            &EventQuery::default()
+                .with_after(Some(Cursor::new(i64::MIN, i64::MIN)))
+                .with_range(
+                    Some(DateTime::<Utc>::MIN_UTC),
+                    Some(DateTime::<Utc>::MAX_UTC),
+                ),
+        )
+        .await
+        .unwrap();
+    assert!(page.items.is_empty());
+    // Nothing of the refused batches was stored.
+    assert_eq!(store.stats().await.unwrap().events, 1);
+}
