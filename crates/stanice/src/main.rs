@@ -7,6 +7,7 @@
 
 mod demo;
 mod iec104;
+mod plc;
 
 use clap::{Parser, Subcommand};
 use tracing_subscriber::EnvFilter;
@@ -32,6 +33,9 @@ enum Command {
     Iec104(iec104::Iec104Command),
     /// Run the railway-station demo.
     Demo(demo::DemoArgs),
+    /// Soft PLC: check and run Structured Text.
+    #[command(subcommand)]
+    Plc(plc::PlcCommand),
 }
 
 fn main() -> std::process::ExitCode {
@@ -58,6 +62,7 @@ fn main() -> std::process::ExitCode {
         match cli.command {
             Command::Iec104(command) => iec104::run(command).await,
             Command::Demo(args) => demo::run(args).await,
+            Command::Plc(command) => plc::run(command).await,
         }
     });
     match result {
