@@ -410,11 +410,29 @@ impl<'u> Decls<'u> {
                     if self.pou_index.contains_key(&p.name.key)
                         || self.type_slots.contains_key(&p.name.key)
                     {
-                        self.err(
+                        let mut d = Diagnostic::error(
                             Code::Duplicate,
                             p.name.span,
                             format!("'{}' is declared more than once", p.name.name),
                         );
+                        let first = self
+                            .pou_index
+                            .get(&p.name.key)
+                            .and_then(|id| self.pous.get(id.0))
+                            .map(|f| (f.item, f.stdlib));
+                        if let Some((item, stdlib)) = first {
+                            if let Some(Item::Pou(f)) = self.unit.items.get(item) {
+                                d = if stdlib {
+                                    d.with_note(format!(
+                                        "'{}' is part of the standard library",
+                                        f.name.name
+                                    ))
+                                } else {
+                                    d.with_label(f.name.span, "first declared here")
+                                };
+                            }
+                        }
+                        self.diags.push(d);
                         continue;
                     }
                     let id = PouId(self.pous.len());
@@ -481,12 +499,16 @@ impl<'u> Decls<'u> {
                 for d in &b.decls {
                     let ty = self.resolve_type(&d.ty, &d.names[..]);
                     for n in &d.names {
-                        if self.global_index.contains_key(&n.key) {
-                            self.err(
+                        if let Some(&first) = self.global_index.get(&n.key) {
+                            let mut d = Diagnostic::error(
                                 Code::Duplicate,
                                 n.span,
                                 format!("global variable '{}' is declared more than once", n.name),
                             );
+                            if let Some(f) = self.globals.get(first) {
+                                d = d.with_label(f.span, "first declared here");
+                            }
+                            self.diags.push(d);
                             continue;
                         }
                         self.global_index.insert(n.key.clone(), self.globals.len());
@@ -849,12 +871,17 @@ impl<'u> Decls<'u> {
                     ty = Ty::Void;
                 }
                 for n in &d.names {
-                    if index.contains_key(&n.key) {
-                        self.err(
+                    if let Some(&first) = index.get(&n.key) {
+                        let mut d = Diagnostic::error(
                             Code::Duplicate,
                             n.span,
                             format!("variable '{}' is declared more than once", n.name),
                         );
+                        if let Some(f) = vars.get(first) {
+                            let f: &VarInfo = f;
+                            d = d.with_label(f.span, "first declared here");
+                        }
+                        self.diags.push(d);
                         continue;
                     }
                     index.insert(n.key.clone(), vars.len());
