@@ -1,6 +1,11 @@
 //! Representative ST programs against the same algorithms in native Rust, side by side.
 //! Run: `cargo bench -p plc --bench st_vs_native`. Prints time per scan and the ratio.
-#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, clippy::disallowed_methods)]
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::disallowed_methods
+)]
 
 use plc::task::{ClockReading, TaskConfig};
 use std::hint::black_box;

@@ -32,8 +32,10 @@
 //!
 //! # Run-time rules
 //! - Integer overflow wraps at the declared width (two's complement), as on most PLCs.
-//! - Integer division/MOD by zero, array index out of range and an exhausted per-cycle loop
-//!   budget are *faults*: the task stops with a diagnostic; the host never panics.
+//! - Integer division/MOD by zero, array index out of range, a value outside the subrange
+//!   of a variable, field or input (checked on every store; FOR counters excepted) and an
+//!   exhausted per-cycle loop budget are *faults*: the task stops with a diagnostic; the
+//!   host never panics. Constant values outside a subrange are compile-time errors.
 //! - REAL arithmetic follows IEC 60559 (division by zero gives ±INF/NaN).
 //! - Functions have one static frame each (IEC 61131-3 forbids recursion, which the
 //!   checker rejects); VAR_IN_OUT is passed by reference (the callee holds the address of

@@ -309,6 +309,27 @@ impl BodyCx<'_> {
                     );
                     return;
                 }
+                // constant values outside a subrange are rejected at compile time
+                let range = match self.c.res.get(&target.id) {
+                    Some(Res::Local(i)) => self
+                        .pou
+                        .and_then(|p| self.c.pou(p))
+                        .and_then(|p| p.vars.get(*i))
+                        .and_then(|v| v.range),
+                    Some(Res::Global(g)) => self.c.globals.get(*g).and_then(|v| v.range),
+                    _ => None,
+                };
+                if let (Some((lo, hi)), ExprKind::Literal(Literal::Int(v, _))) =
+                    (range, &value.kind)
+                {
+                    if *v < i128::from(lo) || *v > i128::from(hi) {
+                        self.err(
+                            Code::TypeMismatch,
+                            value.span,
+                            format!("value {v} is outside the subrange {lo}..{hi}"),
+                        );
+                    }
+                }
                 if !self.coerce_to(value, &vt, &tt, "value") {
                     // point at the declaration of the target variable
                     let decl = match self.c.res.get(&target.id) {

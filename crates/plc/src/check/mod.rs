@@ -69,6 +69,8 @@ pub struct VarInfo {
     pub init: Option<Init>,
     /// Declaration.
     pub span: Span,
+    /// Subrange bounds when the variable's type is a subrange (checked on every store).
+    pub range: Option<(i64, i64)>,
 }
 
 /// A checked POU.
@@ -524,6 +526,7 @@ impl<'u> Decls<'u> {
                             at: d.at.as_ref().map(|a| a.0.clone()),
                             init: d.init.clone(),
                             span: n.span,
+                            range: self.subrange_of(&d.ty),
                         });
                     }
                 }
@@ -553,6 +556,31 @@ impl<'u> Decls<'u> {
             }
             _ => None,
         }
+    }
+
+    /// Bounds of a subrange type, written directly or through TYPE aliases.
+    fn subrange_of(&self, t: &TypeRef) -> Option<(i64, i64)> {
+        let mut t = t.clone();
+        for _ in 0..32 {
+            match &t {
+                TypeRef::Subrange { lo, hi, .. } => {
+                    let (a, b) = (self.const_int(lo)?, self.const_int(hi)?);
+                    return Some((i64::try_from(a).ok()?, i64::try_from(b).ok()?));
+                }
+                TypeRef::Named(id) => {
+                    if !self.type_slots.contains_key(&id.key) {
+                        return None;
+                    }
+                    let decl = self.unit.items.iter().find_map(|it| match it {
+                        Item::Types(d) => d.iter().find(|d| d.name.key == id.key),
+                        _ => None,
+                    })?;
+                    t = decl.ty.clone();
+                }
+                _ => return None,
+            }
+        }
+        None
     }
 
     fn named_type(&mut self, key: &str, span: Span) -> Option<Ty> {
@@ -628,6 +656,7 @@ impl<'u> Decls<'u> {
                     ty: ty.clone(),
                     offset: off,
                     init: d.init.clone(),
+                    range: self.subrange_of(&d.ty),
                 });
                 off = off.plus(size_of(&ty, &self.types, &self.pous));
             }
@@ -810,6 +839,7 @@ impl<'u> Decls<'u> {
                 at: None,
                 init: None,
                 span: pou.name.span,
+                range: None,
             });
             off = off.plus(sz);
         }
@@ -904,6 +934,11 @@ impl<'u> Decls<'u> {
                         at: d.at.as_ref().map(|a| a.0.clone()),
                         init: d.init.clone(),
                         span: n.span,
+                        range: if b.kind == VarKind::InOut {
+                            None
+                        } else {
+                            self.subrange_of(&d.ty)
+                        },
                     });
                     off = off.plus(sz);
                 }

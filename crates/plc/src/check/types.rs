@@ -326,6 +326,8 @@ pub struct Field {
     pub offset: Size,
     /// Initial value.
     pub init: Option<crate::syntax::Init>,
+    /// Subrange bounds when the field's type is a subrange.
+    pub range: Option<(i64, i64)>,
 }
 
 /// An enumeration.

@@ -29,6 +29,8 @@ pub(crate) struct Place {
     pub(crate) direct: Option<DirectAddress>,
     /// The single run-time index of a one-index access on a static base (fast path).
     pub(crate) index1: Option<Rc<Index1>>,
+    /// Subrange bounds checked on stores, with the span of the access for the fault.
+    pub(crate) range: Option<(i64, i64, Span)>,
 }
 
 /// How the index value is computed.
@@ -86,6 +88,7 @@ impl Place {
             bit: None,
             direct: None,
             index1: None,
+            range: None,
         }
     }
     pub(crate) fn abs(off: Size, ty: Ty) -> Place {
@@ -171,7 +174,14 @@ impl Cx<'_> {
         match &e.kind {
             ExprKind::Name { .. } => {
                 let r = self.c.res.get(&e.id)?.clone();
-                self.var_place(&r)
+                let mut p = self.var_place(&r)?;
+                let range = match r {
+                    Res::Local(i) => self.c.pou(self.pou?)?.vars.get(i)?.range,
+                    Res::Global(g) => self.c.globals.get(g)?.range,
+                    _ => None,
+                };
+                p.range = range.map(|(lo, hi)| (lo, hi, e.span));
+                Some(p)
             }
             ExprKind::Direct(d) => {
                 let da = DirectAddress::parse(d)?;
@@ -185,32 +195,37 @@ impl Cx<'_> {
                     let p = self.c.pou(*pid)?;
                     let Res::PouVar(_, i) = r else { return None };
                     let v = p.vars.get(i)?;
-                    return Some(Place::abs(p.base?.plus(v.offset), v.ty.clone()));
+                    let mut place = Place::abs(p.base?.plus(v.offset), v.ty.clone());
+                    place.range = v.range.map(|(lo, hi)| (lo, hi, e.span));
+                    return Some(place);
                 }
                 let mut bp = self.place(base)?;
-                let (off, ty) = match (&bp.ty, r) {
+                let (off, ty, range) = match (&bp.ty, r) {
                     (Ty::Struct(id), Res::Field(i)) => {
                         let f = self.c.types.struct_def(*id)?.fields.get(i)?;
-                        (f.offset, f.ty.clone())
+                        (f.offset, f.ty.clone(), f.range)
                     }
                     (Ty::Fb(_), Res::PouVar(pid, i)) => {
                         let v = self.c.pou(pid)?.vars.get(i)?;
-                        (v.offset, v.ty.clone())
+                        (v.offset, v.ty.clone(), v.range)
                     }
                     _ => return None,
                 };
                 bp.off = bp.off.plus(off);
                 bp.ty = ty;
+                bp.range = range.map(|(lo, hi)| (lo, hi, e.span));
                 Some(bp)
             }
             ExprKind::Bit(base, bit) => {
                 let mut bp = self.place(base)?;
+                bp.range = None;
                 bp.bit = Some(*bit);
                 bp.ty = Ty::Bool;
                 Some(bp)
             }
             ExprKind::Index(base, idx) => {
                 let mut bp = self.place(base)?;
+                bp.range = None;
                 let Ty::Array(a) = bp.ty.clone() else {
                     return None;
                 };
@@ -398,6 +413,22 @@ impl Cx<'_> {
     /// Stores a scalar value into a place (string truncation, bit insertion, I/O image).
     pub(crate) fn store(&self, p: &Place, v: CE) -> StmtFn {
         let off = p.off;
+        let v = match (v, p.range) {
+            (CE::I(f), Some((lo, hi, span))) => CE::I(Box::new(move |vm| {
+                let x = f(vm)?;
+                if x < lo || x > hi {
+                    return Err(FaultKind::RangeError {
+                        span,
+                        value: x,
+                        lo,
+                        hi,
+                    }
+                    .into());
+                }
+                Ok(x)
+            })),
+            (v, _) => v,
+        };
         if let Some(d) = p.direct {
             let CE::I(f) = v else {
                 return Box::new(|_| Ok(Flow::Normal));
@@ -726,6 +757,7 @@ impl Cx<'_> {
             let Some(v) = pou.vars.get(idx) else { continue };
             let target = Place {
                 base: Base::Callee,
+                range: v.range.map(|(lo, hi)| (lo, hi, a.value.span)),
                 ..Place::frame(v.offset, v.ty.clone())
             };
             if a.output {
@@ -800,7 +832,11 @@ impl Cx<'_> {
 
     /// Stores an argument expression: inline operand when simple.
     fn arg_pre(&mut self, e: &Expr, target: &Place, direct: bool) -> Pre {
-        if direct && target.base == Base::Callee && target.dynamic.is_none() && target.bit.is_none()
+        if direct
+            && target.base == Base::Callee
+            && target.dynamic.is_none()
+            && target.bit.is_none()
+            && target.range.is_none()
         {
             if let Some(o) = self.simple_int(e) {
                 return Pre::Direct(Binder::Inline(target.off.i, o));

@@ -43,6 +43,18 @@ pub enum FaultKind {
         /// Upper bound.
         hi: i64,
     },
+    /// A value stored into a subrange variable is outside its range.
+    #[error("value {value} outside the subrange {lo}..{hi}")]
+    RangeError {
+        /// Where.
+        span: Span,
+        /// The value.
+        value: i64,
+        /// Lower bound.
+        lo: i64,
+        /// Upper bound.
+        hi: i64,
+    },
     /// The loop-iteration budget of one cycle is exhausted (endless loop).
     #[error("loop iteration budget of the cycle exhausted (endless loop?)")]
     LoopBudget(Span),
@@ -79,7 +91,9 @@ impl Fault {
     pub fn span(&self) -> Option<Span> {
         match &*self.0 {
             FaultKind::DivisionByZero(s) | FaultKind::LoopBudget(s) => Some(*s),
-            FaultKind::IndexOutOfRange { span, .. } => Some(*span),
+            FaultKind::IndexOutOfRange { span, .. } | FaultKind::RangeError { span, .. } => {
+                Some(*span)
+            }
             FaultKind::Memory => None,
         }
     }
