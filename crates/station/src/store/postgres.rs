@@ -7,12 +7,13 @@
 //! is dropped and replaced on the next checkout, so the store survives a server restart.
 
 use chrono::{DateTime, Utc};
+use std::collections::HashMap;
 use std::str::FromStr;
 use std::sync::Mutex;
 use std::time::Duration;
 use tokio::sync::{Semaphore, SemaphorePermit};
 use tokio_postgres::types::ToSql;
-use tokio_postgres::{Client, NoTls, Row};
+use tokio_postgres::{Client, NoTls, Row, Statement};
 
 use super::model::{
     check_command, check_event, from_ms, to_ms, CommandRecord, EventRecord, RawCommand, RawEvent,
@@ -98,28 +99,50 @@ impl PostgresConfig {
     }
 }
 
-/// The pool: idle clients and a semaphore limiting how many are in use.
+/// A pooled connection with the statements prepared on it so far.
+struct Conn {
+    client: Client,
+    prepared: HashMap<&'static str, Statement>,
+}
+
+impl Conn {
+    /// The statement for `sql`, prepared once per connection (saves a round trip on every
+    /// later use).
+    async fn prepared(&mut self, sql: &'static str) -> Result<Statement, StoreError> {
+        if let Some(stmt) = self.prepared.get(sql) {
+            return Ok(stmt.clone());
+        }
+        let stmt = self.client.prepare(sql).await?;
+        self.prepared.insert(sql, stmt.clone());
+        Ok(stmt)
+    }
+}
+
+/// The pool: idle connections and a semaphore limiting how many are in use.
 struct Pool {
     config: tokio_postgres::Config,
-    idle: Mutex<Vec<Client>>,
+    idle: Mutex<Vec<Conn>>,
     permits: Semaphore,
 }
 
-/// A client checked out of the pool.
+/// A connection checked out of the pool.
 struct Lease<'a> {
-    client: Client,
+    conn: Conn,
     _permit: SemaphorePermit<'a>,
 }
 
 impl Pool {
-    async fn connect(&self) -> Result<Client, StoreError> {
+    async fn connect(&self) -> Result<Conn, StoreError> {
         let (client, connection) = self.config.connect(NoTls).await?;
         tokio::spawn(async move {
             if let Err(e) = connection.await {
                 tracing::warn!(error = %e, "PostgreSQL connection closed");
             }
         });
-        Ok(client)
+        Ok(Conn {
+            client,
+            prepared: HashMap::new(),
+        })
     }
 
     async fn checkout(&self) -> Result<Lease<'_>, StoreError> {
@@ -134,26 +157,26 @@ impl Pool {
                 Err(_) => None,
             };
             match next {
-                Some(c) if c.is_closed() => continue,
+                Some(c) if c.client.is_closed() => continue,
                 other => break other,
             }
         };
-        let client = match idle {
+        let conn = match idle {
             Some(c) => c,
             None => self.connect().await?,
         };
         Ok(Lease {
-            client,
+            conn,
             _permit: permit,
         })
     }
 
     fn give_back(&self, lease: Lease<'_>) {
-        if lease.client.is_closed() {
+        if lease.conn.client.is_closed() {
             return;
         }
         if let Ok(mut idle) = self.idle.lock() {
-            idle.push(lease.client);
+            idle.push(lease.conn);
         }
     }
 }
@@ -229,7 +252,7 @@ impl PostgresStore {
             permits: Semaphore::new(config.pool_size.max(1)),
         };
         let mut lease = pool.checkout().await?;
-        let migrated = migrate(&mut lease.client).await;
+        let migrated = migrate(&mut lease.conn.client).await;
         pool.give_back(lease);
         migrated?;
         Ok(PostgresStore {
@@ -291,6 +314,13 @@ const INSERT_ONE: &str = "INSERT INTO events (node, point, ioa, value_kind, valu
      value_float, value_text, quality, source_ms, source_invalid, received_ms, event_ms, cause, \
      origin) VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14) RETURNING id";
 
+const NEXT_IDS: &str = "SELECT nextval(pg_get_serial_sequence('events', 'id')) \
+     FROM generate_series(1, $1::int8)";
+
+const INSERT_COMMAND: &str = "INSERT INTO commands (time_ms, actor_kind, actor, node, point, \
+     ioa, value_kind, value_int, value_float, value_text, phase, outcome, detail) \
+     VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13) RETURNING id";
+
 const INSERT_MANY: &str = "INSERT INTO events (id, node, point, ioa, value_kind, value_int, \
      value_float, value_text, quality, source_ms, source_invalid, received_ms, event_ms, cause, \
      origin) SELECT * FROM unnest($1::int8[], $2::text[], $3::text[], $4::int8[], $5::int2[], \
@@ -331,11 +361,13 @@ impl<'a> EventColumns<'a> {
     }
 }
 
-async fn insert_one(client: &Client, e: &EventRecord) -> Result<RecordId, StoreError> {
+async fn insert_one(conn: &mut Conn, e: &EventRecord) -> Result<RecordId, StoreError> {
     let c = EventColumns::of(e);
-    let row = client
+    let stmt = conn.prepared(INSERT_ONE).await?;
+    let row = conn
+        .client
         .query_one(
-            INSERT_ONE,
+            &stmt,
             &[
                 &e.node,
                 &e.point,
@@ -357,26 +389,20 @@ async fn insert_one(client: &Client, e: &EventRecord) -> Result<RecordId, StoreE
     Ok(row.try_get(0)?)
 }
 
-async fn insert_many(
-    client: &mut Client,
-    events: &[EventRecord],
-) -> Result<Vec<RecordId>, StoreError> {
-    let tx = client.transaction().await?;
+async fn insert_many(conn: &mut Conn, events: &[EventRecord]) -> Result<Vec<RecordId>, StoreError> {
+    let stmt = conn.prepared(INSERT_MANY).await?;
+    let next_ids = conn.prepared(NEXT_IDS).await?;
+    let tx = conn.client.transaction().await?;
     // Ids come from the identity sequence first, so they are known, increasing and in the
     // order of `events` (RETURNING makes no promise about order).
     let n = i64::try_from(events.len()).unwrap_or(i64::MAX);
     let mut ids: Vec<i64> = tx
-        .query(
-            "SELECT nextval(pg_get_serial_sequence('events', 'id')) \
-             FROM generate_series(1, $1::int8)",
-            &[&n],
-        )
+        .query(&next_ids, &[&n])
         .await?
         .iter()
         .map(|r| r.try_get(0))
         .collect::<Result<_, _>>()?;
     ids.sort_unstable();
-    let stmt = tx.prepare(INSERT_MANY).await?;
     for (chunk, chunk_ids) in events.chunks(INSERT_CHUNK).zip(ids.chunks(INSERT_CHUNK)) {
         let cols: Vec<EventColumns<'_>> = chunk.iter().map(EventColumns::of).collect();
         let node: Vec<&str> = chunk.iter().map(|e| e.node.as_str()).collect();
@@ -420,13 +446,13 @@ async fn insert_many(
     Ok(ids)
 }
 
-async fn insert_command(client: &Client, c: &CommandRecord) -> Result<RecordId, StoreError> {
+async fn insert_command(conn: &mut Conn, c: &CommandRecord) -> Result<RecordId, StoreError> {
     let (kind, int, float, text) = c.value.to_columns();
-    let row = client
+    let stmt = conn.prepared(INSERT_COMMAND).await?;
+    let row = conn
+        .client
         .query_one(
-            "INSERT INTO commands (time_ms, actor_kind, actor, node, point, ioa, value_kind, \
-             value_int, value_float, value_text, phase, outcome, detail) \
-             VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13) RETURNING id",
+            &stmt,
             &[
                 &to_ms(c.time),
                 &c.actor.kind_code(),
@@ -450,7 +476,7 @@ async fn insert_command(client: &Client, c: &CommandRecord) -> Result<RecordId, 
 impl PostgresStore {
     async fn query_rows(&self, sql: &str, params: &[Param]) -> Result<Vec<Row>, StoreError> {
         let lease = self.pool.checkout().await?;
-        let rows = lease.client.query(sql, &sql_params(params)).await;
+        let rows = lease.conn.client.query(sql, &sql_params(params)).await;
         self.pool.give_back(lease);
         Ok(rows?)
     }
@@ -469,8 +495,8 @@ impl EventStore for PostgresStore {
             events.iter().try_for_each(check_event)?;
             let mut lease = self.pool.checkout().await?;
             let result = match events {
-                [one] => insert_one(&lease.client, one).await.map(|id| vec![id]),
-                _ => insert_many(&mut lease.client, events).await,
+                [one] => insert_one(&mut lease.conn, one).await.map(|id| vec![id]),
+                _ => insert_many(&mut lease.conn, events).await,
             };
             self.pool.give_back(lease);
             result
@@ -480,8 +506,8 @@ impl EventStore for PostgresStore {
     fn append_command<'a>(&'a self, command: &'a CommandRecord) -> StoreFuture<'a, RecordId> {
         Box::pin(async move {
             check_command(command)?;
-            let lease = self.pool.checkout().await?;
-            let result = insert_command(&lease.client, command).await;
+            let mut lease = self.pool.checkout().await?;
+            let result = insert_command(&mut lease.conn, command).await;
             self.pool.give_back(lease);
             result
         })
@@ -526,7 +552,11 @@ impl EventStore for PostgresStore {
                 );
                 loop {
                     let lease = self.pool.checkout().await?;
-                    let n = lease.client.execute(&sql, &[&cutoff, &PURGE_CHUNK]).await;
+                    let n = lease
+                        .conn
+                        .client
+                        .execute(&sql, &[&cutoff, &PURGE_CHUNK])
+                        .await;
                     self.pool.give_back(lease);
                     let n = n?;
                     total += n;

@@ -114,6 +114,8 @@ fn open_writer(path: &Path) -> Result<Connection, StoreError> {
     }
     conn.pragma_update(None, "synchronous", "NORMAL")?;
     migrate(&conn)?;
+    // Analyses what needs it at open (SQLite's advice for long-lived connections).
+    conn.execute_batch("PRAGMA optimize = 0x10002")?;
     Ok(conn)
 }
 
@@ -414,6 +416,11 @@ impl EventStore for SqliteStore {
                     }
                 }
             }
+            // Refresh the planner's statistics now and then (cheap, hourly with retention):
+            // they decide between the point index and the time index for prefix filters.
+            self.writer
+                .run(|c| Ok(c.execute_batch("PRAGMA optimize")?))
+                .await?;
             Ok(total)
         })
     }
