@@ -369,6 +369,40 @@ impl Plc {
         Ok(())
     }
 
+    /// Program download: replaces the program by `compiled` (a new build), cold-starts it
+    /// and carries over every PERSISTENT variable whose path and type still exist. Tasks
+    /// are kept (their programs are looked up again by name) and statistics reset;
+    /// forcing is released. Returns how many values were carried over.
+    pub fn download(&mut self, compiled: Compiled, sources: SourceMap) -> Result<usize, PlcError> {
+        let kept: Vec<(String, Ty, Val)> = self
+            .leaves()
+            .into_iter()
+            .filter(|l| l.persistent)
+            .filter_map(|l| {
+                let v = self.read_leaf(&l).ok()?;
+                Some((l.path, l.ty, v))
+            })
+            .collect();
+        let configs: Vec<TaskConfig> = self.tasks.iter().map(|t| t.config.clone()).collect();
+        let mut next = Plc::new(compiled, sources);
+        next.loop_budget = self.loop_budget;
+        next.stopwatch = std::mem::replace(&mut self.stopwatch, Box::new(NoStopwatch));
+        for c in configs {
+            next.add_task(c)?;
+        }
+        let mut n = 0;
+        for (path, ty, v) in kept {
+            if let Ok(l) = next.leaf(&path) {
+                if l.ty == ty && l.persistent {
+                    next.write_leaf(&l, v);
+                    n += 1;
+                }
+            }
+        }
+        *self = next;
+        Ok(n)
+    }
+
     /// Writes RETAIN and PERSISTENT variables to `path` atomically (temporary file, then
     /// rename). One `path = value` line each, values in IEC literal syntax.
     pub fn save_retain(&self, path: &Path) -> Result<(), PlcError> {

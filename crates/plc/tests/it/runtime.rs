@@ -500,3 +500,31 @@ fn unused_variables_are_warnings() {
         vec!["w.st:2:17: warning: variable 'spare' is declared but never used".to_string()]
     );
 }
+
+#[test]
+fn download_keeps_persistent_values_and_tasks() {
+    let mut p = plc(LIGHTS);
+    p.add_task(TaskConfig::cyclic("main", 10_000_000, &["Main"]))
+        .unwrap();
+    for k in 0..4 {
+        p.run_cycle(at_ms(k * 10));
+    }
+    p.write("Main.starts", "3").unwrap();
+    assert_eq!(p.read_text("Main.total").unwrap(), "4");
+    let changed = LIGHTS.replace("count := count + 1;", "count := count + 2;");
+    let (sources, r) = plc::build(&[("t.st".to_string(), changed)]);
+    assert_eq!(p.download(r.unwrap(), sources).unwrap(), 1);
+    assert_eq!(
+        p.read_text("Main.total").unwrap(),
+        "4",
+        "PERSISTENT carried over"
+    );
+    assert_eq!(
+        p.read_text("Main.starts").unwrap(),
+        "0",
+        "RETAIN is not kept by a download"
+    );
+    p.run_cycle(at_ms(100));
+    assert_eq!(p.read_text("Main.count").unwrap(), "2", "new code runs");
+    assert_eq!(p.read_text("Main.total").unwrap(), "5");
+}
