@@ -191,6 +191,7 @@ impl Diagnostic {
     /// labels, notes and the error code on indented lines.
     pub fn render(&self, sources: &SourceMap) -> String {
         let mut out = self.headline(sources);
+        out.push_str(&snippet(sources, self.primary));
         for label in &self.secondary {
             out.push_str(&format!(
                 "\n  {}: {}",
@@ -204,6 +205,40 @@ impl Diagnostic {
         out.push_str(&format!("\n  = code: {}", self.code.as_str()));
         out
     }
+}
+
+/// The source line of `span` with carets under the spanned characters (first line only).
+fn snippet(sources: &SourceMap, span: Span) -> String {
+    let Some(file) = sources.file(span.file) else {
+        return String::new();
+    };
+    let lc = sources.line_col(span);
+    if lc.line == 0 {
+        return String::new();
+    }
+    let Some(line) = file.text.lines().nth(lc.line - 1) else {
+        return String::new();
+    };
+    let line = line.trim_end_matches('\r');
+    let start = lc.col.saturating_sub(1);
+    let width = sources
+        .snippet(span)
+        .lines()
+        .next()
+        .map(|s| s.chars().count())
+        .unwrap_or(1)
+        .clamp(1, line.chars().count().saturating_sub(start).max(1));
+    let number = lc.line.to_string();
+    let pad = " ".repeat(number.len());
+    let prefix: String = line
+        .chars()
+        .take(start)
+        .map(|c| if c == '\t' { '\t' } else { ' ' })
+        .collect();
+    format!(
+        "\n{pad} |\n{number} | {line}\n{pad} | {prefix}{}",
+        "^".repeat(width)
+    )
 }
 
 /// A list of diagnostics gathered by one stage.
