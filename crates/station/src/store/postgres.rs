@@ -565,6 +565,16 @@ impl EventStore for PostgresStore {
                     }
                 }
             }
+            // Refresh the planner's statistics with each (hourly) retention pass, as the
+            // SQLite backend does, rather than waiting for autovacuum after a bulk load.
+            let lease = self.pool.checkout().await?;
+            let analysed = lease
+                .conn
+                .client
+                .batch_execute("ANALYZE events, commands")
+                .await;
+            self.pool.give_back(lease);
+            analysed?;
             Ok(total)
         })
     }

@@ -390,7 +390,13 @@ impl SelectBuilder {
         if let Some(c) = after {
             let t = self.bind(Param::Int(c.time_ms));
             let id = self.bind(Param::Int(c.id));
-            self.cond(format!("({col}, id) {cmp} ({t}, {id})"));
+            // The redundant plain bound lets an index on (name, time, id) use the range
+            // after an equality on its first column (PostgreSQL uses a row comparison only
+            // on leading index columns).
+            let t2 = self.bind(Param::Int(c.time_ms));
+            self.cond(format!(
+                "{col} {cmp}= {t2} AND ({col}, id) {cmp} ({t}, {id})"
+            ));
         }
         dir
     }
