@@ -341,8 +341,25 @@ fn configure(c: &Checked, diags: &mut Vec<Diagnostic>) -> Vec<TaskSpec> {
             });
         }
     }
+    let mut instantiated: HashMap<String, Span> = HashMap::new();
     for item in &c.unit.items {
         if let Item::ProgramConfig(pc) = item {
+            if let Some(first) = instantiated.get(&pc.program.key) {
+                diags.push(
+                    Diagnostic::error(
+                        Code::Unsupported,
+                        pc.program.span,
+                        format!(
+                            "PROGRAM '{}' is instantiated more than once",
+                            pc.program.name
+                        ),
+                    )
+                    .with_label(*first, "first instance here")
+                    .with_note("each PROGRAM type has exactly one instance in this runtime"),
+                );
+                continue;
+            }
+            instantiated.insert(pc.program.key.clone(), pc.program.span);
             let is_program = c
                 .pou_index
                 .get(&pc.program.key)
