@@ -1,0 +1,235 @@
+//! The plant-independent core: values, signal descriptions, errors and the [`Plant`] trait.
+
+use std::collections::BTreeMap;
+use std::fmt;
+use std::time::Duration;
+
+/// Simulated time: the duration since the start of the simulation.
+pub type SimTime = Duration;
+
+/// A signal value as a PLC sees it on a terminal or in a measurement.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Value {
+    /// A digital signal (contact, coil).
+    Bool(bool),
+    /// An analog measurement or set point (volts, kWh, lux...).
+    Real(f64),
+}
+
+impl Value {
+    /// The kind of this value.
+    pub fn kind(&self) -> ValueKind {
+        match self {
+            Value::Bool(_) => ValueKind::Bool,
+            Value::Real(_) => ValueKind::Real,
+        }
+    }
+
+    /// The boolean, if this is a digital value.
+    pub fn as_bool(&self) -> Option<bool> {
+        match self {
+            Value::Bool(b) => Some(*b),
+            Value::Real(_) => None,
+        }
+    }
+
+    /// The number, if this is an analog value.
+    pub fn as_real(&self) -> Option<f64> {
+        match self {
+            Value::Real(r) => Some(*r),
+            Value::Bool(_) => None,
+        }
+    }
+}
+
+impl fmt::Display for Value {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Value::Bool(true) => f.write_str("TRUE"),
+            Value::Bool(false) => f.write_str("FALSE"),
+            Value::Real(r) => write!(f, "{r}"),
+        }
+    }
+}
+
+/// The type of a signal.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ValueKind {
+    /// Digital.
+    Bool,
+    /// Analog (IEEE 754 double).
+    Real,
+}
+
+impl fmt::Display for ValueKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            ValueKind::Bool => "BOOL",
+            ValueKind::Real => "REAL",
+        })
+    }
+}
+
+/// Direction of a signal, seen from the PLC (as on a wiring diagram).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Direction {
+    /// The plant drives it, the PLC reads it (DI, AI): contacts, relays, measurements.
+    Input,
+    /// The PLC drives it, the plant obeys (DO, AO): coils, start commands.
+    Output,
+}
+
+/// Static description of one signal of the I/O surface.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SignalInfo {
+    /// Stable name (the spec's tag where it gives one).
+    pub name: String,
+    /// Seen from the PLC.
+    pub direction: Direction,
+    /// Type.
+    pub kind: ValueKind,
+    /// The I/O module the signal is wired to; a pulled module makes it unavailable.
+    pub module: String,
+    /// Unit of an analog value (`V`, `kWh`, `lx`...), empty for digital signals.
+    pub unit: &'static str,
+    /// One-line meaning.
+    pub description: String,
+}
+
+/// A value together with its availability, for the runtime's quality handling.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Reading {
+    /// The physical value (the last one seen if the module is unavailable).
+    pub value: Value,
+    /// `false` when the signal's I/O module is unavailable (pulled): the runtime reports
+    /// the point with the IV (invalid) flag.
+    pub valid: bool,
+}
+
+/// Errors of the plant API.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum PlantError {
+    /// No signal has this name.
+    #[error("unknown signal `{0}`")]
+    UnknownSignal(String),
+    /// The signal exists but is of another type.
+    #[error("signal `{name}` is {expected}, got {got}")]
+    WrongType {
+        /// Signal name.
+        name: String,
+        /// Its type.
+        expected: ValueKind,
+        /// The type that was supplied.
+        got: ValueKind,
+    },
+    /// `set_output` on a plant input (a contact the plant drives).
+    #[error("signal `{0}` is a plant input (read it), not an output the PLC drives")]
+    NotAnOutput(String),
+    /// The module of the signal is unavailable (pulled), so no valid value exists.
+    #[error("signal `{signal}` unavailable: module `{module}` is not present")]
+    ModuleUnavailable {
+        /// Signal name.
+        signal: String,
+        /// Module name.
+        module: String,
+    },
+    /// A fault or action names a device this plant does not have, or one of the wrong kind.
+    #[error("no {kind} named `{name}`")]
+    UnknownDevice {
+        /// What was looked for (breaker, fuse, board...).
+        kind: &'static str,
+        /// The name given.
+        name: String,
+    },
+    /// `advance_to` with a time before the current time.
+    #[error("time {requested:?} is before the plant's time {now:?}")]
+    TimeWentBackwards {
+        /// The plant's current time.
+        now: SimTime,
+        /// The requested time.
+        requested: SimTime,
+    },
+    /// A hand operation refused by the hardware (e.g. door pushbuttons with the selector in remote).
+    #[error("operation refused: {0}")]
+    Refused(String),
+    /// Text that does not parse as a fault.
+    #[error("cannot parse fault `{0}`")]
+    BadFault(String),
+}
+
+/// The shape every plant simulation has: a named I/O surface and a clock-free step.
+///
+/// Time advances only through [`Plant::advance_to`]; every internal event (operate
+/// times, delays) is hit exactly, whatever the step size. A scheduler may jump straight to
+/// [`Plant::next_event`].
+pub trait Plant {
+    /// Current simulated time.
+    fn now(&self) -> SimTime;
+    /// The earliest pending internal event, if any.
+    fn next_event(&self) -> Option<SimTime>;
+    /// Advances to `t`, processing every internal event on the way at its exact time.
+    fn advance_to(&mut self, t: SimTime) -> Result<(), PlantError>;
+    /// Advances by `dt`.
+    fn advance(&mut self, dt: Duration) -> Result<(), PlantError> {
+        let t = self.now().saturating_add(dt);
+        self.advance_to(t)
+    }
+    /// Every signal, in a stable order.
+    fn signals(&self) -> &[SignalInfo];
+    /// Reads a signal (input or output) with its availability.
+    fn read(&self, name: &str) -> Result<Reading, PlantError>;
+    /// Reads a plant input; fails if its module is unavailable.
+    fn input(&self, name: &str) -> Result<Value, PlantError> {
+        let r = self.read(name)?;
+        if r.valid {
+            return Ok(r.value);
+        }
+        let module = self
+            .signals()
+            .iter()
+            .find(|s| s.name == name)
+            .map(|s| s.module.clone())
+            .unwrap_or_default();
+        Err(PlantError::ModuleUnavailable {
+            signal: name.to_string(),
+            module,
+        })
+    }
+    /// Drives a PLC output (coil, command). Takes effect at the current time.
+    fn set_output(&mut self, name: &str, value: Value) -> Result<(), PlantError>;
+    /// All inputs with their availability.
+    fn inputs(&self) -> BTreeMap<String, Reading> {
+        self.signals()
+            .iter()
+            .filter(|s| s.direction == Direction::Input)
+            .filter_map(|s| self.read(&s.name).ok().map(|r| (s.name.clone(), r)))
+            .collect()
+    }
+    /// All outputs with the value the PLC last wrote.
+    fn outputs(&self) -> BTreeMap<String, Value> {
+        self.signals()
+            .iter()
+            .filter(|s| s.direction == Direction::Output)
+            .filter_map(|s| self.read(&s.name).ok().map(|r| (s.name.clone(), r.value)))
+            .collect()
+    }
+    /// Reads a digital signal (convenience for tests and drivers).
+    fn bool(&self, name: &str) -> Result<bool, PlantError> {
+        let v = self.read(name)?.value;
+        v.as_bool().ok_or(PlantError::WrongType {
+            name: name.to_string(),
+            expected: ValueKind::Real,
+            got: ValueKind::Bool,
+        })
+    }
+    /// Reads an analog signal (convenience for tests and drivers).
+    fn real(&self, name: &str) -> Result<f64, PlantError> {
+        let v = self.read(name)?.value;
+        v.as_real().ok_or(PlantError::WrongType {
+            name: name.to_string(),
+            expected: ValueKind::Bool,
+            got: ValueKind::Real,
+        })
+    }
+}

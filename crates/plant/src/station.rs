@@ -1,0 +1,1753 @@
+//! The Vsetín railway station plant: supplies, transformers, boards RH1.1, RH2, RZZ, RDA,
+//! RZS1, the diesel generator set, 12 lighting towers (ROV) and the OŘ-area lighting.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::time::Duration;
+
+use crate::core::{Direction, Plant, PlantError, Reading, SignalInfo, SimTime, Value, ValueKind};
+use crate::devices::{earliest, Breaker, Delayed, Generator, GeneratorConfig, GeneratorState};
+use crate::fault::{Action, Fault};
+use crate::sun::{Sky, SunConfig};
+use crate::topology::{Network, SafetyEvent, SafetyKind, TopologySnapshot};
+
+const NANOS: i128 = 1_000_000_000;
+/// Safety records kept; later ones are counted in [`VsetinPlant::safety_dropped`].
+const SAFETY_LOG_CAP: usize = 100_000;
+
+/// Parameters of the station plant. Every time is a default proposal (the thesis gives
+/// none) and can be changed per test.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub struct StationConfig {
+    /// UTC time of simulated time zero, seconds since the Unix epoch (default
+    /// 2024-01-01T00:00:00Z). Used by the sun model only.
+    pub start_unix_secs: i64,
+    /// Motorised breaker (QF) closing time, coil edge to main contacts closed.
+    pub breaker_close_time: Duration,
+    /// Breaker opening time, trip coil (or emergency-off release) to contacts open. Also
+    /// used for a manual breaker tripped by its protection.
+    pub breaker_open_time: Duration,
+    /// Contactor pick-up time (coil energised to contacts closed).
+    pub contactor_pickup: Duration,
+    /// Contactor drop-out time (coil de-energised to contacts open).
+    pub contactor_dropout: Duration,
+    /// Voltage-present relays (KHU): pick-up and drop-out time.
+    pub relay_time: Duration,
+    /// Lamp-circuit feedback relay `PrRele`: pick-up time after the circuit is energised
+    /// (it drops out at once).
+    pub feedback_pickup: Duration,
+    /// Lamp warm-up: light output ramps linearly from 0 to 100 % over this time.
+    pub lamp_warm_up: Duration,
+    /// Diesel generator.
+    pub generator: GeneratorConfig,
+    /// Sky over the site.
+    pub sun: SunConfig,
+    /// Dusk sensors switch to "dark" below this illuminance.
+    pub dusk_threshold_lux: f64,
+    /// Electrical load of one lighting tower, kW.
+    pub tower_power_kw: f64,
+    /// Electrical load of the OŘ-area lighting, kW.
+    pub or_power_kw: f64,
+    /// Emergency-off of RH2/RZZ also trips QF1 through a hard-wired release (besides the
+    /// LOGO! logic). RDA's emergency-off always cuts both contactor coils.
+    pub estop_trips_feeder: bool,
+    /// QF1 of RH2 and RZZ are closed at time zero.
+    pub feeders_initially_closed: bool,
+}
+
+impl Default for StationConfig {
+    fn default() -> Self {
+        StationConfig {
+            start_unix_secs: 1_704_067_200,
+            breaker_close_time: Duration::from_millis(60),
+            breaker_open_time: Duration::from_millis(40),
+            contactor_pickup: Duration::from_millis(30),
+            contactor_dropout: Duration::from_millis(20),
+            relay_time: Duration::from_millis(20),
+            feedback_pickup: Duration::from_millis(50),
+            lamp_warm_up: Duration::from_secs(3),
+            generator: GeneratorConfig::default(),
+            sun: SunConfig::default(),
+            dusk_threshold_lux: 20.0,
+            tower_power_kw: 2.4,
+            or_power_kw: 6.0,
+            estop_trips_feeder: true,
+            feeders_initially_closed: true,
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+struct BreakerDev {
+    name: String,
+    dev: Breaker,
+    link: Option<usize>,
+    close_out: Option<usize>,
+    trip_out: Option<usize>,
+    board: Option<usize>,
+    tripped: bool,
+    both_coils: bool,
+}
+
+#[derive(Debug, Clone, Copy)]
+enum Coil {
+    Output(usize),
+    ManualSwitch(usize),
+}
+
+#[derive(Debug, Clone)]
+struct ContactorDev {
+    name: String,
+    dev: Delayed,
+    link: Option<usize>,
+    coil: Coil,
+    estop_board: Option<usize>,
+}
+
+#[derive(Debug, Clone, Copy)]
+enum Sense {
+    Bus(usize),
+    Generator,
+}
+
+#[derive(Debug, Clone)]
+struct RelayDev {
+    dev: Delayed,
+    sense: Sense,
+}
+
+#[derive(Debug, Clone)]
+struct Board {
+    name: String,
+    remote: bool,
+    estop: bool,
+    has_estop: bool,
+    bus: usize,
+    base_kw: f64,
+    live_ns: u128,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum ContactKind {
+    Fuse,
+    Arrester,
+    Door,
+    SupplyUnit,
+    NetSwitch,
+}
+
+#[derive(Debug, Clone)]
+struct Contact {
+    name: String,
+    kind: ContactKind,
+    active: bool,
+}
+
+#[derive(Debug, Clone)]
+struct Lighting {
+    name: String,
+    bus: usize,
+    km: usize,
+    km_manual: usize,
+    fuse: usize,
+    manual_switch: bool,
+    remote: bool,
+    lamp_failed: bool,
+    feedback: Delayed,
+    energised_since: Option<SimTime>,
+    power_kw: f64,
+    on_ns: u128,
+    dark: bool,
+    dark_next: Option<SimTime>,
+}
+
+#[derive(Debug, Clone, Copy)]
+enum Src {
+    Const(bool),
+    BreakerClosed(usize),
+    ContactorClosed(usize),
+    Relay(usize),
+    Selector(usize, bool),
+    Estop(usize),
+    Contact(usize, bool),
+    BusVoltage(usize, f64),
+    BoardPower(usize),
+    BoardEnergy(usize),
+    GenRunning,
+    GenReady,
+    GenFault,
+    GenVoltage,
+    LightFeedback(usize),
+    LightDusk(usize),
+    LightRemote(usize),
+    LightManual(usize),
+    LightEnergy(usize),
+    LightPower(usize),
+    LightOutput(usize),
+    Illuminance,
+}
+
+#[derive(Debug, Clone, Copy)]
+enum Sig {
+    In(Src),
+    Out(usize),
+}
+
+#[derive(Debug, Clone)]
+struct Out {
+    value: bool,
+    module: usize,
+}
+
+#[derive(Debug, Clone, Copy)]
+enum SupplyRef {
+    Source(usize),
+    Link(usize),
+}
+
+/// The whole station plant. See the crate documentation for the signal table.
+#[derive(Debug, Clone)]
+pub struct VsetinPlant {
+    cfg: StationConfig,
+    now: SimTime,
+    net: Network,
+    sky: Sky,
+    illuminance_override: Option<f64>,
+    gen: Generator,
+    da_source: usize,
+    supplies: BTreeMap<String, (SupplyRef, bool)>,
+    breakers: Vec<BreakerDev>,
+    contactors: Vec<ContactorDev>,
+    relays: Vec<RelayDev>,
+    boards: Vec<Board>,
+    contacts: Vec<Contact>,
+    lights: Vec<Lighting>,
+    modules: Vec<(String, bool)>,
+    outs: Vec<Out>,
+    infos: Vec<SignalInfo>,
+    sigs: Vec<Sig>,
+    index: BTreeMap<String, usize>,
+    faults: BTreeSet<Fault>,
+    safety: Vec<SafetyEvent>,
+    safety_dropped: u64,
+    joined: Vec<Vec<String>>,
+    gen_start: Option<usize>,
+}
+
+fn kwh(kw: f64, ns: u128) -> f64 {
+    kw * (ns as f64 / 3.6e12)
+}
+
+/// Names of the lighting boards: `ROV01`..`ROV12` and `OR`.
+pub fn lighting_boards() -> Vec<String> {
+    let mut v: Vec<String> = (1..=12).map(|i| format!("ROV{i:02}")).collect();
+    v.push("OR".to_string());
+    v
+}
+
+impl VsetinPlant {
+    /// Builds the station at time zero with default parameters.
+    pub fn new() -> Self {
+        Self::with_config(StationConfig::default())
+    }
+
+    /// Builds the station at time zero.
+    pub fn with_config(cfg: StationConfig) -> Self {
+        let mut p = VsetinPlant {
+            sky: Sky::new(cfg.sun.clone()),
+            gen: Generator::new(cfg.generator.clone()),
+            cfg,
+            now: Duration::ZERO,
+            net: Network::default(),
+            illuminance_override: None,
+            da_source: 0,
+            supplies: BTreeMap::new(),
+            breakers: Vec::new(),
+            contactors: Vec::new(),
+            relays: Vec::new(),
+            boards: Vec::new(),
+            contacts: Vec::new(),
+            lights: Vec::new(),
+            modules: Vec::new(),
+            outs: Vec::new(),
+            infos: Vec::new(),
+            sigs: Vec::new(),
+            index: BTreeMap::new(),
+            faults: BTreeSet::new(),
+            safety: Vec::new(),
+            safety_dropped: 0,
+            joined: Vec::new(),
+            gen_start: None,
+        };
+        p.build();
+        p.settle();
+        // Start in the steady state: relays already follow what they sense.
+        for r in &mut p.relays {
+            r.dev.complete();
+        }
+        for l in &mut p.lights {
+            l.feedback.complete();
+        }
+        p
+    }
+
+    // ------------------------------------------------------------------ construction
+
+    fn module(&mut self, name: &str) -> usize {
+        if let Some(i) = self.modules.iter().position(|m| m.0 == name) {
+            return i;
+        }
+        self.modules.push((name.to_string(), true));
+        self.modules.len() - 1
+    }
+
+    fn input(&mut self, name: &str, module: usize, desc: &str, src: Src) {
+        let (kind, unit) = match src {
+            Src::BusVoltage(..) | Src::GenVoltage => (ValueKind::Real, "V"),
+            Src::BoardPower(_) | Src::LightPower(_) => (ValueKind::Real, "kW"),
+            Src::BoardEnergy(_) | Src::LightEnergy(_) => (ValueKind::Real, "kWh"),
+            Src::LightOutput(_) => (ValueKind::Real, "%"),
+            Src::Illuminance => (ValueKind::Real, "lx"),
+            _ => (ValueKind::Bool, ""),
+        };
+        self.push_sig(
+            name,
+            Direction::Input,
+            kind,
+            unit,
+            module,
+            desc,
+            Sig::In(src),
+        );
+    }
+
+    fn output(&mut self, name: &str, module: usize, desc: &str) -> usize {
+        self.outs.push(Out {
+            value: false,
+            module,
+        });
+        let slot = self.outs.len() - 1;
+        self.push_sig(
+            name,
+            Direction::Output,
+            ValueKind::Bool,
+            "",
+            module,
+            desc,
+            Sig::Out(slot),
+        );
+        slot
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn push_sig(
+        &mut self,
+        name: &str,
+        direction: Direction,
+        kind: ValueKind,
+        unit: &'static str,
+        module: usize,
+        desc: &str,
+        sig: Sig,
+    ) {
+        let module = self
+            .modules
+            .get(module)
+            .map(|m| m.0.clone())
+            .unwrap_or_default();
+        self.index.insert(name.to_string(), self.infos.len());
+        self.infos.push(SignalInfo {
+            name: name.to_string(),
+            direction,
+            kind,
+            module,
+            unit,
+            description: desc.to_string(),
+        });
+        self.sigs.push(sig);
+    }
+
+    fn breaker(&mut self, name: &str, closed: bool, link: Option<usize>) -> usize {
+        self.breakers.push(BreakerDev {
+            name: name.to_string(),
+            dev: Breaker::new(
+                closed,
+                self.cfg.breaker_close_time,
+                self.cfg.breaker_open_time,
+            ),
+            link,
+            close_out: None,
+            trip_out: None,
+            board: None,
+            tripped: false,
+            both_coils: false,
+        });
+        self.breakers.len() - 1
+    }
+
+    fn contactor(&mut self, name: &str, link: Option<usize>, coil: Coil) -> usize {
+        self.contactors.push(ContactorDev {
+            name: name.to_string(),
+            dev: Delayed::new(false, self.cfg.contactor_pickup, self.cfg.contactor_dropout),
+            link,
+            coil,
+            estop_board: None,
+        });
+        self.contactors.len() - 1
+    }
+
+    fn relay(&mut self, sense: Sense) -> usize {
+        self.relays.push(RelayDev {
+            dev: Delayed::new(false, self.cfg.relay_time, self.cfg.relay_time),
+            sense,
+        });
+        self.relays.len() - 1
+    }
+
+    fn contact(&mut self, name: &str, kind: ContactKind) -> usize {
+        self.contacts.push(Contact {
+            name: name.to_string(),
+            kind,
+            active: false,
+        });
+        self.contacts.len() - 1
+    }
+
+    fn board(&mut self, name: &str, bus: usize, base_kw: f64, has_estop: bool) -> usize {
+        self.boards.push(Board {
+            name: name.to_string(),
+            remote: true,
+            estop: false,
+            has_estop,
+            bus,
+            base_kw,
+            live_ns: 0,
+        });
+        self.boards.len() - 1
+    }
+
+    fn build(&mut self) {
+        // Buses and sources (grid sources first: they name a bus's supply when paralleled).
+        let n = &mut self.net;
+        let b_usti = n.add_bus("TNS_USTI");
+        let b_valmez = n.add_bus("TNS_VALMEZ");
+        let b_r6 = n.add_bus("R6");
+        let b_t1 = n.add_bus("T1_LV");
+        let b_t2 = n.add_bus("T2_LV");
+        let b_rzz = n.add_bus("RZZ");
+        let b_rzza = n.add_bus("RZZ_A");
+        let b_rzz_v1 = n.add_bus("RZZ_V1");
+        let b_rh2 = n.add_bus("RH2");
+        let b_rh2_v1 = n.add_bus("RH2_V1");
+        let b_util = n.add_bus("UTILITY");
+        let b_rh11 = n.add_bus("RH11");
+        let b_rh11ab = n.add_bus("RH11_AB");
+        let b_rzs = n.add_bus("RZS");
+        let b_da = n.add_bus("DA");
+        let s_usti = n.add_source("TNS_USTI", b_usti, "grid");
+        let s_valmez = n.add_source("TNS_VALMEZ", b_valmez, "grid");
+        let s_util = n.add_source("UTILITY", b_util, "grid");
+        self.da_source = n.add_source("DA", b_da, "diesel");
+        n.add_link("LINE_USTI", b_usti, b_r6);
+        n.add_link("LINE_VALMEZ", b_valmez, b_r6);
+        let l_t1 = n.add_link("T1", b_r6, b_t1);
+        let l_t2 = n.add_link("T2", b_r6, b_t2);
+        n.add_link("TI_RZZA", b_rzz, b_rzza);
+        n.add_link("TI_RH11", b_rh11, b_rh11ab);
+        for (name, r) in [
+            ("TNS_USTI", SupplyRef::Source(s_usti)),
+            ("TNS_VALMEZ", SupplyRef::Source(s_valmez)),
+            ("UTILITY", SupplyRef::Source(s_util)),
+            ("T1", SupplyRef::Link(l_t1)),
+            ("T2", SupplyRef::Link(l_t2)),
+        ] {
+            self.supplies.insert(name.to_string(), (r, false));
+        }
+
+        // RH2 (fed from T2) and RZZ (fed from T1): LOGO! boards of the same pattern.
+        let rh2_feeders = self.logo_board("RH2", b_t2, b_rh2, b_rh2_v1, 5.0);
+        self.logo_board("RZZ", b_t1, b_rzz, b_rzz_v1, 8.0);
+
+        // RH1.1: main board on the distribution connection.
+        let m = self.module("RH11_DI");
+        let l = self.net.add_link("RH11_QF1", b_util, b_rh11);
+        let qf = self.breaker("RH11_QF1", true, Some(l));
+        let bd = self.board("RH11", b_rh11, 15.0, false);
+        let khu = self.relay(Sense::Bus(b_util));
+        let fv = self.contact("RH11_FV1", ContactKind::Arrester);
+        let fu = self.contact("RH11_FU1", ContactKind::Fuse);
+        self.input(
+            "RH11_QF1_Zapnut",
+            m,
+            "main breaker QF1 (utility feed) closed",
+            Src::BreakerClosed(qf),
+        );
+        self.input(
+            "RH11_KHU1_Napeti_sit",
+            m,
+            "utility voltage present (relay KHU1)",
+            Src::Relay(khu),
+        );
+        self.input(
+            "RH11_FV1_Prepetova_ochrana",
+            m,
+            "surge arrester FV1 tripped",
+            Src::Contact(fv, true),
+        );
+        self.input(
+            "RH11_FU1_Pretavena_pojistka",
+            m,
+            "fuse FU1 blown",
+            Src::Contact(fu, true),
+        );
+        self.input(
+            "RH11_U",
+            m,
+            "busbar voltage",
+            Src::BusVoltage(b_rh11, 400.0),
+        );
+        self.input(
+            "RH11_P_kW",
+            m,
+            "active power of the board's own load",
+            Src::BoardPower(bd),
+        );
+        self.input("RH11_Energie_kWh", m, "energy meter", Src::BoardEnergy(bd));
+        self.input(
+            "R6_U",
+            m,
+            "6 kV switchroom voltage",
+            Src::BusVoltage(b_r6, 6000.0),
+        );
+        self.board("RH11_AB", b_rh11ab, 3.0, false);
+        self.board("RZZ_A", b_rzza, 3.0, false);
+
+        // RDA: automatic transfer between RH1.1 (mains) and the diesel generator onto RZS.
+        let m = self.module("RDA_LOGO");
+        let bd = self.board("RDA", b_rzs, 0.0, true);
+        let l1 = self.net.add_link("RDA_KM1", b_rh11, b_rzs);
+        let l2 = self.net.add_link("RDA_KM2", b_da, b_rzs);
+        let o1 = self.output(
+            "RDA_KM1_Zap",
+            m,
+            "coil of contactor KM1 (supply from RH1.1, mains)",
+        );
+        let o2 = self.output(
+            "RDA_KM2_Zap",
+            m,
+            "coil of contactor KM2 (supply from the diesel generator)",
+        );
+        let os = self.output(
+            "RDA_DA_Start",
+            m,
+            "generator start/run request (level; removing it stops after cool-down)",
+        );
+        let k1 = self.contactor("RDA_KM1", Some(l1), Coil::Output(o1));
+        let k2 = self.contactor("RDA_KM2", Some(l2), Coil::Output(o2));
+        for k in [k1, k2] {
+            if let Some(c) = self.contactors.get_mut(k) {
+                c.estop_board = Some(bd);
+            }
+        }
+        let r1 = self.relay(Sense::Bus(b_rh11));
+        let r2 = self.relay(Sense::Generator);
+        let r3 = self.relay(Sense::Bus(b_rzs));
+        let fv = self.contact("RDA_FV1", ContactKind::Arrester);
+        let fu = self.contact("RDA_FU1", ContactKind::Fuse);
+        self.gen_start = Some(os);
+        self.input(
+            "RDA_KM1_Zapnut",
+            m,
+            "KM1 (mains) closed, auxiliary contact",
+            Src::ContactorClosed(k1),
+        );
+        self.input(
+            "RDA_KM2_Zapnut",
+            m,
+            "KM2 (diesel) closed, auxiliary contact",
+            Src::ContactorClosed(k2),
+        );
+        self.input(
+            "RDA_KHU1_Napeti_sit",
+            m,
+            "mains voltage present on the RH1.1 side (relay KHU1)",
+            Src::Relay(r1),
+        );
+        self.input(
+            "RDA_KHU2_Napeti_DA",
+            m,
+            "generator voltage >= 90 % (relay KHU2)",
+            Src::Relay(r2),
+        );
+        self.input(
+            "RDA_KHU3_Napeti_RZS",
+            m,
+            "RZS busbar voltage present (relay KHU3)",
+            Src::Relay(r3),
+        );
+        self.input(
+            "RDA_SA1_Mistne",
+            m,
+            "selector SA1 in local",
+            Src::Selector(bd, false),
+        );
+        self.input(
+            "RDA_SA1_Dalkove",
+            m,
+            "selector SA1 in remote",
+            Src::Selector(bd, true),
+        );
+        self.input(
+            "RDA_KHVRDA_Havarijni_vypnuti",
+            m,
+            "emergency off of RDA (cuts both contactor coils)",
+            Src::Estop(bd),
+        );
+        self.input(
+            "RDA_DA_Bezi",
+            m,
+            "generator engine running",
+            Src::GenRunning,
+        );
+        self.input(
+            "RDA_DA_Pripraven",
+            m,
+            "generator voltage settled, ready to load",
+            Src::GenReady,
+        );
+        self.input(
+            "RDA_DA_Porucha",
+            m,
+            "generator fault (failed to start)",
+            Src::GenFault,
+        );
+        self.input("RDA_DA_U", m, "generator terminal voltage", Src::GenVoltage);
+        self.input(
+            "RDA_FV1_Prepetova_ochrana",
+            m,
+            "surge arrester FV1 tripped",
+            Src::Contact(fv, true),
+        );
+        self.input(
+            "RDA_FU1_Pretavena_pojistka",
+            m,
+            "fuse FU1 blown",
+            Src::Contact(fu, true),
+        );
+
+        // RZS1: secured-network board.
+        let m = self.module("RZS1_DI");
+        let bd = self.board("RZS1", b_rzs, 10.0, false);
+        let r = self.relay(Sense::Bus(b_rzs));
+        let fv = self.contact("RZS1_FV1", ContactKind::Arrester);
+        let fu = self.contact("RZS1_FU1", ContactKind::Fuse);
+        self.input(
+            "RZS1_KHU1_Napeti",
+            m,
+            "busbar voltage present (relay KHU1)",
+            Src::Relay(r),
+        );
+        self.input(
+            "RZS1_FV1_Prepetova_ochrana",
+            m,
+            "surge arrester FV1 tripped",
+            Src::Contact(fv, true),
+        );
+        self.input(
+            "RZS1_FU1_Pretavena_pojistka",
+            m,
+            "fuse FU1 blown",
+            Src::Contact(fu, true),
+        );
+        self.input("RZS1_U", m, "busbar voltage", Src::BusVoltage(b_rzs, 400.0));
+        self.input(
+            "RZS1_P_kW",
+            m,
+            "active power of the board's own load",
+            Src::BoardPower(bd),
+        );
+        self.input("RZS1_Energie_kWh", m, "energy meter", Src::BoardEnergy(bd));
+
+        // RDRT: TC700 module p9 (DI0..DI9) and the door contacts on module p6.
+        let m = self.module("RDRT_P9");
+        for (sig, dev, kind, active_true, desc) in [
+            (
+                "RDRT_FV230",
+                "RDRT_FV230",
+                ContactKind::Arrester,
+                true,
+                "DI0: surge arrester FV230 tripped",
+            ),
+            (
+                "RDRT_FV110",
+                "RDRT_FV110",
+                ContactKind::Arrester,
+                true,
+                "DI1: surge arrester FV110 tripped",
+            ),
+            (
+                "RDRT_FV24",
+                "RDRT_FV24",
+                ContactKind::Arrester,
+                true,
+                "DI2: surge arrester FV24 tripped",
+            ),
+            (
+                "RDRT_G230_OK",
+                "RDRT_G230",
+                ContactKind::SupplyUnit,
+                false,
+                "DI3: supply G230 healthy (SP 4 inverts it)",
+            ),
+            (
+                "RDRT_G110_OK",
+                "RDRT_G110",
+                ContactKind::SupplyUnit,
+                false,
+                "DI4: supply G110 healthy (SP 5 inverts it)",
+            ),
+            (
+                "RDRT_G24_OK",
+                "RDRT_G24",
+                ContactKind::SupplyUnit,
+                false,
+                "DI5: supply G24 healthy (SP 6 inverts it)",
+            ),
+            (
+                "RDRT_Switch_ABB_OK",
+                "RDRT_ABB",
+                ContactKind::NetSwitch,
+                false,
+                "DI7: ABB switch healthy (SP 9 inverts it)",
+            ),
+            (
+                "RDRT_Switch_Korenix_Porucha",
+                "RDRT_KORENIX",
+                ContactKind::NetSwitch,
+                true,
+                "DI8: Korenix switch fault",
+            ),
+            (
+                "RDRT_Switch_Siemens_Porucha",
+                "RDRT_SIEMENS",
+                ContactKind::NetSwitch,
+                true,
+                "DI9: Siemens switch fault",
+            ),
+        ] {
+            let c = self.contact(dev, kind);
+            self.input(sig, m, desc, Src::Contact(c, active_true));
+        }
+        self.input("RDRT_Rezerva_DI6", m, "DI6: spare", Src::Const(false));
+        let m = self.module("RDRT_P6");
+        for (d, desc) in [
+            ("NN", "LV switchroom door open"),
+            ("VN", "HV switchroom door open"),
+            ("T1", "transformer chamber T1 door open"),
+            ("T2", "transformer chamber T2 door open"),
+        ] {
+            let c = self.contact(&format!("RDRT_{d}"), ContactKind::Door);
+            self.input(&format!("RDRT_Dvere_{d}"), m, desc, Src::Contact(c, true));
+        }
+
+        // Lighting: towers 1-3 on RH2 FA1.1, 4-6 on FA1.2, 7-9 on FA1.3, 10-12 on FA1.4,
+        // the OŘ area on FA1.5.
+        for (i, name) in lighting_boards().into_iter().enumerate() {
+            let feeder = rh2_feeders.get((i / 3).min(4)).copied().unwrap_or(b_rh2_v1);
+            let power = if name == "OR" {
+                self.cfg.or_power_kw
+            } else {
+                self.cfg.tower_power_kw
+            };
+            self.lighting_board(&name, feeder, power);
+        }
+        let m = self.module("ENV");
+        self.input(
+            "ENV_Osvetlenost_lx",
+            m,
+            "outdoor illuminance (sun model or forced)",
+            Src::Illuminance,
+        );
+    }
+
+    /// RH2 / RZZ pattern; returns the five feeder buses of FA1.1..FA1.5.
+    fn logo_board(
+        &mut self,
+        p: &str,
+        b_in: usize,
+        b_bus: usize,
+        b_v1: usize,
+        base_kw: f64,
+    ) -> Vec<usize> {
+        let m = self.module(&format!("{p}_LOGO"));
+        let bd = self.board(p, b_bus, base_kw, true);
+        let l = self.net.add_link(&format!("{p}_QF1"), b_in, b_bus);
+        let qf = self.breaker(
+            &format!("{p}_QF1"),
+            self.cfg.feeders_initially_closed,
+            Some(l),
+        );
+        let o_off = self.output(
+            &format!("{p}_QF1_Vyp"),
+            m,
+            "trip coil of feeder breaker QF1 (DO 'QF1 off')",
+        );
+        let o_on = self.output(
+            &format!("{p}_QF1_Zap"),
+            m,
+            "close coil of feeder breaker QF1 (DO 'QF1 on', rising edge closes)",
+        );
+        if let Some(b) = self.breakers.get_mut(qf) {
+            b.close_out = Some(o_on);
+            b.trip_out = Some(o_off);
+            b.board = Some(bd);
+        }
+        let l = self.net.add_link(&format!("{p}_FA1"), b_bus, b_v1);
+        let fa1 = self.breaker(&format!("{p}_FA1"), true, Some(l));
+        self.input(
+            &format!("{p}_V1_FA1_Zapnut"),
+            m,
+            "breaker FA1 closed",
+            Src::BreakerClosed(fa1),
+        );
+        let mut feeders = Vec::new();
+        for k in 1..=5 {
+            let fb = self.net.add_bus(&format!("{p}_F{k}"));
+            let l = self.net.add_link(&format!("{p}_FA1.{k}"), b_v1, fb);
+            let b = self.breaker(&format!("{p}_FA1.{k}"), true, Some(l));
+            self.input(
+                &format!("{p}_V1_FA1.{k}"),
+                m,
+                &format!("breaker FA1.{k} closed"),
+                Src::BreakerClosed(b),
+            );
+            feeders.push(fb);
+        }
+        for k in 0..=2 {
+            let b = self.breaker(&format!("{p}_FA110.{k}"), true, None);
+            self.input(
+                &format!("{p}_P1_FA110.{k}"),
+                m,
+                &format!("breaker FA110.{k} (110 V DC) closed"),
+                Src::BreakerClosed(b),
+            );
+        }
+        let khu1 = self.relay(Sense::Bus(b_in));
+        let khu3 = self.relay(Sense::Bus(b_bus));
+        self.input(
+            &format!("{p}_P1_KHU1_Napeti_na_privodu"),
+            m,
+            "voltage present on the incoming feeder, upstream of QF1 (relay KHU1)",
+            Src::Relay(khu1),
+        );
+        self.input(
+            &format!("{p}_P1_KHU3_Napeti_na_pripojeni"),
+            m,
+            "voltage present on the busbar, downstream of QF1 (relay KHU3)",
+            Src::Relay(khu3),
+        );
+        self.input(
+            &format!("{p}_P1_SA1_Mistne"),
+            m,
+            "selector SA1 in local",
+            Src::Selector(bd, false),
+        );
+        self.input(
+            &format!("{p}_P1_SA1_Dalkove"),
+            m,
+            "selector SA1 in remote",
+            Src::Selector(bd, true),
+        );
+        let fu = self.contact(&format!("{p}_FU1"), ContactKind::Fuse);
+        let fv = self.contact(&format!("{p}_FV1"), ContactKind::Arrester);
+        let fv110 = self.contact(&format!("{p}_FV110"), ContactKind::Arrester);
+        let g = self.contact(&format!("{p}_G110.2"), ContactKind::SupplyUnit);
+        self.input(
+            &format!("{p}_P1_FU1_Pretavena_pojistka"),
+            m,
+            "fuse FU1 blown",
+            Src::Contact(fu, true),
+        );
+        self.input(
+            &format!("{p}_P1_FV1_Prepetova_ochrana"),
+            m,
+            "surge arrester FV1 tripped",
+            Src::Contact(fv, true),
+        );
+        self.input(
+            &format!("{p}_P1_KHV{p}_Havarijni_vypnuti"),
+            m,
+            "emergency off pressed",
+            Src::Estop(bd),
+        );
+        self.input(
+            &format!("{p}_P1_FV110_Prepetova_ochrana"),
+            m,
+            "surge arrester FV110 (110 V) tripped",
+            Src::Contact(fv110, true),
+        );
+        self.input(
+            &format!("{p}_P1_G110.2_Napeti_zdroje"),
+            m,
+            "voltage of the 110 V source G110.2 present",
+            Src::Contact(g, false),
+        );
+        for k in 1..=14 {
+            self.input(
+                &format!("{p}_RezervaVstup{k}"),
+                m,
+                "spare input",
+                Src::Const(false),
+            );
+        }
+        self.input(
+            &format!("{p}_QF1_Zapnut"),
+            m,
+            "feeder breaker QF1 closed (auxiliary contact; not in the thesis tag list)",
+            Src::BreakerClosed(qf),
+        );
+        self.input(
+            &format!("{p}_U"),
+            m,
+            "busbar voltage",
+            Src::BusVoltage(b_bus, 400.0),
+        );
+        self.input(
+            &format!("{p}_P_kW"),
+            m,
+            "active power of the board's own load",
+            Src::BoardPower(bd),
+        );
+        self.input(
+            &format!("{p}_Energie_kWh"),
+            m,
+            "energy meter",
+            Src::BoardEnergy(bd),
+        );
+        feeders
+    }
+
+    fn lighting_board(&mut self, p: &str, feeder: usize, power_kw: f64) {
+        let m = self.module(&format!("{p}_PLC"));
+        let bus = self.net.add_bus(p);
+        self.net.add_link(&format!("{p}_CABLE"), feeder, bus);
+        let o = self.output(
+            &format!("{p}_OvladanyQ"),
+            m,
+            "lighting contactor KM1 coil (the FB's OvladanyQ)",
+        );
+        let li = self.lights.len();
+        let km = self.contactor(&format!("{p}_KM1"), None, Coil::Output(o));
+        let km_manual = self.contactor(&format!("{p}_KM2"), None, Coil::ManualSwitch(li));
+        let fuse = self.contact(&format!("{p}_FU1"), ContactKind::Fuse);
+        let fv = self.contact(&format!("{p}_FV1"), ContactKind::Arrester);
+        let door = self.contact(p, ContactKind::Door);
+        let khu = self.relay(Sense::Bus(bus));
+        self.lights.push(Lighting {
+            name: p.to_string(),
+            bus,
+            km,
+            km_manual,
+            fuse,
+            manual_switch: false,
+            remote: true,
+            lamp_failed: false,
+            feedback: Delayed::new(false, self.cfg.feedback_pickup, Duration::ZERO),
+            energised_since: None,
+            power_kw,
+            on_ns: 0,
+            dark: false,
+            dark_next: None,
+        });
+        self.input(
+            &format!("{p}_Dalkove"),
+            m,
+            "remote-control enable switch (TRUE = DDTS may control)",
+            Src::LightRemote(li),
+        );
+        self.input(
+            &format!("{p}_Cidlo"),
+            m,
+            "dusk sensor (TRUE = outdoor light insufficient)",
+            Src::LightDusk(li),
+        );
+        self.input(
+            &format!("{p}_PrRele"),
+            m,
+            "lamp-circuit feedback relay (TRUE = circuit energised and drawing current)",
+            Src::LightFeedback(li),
+        );
+        self.input(
+            &format!("{p}_KM1_Zapnut"),
+            m,
+            "lighting contactor KM1 closed",
+            Src::ContactorClosed(km),
+        );
+        self.input(
+            &format!("{p}_Rucne_Zap"),
+            m,
+            "hard-wired 0/1 switch in position 1 (manual contactor KM2)",
+            Src::LightManual(li),
+        );
+        self.input(
+            &format!("{p}_Dvere"),
+            m,
+            "cabinet door open (door limit switch)",
+            Src::Contact(door, true),
+        );
+        self.input(
+            &format!("{p}_Termostat_Min"),
+            m,
+            "cabinet below minimum temperature (not modelled: FALSE)",
+            Src::Const(false),
+        );
+        self.input(
+            &format!("{p}_Termostat_Max"),
+            m,
+            "cabinet above maximum temperature (not modelled: FALSE)",
+            Src::Const(false),
+        );
+        self.input(
+            &format!("{p}_FV1_Prepetova_ochrana"),
+            m,
+            "surge arrester FV1 (255 V) tripped",
+            Src::Contact(fv, true),
+        );
+        self.input(
+            &format!("{p}_FU1_Pretavena_pojistka"),
+            m,
+            "lamp-circuit fuse FU1 blown",
+            Src::Contact(fuse, true),
+        );
+        self.input(
+            &format!("{p}_Napeti"),
+            m,
+            "board supply voltage present (relay KHU1)",
+            Src::Relay(khu),
+        );
+        self.input(
+            &format!("{p}_P_kW"),
+            m,
+            "active power of the lamps (ABB meter)",
+            Src::LightPower(li),
+        );
+        self.input(
+            &format!("{p}_Energie_kWh"),
+            m,
+            "energy of the lamps (ABB meter)",
+            Src::LightEnergy(li),
+        );
+        self.input(
+            &format!("{p}_Svit_pct"),
+            m,
+            "light output of the lamps, % (warm-up ramp)",
+            Src::LightOutput(li),
+        );
+    }
+
+    // ------------------------------------------------------------------ the step
+
+    fn out_eff(&self, slot: Option<usize>) -> bool {
+        slot.and_then(|s| self.outs.get(s))
+            .is_some_and(|o| o.value && self.modules.get(o.module).is_some_and(|m| m.1))
+    }
+
+    fn board_estop(&self, b: Option<usize>) -> bool {
+        b.and_then(|b| self.boards.get(b)).is_some_and(|b| b.estop)
+    }
+
+    fn unix_ns(&self, t: SimTime) -> i128 {
+        i128::from(self.cfg.start_unix_secs) * NANOS + t.as_nanos() as i128
+    }
+
+    fn sim_of_unix(&self, ns: i128) -> Option<SimTime> {
+        let rel = ns - i128::from(self.cfg.start_unix_secs) * NANOS;
+        u64::try_from(rel).ok().map(Duration::from_nanos)
+    }
+
+    fn circuit_energised(&self, l: &Lighting) -> bool {
+        let km = |i: usize| self.contactors.get(i).is_some_and(|c| c.dev.value());
+        let fuse_ok = self.contacts.get(l.fuse).is_some_and(|c| !c.active);
+        self.net.live(l.bus) && (km(l.km) || km(l.km_manual)) && fuse_ok && !l.lamp_failed
+    }
+
+    /// Brings every device up to date at `self.now`: fires due timers, applies coils and
+    /// commands, recomputes energisation, then drives the relays that sense it.
+    fn settle(&mut self) {
+        let now = self.now;
+        for b in &mut self.breakers {
+            b.dev.fire(now);
+        }
+        for c in &mut self.contactors {
+            c.dev.fire(now);
+        }
+        self.gen.fire(now);
+        for r in &mut self.relays {
+            r.dev.fire(now);
+        }
+        for l in &mut self.lights {
+            l.feedback.fire(now);
+        }
+        self.update_dusk();
+
+        // Coils and commands.
+        let estop_trips = self.cfg.estop_trips_feeder;
+        for i in 0..self.breakers.len() {
+            let Some(b) = self.breakers.get(i) else {
+                continue;
+            };
+            let close = self.out_eff(b.close_out);
+            let trip_coil = self.out_eff(b.trip_out);
+            let trip = trip_coil || b.tripped || (estop_trips && self.board_estop(b.board));
+            let both = close && trip_coil;
+            let name = b.name.clone();
+            let was_both = b.both_coils;
+            if let Some(b) = self.breakers.get_mut(i) {
+                b.dev.drive(now, close, trip);
+                b.both_coils = both;
+            }
+            if both && !was_both {
+                self.record(SafetyKind::BothCoils { breaker: name });
+            }
+        }
+        for i in 0..self.contactors.len() {
+            let Some(c) = self.contactors.get(i) else {
+                continue;
+            };
+            let coil = match c.coil {
+                Coil::Output(o) => self.out_eff(Some(o)),
+                Coil::ManualSwitch(l) => self.lights.get(l).is_some_and(|l| l.manual_switch),
+            } && !self.board_estop(c.estop_board);
+            if let Some(c) = self.contactors.get_mut(i) {
+                c.dev.drive(now, coil);
+            }
+        }
+        let start = self.out_eff(self.gen_start);
+        self.gen.drive(now, start);
+
+        // Energisation.
+        for b in &self.breakers {
+            if let Some(l) = b.link {
+                self.net.set_link(l, b.dev.closed());
+            }
+        }
+        for c in &self.contactors {
+            if let Some(l) = c.link {
+                self.net.set_link(l, c.dev.value());
+            }
+        }
+        for (r, lost) in self.supplies.values() {
+            match *r {
+                SupplyRef::Source(s) => self.net.set_source(s, !lost),
+                SupplyRef::Link(l) => self.net.set_link(l, !lost),
+            }
+        }
+        self.net.set_source(self.da_source, self.gen.live());
+        let joined = self.net.energise();
+        self.monitor(joined);
+
+        // Sensing.
+        for i in 0..self.relays.len() {
+            let Some(r) = self.relays.get(i) else {
+                continue;
+            };
+            let want = match r.sense {
+                Sense::Bus(b) => self.net.live(b),
+                Sense::Generator => self.gen.voltage_ok(now),
+            };
+            if let Some(r) = self.relays.get_mut(i) {
+                r.dev.drive(now, want);
+            }
+        }
+        for i in 0..self.lights.len() {
+            let Some(l) = self.lights.get(i) else {
+                continue;
+            };
+            let on = self.circuit_energised(l);
+            if let Some(l) = self.lights.get_mut(i) {
+                l.feedback.drive(now, on);
+                l.energised_since = match (on, l.energised_since) {
+                    (true, None) => Some(now),
+                    (true, s) => s,
+                    (false, _) => None,
+                };
+            }
+        }
+    }
+
+    fn update_dusk(&mut self) {
+        let now = self.now;
+        let unix = self.unix_ns(now);
+        let thr = self.cfg.dusk_threshold_lux;
+        let forced = self.illuminance_override.map(|lux| lux < thr);
+        let mut cache: Option<(bool, Option<SimTime>)> = None;
+        for i in 0..self.lights.len() {
+            let due = self
+                .lights
+                .get(i)
+                .is_some_and(|l| l.dark_next.is_none_or(|t| t <= now));
+            if forced.is_none() && !due {
+                continue;
+            }
+            let (dark, next) = match forced {
+                Some(d) => (d, None),
+                None => *cache.get_or_insert_with(|| {
+                    let (d, n) = self.sky.dark_and_next(unix, thr);
+                    (d, self.sim_of_unix(n))
+                }),
+            };
+            if let Some(l) = self.lights.get_mut(i) {
+                l.dark = dark;
+                l.dark_next = next;
+            }
+        }
+    }
+
+    fn record(&mut self, kind: SafetyKind) {
+        if self.safety.len() < SAFETY_LOG_CAP {
+            self.safety.push(SafetyEvent { at: self.now, kind });
+        } else {
+            self.safety_dropped += 1;
+        }
+    }
+
+    fn monitor(&mut self, joined: Vec<(Vec<String>, Vec<String>, bool)>) {
+        let current: Vec<Vec<String>> = joined.iter().map(|j| j.1.clone()).collect();
+        let ended: Vec<Vec<String>> = self
+            .joined
+            .iter()
+            .filter(|s| !current.contains(s))
+            .cloned()
+            .collect();
+        for sources in ended {
+            self.record(SafetyKind::SourcesSeparated { sources });
+        }
+        for (buses, sources, both_live) in joined {
+            if !self.joined.contains(&sources) {
+                self.record(SafetyKind::SourcesConnected {
+                    buses,
+                    sources,
+                    both_live,
+                });
+            } else if both_live {
+                // A joined network that becomes truly paralleled is worth a new record.
+                let was_live = self.safety.iter().rev().find_map(|e| match &e.kind {
+                    SafetyKind::SourcesConnected {
+                        sources: s,
+                        both_live,
+                        ..
+                    } if *s == sources => Some(*both_live),
+                    _ => None,
+                });
+                if was_live == Some(false) {
+                    self.record(SafetyKind::SourcesConnected {
+                        buses,
+                        sources,
+                        both_live,
+                    });
+                }
+            }
+        }
+        self.joined = current;
+    }
+
+    /// Integrates the meters over `[self.now, t]`: the on-time of every load is counted in
+    /// whole nanoseconds (power is constant between events), so the energy does not depend
+    /// on the step size.
+    fn integrate(&mut self, t: SimTime) {
+        let dt = t.saturating_sub(self.now).as_nanos();
+        if dt == 0 {
+            return;
+        }
+        for i in 0..self.boards.len() {
+            let live = self.boards.get(i).is_some_and(|b| self.net.live(b.bus));
+            if let Some(b) = self.boards.get_mut(i) {
+                if live {
+                    b.live_ns += dt;
+                }
+            }
+        }
+        for i in 0..self.lights.len() {
+            let on = self
+                .lights
+                .get(i)
+                .is_some_and(|l| self.circuit_energised(l));
+            if let Some(l) = self.lights.get_mut(i) {
+                if on {
+                    l.on_ns += dt;
+                }
+            }
+        }
+    }
+
+    fn next_internal(&self) -> Option<SimTime> {
+        let now = self.now;
+        earliest(
+            self.breakers
+                .iter()
+                .map(|b| b.dev.next_event())
+                .chain(self.contactors.iter().map(|c| c.dev.next_event()))
+                .chain(self.relays.iter().map(|r| r.dev.next_event()))
+                .chain(self.lights.iter().map(|l| l.feedback.next_event()))
+                .chain(self.lights.iter().map(|l| l.dark_next))
+                .chain(self.lights.iter().map(|l| {
+                    l.energised_since
+                        .map(|s| s + self.cfg.lamp_warm_up)
+                        .filter(|t| *t > now)
+                }))
+                .chain(std::iter::once(self.gen.next_event(now))),
+        )
+    }
+
+    // ------------------------------------------------------------------ values
+
+    fn value(&self, src: Src) -> Value {
+        let now = self.now;
+        let b = Value::Bool;
+        match src {
+            Src::Const(v) => b(v),
+            Src::BreakerClosed(i) => b(self.breakers.get(i).is_some_and(|x| x.dev.closed())),
+            Src::ContactorClosed(i) => b(self.contactors.get(i).is_some_and(|x| x.dev.value())),
+            Src::Relay(i) => b(self.relays.get(i).is_some_and(|x| x.dev.value())),
+            Src::Selector(i, remote) => b(self.boards.get(i).is_some_and(|x| x.remote == remote)),
+            Src::Estop(i) => b(self.boards.get(i).is_some_and(|x| x.estop)),
+            Src::Contact(i, active_true) => b(self
+                .contacts
+                .get(i)
+                .is_some_and(|x| x.active == active_true)),
+            Src::BusVoltage(bus, nominal) => Value::Real(self.bus_voltage(bus, nominal)),
+            Src::BoardPower(i) => Value::Real(
+                self.boards
+                    .get(i)
+                    .filter(|x| self.net.live(x.bus))
+                    .map_or(0.0, |x| x.base_kw),
+            ),
+            Src::BoardEnergy(i) => Value::Real(
+                self.boards
+                    .get(i)
+                    .map_or(0.0, |x| kwh(x.base_kw, x.live_ns)),
+            ),
+            Src::GenRunning => b(self.gen.running()),
+            Src::GenReady => b(self.gen.ready(now)),
+            Src::GenFault => b(self.gen.failed()),
+            Src::GenVoltage => Value::Real(self.gen.voltage(now)),
+            Src::LightFeedback(i) => b(self.lights.get(i).is_some_and(|l| l.feedback.value())),
+            Src::LightDusk(i) => b(self.lights.get(i).is_some_and(|l| l.dark)),
+            Src::LightRemote(i) => b(self.lights.get(i).is_some_and(|l| l.remote)),
+            Src::LightManual(i) => b(self.lights.get(i).is_some_and(|l| l.manual_switch)),
+            Src::LightEnergy(i) => {
+                Value::Real(self.lights.get(i).map_or(0.0, |l| kwh(l.power_kw, l.on_ns)))
+            }
+            Src::LightPower(i) => Value::Real(
+                self.lights
+                    .get(i)
+                    .filter(|l| self.circuit_energised(l))
+                    .map_or(0.0, |l| l.power_kw),
+            ),
+            Src::LightOutput(i) => {
+                Value::Real(self.lights.get(i).map_or(0.0, |l| match l.energised_since {
+                    Some(s) => {
+                        let w = self.cfg.lamp_warm_up.as_secs_f64();
+                        let e = now.saturating_sub(s).as_secs_f64();
+                        if w <= 0.0 || e >= w {
+                            100.0
+                        } else {
+                            100.0 * e / w
+                        }
+                    }
+                    None => 0.0,
+                }))
+            }
+            Src::Illuminance => Value::Real(
+                self.illuminance_override
+                    .unwrap_or_else(|| self.sky.illuminance(self.unix_ns(now))),
+            ),
+        }
+    }
+
+    fn bus_voltage(&self, bus: usize, nominal: f64) -> f64 {
+        match self.net.supply(bus) {
+            None => 0.0,
+            Some(s) if s == self.da_source => self.gen.voltage(self.now) * nominal / 400.0,
+            Some(_) => nominal,
+        }
+    }
+
+    // ------------------------------------------------------------------ public API
+
+    /// The configuration the plant was built with.
+    pub fn config(&self) -> &StationConfig {
+        &self.cfg
+    }
+
+    /// Injects a fault at the current time. Injecting an active fault again is a no-op.
+    pub fn inject(&mut self, fault: Fault) -> Result<(), PlantError> {
+        self.apply_fault(&fault, true)?;
+        self.faults.insert(fault);
+        self.settle();
+        Ok(())
+    }
+
+    /// Clears a fault at the current time (clearing an inactive fault is a no-op).
+    pub fn clear(&mut self, fault: &Fault) -> Result<(), PlantError> {
+        self.apply_fault(fault, false)?;
+        self.faults.remove(fault);
+        self.settle();
+        Ok(())
+    }
+
+    /// Clears every active fault.
+    pub fn clear_all(&mut self) {
+        let all: Vec<Fault> = self.faults.iter().cloned().collect();
+        for f in all {
+            let _ = self.apply_fault(&f, false);
+        }
+        self.faults.clear();
+        self.settle();
+    }
+
+    /// The active faults, sorted.
+    pub fn active_faults(&self) -> Vec<Fault> {
+        self.faults.iter().cloned().collect()
+    }
+
+    fn apply_fault(&mut self, f: &Fault, on: bool) -> Result<(), PlantError> {
+        let unknown = |kind: &'static str, name: &str| PlantError::UnknownDevice {
+            kind,
+            name: name.to_string(),
+        };
+        let now = self.now;
+        match f {
+            Fault::SupplyLoss(d) => {
+                let s = self
+                    .supplies
+                    .get_mut(d.as_str())
+                    .ok_or_else(|| unknown("supply", d))?;
+                s.1 = on;
+            }
+            Fault::GeneratorFailToStart => {
+                if on {
+                    self.gen.fail_to_start = true;
+                } else {
+                    self.gen.clear_failure(now);
+                }
+            }
+            Fault::StuckClosed(d) | Fault::StuckOpen(d) => {
+                let pos = matches!(f, Fault::StuckClosed(_));
+                let stuck = on.then_some(pos);
+                if let Some(b) = self.breakers.iter_mut().find(|b| b.name == *d) {
+                    if on || b.dev.stuck() == Some(pos) {
+                        b.dev.set_stuck(stuck);
+                    }
+                } else if let Some(c) = self.contactors.iter_mut().find(|c| c.name == *d) {
+                    if on || c.dev.stuck() == Some(pos) {
+                        c.dev.set_stuck(stuck);
+                    }
+                } else {
+                    return Err(unknown("breaker or contactor", d));
+                }
+            }
+            Fault::BreakerTripped(d) => {
+                let b = self
+                    .breakers
+                    .iter_mut()
+                    .find(|b| b.name == *d)
+                    .ok_or_else(|| unknown("breaker", d))?;
+                if !on && b.tripped && b.close_out.is_none() {
+                    b.tripped = false;
+                    b.dev.drive(now, false, false);
+                    b.dev.hand(true);
+                }
+                b.tripped = on;
+            }
+            Fault::LampFailure(d) => {
+                let l = self
+                    .lights
+                    .iter_mut()
+                    .find(|l| l.name == *d)
+                    .ok_or_else(|| unknown("lighting board", d))?;
+                l.lamp_failed = on;
+            }
+            Fault::FuseBlown(d) => self.set_contact(d, ContactKind::Fuse, on)?,
+            Fault::SurgeArresterTripped(d) => self.set_contact(d, ContactKind::Arrester, on)?,
+            Fault::DoorOpen(d) => self.set_contact(d, ContactKind::Door, on)?,
+            Fault::SupplyUnitFault(d) => self.set_contact(d, ContactKind::SupplyUnit, on)?,
+            Fault::NetworkSwitchFault(d) => self.set_contact(d, ContactKind::NetSwitch, on)?,
+            Fault::EmergencyOff(d) => {
+                let b = self
+                    .boards
+                    .iter_mut()
+                    .find(|b| b.name == *d && b.has_estop)
+                    .ok_or_else(|| unknown("board with emergency off", d))?;
+                b.estop = on;
+            }
+            Fault::ModulePulled(d) => {
+                let m = self
+                    .modules
+                    .iter_mut()
+                    .find(|m| m.0 == *d)
+                    .ok_or_else(|| unknown("module", d))?;
+                m.1 = !on;
+            }
+        }
+        Ok(())
+    }
+
+    fn set_contact(&mut self, name: &str, kind: ContactKind, on: bool) -> Result<(), PlantError> {
+        let c = self
+            .contacts
+            .iter_mut()
+            .find(|c| c.name == name && c.kind == kind)
+            .ok_or_else(|| PlantError::UnknownDevice {
+                kind: match kind {
+                    ContactKind::Fuse => "fuse",
+                    ContactKind::Arrester => "surge arrester",
+                    ContactKind::Door => "door",
+                    ContactKind::SupplyUnit => "supply unit",
+                    ContactKind::NetSwitch => "network switch",
+                },
+                name: name.to_string(),
+            })?;
+        c.active = on;
+        Ok(())
+    }
+
+    /// Performs a hand operation at the current time.
+    pub fn operate(&mut self, action: Action) -> Result<(), PlantError> {
+        let unknown = |kind: &'static str, name: &str| PlantError::UnknownDevice {
+            kind,
+            name: name.to_string(),
+        };
+        match action {
+            Action::SetSelector { board, remote } => {
+                if let Some(b) = self
+                    .boards
+                    .iter_mut()
+                    .find(|b| b.name == board && b.has_estop)
+                {
+                    b.remote = remote;
+                } else if let Some(l) = self.lights.iter_mut().find(|l| l.name == board) {
+                    l.remote = remote;
+                } else {
+                    return Err(unknown("board with a selector", &board));
+                }
+            }
+            Action::SetManualSwitch { board, on } => {
+                let l = self
+                    .lights
+                    .iter_mut()
+                    .find(|l| l.name == board)
+                    .ok_or_else(|| unknown("lighting board", &board))?;
+                l.manual_switch = on;
+            }
+            Action::Close(name) => return self.hand_breaker(&name, true),
+            Action::Open(name) => return self.hand_breaker(&name, false),
+            Action::SetIlluminance(lux) => {
+                self.illuminance_override = lux.filter(|x| x.is_finite());
+                for l in &mut self.lights {
+                    l.dark_next = None;
+                }
+            }
+        }
+        self.settle();
+        Ok(())
+    }
+
+    fn hand_breaker(&mut self, name: &str, close: bool) -> Result<(), PlantError> {
+        let now = self.now;
+        let i = self
+            .breakers
+            .iter()
+            .position(|b| b.name == name)
+            .ok_or_else(|| PlantError::UnknownDevice {
+                kind: "breaker",
+                name: name.to_string(),
+            })?;
+        let Some(b) = self.breakers.get(i) else {
+            return Ok(());
+        };
+        if b.close_out.is_some() {
+            let board = b.board.and_then(|x| self.boards.get(x));
+            if board.is_some_and(|x| x.remote) {
+                return Err(PlantError::Refused(format!(
+                    "{name}: board selector in remote, door pushbuttons have no effect"
+                )));
+            }
+            if let Some(b) = self.breakers.get_mut(i) {
+                if close {
+                    b.dev.start_close(now);
+                } else {
+                    b.dev.start_open(now);
+                }
+            }
+        } else {
+            if close && b.tripped {
+                return Err(PlantError::Refused(format!(
+                    "{name}: tripped by its protection; clear the fault to reclose"
+                )));
+            }
+            if let Some(b) = self.breakers.get_mut(i) {
+                b.dev.hand(close);
+            }
+        }
+        self.settle();
+        Ok(())
+    }
+
+    /// The energisation picture (buses, links, sources) at the current time.
+    pub fn topology(&self) -> &TopologySnapshot {
+        &self.net.snap
+    }
+
+    /// Whether a bus (by name, see [`VsetinPlant::topology`]) is energised.
+    pub fn bus_live(&self, bus: &str) -> Result<bool, PlantError> {
+        self.net
+            .snap
+            .buses
+            .iter()
+            .find(|b| b.name == bus)
+            .map(|b| b.live)
+            .ok_or_else(|| PlantError::UnknownDevice {
+                kind: "bus",
+                name: bus.to_string(),
+            })
+    }
+
+    /// The safety monitor's records, oldest first.
+    pub fn safety_log(&self) -> &[SafetyEvent] {
+        &self.safety
+    }
+
+    /// Safety records not kept because the log was full.
+    pub fn safety_dropped(&self) -> u64 {
+        self.safety_dropped
+    }
+
+    /// Whether sources of different groups are joined right now.
+    pub fn sources_joined(&self) -> bool {
+        !self.joined.is_empty()
+    }
+
+    /// Number of times sources of different groups became joined.
+    pub fn source_violations(&self) -> usize {
+        self.safety
+            .iter()
+            .filter(|e| matches!(e.kind, SafetyKind::SourcesConnected { .. }))
+            .count()
+    }
+
+    /// The diesel generator's state.
+    pub fn generator_state(&self) -> GeneratorState {
+        self.gen.state
+    }
+
+    /// Modules and whether each is present.
+    pub fn modules(&self) -> Vec<(String, bool)> {
+        self.modules.clone()
+    }
+}
+
+impl Default for VsetinPlant {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Plant for VsetinPlant {
+    fn now(&self) -> SimTime {
+        self.now
+    }
+
+    fn next_event(&self) -> Option<SimTime> {
+        self.next_internal()
+    }
+
+    fn advance_to(&mut self, t: SimTime) -> Result<(), PlantError> {
+        if t < self.now {
+            return Err(PlantError::TimeWentBackwards {
+                now: self.now,
+                requested: t,
+            });
+        }
+        // Guards against a device that keeps a deadline at the current instant.
+        let mut stalls = 0u32;
+        loop {
+            match self.next_internal().filter(|e| *e <= t) {
+                Some(e) if e > self.now || stalls < 64 => {
+                    if e <= self.now {
+                        stalls += 1;
+                    } else {
+                        stalls = 0;
+                    }
+                    let e = e.max(self.now);
+                    self.integrate(e);
+                    self.now = e;
+                    self.settle();
+                }
+                _ => {
+                    self.integrate(t);
+                    self.now = t;
+                    self.settle();
+                    return Ok(());
+                }
+            }
+        }
+    }
+
+    fn signals(&self) -> &[SignalInfo] {
+        &self.infos
+    }
+
+    fn read(&self, name: &str) -> Result<Reading, PlantError> {
+        let i = *self
+            .index
+            .get(name)
+            .ok_or_else(|| PlantError::UnknownSignal(name.to_string()))?;
+        let module_ok = |m: usize| self.modules.get(m).is_some_and(|m| m.1);
+        match self.sigs.get(i) {
+            Some(Sig::In(src)) => {
+                let info = self.infos.get(i);
+                let valid = info
+                    .and_then(|inf| self.modules.iter().position(|m| m.0 == inf.module))
+                    .is_some_and(module_ok);
+                Ok(Reading {
+                    value: self.value(*src),
+                    valid,
+                })
+            }
+            Some(Sig::Out(o)) => {
+                let out = self.outs.get(*o);
+                Ok(Reading {
+                    value: Value::Bool(out.is_some_and(|x| x.value)),
+                    valid: out.is_some_and(|x| module_ok(x.module)),
+                })
+            }
+            None => Err(PlantError::UnknownSignal(name.to_string())),
+        }
+    }
+
+    fn set_output(&mut self, name: &str, value: Value) -> Result<(), PlantError> {
+        let i = *self
+            .index
+            .get(name)
+            .ok_or_else(|| PlantError::UnknownSignal(name.to_string()))?;
+        let Some(Sig::Out(o)) = self.sigs.get(i).copied() else {
+            return Err(PlantError::NotAnOutput(name.to_string()));
+        };
+        let Value::Bool(v) = value else {
+            return Err(PlantError::WrongType {
+                name: name.to_string(),
+                expected: ValueKind::Bool,
+                got: value.kind(),
+            });
+        };
+        if let Some(out) = self.outs.get_mut(o) {
+            if out.value == v {
+                return Ok(());
+            }
+            out.value = v;
+        }
+        self.settle();
+        Ok(())
+    }
+}
