@@ -284,3 +284,22 @@ async fn an_idle_client_is_closed_after_t3_plus_t1() {
     assert!(!polite.is_closed());
     assert!(polite.session.stats().test_frames_received >= 2);
 }
+
+#[tokio::test]
+async fn a_client_flooding_requests_without_acknowledging_is_closed() {
+    init_logs();
+    let server = fast_server().await;
+    let mut good = Client::connect(server.local_addr()).await;
+    let mut peer = abuser(server.local_addr()).await;
+    peer.start().await;
+    // 20,000 read requests, each numbered correctly, none acknowledging an answer: the
+    // server's window shuts after k answers and the rest would pile up until t1.
+    let read = [102u8, 0x01, 0x05, 0x00, 0x01, 0x00, 1, 0, 0];
+    let mut flood = Vec::new();
+    for number in 0..20_000u16 {
+        encode_i_frame(SeqNum::new(number), SeqNum::ZERO, &read, &mut flood).unwrap();
+    }
+    peer.write_raw(&flood).await;
+    expect_close_logged(peer.local, "without acknowledging").await;
+    still_served(&server, &mut good, 77).await;
+}

@@ -24,6 +24,15 @@ use super::group::Group;
 use super::handler::{Command, CommandFuture, CommandOutcome};
 use super::{Selection, Shared};
 
+/// Answers queued for a client that does not acknowledge them: beyond this the client is
+/// flooding us with requests while its window stays shut, and the connection is closed
+/// rather than let the queue grow until t1 expires.
+const MAX_QUEUED_RESPONSES: usize = 4096;
+
+/// Commands waiting for the application's outcome on one connection; further commands
+/// are refused with a negative confirmation.
+const MAX_PENDING_COMMANDS: usize = 256;
+
 /// Bytes read from the socket at a time.
 const READ_BUFFER: usize = 1024;
 
@@ -183,6 +192,12 @@ impl Connection {
                     SessionEvent::Acknowledged { .. } => self.forget_acknowledged(),
                     SessionEvent::Closed(reason) => return reason.to_string(),
                 }
+            }
+            if self.responses.len() > MAX_QUEUED_RESPONSES {
+                return format!(
+                    "{} answers queued: the client sends requests without acknowledging the answers",
+                    self.responses.len()
+                );
             }
             self.fill_window(now);
             while self.session.poll_transmit(&mut output) {}
@@ -838,6 +853,10 @@ impl Connection {
             peer: self.peer,
         };
         tracing::info!(%command.type_id, ioa = %command.ioa, element = %command.element, select, "command");
+        if self.pending_commands.len() >= MAX_PENDING_COMMANDS {
+            tracing::warn!(ioa = %command.ioa, "too many commands waiting for their outcome: refused");
+            return self.reply(&raw, Cause::ACTIVATION_CON, true);
+        }
         let future = self.shared.handler.handle_command(command);
         self.pending_commands.push(PendingCommand {
             future,
