@@ -41,6 +41,9 @@ pub enum Fault {
     /// An I/O or communication module pulled or dead (`RH2_LOGO`, `ROV05_PLC`, `RDRT_P9`...):
     /// its inputs become unavailable (invalid) and its outputs de-energise.
     ModulePulled(String),
+    /// The link to a module lost (its communication module pulled, a cable cut): its
+    /// inputs become unavailable (invalid) but the field keeps running on its last outputs.
+    CommunicationLost(String),
 }
 
 const KINDS: &[(&str, bool)] = &[
@@ -57,6 +60,7 @@ const KINDS: &[(&str, bool)] = &[
     ("supply-unit-fault", true),
     ("network-switch-fault", true),
     ("module-pulled", true),
+    ("communication-lost", true),
 ];
 
 impl Fault {
@@ -76,6 +80,7 @@ impl Fault {
             Fault::SupplyUnitFault(_) => "supply-unit-fault",
             Fault::NetworkSwitchFault(_) => "network-switch-fault",
             Fault::ModulePulled(_) => "module-pulled",
+            Fault::CommunicationLost(_) => "communication-lost",
         }
     }
 
@@ -94,7 +99,8 @@ impl Fault {
             | Fault::DoorOpen(d)
             | Fault::SupplyUnitFault(d)
             | Fault::NetworkSwitchFault(d)
-            | Fault::ModulePulled(d) => Some(d),
+            | Fault::ModulePulled(d)
+            | Fault::CommunicationLost(d) => Some(d),
         }
     }
 
@@ -141,6 +147,7 @@ impl FromStr for Fault {
             "supply-unit-fault" => Fault::SupplyUnitFault(need(dev)?),
             "network-switch-fault" => Fault::NetworkSwitchFault(need(dev)?),
             "module-pulled" => Fault::ModulePulled(need(dev)?),
+            "communication-lost" => Fault::CommunicationLost(need(dev)?),
             _ => return Err(bad()),
         })
     }

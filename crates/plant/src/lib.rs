@@ -17,7 +17,7 @@ pub use crate::core::{
 };
 pub use crate::devices::{GeneratorConfig, GeneratorState};
 pub use crate::fault::{Action, Fault};
-pub use crate::station::{lighting_boards, StationConfig, VsetinPlant};
+pub use crate::station::{lighting_boards, Module, StationConfig, VsetinPlant};
 pub use crate::topology::{
     BusState, LinkState, SafetyEvent, SafetyKind, SourceState, TopologySnapshot,
 };

@@ -119,6 +119,7 @@ fn fault_text_round_trip() {
         Fault::SupplyUnitFault("RH2_G110.2".into()),
         Fault::NetworkSwitchFault("RDRT_ABB".into()),
         Fault::ModulePulled("RDRT_P9".into()),
+        Fault::CommunicationLost("RH2_LOGO".into()),
     ];
     assert_eq!(all.len(), Fault::keywords().len());
     let mut p = VsetinPlant::new();

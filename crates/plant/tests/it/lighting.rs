@@ -158,3 +158,22 @@ fn dusk_sensor_follows_the_sun_exactly() {
     p.operate(Action::SetIlluminance(None)).unwrap();
     assert!(get(&p, "ROV01_Cidlo"));
 }
+
+#[test]
+fn communication_lost_invalidates_but_the_field_keeps_running() {
+    let mut p = VsetinPlant::new();
+    set(&mut p, "ROV08_OvladanyQ", true);
+    at(&mut p, s(1));
+    p.inject(Fault::CommunicationLost("ROV08_PLC".into()))
+        .unwrap();
+    assert!(!p.read("ROV08_PrRele").unwrap().valid);
+    assert!(p.input("ROV08_Cidlo").is_err());
+    at(&mut p, s(10));
+    // Unlike a pulled module, the outputs stay: the lamps are still lit.
+    assert!(p.read("ROV08_PrRele").unwrap().value.as_bool().unwrap());
+    let m = p.modules().iter().find(|m| m.name == "ROV08_PLC").unwrap();
+    assert!(m.present && !m.linked && !m.valid());
+    p.clear(&Fault::CommunicationLost("ROV08_PLC".into()))
+        .unwrap();
+    assert_eq!(p.input("ROV08_PrRele").unwrap(), Value::Bool(true));
+}
