@@ -369,3 +369,119 @@ fn demo_serves_the_rh2_board() {
         .collect();
     assert_eq!(interrogated, (281..=298).collect::<Vec<u64>>());
 }
+
+fn write_source(name: &str, text: &str) -> PathBuf {
+    let path = std::env::temp_dir().join(format!("stanice-cli-{}-{name}", std::process::id()));
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn plc_run_prints_the_program_after_n_cycles_on_virtual_time() {
+    let source = write_source(
+        "lamp.st",
+        "PROGRAM Main\nVAR\n  n : INT := 0;\n  t : TON;\n  lamp : BOOL;\n  msg : STRING[20] := 'idle';\n  level : ARRAY[1..2] OF REAL;\nEND_VAR\n\
+         n := n + 1;\nt(IN := TRUE, PT := T#50ms);\nlamp := t.Q;\nIF lamp THEN msg := 'lit'; END_IF;\nlevel[2] := INT_TO_REAL(n) / 2.0;\nEND_PROGRAM\n",
+    );
+    let run = |cycles: &str| {
+        let mut command = stanice();
+        command.args(["plc", "run"]).arg(&source).args([
+            "--program",
+            "Main",
+            "--cycles",
+            cycles,
+            "--cycle-ms",
+            "10",
+        ]);
+        let output = run_bounded(command, 20);
+        assert!(
+            output.status.success(),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        String::from_utf8_lossy(&output.stdout).to_string()
+    };
+    // Cycle k runs at (k-1) x 10 ms: the 50 ms timer is due exactly on the sixth cycle.
+    let five = run("5");
+    assert!(
+        five.contains("Main.n = 5\n")
+            && five.contains("Main.lamp = FALSE\n")
+            && five.contains("Main.msg = 'idle'\n"),
+        "{five}"
+    );
+    let six = run("6");
+    assert!(
+        six.contains("Main.n = 6\n")
+            && six.contains("Main.t.Q = TRUE\n")
+            && six.contains("Main.t.ET = T#50ms\n"),
+        "{six}"
+    );
+    assert!(
+        six.contains("Main.msg = 'lit'\n")
+            && six.contains("Main.level[1] = 0.0\n")
+            && six.contains("Main.level[2] = 3.0\n"),
+        "{six}"
+    );
+
+    let mut command = stanice();
+    command
+        .args(["plc", "run"])
+        .arg(&source)
+        .args(["--program", "Main", "--set", "Main.n=41"]);
+    let output = run_bounded(command, 20);
+    assert!(String::from_utf8_lossy(&output.stdout).contains("Main.n = 42\n"));
+}
+
+#[test]
+fn plc_check_reports_file_line_col_and_fails() {
+    let good = write_source(
+        "good.st",
+        "PROGRAM P\nVAR x : INT; END_VAR\nx := x + 1;\nEND_PROGRAM\n",
+    );
+    let mut command = stanice();
+    command.args(["plc", "check"]).arg(&good);
+    assert!(run_bounded(command, 20).status.success());
+
+    let bad = write_source(
+        "bad.st",
+        "PROGRAM P\nVAR x : INT; END_VAR\nx := y + 1;\nx := TRUE;\nEND_PROGRAM\n",
+    );
+    let mut command = stanice();
+    command.args(["plc", "check"]).arg(&bad);
+    let output = run_bounded(command, 20);
+    assert!(!output.status.success());
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(
+        text.contains(&format!(
+            "{}:3:6: error: undeclared name 'y'",
+            bad.display()
+        )),
+        "{text}"
+    );
+    assert!(
+        text.contains(&format!("{}:4:6: error: type mismatch", bad.display())),
+        "{text}"
+    );
+
+    let broken = write_source(
+        "broken.st",
+        "PROGRAM P\nVAR x : INT; END_VAR\nx := (1 + ;\n",
+    );
+    let mut command = stanice();
+    command.args(["plc", "check"]).arg(&broken);
+    let output = run_bounded(command, 20);
+    assert!(!output.status.success());
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(
+        text.contains(&format!("{}:3:", broken.display())) && text.contains("error:"),
+        "{text}"
+    );
+}
