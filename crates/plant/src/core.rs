@@ -233,3 +233,22 @@ pub trait Plant {
         })
     }
 }
+
+/// Renders signal descriptions as a Markdown table (`name | dir | type | unit | module |
+/// meaning`), e.g. for `stanice` to list a plant's I/O.
+pub fn signal_table_markdown(signals: &[SignalInfo]) -> String {
+    let mut out = String::from(
+        "| Signal | Dir | Type | Unit | Module | Meaning |\n|---|---|---|---|---|---|\n",
+    );
+    for s in signals {
+        let dir = match s.direction {
+            Direction::Input => "in",
+            Direction::Output => "out",
+        };
+        out.push_str(&format!(
+            "| `{}` | {} | {} | {} | {} | {} |\n",
+            s.name, dir, s.kind, s.unit, s.module, s.description
+        ));
+    }
+    out
+}

@@ -178,3 +178,71 @@ fn indication_contacts() {
     assert!(p.read("RDRT_Dvere_VN").unwrap().valid);
     set(&mut p, "RH2_QF1_Vyp", false);
 }
+
+#[test]
+#[ignore = "prints the signal list: cargo test -p plant print_signals -- --ignored --nocapture"]
+fn print_signals() {
+    print!(
+        "{}",
+        plant::signal_table_markdown(VsetinPlant::new().signals())
+    );
+}
+
+/// Expands the patterns of the crate docs' signal table.
+fn expand(pat: &str) -> Vec<String> {
+    if let Some(start) = pat.find('{') {
+        let end = start + pat[start..].find('}').unwrap();
+        let (head, key, tail) = (&pat[..start], &pat[start + 1..end], &pat[end + 1..]);
+        let subs: Vec<String> = match key {
+            "B" => vec!["RH2".into(), "RZZ".into()],
+            "L" => plant::lighting_boards(),
+            range => {
+                let (a, b) = range.split_once("..").unwrap();
+                (a.parse::<u32>().unwrap()..=b.parse().unwrap())
+                    .map(|i| i.to_string())
+                    .collect()
+            }
+        };
+        subs.iter()
+            .flat_map(|s| expand(&format!("{head}{s}{tail}")))
+            .collect()
+    } else {
+        vec![pat.to_string()]
+    }
+}
+
+#[test]
+fn crate_docs_list_every_signal() {
+    let lib = include_str!("../../src/lib.rs");
+    let table = &lib[lib.find("# Signal table").unwrap()..lib.find("# Faults").unwrap()];
+    let mut documented = BTreeSet::new();
+    for row in table.lines().filter(|l| l.starts_with("//! | `")) {
+        let first = row.trim_start_matches("//! |").split(" | ").next().unwrap();
+        for pat in first.split(", ") {
+            let pat = pat.trim().trim_matches('`');
+            for name in expand(pat) {
+                assert!(documented.insert(name.clone()), "{name} documented twice");
+            }
+        }
+    }
+    let p = VsetinPlant::new();
+    let actual: BTreeSet<String> = p.signals().iter().map(|s| s.name.clone()).collect();
+    let missing: Vec<_> = actual.difference(&documented).collect();
+    let extra: Vec<_> = documented.difference(&actual).collect();
+    assert!(
+        missing.is_empty() && extra.is_empty(),
+        "undocumented {missing:?}, not existing {extra:?}"
+    );
+    let inputs = p
+        .signals()
+        .iter()
+        .filter(|s| s.direction == Direction::Input)
+        .count();
+    let count = format!(
+        "That is {inputs} inputs and {} outputs.",
+        actual.len() - inputs
+    );
+    assert!(table.contains(&count), "{count}");
+    let md = plant::signal_table_markdown(p.signals());
+    assert_eq!(md.lines().count(), actual.len() + 2);
+}
