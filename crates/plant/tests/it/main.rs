@@ -5,7 +5,9 @@
 mod devices;
 mod faults;
 mod lighting;
+mod logo;
 mod prop;
+mod sun;
 mod topology;
 mod transfer;
 mod year;
