@@ -114,11 +114,11 @@
 //! | `{B}_P1_G110.2_Napeti_zdroje` | in | BOOL | `{B}_LOGO` | 110 V source G110.2 healthy (IOA 298) |
 //! | `{B}_RezervaVstup{1..14}` | in | BOOL | `{B}_LOGO` | spare inputs, always FALSE |
 //! | `{B}_U` | in | REAL V | `{B}_LOGO` | busbar voltage |
-//! | `{B}_P_kW`, `{B}_Energie_kWh` | in | REAL | `{B}_LOGO` | own load power and energy meter |
+//! | `{B}_P_kW`, `{B}_I_A`, `{B}_Energie_kWh` | in | REAL | `{B}_LOGO` | own load power, phase current and energy meter |
 //! | `RH11_QF1_Zapnut` | in | BOOL | `RH11_DI` | main breaker on the utility feed closed |
 //! | `RH11_KHU1_Napeti_sit` | in | BOOL | `RH11_DI` | utility voltage present |
 //! | `RH11_FV1_Prepetova_ochrana`, `RH11_FU1_Pretavena_pojistka` | in | BOOL | `RH11_DI` | surge arrester tripped, fuse blown |
-//! | `RH11_U`, `RH11_P_kW`, `RH11_Energie_kWh`, `R6_U` | in | REAL | `RH11_DI` | busbar voltage, power, energy; 6 kV switchroom voltage |
+//! | `RH11_U`, `RH11_P_kW`, `RH11_I_A`, `RH11_Energie_kWh`, `R6_U` | in | REAL | `RH11_DI` | busbar voltage, power, current, energy; 6 kV switchroom voltage |
 //! | `RDA_KM1_Zap` | out | BOOL | `RDA_LOGO` | coil of KM1, supply of RZS from RH1.1 (mains) |
 //! | `RDA_KM2_Zap` | out | BOOL | `RDA_LOGO` | coil of KM2, supply of RZS from the diesel set |
 //! | `RDA_DA_Start` | out | BOOL | `RDA_LOGO` | generator start/run request (level) |
@@ -135,7 +135,7 @@
 //! | `RDA_FV1_Prepetova_ochrana`, `RDA_FU1_Pretavena_pojistka` | in | BOOL | `RDA_LOGO` | surge arrester tripped, fuse blown |
 //! | `RZS1_KHU1_Napeti` | in | BOOL | `RZS1_DI` | RZS busbar voltage present |
 //! | `RZS1_FV1_Prepetova_ochrana`, `RZS1_FU1_Pretavena_pojistka` | in | BOOL | `RZS1_DI` | surge arrester tripped, fuse blown |
-//! | `RZS1_U`, `RZS1_P_kW`, `RZS1_Energie_kWh` | in | REAL | `RZS1_DI` | busbar voltage (from the generator's curve when fed by it), power, energy |
+//! | `RZS1_U`, `RZS1_P_kW`, `RZS1_I_A`, `RZS1_Energie_kWh` | in | REAL | `RZS1_DI` | busbar voltage (from the generator's curve when fed by it), power, current, energy |
 //! | `RDRT_FV230`, `RDRT_FV110`, `RDRT_FV24` | in | BOOL | `RDRT_P9` | DI0–DI2: surge arresters tripped (SP 1–3) |
 //! | `RDRT_G230_OK`, `RDRT_G110_OK`, `RDRT_G24_OK` | in | BOOL | `RDRT_P9` | DI3–DI5: supplies healthy (SP 4–6 invert them) |
 //! | `RDRT_Rezerva_DI6` | in | BOOL | `RDRT_P9` | DI6: spare |
@@ -153,11 +153,11 @@
 //! | `{L}_FV1_Prepetova_ochrana` | in | BOOL | `{L}_PLC` | surge arrester (255 V) tripped |
 //! | `{L}_FU1_Pretavena_pojistka` | in | BOOL | `{L}_PLC` | lamp-circuit fuse blown (also cuts the lamps) |
 //! | `{L}_Napeti` | in | BOOL | `{L}_PLC` | board supply present |
-//! | `{L}_P_kW`, `{L}_Energie_kWh` | in | REAL | `{L}_PLC` | lamp power and energy (ABB meter) |
+//! | `{L}_P_kW`, `{L}_I_A`, `{L}_Energie_kWh` | in | REAL | `{L}_PLC` | lamp power, phase current and energy (ABB meter) |
 //! | `{L}_Svit_pct` | in | REAL % | `{L}_PLC` | light output (warm-up ramp) |
 //! | `ENV_Osvetlenost_lx` | in | REAL lx | `ENV` | outdoor illuminance |
 //!
-//! That is 297 inputs and 20 outputs.
+//! That is 314 inputs and 20 outputs.
 //!
 //! # Faults ([`Fault`]) and hand operations ([`Action`])
 //!
@@ -184,11 +184,17 @@
 //!
 //! # Left out
 //!
-//! Load flow (voltages are nominal or the generator's curve, no currents except lamp
-//! power), protection settings and selectivity, the RS602 by-pass and the TZ1 signalling
-//! supply, cabinet temperature, PLC supply loss when a board is dead (a dead board's PLC
-//! keeps "running"), generator trips while running, frequency, lamp ageing and
-//! per-lamp failures.
+//! - Load flow: voltages are nominal (or the generator's curve), each load draws its
+//!   constant rating and currents are derived from power and voltage; no voltage drop,
+//!   no overload, no protection settings or selectivity (a breaker trips only by fault
+//!   injection or its coils).
+//! - The RS602 6 kV by-pass, the TZ1 signalling supply and RZZ/RZS1 backup of the
+//!   signalling equipment, the RH1.2 and RZS2 boards and the DT building.
+//! - Cabinet temperature (thermostat inputs are constant FALSE), heaters and fans.
+//! - Loss of a PLC's own supply when its board is dead: the PLC is assumed to keep running
+//!   (model it with `module-pulled`).
+//! - Generator trips while running, frequency, fuel; lamp ageing and single-lamp failures.
+//! - Control logic of any kind: RDA transfer, LOGO! breaker logic, the lighting FB.
 #![cfg_attr(
     not(test),
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)

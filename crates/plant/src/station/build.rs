@@ -26,6 +26,7 @@ impl VsetinPlant {
         let (kind, unit) = match src {
             Src::BusVoltage(..) | Src::GenVoltage => (ValueKind::Real, "V"),
             Src::BoardPower(_) | Src::LightPower(_) => (ValueKind::Real, "kW"),
+            Src::BoardCurrent(_) | Src::LightCurrent(_) => (ValueKind::Real, "A"),
             Src::BoardEnergy(_) | Src::LightEnergy(_) => (ValueKind::Real, "kWh"),
             Src::LightOutput(_) => (ValueKind::Real, "%"),
             Src::Illuminance => (ValueKind::Real, "lx"),
@@ -234,6 +235,12 @@ impl VsetinPlant {
             "active power of the board's own load",
             Src::BoardPower(bd),
         );
+        self.input(
+            "RH11_I_A",
+            m,
+            "phase current (three-phase, from power and voltage)",
+            Src::BoardCurrent(bd),
+        );
         self.input("RH11_Energie_kWh", m, "energy meter", Src::BoardEnergy(bd));
         self.input(
             "R6_U",
@@ -387,6 +394,12 @@ impl VsetinPlant {
             m,
             "active power of the board's own load",
             Src::BoardPower(bd),
+        );
+        self.input(
+            "RZS1_I_A",
+            m,
+            "phase current (three-phase, from power and voltage)",
+            Src::BoardCurrent(bd),
         );
         self.input("RZS1_Energie_kWh", m, "energy meter", Src::BoardEnergy(bd));
 
@@ -641,6 +654,12 @@ impl VsetinPlant {
             Src::BoardPower(bd),
         );
         self.input(
+            &format!("{p}_I_A"),
+            m,
+            "phase current (three-phase, from power and voltage)",
+            Src::BoardCurrent(bd),
+        );
+        self.input(
             &format!("{p}_Energie_kWh"),
             m,
             "energy meter",
@@ -752,6 +771,12 @@ impl VsetinPlant {
             m,
             "active power of the lamps (ABB meter)",
             Src::LightPower(li),
+        );
+        self.input(
+            &format!("{p}_I_A"),
+            m,
+            "phase current (three-phase, from power and voltage)",
+            Src::LightCurrent(li),
         );
         self.input(
             &format!("{p}_Energie_kWh"),

@@ -174,6 +174,7 @@ enum Src {
     Contact(usize, bool),
     BusVoltage(usize, f64),
     BoardPower(usize),
+    BoardCurrent(usize),
     BoardEnergy(usize),
     GenRunning,
     GenReady,
@@ -185,6 +186,7 @@ enum Src {
     LightManual(usize),
     LightEnergy(usize),
     LightPower(usize),
+    LightCurrent(usize),
     LightOutput(usize),
     Illuminance,
 }
@@ -254,6 +256,15 @@ pub struct VsetinPlant {
     safety_dropped: u64,
     joined: Vec<Vec<String>>,
     gen_start: Option<usize>,
+}
+
+/// Phase current (A) of a balanced three-phase load of `kw` at line voltage `volts`.
+fn current(kw: f64, volts: f64) -> f64 {
+    if volts < 1.0 {
+        0.0
+    } else {
+        kw * 1000.0 / (3f64.sqrt() * volts)
+    }
 }
 
 fn kwh(kw: f64, ns: u128) -> f64 {
@@ -561,7 +572,7 @@ impl VsetinPlant {
                 .chain(self.lights.iter().map(|l| l.dark_next))
                 .chain(self.lights.iter().map(|l| {
                     l.energised_since
-                        .map(|s| s + self.cfg.lamp_warm_up)
+                        .map(|s| s.saturating_add(self.cfg.lamp_warm_up))
                         .filter(|t| *t > now)
                 }))
                 .chain(std::iter::once(self.gen.next_event(now))),
@@ -596,6 +607,14 @@ impl VsetinPlant {
                     .get(i)
                     .map_or(0.0, |x| kwh(x.base_kw, x.live_ns)),
             ),
+            Src::BoardCurrent(i) => Value::Real(self.boards.get(i).map_or(0.0, |x| {
+                let p = self.value(Src::BoardPower(i)).as_real().unwrap_or(0.0);
+                current(p, self.bus_voltage(x.bus, 400.0))
+            })),
+            Src::LightCurrent(i) => Value::Real(self.lights.get(i).map_or(0.0, |l| {
+                let p = self.value(Src::LightPower(i)).as_real().unwrap_or(0.0);
+                current(p, self.bus_voltage(l.bus, 400.0))
+            })),
             Src::GenRunning => b(self.gen.running()),
             Src::GenReady => b(self.gen.ready(now)),
             Src::GenFault => b(self.gen.failed()),

@@ -196,6 +196,8 @@ fn lamp_feedback_and_warm_up() {
     at(&mut p, s(1) + ms(30) + s(3));
     assert_eq!(real(&p, "ROV01_Svit_pct"), 100.0);
     assert_eq!(real(&p, "ROV01_P_kW"), 2.4);
+    // 2.4 kW three-phase at 400 V.
+    assert!((real(&p, "ROV01_I_A") - 3.464_101_6).abs() < 1e-6);
     // Off: contactor drops after 20 ms, feedback at once with it.
     set(&mut p, "ROV01_OvladanyQ", false);
     at(&mut p, s(5) + ms(20));

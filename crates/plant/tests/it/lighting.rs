@@ -125,7 +125,7 @@ fn module_pulled_invalidates_inputs_and_drops_outputs() {
         .map(|(n, _)| n)
         .collect();
     assert!(invalid.iter().all(|n| n.starts_with("ROV05_")));
-    assert_eq!(invalid.len(), 14);
+    assert_eq!(invalid.len(), 15);
     p.clear(&Fault::ModulePulled("ROV05_PLC".into())).unwrap();
     at(&mut p, s(3));
     assert_eq!(p.input("ROV05_PrRele").unwrap(), Value::Bool(true));
