@@ -19,8 +19,9 @@ use super::model::{
     check_command, check_event, from_ms, to_ms, CommandRecord, EventRecord, RawCommand, RawEvent,
     RecordId,
 };
-use super::query::{command_sql, event_sql, into_page, Dialect, Param};
-use super::sqlite::{command_cursor, event_cursor};
+use super::query::{
+    command_cursor, command_sql, event_cursor, event_sql, into_page, Dialect, Param,
+};
 use super::{
     redact, Backend, CommandQuery, EventQuery, EventStore, Page, StoreError, StoreFuture,
     StoreStats,

@@ -8,7 +8,9 @@ use chrono::{DateTime, Utc};
 use std::fmt;
 use std::str::FromStr;
 
-use super::model::{to_ms, Actor, CommandOutcome, EventCause, RecordId};
+use super::model::{
+    to_ms, Actor, CommandOutcome, CommandRecord, EventCause, EventRecord, RecordId,
+};
 use super::StoreError;
 
 /// The largest page a query may ask for.
@@ -495,4 +497,18 @@ pub(crate) fn into_page<T>(
         None
     };
     Page { items, next }
+}
+
+/// The cursor after an event, by the query's time basis.
+pub(crate) fn event_cursor(e: &EventRecord, basis: TimeBasis) -> Option<Cursor> {
+    let t = match basis {
+        TimeBasis::Source => e.event_time(),
+        TimeBasis::Received => e.received_time,
+    };
+    e.id.map(|id| Cursor::new(to_ms(t), id))
+}
+
+/// The cursor after a command record.
+pub(crate) fn command_cursor(c: &CommandRecord) -> Option<Cursor> {
+    c.id.map(|id| Cursor::new(to_ms(c.time), id))
 }
