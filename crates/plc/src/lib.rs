@@ -75,14 +75,39 @@ pub fn build(files: &[(String, String)]) -> (SourceMap, Result<Compiled, Vec<Dia
 }
 
 /// Like [`build`] for a prepared source map whose first file is the prelude.
+///
+/// The prelude is parsed once per process ([`prelude`]); only its types, globals and the
+/// POUs that the program names (directly or through other prelude POUs) are checked and
+/// compiled, so a small program does not pay for the whole standard library.
 pub fn build_sources(sources: &SourceMap) -> Result<Compiled, Vec<Diagnostic>> {
     let mut unit = syntax::CompilationUnit::default();
     let mut diags = Vec::new();
     let mut stdlib_items = 0;
-    for (i, (id, file)) in sources.files().enumerate() {
-        syntax::parser::parse_into(id, &file.text, &mut unit, &mut diags);
-        if i == 0 {
+    let mut files = sources.files();
+    let prepared = prelude::get();
+    match files.next() {
+        Some((id, file)) if file.text == stdlib::PRELUDE && id == prelude::FILE => {
+            let mut user = Vec::new();
+            let mut names = std::collections::HashSet::new();
+            for (id, file) in files {
+                let tokens = syntax::lexer::lex(id, &file.text, &mut diags);
+                prelude::collect_names(&tokens, &mut names);
+                user.push(tokens);
+            }
+            unit.items = prepared.items_for(&names);
+            unit.node_count = prepared.node_count;
             stdlib_items = unit.items.len();
+            for tokens in user {
+                syntax::parser::parse_tokens_into(tokens, &mut unit, &mut diags);
+            }
+        }
+        first => {
+            for (i, (id, file)) in first.into_iter().chain(files).enumerate() {
+                syntax::parser::parse_into(id, &file.text, &mut unit, &mut diags);
+                if i == 0 {
+                    stdlib_items = unit.items.len();
+                }
+            }
         }
     }
     if diags.iter().any(Diagnostic::is_error) {
@@ -96,4 +121,109 @@ pub fn build_sources(sources: &SourceMap) -> Result<Compiled, Vec<Diagnostic>> {
     }
     let checked = check::check(unit, stdlib_items)?;
     compile::compile(checked)
+}
+
+/// The standard-library prelude, parsed once per process.
+pub mod prelude {
+    use crate::syntax::lexer::{lex, Tok, Token};
+    use crate::syntax::{parser, CompilationUnit, FileId, Item};
+    use std::collections::HashSet;
+    use std::sync::OnceLock;
+
+    /// The prelude's file id: it is always the first file of a source map.
+    pub const FILE: FileId = FileId(0);
+
+    /// A prelude POU's upper-case name and the names its text mentions.
+    type PouNames = (String, Vec<String>);
+
+    /// The parsed prelude with, for every POU, the names its text mentions.
+    pub struct Prepared {
+        /// Items in source order, each with the upper-case names it mentions (empty for
+        /// items that are always included).
+        items: Vec<(Item, Option<PouNames>)>,
+        /// Node ids used by the prelude (the program's continue from here).
+        pub node_count: u32,
+    }
+
+    impl Prepared {
+        /// Types and globals, plus the POUs named in `names` and, transitively, the
+        /// prelude POUs those mention; in prelude order.
+        pub fn items_for(&self, names: &HashSet<String>) -> Vec<Item> {
+            let mut want: HashSet<&str> = names.iter().map(String::as_str).collect();
+            let mut take = vec![false; self.items.len()];
+            let mut changed = true;
+            while changed {
+                changed = false;
+                for ((_, pou), t) in self.items.iter().zip(take.iter_mut()) {
+                    let needed = match pou {
+                        None => true,
+                        Some((key, _)) => want.contains(key.as_str()),
+                    };
+                    if needed && !*t {
+                        *t = true;
+                        changed = true;
+                        if let Some((_, deps)) = pou {
+                            want.extend(deps.iter().map(String::as_str));
+                        }
+                    }
+                }
+            }
+            self.items
+                .iter()
+                .zip(take)
+                .filter(|(_, t)| *t)
+                .map(|((item, _), _)| item.clone())
+                .collect()
+        }
+    }
+
+    /// Adds the upper-case spelling of every name-like token (identifiers, `#local` and
+    /// `"quoted"` names) to `names`.
+    pub fn collect_names(tokens: &[Token], names: &mut HashSet<String>) {
+        for t in tokens {
+            if let Tok::Ident(n) | Tok::HashIdent(n) | Tok::DqString(n) = &t.tok {
+                if !names.contains(n.as_str()) {
+                    names.insert(n.to_ascii_uppercase());
+                }
+            }
+        }
+    }
+
+    /// The prepared prelude (parsed on first use).
+    pub fn get() -> &'static Prepared {
+        static PRELUDE: OnceLock<Prepared> = OnceLock::new();
+        PRELUDE.get_or_init(prepare)
+    }
+
+    fn prepare() -> Prepared {
+        let mut diags = Vec::new();
+        let tokens = lex(FILE, crate::stdlib::PRELUDE, &mut diags);
+        let mut unit = CompilationUnit::default();
+        parser::parse_tokens_into(tokens.clone(), &mut unit, &mut diags);
+        let items = unit
+            .items
+            .into_iter()
+            .map(|item| {
+                let pou = match &item {
+                    Item::Pou(p) => {
+                        let mut deps = HashSet::new();
+                        let inside: Vec<Token> = tokens
+                            .iter()
+                            .filter(|t| t.span.start >= p.span.start && t.span.end <= p.span.end)
+                            .cloned()
+                            .collect();
+                        collect_names(&inside, &mut deps);
+                        deps.remove(&p.name.key);
+                        Some((p.name.key.clone(), deps.into_iter().collect()))
+                    }
+                    _ => None,
+                };
+                (item, pou)
+            })
+            .collect();
+        Prepared {
+            items,
+            node_count: unit.node_count,
+        }
+    }
 }

@@ -21,6 +21,15 @@ pub fn parse_into(
     diags: &mut Vec<Diagnostic>,
 ) {
     let tokens = lex(file, text, diags);
+    parse_tokens_into(tokens, unit, diags);
+}
+
+/// Parses the tokens of one file (from [`lex`]), appending nodes to `unit`.
+pub fn parse_tokens_into(
+    tokens: Vec<Token>,
+    unit: &mut CompilationUnit,
+    diags: &mut Vec<Diagnostic>,
+) {
     let mut p = Parser {
         tokens,
         pos: 0,

@@ -363,7 +363,10 @@ impl WithMono for ClockReading {
 
 #[test]
 fn standard_timers_have_native_bodies() {
-    let (_, r) = plc::build(&[]);
+    // the prelude's POUs are compiled when a program names them
+    let src =
+        "PROGRAM Main VAR a : TON; b : TOF; c : TP; d : R_TRIG; e : F_TRIG; END_VAR END_PROGRAM";
+    let (_, r) = plc::build(&[("a.st".into(), src.into())]);
     let c = r.unwrap();
     for name in ["TON", "TOF", "TP", "R_TRIG", "F_TRIG"] {
         let id = c.checked.pou_index[name];
@@ -527,4 +530,44 @@ fn download_keeps_persistent_values_and_tasks() {
     p.run_cycle(at_ms(100));
     assert_eq!(p.read_text("Main.count").unwrap(), "2", "new code runs");
     assert_eq!(p.read_text("Main.total").unwrap(), "5");
+}
+
+/// The prelude is parsed once per process and only the POUs a program names are checked
+/// and compiled (a small program — and every fuzz input — no longer pays for the whole
+/// standard library); dependencies among prelude POUs are followed.
+#[test]
+fn only_the_named_prelude_pous_are_compiled() {
+    let (_, r) = plc::build(&[(
+        "a.st".into(),
+        "PROGRAM Main VAR x : INT; END_VAR x := x + 1; END_PROGRAM".into(),
+    )]);
+    let c = r.unwrap();
+    let stdlib_pous = c.checked.pous.iter().filter(|p| p.stdlib).count();
+    assert_eq!(stdlib_pous, 0);
+    // types and globals of the prelude are always there
+    assert!(c.checked.global_index.contains_key("SYSTEM_S"));
+    // a prelude POU and its prelude dependencies
+    let (_, r) = plc::build(&[(
+        "a.st".into(),
+        "PROGRAM Main VAR t : ton; d : DTL; END_VAR d := DT_TO_DTL(DT#2024-01-01-00:00:00); END_PROGRAM"
+            .into(),
+    )]);
+    let c = r.unwrap();
+    let names: Vec<&str> = c
+        .checked
+        .pous
+        .iter()
+        .filter(|p| p.stdlib)
+        .map(|p| p.name.as_str())
+        .collect();
+    assert_eq!(names, ["TON", "DT_TO_DTL"]);
+    // redeclaring a standard FB is still reported as such
+    let (sources, r) = plc::build(&[(
+        "a.st".into(),
+        "FUNCTION_BLOCK TON END_FUNCTION_BLOCK PROGRAM Main END_PROGRAM".into(),
+    )]);
+    let d = r.err().unwrap();
+    assert!(d[0]
+        .render(&sources)
+        .contains("part of the standard library"));
 }
