@@ -227,6 +227,13 @@ impl Cx<'_> {
                 let from_v = self.expr(from);
                 let set_from = self.store(&p, from_v);
                 let to = self.cond(to);
+                let by_const = match by.as_ref() {
+                    None => Some(1),
+                    Some(b) => match self.simple_int(b) {
+                        Some(super::fused::Opnd::K(k)) => Some(k),
+                        _ => None,
+                    },
+                };
                 let by = by
                     .as_ref()
                     .map(|b| self.cond(b))
@@ -242,6 +249,29 @@ impl Cx<'_> {
                 };
                 let body = self.block(body);
                 let span = s.span;
+                if let (Cell::Frame(o), Some(step)) = (&cell, by_const) {
+                    // the common case: a local counter and a constant step
+                    let o = *o;
+                    let wrap = Wrap::of(&vt);
+                    return Box::new(move |vm| {
+                        set_from(vm)?;
+                        let end = to(vm)?;
+                        let mut cur = vm.geti(vm.frame.i + o)?;
+                        while !((step >= 0 && cur > end) || (step < 0 && cur < end)) {
+                            tick(vm, span)?;
+                            match run_block(&body, vm)? {
+                                Flow::Exit => return Ok(Flow::Normal),
+                                Flow::Return => return Ok(Flow::Return),
+                                _ => {}
+                            }
+                            // the body may have changed the variable
+                            let at = vm.frame.i + o;
+                            cur = vm.geti(at)?.saturating_add(step);
+                            vm.seti(at, wrap.apply(cur))?;
+                        }
+                        Ok(Flow::Normal)
+                    });
+                }
                 Box::new(move |vm| {
                     set_from(vm)?;
                     let end = to(vm)?;
@@ -418,11 +448,16 @@ impl Cx<'_> {
             self.error(callee.span, "cannot compile this instance");
             return nop();
         };
-        let addr = InstAddr::of(&inst);
+        let addr = std::rc::Rc::new(InstAddr::of(&inst));
         let needs_temps = args.iter().any(|a| super::expr::contains_call(&a.value));
         let (pre, post) = self.bind_args(&pou, args, !needs_temps);
         let (direct, split) = super::expr::split_pre(pre);
         let id = pid.0;
+        if split.is_empty() && post.is_empty() {
+            if let Some(call) = native_fb_call(&pou, &addr, &direct) {
+                return call;
+            }
+        }
         if split.is_empty() && post.is_empty() {
             // the common case: inputs only
             return Box::new(move |vm| {
@@ -464,5 +499,70 @@ impl Cx<'_> {
             vm.callee = saved;
             r
         })
+    }
+}
+
+/// A call of a standard FB with a native body ([`crate::stdlib::timers`]) whose arguments
+/// are all inline operands: the arguments are written into the instance and the native
+/// body runs on it directly, without the generic binding and call machinery.
+fn native_fb_call(
+    pou: &crate::check::PouInfo,
+    addr: &std::rc::Rc<InstAddr>,
+    direct: &[super::expr::Binder],
+) -> Option<StmtFn> {
+    let binds: Vec<(usize, super::fused::Opnd)> = direct
+        .iter()
+        .map(|b| match b {
+            super::expr::Binder::Inline(off, o) => Some((*off, *o)),
+            super::expr::Binder::Code(_) => None,
+        })
+        .collect::<Option<_>>()?;
+    let body = crate::stdlib::timers::native_body(pou)?;
+    let addr = std::rc::Rc::clone(addr);
+    Some(Box::new(move |vm| {
+        let base = addr.get(vm)?;
+        for (off, o) in &binds {
+            let x = o.get(vm)?;
+            vm.seti(base.i + off, x)?;
+        }
+        let saved = std::mem::replace(&mut vm.frame, base);
+        let r = body(vm);
+        vm.frame = saved;
+        r.map(|_| Flow::Normal)
+    }))
+}
+
+/// Wrapping to an integer type's width, decided at compile time.
+#[derive(Clone, Copy)]
+pub(crate) enum Wrap {
+    /// BOOL.
+    Bool,
+    /// Sign-extend from `64 - n` bits.
+    Signed(u32),
+    /// Zero-extend from `64 - n` bits.
+    Unsigned(u32),
+}
+
+impl Wrap {
+    pub(crate) fn of(t: &crate::check::Ty) -> Wrap {
+        use crate::check::Ty;
+        match t {
+            Ty::Bool => Wrap::Bool,
+            Ty::SInt => Wrap::Signed(56),
+            Ty::Int => Wrap::Signed(48),
+            Ty::DInt => Wrap::Signed(32),
+            Ty::USInt | Ty::Byte => Wrap::Unsigned(56),
+            Ty::UInt | Ty::Word => Wrap::Unsigned(48),
+            Ty::UDInt | Ty::DWord => Wrap::Unsigned(32),
+            _ => Wrap::Signed(0),
+        }
+    }
+    #[inline(always)]
+    pub(crate) fn apply(self, v: i64) -> i64 {
+        match self {
+            Wrap::Bool => i64::from(v != 0),
+            Wrap::Signed(n) => v.wrapping_shl(n).wrapping_shr(n),
+            Wrap::Unsigned(n) => ((v as u64).wrapping_shl(n).wrapping_shr(n)) as i64,
+        }
     }
 }
