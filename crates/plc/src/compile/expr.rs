@@ -356,6 +356,9 @@ impl Cx<'_> {
             }));
         }
         let off = p.off;
+        if let Some(el) = super::fused::Elem::of(p) {
+            return CE::I(Box::new(move |vm| el.get(vm)));
+        }
         if let (Some(ix), Some(Lane::Int), Base::Frame | Base::Abs | Base::Callee) =
             (p.index1.clone(), p.ty.lane(), p.base)
         {
@@ -450,6 +453,16 @@ impl Cx<'_> {
                 let old = vm.geti(at.i)?;
                 let m = 1i64 << bit;
                 vm.seti(at.i, if x != 0 { old | m } else { old & !m })?;
+                Ok(Flow::Normal)
+            });
+        }
+        if let (Some(el), CE::I(_)) = (super::fused::Elem::of(p), &v) {
+            let CE::I(f) = v else {
+                return Box::new(|_| Ok(Flow::Normal));
+            };
+            return Box::new(move |vm| {
+                let x = f(vm)?;
+                el.set(vm, x)?;
                 Ok(Flow::Normal)
             });
         }
@@ -592,6 +605,22 @@ impl Cx<'_> {
                     && !timey(&ta)
                     && !timey(&tb)
                     && (self.simple_int(a).is_some() || self.simple_int(b).is_some());
+                let cmp = matches!(
+                    op,
+                    BinOp::Lt | BinOp::Gt | BinOp::Le | BinOp::Ge | BinOp::Eq | BinOp::Ne
+                );
+                if cmp
+                    && ta == tb
+                    && ta.lane() == Some(Lane::Int)
+                    && self.c.ty(a.id) == ta
+                    && self.c.ty(b.id) == tb
+                {
+                    if let (Some(ea), Some(eb)) = (self.elem_int(a), self.elem_int(b)) {
+                        if let Some(f) = super::fused::elem_cmp(*op, ea, eb, ty_is_u64(&ta)) {
+                            return CE::I(f);
+                        }
+                    }
+                }
                 if fusable {
                     if let (Some(sa), Some(sb)) = (self.int_src(a), self.int_src(b)) {
                         if let Some(f) = super::fused::int_binary(*op, sa, sb, &ta, &ty, e.span) {

@@ -301,3 +301,142 @@ pub(crate) fn real_binary(op: BinOp, a: RSrc, b: RSrc, single: bool) -> Option<s
         _ => return None,
     })
 }
+
+/// An integer array element `a[v + k]` of a local array indexed by a local integer
+/// variable, read or written with one closure: index load, wrap, bounds check and the
+/// element access inline.
+#[derive(Clone, Copy)]
+pub(crate) struct Elem {
+    /// Frame-relative integer cell of the index variable.
+    var: usize,
+    /// Constant added to the index.
+    k: i64,
+    /// Wrapping of `v + k` to the index expression's type.
+    wrap: super::stmt::Wrap,
+    lo: i64,
+    hi: i64,
+    /// Integer cells per element.
+    stride: usize,
+    /// Frame-relative integer cell of the element at `lo`.
+    off: usize,
+    span: crate::syntax::Span,
+}
+
+impl Elem {
+    /// The fast form of a place, if it has one.
+    pub(crate) fn of(p: &super::expr::Place) -> Option<Elem> {
+        use super::expr::{Base, IdxSrc};
+        if p.base != Base::Frame
+            || p.bit.is_some()
+            || p.direct.is_some()
+            || p.range.is_some()
+            || p.ty.lane() != Some(Lane::Int)
+        {
+            return None;
+        }
+        let ix = p.index1.as_ref()?;
+        let IdxSrc::Inline(Opnd::F(var), k, t) = &ix.f else {
+            return None;
+        };
+        Some(Elem {
+            var: *var,
+            k: *k,
+            wrap: super::stmt::Wrap::of(t),
+            lo: ix.lo,
+            hi: ix.hi,
+            stride: ix.stride.i,
+            off: p.off.i,
+            span: ix.span,
+        })
+    }
+
+    #[inline(always)]
+    fn cell(&self, vm: &Vm) -> Result<usize, Fault> {
+        let fi = vm.frame.i;
+        let x = self
+            .wrap
+            .apply(vm.geti(fi + self.var)?.wrapping_add(self.k));
+        if x < self.lo || x > self.hi {
+            return Err(crate::vm::FaultKind::IndexOutOfRange {
+                span: self.span,
+                index: x,
+                lo: self.lo,
+                hi: self.hi,
+            }
+            .into());
+        }
+        Ok(fi + self.off + (x - self.lo) as usize * self.stride)
+    }
+
+    /// The element's value.
+    #[inline(always)]
+    pub(crate) fn get(&self, vm: &Vm) -> Result<i64, Fault> {
+        vm.geti(self.cell(vm)?)
+    }
+
+    /// Stores into the element.
+    #[inline(always)]
+    pub(crate) fn set(&self, vm: &mut Vm, v: i64) -> Result<(), Fault> {
+        let at = self.cell(vm)?;
+        vm.seti(at, v)
+    }
+}
+
+/// A comparison of two fast array elements (`a[j] > a[j + 1]`).
+pub(crate) fn elem_cmp(op: BinOp, a: Elem, b: Elem, unsigned: bool) -> Option<IFn> {
+    use BinOp::*;
+    macro_rules! cmp {
+        (|$x:ident, $y:ident| $body:expr) => {
+            Box::new(move |vm: &mut Vm| {
+                let $x = a.get(vm)?;
+                let $y = b.get(vm)?;
+                Ok(i64::from($body))
+            }) as IFn
+        };
+    }
+    Some(match op {
+        Lt if unsigned => cmp!(|x, y| (x as u64) < (y as u64)),
+        Gt if unsigned => cmp!(|x, y| (x as u64) > (y as u64)),
+        Le if unsigned => cmp!(|x, y| (x as u64) <= (y as u64)),
+        Ge if unsigned => cmp!(|x, y| (x as u64) >= (y as u64)),
+        Lt => cmp!(|x, y| x < y),
+        Gt => cmp!(|x, y| x > y),
+        Le => cmp!(|x, y| x <= y),
+        Ge => cmp!(|x, y| x >= y),
+        Eq => cmp!(|x, y| x == y),
+        Ne => cmp!(|x, y| x != y),
+        _ => return None,
+    })
+}
+
+impl Cx<'_> {
+    /// `e` as a fast array element, if it is `a[v]`/`a[v ± k]` with a local array `a` and
+    /// a local integer `v`, read without conversion.
+    pub(crate) fn elem_int(&mut self, e: &Expr) -> Option<Elem> {
+        let ExprKind::Index(base, idx) = &e.kind else {
+            return None;
+        };
+        if self.c.ty(e.id) != self.c.final_ty(e.id) || idx.len() != 1 {
+            return None;
+        }
+        // only shapes whose place() cannot report anything
+        if !matches!(base.kind, ExprKind::Name { .. }) || self.simple_int(base).is_some() {
+            return None;
+        }
+        let ix = idx.first()?;
+        if matches!(ix.kind, ExprKind::Literal(_)) {
+            return None;
+        }
+        match self.c.res.get(&base.id)? {
+            Res::Local(i) => {
+                let v = self.c.pou(self.pou?)?.vars.get(*i)?;
+                if v.kind == crate::syntax::VarKind::InOut {
+                    return None;
+                }
+            }
+            _ => return None,
+        }
+        let p = self.place(e)?;
+        Elem::of(&p)
+    }
+}
