@@ -130,6 +130,21 @@ pub(crate) fn int_binary(
     let u64cmp = matches!(operand, Ty::ULInt | Ty::LWord);
     let t = result.clone();
     let zero = move || -> Fault { crate::vm::FaultKind::DivisionByZero(span).into() };
+    if let (Div | Mod, Src::O(Opnd::K(d)), true) = (op, &b, t.bits() <= 32 && t.is_signed_int()) {
+        if let Some(m) = ConstDiv::new(*d) {
+            let rem = op == Mod;
+            return Some(match a {
+                Src::O(p) => Box::new(move |vm: &mut Vm| {
+                    let x = p.get(vm)?;
+                    Ok(t.wrap(if rem { m.rem(x) } else { m.div(x) }))
+                }),
+                Src::E(f) => Box::new(move |vm: &mut Vm| {
+                    let x = f(vm)?;
+                    Ok(t.wrap(if rem { m.rem(x) } else { m.div(x) }))
+                }),
+            });
+        }
+    }
     Some(match op {
         // 32-bit division is several times faster than 64-bit on common CPUs
         Div if t.bits() <= 32 && t.is_signed_int() => fuse!(a, b, |x, y| {
@@ -438,5 +453,103 @@ impl Cx<'_> {
         }
         let p = self.place(e)?;
         Elem::of(&p)
+    }
+}
+
+/// 32-bit signed division and remainder by a constant `d` (`|d| >= 2`) with a multiply
+/// instead of a divide instruction (Lemire, Kaser, Kurz: "Faster remainder by direct
+/// computation", 2019: exact for every 32-bit dividend). Same results as
+/// `(x as i32).wrapping_div(d)` / `wrapping_rem(d)`.
+#[derive(Clone, Copy)]
+pub(crate) struct ConstDiv {
+    m: u64,
+    ud: u32,
+    neg: bool,
+}
+
+impl ConstDiv {
+    pub(crate) fn new(d: i64) -> Option<ConstDiv> {
+        let d = i32::try_from(d).ok()?;
+        let ud = d.unsigned_abs();
+        if ud < 2 {
+            return None;
+        }
+        Some(ConstDiv {
+            m: (u64::MAX / u64::from(ud)).wrapping_add(1),
+            ud,
+            neg: d < 0,
+        })
+    }
+
+    #[inline(always)]
+    pub(crate) fn rem(self, x: i64) -> i64 {
+        let x = x as i32;
+        let low = self.m.wrapping_mul(u64::from(x.unsigned_abs()));
+        let r = ((u128::from(low) * u128::from(self.ud)) >> 64) as i64;
+        if x < 0 {
+            -r
+        } else {
+            r
+        }
+    }
+
+    #[inline(always)]
+    pub(crate) fn div(self, x: i64) -> i64 {
+        let x = x as i32;
+        let q = ((u128::from(self.m) * u128::from(x.unsigned_abs())) >> 64) as i64;
+        if (x < 0) != self.neg {
+            -q
+        } else {
+            q
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ConstDiv;
+    use proptest::prelude::*;
+
+    proptest! {
+        #[test]
+        fn const_div_matches_the_divide_instruction(x in any::<i32>(), d in any::<i32>()) {
+            if let Some(m) = ConstDiv::new(i64::from(d)) {
+                prop_assert_eq!(m.rem(i64::from(x)), i64::from(x.wrapping_rem(d)));
+                prop_assert_eq!(m.div(i64::from(x)), i64::from(x.wrapping_div(d)));
+            }
+        }
+    }
+
+    #[test]
+    fn const_div_edge_cases() {
+        for d in [2, 3, 7, 10, 1000, -2, -7, i32::MAX, i32::MIN, i32::MIN + 1] {
+            let m = ConstDiv::new(i64::from(d)).unwrap();
+            for x in [
+                0,
+                1,
+                -1,
+                6,
+                7,
+                -7,
+                i32::MAX,
+                i32::MIN,
+                i32::MIN + 1,
+                d,
+                d - 1,
+            ] {
+                assert_eq!(
+                    m.rem(i64::from(x)),
+                    i64::from(x.wrapping_rem(d)),
+                    "{x} % {d}"
+                );
+                assert_eq!(
+                    m.div(i64::from(x)),
+                    i64::from(x.wrapping_div(d)),
+                    "{x} / {d}"
+                );
+            }
+        }
+        assert!(ConstDiv::new(1).is_none() && ConstDiv::new(-1).is_none());
+        assert!(ConstDiv::new(0).is_none() && ConstDiv::new(1 << 40).is_none());
     }
 }

@@ -145,6 +145,9 @@ impl Cx<'_> {
                 if let Some(append) = self.concat_append(target, value) {
                     return append;
                 }
+                if let Some(copy) = self.int_copy(target, value) {
+                    return copy;
+                }
                 let Some(p) = self.place(target) else {
                     self.error(target.span, "cannot compile this assignment target");
                     return nop();
@@ -389,6 +392,66 @@ impl Cx<'_> {
             }
             Ok(Flow::Normal)
         }))
+    }
+
+    /// `x := y` between integer locals and fast array elements (no conversion, no
+    /// subrange): one closure without inner calls.
+    fn int_copy(&mut self, target: &Expr, value: &Expr) -> Option<StmtFn> {
+        use super::fused::{Elem, Opnd};
+        enum Dst {
+            F(usize),
+            E(Elem),
+        }
+        enum Val {
+            O(Opnd),
+            E(Elem),
+        }
+        let tt = self.c.ty(target.id);
+        if tt.lane() != Some(crate::check::Lane::Int) || self.c.final_ty(value.id) != tt {
+            return None;
+        }
+        let val = match self.simple_int(value) {
+            Some(o) => Val::O(o),
+            None => Val::E(self.elem_int(value)?),
+        };
+        let dst = match &target.kind {
+            ExprKind::Name { .. } => {
+                let p = self.place(target)?;
+                if p.base != super::expr::Base::Frame
+                    || p.dynamic.is_some()
+                    || p.range.is_some()
+                    || p.bit.is_some()
+                    || p.direct.is_some()
+                {
+                    return None;
+                }
+                Dst::F(p.off.i)
+            }
+            ExprKind::Index(..) => Dst::E(self.elem_int(target)?),
+            _ => return None,
+        };
+        Some(match (dst, val) {
+            (Dst::F(o), Val::O(v)) => Box::new(move |vm| {
+                let x = v.get(vm)?;
+                vm.seti(vm.frame.i + o, x)?;
+                Ok(Flow::Normal)
+            }),
+            (Dst::F(o), Val::E(v)) => Box::new(move |vm| {
+                let x = v.get(vm)?;
+                vm.seti(vm.frame.i + o, x)?;
+                Ok(Flow::Normal)
+            }),
+            (Dst::E(d), Val::O(v)) => Box::new(move |vm| {
+                let x = v.get(vm)?;
+                d.set(vm, x)?;
+                Ok(Flow::Normal)
+            }),
+            (Dst::E(d), Val::E(v)) => Box::new(move |vm| {
+                let x = v.get(vm)?;
+                d.set(vm, x)?;
+                Ok(Flow::Normal)
+            }),
+        })
     }
 
     /// Value of a constant CASE label.

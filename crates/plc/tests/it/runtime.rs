@@ -571,3 +571,36 @@ fn only_the_named_prelude_pous_are_compiled() {
         .render(&sources)
         .contains("part of the standard library"));
 }
+
+/// The fused fast paths (array element compare/copy, constant divisors) keep the rules:
+/// bounds faults with the index, wrapping index arithmetic, truncating division.
+#[test]
+fn fused_paths_keep_faults_and_semantics() {
+    let src = "PROGRAM Main VAR a : ARRAY[1..5] OF DINT := [5, 4, 3, 2, 1]; j, t : DINT;
+        m1, m2, d1, d2 : DINT; swapped : BOOL; END_VAR
+        FOR j := 1 TO 4 DO
+          IF a[j] > a[j + 1] THEN t := a[j]; a[j] := a[j + 1]; a[j + 1] := t; swapped := TRUE; END_IF
+        END_FOR
+        m1 := -7 MOD 3; m2 := t MOD -3; d1 := -7 / 2; d2 := a[1] / -2;
+        IF a[1] = 4 THEN j := 5; t := a[j + 1]; END_IF
+        END_PROGRAM";
+    let mut p = plc(src);
+    p.add_task(TaskConfig::cyclic("main", 0, &["Main"]))
+        .unwrap();
+    let faults = p.run_cycle(ClockReading::default());
+    let read = |p: &Plc, path: &str| p.read_text(path).unwrap();
+    assert_eq!(read(&p, "Main.a[1]"), "4");
+    assert_eq!(read(&p, "Main.a[5]"), "5");
+    assert_eq!(read(&p, "Main.m1"), "-1");
+    assert_eq!(read(&p, "Main.m2"), "2");
+    assert_eq!(read(&p, "Main.d1"), "-3");
+    assert_eq!(read(&p, "Main.d2"), "-2");
+    assert_eq!(faults.len(), 1);
+    assert!(
+        faults[0]
+            .message
+            .contains("array index 6 out of range 1..5"),
+        "{}",
+        faults[0].message
+    );
+}
