@@ -535,7 +535,7 @@ mod tests {
                 i32::MIN,
                 i32::MIN + 1,
                 d,
-                d - 1,
+                d.wrapping_sub(1),
             ] {
                 assert_eq!(
                     m.rem(i64::from(x)),
