@@ -36,6 +36,10 @@
 //!   of a variable, field or input (checked on every store; FOR counters excepted) and an
 //!   exhausted per-cycle loop budget are *faults*: the task stops with a diagnostic; the
 //!   host never panics. Constant values outside a subrange are compile-time errors.
+//! - Initial values are stored with the same checks (a subrange variable without an
+//!   initial value starts at its lower bound). A fault while setting them puts the PLC in
+//!   STOP: [`task::Plc::init_fault`] holds the diagnostic, every task is faulted with it
+//!   and the next `run_cycle` returns it; [`task::Plc::try_new`] returns it as an error.
 //! - REAL arithmetic follows IEC 60559 (division by zero gives ±INF/NaN).
 //! - Functions have one static frame each (IEC 61131-3 forbids recursion, which the
 //!   checker rejects); VAR_IN_OUT is passed by reference (the callee holds the address of

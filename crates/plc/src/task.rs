@@ -46,6 +46,10 @@ pub enum PlcError {
     /// Persistence file I/O.
     #[error("retain file: {0}")]
     Io(#[from] std::io::Error),
+    /// Setting the initial values faulted (e.g. an initial value outside a subrange);
+    /// the diagnostic says where.
+    #[error("{}", .0.message)]
+    Init(Box<Diagnostic>),
 }
 
 /// The time of one cycle.
@@ -232,12 +236,20 @@ pub struct Plc {
     /// Integer cells of System_S.R_EDGE_1SEC, R_EDGE_100MS, FIRST_SCAN.
     system_flags: Option<[usize; 3]>,
     stopwatch: Box<dyn Stopwatch>,
+    /// The fault of the last cold start, if it failed; and whether `run_cycle` has yet to
+    /// report it.
+    init_fault: Option<(Diagnostic, bool)>,
     /// Loop iterations per cycle.
     pub loop_budget: u64,
 }
 
 impl Plc {
     /// A PLC for a compiled program; memory is cold-started. No tasks yet.
+    ///
+    /// If setting the initial values faults (an initial value outside a subrange, an
+    /// array index or a division in an initial-value expression), the PLC is in STOP:
+    /// [`Plc::init_fault`] says why, every task starts faulted with that diagnostic and
+    /// the first [`Plc::run_cycle`] returns it. [`Plc::try_new`] returns it as an error.
     pub fn new(compiled: Compiled, sources: SourceMap) -> Self {
         let vm = Vm::new(compiled.checked.memory_size, Rc::clone(&compiled.code));
         let mut plc = Plc {
@@ -249,6 +261,7 @@ impl Plc {
             io_bindings: Vec::new(),
             system_flags: None,
             stopwatch: Box::new(NoStopwatch),
+            init_fault: None,
             loop_budget: DEFAULT_LOOP_BUDGET,
         };
         plc.io_bindings = plc.collect_io_bindings();
@@ -261,9 +274,24 @@ impl Plc {
         .map(|p| plc.leaf(p).ok().map(|l| l.addr.i))
         .collect::<Option<Vec<usize>>>()
         .and_then(|v| <[usize; 3]>::try_from(v).ok());
-        // initialisation faults are impossible for constant initialisers; report if any
+        // a fault is kept in `init_fault` and reported by the tasks and `run_cycle`
         let _ = plc.cold_start();
         plc
+    }
+
+    /// Like [`Plc::new`], but a fault while setting the initial values is an error.
+    pub fn try_new(compiled: Compiled, sources: SourceMap) -> Result<Self, PlcError> {
+        let plc = Plc::new(compiled, sources);
+        match plc.init_fault() {
+            Some(d) => Err(PlcError::Init(Box::new(d.clone()))),
+            None => Ok(plc),
+        }
+    }
+
+    /// The fault of the last cold (or warm) start, if setting the initial values failed.
+    /// Tasks stay faulted until a start succeeds.
+    pub fn init_fault(&self) -> Option<&Diagnostic> {
+        self.init_fault.as_ref().map(|(d, _)| d)
     }
 
     /// The checked program (types, POUs, globals).
@@ -296,12 +324,16 @@ impl Plc {
             let base = c.pou(pid).and_then(|p| p.base).unwrap_or_default();
             programs.push((pid.0, base));
         }
+        let state = match &self.init_fault {
+            Some((d, _)) => TaskState::Faulted(d.clone()),
+            None => TaskState::Running,
+        };
         self.tasks.push(Task {
             config,
             programs,
             next_due: None,
             stats: CycleStats::default(),
-            state: TaskState::Running,
+            state,
             consecutive_overruns: 0,
             last_tick: None,
         });
@@ -326,7 +358,33 @@ impl Plc {
 
     /// Cold start: every variable gets its initial value (PERSISTENT ones are restored by
     /// the caller with [`Plc::load_retain`] if desired). Faulted tasks are restarted.
+    ///
+    /// A fault while setting the initial values is returned, kept as [`Plc::init_fault`]
+    /// and stops every task (reported once by the next [`Plc::run_cycle`]).
     pub fn cold_start(&mut self) -> Result<(), Fault> {
+        if let Err(f) = self.init_memory() {
+            let d = Diagnostic::error(
+                Code::RuntimeFault,
+                f.span().unwrap_or_default(),
+                format!("initialisation stopped: {f}"),
+            );
+            for t in &mut self.tasks {
+                t.state = TaskState::Faulted(d.clone());
+            }
+            self.init_fault = Some((d, true));
+            return Err(f);
+        }
+        self.init_fault = None;
+        for t in &mut self.tasks {
+            t.state = TaskState::Running;
+            t.next_due = None;
+            t.consecutive_overruns = 0;
+            t.last_tick = None;
+        }
+        Ok(())
+    }
+
+    fn init_memory(&mut self) -> Result<(), Fault> {
         let size = self.compiled.checked.memory_size;
         self.vm.ints = vec![0; size.i];
         self.vm.reals = vec![0.0; size.r];
@@ -341,12 +399,6 @@ impl Plc {
                     self.vm.init(i, b)?;
                 }
             }
-        }
-        for t in &mut self.tasks {
-            t.state = TaskState::Running;
-            t.next_due = None;
-            t.consecutive_overruns = 0;
-            t.last_tick = None;
         }
         Ok(())
     }
@@ -449,6 +501,12 @@ impl Plc {
     /// in this call.
     pub fn run_cycle(&mut self, now: ClockReading) -> Vec<Diagnostic> {
         let mut faults = Vec::new();
+        if let Some((d, pending)) = &mut self.init_fault {
+            if *pending {
+                *pending = false;
+                faults.push(d.clone());
+            }
+        }
         self.vm.now = now.monotonic_ns;
         self.vm.utc = now.utc_ns;
         self.vm.local_offset = now.utc_offset_ns;

@@ -773,12 +773,14 @@ impl<'u> Decls<'u> {
                         }
                     }
                 }
+                let elem_range = self.subrange_of(elem);
                 let elem = self.resolve_type(elem, names);
                 let elem_size = size_of(&elem, &self.types, &self.pous);
                 let a = ArrayTy {
                     dims: d,
                     elem,
                     elem_size,
+                    elem_range,
                 };
                 if a.len()
                     .saturating_mul(elem_size.i + elem_size.r + elem_size.s)

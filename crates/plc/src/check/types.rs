@@ -55,6 +55,8 @@ pub struct ArrayTy {
     pub elem: Ty,
     /// Size of one element.
     pub elem_size: Size,
+    /// Subrange bounds of the element type (checked on every element store).
+    pub elem_range: Option<(i64, i64)>,
 }
 
 impl ArrayTy {

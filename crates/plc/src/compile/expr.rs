@@ -30,7 +30,81 @@ pub(crate) struct Place {
     /// The single run-time index of a one-index access on a static base (fast path).
     pub(crate) index1: Option<Rc<Index1>>,
     /// Subrange bounds checked on stores, with the span of the access for the fault.
-    pub(crate) range: Option<(i64, i64, Span)>,
+    pub(crate) range: Option<Rc<RangeCheck>>,
+}
+
+/// A subrange check on stores: bounds, where and what is written.
+pub(crate) struct RangeCheck {
+    pub(crate) lo: i64,
+    pub(crate) hi: i64,
+    pub(crate) span: Span,
+    pub(crate) name: Rc<str>,
+}
+
+impl RangeCheck {
+    pub(crate) fn new(bounds: Option<(i64, i64)>, span: Span, name: &str) -> Option<Rc<Self>> {
+        bounds.map(|(lo, hi)| {
+            Rc::new(RangeCheck {
+                lo,
+                hi,
+                span,
+                name: Rc::from(name),
+            })
+        })
+    }
+
+    /// Whether `x` is inside the bounds.
+    #[inline(always)]
+    pub(crate) fn contains(&self, x: i64) -> bool {
+        x >= self.lo && x <= self.hi
+    }
+
+    /// The fault for `x` outside the bounds.
+    #[cold]
+    pub(crate) fn fault(&self, x: i64) -> Fault {
+        FaultKind::RangeError {
+            span: self.span,
+            name: self.name.to_string(),
+            value: x,
+            lo: self.lo,
+            hi: self.hi,
+        }
+        .into()
+    }
+
+    /// `x` if inside the bounds, else the fault.
+    #[inline(always)]
+    pub(crate) fn check(&self, x: i64) -> Result<i64, Fault> {
+        if self.contains(x) {
+            Ok(x)
+        } else {
+            Err(self.fault(x))
+        }
+    }
+}
+
+/// The source-like name of an l-value (`a[i]`, `s.level`, `Main.x`) for fault messages.
+pub(crate) fn lvalue_name(e: &Expr) -> String {
+    match &e.kind {
+        ExprKind::Name { ident, .. } => ident.name.clone(),
+        ExprKind::Member(b, f) => format!("{}.{}", lvalue_name(b), f.name),
+        ExprKind::Bit(b, bit) => format!("{}.{bit}", lvalue_name(b)),
+        ExprKind::Index(b, idx) => {
+            let ix: Vec<String> = idx
+                .iter()
+                .map(|i| match &i.kind {
+                    ExprKind::Literal(Literal::Int(v, _)) => v.to_string(),
+                    ExprKind::Name { .. } | ExprKind::Member(..) | ExprKind::Index(..) => {
+                        lvalue_name(i)
+                    }
+                    _ => "..".to_string(),
+                })
+                .collect();
+            format!("{}[{}]", lvalue_name(b), ix.join(", "))
+        }
+        ExprKind::Direct(d) => format!("%{d}"),
+        _ => "?".to_string(),
+    }
 }
 
 /// How the index value is computed.
@@ -180,7 +254,7 @@ impl Cx<'_> {
                     Res::Global(g) => self.c.globals.get(g)?.range,
                     _ => None,
                 };
-                p.range = range.map(|(lo, hi)| (lo, hi, e.span));
+                p.range = RangeCheck::new(range, e.span, &lvalue_name(e));
                 Some(p)
             }
             ExprKind::Direct(d) => {
@@ -196,7 +270,7 @@ impl Cx<'_> {
                     let Res::PouVar(_, i) = r else { return None };
                     let v = p.vars.get(i)?;
                     let mut place = Place::abs(p.base?.plus(v.offset), v.ty.clone());
-                    place.range = v.range.map(|(lo, hi)| (lo, hi, e.span));
+                    place.range = RangeCheck::new(v.range, e.span, &lvalue_name(e));
                     return Some(place);
                 }
                 let mut bp = self.place(base)?;
@@ -213,7 +287,7 @@ impl Cx<'_> {
                 };
                 bp.off = bp.off.plus(off);
                 bp.ty = ty;
-                bp.range = range.map(|(lo, hi)| (lo, hi, e.span));
+                bp.range = RangeCheck::new(range, e.span, &lvalue_name(e));
                 Some(bp)
             }
             ExprKind::Bit(base, bit) => {
@@ -310,6 +384,7 @@ impl Cx<'_> {
                     bp.dynamic = Some(d);
                 }
                 bp.ty = a.elem.clone();
+                bp.range = RangeCheck::new(a.elem_range, e.span, &lvalue_name(e));
                 Some(bp)
             }
             _ => None,
@@ -416,20 +491,8 @@ impl Cx<'_> {
     /// Stores a scalar value into a place (string truncation, bit insertion, I/O image).
     pub(crate) fn store(&self, p: &Place, v: CE) -> StmtFn {
         let off = p.off;
-        let v = match (v, p.range) {
-            (CE::I(f), Some((lo, hi, span))) => CE::I(Box::new(move |vm| {
-                let x = f(vm)?;
-                if x < lo || x > hi {
-                    return Err(FaultKind::RangeError {
-                        span,
-                        value: x,
-                        lo,
-                        hi,
-                    }
-                    .into());
-                }
-                Ok(x)
-            })),
+        let v = match (v, p.range.clone()) {
+            (CE::I(f), Some(r)) => CE::I(Box::new(move |vm| r.check(f(vm)?))),
             (v, _) => v,
         };
         if let Some(d) = p.direct {
@@ -786,7 +849,7 @@ impl Cx<'_> {
             let Some(v) = pou.vars.get(idx) else { continue };
             let target = Place {
                 base: Base::Callee,
-                range: v.range.map(|(lo, hi)| (lo, hi, a.value.span)),
+                range: RangeCheck::new(v.range, a.value.span, &v.name),
                 ..Place::frame(v.offset, v.ty.clone())
             };
             if a.output {
@@ -890,10 +953,16 @@ impl Cx<'_> {
             Ty::String(n) | Ty::WString(n) => n,
             _ => u32::MAX,
         };
+        let range = p.range.clone();
         Rc::new(move |vm, v| {
             let at = a(vm)?;
             match v {
-                crate::vm::Val::Int(x) => vm.seti(at.i, x),
+                crate::vm::Val::Int(x) => {
+                    if let Some(r) = &range {
+                        r.check(x)?;
+                    }
+                    vm.seti(at.i, x)
+                }
                 crate::vm::Val::Real(x) => vm.setr(at.r, x),
                 crate::vm::Val::Str(x) => vm.sets(at.s, string::truncate(x, max)),
             }

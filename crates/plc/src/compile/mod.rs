@@ -45,7 +45,7 @@ mod stmt;
 
 use crate::check::{Checked, PouId, Size, Ty};
 use crate::diagnostics::Diagnostic;
-use crate::syntax::{Init, Item, VarKind};
+use crate::syntax::{Init, Item, Span, VarKind};
 use crate::vm::{Code, CompiledPou, Fault, InitFn, StmtFn, Vm};
 use std::rc::Rc;
 
@@ -91,7 +91,8 @@ pub fn compile(checked: Checked) -> Result<Compiled, Vec<Diagnostic>> {
         };
         let mut ops = Vec::new();
         for g in &checked.globals {
-            cx.init_value(&g.ty, g.init.as_ref(), g.offset, &mut ops);
+            let at = InitTarget::new(&g.name, g.span, g.range);
+            cx.init_value(&g.ty, g.init.as_ref(), g.offset, &at, &mut ops);
         }
         global_init = seq_init(ops);
         for (i, p) in checked.pous.iter().enumerate() {
@@ -105,7 +106,8 @@ pub fn compile(checked: Checked) -> Result<Compiled, Vec<Diagnostic>> {
                 if matches!(v.kind, VarKind::External | VarKind::InOut) {
                     continue;
                 }
-                cx.init_value(&v.ty, v.init.as_ref(), v.offset, &mut ops);
+                let at = InitTarget::new(&format!("{}.{}", p.name, v.name), v.span, v.range);
+                cx.init_value(&v.ty, v.init.as_ref(), v.offset, &at, &mut ops);
             }
             let init = seq_init(ops);
             let body = match checked.unit.items.get(p.item) {
@@ -151,6 +153,7 @@ impl Cx<'_> {
         ty: &Ty,
         init: Option<&Init>,
         off: Size,
+        at: &InitTarget,
         ops: &mut Vec<InitFn>,
     ) {
         match ty {
@@ -168,7 +171,8 @@ impl Cx<'_> {
                         .find(|(n, _)| n.key == f.key)
                         .map(|(_, i)| i)
                         .or(f.init.as_ref());
-                    self.init_value(&f.ty, i, off.plus(f.offset), ops);
+                    let fat = InitTarget::new(&format!("{}.{}", at.name, f.name), at.span, f.range);
+                    self.init_value(&f.ty, i, off.plus(f.offset), &fat, ops);
                 }
             }
             Ty::Array(a) => {
@@ -191,7 +195,10 @@ impl Cx<'_> {
                 let simple = a.elem.is_elementary() || matches!(a.elem, Ty::Enum(_));
                 if simple && elems.is_empty() {
                     let size = a.elem_size.times(n);
-                    let default = self.default_int(&a.elem);
+                    let default = match a.elem_range {
+                        Some((lo, _)) => lo,
+                        None => self.default_int(&a.elem),
+                    };
                     ops.push(Box::new(move |vm| {
                         let b = vm.frame.plus(off);
                         fill(vm, b, size, default)
@@ -200,7 +207,12 @@ impl Cx<'_> {
                 }
                 for k in 0..n {
                     let init = elems.get(k).copied().flatten();
-                    self.init_value(&a.elem, init, off.plus(a.elem_size.times(k)), ops);
+                    let eat = InitTarget::new(
+                        &format!("{}[{}]", at.name, elem_index(a, k)),
+                        at.span,
+                        a.elem_range,
+                    );
+                    self.init_value(&a.elem, init, off.plus(a.elem_size.times(k)), &eat, ops);
                 }
             }
             Ty::Fb(id) => {
@@ -213,21 +225,35 @@ impl Cx<'_> {
                     let pou = self.c.pou(PouId(id)).cloned();
                     for (name, i) in fields {
                         if let Some((_, v)) = pou.as_ref().and_then(|p| p.var(&name.key)) {
-                            self.init_value(&v.ty.clone(), Some(i), off.plus(v.offset), ops);
+                            let vat = InitTarget::new(
+                                &format!("{}.{}", at.name, v.name),
+                                at.span,
+                                v.range,
+                            );
+                            self.init_value(&v.ty.clone(), Some(i), off.plus(v.offset), &vat, ops);
                         }
                     }
                 }
             }
             Ty::Void => {}
             _ => {
-                let place = expr::Place::frame(off, ty.clone());
+                let mut place = expr::Place::frame(off, ty.clone());
+                let span = match init {
+                    Some(Init::Expr(e)) => e.span,
+                    _ => at.span,
+                };
+                place.range = expr::RangeCheck::new(at.range, span, &at.name);
                 let value = match init {
                     Some(Init::Expr(e)) => self.expr(e),
                     _ => match ty.lane() {
                         Some(crate::check::Lane::Real) => CE::R(Box::new(|_| Ok(0.0))),
                         Some(crate::check::Lane::Str) => CE::S(Box::new(|_| Ok(String::new()))),
                         _ => {
-                            let d = self.default_int(ty);
+                            // the default of a subrange is its lower bound
+                            let d = match at.range {
+                                Some((lo, _)) => lo,
+                                None => self.default_int(ty),
+                            };
                             CE::I(Box::new(move |_| Ok(d)))
                         }
                     },
@@ -250,6 +276,41 @@ impl Cx<'_> {
             _ => 0,
         }
     }
+}
+
+/// What an initialiser writes: the name for faults (`Main.a[2]`), the declaration and
+/// the subrange bounds, if any.
+pub(crate) struct InitTarget {
+    name: String,
+    span: Span,
+    range: Option<(i64, i64)>,
+}
+
+impl InitTarget {
+    fn new(name: &str, span: Span, range: Option<(i64, i64)>) -> Self {
+        InitTarget {
+            name: name.to_string(),
+            span,
+            range,
+        }
+    }
+}
+
+/// The index of the `k`-th element (row-major) as written in ST: `3` or `1, 2`.
+fn elem_index(a: &crate::check::ArrayTy, k: usize) -> String {
+    let mut rem = k;
+    let mut idx = vec![0i64; a.dims.len()];
+    for (d, (lo, hi)) in a.dims.iter().enumerate().rev() {
+        let span = usize::try_from(hi - lo + 1).unwrap_or(1).max(1);
+        if let Some(s) = idx.get_mut(d) {
+            *s = lo.saturating_add(i64::try_from(rem % span).unwrap_or(0));
+        }
+        rem /= span;
+    }
+    idx.iter()
+        .map(i64::to_string)
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 fn fill(vm: &mut Vm, b: Size, size: Size, default: i64) -> Result<(), Fault> {

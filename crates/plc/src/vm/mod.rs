@@ -44,10 +44,12 @@ pub enum FaultKind {
         hi: i64,
     },
     /// A value stored into a subrange variable is outside its range.
-    #[error("value {value} outside the subrange {lo}..{hi}")]
+    #[error("value {value} outside the subrange {lo}..{hi} of '{name}'")]
     RangeError {
         /// Where.
         span: Span,
+        /// The variable (or element, field) written, e.g. `a[i]`, `s.level`.
+        name: String,
         /// The value.
         value: i64,
         /// Lower bound.

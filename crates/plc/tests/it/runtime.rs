@@ -604,3 +604,44 @@ fn fused_paths_keep_faults_and_semantics() {
         faults[0].message
     );
 }
+
+#[test]
+fn a_fault_while_setting_initial_values_is_reported() {
+    let src = "PROGRAM Main
+VAR n : INT; x : INT (0..10) := 20; END_VAR
+n := n + 1;
+END_PROGRAM
+";
+    let build = || plc::build(&[("t.st".to_string(), src.to_string())]);
+    let (sources, r) = build();
+    let err = Plc::try_new(r.unwrap(), sources).err().expect("init fault");
+    let plc::PlcError::Init(d) = &err else {
+        panic!("{err}")
+    };
+    assert_eq!(
+        d.message,
+        "initialisation stopped: value 20 outside the subrange 0..10 of 'Main.x'"
+    );
+    let mut p = plc(src);
+    let d = p.init_fault().cloned().expect("kept");
+    assert!(
+        p.render(&d)
+            .starts_with("t.st:2:33: error: initialisation stopped: value 20"),
+        "{}",
+        p.render(&d)
+    );
+    p.add_task(TaskConfig::cyclic("main", 10_000_000, &["Main"]))
+        .unwrap();
+    assert_eq!(p.task_state("main"), Some(&TaskState::Faulted(d.clone())));
+    // reported once, by the first cycle; the program does not run
+    assert_eq!(p.run_cycle(at_ms(0)), vec![d.clone()]);
+    assert!(p.run_cycle(at_ms(10)).is_empty());
+    assert_eq!(p.read_text("Main.n").unwrap(), "0");
+    // a restart faults again
+    assert!(p.cold_start().is_err());
+    assert!(matches!(p.task_state("main"), Some(TaskState::Faulted(_))));
+    // a program whose initial values are fine starts normally
+    let (sources, r) = plc::build(&[("t.st".to_string(), LIGHTS.to_string())]);
+    let p = Plc::try_new(r.unwrap(), sources).unwrap();
+    assert!(p.init_fault().is_none());
+}
