@@ -33,7 +33,9 @@
 //! # Run-time rules
 //! - Integer overflow wraps at the declared width (two's complement), as on most PLCs.
 //! - Integer division/MOD by zero, array index out of range, a value outside the subrange
-//!   of a variable, field or input (checked on every store; FOR counters excepted) and an
+//!   of a variable, field, array element or input (checked on every store, with the name
+//!   of what was written; a FOR counter is checked for every value the body runs with,
+//!   the step past the end is not stored if it leaves the subrange) and an
 //!   exhausted per-cycle loop budget are *faults*: the task stops with a diagnostic; the
 //!   host never panics. Constant values outside a subrange are compile-time errors.
 //! - Initial values are stored with the same checks (a subrange variable without an

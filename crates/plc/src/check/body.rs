@@ -317,7 +317,13 @@ impl BodyCx<'_> {
                         .and_then(|p| p.vars.get(*i))
                         .and_then(|v| v.range),
                     Some(Res::Global(g)) => self.c.globals.get(*g).and_then(|v| v.range),
-                    _ => None,
+                    _ => match &target.kind {
+                        ExprKind::Index(base, _) => match self.c.ty(base.id) {
+                            Ty::Array(a) => a.elem_range,
+                            _ => None,
+                        },
+                        _ => None,
+                    },
                 };
                 if let (Some((lo, hi)), ExprKind::Literal(Literal::Int(v, _))) =
                     (range, &value.kind)

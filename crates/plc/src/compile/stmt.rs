@@ -252,7 +252,11 @@ impl Cx<'_> {
                 };
                 let body = self.block(body);
                 let span = s.span;
-                if let (Cell::Frame(o), Some(step)) = (&cell, by_const) {
+                // a subrange counter: every value the body runs with is checked; the
+                // step past the end is not stored if it leaves the subrange (the counter
+                // keeps its last value, IEC leaves it implementation-defined)
+                let range = p.range.clone();
+                if let (Cell::Frame(o), Some(step), None) = (&cell, by_const, &range) {
                     // the common case: a local counter and a constant step
                     let o = *o;
                     let wrap = Wrap::of(&vt);
@@ -292,6 +296,14 @@ impl Cx<'_> {
                         }
                         // the body may have changed the variable
                         cur = cell.get(vm)?.saturating_add(step);
+                        if let Some(r) = &range {
+                            if !r.contains(cur) {
+                                if (step >= 0 && cur > end) || (step < 0 && cur < end) {
+                                    break;
+                                }
+                                return Err(r.fault(cur));
+                            }
+                        }
                         cell.set(vm, vt.wrap(cur))?;
                     }
                     Ok(Flow::Normal)
