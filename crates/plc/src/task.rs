@@ -6,10 +6,14 @@
 //! clock in production — and, for execution-time statistics and the watchdog, a
 //! [`Stopwatch`] that says how long the cycle's work took.
 //!
-//! One cycle of a due task: copy `%I`/`%M` into the variables declared `AT` those
-//! addresses, apply forced values, run the task's programs in order, apply forced values
-//! again, copy `AT %Q`/`%M` variables into the output image, update statistics and the
-//! watchdog.
+//! One cycle of a due task: apply forced direct addresses to the process image, copy
+//! `%I`/`%M` into the variables declared `AT` those addresses, apply forced variables, run
+//! the task's programs in order, apply forced variables again, copy `AT %Q`/`%M`
+//! variables into the output image, apply forced direct addresses again (and to the
+//! variables `AT` them), update statistics and the watchdog.
+//!
+//! Forcing and writing work by variable path (`Main.lights[3].Q`) or by direct address
+//! (`%IX0.0`, `%QW2`, `%MD20`).
 
 use crate::check::{Checked, PouId, Size, Ty};
 use crate::compile::Compiled;
@@ -232,6 +236,8 @@ pub struct Plc {
     vm: Vm,
     tasks: Vec<Task>,
     forces: BTreeMap<String, (Ty, Size, Val)>,
+    /// Forced direct addresses (`%QX1.3`), by canonical spelling.
+    io_forces: BTreeMap<String, (DirectAddress, i64)>,
     io_bindings: Vec<(Size, Ty, DirectAddress)>,
     /// Integer cells of System_S.R_EDGE_1SEC, R_EDGE_100MS, FIRST_SCAN.
     system_flags: Option<[usize; 3]>,
@@ -258,6 +264,7 @@ impl Plc {
             vm,
             tasks: Vec::new(),
             forces: BTreeMap::new(),
+            io_forces: BTreeMap::new(),
             io_bindings: Vec::new(),
             system_flags: None,
             stopwatch: Box::new(NoStopwatch),
@@ -521,6 +528,7 @@ impl Plc {
                 continue;
             }
             self.update_system_flags(ti, now.monotonic_ns);
+            self.apply_io_forces();
             self.sync_inputs();
             self.apply_forces();
             self.vm.budget = self.loop_budget;
@@ -540,6 +548,7 @@ impl Plc {
             let elapsed = self.stopwatch.elapsed_ns();
             self.apply_forces();
             self.sync_outputs();
+            self.apply_io_forces();
             let Some(t) = self.tasks.get_mut(ti) else {
                 continue;
             };
@@ -810,8 +819,12 @@ impl Plc {
         };
     }
 
-    /// Reads a scalar by path.
+    /// Reads a scalar by path, or the process image by direct address (`%QX1.3`).
     pub fn read(&self, path: &str) -> Result<Val, PlcError> {
+        if let Some(d) = direct_path(path) {
+            let d = d?;
+            return Ok(Val::Int(self.vm.io_read(d.area, d.byte, d.bit, d.bits)));
+        }
         let l = self.leaf(path)?;
         self.read_leaf(&l)
     }
@@ -823,13 +836,27 @@ impl Plc {
 
     /// Reads a scalar by path as an IEC literal (`TRUE`, `T#5s`, `'text'`).
     pub fn read_text(&self, path: &str) -> Result<String, PlcError> {
+        if let Some(d) = direct_path(path) {
+            let d = d?;
+            let v = Val::Int(self.vm.io_read(d.area, d.byte, d.bit, d.bits));
+            return Ok(format_value(&self.compiled.checked, &direct_ty(&d), &v));
+        }
         let l = self.leaf(path)?;
         self.format_leaf(&l)
     }
 
     /// Writes a scalar once (the program may overwrite it in the next cycle). `text` is an
     /// IEC literal of the variable's type.
+    ///
+    /// A direct address (`%IX0.0`, `%QW2`, `%MD20`; the `%` is required) writes the
+    /// process image (a BOOL, BYTE, WORD, DWORD or LWORD literal by the address's size)
+    /// and the variables declared `AT` an overlapping address.
     pub fn write(&mut self, path: &str, text: &str) -> Result<(), PlcError> {
+        if let Some(d) = direct_path(path) {
+            let (d, x) = self.direct_value(d?, text)?;
+            self.write_io(&d, x);
+            return Ok(());
+        }
         let l = self.leaf(path)?;
         let v = parse_value(&self.compiled.checked, &l.ty, text)?;
         self.write_leaf(&l, v);
@@ -838,7 +865,19 @@ impl Plc {
 
     /// Forces a variable: the value is applied before and after the programs of every
     /// cycle until [`Plc::release`].
+    ///
+    /// A direct address (`%IX0.0`, `%QX1.3`, `%MW10`) forces the process image: before
+    /// the programs (so inputs and `AT` variables read the forced value) and after them,
+    /// after the outputs were copied into the image (so programs cannot override it).
+    /// After [`Plc::release`] the image keeps the forced value until the program (outputs,
+    /// markers) or the field ([`Plc::set_io`], inputs) writes it again.
     pub fn force(&mut self, path: &str, text: &str) -> Result<(), PlcError> {
+        if let Some(d) = direct_path(path) {
+            let (d, x) = self.direct_value(d?, text)?;
+            self.write_io(&d, x);
+            self.io_forces.insert(direct_key(&d), (d, x));
+            return Ok(());
+        }
         let l = self.leaf(path)?;
         let v = parse_value(&self.compiled.checked, &l.ty, text)?;
         self.write_leaf(&l, v.clone());
@@ -848,12 +887,54 @@ impl Plc {
 
     /// Releases a forced variable; returns whether it was forced.
     pub fn release(&mut self, path: &str) -> bool {
+        if let Some(d) = direct_path(path) {
+            return match d {
+                Ok(d) => self.io_forces.remove(&direct_key(&d)).is_some(),
+                Err(_) => false,
+            };
+        }
         self.forces.remove(path).is_some()
     }
 
-    /// Forced paths.
+    /// Forced paths and direct addresses (`%QX1.3`).
     pub fn forced(&self) -> Vec<String> {
-        self.forces.keys().cloned().collect()
+        self.forces
+            .keys()
+            .chain(self.io_forces.keys())
+            .cloned()
+            .collect()
+    }
+
+    /// The value of a literal for a direct address, by the address's size.
+    fn direct_value(&self, d: DirectAddress, text: &str) -> Result<(DirectAddress, i64), PlcError> {
+        match parse_value(&self.compiled.checked, &direct_ty(&d), text)? {
+            Val::Int(x) => Ok((d, x)),
+            _ => Err(PlcError::BadValue {
+                text: text.to_string(),
+                ty: self.compiled.checked.type_name(&direct_ty(&d)),
+            }),
+        }
+    }
+
+    /// Writes the process image and every variable declared `AT` an overlapping address.
+    fn write_io(&mut self, d: &DirectAddress, x: i64) {
+        self.vm.io_write(d.area, d.byte, d.bit, d.bits, x);
+        for (a, ty, b) in &self.io_bindings {
+            if overlaps(b, d) {
+                let v = self.vm.io_read(b.area, b.byte, b.bit, b.bits);
+                let _ = self.vm.seti(a.i, ty.wrap(v));
+            }
+        }
+    }
+
+    fn apply_io_forces(&mut self) {
+        if self.io_forces.is_empty() {
+            return;
+        }
+        let forces: Vec<(DirectAddress, i64)> = self.io_forces.values().copied().collect();
+        for (d, x) in forces {
+            self.write_io(&d, x);
+        }
     }
 
     fn apply_forces(&mut self) {
@@ -934,6 +1015,54 @@ impl Plc {
     pub fn render(&self, d: &Diagnostic) -> String {
         d.render(&self.sources)
     }
+}
+
+/// A direct address written as a path (`%QX1.3`, any case): `None` for variable paths.
+fn direct_path(path: &str) -> Option<Result<DirectAddress, PlcError>> {
+    let rest = path.trim().strip_prefix('%')?;
+    Some(
+        DirectAddress::parse(&rest.to_ascii_uppercase())
+            .ok_or_else(|| PlcError::BadAddress(path.to_string())),
+    )
+}
+
+/// The type of a direct address by its size.
+fn direct_ty(d: &DirectAddress) -> Ty {
+    match d.bits {
+        1 => Ty::Bool,
+        8 => Ty::Byte,
+        16 => Ty::Word,
+        32 => Ty::DWord,
+        _ => Ty::LWord,
+    }
+}
+
+/// Canonical spelling: `%QX1.3`, `%MW10`.
+fn direct_key(d: &DirectAddress) -> String {
+    match d.bits {
+        1 => format!("%{}X{}.{}", d.area, d.byte, d.bit),
+        n => {
+            let size = match n {
+                8 => 'B',
+                16 => 'W',
+                32 => 'D',
+                _ => 'L',
+            };
+            format!("%{}{size}{}", d.area, d.byte)
+        }
+    }
+}
+
+/// Whether two direct addresses share a bit.
+fn overlaps(a: &DirectAddress, b: &DirectAddress) -> bool {
+    if a.area != b.area {
+        return false;
+    }
+    let end = |d: &DirectAddress| d.byte + (d.bits as usize / 8).max(1);
+    if a.byte >= end(b) || b.byte >= end(a) {
+        return false;
+    }
+    !(a.bits == 1 && b.bits == 1 && a.bit != b.bit)
 }
 
 type Seg = (String, Vec<Vec<i64>>);

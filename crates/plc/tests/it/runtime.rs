@@ -645,3 +645,101 @@ END_PROGRAM
     let p = Plc::try_new(r.unwrap(), sources).unwrap();
     assert!(p.init_fault().is_none());
 }
+
+#[test]
+fn forcing_and_writing_by_direct_address() {
+    let src = "
+PROGRAM Main
+VAR
+    start AT %IX0.0 : BOOL;
+    level AT %IW4 : WORD;
+    lamp AT %QX1.3 : BOOL;
+    out AT %QW2 : WORD;
+    flag AT %MX10.1 : BOOL;
+    seen : BOOL;
+    mw : WORD;
+    md : DWORD;
+    n : INT;
+END_VAR
+n := n + 1;
+lamp := FALSE;
+out := 7;
+seen := start AND flag;
+flag := FALSE;
+mw := %MW10;
+md := %MD20;
+%MD20 := 0;
+END_PROGRAM
+";
+    let mut p = plc(src);
+    p.add_task(TaskConfig::cyclic("main", 10_000_000, &["Main"]))
+        .unwrap();
+    p.force("%IX0.0", "TRUE").unwrap();
+    p.force("%qx1.3", "TRUE").unwrap();
+    p.force("%IW4", "16#BEEF").unwrap();
+    p.force("%QW2", "500").unwrap();
+    p.force("%MX10.1", "TRUE").unwrap();
+    p.force("%MD20", "70000").unwrap();
+    assert_eq!(
+        p.forced(),
+        vec!["%IW4", "%IX0.0", "%MD20", "%MX10.1", "%QW2", "%QX1.3"]
+    );
+    for k in 0..3 {
+        p.set_io("%IX0.0", 0).unwrap(); // the field says FALSE; the force wins
+        p.run_cycle(at_ms(10 * k));
+        // inputs and markers: the program read the forced values
+        assert_eq!(p.read_text("Main.start").unwrap(), "TRUE");
+        assert_eq!(p.read_text("Main.level").unwrap(), "48879");
+        assert_eq!(p.read_text("Main.seen").unwrap(), "TRUE");
+        assert_eq!(p.read_text("Main.mw").unwrap(), "512"); // %MX10.1: bit 1 of %MB10, the high byte
+        assert_eq!(p.read_text("Main.md").unwrap(), "70000");
+        // outputs: the program wrote other values, the forced ones reach the image
+        assert_eq!(p.get_io("%QX1.3").unwrap(), 1);
+        assert_eq!(p.read_text("%QX1.3").unwrap(), "TRUE");
+        assert_eq!(p.read_text("Main.lamp").unwrap(), "TRUE");
+        assert_eq!(p.get_io("%QW2").unwrap(), 500);
+        assert_eq!(p.read_text("Main.out").unwrap(), "500");
+        assert_eq!(p.read_text("%MD20").unwrap(), "70000");
+        assert_eq!(p.read_text("Main.flag").unwrap(), "TRUE");
+    }
+    assert!(p.release("%QX1.3"));
+    assert!(p.release("%qw2"));
+    assert!(!p.release("%QW2"));
+    assert!(p.release("%IX0.0"));
+    // the image keeps the forced value until the field writes the input again
+    assert_eq!(p.get_io("%IX0.0").unwrap(), 1);
+    p.set_io("%IX0.0", 0).unwrap();
+    p.run_cycle(at_ms(30));
+    assert_eq!(p.get_io("%QX1.3").unwrap(), 0);
+    assert_eq!(p.get_io("%QW2").unwrap(), 7);
+    assert_eq!(p.read_text("Main.start").unwrap(), "FALSE");
+    assert_eq!(p.read_text("Main.level").unwrap(), "48879");
+    assert_eq!(p.forced(), vec!["%IW4", "%MD20", "%MX10.1"]);
+    // write once: until the program or the field changes it
+    p.write("%IW4", "1").ok(); // forced: overwritten again by the force
+    p.release("%IW4");
+    p.write("%IW4", "16#12").unwrap();
+    p.run_cycle(at_ms(40));
+    assert_eq!(p.read_text("Main.level").unwrap(), "18");
+    p.write("%QX1.3", "TRUE").unwrap();
+    assert_eq!(p.read_text("Main.lamp").unwrap(), "TRUE");
+    p.run_cycle(at_ms(50));
+    assert_eq!(p.get_io("%QX1.3").unwrap(), 0, "the program overwrites it");
+    // errors
+    assert!(matches!(
+        p.force("%ZX0.0", "TRUE"),
+        Err(plc::PlcError::BadAddress(_))
+    ));
+    assert!(matches!(
+        p.write("%QX1.9", "TRUE"),
+        Err(plc::PlcError::BadAddress(_))
+    ));
+    assert!(matches!(
+        p.force("%QW2", "70000"),
+        Err(plc::PlcError::BadValue { .. })
+    ));
+    assert!(matches!(
+        p.force("%QX1.3", "'on'"),
+        Err(plc::PlcError::BadValue { .. })
+    ));
+}
