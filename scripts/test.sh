@@ -19,5 +19,8 @@ echo "== tests (unit, property, state machine, interoperability with c104, tshar
 export STANICE_REQUIRE_PEERS=1
 bash scripts/with-postgres.sh cargo test --workspace --locked
 
+echo "== the peer tooling checks itself (c104 against c104; the capture checker must reject broken frames)"
+bash tests/peer/selftest.sh
+
 echo "== fuzz smoke"
 bash scripts/fuzz-smoke.sh
