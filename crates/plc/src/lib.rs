@@ -42,6 +42,9 @@
 //!   initial value starts at its lower bound). A fault while setting them puts the PLC in
 //!   STOP: [`task::Plc::init_fault`] holds the diagnostic, every task is faulted with it
 //!   and the next `run_cycle` returns it; [`task::Plc::try_new`] returns it as an error.
+//! - `s[i]` reads or writes one character of a STRING/WSTRING as its CHAR/WCHAR code
+//!   (IEC 61131-3 3rd edition; CHAR is BYTE, WCHAR is WORD here), 1-based; an index
+//!   outside `1..LEN(s)` is a fault.
 //! - REAL arithmetic follows IEC 60559 (division by zero gives ±INF/NaN).
 //! - Functions have one static frame each (IEC 61131-3 forbids recursion, which the
 //!   checker rejects); VAR_IN_OUT is passed by reference (the callee holds the address of

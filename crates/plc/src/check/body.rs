@@ -865,13 +865,20 @@ impl BodyCx<'_> {
                         }
                         a.elem.clone()
                     }
+                    // IEC 61131-3 3rd edition: one character, 1-based, as CHAR/WCHAR
                     Ty::String(_) | Ty::WString(_) => {
-                        self.err(
-                            Code::Unsupported,
-                            e.span,
-                            "indexing strings is not supported; use MID",
-                        );
-                        Ty::Void
+                        if idx.len() != 1 {
+                            self.err(
+                                Code::WrongArguments,
+                                e.span,
+                                format!("a string has one index, {} given", idx.len()),
+                            );
+                        }
+                        if matches!(bt, Ty::WString(_)) {
+                            Ty::Word
+                        } else {
+                            Ty::Byte
+                        }
                     }
                     Ty::Void => Ty::Void,
                     other => {

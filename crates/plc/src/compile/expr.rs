@@ -31,6 +31,65 @@ pub(crate) struct Place {
     pub(crate) index1: Option<Rc<Index1>>,
     /// Subrange bounds checked on stores, with the span of the access for the fault.
     pub(crate) range: Option<Rc<RangeCheck>>,
+    /// A single character `s[i]` of the STRING/WSTRING at this place (1-based).
+    pub(crate) char_ix: Option<Rc<CharIndex>>,
+}
+
+/// The index of a character of a string: `s[i]`, 1-based, checked against the current
+/// length.
+pub(crate) struct CharIndex {
+    f: IFn,
+    span: Span,
+    /// WSTRING (16-bit characters) rather than STRING (8-bit).
+    wide: bool,
+}
+
+impl CharIndex {
+    /// The byte range of the character in `s`, or the fault.
+    fn locate(&self, s: &str, i: i64) -> Result<(usize, usize), Fault> {
+        let hit = usize::try_from(i)
+            .ok()
+            .and_then(|k| k.checked_sub(1))
+            .and_then(|k| s.char_indices().nth(k));
+        match hit {
+            Some((at, c)) => Ok((at, at + c.len_utf8())),
+            None => Err(FaultKind::StringIndex {
+                span: self.span,
+                index: i,
+                len: crate::stdlib::string::len(s),
+            }
+            .into()),
+        }
+    }
+
+    /// The character code at `i`.
+    fn get(&self, vm: &mut Vm, at: usize) -> Result<i64, Fault> {
+        let i = (self.f)(vm)?;
+        let s = vm.gets_ref(at)?;
+        let (a, b) = self.locate(s, i)?;
+        let c = s.get(a..b).and_then(|t| t.chars().next()).unwrap_or('\0');
+        Ok(i64::from(u32::from(c) & self.mask()))
+    }
+
+    /// Replaces the character at `i` by the one with code `x`.
+    fn set(&self, vm: &mut Vm, at: usize, x: i64) -> Result<(), Fault> {
+        let i = (self.f)(vm)?;
+        let code = u32::try_from(x & i64::from(self.mask())).unwrap_or(0);
+        let c = char::from_u32(code).unwrap_or('\u{FFFD}');
+        let s = vm.strs.get_mut(at).ok_or_else(Fault::memory)?;
+        let (a, b) = self.locate(s, i)?;
+        let mut buf = [0u8; 4];
+        s.replace_range(a..b, c.encode_utf8(&mut buf));
+        Ok(())
+    }
+
+    fn mask(&self) -> u32 {
+        if self.wide {
+            0xFFFF
+        } else {
+            0xFF
+        }
+    }
 }
 
 /// A subrange check on stores: bounds, where and what is written.
@@ -163,6 +222,7 @@ impl Place {
             direct: None,
             index1: None,
             range: None,
+            char_ix: None,
         }
     }
     pub(crate) fn abs(off: Size, ty: Ty) -> Place {
@@ -292,6 +352,9 @@ impl Cx<'_> {
             }
             ExprKind::Bit(base, bit) => {
                 let mut bp = self.place(base)?;
+                if bp.char_ix.is_some() {
+                    return None;
+                }
                 bp.range = None;
                 bp.bit = Some(*bit);
                 bp.ty = Ty::Bool;
@@ -300,6 +363,19 @@ impl Cx<'_> {
             ExprKind::Index(base, idx) => {
                 let mut bp = self.place(base)?;
                 bp.range = None;
+                if let (Ty::String(_) | Ty::WString(_), None, [ix]) =
+                    (&bp.ty, &bp.char_ix, idx.as_slice())
+                {
+                    let wide = matches!(bp.ty, Ty::WString(_));
+                    let CE::I(f) = self.expr(ix) else { return None };
+                    bp.char_ix = Some(Rc::new(CharIndex {
+                        f,
+                        span: ix.span,
+                        wide,
+                    }));
+                    bp.ty = if wide { Ty::Word } else { Ty::Byte };
+                    return Some(bp);
+                }
                 let Ty::Array(a) = bp.ty.clone() else {
                     return None;
                 };
@@ -418,6 +494,13 @@ impl Cx<'_> {
 
     /// Loads a scalar from a place.
     pub(crate) fn load(&self, p: &Place) -> CE {
+        if let Some(ci) = p.char_ix.clone() {
+            let a = p.addr();
+            return CE::I(Box::new(move |vm| {
+                let at = a(vm)?;
+                ci.get(vm, at.s)
+            }));
+        }
         if let Some(d) = p.direct {
             return CE::I(Box::new(move |vm| {
                 Ok(vm.io_read(d.area, d.byte, d.bit, d.bits))
@@ -495,6 +578,18 @@ impl Cx<'_> {
             (CE::I(f), Some(r)) => CE::I(Box::new(move |vm| r.check(f(vm)?))),
             (v, _) => v,
         };
+        if let Some(ci) = p.char_ix.clone() {
+            let a = p.addr();
+            let CE::I(f) = v else {
+                return Box::new(|_| Ok(Flow::Normal));
+            };
+            return Box::new(move |vm| {
+                let x = f(vm)?;
+                let at = a(vm)?;
+                ci.set(vm, at.s, x)?;
+                Ok(Flow::Normal)
+            });
+        }
         if let Some(d) = p.direct {
             let CE::I(f) = v else {
                 return Box::new(|_| Ok(Flow::Normal));
@@ -885,6 +980,13 @@ impl Cx<'_> {
                 let Some(src) = self.place(&a.value) else {
                     continue;
                 };
+                if src.char_ix.is_some() {
+                    self.error(
+                        a.value.span,
+                        "a character of a string cannot be passed to VAR_IN_OUT",
+                    );
+                    continue;
+                }
                 let sa = src.addr();
                 let cell = v.offset.i;
                 let bind: Rc<crate::vm::InitFn> = Rc::new(Box::new(move |vm| {

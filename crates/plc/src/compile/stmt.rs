@@ -222,7 +222,7 @@ impl Cx<'_> {
                 by,
                 body,
             } => {
-                let Some(p) = self.place(var) else {
+                let Some(p) = self.place(var).filter(|p| p.char_ix.is_none()) else {
                     self.error(var.span, "cannot compile FOR variable");
                     return nop();
                 };

@@ -43,6 +43,16 @@ pub enum FaultKind {
         /// Upper bound.
         hi: i64,
     },
+    /// A string index `s[i]` outside `1..LEN(s)`.
+    #[error("string index {index} out of range 1..{len}")]
+    StringIndex {
+        /// Where.
+        span: Span,
+        /// The index.
+        index: i64,
+        /// The current length of the string.
+        len: i64,
+    },
     /// A value stored into a subrange variable is outside its range.
     #[error("value {value} outside the subrange {lo}..{hi} of '{name}'")]
     RangeError {
@@ -93,9 +103,9 @@ impl Fault {
     pub fn span(&self) -> Option<Span> {
         match &*self.0 {
             FaultKind::DivisionByZero(s) | FaultKind::LoopBudget(s) => Some(*s),
-            FaultKind::IndexOutOfRange { span, .. } | FaultKind::RangeError { span, .. } => {
-                Some(*span)
-            }
+            FaultKind::IndexOutOfRange { span, .. }
+            | FaultKind::StringIndex { span, .. }
+            | FaultKind::RangeError { span, .. } => Some(*span),
             FaultKind::Memory => None,
         }
     }
