@@ -303,3 +303,22 @@ async fn a_client_flooding_requests_without_acknowledging_is_closed() {
     expect_close_logged(peer.local, "without acknowledging").await;
     still_served(&server, &mut good, 77).await;
 }
+
+#[tokio::test]
+async fn endless_malformed_asdus_close_the_connection() {
+    init_logs();
+    let server = fast_server().await;
+    let mut good = Client::connect(server.local_addr()).await;
+    let mut peer = abuser(server.local_addr()).await;
+    peer.start().await;
+    // A C_IC_NA_1 announcing two objects but carrying one, 100 times: each is ignored,
+    // and past the tolerated number the connection is closed.
+    let malformed = [100u8, 0x02, 0x06, 0x00, 0x01, 0x00, 0, 0, 0, 20];
+    let mut frames = Vec::new();
+    for number in 0..100u16 {
+        encode_i_frame(SeqNum::new(number), SeqNum::ZERO, &malformed, &mut frames).unwrap();
+    }
+    peer.write_raw(&frames).await;
+    expect_close_logged(peer.local, "malformed ASDUs received").await;
+    still_served(&server, &mut good, 78).await;
+}

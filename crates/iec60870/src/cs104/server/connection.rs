@@ -33,6 +33,10 @@ const MAX_QUEUED_RESPONSES: usize = 4096;
 /// are refused with a negative confirmation.
 const MAX_PENDING_COMMANDS: usize = 256;
 
+/// Malformed ASDUs tolerated on one connection (each is logged and ignored); the next one
+/// closes it, so a broken or hostile client cannot flood the log forever.
+const MAX_MALFORMED_ASDUS: u32 = 64;
+
 /// Bytes read from the socket at a time.
 const READ_BUFFER: usize = 1024;
 
@@ -114,6 +118,8 @@ struct Connection {
     /// Alternates group events and interrogation chunks so neither starves the other.
     prefer_interrogation: bool,
     pending_commands: Vec<PendingCommand>,
+    /// Malformed ASDUs received so far (see [`MAX_MALFORMED_ASDUS`]).
+    malformed_asdus: u32,
 }
 
 pub(super) async fn run<S>(
@@ -143,6 +149,7 @@ pub(super) async fn run<S>(
             active: false,
             prefer_interrogation: false,
             pending_commands: Vec::new(),
+            malformed_asdus: 0,
         };
         let reason = connection.drive(stream, shutdown).await;
         connection.release_group();
@@ -192,6 +199,12 @@ impl Connection {
                     SessionEvent::Acknowledged { .. } => self.forget_acknowledged(),
                     SessionEvent::Closed(reason) => return reason.to_string(),
                 }
+            }
+            if self.malformed_asdus > MAX_MALFORMED_ASDUS {
+                return format!(
+                    "{} malformed ASDUs received: more than the {MAX_MALFORMED_ASDUS} tolerated",
+                    self.malformed_asdus
+                );
             }
             if self.responses.len() > MAX_QUEUED_RESPONSES {
                 return format!(
@@ -543,6 +556,7 @@ impl Connection {
             Ok(header) => header,
             Err(error) => {
                 tracing::warn!(%error, "ASDU too short for its header: ignored");
+                self.malformed_asdus += 1;
                 return;
             }
         };
@@ -568,6 +582,7 @@ impl Connection {
                 // Not answered: a mirror would be just as malformed (the client could not
                 // decode it either), and no cause says "malformed". The connection stays.
                 tracing::warn!(%error, %type_id, bytes = ?raw, "malformed ASDU ignored");
+                self.malformed_asdus += 1;
                 return;
             }
         };
