@@ -9,6 +9,7 @@
 )]
 
 mod fixture;
+mod pointdb;
 mod retention;
 mod specific;
 mod suite;
