@@ -7,7 +7,7 @@
 //!
 //! | module        | what it does                                                      | state   |
 //! |---------------|-------------------------------------------------------------------|---------|
-//! | `config`      | the project folder: `station.toml`, nodes, points, links, errors with file:line | planned |
+//! | [`config`]    | the project folder: `station.toml`, nodes, points, links, errors with file:line | present |
 //! | [`pointdb`]   | per-node typed values with quality and source time, report by exception | present |
 //! | `links`       | IEC 104 server and client links of a node, communication-status points | planned |
 //! | `concentrator`| re-publishing lower nodes' points upward, commands downward       | planned |
@@ -18,5 +18,6 @@
 )]
 #![cfg_attr(not(test), deny(clippy::indexing_slicing))]
 
+pub mod config;
 pub mod pointdb;
 pub mod store;

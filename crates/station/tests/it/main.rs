@@ -1,6 +1,7 @@
 //! Integration tests of the event store: one suite run against both backends (SQLite on a
 //! temp file, PostgreSQL on the server named by `STANICE_TEST_POSTGRES_URL`, which
-//! `scripts/with-postgres.sh` provides), plus backend-specific and retention tests.
+//! `scripts/with-postgres.sh` provides), plus backend-specific and retention tests; and the
+//! project-folder tests of `station::config`.
 #![allow(
     clippy::unwrap_used,
     clippy::expect_used,
@@ -8,6 +9,7 @@
     clippy::indexing_slicing
 )]
 
+mod config;
 mod fixture;
 mod pointdb;
 mod retention;

@@ -1,0 +1,1033 @@
+//! `station::config`: real project folders in temp dirs; every semantic check asserts the
+//! exact `line:col` and key of its error.
+
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use iec60870::asdu::{CommonAddress, Ioa, TypeId};
+use proptest::prelude::*;
+use station::config::{CommandTarget, ConfigError, LinkTarget, PointSource, Project, Transmission};
+
+/// A project folder with `station.toml` = `toml` and the extra `files`.
+fn folder(toml: &str, files: &[(&str, &str)]) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("station.toml"), toml).unwrap();
+    for (path, text) in files {
+        let path = dir.path().join(path);
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(path, text).unwrap();
+    }
+    dir
+}
+
+fn load(toml: &str, files: &[(&str, &str)]) -> Result<Project, Vec<ConfigError>> {
+    let dir = folder(toml, files);
+    Project::load(dir.path()).map_err(|e| e.into_errors())
+}
+
+fn errors(toml: &str, files: &[(&str, &str)]) -> Vec<ConfigError> {
+    match load(toml, files) {
+        Ok(_) => panic!("the project loaded:\n{toml}"),
+        Err(errors) => errors,
+    }
+}
+
+/// Asserts that an error at `line:col` with `key` and a message containing `message` is
+/// among the errors.
+#[track_caller]
+fn expect(errors: &[ConfigError], line: usize, column: usize, key: &str, message: &str) {
+    let listing: Vec<String> = errors.iter().map(|e| e.to_string()).collect();
+    assert!(
+        errors.iter().any(|e| e.line == line
+            && e.column == column
+            && e.key == key
+            && e.message.contains(message)),
+        "no error {line}:{column}: {key}: ...{message}... in\n{}",
+        listing.join("\n")
+    );
+}
+
+#[track_caller]
+fn expect_only(
+    toml: &str,
+    files: &[(&str, &str)],
+    line: usize,
+    column: usize,
+    key: &str,
+    message: &str,
+) {
+    let errors = errors(toml, files);
+    expect(&errors, line, column, key, message);
+    assert_eq!(errors.len(), 1, "{errors:#?}");
+}
+
+const PLC: (&str, &str) = (
+    "plc/main.st",
+    "PROGRAM Main\nVAR_INPUT A : BOOL; END_VAR\nEND_PROGRAM\n",
+);
+
+#[test]
+fn minimal_project_loads_with_defaults() {
+    let dir = folder(
+        r#"[station]
+name = "Test"
+time_zone = "Europe/Prague"
+
+[[node]]
+name = "A"
+common_address = 1
+sources = ["plc/main.st"]
+[node.server]
+port_offset = 3
+[[node.task]]
+name = "fast"
+interval_ms = 50
+programs = ["main"]
+[[node.point]]
+name = "P"
+type = "M_ME_NC_1"
+ioa = 1
+source = "Main.X"
+transmission = "cyclic"
+cycle_ms = 1000
+groups = [1, 16]
+deadband = 0.5
+[[node.command]]
+name = "C"
+type = "C_SC_NA_1"
+ioa = 1
+target = "Main.A"
+"#,
+        &[PLC],
+    );
+    let project = Project::load(dir.path()).unwrap();
+    assert_eq!(project.folder, dir.path());
+    let s = &project.station;
+    assert_eq!(s.name, "Test");
+    assert_eq!(s.time_zone, chrono_tz::Europe::Prague);
+    assert_eq!(
+        s.store,
+        format!("sqlite:{}", dir.path().join("events.sqlite").display())
+    );
+    assert_eq!((s.retention_days, s.port_base), (60, 2404));
+    assert_eq!(s.bind.to_string(), "127.0.0.1");
+    assert_eq!(s.plant, None);
+    let a = project.node("A").unwrap();
+    assert_eq!(a.common_address, CommonAddress::new(1));
+    assert_eq!(a.sources, vec![dir.path().join("plc/main.st")]);
+    let server = a.server.as_ref().unwrap();
+    assert!(server.allowed_clients.is_empty());
+    assert_eq!(server.redundancy_groups.len(), 1);
+    assert!(server.redundancy_groups[0].clients.is_empty());
+    assert_eq!(
+        a.server_address(s),
+        Some("127.0.0.1:2407".parse::<SocketAddr>().unwrap())
+    );
+    assert_eq!(a.tasks[0].interval, Duration::from_millis(50));
+    assert_eq!(a.tasks[0].watchdog, None);
+    let p = &a.points[0];
+    assert_eq!(p.type_id, TypeId::M_ME_NC_1);
+    assert_eq!(p.ioa, Ioa::from(1u8));
+    assert_eq!(p.source, PointSource::Variable("Main.X".into()));
+    assert_eq!(
+        p.transmission,
+        Transmission::Cyclic {
+            period: Duration::from_millis(1000)
+        }
+    );
+    assert_eq!(p.groups, vec![1, 16]);
+    assert_eq!(p.deadband, Some(0.5));
+    assert_eq!(
+        a.commands[0].target,
+        CommandTarget::Variable("Main.A".into())
+    );
+    assert!(!a.commands[0].select_required);
+
+    let moved = project.with_port_base(3000);
+    let a = moved.node("A").unwrap();
+    assert_eq!(a.server_address(&moved.station).unwrap().port(), 3003);
+}
+
+#[test]
+fn station_only_loads() {
+    let project = load(
+        "[station]\nname = \"X\"\ntime_zone = \"UTC\"\nstore = \"postgres://u@h/db\"\n",
+        &[],
+    )
+    .unwrap();
+    assert!(project.nodes.is_empty());
+    assert_eq!(project.station.store, "postgres://u@h/db");
+}
+
+fn example_folder() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/vsetin")
+}
+
+#[test]
+fn vsetin_example_loads() {
+    let project = match Project::load(&example_folder()) {
+        Ok(p) => p,
+        Err(e) => panic!("{e}"),
+    };
+    assert_eq!(project.station.name, "Vsetín");
+    let names: Vec<&str> = project.nodes.iter().map(|n| n.name.as_str()).collect();
+    assert_eq!(names, ["RH2", "RH1.1", "RDRT"]);
+
+    let rh2 = project.node("RH2").unwrap();
+    let ioas: Vec<u32> = rh2.points.iter().map(|p| p.ioa.get()).collect();
+    assert_eq!(ioas, (281..=298).collect::<Vec<_>>());
+    assert!(rh2.points.iter().all(|p| p.type_id == TypeId::M_SP_TB_1));
+    let commands: Vec<(u32, TypeId)> = rh2
+        .commands
+        .iter()
+        .map(|c| (c.ioa.get(), c.type_id))
+        .collect();
+    assert_eq!(
+        commands,
+        [(2021, TypeId::C_SC_NA_1), (2022, TypeId::C_SC_NA_1)]
+    );
+    assert_eq!(
+        rh2.commands[0].target,
+        CommandTarget::Variable("RH2Logic.Cmd_VypnoutQF1".into())
+    );
+    assert_eq!(rh2.tasks[0].programs, ["RH2Logic"]);
+
+    let rh11 = project.node("RH1.1").unwrap();
+    assert_eq!(rh11.points.len(), 18);
+    assert_eq!(
+        rh11.points[0].source,
+        PointSource::Link {
+            link: "RH2".into(),
+            ioa: Ioa::from(281u16)
+        }
+    );
+    assert_eq!(
+        rh11.commands[1].target,
+        CommandTarget::Link {
+            link: "RH2".into(),
+            ioa: Ioa::from(2022u16)
+        }
+    );
+    let link = rh11.link("RH2").unwrap();
+    assert_eq!(link.target, LinkTarget::Node("RH2".into()));
+    assert_eq!(link.common_address, rh2.common_address);
+    assert!(link.interrogate_on_start && link.clock_sync);
+    let rh2_address = project.link_address(link).unwrap();
+    assert_eq!(Some(rh2_address), rh2.server_address(&project.station));
+
+    let rdrt = project.node("RDRT").unwrap();
+    assert_eq!(
+        rdrt.server_address(&project.station),
+        Some("127.0.0.1:2404".parse().unwrap())
+    );
+    let status = rdrt.point("COMM_RH").unwrap();
+    assert_eq!(status.source, PointSource::LinkStatus("RH".into()));
+    assert_eq!(
+        rdrt.link("RH").unwrap().status_point.as_deref(),
+        Some("COMM_RH")
+    );
+
+    // --port-base moves every server, and the links follow
+    let moved = project.clone().with_port_base(12000);
+    let rdrt = moved.node("RDRT").unwrap();
+    assert_eq!(rdrt.server_address(&moved.station).unwrap().port(), 12000);
+    let link = moved.node("RH1.1").unwrap().link("RH2").unwrap();
+    assert_eq!(moved.link_address(link).unwrap().port(), 12002);
+}
+
+// ---------------------------------------------------------------------------------------
+// syntax and type errors
+
+#[test]
+fn syntax_error_has_position_and_display() {
+    let toml = "[station]\nname = \"X\"\ntime_zone = \"UTC\n";
+    let dir = folder(toml, &[]);
+    let errors = Project::load(dir.path()).unwrap_err();
+    let first = &errors.errors()[0];
+    assert_eq!(first.line, 3);
+    assert_eq!(first.key, "");
+    let shown = errors.to_string();
+    let file = dir.path().join("station.toml");
+    assert!(
+        shown.starts_with(&format!("{}:3:", file.display())),
+        "{shown}"
+    );
+    assert!(shown.contains(": error: "), "{shown}");
+}
+
+#[test]
+fn type_error_names_key_and_position() {
+    let toml = r#"[station]
+name = "X"
+time_zone = "UTC"
+[[node]]
+name = "A"
+common_address = 1
+[[node.point]]
+name = "P"
+type = "M_SP_NA_1"
+ioa = "many"
+source = "Main.X"
+"#;
+    let errors = errors(toml, &[]);
+    expect(&errors, 10, 7, "node[0].point[0].ioa", "invalid type");
+    assert_eq!(errors.len(), 1);
+}
+
+#[test]
+fn display_is_file_line_col_error_key_message() {
+    let error = ConfigError {
+        file: "p/station.toml".into(),
+        line: 4,
+        column: 9,
+        key: "node[2].point[5].ioa".into(),
+        message: "bad".into(),
+    };
+    assert_eq!(
+        error.to_string(),
+        "p/station.toml:4:9: error: node[2].point[5].ioa: bad"
+    );
+}
+
+#[test]
+fn unknown_key_is_refused() {
+    let toml = "[station]\nname = \"X\"\ntime_zone = \"UTC\"\nretention = 5\n";
+    let errors = errors(toml, &[]);
+    assert_eq!(errors.len(), 1, "{errors:?}");
+    assert_eq!(errors[0].line, 4, "{errors:?}");
+    assert!(errors[0].message.contains("retention"), "{errors:?}");
+}
+
+#[test]
+fn missing_project_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let errors = Project::load(dir.path()).unwrap_err();
+    assert_eq!(errors.errors()[0].line, 0);
+    assert!(errors
+        .to_string()
+        .contains("station.toml: error: cannot read"));
+}
+
+// ---------------------------------------------------------------------------------------
+// semantic checks
+
+#[test]
+fn unknown_time_zone() {
+    expect_only(
+        "[station]\nname = \"X\"\ntime_zone = \"Europe/Vsetin\"\n",
+        &[],
+        3,
+        13,
+        "station.time_zone",
+        "unknown time zone",
+    );
+}
+
+#[test]
+fn retention_zero() {
+    expect_only(
+        "[station]\nname = \"X\"\ntime_zone = \"UTC\"\nretention_days = 0\n",
+        &[],
+        4,
+        18,
+        "station.retention_days",
+        "at least 1",
+    );
+}
+
+#[test]
+fn common_address_zero_and_broadcast() {
+    let toml = r#"[station]
+name = "X"
+time_zone = "UTC"
+[[node]]
+name = "A"
+common_address = 0
+[[node]]
+name = "B"
+common_address = 65535
+"#;
+    let errors = errors(toml, &[]);
+    expect(
+        &errors,
+        6,
+        18,
+        "node[0].common_address",
+        "outside 1..=65534",
+    );
+    expect(
+        &errors,
+        9,
+        18,
+        "node[1].common_address",
+        "outside 1..=65534",
+    );
+    assert_eq!(errors.len(), 2);
+}
+
+#[test]
+fn duplicate_node_names() {
+    let toml = r#"[station]
+name = "X"
+time_zone = "UTC"
+[[node]]
+name = "A"
+common_address = 1
+[[node]]
+name = "A"
+common_address = 2
+"#;
+    expect_only(toml, &[], 8, 8, "node[1].name", "duplicate node name `A`");
+}
+
+#[test]
+fn duplicate_ioas_points_and_commands_separately() {
+    let toml = r#"[station]
+name = "X"
+time_zone = "UTC"
+[[node]]
+name = "A"
+common_address = 1
+[[node.point]]
+name = "P1"
+type = "M_SP_NA_1"
+ioa = 5
+source = "M.A"
+[[node.point]]
+name = "P2"
+type = "M_SP_NA_1"
+ioa = 5
+source = "M.B"
+[[node.command]]
+name = "C1"
+type = "C_SC_NA_1"
+ioa = 5
+target = "M.C"
+[[node.command]]
+name = "C2"
+type = "C_DC_NA_1"
+ioa = 5
+target = "M.D"
+"#;
+    let errors = errors(toml, &[]);
+    expect(
+        &errors,
+        15,
+        7,
+        "node[0].point[1].ioa",
+        "also used by point `P1`",
+    );
+    expect(
+        &errors,
+        25,
+        7,
+        "node[0].command[1].ioa",
+        "also used by command `C1`",
+    );
+    assert_eq!(errors.len(), 2, "{errors:#?}");
+}
+
+#[test]
+fn ioa_out_of_range() {
+    let toml = r#"[station]
+name = "X"
+time_zone = "UTC"
+[[node]]
+name = "A"
+common_address = 1
+[[node.point]]
+name = "P1"
+type = "M_SP_NA_1"
+ioa = 16777216
+source = "M.A"
+"#;
+    expect_only(
+        toml,
+        &[],
+        10,
+        7,
+        "node[0].point[0].ioa",
+        "outside 1..=16777215",
+    );
+}
+
+#[test]
+fn point_and_command_types() {
+    let toml = r#"[station]
+name = "X"
+time_zone = "UTC"
+[[node]]
+name = "A"
+common_address = 1
+[[node.point]]
+name = "P1"
+type = "C_SC_NA_1"
+ioa = 1
+source = "M.A"
+[[node.point]]
+name = "P2"
+type = "M_XX_NA_1"
+ioa = 2
+source = "M.A"
+[[node.command]]
+name = "C1"
+type = "M_SP_NA_1"
+ioa = 1
+target = "M.C"
+"#;
+    let errors = errors(toml, &[]);
+    expect(
+        &errors,
+        9,
+        8,
+        "node[0].point[0].type",
+        "C_SC_NA_1 is not a monitor",
+    );
+    expect(
+        &errors,
+        14,
+        8,
+        "node[0].point[1].type",
+        "unknown type `M_XX_NA_1`",
+    );
+    expect(
+        &errors,
+        19,
+        8,
+        "node[0].command[0].type",
+        "M_SP_NA_1 is not a command type",
+    );
+    assert_eq!(errors.len(), 3, "{errors:#?}");
+}
+
+#[test]
+fn link_references_to_unknown_links() {
+    let toml = r#"[station]
+name = "X"
+time_zone = "UTC"
+[[node]]
+name = "A"
+common_address = 1
+[[node.point]]
+name = "P1"
+type = "M_SP_NA_1"
+ioa = 1
+source = "link:B/7"
+[[node.point]]
+name = "P2"
+type = "M_SP_NA_1"
+ioa = 2
+source = "link:B"
+[[node.command]]
+name = "C1"
+type = "C_SC_NA_1"
+ioa = 1
+target = "link:B/8"
+"#;
+    let errors = errors(toml, &[]);
+    expect(
+        &errors,
+        11,
+        10,
+        "node[0].point[0].source",
+        "node `A` has no link `B`",
+    );
+    expect(
+        &errors,
+        16,
+        10,
+        "node[0].point[1].source",
+        "not of the form link:LINK/IOA",
+    );
+    expect(
+        &errors,
+        21,
+        10,
+        "node[0].command[0].target",
+        "node `A` has no link `B`",
+    );
+    assert_eq!(errors.len(), 3, "{errors:#?}");
+}
+
+const TWO_NODES: &str = r#"[station]
+name = "X"
+time_zone = "UTC"
+[[node]]
+name = "Low"
+common_address = 2
+[node.server]
+port_offset = 1
+[[node.point]]
+name = "P"
+type = "M_SP_NA_1"
+ioa = 10
+source = "M.P"
+[[node.command]]
+name = "C"
+type = "C_SC_NA_1"
+ioa = 20
+target = "M.C"
+[[node]]
+name = "Top"
+common_address = 1
+"#;
+
+#[test]
+fn link_to_unknown_node_or_itself() {
+    let toml = format!(
+        "{TWO_NODES}{}",
+        r#"[[node.link]]
+name = "L1"
+node = "Nowhere"
+[[node.link]]
+name = "L2"
+node = "Top"
+"#
+    );
+    let errors = errors(&toml, &[]);
+    expect(&errors, 24, 8, "node[1].link[0].node", "no node `Nowhere`");
+    expect(
+        &errors,
+        27,
+        8,
+        "node[1].link[1].node",
+        "cannot link to itself",
+    );
+    assert_eq!(errors.len(), 2, "{errors:#?}");
+}
+
+#[test]
+fn link_needs_exactly_one_of_node_and_address() {
+    let toml = format!(
+        "{TWO_NODES}{}",
+        r#"[[node.link]]
+name = "Both"
+node = "Low"
+address = "192.0.2.1:2404"
+[[node.link]]
+name = "Neither"
+"#
+    );
+    let errors = errors(&toml, &[]);
+    expect(&errors, 25, 11, "node[1].link[0].address", "not both");
+    let neither = errors
+        .iter()
+        .find(|e| e.key == "node[1].link[1]")
+        .unwrap_or_else(|| panic!("{errors:#?}"));
+    assert!(neither.message.contains("needs node or address"));
+    assert_eq!(neither.line, 26, "{errors:#?}");
+    assert_eq!(errors.len(), 2, "{errors:#?}");
+}
+
+#[test]
+fn link_with_address_and_common_address_loads() {
+    let toml = format!(
+        "{TWO_NODES}{}",
+        r#"[[node.link]]
+name = "Far"
+address = "192.0.2.1:2404"
+common_address = 9
+"#
+    );
+    let project = load(&toml, &[]).unwrap();
+    let link = &project.node("Top").unwrap().links[0];
+    assert_eq!(
+        link.target,
+        LinkTarget::Address("192.0.2.1:2404".parse().unwrap())
+    );
+    assert_eq!(link.common_address, CommonAddress::new(9));
+}
+
+#[test]
+fn link_ioas_must_exist_on_the_lower_node() {
+    let toml = format!(
+        "{TWO_NODES}{}",
+        r#"[[node.link]]
+name = "L"
+node = "Low"
+[[node.point]]
+name = "Ok"
+type = "M_SP_TB_1"
+ioa = 10
+source = "link:L/10"
+[[node.point]]
+name = "Bad"
+type = "M_SP_TB_1"
+ioa = 11
+source = "link:L/11"
+[[node.command]]
+name = "Cmd"
+type = "C_SC_NA_1"
+ioa = 20
+target = "link:L/10"
+"#
+    );
+    let errors = errors(&toml, &[]);
+    expect(
+        &errors,
+        34,
+        10,
+        "node[1].point[1].source",
+        "serves no point with IOA 11",
+    );
+    expect(
+        &errors,
+        39,
+        10,
+        "node[1].command[0].target",
+        "accepts no command with IOA 10",
+    );
+    assert_eq!(errors.len(), 2, "{errors:#?}");
+}
+
+#[test]
+fn cycles_in_the_link_graph() {
+    let toml = r#"[station]
+name = "X"
+time_zone = "UTC"
+[[node]]
+name = "A"
+common_address = 1
+[node.server]
+port_offset = 0
+[[node.link]]
+name = "toB"
+node = "B"
+[[node]]
+name = "B"
+common_address = 2
+[node.server]
+port_offset = 1
+[[node.link]]
+name = "toA"
+node = "A"
+"#;
+    expect_only(
+        toml,
+        &[],
+        19,
+        8,
+        "node[1].link[0].node",
+        "cycle: A -> B -> A",
+    );
+}
+
+#[test]
+fn same_port_offset() {
+    let toml = r#"[station]
+name = "X"
+time_zone = "UTC"
+[[node]]
+name = "A"
+common_address = 1
+[node.server]
+port_offset = 4
+[[node]]
+name = "B"
+common_address = 2
+[node.server]
+port_offset = 4
+"#;
+    expect_only(
+        toml,
+        &[],
+        13,
+        15,
+        "node[1].server.port_offset",
+        "also used by node `A`",
+    );
+}
+
+#[test]
+fn cyclic_without_cycle_ms() {
+    let toml = r#"[station]
+name = "X"
+time_zone = "UTC"
+[[node]]
+name = "A"
+common_address = 1
+[[node.point]]
+name = "P"
+type = "M_ME_NC_1"
+ioa = 1
+source = "M.A"
+transmission = "cyclic"
+"#;
+    expect_only(
+        toml,
+        &[],
+        12,
+        16,
+        "node[0].point[0].transmission",
+        "needs cycle_ms",
+    );
+}
+
+#[test]
+fn deadband_on_a_non_measurement() {
+    let toml = r#"[station]
+name = "X"
+time_zone = "UTC"
+[[node]]
+name = "A"
+common_address = 1
+[[node.point]]
+name = "P"
+type = "M_SP_TB_1"
+ioa = 1
+source = "M.A"
+deadband = 0.5
+"#;
+    expect_only(
+        toml,
+        &[],
+        12,
+        12,
+        "node[0].point[0].deadband",
+        "measurement type",
+    );
+}
+
+#[test]
+fn interrogation_group_out_of_range() {
+    let toml = r#"[station]
+name = "X"
+time_zone = "UTC"
+[[node]]
+name = "A"
+common_address = 1
+[[node.point]]
+name = "P"
+type = "M_SP_TB_1"
+ioa = 1
+source = "M.A"
+groups = [1, 17]
+"#;
+    expect_only(
+        toml,
+        &[],
+        12,
+        14,
+        "node[0].point[0].groups[1]",
+        "outside 1..=16",
+    );
+}
+
+#[test]
+fn missing_st_source() {
+    let toml = r#"[station]
+name = "X"
+time_zone = "UTC"
+[[node]]
+name = "A"
+common_address = 1
+sources = ["plc/main.st", "plc/gone.st"]
+"#;
+    expect_only(toml, &[PLC], 7, 27, "node[0].sources[1]", "not found");
+}
+
+#[test]
+fn program_not_in_sources() {
+    let toml = r#"[station]
+name = "X"
+time_zone = "UTC"
+[[node]]
+name = "A"
+common_address = 1
+sources = ["plc/main.st"]
+[[node.task]]
+name = "t"
+interval_ms = 10
+programs = ["Main", "Other"]
+"#;
+    expect_only(
+        toml,
+        &[PLC],
+        11,
+        21,
+        "node[0].task[0].programs[1]",
+        "no PROGRAM `Other`",
+    );
+}
+
+#[test]
+fn status_point_must_name_a_point() {
+    let toml = format!(
+        "{TWO_NODES}{}",
+        r#"[[node.link]]
+name = "L"
+node = "Low"
+status_point = "COMM_L"
+"#
+    );
+    expect_only(
+        &toml,
+        &[],
+        25,
+        16,
+        "node[1].link[0].status_point",
+        "has no point `COMM_L`",
+    );
+}
+
+#[test]
+fn point_without_source() {
+    let toml = r#"[station]
+name = "X"
+time_zone = "UTC"
+[[node]]
+name = "A"
+common_address = 1
+[[node.point]]
+name = "P"
+type = "M_SP_TB_1"
+ioa = 1
+"#;
+    let errors = errors(toml, &[]);
+    assert_eq!(errors.len(), 1, "{errors:#?}");
+    assert_eq!(errors[0].key, "node[0].point[0]");
+    assert!(errors[0].message.contains("missing source"));
+}
+
+#[test]
+fn every_problem_is_reported() {
+    let toml = r#"[station]
+name = "X"
+time_zone = "Mars/Olympus"
+retention_days = 0
+[[node]]
+name = "A"
+common_address = 0
+sources = ["nope.st"]
+[[node]]
+name = "A"
+common_address = 1
+"#;
+    let errors = errors(toml, &[]);
+    expect(&errors, 3, 13, "station.time_zone", "unknown");
+    expect(&errors, 4, 18, "station.retention_days", "at least 1");
+    expect(&errors, 7, 18, "node[0].common_address", "outside");
+    expect(&errors, 8, 12, "node[0].sources[0]", "not found");
+    expect(&errors, 10, 8, "node[1].name", "duplicate");
+    assert_eq!(errors.len(), 5, "{errors:#?}");
+}
+
+// ---------------------------------------------------------------------------------------
+// robustness
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    #[test]
+    fn arbitrary_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..512)) {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("station.toml"), &bytes).unwrap();
+        if let Err(errors) = Project::load(dir.path()) {
+            prop_assert!(!errors.errors().is_empty());
+            let _ = errors.to_string();
+        }
+    }
+
+    #[test]
+    fn mangled_example_never_panics(
+        drop_lines in proptest::collection::vec(0usize..600, 0..8),
+        cut in 0usize..20_000,
+    ) {
+        let original = std::fs::read_to_string(example_folder().join("station.toml")).unwrap();
+        let kept: String = original
+            .lines()
+            .enumerate()
+            .filter(|(i, _)| !drop_lines.contains(i))
+            .map(|(_, l)| format!("{l}\n"))
+            .collect();
+        let mut end = cut.min(kept.len());
+        while !kept.is_char_boundary(end) {
+            end -= 1;
+        }
+        let dir = folder(&kept[..end], &[]);
+        std::fs::create_dir_all(dir.path().join("plc")).unwrap();
+        std::fs::copy(
+            example_folder().join("plc/rh2_logic.st"),
+            dir.path().join("plc/rh2_logic.st"),
+        )
+        .unwrap();
+        if let Err(errors) = Project::load(dir.path()) {
+            for e in errors.errors() {
+                prop_assert!(e.line >= 1 && e.column >= 1, "{e}");
+            }
+        }
+    }
+}
+
+#[test]
+fn type_errors_deep_in_interleaved_arrays_of_tables() {
+    let toml = r#"[station]
+name = "X"
+time_zone = "UTC"
+[[node]]
+name = "A"
+common_address = 1
+[[node.point]]
+name = "P0"
+type = "M_SP_NA_1"
+ioa = 1
+source = "M.A"
+[[node.command]]
+name = "C0"
+type = "C_SC_NA_1"
+ioa = 1
+target = "M.C"
+[[node.point]]
+name = "P1"
+type = "M_SP_NA_1"
+ioa = 2
+source = "M.A"
+groups = ["one"]
+[[node]]
+name = "B"
+common_address = 2
+[node.server]
+port_offset = "x"
+"#;
+    let errors = errors(toml, &[]);
+    // serde stops at the first type error
+    expect(
+        &errors,
+        22,
+        11,
+        "node[0].point[1].groups[0]",
+        "invalid type",
+    );
+    assert_eq!(errors.len(), 1);
+    let fixed = toml.replace("groups = [\"one\"]", "groups = [1]");
+    let errors = self::errors(&fixed, &[]);
+    expect(
+        &errors,
+        27,
+        15,
+        "node[1].server.port_offset",
+        "invalid type",
+    );
+}
+
+#[test]
+fn missing_required_key_names_its_table() {
+    let toml = r#"[station]
+name = "X"
+time_zone = "UTC"
+[[node]]
+name = "A"
+common_address = 1
+[[node.link]]
+node = "B"
+"#;
+    let errors = errors(toml, &[]);
+    assert_eq!(errors.len(), 1, "{errors:#?}");
+    assert!(
+        errors[0].message.contains("missing field `name`"),
+        "{errors:#?}"
+    );
+    assert!(errors[0].key.starts_with("node[0]"), "{errors:#?}");
+    assert!(errors[0].line >= 4, "{errors:#?}");
+}
