@@ -600,47 +600,12 @@ fn our_image() -> ProcessImage {
     image
 }
 
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn c104_client_reads_and_commands_our_outstation() {
-    if !peers_available() {
-        return;
-    }
-    let port = free_port();
-    let capture = Capture::start(port);
-    let recorder = Arc::new(Recorder::default());
-    let config = ServerConfig::new(
-        SocketAddr::from(([127, 0, 0, 1], port)),
-        CommonAddress::new(1),
-    );
-    let server = spawn_server(
-        config,
-        our_image(),
-        Arc::clone(&recorder) as Arc<dyn StationHandler>,
-    )
-    .await
-    .unwrap();
-    // Spontaneous events while the c104 client listens: 50 float updates.
-    let producer = {
-        let server = server.clone();
-        tokio::spawn(async move {
-            // Wait until the c104 client has started data transfer.
-            for _ in 0..200 {
-                if server.stats().groups.iter().any(|group| group.has_active) {
-                    break;
-                }
-                tokio::time::sleep(Duration::from_millis(50)).await;
-            }
-            tokio::time::sleep(Duration::from_millis(1500)).await;
-            for index in 0..50u32 {
-                let element = Element::Float {
-                    value: index as f32,
-                    quality: Quality::default(),
-                };
-                server.update(ioa(500 + index % 5), element, None).unwrap();
-                tokio::time::sleep(Duration::from_millis(10)).await;
-            }
-        })
-    };
+/// Attempts of the c104 client against our outstation.
+const ATTEMPTS: usize = 2;
+
+/// Runs c104's controlling station against our outstation: GI, nine commands (one must be
+/// refused), then 50 spontaneous events.
+async fn run_c104_client(port: u16) -> std::process::Output {
     let mut command = Command::new("python3");
     command
         .arg(peer_script("c104_client.py"))
@@ -663,11 +628,75 @@ async fn c104_client_reads_and_commands_our_outstation() {
         .args(["--command", "C_BO_NA_1:2600:0x0F0F"])
         .args(["--command", "C_SC_NA_1:9999:1:expect-fail"])
         .args(["--expect-spontaneous", "50", "--duration", "20"]);
-    let output = tokio::task::spawn_blocking(move || command.stdin(Stdio::null()).output())
+    tokio::task::spawn_blocking(move || command.stdin(Stdio::null()).output())
         .await
         .unwrap()
-        .expect("run c104_client.py");
-    producer.await.unwrap();
+        .expect("run c104_client.py")
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn c104_client_reads_and_commands_our_outstation() {
+    if !peers_available() {
+        return;
+    }
+    let port = free_port();
+    let capture = Capture::start(port);
+    let recorder = Arc::new(Recorder::default());
+    let config = ServerConfig::new(
+        SocketAddr::from(([127, 0, 0, 1], port)),
+        CommonAddress::new(1),
+    );
+    let server = spawn_server(
+        config,
+        our_image(),
+        Arc::clone(&recorder) as Arc<dyn StationHandler>,
+    )
+    .await
+    .unwrap();
+    // Spontaneous events while the c104 client listens: 50 float updates.
+    // Spontaneous events for each c104 client that starts: 50 float updates.
+    let producer = {
+        let server = server.clone();
+        tokio::spawn(async move {
+            for attempt in 1..=ATTEMPTS as u64 {
+                // Wait until this attempt's c104 client has started data transfer.
+                for _ in 0..400 {
+                    let stats = server.stats();
+                    if stats.accepted >= attempt
+                        && stats.groups.iter().any(|group| group.has_active)
+                    {
+                        break;
+                    }
+                    tokio::time::sleep(Duration::from_millis(50)).await;
+                }
+                tokio::time::sleep(Duration::from_millis(1500)).await;
+                for index in 0..50u32 {
+                    let element = Element::Float {
+                        value: index as f32,
+                        quality: Quality::default(),
+                    };
+                    server.update(ioa(500 + index % 5), element, None).unwrap();
+                    tokio::time::sleep(Duration::from_millis(10)).await;
+                }
+            }
+        })
+    };
+    // c104's own client is known to lose its STARTDT or misreport a result now and then
+    // (tests/peer/README.md), most under load: one retry of the peer. A fault of ours
+    // fails both attempts.
+    let mut output = run_c104_client(port).await;
+    for attempt in 2..=ATTEMPTS {
+        if output.status.success() {
+            break;
+        }
+        eprintln!(
+            "c104 client attempt {} failed, retrying:\n{}",
+            attempt - 1,
+            String::from_utf8_lossy(&output.stdout)
+        );
+        output = run_c104_client(port).await;
+    }
+    producer.abort();
     let lines: Vec<Value> = String::from_utf8_lossy(&output.stdout)
         .lines()
         .filter_map(|line| serde_json::from_str(line).ok())
@@ -677,9 +706,13 @@ async fn c104_client_reads_and_commands_our_outstation() {
         .find(|line| line["event"] == "summary")
         .cloned()
         .unwrap_or(Value::Null);
+    let results: Vec<&Value> = lines
+        .iter()
+        .filter(|line| line["event"] == "command_result" || line["event"] == "connected")
+        .collect();
     assert!(
         output.status.success(),
-        "c104 client failed: {summary}\n{}",
+        "c104 client failed: {summary}\n{results:#?}\n{}",
         String::from_utf8_lossy(&output.stderr)
     );
     assert_eq!(summary["points"], 21, "{summary}");
