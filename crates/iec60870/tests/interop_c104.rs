@@ -86,6 +86,7 @@ fn free_port() -> u16 {
 struct Capture {
     file: PathBuf,
     port: u16,
+    stopped: bool,
 }
 
 impl Capture {
@@ -101,12 +102,17 @@ impl Capture {
             .status()
             .unwrap();
         assert!(status.success(), "tshark capture did not start");
-        Capture { file, port }
+        Capture {
+            file,
+            port,
+            stopped: false,
+        }
     }
 
     /// Stops the capture and fails the test on any frame the dissector finds malformed,
     /// undecodable or of unknown type. Returns the checker's JSON report.
-    fn stop_and_check(self) -> Value {
+    fn stop_and_check(mut self) -> Value {
+        self.stopped = true;
         let status = Command::new("bash")
             .arg(peer_script("capture.sh"))
             .arg("stop")
@@ -134,6 +140,22 @@ impl Capture {
             .rev()
             .find_map(|line| serde_json::from_str(line).ok())
             .unwrap_or(Value::Null)
+    }
+}
+
+impl Drop for Capture {
+    /// A test that fails before checking its capture must not leave tshark running.
+    fn drop(&mut self) {
+        if !self.stopped {
+            let _ = Command::new("bash")
+                .arg(peer_script("capture.sh"))
+                .arg("stop")
+                .arg(&self.file)
+                .stdout(Stdio::null())
+                .stderr(Stdio::null())
+                .status();
+            let _ = std::fs::remove_file(&self.file);
+        }
     }
 }
 
