@@ -508,26 +508,6 @@ impl PointChange {
     }
 }
 
-fn to_iec_quality(q: Quality) -> iec60870::asdu::Quality {
-    iec60870::asdu::Quality {
-        invalid: q.invalid,
-        not_topical: q.not_topical,
-        substituted: q.substituted,
-        blocked: q.blocked,
-        overflow: q.overflow,
-    }
-}
-
-fn from_iec_quality(q: iec60870::asdu::Quality) -> Quality {
-    Quality {
-        invalid: q.invalid,
-        not_topical: q.not_topical,
-        substituted: q.substituted,
-        blocked: q.blocked,
-        overflow: q.overflow,
-    }
-}
-
 /// The element of a (checked) value; a value of the wrong kind gives the type's zero
 /// with IV set rather than a panic.
 fn to_element_of(type_id: TypeId, value: &PointValue, quality: Quality) -> Element {
@@ -542,8 +522,8 @@ fn to_element_of(type_id: TypeId, value: &PointValue, quality: Quality) -> Eleme
             },
         ),
     };
-    let q = to_iec_quality(quality);
-    let sp_quality = iec60870::asdu::Quality {
+    let q = quality;
+    let sp_quality = Quality {
         overflow: false,
         ..q
     };
@@ -585,14 +565,14 @@ fn to_element_of(type_id: TypeId, value: &PointValue, quality: Quality) -> Eleme
                 Ok(r) => Element::IntegratedTotal(r),
                 Err(_) => Element::SinglePoint {
                     on: false,
-                    quality: iec60870::asdu::Quality::INVALID,
+                    quality: Quality::INVALID,
                 },
             }
         }
         // Unreachable after `check`; kept total.
         _ => Element::SinglePoint {
             on: false,
-            quality: iec60870::asdu::Quality::INVALID,
+            quality: Quality::INVALID,
         },
     }
 }
@@ -616,32 +596,25 @@ pub fn from_element(
         return Err(mismatch());
     }
     let (value, quality) = match (kind, element) {
-        (Kind::Single, Element::SinglePoint { on, quality }) => {
-            (PointValue::Bool(*on), from_iec_quality(*quality))
+        (Kind::Single, Element::SinglePoint { on, quality }) => (PointValue::Bool(*on), *quality),
+        (Kind::Double, Element::DoublePoint { state, quality }) => {
+            (PointValue::DoublePoint(state.bits()), *quality)
         }
-        (Kind::Double, Element::DoublePoint { state, quality }) => (
-            PointValue::DoublePoint(state.bits()),
-            from_iec_quality(*quality),
-        ),
-        (Kind::Step, Element::StepPosition { position, quality }) => (
-            PointValue::Int(i64::from(position.value())),
-            from_iec_quality(*quality),
-        ),
+        (Kind::Step, Element::StepPosition { position, quality }) => {
+            (PointValue::Int(i64::from(position.value())), *quality)
+        }
         (Kind::Bitstring, Element::Bitstring { bits, quality }) => {
-            (PointValue::Bits(*bits), from_iec_quality(*quality))
+            (PointValue::Bits(*bits), *quality)
         }
-        (Kind::Normalized, Element::Normalized { raw, quality }) => (
-            PointValue::Float(f64::from(*raw) / 32768.0),
-            from_iec_quality(*quality),
-        ),
-        (Kind::Scaled, Element::Scaled { value, quality }) => (
-            PointValue::Int(i64::from(*value)),
-            from_iec_quality(*quality),
-        ),
-        (Kind::Float, Element::Float { value, quality }) => (
-            PointValue::Float(f64::from(*value)),
-            from_iec_quality(*quality),
-        ),
+        (Kind::Normalized, Element::Normalized { raw, quality }) => {
+            (PointValue::Float(f64::from(*raw) / 32768.0), *quality)
+        }
+        (Kind::Scaled, Element::Scaled { value, quality }) => {
+            (PointValue::Int(i64::from(*value)), *quality)
+        }
+        (Kind::Float, Element::Float { value, quality }) => {
+            (PointValue::Float(f64::from(*value)), *quality)
+        }
         (Kind::Total, Element::IntegratedTotal(r)) => (
             PointValue::Int(i64::from(r.value())),
             Quality {

@@ -53,8 +53,8 @@ use std::pin::Pin;
 
 pub use error::StoreError;
 pub use model::{
-    Actor, CommandOutcome, CommandPhase, CommandRecord, EventCause, EventRecord, PointValue,
-    Quality, RecordId, SourceTime,
+    quality_from_bits, quality_to_bits, Actor, CommandOutcome, CommandPhase, CommandRecord,
+    EventCause, EventRecord, PointValue, Quality, RecordId, SourceTime,
 };
 pub use postgres::{PostgresConfig, PostgresStore};
 pub use query::{

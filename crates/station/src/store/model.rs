@@ -107,86 +107,29 @@ impl fmt::Display for PointValue {
     }
 }
 
-/// Quality descriptor of a value (IEC 60870-5-101 7.2.6.3).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
-pub struct Quality {
-    /// IV: the value is invalid (source failed, link down, module pulled).
-    pub invalid: bool,
-    /// NT: not topical, the value was not updated successfully at the last attempt.
-    pub not_topical: bool,
-    /// SB: substituted by an operator or an automatic source.
-    pub substituted: bool,
-    /// BL: blocked for transmission.
-    pub blocked: bool,
-    /// OV: overflow of the value range.
-    pub overflow: bool,
+/// Quality descriptor of a value: the IEC 60870-5 flags IV, NT, SB, BL and OV, the same
+/// type the protocol stack uses, so values pass between link, point database and store
+/// without conversion.
+pub use iec60870::asdu::Quality;
+
+/// The quality flags as the stored bit mask: IV = 1, NT = 2, SB = 4, BL = 8, OV = 16 (both
+/// backends; the on-the-wire octet differs and is the protocol's business).
+pub fn quality_to_bits(quality: Quality) -> u8 {
+    u8::from(quality.invalid)
+        | u8::from(quality.not_topical) << 1
+        | u8::from(quality.substituted) << 2
+        | u8::from(quality.blocked) << 3
+        | u8::from(quality.overflow) << 4
 }
 
-impl Quality {
-    /// Good quality: no flag set.
-    pub const GOOD: Quality = Quality {
-        invalid: false,
-        not_topical: false,
-        substituted: false,
-        blocked: false,
-        overflow: false,
-    };
-
-    /// Only IV set.
-    pub const INVALID: Quality = Quality {
-        invalid: true,
-        ..Quality::GOOD
-    };
-
-    /// The flags as the stored bit mask: IV = 1, NT = 2, SB = 4, BL = 8, OV = 16.
-    pub fn bits(self) -> u8 {
-        u8::from(self.invalid)
-            | u8::from(self.not_topical) << 1
-            | u8::from(self.substituted) << 2
-            | u8::from(self.blocked) << 3
-            | u8::from(self.overflow) << 4
-    }
-
-    /// The flags from the stored bit mask (unknown bits are ignored).
-    pub fn from_bits(bits: u8) -> Quality {
-        Quality {
-            invalid: bits & 1 != 0,
-            not_topical: bits & 2 != 0,
-            substituted: bits & 4 != 0,
-            blocked: bits & 8 != 0,
-            overflow: bits & 16 != 0,
-        }
-    }
-
-    /// True when no flag is set.
-    pub fn is_good(self) -> bool {
-        self.bits() == 0
-    }
-}
-
-impl fmt::Display for Quality {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let names = [
-            (self.invalid, "IV"),
-            (self.not_topical, "NT"),
-            (self.substituted, "SB"),
-            (self.blocked, "BL"),
-            (self.overflow, "OV"),
-        ];
-        let mut first = true;
-        for (set, name) in names {
-            if set {
-                if !first {
-                    f.write_str(",")?;
-                }
-                f.write_str(name)?;
-                first = false;
-            }
-        }
-        if first {
-            f.write_str("good")?;
-        }
-        Ok(())
+/// The quality flags from the stored bit mask (unknown bits are ignored).
+pub fn quality_from_bits(bits: u8) -> Quality {
+    Quality {
+        invalid: bits & 1 != 0,
+        not_topical: bits & 2 != 0,
+        substituted: bits & 4 != 0,
+        blocked: bits & 8 != 0,
+        overflow: bits & 16 != 0,
     }
 }
 
@@ -541,7 +484,7 @@ impl RawEvent {
                 self.value_float,
                 self.value_text,
             )?,
-            quality: Quality::from_bits(u8::try_from(self.quality & 0xFF).unwrap_or(0)),
+            quality: quality_from_bits(u8::try_from(self.quality & 0xFF).unwrap_or(0)),
             source_time: self
                 .source_ms
                 .map(|ms| {

@@ -16,8 +16,8 @@ use tokio_postgres::types::ToSql;
 use tokio_postgres::{Client, NoTls, Row, Statement};
 
 use super::model::{
-    check_command, check_event, from_ms, to_ms, CommandRecord, EventRecord, RawCommand, RawEvent,
-    RecordId,
+    check_command, check_event, from_ms, quality_to_bits, to_ms, CommandRecord, EventRecord,
+    RawCommand, RawEvent, RecordId,
 };
 use super::query::{
     command_cursor, command_sql, event_cursor, event_sql, into_page, Dialect, Param,
@@ -352,7 +352,7 @@ impl<'a> EventColumns<'a> {
             int,
             float,
             text,
-            quality: i16::from(e.quality.bits()),
+            quality: i16::from(quality_to_bits(e.quality)),
             source_ms: e.source_time.map(|s| to_ms(s.time)),
             source_invalid: e.source_time.is_some_and(|s| s.invalid),
             received_ms: to_ms(e.received_time),

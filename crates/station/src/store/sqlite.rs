@@ -14,8 +14,8 @@ use std::time::Duration;
 use tokio::sync::oneshot;
 
 use super::model::{
-    check_command, check_event, from_ms, to_ms, CommandRecord, EventRecord, RawCommand, RawEvent,
-    RecordId,
+    check_command, check_event, from_ms, quality_to_bits, to_ms, CommandRecord, EventRecord,
+    RawCommand, RawEvent, RecordId,
 };
 use super::query::{
     command_cursor, command_sql, event_cursor, event_sql, into_page, Dialect, Param,
@@ -286,7 +286,7 @@ fn insert_events(
                 vi,
                 vf,
                 vt,
-                e.quality.bits(),
+                quality_to_bits(e.quality),
                 e.source_time.map(|s| to_ms(s.time)),
                 e.source_time.is_some_and(|s| s.invalid),
                 to_ms(e.received_time),

@@ -10,7 +10,7 @@ use proptest::prelude::*;
 use station::pointdb::{
     from_element, PointChange, PointDb, PointDbError, PointSpec, TimeZonePolicy, Transmission,
 };
-use station::store::{EventCause, PointValue, Quality, SourceTime};
+use station::store::{quality_from_bits, EventCause, PointValue, Quality, SourceTime};
 
 fn ioa(n: u32) -> Ioa {
     Ioa::try_new(n).unwrap()
@@ -754,7 +754,7 @@ fn arb_value() -> impl Strategy<Value = PointValue> {
 }
 
 fn arb_quality() -> impl Strategy<Value = Quality> {
-    (0u8..32).prop_map(Quality::from_bits)
+    (0u8..32).prop_map(quality_from_bits)
 }
 
 proptest! {

@@ -5,9 +5,9 @@ use std::collections::HashSet;
 use std::sync::Arc;
 
 use station::store::{
-    Actor, CommandOutcome, CommandPhase, CommandQuery, CommandRecord, Cursor, EventCause,
-    EventQuery, EventRecord, EventStore, Order, Page, PointValue, Quality, SourceTime, StoreError,
-    TimeBasis, MAX_PAGE_SIZE,
+    quality_from_bits, Actor, CommandOutcome, CommandPhase, CommandQuery, CommandRecord, Cursor,
+    EventCause, EventQuery, EventRecord, EventStore, Order, Page, PointValue, Quality, SourceTime,
+    StoreError, TimeBasis, MAX_PAGE_SIZE,
 };
 
 /// 2026-03-01 00:00:00 UTC, the base of every test time.
@@ -92,9 +92,9 @@ pub(crate) async fn round_trip_every_value_cause_and_quality(store: Arc<dyn Even
     let qualities = [
         Quality::GOOD,
         Quality::INVALID,
-        Quality::from_bits(0b11111),
-        Quality::from_bits(0b00110),
-        Quality::from_bits(0b11000),
+        quality_from_bits(0b11111),
+        quality_from_bits(0b00110),
+        quality_from_bits(0b11000),
     ];
     let mut input = Vec::new();
     for (i, value) in values.iter().enumerate() {
@@ -295,7 +295,7 @@ pub(crate) async fn filters_node_cause_and_invalid(store: Arc<dyn EventStore>) {
         e.quality = if i % 5 == 0 {
             Quality::INVALID
         } else if i % 5 == 1 {
-            Quality::from_bits(0b10) // NT only: not invalid
+            quality_from_bits(0b10) // NT only: not invalid
         } else {
             Quality::GOOD
         };
