@@ -4,7 +4,10 @@
 use plc::task::{ClockReading, TaskConfig};
 use plc::Plc;
 
-const SOURCE: &str = include_str!("../programs/railway_lighting.st");
+/// The function block, as the Vsetín example project ships it (one copy).
+const FB: &str = include_str!("../../../../examples/vsetin/plc/osvetleni.st");
+/// The test bench: one instance wired to globals.
+const BENCH: &str = include_str!("../programs/railway_lighting.st");
 const HOUR: i64 = 3_600_000_000_000;
 const SEC: i64 = 1_000_000_000;
 const DAY: i64 = 24 * HOUR;
@@ -38,7 +41,10 @@ fn prague_offset(utc: i64) -> i64 {
 
 impl Station {
     fn new() -> Self {
-        let (sources, r) = plc::build(&[("railway_lighting.st".into(), SOURCE.into())]);
+        let (sources, r) = plc::build(&[
+            ("osvetleni.st".into(), FB.into()),
+            ("railway_lighting.st".into(), BENCH.into()),
+        ]);
         let compiled = r.unwrap_or_else(|d| {
             panic!(
                 "{}",
