@@ -802,7 +802,9 @@ impl Plc {
         })
     }
 
-    fn read_leaf(&self, l: &Leaf) -> Result<Val, PlcError> {
+    /// Reads a scalar resolved once with [`Plc::leaf`]: the fast path for runtimes that
+    /// copy the same variables every cycle.
+    pub fn read_leaf(&self, l: &Leaf) -> Result<Val, PlcError> {
         let bad = || PlcError::UnknownPath(l.path.clone());
         Ok(match l.ty.lane() {
             Some(crate::check::Lane::Real) => Val::Real(self.vm.getr(l.addr.r).map_err(|_| bad())?),
@@ -811,7 +813,14 @@ impl Plc {
         })
     }
 
-    fn write_leaf(&mut self, l: &Leaf, v: Val) {
+    /// Writes a scalar resolved once with [`Plc::leaf`]. The value must be of the leaf's
+    /// lane (integers, BOOL and times as [`Val::Int`], reals as [`Val::Real`]); integers
+    /// are wrapped to the variable's type, as an assignment in ST would.
+    pub fn write_leaf(&mut self, l: &Leaf, v: Val) {
+        let v = match v {
+            Val::Int(x) => Val::Int(l.ty.wrap(x)),
+            other => other,
+        };
         let _ = match v {
             Val::Int(x) => self.vm.seti(l.addr.i, x),
             Val::Real(x) => self.vm.setr(l.addr.r, x),

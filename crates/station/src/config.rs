@@ -70,6 +70,8 @@
 //! select_required = false              # default false
 //! remote_enable = "RH2Logic.SA1_Dalkove"   # optional BOOL variable; FALSE (local mode):
 //!                                          # remote commands are refused
+//! pulse_ms = 500                       # optional, single/double commands on a variable:
+//!                                      # reset to FALSE after this time
 //! description = "open QF1"             # optional
 //!
 //! [[node.link]]                        # IEC 104 client link to a lower node
@@ -315,6 +317,11 @@ pub struct CommandConfig {
     pub select_required: bool,
     /// A BOOL variable; while FALSE (local mode) remote commands are refused.
     pub remote_enable: Option<String>,
+    /// For single and double commands on a PLC variable: the value is held this long and
+    /// then reset (FALSE), like a relay output pulse. Without it the value persists
+    /// until the next command. A command's QU (short/long pulse, persistent) is honoured
+    /// as well: QU 1 and 2 pulse for this time (500 ms when not set), QU 3 persists.
+    pub pulse: Option<Duration>,
     /// Free text.
     pub description: String,
 }
@@ -644,6 +651,7 @@ struct RawCommand {
     #[serde(default)]
     select_required: bool,
     remote_enable: Option<String>,
+    pulse_ms: Option<i64>,
     #[serde(default)]
     description: String,
 }
@@ -1375,6 +1383,25 @@ impl Ctx<'_> {
                     CommandTarget::Variable(command.target.clone())
                 }
             };
+            let pulse = match command.pulse_ms {
+                None => None,
+                Some(ms) if (1..=3_600_000).contains(&ms) => {
+                    if matches!(target, CommandTarget::Link { .. }) {
+                        self.err(
+                            &at("pulse_ms"),
+                            "a forwarded command is pulsed by the node that executes it",
+                        );
+                    }
+                    Some(Duration::from_millis(ms.unsigned_abs()))
+                }
+                Some(ms) => {
+                    self.err(
+                        &at("pulse_ms"),
+                        format!("pulse_ms {ms} is outside 1..=3600000"),
+                    );
+                    None
+                }
+            };
             commands.push(CommandConfig {
                 name: command.name.clone(),
                 type_id,
@@ -1382,6 +1409,7 @@ impl Ctx<'_> {
                 target,
                 select_required: command.select_required,
                 remote_enable: command.remote_enable.clone(),
+                pulse,
                 description: command.description.clone(),
             });
         }

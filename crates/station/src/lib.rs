@@ -9,8 +9,7 @@
 //! |---------------|-------------------------------------------------------------------|---------|
 //! | [`config`]    | the project folder: `station.toml`, nodes, points, links, errors with file:line | present |
 //! | [`pointdb`]   | per-node typed values with quality and source time, report by exception | present |
-//! | `links`       | IEC 104 server and client links of a node, communication-status points | planned |
-//! | `concentrator`| re-publishing lower nodes' points upward, commands downward       | planned |
+//! | [`runtime`]   | runs a project: simulated clock, plant and PLCs, servers, links (concentration, commands down the hierarchy), recording | present |
 //! | [`store`]     | the event and command-audit store (SQLite, PostgreSQL), retention | present |
 #![cfg_attr(
     not(test),
@@ -20,4 +19,5 @@
 
 pub mod config;
 pub mod pointdb;
+pub mod runtime;
 pub mod store;

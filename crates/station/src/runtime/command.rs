@@ -1,0 +1,279 @@
+//! A node's IEC 104 server hooks: commands travel down the hierarchy and their outcome
+//! travels back; clock synchronisation sets the node's clock and is passed down.
+//!
+//! A command addressed to a PLC variable goes to the simulation thread, which refuses it
+//! while the board's `remote_enable` variable is FALSE (Local/Remote switch in local) and
+//! otherwise writes it (held for the pulse time, then reset). A command addressed to a
+//! link is sent to the lower node with the same qualifier (a select stays a select) and
+//! its confirmation becomes this node's. Each is audited in the store with the peer's
+//! address, the time on the node's clock, the target, the value and the outcome.
+
+use std::collections::HashMap;
+use std::net::SocketAddr;
+use std::sync::{mpsc, Arc};
+use std::time::Duration;
+
+use iec60870::asdu::{DoublePointState, Element, RegulatingStepState, TimeTag};
+use iec60870::cs104::server::{self, CommandFuture, StationHandler};
+use iec60870::time::Cp56Time2a;
+use plc::vm::Val;
+use tokio::sync::oneshot;
+
+use crate::store::{Actor, CommandOutcome, CommandPhase, CommandRecord, PointValue};
+
+use super::link::LinkHandle;
+use super::node::NodePoints;
+use super::simulation::{CommandRefusal, SimRequest};
+
+/// The pulse length of a command with QU 1 or 2 when the project sets none.
+pub(crate) const DEFAULT_PULSE: Duration = Duration::from_millis(500);
+
+/// Where a command of this node goes.
+#[derive(Debug, Clone)]
+pub(crate) enum Route {
+    /// A PLC variable of this node (simulation node index).
+    Plc {
+        node: usize,
+        pulse: Option<Duration>,
+    },
+    /// Down a link, as command `ioa` of the lower node.
+    Link {
+        link: String,
+        ioa: iec60870::asdu::Ioa,
+    },
+}
+
+#[derive(Debug, Clone)]
+pub(crate) struct RoutedCommand {
+    pub name: String,
+    pub route: Route,
+}
+
+/// The [`StationHandler`] of a node's server.
+pub(crate) struct NodeHandler {
+    pub points: Arc<NodePoints>,
+    pub commands: HashMap<u32, RoutedCommand>,
+    /// Set once the links are up (they start after every server of the process).
+    pub links: std::sync::OnceLock<HashMap<String, LinkHandle>>,
+    /// Links whose lower node takes this node's time.
+    pub sync_links: Vec<String>,
+    pub simulation: mpsc::Sender<SimRequest>,
+}
+
+impl StationHandler for NodeHandler {
+    fn handle_command(&self, command: server::Command) -> CommandFuture {
+        let Some(routed) = self.commands.get(&command.ioa.get()).cloned() else {
+            return server::ready(server::CommandOutcome::Refused);
+        };
+        let points = Arc::clone(&self.points);
+        let handler_links = self.links.get().cloned().unwrap_or_default();
+        let simulation = self.simulation.clone();
+        let this = Recorded {
+            points,
+            command: command.clone(),
+            name: routed.name.clone(),
+        };
+        Box::pin(async move {
+            let (outcome, detail) = match routed.route {
+                Route::Plc { node, pulse } => {
+                    execute_on_plc(&simulation, node, &command, pulse).await
+                }
+                Route::Link { link, ioa } => {
+                    forward(handler_links.get(&link), &link, ioa, &command).await
+                }
+            };
+            this.finish(outcome, detail)
+        })
+    }
+
+    fn handle_clock_sync(&self, time: Cp56Time2a, peer: SocketAddr) -> bool {
+        let Some(source) = self.points.zone().from_cp56(&time) else {
+            tracing::warn!(node = %self.points.name(), %peer, "clock synchronisation with an impossible date refused");
+            return false;
+        };
+        self.points.clock().synchronise(source.time);
+        tracing::info!(node = %self.points.name(), %peer, time = %source.time, "clock synchronised");
+        // Pass the time down at once rather than at the next periodic synchronisation.
+        for name in &self.sync_links {
+            let Some(client) = self
+                .links
+                .get()
+                .and_then(|l| l.get(name))
+                .and_then(LinkHandle::client)
+            else {
+                continue;
+            };
+            let time = self.points.zone().to_cp56(self.points.clock().now());
+            tokio::spawn(async move {
+                let _ = client.clock_sync(time).await;
+            });
+        }
+        true
+    }
+
+    fn connection_changed(&self, peer: SocketAddr, connected: bool, started: bool) {
+        tracing::info!(node = %self.points.name(), %peer, connected, started, "controlling station");
+    }
+}
+
+/// What the audit needs once the outcome is known.
+struct Recorded {
+    points: Arc<NodePoints>,
+    command: server::Command,
+    name: String,
+}
+
+impl Recorded {
+    fn finish(self, outcome: CommandOutcome, detail: String) -> server::CommandOutcome {
+        let handler_outcome = if outcome == CommandOutcome::Executed {
+            server::CommandOutcome::Executed
+        } else {
+            server::CommandOutcome::Refused
+        };
+        tracing::info!(
+            node = %self.points.name(), command = %self.name, peer = %self.command.peer,
+            select = self.command.select, ?outcome, %detail, "command"
+        );
+        self.points.recorder().command(CommandRecord {
+            id: None,
+            time: self.points.clock().now(),
+            actor: Actor::Remote(self.command.peer.to_string()),
+            node: self.points.name().to_owned(),
+            point: self.name,
+            ioa: Some(self.command.ioa.get()),
+            value: command_value(&self.command.element),
+            phase: if self.command.select {
+                CommandPhase::Select
+            } else {
+                CommandPhase::Execute
+            },
+            outcome,
+            detail,
+        });
+        handler_outcome
+    }
+}
+
+async fn execute_on_plc(
+    simulation: &mpsc::Sender<SimRequest>,
+    node: usize,
+    command: &server::Command,
+    configured_pulse: Option<Duration>,
+) -> (CommandOutcome, String) {
+    let Some((value, qualifier)) = plc_value(&command.element) else {
+        return (
+            CommandOutcome::Refused,
+            format!(
+                "{} cannot be written to a PLC variable",
+                command.element.short_name()
+            ),
+        );
+    };
+    let pulse = match qualifier {
+        Some(1 | 2) => Some(configured_pulse.unwrap_or(DEFAULT_PULSE)),
+        Some(3) => None,
+        Some(_) => configured_pulse,
+        None => None,
+    };
+    let (reply, answer) = oneshot::channel();
+    let request = SimRequest::Command {
+        node,
+        ioa: command.ioa.get(),
+        value,
+        pulse,
+        select: command.select,
+        reply,
+    };
+    if simulation.send(request).is_err() {
+        return (CommandOutcome::Failed, "the simulation has stopped".into());
+    }
+    match answer.await {
+        Ok(Ok(())) => (CommandOutcome::Executed, String::new()),
+        Ok(Err(CommandRefusal::LocalMode)) => (
+            CommandOutcome::RefusedLocalMode,
+            "the board is in local mode".into(),
+        ),
+        Ok(Err(refusal)) => (CommandOutcome::Refused, refusal.to_string()),
+        Err(_) => (CommandOutcome::Failed, "the simulation has stopped".into()),
+    }
+}
+
+async fn forward(
+    link: Option<&LinkHandle>,
+    name: &str,
+    ioa: iec60870::asdu::Ioa,
+    command: &server::Command,
+) -> (CommandOutcome, String) {
+    let Some(client) = link.and_then(LinkHandle::client) else {
+        return (CommandOutcome::Failed, format!("link {name} is cut"));
+    };
+    if !link.is_some_and(LinkHandle::is_up) {
+        return (CommandOutcome::Failed, format!("link {name} is down"));
+    }
+    let time = match &command.time {
+        Some(TimeTag::Cp56(tag)) => Some(*tag),
+        _ => None,
+    };
+    match client
+        .command(command.type_id, ioa, command.element.clone(), time)
+        .await
+    {
+        Ok(outcome) if outcome.positive => (
+            CommandOutcome::Executed,
+            format!("confirmed by {name} (IOA {ioa})"),
+        ),
+        Ok(outcome) => (
+            CommandOutcome::Refused,
+            format!("refused by {name} (IOA {ioa}, cause {})", outcome.cause),
+        ),
+        Err(iec60870::cs104::client::ClientError::Timeout(what)) => (
+            CommandOutcome::TimedOut,
+            format!("no answer from {name}: timed out waiting for {what}"),
+        ),
+        Err(error) => (CommandOutcome::Failed, format!("{name}: {error}")),
+    }
+}
+
+/// The value a command writes to a PLC variable, and its QU (single, double and
+/// regulating-step commands).
+fn plc_value(element: &Element) -> Option<(Val, Option<u8>)> {
+    Some(match element {
+        Element::SingleCommand { on, qualifier } => {
+            (Val::Int(i64::from(*on)), Some(qualifier.qualifier()))
+        }
+        Element::DoubleCommand { state, qualifier } => match state {
+            DoublePointState::On => (Val::Int(1), Some(qualifier.qualifier())),
+            DoublePointState::Off => (Val::Int(0), Some(qualifier.qualifier())),
+            _ => return None,
+        },
+        // Higher = +1, lower = -1 (an INT target steps; a BOOL target sees TRUE).
+        Element::RegulatingStep { state, qualifier } => match state {
+            RegulatingStepState::Higher => (Val::Int(1), Some(qualifier.qualifier())),
+            RegulatingStepState::Lower => (Val::Int(-1), Some(qualifier.qualifier())),
+            _ => return None,
+        },
+        Element::SetpointNormalized { raw, .. } => (Val::Real(f64::from(*raw) / 32768.0), None),
+        Element::SetpointScaled { value, .. } => (Val::Int(i64::from(*value)), None),
+        Element::SetpointFloat { value, .. } => (Val::Real(f64::from(*value)), None),
+        Element::BitstringCommand { bits } => (Val::Int(i64::from(*bits)), None),
+        _ => return None,
+    })
+}
+
+/// The audited value of a command.
+fn command_value(element: &Element) -> PointValue {
+    match element {
+        Element::SingleCommand { on, .. } => PointValue::Bool(*on),
+        Element::DoubleCommand { state, .. } => PointValue::DoublePoint(state.bits()),
+        Element::RegulatingStep { state, .. } => PointValue::Int(match state {
+            RegulatingStepState::Higher => 1,
+            RegulatingStepState::Lower => -1,
+            _ => 0,
+        }),
+        Element::SetpointNormalized { raw, .. } => PointValue::Float(f64::from(*raw) / 32768.0),
+        Element::SetpointScaled { value, .. } => PointValue::Int(i64::from(*value)),
+        Element::SetpointFloat { value, .. } => PointValue::Float(f64::from(*value)),
+        Element::BitstringCommand { bits } => PointValue::Bits(*bits),
+        other => PointValue::Text(other.short_name().to_owned()),
+    }
+}

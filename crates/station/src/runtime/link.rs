@@ -1,0 +1,257 @@
+//! A node's IEC 104 client link to a lower node (concentration).
+//!
+//! One task per link drives a [`cs104::client`](iec60870::cs104::client): data of the
+//! lower node (spontaneous, interrogated, periodic, return information) update the
+//! points whose source is `link:NAME/IOA`; when the connection is lost those points turn
+//! invalid (IV, last value kept) and the link's status point reports the failure; after
+//! reconnection the lower node's buffered events and the general interrogation bring
+//! them back. On start (and every [`CLOCK_SYNC_PERIOD`]) the node synchronises the lower
+//! node's clock with its own, so it stays the time source while its upper link is down.
+//! Commands forwarded down the link use the same client ([`LinkHandle::client`]).
+
+use std::collections::HashMap;
+use std::net::SocketAddr;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use iec60870::asdu::{Asdu, CommonAddress};
+use iec60870::cs104::client::{spawn_client, ClientConfig, ClientEvent, ClientHandle};
+use tokio::sync::mpsc;
+
+use crate::pointdb::{from_element, PointId};
+use crate::store::EventCause;
+
+use super::node::NodePoints;
+
+/// How often a node re-synchronises the clocks of the nodes below it.
+pub const CLOCK_SYNC_PERIOD: Duration = Duration::from_secs(60);
+
+/// What a link is configured to do.
+#[derive(Debug, Clone)]
+pub(crate) struct LinkSpec {
+    pub name: String,
+    pub address: SocketAddr,
+    pub common_address: CommonAddress,
+    pub interrogate_on_start: bool,
+    pub clock_sync: bool,
+    pub status_point: Option<String>,
+    /// Remote IOA -> the local points it feeds.
+    pub points: HashMap<u32, Vec<PointId>>,
+}
+
+enum LinkControl {
+    Cut,
+    Restore,
+}
+
+/// A running link: its state, its client (for forwarded commands), cut and restore.
+#[derive(Debug, Clone)]
+pub struct LinkHandle {
+    name: String,
+    control: mpsc::UnboundedSender<LinkControl>,
+    client: Arc<Mutex<Option<ClientHandle>>>,
+    up: Arc<AtomicBool>,
+}
+
+impl LinkHandle {
+    /// The link's name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Whether data transfer is started on the link.
+    pub fn is_up(&self) -> bool {
+        self.up.load(Ordering::Acquire)
+    }
+
+    /// The client, while the link is not cut.
+    pub fn client(&self) -> Option<ClientHandle> {
+        self.client
+            .lock()
+            .unwrap_or_else(|poison| poison.into_inner())
+            .clone()
+    }
+
+    /// Cuts the link (fault injection: a cable pulled): closes the connection and stays
+    /// disconnected until [`LinkHandle::restore`].
+    pub fn cut(&self) {
+        let _ = self.control.send(LinkControl::Cut);
+    }
+
+    /// Reconnects a cut link.
+    pub fn restore(&self) {
+        let _ = self.control.send(LinkControl::Restore);
+    }
+}
+
+/// Starts a link's task on the current tokio runtime.
+pub(crate) fn spawn_link(spec: LinkSpec, node: Arc<NodePoints>) -> LinkHandle {
+    let (control, receiver) = mpsc::unbounded_channel();
+    let handle = LinkHandle {
+        name: spec.name.clone(),
+        control,
+        client: Arc::new(Mutex::new(None)),
+        up: Arc::new(AtomicBool::new(false)),
+    };
+    tokio::spawn(run(spec, node, receiver, handle.clone()));
+    handle
+}
+
+async fn run(
+    spec: LinkSpec,
+    node: Arc<NodePoints>,
+    mut control: mpsc::UnboundedReceiver<LinkControl>,
+    handle: LinkHandle,
+) {
+    let origin = format!("link:{}", spec.name);
+    set_down(&spec, &node, &origin);
+    let mut cut = false;
+    loop {
+        if cut {
+            match control.recv().await {
+                Some(LinkControl::Restore) => cut = false,
+                Some(LinkControl::Cut) => {}
+                None => return,
+            }
+            continue;
+        }
+        let mut config = ClientConfig::new(spec.address.to_string(), spec.common_address);
+        config.interrogate_on_start = spec.interrogate_on_start;
+        config.reconnect = true;
+        config.reconnect_delay = Duration::from_millis(200);
+        config.reconnect_delay_max = Duration::from_secs(5);
+        let (client, mut events) = spawn_client(config);
+        *handle
+            .client
+            .lock()
+            .unwrap_or_else(|poison| poison.into_inner()) = Some(client.clone());
+        let mut sync_timer = tokio::time::interval(CLOCK_SYNC_PERIOD);
+        sync_timer.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+        loop {
+            tokio::select! {
+                event = events.recv() => match event {
+                    None => break,
+                    Some(ClientEvent::Started) => {
+                        handle.up.store(true, Ordering::Release);
+                        tracing::info!(node = %node.name(), link = %spec.name, address = %spec.address, "link up");
+                        if let Some(point) = &spec.status_point {
+                            node.change_with(&origin, |db, now| {
+                                db.set_link_status(point.as_str(), true, now).ok().flatten().into_iter().collect()
+                            });
+                        }
+                        if spec.clock_sync {
+                            synchronise(&node, &client);
+                        }
+                    }
+                    Some(ClientEvent::Asdu(asdu)) => apply(&spec, &node, &origin, &asdu),
+                    Some(ClientEvent::Disconnected { reason }) => {
+                        if handle.up.swap(false, Ordering::AcqRel) {
+                            tracing::warn!(node = %node.name(), link = %spec.name, %reason, "link down");
+                            set_down(&spec, &node, &origin);
+                        }
+                    }
+                    Some(_) => {}
+                },
+                _ = sync_timer.tick(), if spec.clock_sync => {
+                    if handle.is_up() {
+                        synchronise(&node, &client);
+                    }
+                }
+                request = control.recv() => match request {
+                    Some(LinkControl::Cut) => {
+                        *handle.client.lock().unwrap_or_else(|poison| poison.into_inner()) = None;
+                        client.close().await;
+                        handle.up.store(false, Ordering::Release);
+                        tracing::warn!(node = %node.name(), link = %spec.name, "link cut");
+                        set_down(&spec, &node, &origin);
+                        cut = true;
+                        break;
+                    }
+                    Some(LinkControl::Restore) => {}
+                    None => {
+                        client.close().await;
+                        return;
+                    }
+                },
+            }
+        }
+    }
+}
+
+/// Invalidates the link's points and reports the link as failed.
+fn set_down(spec: &LinkSpec, node: &NodePoints, origin: &str) {
+    let prefix = format!("{origin}/");
+    node.change_with(origin, |db, now| {
+        let mut changes = db.invalidate_source_prefix(&prefix, now);
+        if let Some(point) = &spec.status_point {
+            changes.extend(
+                db.set_link_status(point.as_str(), false, now)
+                    .ok()
+                    .flatten(),
+            );
+        }
+        changes
+    });
+}
+
+fn synchronise(node: &NodePoints, client: &ClientHandle) {
+    let time = node.zone().to_cp56(node.clock().now());
+    let client = client.clone();
+    let name = node.name().to_owned();
+    tokio::spawn(async move {
+        match client.clock_sync(time).await {
+            Ok(outcome) if outcome.positive => {}
+            Ok(outcome) => {
+                tracing::warn!(node = %name, cause = %outcome.cause, "clock synchronisation refused")
+            }
+            Err(error) => tracing::debug!(node = %name, %error, "clock synchronisation not sent"),
+        }
+    });
+}
+
+fn apply(spec: &LinkSpec, node: &NodePoints, origin: &str, asdu: &Asdu) {
+    if asdu.cot.negative || asdu.cot.test || !asdu.type_id.is_monitor() {
+        return;
+    }
+    let cause = asdu.cot.cause;
+    let event_cause = match cause.value() {
+        11 => EventCause::ReturnRemote,
+        12 => EventCause::ReturnLocal,
+        // Spontaneous, periodic, background, read and interrogation answers: for the
+        // node above, a change is a change (report by exception); the node's own
+        // transmission setting decides how it is sent.
+        1..=3 | 5 | 20..=36 => EventCause::Spontaneous,
+        _ => return,
+    };
+    for object in &asdu.objects {
+        let Some(ids) = spec.points.get(&object.ioa.get()) else {
+            continue;
+        };
+        let decoded = from_element(
+            asdu.type_id,
+            &object.element,
+            object.time.as_ref(),
+            node.zone(),
+        );
+        let (value, quality, source_time) = match decoded {
+            Ok(decoded) => decoded,
+            Err(error) => {
+                tracing::warn!(node = %node.name(), link = %spec.name, ioa = %object.ioa, %error, "value from the link refused");
+                continue;
+            }
+        };
+        for id in ids {
+            if let Err(error) = node.update(
+                *id,
+                value.clone(),
+                quality,
+                source_time,
+                event_cause,
+                origin,
+            ) {
+                tracing::warn!(node = %node.name(), link = %spec.name, %error, "value from the link refused");
+            }
+        }
+    }
+}

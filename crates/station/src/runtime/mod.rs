@@ -1,0 +1,588 @@
+//! The station runtime: runs the nodes of a project.
+//!
+//! ```text
+//!              simulation thread (clock, plant, PLCs)          tokio tasks
+//!  plant ──inputs──> PLC of node N ──points──> NodePoints N ──> IEC 104 server N ──> upper node / dispatch
+//!    ^                   ^    │                  ^   │ store records ──> Recorder ──> EventStore
+//!    └──── outputs ──────┘    └ commands <── NodeHandler N <──── commands from above
+//!                                                ^   └──── forwarded commands ──> link client ──> lower node
+//!                                  link task ────┘ (values of the lower node, IV on loss, status point)
+//! ```
+//!
+//! - [`clock`]: simulated time ([`SimClock`]) and each node's own clock, set by clock
+//!   synchronisation ([`NodeClock`]).
+//! - [`simulation`]: the thread that owns the plant and every node's soft PLC, steps
+//!   them on the simulated clock and feeds PLC-sourced points.
+//! - [`node`]: a node's point database with its server and recorder ([`NodePoints`]).
+//! - [`link`]: the IEC 104 client links to lower nodes (concentration, invalidation,
+//!   status points, time source).
+//! - `command`: the server hooks — commands routed to a PLC variable (refused in local
+//!   mode) or down a link, each audited; clock synchronisation passed down.
+//! - [`recorder`]: the batching writer into the event store.
+//!
+//! [`Runtime::start`] brings a project (or some of its nodes) up: store, point databases,
+//! PLCs (compiled on the simulation thread, errors with file:line:col), one server per
+//! node (its image holds the values of the first PLC scan), then the links, then the
+//! clock starts.
+
+pub mod clock;
+mod command;
+pub mod link;
+pub mod node;
+pub mod recorder;
+pub mod simulation;
+
+use std::collections::HashMap;
+use std::sync::{mpsc, Arc};
+use std::time::Duration;
+
+use chrono::{DateTime, Utc};
+use iec60870::cs104::server::{
+    spawn_server, CommandPoint, RedundancyGroupConfig, ServerConfig, ServerError, ServerHandle,
+};
+use tokio::sync::oneshot;
+
+use crate::config::{
+    CommandTarget, NodeConfig, PointSource, Project, Transmission as ConfigTransmission,
+};
+use crate::pointdb::{PointDb, PointSpec, TimeZonePolicy, Transmission};
+use crate::store::{
+    open_store, spawn_retention, EventStore, Retention, RetentionHandle, StoreError,
+};
+
+pub use clock::{NodeClock, Pacing, SimClock};
+pub use link::LinkHandle;
+pub use node::NodePoints;
+pub use recorder::Recorder;
+pub use simulation::{CommandRefusal, Simulation};
+
+use command::{NodeHandler, Route, RoutedCommand};
+use link::LinkSpec;
+use simulation::SimRequest;
+
+/// Why the runtime could not start or a request failed.
+#[derive(Debug, thiserror::Error)]
+pub enum RuntimeError {
+    /// The project does not fit together at run time (unknown node or plant signal, a
+    /// variable the PLC does not have, ...).
+    #[error("{0}")]
+    Setup(String),
+    /// A node's Structured Text does not compile; the diagnostics as `file:line:col`.
+    #[error("{0}")]
+    Plc(String),
+    /// The event store could not be opened.
+    #[error("event store: {0}")]
+    Store(#[from] StoreError),
+    /// A server could not start (port in use, TLS files).
+    #[error("node `{node}`: {source}")]
+    Server {
+        /// The node.
+        node: String,
+        /// Why.
+        source: ServerError,
+    },
+    /// The simulation thread has ended.
+    #[error("the simulation has stopped")]
+    Stopped,
+}
+
+/// Where events go.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub enum StoreChoice {
+    /// The project's `store` setting (a relative SQLite path resolves in the project folder).
+    #[default]
+    Project,
+    /// This URL instead.
+    Url(String),
+    /// No store: events and commands are not recorded.
+    Disabled,
+}
+
+/// How to run a project.
+#[derive(Debug, Clone)]
+pub struct RuntimeOptions {
+    /// The nodes to run here; empty runs them all.
+    pub nodes: Vec<String>,
+    /// How simulated time moves.
+    pub pacing: Pacing,
+    /// UTC at simulated time zero.
+    pub start: DateTime<Utc>,
+    /// The event store.
+    pub store: StoreChoice,
+}
+
+impl Default for RuntimeOptions {
+    fn default() -> Self {
+        RuntimeOptions {
+            nodes: Vec::new(),
+            pacing: Pacing::RealTime { speed: 1.0 },
+            start: Utc::now(),
+            store: StoreChoice::Project,
+        }
+    }
+}
+
+/// A running node.
+#[derive(Debug)]
+pub struct NodeRuntime {
+    /// Its points (with server and recorder).
+    pub points: Arc<NodePoints>,
+    /// Its IEC 104 server, if it has one.
+    pub server: Option<ServerHandle>,
+    /// Its links to lower nodes.
+    pub links: Vec<LinkHandle>,
+}
+
+impl NodeRuntime {
+    /// The link called `name`.
+    pub fn link(&self, name: &str) -> Option<&LinkHandle> {
+        self.links.iter().find(|l| l.name() == name)
+    }
+}
+
+/// A running project.
+pub struct Runtime {
+    project: Project,
+    clock: Arc<SimClock>,
+    nodes: Vec<NodeRuntime>,
+    simulation: mpsc::Sender<SimRequest>,
+    thread: Option<std::thread::JoinHandle<()>>,
+    store: Option<Arc<dyn EventStore>>,
+    recorder: Recorder,
+    retention: Option<RetentionHandle>,
+}
+
+impl std::fmt::Debug for Runtime {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Runtime")
+            .field("station", &self.project.station.name)
+            .field("nodes", &self.nodes.len())
+            .finish_non_exhaustive()
+    }
+}
+
+/// The time-tag zone of the project's nodes.
+fn zone_of(project: &Project) -> TimeZonePolicy {
+    TimeZonePolicy::Zone(project.station.time_zone)
+}
+
+/// The point database declarations of a node.
+pub fn point_specs(node: &NodeConfig) -> Vec<PointSpec> {
+    node.points
+        .iter()
+        .map(|point| PointSpec {
+            name: point.name.clone(),
+            type_id: point.type_id,
+            ioa: point.ioa,
+            transmission: match point.transmission {
+                ConfigTransmission::Spontaneous => Transmission::Spontaneous,
+                ConfigTransmission::Cyclic { period } => Transmission::Cyclic(period),
+                ConfigTransmission::InterrogationOnly => Transmission::InterrogationOnly,
+            },
+            groups: point
+                .groups
+                .iter()
+                .filter(|g| (1..=16).contains(*g))
+                .fold(0u16, |bits, g| bits | (1 << (g - 1))),
+            deadband: point.deadband,
+            source: match &point.source {
+                PointSource::Variable(path) => path.clone(),
+                PointSource::Link { link, ioa } => format!("link:{link}/{ioa}"),
+                PointSource::LinkStatus(link) => format!("status:{link}"),
+            },
+            description: point.description.clone(),
+        })
+        .collect()
+}
+
+impl Runtime {
+    /// Starts `project` (or the nodes `options.nodes` of it) on the current tokio runtime.
+    pub async fn start(project: Project, options: RuntimeOptions) -> Result<Runtime, RuntimeError> {
+        let selected: Vec<usize> = if options.nodes.is_empty() {
+            (0..project.nodes.len()).collect()
+        } else {
+            let mut selected = Vec::new();
+            for name in &options.nodes {
+                let index = project
+                    .nodes
+                    .iter()
+                    .position(|n| &n.name == name)
+                    .ok_or_else(|| {
+                        RuntimeError::Setup(format!(
+                            "no node `{name}` in the project (nodes: {})",
+                            project
+                                .nodes
+                                .iter()
+                                .map(|n| n.name.as_str())
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        ))
+                    })?;
+                selected.push(index);
+            }
+            selected
+        };
+        let store_url = match &options.store {
+            StoreChoice::Disabled => None,
+            StoreChoice::Url(url) => Some(url.clone()),
+            StoreChoice::Project => Some(resolve_store_url(&project)),
+        };
+        let store: Option<Arc<dyn EventStore>> = match store_url {
+            Some(url) => Some(Arc::from(open_store(&url).await?)),
+            None => None,
+        };
+        let recorder = match &store {
+            Some(store) => Recorder::spawn(Arc::clone(store)),
+            None => Recorder::disabled(),
+        };
+        let clock = SimClock::new(options.start);
+        let zone = zone_of(&project);
+        let mut shared = Vec::new();
+        for &index in &selected {
+            let Some(node) = project.nodes.get(index) else {
+                continue;
+            };
+            let db = PointDb::new(&node.name, point_specs(node))
+                .map_err(|error| RuntimeError::Setup(format!("node `{}`: {error}", node.name)))?;
+            let node_clock = NodeClock::new(Arc::clone(&clock), project.station.time_zone);
+            shared.push((
+                index,
+                NodePoints::new(&node.name, db, zone, recorder.clone(), node_clock),
+            ));
+        }
+
+        // The simulation thread builds the PLCs (they cannot leave it) and runs the first
+        // scan, so that each server starts with real values in its image.
+        let (requests, receiver) = mpsc::channel();
+        let (built, built_answer) = oneshot::channel();
+        let thread = {
+            let project = project.clone();
+            let shared = shared.clone();
+            let clock = Arc::clone(&clock);
+            let pacing = options.pacing;
+            std::thread::Builder::new()
+                .name("stanice-simulation".into())
+                .spawn(move || match Simulation::build(&project, &shared, clock) {
+                    Ok(simulation) => {
+                        let _ = built.send(Ok(()));
+                        simulation::run(simulation, pacing, receiver);
+                    }
+                    Err(error) => {
+                        let _ = built.send(Err(error));
+                    }
+                })
+                .map_err(|error| {
+                    RuntimeError::Setup(format!("cannot start the simulation thread: {error}"))
+                })?
+        };
+        built_answer.await.map_err(|_| RuntimeError::Stopped)??;
+        // Wait for the first scan (the thread runs it before reading requests).
+        let (scanned, scan_answer) = oneshot::channel();
+        requests
+            .send(SimRequest::With(Box::new(move |sim: &mut Simulation| {
+                let _ = scanned.send(sim.now());
+            })))
+            .map_err(|_| RuntimeError::Stopped)?;
+        scan_answer.await.map_err(|_| RuntimeError::Stopped)?;
+
+        let mut nodes = Vec::new();
+        let mut handlers = Vec::new();
+        for (sim_index, (index, points)) in shared.iter().enumerate() {
+            let Some(config) = project.nodes.get(*index) else {
+                continue;
+            };
+            let commands = config
+                .commands
+                .iter()
+                .map(|command| {
+                    let route = match &command.target {
+                        CommandTarget::Variable(_) => Route::Plc {
+                            node: sim_index,
+                            pulse: command.pulse,
+                        },
+                        CommandTarget::Link { link, ioa } => Route::Link {
+                            link: link.clone(),
+                            ioa: *ioa,
+                        },
+                    };
+                    (
+                        command.ioa.get(),
+                        RoutedCommand {
+                            name: command.name.clone(),
+                            route,
+                        },
+                    )
+                })
+                .collect();
+            let handler = Arc::new(NodeHandler {
+                points: Arc::clone(points),
+                commands,
+                links: std::sync::OnceLock::new(),
+                sync_links: config
+                    .links
+                    .iter()
+                    .filter(|l| l.clock_sync)
+                    .map(|l| l.name.clone())
+                    .collect(),
+                simulation: requests.clone(),
+            });
+            let server = match (&config.server, config.server_address(&project.station)) {
+                (Some(server_config), Some(address)) => {
+                    let mut server = ServerConfig::new(address, config.common_address);
+                    server.allowed_clients = server_config.allowed_clients.clone();
+                    server.redundancy_groups = server_config
+                        .redundancy_groups
+                        .iter()
+                        .map(|g| RedundancyGroupConfig::new(g.name.clone(), g.clients.clone()))
+                        .collect();
+                    if let Some(tls) = &server_config.tls {
+                        let files = iec60870::cs104::tls::TlsFiles {
+                            certificate: project.folder.join(&tls.certificate),
+                            private_key: project.folder.join(&tls.private_key),
+                            trust_anchors: project.folder.join(&tls.trust_anchors),
+                        };
+                        let tls = files
+                            .load()
+                            .and_then(|pem| iec60870::cs104::tls::server_config(&pem))
+                            .map_err(|error| {
+                                RuntimeError::Setup(format!("node `{}`: TLS: {error}", config.name))
+                            })?;
+                        server.tls = Some(tls);
+                    }
+                    let mut image = points.lock().process_image(zone).map_err(|error| {
+                        RuntimeError::Setup(format!("node `{}`: {error}", config.name))
+                    })?;
+                    for command in &config.commands {
+                        image
+                            .add_command(CommandPoint {
+                                ioa: command.ioa,
+                                command_type: command.type_id,
+                                select_required: command.select_required,
+                            })
+                            .map_err(|error| {
+                                RuntimeError::Setup(format!("node `{}`: {error}", config.name))
+                            })?;
+                    }
+                    let handle = spawn_server(server, image, handler.clone() as Arc<_>)
+                        .await
+                        .map_err(|source| RuntimeError::Server {
+                            node: config.name.clone(),
+                            source,
+                        })?;
+                    points.attach_server(handle.clone());
+                    Some(handle)
+                }
+                _ => None,
+            };
+            handlers.push(handler);
+            nodes.push(NodeRuntime {
+                points: Arc::clone(points),
+                server,
+                links: Vec::new(),
+            });
+        }
+
+        // Links, once every server of this process listens.
+        for ((index, points), (node, handler)) in shared.iter().zip(nodes.iter_mut().zip(&handlers))
+        {
+            let Some(config) = project.nodes.get(*index) else {
+                continue;
+            };
+            let mut by_name = HashMap::new();
+            for link in &config.links {
+                let Some(address) = project.link_address(link) else {
+                    return Err(RuntimeError::Setup(format!(
+                        "node `{}`: link `{}` has no address",
+                        config.name, link.name
+                    )));
+                };
+                let mut map: HashMap<u32, Vec<crate::pointdb::PointId>> = HashMap::new();
+                {
+                    let db = points.lock();
+                    for point in &config.points {
+                        if let PointSource::Link { link: name, ioa } = &point.source {
+                            if name == &link.name {
+                                if let Some(id) = db.id(point.name.as_str()) {
+                                    map.entry(ioa.get()).or_default().push(id);
+                                }
+                            }
+                        }
+                    }
+                }
+                let spec = LinkSpec {
+                    name: link.name.clone(),
+                    address,
+                    common_address: link.common_address,
+                    interrogate_on_start: link.interrogate_on_start,
+                    clock_sync: link.clock_sync,
+                    status_point: link.status_point.clone(),
+                    points: map,
+                };
+                let handle = link::spawn_link(spec, Arc::clone(points));
+                by_name.insert(link.name.clone(), handle.clone());
+                node.links.push(handle);
+            }
+            let _ = handler.links.set(by_name);
+        }
+        requests
+            .send(SimRequest::Go)
+            .map_err(|_| RuntimeError::Stopped)?;
+
+        let retention = store.as_ref().map(|store| {
+            let days = u64::from(project.station.retention_days.max(1));
+            let node_clock = NodeClock::new(Arc::clone(&clock), project.station.time_zone);
+            spawn_retention(
+                Arc::clone(store),
+                Retention {
+                    max_age: Duration::from_secs(days * 86_400),
+                    ..Retention::default()
+                },
+                move || node_clock.now(),
+            )
+        });
+        tracing::info!(station = %project.station.name, nodes = nodes.len(), "station running");
+        Ok(Runtime {
+            project,
+            clock,
+            nodes,
+            simulation: requests,
+            thread: Some(thread),
+            store,
+            recorder,
+            retention,
+        })
+    }
+
+    /// The project.
+    pub fn project(&self) -> &Project {
+        &self.project
+    }
+
+    /// The simulated clock.
+    pub fn clock(&self) -> &Arc<SimClock> {
+        &self.clock
+    }
+
+    /// The running nodes.
+    pub fn nodes(&self) -> &[NodeRuntime] {
+        &self.nodes
+    }
+
+    /// A running node by name.
+    pub fn node(&self, name: &str) -> Option<&NodeRuntime> {
+        self.nodes.iter().find(|n| n.points.name() == name)
+    }
+
+    /// A node's link by names.
+    pub fn link(&self, node: &str, link: &str) -> Option<&LinkHandle> {
+        self.node(node)?.link(link)
+    }
+
+    /// The event store, if one is configured.
+    pub fn store(&self) -> Option<Arc<dyn EventStore>> {
+        self.store.clone()
+    }
+
+    /// The recorder feeding the store ([`Recorder::flush`] before querying it).
+    pub fn recorder(&self) -> &Recorder {
+        &self.recorder
+    }
+
+    /// With [`Pacing::Manual`]: runs the simulation `by` further, as fast as it goes, and
+    /// returns the new simulated time.
+    pub async fn advance(&self, by: Duration) -> Result<Duration, RuntimeError> {
+        let (reply, answer) = oneshot::channel();
+        self.simulation
+            .send(SimRequest::Advance { by, reply })
+            .map_err(|_| RuntimeError::Stopped)?;
+        answer.await.map_err(|_| RuntimeError::Stopped)
+    }
+
+    /// Runs `f` on the simulation thread between two steps (plant faults, PLC
+    /// monitoring and forcing) and returns its result.
+    pub async fn with_simulation<R: Send + 'static>(
+        &self,
+        f: impl FnOnce(&mut Simulation) -> R + Send + 'static,
+    ) -> Result<R, RuntimeError> {
+        let (reply, answer) = oneshot::channel();
+        self.simulation
+            .send(SimRequest::With(Box::new(move |sim: &mut Simulation| {
+                let _ = reply.send(f(sim));
+            })))
+            .map_err(|_| RuntimeError::Stopped)?;
+        answer.await.map_err(|_| RuntimeError::Stopped)
+    }
+
+    /// Injects a fault or performs a hand operation on the plant ([`Simulation::operate`]),
+    /// or cuts/restores a link: `link-cut NODE/LINK`, `link-restore NODE/LINK`.
+    pub async fn operate(&self, text: &str) -> Result<(), String> {
+        let text = text.trim();
+        for (prefix, cut) in [("link-cut ", true), ("link-restore ", false)] {
+            if let Some(rest) = text.strip_prefix(prefix) {
+                let (node, link) = rest
+                    .trim()
+                    .split_once('/')
+                    .ok_or_else(|| format!("expected NODE/LINK after `{}`", prefix.trim()))?;
+                let handle = self
+                    .link(node, link)
+                    .ok_or_else(|| format!("no link `{link}` at node `{node}`"))?;
+                if cut {
+                    handle.cut();
+                } else {
+                    handle.restore();
+                }
+                return Ok(());
+            }
+        }
+        let text = text.to_owned();
+        self.with_simulation(move |sim| sim.operate(&text))
+            .await
+            .map_err(|e| e.to_string())?
+    }
+
+    /// Stops everything: links, servers, the simulation thread; waits until the store
+    /// has every record.
+    pub async fn shutdown(mut self) {
+        for node in &self.nodes {
+            for link in &node.links {
+                if let Some(client) = link.client() {
+                    client.close().await;
+                }
+            }
+            if let Some(server) = &node.server {
+                server.shutdown();
+            }
+        }
+        let _ = self.simulation.send(SimRequest::Stop);
+        if let Some(thread) = self.thread.take() {
+            let _ = tokio::task::spawn_blocking(move || thread.join()).await;
+        }
+        if let Some(retention) = self.retention.take() {
+            retention.stop();
+        }
+        self.recorder.flush().await;
+    }
+}
+
+impl Drop for Runtime {
+    fn drop(&mut self) {
+        let _ = self.simulation.send(SimRequest::Stop);
+        for node in &self.nodes {
+            if let Some(server) = &node.server {
+                server.shutdown();
+            }
+        }
+    }
+}
+
+/// The project's store URL with a relative SQLite path resolved in the project folder.
+pub fn resolve_store_url(project: &Project) -> String {
+    let url = project.station.store.trim();
+    if let Some(rest) = url.strip_prefix("sqlite:") {
+        let path = rest.strip_prefix("//").unwrap_or(rest);
+        if path != ":memory:" && !std::path::Path::new(path).is_absolute() {
+            return format!("sqlite:{}", project.folder.join(path).display());
+        }
+    }
+    url.to_owned()
+}

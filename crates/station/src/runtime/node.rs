@@ -1,0 +1,141 @@
+//! A node's shared state: its point database, the server that publishes it and the path
+//! to the store. The simulation thread (PLC-sourced points), the link tasks (points of
+//! lower nodes) and the command handler all change points through [`NodePoints`], which
+//! keeps the three in step: a change reported by the database goes to the server (sent
+//! or only imaged, by the point's transmission) and to the store, under one lock so that
+//! clients and the store see changes in the order the database took them.
+
+use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
+
+use chrono::{DateTime, Utc};
+use iec60870::cs104::server::ServerHandle;
+
+use crate::pointdb::{Point, PointChange, PointDb, PointDbError, PointKey, TimeZonePolicy};
+use crate::store::{EventCause, PointValue, Quality, SourceTime};
+
+use super::clock::NodeClock;
+use super::recorder::Recorder;
+
+/// One node's points, server and recorder.
+#[derive(Debug)]
+pub struct NodePoints {
+    name: String,
+    db: Mutex<PointDb>,
+    server: OnceLock<ServerHandle>,
+    zone: TimeZonePolicy,
+    recorder: Recorder,
+    clock: Arc<NodeClock>,
+}
+
+impl NodePoints {
+    pub(crate) fn new(
+        name: &str,
+        db: PointDb,
+        zone: TimeZonePolicy,
+        recorder: Recorder,
+        clock: Arc<NodeClock>,
+    ) -> Arc<NodePoints> {
+        Arc::new(NodePoints {
+            name: name.to_owned(),
+            db: Mutex::new(db),
+            server: OnceLock::new(),
+            zone,
+            recorder,
+            clock,
+        })
+    }
+
+    /// The node's name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The node's clock.
+    pub fn clock(&self) -> &Arc<NodeClock> {
+        &self.clock
+    }
+
+    /// The time zone of the node's time tags.
+    pub fn zone(&self) -> TimeZonePolicy {
+        self.zone
+    }
+
+    /// The node's IEC 104 server, once started.
+    pub fn server(&self) -> Option<&ServerHandle> {
+        self.server.get()
+    }
+
+    pub(crate) fn attach_server(&self, server: ServerHandle) {
+        let _ = self.server.set(server);
+    }
+
+    pub(crate) fn recorder(&self) -> &Recorder {
+        &self.recorder
+    }
+
+    /// Locks the database (a poisoned lock is taken over: the database has no invariant a
+    /// panicking reader could break halfway).
+    pub(crate) fn lock(&self) -> MutexGuard<'_, PointDb> {
+        self.db.lock().unwrap_or_else(|poison| poison.into_inner())
+    }
+
+    /// A copy of one point's state.
+    pub fn point<'a>(&self, key: impl Into<PointKey<'a>>) -> Option<Point> {
+        self.lock().get(key).cloned()
+    }
+
+    /// A copy of every point's state, in declaration order.
+    pub fn points(&self) -> Vec<Point> {
+        self.lock().points().cloned().collect()
+    }
+
+    /// Updates a point and publishes the change, if any. `origin` is recorded with the
+    /// event (the node itself, or the link the value came over).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn update<'a>(
+        &self,
+        key: impl Into<PointKey<'a>>,
+        value: PointValue,
+        quality: Quality,
+        source_time: Option<SourceTime>,
+        cause: EventCause,
+        origin: &str,
+    ) -> Result<(), PointDbError> {
+        let now = self.clock.now();
+        // A value without its own time (an interrogation answer, a PLC variable) is
+        // stamped when the node took it, on the node's clock: the server would otherwise
+        // stamp it with the host's wall clock, not the station's.
+        let source_time = source_time.or(Some(SourceTime {
+            time: now,
+            invalid: false,
+        }));
+        let mut db = self.lock();
+        if let Some(change) = db.update(key, value, quality, source_time, now, cause)? {
+            self.publish(&change, origin);
+        }
+        Ok(())
+    }
+
+    /// Runs `f` on the locked database and publishes the changes it returns.
+    pub(crate) fn change_with(
+        &self,
+        origin: &str,
+        f: impl FnOnce(&mut PointDb, DateTime<Utc>) -> Vec<PointChange>,
+    ) {
+        let now = self.clock.now();
+        let mut db = self.lock();
+        for change in f(&mut db, now) {
+            self.publish(&change, origin);
+        }
+    }
+
+    fn publish(&self, change: &PointChange, origin: &str) {
+        if let Some(server) = self.server.get() {
+            if let Err(error) = change.publish(server, self.zone) {
+                tracing::warn!(node = %self.name, point = %change.name, %error, "not published");
+            }
+        }
+        self.recorder
+            .event(change.to_event_record(&self.name, origin));
+    }
+}

@@ -1,0 +1,738 @@
+//! The simulation thread: the plant and every node's soft PLC on one simulated clock.
+//!
+//! The soft PLC is single-threaded by design (its compiled code shares `Rc`s), so the
+//! PLCs live on one dedicated thread together with the plant they are wired to; the
+//! network side talks to it through [`SimRequest`]s. One *step* at simulated time `t`:
+//!
+//! 1. the plant advances to `t` (its own deadlines are hit exactly on the way);
+//! 2. command pulses that end at `t` reset their variables;
+//! 3. every node whose PLC has a task due copies its bound plant inputs into PLC
+//!    variables (an input of a pulled or unreachable I/O module keeps its last value and
+//!    is remembered as invalid), runs the cycle, and drives the bound plant outputs;
+//! 4. the node's PLC-sourced points are read and handed to its point database: value
+//!    changes and validity changes are reported (IV while the bound input's module is
+//!    unavailable or the PLC task has stopped on a fault);
+//! 5. cyclic points due at `t` are sent.
+//!
+//! The next step is at the earliest of: a PLC task due, a plant event, a pulse end, a
+//! cyclic transmission. [`Pacing::RealTime`] maps steps onto the wall clock times a
+//! speed factor; [`Pacing::Manual`] moves only on request, as fast as the CPU allows.
+
+use std::collections::HashMap;
+use std::sync::{mpsc, Arc};
+use std::time::{Duration, Instant};
+
+use iec60870::asdu::TypeId;
+use plant::{
+    Action, Direction, Fault, Plant, PlantError, StationConfig, Value, ValueKind, VsetinPlant,
+};
+use plc::check::{Lane, Ty};
+use plc::task::{ClockReading, Leaf, TaskConfig as PlcTask};
+use plc::vm::Val;
+use plc::Plc;
+use tokio::sync::oneshot;
+
+use crate::config::{CommandTarget, NodeConfig, PointSource, Project};
+use crate::pointdb::PointId;
+use crate::store::{EventCause, PointValue, Quality};
+
+use super::clock::{Pacing, SimClock};
+use super::node::NodePoints;
+use super::RuntimeError;
+
+/// Steps run between two looks at the request channel when running behind the wall clock.
+const STEPS_PER_POLL: usize = 2_000;
+
+/// A request to the simulation thread.
+pub(crate) enum SimRequest {
+    /// Leave the initial hold and follow the pacing.
+    Go,
+    /// Manual pacing: advance by this much; replies with the new simulated time.
+    Advance {
+        by: Duration,
+        reply: oneshot::Sender<Duration>,
+    },
+    /// A command on a PLC variable of node `node`.
+    Command {
+        node: usize,
+        ioa: u32,
+        value: Val,
+        pulse: Option<Duration>,
+        select: bool,
+        reply: oneshot::Sender<Result<(), CommandRefusal>>,
+    },
+    /// Runs a closure on the simulation (tests, fault injection, monitoring).
+    With(Box<dyn FnOnce(&mut Simulation) + Send>),
+    /// Ends the thread.
+    Stop,
+}
+
+/// Why the simulation refused a command.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum CommandRefusal {
+    /// The board's Local/Remote selector is in local.
+    #[error("the board is in local mode")]
+    LocalMode,
+    /// The node has no PLC command at that address.
+    #[error("no command at this address")]
+    Unknown,
+    /// The PLC task has stopped on a fault.
+    #[error("the PLC is stopped: {0}")]
+    PlcStopped(String),
+    /// The value does not suit the target variable.
+    #[error("bad value: {0}")]
+    BadValue(String),
+}
+
+struct InputBinding {
+    signal: String,
+    leaf: Leaf,
+    valid: bool,
+}
+
+struct OutputBinding {
+    signal: String,
+    leaf: Leaf,
+    kind: ValueKind,
+    last: Option<Value>,
+}
+
+struct SourcedPoint {
+    id: PointId,
+    type_id: TypeId,
+    leaf: Leaf,
+    /// The input binding feeding this variable, whose module validity is the point's.
+    input: Option<usize>,
+    last: Option<(PointValue, bool)>,
+}
+
+struct SimCommand {
+    target: Leaf,
+    remote_enable: Option<Leaf>,
+}
+
+struct SimNode {
+    points: Arc<NodePoints>,
+    plc: Option<Plc>,
+    stopped: Option<String>,
+    inputs: Vec<InputBinding>,
+    outputs: Vec<OutputBinding>,
+    sourced: Vec<SourcedPoint>,
+    commands: HashMap<u32, SimCommand>,
+}
+
+struct Pulse {
+    at: Duration,
+    node: usize,
+    leaf: Leaf,
+}
+
+/// The plant and the nodes' PLCs; owned by the simulation thread.
+pub struct Simulation {
+    clock: Arc<SimClock>,
+    now: Duration,
+    stepped: bool,
+    plant: Option<VsetinPlant>,
+    nodes: Vec<SimNode>,
+    pulses: Vec<Pulse>,
+}
+
+impl Simulation {
+    /// Builds the PLCs of `nodes` (index into `project.nodes`, with their shared points)
+    /// and the project's plant.
+    pub(crate) fn build(
+        project: &Project,
+        nodes: &[(usize, Arc<NodePoints>)],
+        clock: Arc<SimClock>,
+    ) -> Result<Simulation, RuntimeError> {
+        let plant = match project.station.plant.as_deref() {
+            None => None,
+            Some("vsetin") => {
+                let mut config = StationConfig::default();
+                config.start_unix_secs = clock.start().timestamp();
+                Some(VsetinPlant::with_config(config))
+            }
+            Some(other) => {
+                return Err(RuntimeError::Setup(format!(
+                    "unknown plant `{other}` (known: vsetin)"
+                )))
+            }
+        };
+        let mut built = Vec::new();
+        for (index, points) in nodes {
+            let Some(config) = project.nodes.get(*index) else {
+                continue;
+            };
+            built.push(build_node(
+                project,
+                config,
+                Arc::clone(points),
+                plant.as_ref(),
+            )?);
+        }
+        Ok(Simulation {
+            clock,
+            now: Duration::ZERO,
+            stepped: false,
+            plant,
+            nodes: built,
+            pulses: Vec::new(),
+        })
+    }
+
+    /// Current simulated time.
+    pub fn now(&self) -> Duration {
+        self.now
+    }
+
+    /// The plant, if the project has one.
+    pub fn plant(&mut self) -> Option<&mut VsetinPlant> {
+        self.plant.as_mut()
+    }
+
+    /// The PLC of a node, if it has one (monitoring, writing and forcing variables).
+    pub fn plc(&mut self, node: &str) -> Option<&mut Plc> {
+        self.nodes
+            .iter_mut()
+            .find(|n| n.points.name() == node)
+            .and_then(|n| n.plc.as_mut())
+    }
+
+    /// Injects a fault or performs a hand operation given in text form: a plant fault
+    /// (`supply-loss T1`, `module-pulled RH2_LOGO`; prefix `clear ` to clear it, `clear
+    /// all` for every fault) or an action (`selector RH2 local`, `manual-switch ROV01 on`,
+    /// `close FA1`, `open FA1`, `illuminance 5`, `illuminance auto`).
+    pub fn operate(&mut self, text: &str) -> Result<(), String> {
+        let Some(plant) = self.plant.as_mut() else {
+            return Err("the project has no plant simulation".into());
+        };
+        let text = text.trim();
+        let result: Result<(), PlantError> = if text == "clear all" {
+            plant.clear_all();
+            Ok(())
+        } else if let Some(rest) = text.strip_prefix("clear ") {
+            let fault: Fault = rest.parse().map_err(|e: PlantError| e.to_string())?;
+            plant.clear(&fault)
+        } else if let Some(action) = parse_action(text) {
+            action.and_then(|action| plant.operate(action))
+        } else {
+            let fault: Fault = text.parse().map_err(|e: PlantError| e.to_string())?;
+            plant.inject(fault)
+        };
+        result.map_err(|e| e.to_string())
+    }
+
+    /// The earliest time something is due after `self.now` (or at it, before the first
+    /// step).
+    fn next_due(&self) -> Duration {
+        if !self.stepped {
+            return self.now;
+        }
+        let mut next = Duration::MAX;
+        if let Some(plant) = &self.plant {
+            if let Some(t) = plant.next_event() {
+                next = next.min(t);
+            }
+        }
+        for node in &self.nodes {
+            if let Some(due) = node.plc.as_ref().and_then(Plc::next_due) {
+                next = next.min(Duration::from_nanos(due.max(0).unsigned_abs()));
+            }
+            let utc = node.points.clock().at(self.now);
+            if let Some(due) = node.points.lock().next_cyclic_due(utc) {
+                let ahead = (due - utc).to_std().unwrap_or(Duration::ZERO);
+                next = next.min(self.now + ahead);
+            }
+        }
+        for pulse in &self.pulses {
+            next = next.min(pulse.at);
+        }
+        next.max(self.now + Duration::from_nanos(1))
+    }
+
+    /// Runs every step up to and including `target`, at most `max_steps` of them; returns
+    /// whether `target` was reached.
+    fn advance_to(&mut self, target: Duration, max_steps: usize) -> bool {
+        for _ in 0..max_steps {
+            let next = self.next_due();
+            if next > target {
+                self.set_now(target);
+                return true;
+            }
+            self.step(next);
+        }
+        false
+    }
+
+    fn set_now(&mut self, t: Duration) {
+        if t > self.now {
+            if let Some(plant) = self.plant.as_mut() {
+                if let Err(error) = plant.advance_to(t) {
+                    tracing::error!(%error, "plant cannot advance");
+                }
+            }
+            self.now = t;
+        }
+        self.clock.set(self.now);
+    }
+
+    fn step(&mut self, t: Duration) {
+        self.set_now(t);
+        self.stepped = true;
+        let now = self.now;
+        // Pulses ending now.
+        let mut ended = Vec::new();
+        self.pulses.retain(|p| {
+            if p.at <= now {
+                ended.push((p.node, p.leaf.clone()));
+                false
+            } else {
+                true
+            }
+        });
+        for (node, leaf) in ended {
+            if let Some(plc) = self.nodes.get_mut(node).and_then(|n| n.plc.as_mut()) {
+                plc.write_leaf(&leaf, Val::Int(0));
+            }
+        }
+        let Simulation { plant, nodes, .. } = self;
+        for node in nodes.iter_mut() {
+            node.cycle(now, plant.as_mut());
+        }
+        for node in nodes.iter() {
+            let utc = node.points.clock().at(now);
+            let name = node.points.name().to_owned();
+            node.points.change_with(&name, |db, _| db.due_cyclic(utc));
+        }
+    }
+
+    fn command(
+        &mut self,
+        node: usize,
+        ioa: u32,
+        value: Val,
+        pulse: Option<Duration>,
+        select: bool,
+    ) -> Result<(), CommandRefusal> {
+        let now = self.now;
+        let sim_node = self.nodes.get_mut(node).ok_or(CommandRefusal::Unknown)?;
+        if let Some(reason) = &sim_node.stopped {
+            return Err(CommandRefusal::PlcStopped(reason.clone()));
+        }
+        let command = sim_node.commands.get(&ioa).ok_or(CommandRefusal::Unknown)?;
+        let plc = sim_node.plc.as_mut().ok_or(CommandRefusal::Unknown)?;
+        if let Some(enable) = &command.remote_enable {
+            match plc.read_leaf(enable) {
+                Ok(Val::Int(0)) => return Err(CommandRefusal::LocalMode),
+                Ok(_) => {}
+                Err(error) => return Err(CommandRefusal::BadValue(error.to_string())),
+            }
+        }
+        if select {
+            return Ok(());
+        }
+        let value = match (command.target.ty.lane(), value) {
+            (Some(Lane::Int), Val::Int(x)) => Val::Int(x),
+            (Some(Lane::Int), Val::Real(x)) => Val::Int(x.round() as i64),
+            (Some(Lane::Real), Val::Int(x)) => Val::Real(x as f64),
+            (Some(Lane::Real), Val::Real(x)) => Val::Real(x),
+            (lane, v) => {
+                return Err(CommandRefusal::BadValue(format!(
+                    "{v:?} does not suit a {lane:?} variable"
+                )))
+            }
+        };
+        let target = command.target.clone();
+        plc.write_leaf(&target, value);
+        if let Some(length) = pulse {
+            self.pulses
+                .retain(|p| !(p.node == node && p.leaf.path == target.path));
+            self.pulses.push(Pulse {
+                at: now + length,
+                node,
+                leaf: target,
+            });
+        }
+        Ok(())
+    }
+}
+
+impl SimNode {
+    fn cycle(&mut self, now: Duration, plant: Option<&mut VsetinPlant>) {
+        let Some(plc) = self.plc.as_mut() else { return };
+        let due = plc
+            .next_due()
+            .is_some_and(|d| Duration::from_nanos(d.max(0).unsigned_abs()) <= now);
+        if !due {
+            return;
+        }
+        if let Some(plant) = plant.as_deref() {
+            for input in &mut self.inputs {
+                match plant.read(&input.signal) {
+                    Ok(reading) => {
+                        input.valid = reading.valid;
+                        if reading.valid {
+                            plc.write_leaf(&input.leaf, to_val(&input.leaf.ty, reading.value));
+                        }
+                    }
+                    Err(_) => input.valid = false,
+                }
+            }
+        }
+        let clock = self.points.clock();
+        let utc = clock.at(now);
+        let reading = ClockReading {
+            monotonic_ns: i64::try_from(now.as_nanos()).unwrap_or(i64::MAX),
+            utc_ns: utc.timestamp_nanos_opt().unwrap_or(0),
+            utc_offset_ns: clock.utc_offset_ns(utc),
+        };
+        for fault in plc.run_cycle(reading) {
+            let message = plc.render(&fault);
+            tracing::error!(node = %self.points.name(), "{message}");
+            self.stopped = Some(fault.message.clone());
+        }
+        if let Some(plant) = plant {
+            for output in &mut self.outputs {
+                let Ok(v) = plc.read_leaf(&output.leaf) else {
+                    continue;
+                };
+                let value = match output.kind {
+                    ValueKind::Bool => Value::Bool(matches!(v, Val::Int(x) if x != 0)),
+                    ValueKind::Real => Value::Real(match v {
+                        Val::Int(x) => x as f64,
+                        Val::Real(x) => x,
+                        Val::Str(_) => 0.0,
+                    }),
+                };
+                if output.last != Some(value) {
+                    if let Err(error) = plant.set_output(&output.signal, value) {
+                        tracing::warn!(signal = %output.signal, %error, "output not driven");
+                    }
+                    output.last = Some(value);
+                }
+            }
+        }
+        // Points: read everything first, then take the database lock once.
+        let mut changes = Vec::new();
+        for point in &mut self.sourced {
+            let Ok(v) = plc.read_leaf(&point.leaf) else {
+                continue;
+            };
+            let valid = self.stopped.is_none()
+                && point
+                    .input
+                    .and_then(|i| self.inputs.get(i))
+                    .is_none_or(|input| input.valid);
+            let Some(value) = point_value(point.type_id, &point.leaf.ty, &v) else {
+                continue;
+            };
+            let current = Some((value.clone(), valid));
+            if point.last != current {
+                point.last = current;
+                changes.push((point.id, value, valid));
+            }
+        }
+        if changes.is_empty() {
+            return;
+        }
+        let origin = self.points.name().to_owned();
+        self.points.change_with(&origin, |db, received| {
+            let source_time = Some(crate::store::SourceTime {
+                time: received,
+                invalid: false,
+            });
+            changes
+                .into_iter()
+                .filter_map(|(id, value, valid)| {
+                    let quality = Quality {
+                        invalid: !valid,
+                        ..Quality::GOOD
+                    };
+                    db.update(
+                        id,
+                        value,
+                        quality,
+                        source_time,
+                        received,
+                        EventCause::Spontaneous,
+                    )
+                    .map_err(|error| tracing::warn!(%error, "PLC value refused"))
+                    .ok()
+                    .flatten()
+                })
+                .collect()
+        });
+    }
+}
+
+fn to_val(ty: &Ty, value: Value) -> Val {
+    match (ty.lane(), value) {
+        (Some(Lane::Real), Value::Real(x)) => Val::Real(x),
+        (Some(Lane::Real), Value::Bool(b)) => Val::Real(f64::from(u8::from(b))),
+        (_, Value::Bool(b)) => Val::Int(i64::from(b)),
+        (_, Value::Real(x)) => Val::Int(x.round() as i64),
+    }
+}
+
+/// The point value of a PLC variable for a point of `type_id`.
+fn point_value(type_id: TypeId, ty: &Ty, v: &Val) -> Option<PointValue> {
+    use TypeId::*;
+    let int = match v {
+        Val::Int(x) => *x,
+        Val::Real(x) => x.round() as i64,
+        Val::Str(_) => return None,
+    };
+    let real = match v {
+        Val::Int(x) => *x as f64,
+        Val::Real(x) => *x,
+        Val::Str(_) => return None,
+    };
+    Some(match type_id {
+        M_SP_NA_1 | M_SP_TA_1 | M_SP_TB_1 => PointValue::Bool(int != 0),
+        // A BOOL drives a double point as OFF (1) / ON (2); an integer gives the state.
+        M_DP_NA_1 | M_DP_TA_1 | M_DP_TB_1 => PointValue::DoublePoint(if *ty == Ty::Bool {
+            if int != 0 {
+                2
+            } else {
+                1
+            }
+        } else {
+            u8::try_from(int.clamp(0, 3)).unwrap_or(0)
+        }),
+        M_ST_NA_1 | M_ST_TA_1 | M_ST_TB_1 => PointValue::Int(int.clamp(-64, 63)),
+        M_BO_NA_1 | M_BO_TA_1 | M_BO_TB_1 => PointValue::Bits(int as u32),
+        M_ME_NA_1 | M_ME_TA_1 | M_ME_TD_1 | M_ME_ND_1 => PointValue::Float(real.clamp(-1.0, 1.0)),
+        M_ME_NB_1 | M_ME_TB_1 | M_ME_TE_1 => PointValue::Int(int.clamp(-32768, 32767)),
+        M_ME_NC_1 | M_ME_TC_1 | M_ME_TF_1 => PointValue::Float(real),
+        M_IT_NA_1 | M_IT_TA_1 | M_IT_TB_1 => PointValue::Int(int),
+        _ => return None,
+    })
+}
+
+fn parse_action(text: &str) -> Option<Result<Action, PlantError>> {
+    let words: Vec<&str> = text.split_whitespace().collect();
+    let bad = || PlantError::BadFault(text.to_owned());
+    Some(match words.as_slice() {
+        ["selector", board, position] => match *position {
+            "remote" => Ok(Action::SetSelector {
+                board: (*board).to_owned(),
+                remote: true,
+            }),
+            "local" => Ok(Action::SetSelector {
+                board: (*board).to_owned(),
+                remote: false,
+            }),
+            _ => Err(bad()),
+        },
+        ["manual-switch", board, position] => match *position {
+            "on" => Ok(Action::SetManualSwitch {
+                board: (*board).to_owned(),
+                on: true,
+            }),
+            "off" => Ok(Action::SetManualSwitch {
+                board: (*board).to_owned(),
+                on: false,
+            }),
+            _ => Err(bad()),
+        },
+        ["close", name] => Ok(Action::Close((*name).to_owned())),
+        ["open", name] => Ok(Action::Open((*name).to_owned())),
+        ["illuminance", "auto"] => Ok(Action::SetIlluminance(None)),
+        ["illuminance", lux] => match lux.parse::<f64>() {
+            Ok(x) if x.is_finite() && x >= 0.0 => Ok(Action::SetIlluminance(Some(x))),
+            _ => Err(bad()),
+        },
+        [first, ..]
+            if ["selector", "manual-switch", "close", "open", "illuminance"].contains(first) =>
+        {
+            Err(bad())
+        }
+        _ => return None,
+    })
+}
+
+fn build_node(
+    project: &Project,
+    config: &NodeConfig,
+    points: Arc<NodePoints>,
+    plant: Option<&VsetinPlant>,
+) -> Result<SimNode, RuntimeError> {
+    let node = &config.name;
+    let setup = |message: String| RuntimeError::Setup(format!("node `{node}`: {message}"));
+    let mut sim = SimNode {
+        points: Arc::clone(&points),
+        plc: None,
+        stopped: None,
+        inputs: Vec::new(),
+        outputs: Vec::new(),
+        sourced: Vec::new(),
+        commands: HashMap::new(),
+    };
+    if config.sources.is_empty() && config.tasks.is_empty() {
+        return Ok(sim);
+    }
+    let mut files = Vec::new();
+    for source in &config.sources {
+        let path = project.folder.join(source);
+        let text = std::fs::read_to_string(&path)
+            .map_err(|error| setup(format!("cannot read {}: {error}", path.display())))?;
+        files.push((path.display().to_string(), text));
+    }
+    let (sources, result) = plc::build(&files);
+    let compiled = result.map_err(|diagnostics| {
+        RuntimeError::Plc(
+            diagnostics
+                .iter()
+                .map(|d| d.render(&sources))
+                .collect::<Vec<_>>()
+                .join("\n"),
+        )
+    })?;
+    let mut plc = Plc::try_new(compiled, sources)
+        .map_err(|error| setup(format!("PLC cold start failed: {error}")))?;
+    for task in &config.tasks {
+        let interval = i64::try_from(task.interval.as_nanos()).unwrap_or(i64::MAX);
+        let programs: Vec<&str> = task.programs.iter().map(String::as_str).collect();
+        let mut plc_task =
+            PlcTask::cyclic(task.name.clone(), interval, &programs).with_priority(task.priority);
+        if let Some(watchdog) = task.watchdog {
+            plc_task =
+                plc_task.with_watchdog(i64::try_from(watchdog.as_nanos()).unwrap_or(i64::MAX), 1);
+        }
+        plc.add_task(plc_task)
+            .map_err(|error| setup(format!("task `{}`: {error}", task.name)))?;
+    }
+    // Real elapsed time would make the watchdog depend on the host's load in a
+    // simulated run; the runtime measures real cycle times only in real-time pacing.
+    let leaf = |plc: &Plc, path: &str, what: &str| {
+        plc.leaf(path)
+            .map_err(|error| setup(format!("{what} `{path}`: {error}")))
+    };
+    for binding in &config.io {
+        let Some(plant) = plant else {
+            return Err(setup(format!(
+                "I/O binding of `{}` but the project has no plant",
+                binding.signal
+            )));
+        };
+        let info = plant
+            .signals()
+            .iter()
+            .find(|s| s.name == binding.signal)
+            .ok_or_else(|| setup(format!("the plant has no signal `{}`", binding.signal)))?;
+        let target = leaf(&plc, &binding.variable, "I/O variable")?;
+        match info.direction {
+            Direction::Input => sim.inputs.push(InputBinding {
+                signal: binding.signal.clone(),
+                leaf: target,
+                valid: true,
+            }),
+            Direction::Output => sim.outputs.push(OutputBinding {
+                signal: binding.signal.clone(),
+                leaf: target,
+                kind: info.kind,
+                last: None,
+            }),
+        }
+    }
+    {
+        let db = points.lock();
+        for point in &config.points {
+            let PointSource::Variable(path) = &point.source else {
+                continue;
+            };
+            let Some(id) = db.id(point.name.as_str()) else {
+                continue;
+            };
+            let target = leaf(&plc, path, &format!("point `{}` source", point.name))?;
+            let input = sim.inputs.iter().position(|i| i.leaf.path == target.path);
+            sim.sourced.push(SourcedPoint {
+                id,
+                type_id: point.type_id,
+                leaf: target,
+                input,
+                last: None,
+            });
+        }
+    }
+    for command in &config.commands {
+        let CommandTarget::Variable(path) = &command.target else {
+            continue;
+        };
+        let target = leaf(&plc, path, &format!("command `{}` target", command.name))?;
+        let remote_enable = command
+            .remote_enable
+            .as_deref()
+            .map(|path| {
+                leaf(
+                    &plc,
+                    path,
+                    &format!("command `{}` remote_enable", command.name),
+                )
+            })
+            .transpose()?;
+        sim.commands.insert(
+            command.ioa.get(),
+            SimCommand {
+                target,
+                remote_enable,
+            },
+        );
+    }
+    sim.plc = Some(plc);
+    Ok(sim)
+}
+
+/// The simulation thread's loop.
+pub(crate) fn run(mut sim: Simulation, pacing: Pacing, requests: mpsc::Receiver<SimRequest>) {
+    // Hold at time zero until the servers are up.
+    sim.advance_to(Duration::ZERO, 1);
+    let mut going = false;
+    let mut anchor: Option<(Instant, Duration)> = None;
+    loop {
+        let request = match (pacing, going) {
+            (Pacing::RealTime { speed }, true) => {
+                let (real0, sim0) = *anchor.get_or_insert((Instant::now(), sim.now));
+                let target = sim0 + Duration::from_secs_f64(real0.elapsed().as_secs_f64() * speed);
+                let caught_up = sim.advance_to(target, STEPS_PER_POLL);
+                let wait = if caught_up {
+                    let next = sim.next_due();
+                    Duration::from_secs_f64((next.saturating_sub(sim.now)).as_secs_f64() / speed)
+                        .min(Duration::from_millis(100))
+                } else {
+                    Duration::ZERO
+                };
+                match requests.recv_timeout(wait) {
+                    Ok(request) => request,
+                    Err(mpsc::RecvTimeoutError::Timeout) => continue,
+                    Err(mpsc::RecvTimeoutError::Disconnected) => break,
+                }
+            }
+            _ => match requests.recv() {
+                Ok(request) => request,
+                Err(_) => break,
+            },
+        };
+        match request {
+            SimRequest::Go => going = true,
+            SimRequest::Advance { by, reply } => {
+                let target = sim.now + by;
+                while !sim.advance_to(target, usize::MAX) {}
+                let _ = reply.send(sim.now);
+            }
+            SimRequest::Command {
+                node,
+                ioa,
+                value,
+                pulse,
+                select,
+                reply,
+            } => {
+                let _ = reply.send(sim.command(node, ioa, value, pulse, select));
+            }
+            SimRequest::With(f) => f(&mut sim),
+            SimRequest::Stop => break,
+        }
+    }
+    tracing::debug!("simulation thread ends");
+}

@@ -1,0 +1,181 @@
+//! Values up and commands down the controller hierarchy RH2 -> RH1.1 -> RDRT -> dispatch.
+
+use std::time::Duration;
+
+use station::runtime::StoreChoice;
+use station::store::{CommandOutcome, CommandQuery, EventQuery};
+
+use crate::harness::*;
+
+const RDRT_CA: u16 = 1;
+
+fn rdrt_address(runtime: &station::runtime::Runtime) -> std::net::SocketAddr {
+    runtime
+        .node("RDRT")
+        .unwrap()
+        .server
+        .as_ref()
+        .unwrap()
+        .local_addr()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn dispatch_reads_the_board_through_two_concentrators() {
+    let runtime = start(vsetin_project(), StoreChoice::Disabled).await;
+    runtime.advance(Duration::from_secs(1)).await.unwrap();
+    links_up(&runtime).await;
+    let dispatch = Dispatch::connect(rdrt_address(&runtime), RDRT_CA, true).await;
+    eventually("the GI answer holds IOA 298", || {
+        dispatch.last(298).is_some()
+    })
+    .await;
+    // The plant's steady state: FA breakers closed, voltage present, SA1 in remote,
+    // no fuse or arrester fault, no emergency off.
+    for (ioa, expected) in [
+        (281, true),
+        (282, true),
+        (290, true),
+        (291, true),
+        (292, false),
+        (293, true),
+        (294, false),
+        (296, false),
+        (298, true),
+    ] {
+        let got = dispatch.last(ioa).unwrap();
+        assert_eq!(got.on(), Some(expected), "IOA {ioa}: {got:?}");
+        assert!(!got.invalid(), "IOA {ioa} invalid: {got:?}");
+    }
+    // The link status point of RDRT reports RH1.1 reachable.
+    assert_eq!(dispatch.last(32).unwrap().on(), Some(false));
+    runtime.shutdown().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_command_opens_the_feeder_and_the_change_comes_back_up() {
+    let runtime = start(vsetin_project(), StoreChoice::Url("sqlite::memory:".into())).await;
+    runtime.advance(Duration::from_secs(1)).await.unwrap();
+    links_up(&runtime).await;
+    let dispatch = Dispatch::connect(rdrt_address(&runtime), RDRT_CA, true).await;
+    eventually("GI done", || dispatch.last(291).is_some()).await;
+    assert_eq!(dispatch.last(291).unwrap().on(), Some(true));
+
+    // Open QF1 (IOA 2021): confirmed through RH1.1 and RH2, executed by the LOGO! logic.
+    assert!(dispatch.single_command(2021, true, false).await);
+    advance_until(
+        &runtime,
+        Duration::from_millis(100),
+        "busbar voltage lost",
+        || dispatch.last(291).and_then(|r| r.on()) == Some(false),
+    )
+    .await;
+    let feeder_closed = runtime
+        .with_simulation(|sim| {
+            use plant::Plant;
+            sim.plant().unwrap().bool("RH2_QF1_Zapnut").unwrap()
+        })
+        .await
+        .unwrap();
+    assert!(!feeder_closed);
+
+    // Close it again (the pulse of the first command has ended, so the edge is new).
+    assert!(dispatch.single_command(2022, true, false).await);
+    advance_until(
+        &runtime,
+        Duration::from_millis(100),
+        "busbar voltage back",
+        || dispatch.last(291).and_then(|r| r.on()) == Some(true),
+    )
+    .await;
+
+    // The audit at every level names the peer and the outcome.
+    runtime.recorder().flush().await;
+    let store = runtime.store().unwrap();
+    let commands = store
+        .query_commands(&CommandQuery::default())
+        .await
+        .unwrap();
+    let nodes: Vec<&str> = commands.items.iter().map(|c| c.node.as_str()).collect();
+    for node in ["RDRT", "RH1.1", "RH2"] {
+        assert_eq!(
+            nodes.iter().filter(|n| **n == node).count(),
+            2,
+            "two commands audited at {node}: {nodes:?}"
+        );
+    }
+    assert!(commands
+        .items
+        .iter()
+        .all(|c| c.outcome == CommandOutcome::Executed));
+    let events = store
+        .query_events(&EventQuery::default().with_point_prefix("RH2_P1_KHU3"))
+        .await
+        .unwrap();
+    assert!(events.items.len() >= 6, "{} events", events.items.len());
+    runtime.shutdown().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_board_in_local_mode_refuses_remote_commands() {
+    let runtime = start(vsetin_project(), StoreChoice::Url("sqlite::memory:".into())).await;
+    runtime.advance(Duration::from_secs(1)).await.unwrap();
+    links_up(&runtime).await;
+    let dispatch = Dispatch::connect(rdrt_address(&runtime), RDRT_CA, true).await;
+    runtime.operate("selector RH2 local").await.unwrap();
+    advance_until(
+        &runtime,
+        Duration::from_millis(100),
+        "SA1 local reported",
+        || dispatch.last(292).and_then(|r| r.on()) == Some(true),
+    )
+    .await;
+    assert!(!dispatch.single_command(2021, true, false).await);
+    runtime.advance(Duration::from_secs(2)).await.unwrap();
+    let feeder_closed = runtime
+        .with_simulation(|sim| {
+            use plant::Plant;
+            sim.plant().unwrap().bool("RH2_QF1_Zapnut").unwrap()
+        })
+        .await
+        .unwrap();
+    assert!(feeder_closed, "QF1 must stay closed");
+    runtime.recorder().flush().await;
+    let commands = runtime
+        .store()
+        .unwrap()
+        .query_commands(&CommandQuery::default())
+        .await
+        .unwrap();
+    let at_board = commands.items.iter().find(|c| c.node == "RH2").unwrap();
+    assert_eq!(at_board.outcome, CommandOutcome::RefusedLocalMode);
+    let at_top = commands.items.iter().find(|c| c.node == "RDRT").unwrap();
+    assert_eq!(at_top.outcome, CommandOutcome::Refused);
+    assert!(at_top.detail.contains("refused by RH"), "{}", at_top.detail);
+    runtime.shutdown().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_pulled_module_invalidates_its_points_up_to_dispatch() {
+    let runtime = start(vsetin_project(), StoreChoice::Disabled).await;
+    runtime.advance(Duration::from_secs(1)).await.unwrap();
+    links_up(&runtime).await;
+    let dispatch = Dispatch::connect(rdrt_address(&runtime), RDRT_CA, true).await;
+    eventually("GI done", || dispatch.last(298).is_some()).await;
+    runtime.operate("module-pulled RH2_LOGO").await.unwrap();
+    advance_until(
+        &runtime,
+        Duration::from_millis(100),
+        "IV on every RH2 point",
+        || (281..=298).all(|ioa| dispatch.last(ioa).is_some_and(|r| r.invalid())),
+    )
+    .await;
+    runtime
+        .operate("clear module-pulled RH2_LOGO")
+        .await
+        .unwrap();
+    advance_until(&runtime, Duration::from_millis(100), "valid again", || {
+        (281..=298).all(|ioa| dispatch.last(ioa).is_some_and(|r| !r.invalid()))
+    })
+    .await;
+    runtime.shutdown().await;
+}
