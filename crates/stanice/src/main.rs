@@ -3,11 +3,17 @@
 //! One binary, one subcommand per capability:
 //! - `stanice iec104 ...`: the IEC 60870-5-104 test tool (outstation, client, single
 //!   commands, frame decoder), what CPTT and QTester104 do for commissioning engineers.
-//! - `stanice demo`: runs the railway-station demo.
+//! - `stanice run PROJECT`: runs a station project (nodes, PLCs, plant, links, store);
+//!   `stanice demo` runs the Vsetín railway station.
+//! - `stanice points` / `stanice events`: a node's data points; the event store.
+//! - `stanice plc ...`: checks and runs Structured Text.
 
 mod demo;
+mod events;
 mod iec104;
 mod plc;
+mod points;
+mod run;
 
 use clap::{Parser, Subcommand};
 use tracing_subscriber::EnvFilter;
@@ -31,8 +37,14 @@ enum Command {
     /// IEC 60870-5-104 test tool: outstation, client, commands, decoder.
     #[command(subcommand)]
     Iec104(iec104::Iec104Command),
-    /// Run the railway-station demo.
+    /// Run the railway-station demo (examples/vsetin).
     Demo(demo::DemoArgs),
+    /// Run a station project: every node, or those named with --node.
+    Run(run::RunArgs),
+    /// List the data points a node serves, as CSV (ioa,type,name,description).
+    Points(points::PointsArgs),
+    /// Query the event store: value changes or, with --commands, the command audit.
+    Events(events::EventsArgs),
     /// Soft PLC: check and run Structured Text.
     #[command(subcommand)]
     Plc(plc::PlcCommand),
@@ -62,6 +74,9 @@ fn main() -> std::process::ExitCode {
         match cli.command {
             Command::Iec104(command) => iec104::run(command).await,
             Command::Demo(args) => demo::run(args).await,
+            Command::Run(args) => run::run(args).await,
+            Command::Points(args) => points::run(args),
+            Command::Events(args) => events::run(args).await,
             Command::Plc(command) => plc::run(command).await,
         }
     });

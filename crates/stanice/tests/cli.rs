@@ -346,11 +346,11 @@ fn a_bad_point_file_names_its_line() {
 }
 
 #[test]
-fn demo_serves_the_rh2_board() {
-    let port = free_port();
+fn demo_serves_the_station_to_dispatch() {
+    let port = free_port_range(3);
     let mut demo = stanice();
-    demo.args(["demo", "--port-base", &port.to_string()]);
-    let _demo = start_until(demo, "Press Ctrl-C to stop");
+    demo.args(["demo", "--port-base", &port.to_string(), "--store", "none"]);
+    let _demo = start_until(demo, "Ctrl-C stops");
     let mut client = stanice();
     client.args([
         "iec104",
@@ -367,7 +367,22 @@ fn demo_serves_the_rh2_board() {
         .filter(|line| line["cot"] == "inrogen")
         .filter_map(|line| line["ioa"].as_u64())
         .collect();
-    assert_eq!(interrogated, (281..=298).collect::<Vec<u64>>());
+    let mut expected = vec![32];
+    expected.extend(281..=298);
+    assert_eq!(interrogated, expected);
+}
+
+/// A base port whose next `count` ports are free.
+fn free_port_range(count: u16) -> u16 {
+    for _ in 0..100 {
+        let base = free_port();
+        if base.checked_add(count).is_some()
+            && (0..count).all(|i| std::net::TcpListener::bind(("127.0.0.1", base + i)).is_ok())
+        {
+            return base;
+        }
+    }
+    panic!("no free port range");
 }
 
 fn write_source(name: &str, text: &str) -> PathBuf {
@@ -482,6 +497,107 @@ fn plc_check_reports_file_line_col_and_fails() {
     );
     assert!(
         text.contains(&format!("{}:3:", broken.display())) && text.contains("error:"),
+        "{text}"
+    );
+}
+
+fn vsetin() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/vsetin")
+}
+
+#[test]
+fn points_lists_what_the_top_controller_serves() {
+    let mut command = stanice();
+    command.arg("points").arg(vsetin());
+    let output = run_bounded(command, 20);
+    assert!(output.status.success());
+    let text = String::from_utf8_lossy(&output.stdout);
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("ioa,type,name,description"));
+    let rows: Vec<&str> = lines.collect();
+    assert!(
+        rows.contains(&"281,M_SP_TB_1,RH2_V1_FA1_Zapnut,breaker FA1 closed"),
+        "{text}"
+    );
+    assert!(
+        rows.contains(&"2021,C_SC_NA_1,RH2_VypnoutQF1,open QF1"),
+        "{text}"
+    );
+    assert!(
+        rows.iter().any(|r| r.starts_with("32,M_SP_TB_1,COMM_RH,")),
+        "{text}"
+    );
+    let mut command = stanice();
+    command.arg("points").arg(vsetin()).args(["--node", "RH2"]);
+    let output = run_bounded(command, 20);
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert!(!text.contains("COMM_RH"), "{text}");
+    assert_eq!(text.lines().count(), 1 + 18 + 2);
+}
+
+#[test]
+fn run_reports_project_errors_with_file_line_and_column() {
+    let dir = std::env::temp_dir().join(format!("stanice-cli-{}-badproject", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("station.toml"),
+        "[station]\nname = \"x\"\ntime_zone = \"Europe/Prague\"\n\n[[node]]\nname = \"A\"\ncommon_address = 0\n",
+    )
+    .unwrap();
+    let mut command = stanice();
+    command.arg("run").arg(&dir);
+    let output = run_bounded(command, 20);
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("station.toml:7:18: error: node[0].common_address"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn run_records_events_that_events_lists() {
+    let dir = std::env::temp_dir().join(format!("stanice-cli-{}-events", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let store = format!("sqlite:{}", dir.join("events.sqlite").display());
+    let _ = std::fs::remove_file(dir.join("events.sqlite"));
+    let port = free_port_range(3);
+    let mut run = stanice();
+    run.arg("run")
+        .arg(vsetin())
+        .args(["--port-base", &port.to_string(), "--store", &store])
+        .args(["--speed", "10", "--duration", "2"]);
+    let output = run_bounded(run, 30);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let mut events = stanice();
+    events.arg("events").arg(vsetin()).args([
+        "--store",
+        &store,
+        "--point",
+        "RH2_P1_SA1_*",
+        "--node",
+        "RDRT",
+    ]);
+    let output = run_bounded(events, 20);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let text = String::from_utf8_lossy(&output.stdout);
+    // At RDRT, the values that came up the hierarchy from RH2.
+    assert!(
+        text.lines()
+            .any(|l| l.contains(",RDRT,RH2_P1_SA1_Dalkove,293,ON,,Spontaneous,link:RH")),
+        "{text}"
+    );
+    assert!(
+        text.lines()
+            .any(|l| l.contains(",RDRT,RH2_P1_SA1_Mistne,292,OFF,,Spontaneous,link:RH")),
         "{text}"
     );
 }

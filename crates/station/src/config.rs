@@ -407,6 +407,19 @@ impl Project {
         self.nodes.iter().find(|n| n.name == name)
     }
 
+    /// The top node: the first node with a server that no other node links to (the one
+    /// serving the dispatch systems).
+    pub fn top_node(&self) -> Option<&NodeConfig> {
+        self.nodes.iter().find(|candidate| {
+            candidate.server.is_some()
+                && !self.nodes.iter().any(|other| {
+                    other.links.iter().any(
+                        |link| matches!(&link.target, LinkTarget::Node(target) if *target == candidate.name),
+                    )
+                })
+        })
+    }
+
     /// The project with another port base (the CLI's `--port-base`).
     pub fn with_port_base(mut self, port_base: u16) -> Project {
         self.station.port_base = port_base;

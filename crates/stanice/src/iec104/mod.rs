@@ -20,8 +20,6 @@ use std::process::ExitCode;
 
 use clap::{Args, Subcommand};
 
-pub(crate) use server::serve_points;
-
 /// Options shared by the tool's network commands.
 #[derive(Args, Clone, Debug)]
 pub(crate) struct LinkOptions {

@@ -543,12 +543,16 @@ impl Runtime {
     /// Stops everything: links, servers, the simulation thread; waits until the store
     /// has every record.
     pub async fn shutdown(mut self) {
+        // Links first, so that no node reports its lower nodes lost while stopping.
         for node in &self.nodes {
             for link in &node.links {
+                link.cut();
                 if let Some(client) = link.client() {
                     client.close().await;
                 }
             }
+        }
+        for node in &self.nodes {
             if let Some(server) = &node.server {
                 server.shutdown();
             }

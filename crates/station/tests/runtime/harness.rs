@@ -232,7 +232,7 @@ fn record(received: &Mutex<Vec<Received>>, asdu: &Asdu) {
             ioa: object.ioa.get(),
             cause: asdu.cot.cause.value(),
             element: object.element.clone(),
-            time: object.time.clone(),
+            time: object.time,
         });
     }
 }

@@ -1,0 +1,59 @@
+//! `stanice points PROJECT [--node NAME]`: every data point a node serves, as CSV
+//! (`ioa,type,name,description`), commands included, in IOA order.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::Args;
+
+use crate::run::load_project;
+
+/// Arguments of `stanice points`.
+#[derive(Args, Debug)]
+pub(crate) struct PointsArgs {
+    /// The project folder.
+    project: PathBuf,
+    /// The node; default: the top node (the one no other node links to).
+    #[arg(long)]
+    node: Option<String>,
+}
+
+pub(crate) fn run(args: PointsArgs) -> anyhow::Result<ExitCode> {
+    let project = load_project(&args.project)?;
+    let node = match &args.node {
+        Some(name) => project
+            .node(name)
+            .ok_or_else(|| anyhow::anyhow!("no node `{name}` in the project"))?,
+        None => project
+            .top_node()
+            .ok_or_else(|| anyhow::anyhow!("the project has no nodes"))?,
+    };
+    let mut rows: Vec<(u32, String, String, String)> = node
+        .points
+        .iter()
+        .map(|p| {
+            (
+                p.ioa.get(),
+                p.type_id.to_string(),
+                p.name.clone(),
+                p.description.clone(),
+            )
+        })
+        .chain(node.commands.iter().map(|c| {
+            (
+                c.ioa.get(),
+                c.type_id.to_string(),
+                c.name.clone(),
+                c.description.clone(),
+            )
+        }))
+        .collect();
+    rows.sort_by(|a, b| a.0.cmp(&b.0).then_with(|| a.1.cmp(&b.1)));
+    let mut out = csv::Writer::from_writer(std::io::stdout());
+    out.write_record(["ioa", "type", "name", "description"])?;
+    for (ioa, type_id, name, description) in rows {
+        out.write_record([ioa.to_string(), type_id, name, description])?;
+    }
+    out.flush()?;
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,247 @@
+//! `stanice run PROJECT` and `stanice demo`: run a station project.
+//!
+//! Every node of the project (or those named with `--node`) runs in this process on the
+//! simulated clock; `--speed` runs it faster than real time. While it runs, lines typed on
+//! standard input inject faults and hand operations (`supply-loss T1`, `selector RH2
+//! local`, `link-cut RDRT/RH`, `clear all`, `status`, `help`).
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Duration;
+
+use anyhow::Context as _;
+use chrono::{DateTime, Utc};
+use clap::Args;
+use station::config::Project;
+use station::runtime::{Pacing, Runtime, RuntimeOptions, StoreChoice};
+use tokio::io::AsyncBufReadExt as _;
+
+/// Arguments of `stanice run`.
+#[derive(Args, Debug)]
+pub(crate) struct RunArgs {
+    /// The project folder (holding station.toml).
+    project: PathBuf,
+    #[command(flatten)]
+    options: RunOptions,
+}
+
+/// Options shared by `run` and `demo`.
+#[derive(Args, Debug)]
+pub(crate) struct RunOptions {
+    /// Run only this node (repeatable); links to other nodes then go over the network.
+    #[arg(long = "node", value_name = "NAME")]
+    nodes: Vec<String>,
+    /// Simulated seconds per real second.
+    #[arg(long, default_value_t = 1.0)]
+    speed: f64,
+    /// Event store URL (`sqlite:PATH`, `postgres://...`), or `none`; default: the project's.
+    #[arg(long)]
+    store: Option<String>,
+    /// Moves every server port: the project's port_base becomes this.
+    #[arg(long)]
+    port_base: Option<u16>,
+    /// Simulated start time (RFC 3339, e.g. 2025-01-15T16:00:00Z); default: now.
+    #[arg(long)]
+    start: Option<DateTime<Utc>>,
+    /// Stop after this many real seconds (runs until Ctrl-C otherwise).
+    #[arg(long)]
+    duration: Option<f64>,
+}
+
+pub(crate) async fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
+    run_project(&args.project, args.options, false).await
+}
+
+/// Loads a project, printing every configuration error as `file:line:col: error: ...`.
+pub(crate) fn load_project(folder: &Path) -> anyhow::Result<Project> {
+    Project::load(folder).map_err(|errors| {
+        for error in errors.errors() {
+            eprintln!("{error}");
+        }
+        anyhow::anyhow!(
+            "{} error(s) in the project {}",
+            errors.errors().len(),
+            folder.display()
+        )
+    })
+}
+
+pub(crate) async fn run_project(
+    folder: &Path,
+    options: RunOptions,
+    demo: bool,
+) -> anyhow::Result<ExitCode> {
+    let mut project = load_project(folder)?;
+    if let Some(base) = options.port_base {
+        project = project.with_port_base(base);
+    }
+    if !(options.speed.is_finite() && options.speed > 0.0) {
+        anyhow::bail!("--speed must be a positive number");
+    }
+    let store = match options.store.as_deref() {
+        None => StoreChoice::Project,
+        Some("none") => StoreChoice::Disabled,
+        Some(url) => StoreChoice::Url(url.to_owned()),
+    };
+    let store_shown = match &store {
+        StoreChoice::Project => station::runtime::resolve_store_url(&project),
+        StoreChoice::Url(url) => url.clone(),
+        StoreChoice::Disabled => "none".to_owned(),
+    };
+    let runtime = Runtime::start(
+        project,
+        RuntimeOptions {
+            nodes: options.nodes.clone(),
+            pacing: Pacing::RealTime {
+                speed: options.speed,
+            },
+            start: options.start.unwrap_or_else(Utc::now),
+            store,
+        },
+    )
+    .await
+    .context("the station does not start")?;
+    print_banner(&runtime, &store_shown, options.speed, demo);
+    let stop = async {
+        match options.duration {
+            Some(seconds) => {
+                tokio::time::sleep(Duration::from_secs_f64(seconds.clamp(0.0, 1e9))).await
+            }
+            None => {
+                let _ = tokio::signal::ctrl_c().await;
+            }
+        }
+    };
+    tokio::select! {
+        () = stop => {}
+        () = console(&runtime) => {}
+    }
+    runtime.shutdown().await;
+    Ok(ExitCode::SUCCESS)
+}
+
+fn print_banner(runtime: &Runtime, store: &str, speed: f64, demo: bool) {
+    let project = runtime.project();
+    let title = if demo { "Stanice demo: " } else { "" };
+    println!(
+        "{title}station {} ({}), {} node(s), simulated clock x{speed}",
+        project.station.name,
+        project.folder.display(),
+        runtime.nodes().len()
+    );
+    for node in runtime.nodes() {
+        let name = node.points.name();
+        let config = project.node(name);
+        let ca = config
+            .map(|c| c.common_address.to_string())
+            .unwrap_or_default();
+        let server = node
+            .server
+            .as_ref()
+            .map(|s| format!("IEC 104 server {} (CA {ca})", s.local_addr()))
+            .unwrap_or_else(|| "no server".to_owned());
+        let links: Vec<&str> = node.links.iter().map(|l| l.name()).collect();
+        let links = if links.is_empty() {
+            String::new()
+        } else {
+            format!(", links to {}", links.join(", "))
+        };
+        println!(
+            "  {name:<8} {} points, {server}{links}",
+            node.points.points().len()
+        );
+    }
+    println!("  events and command audit: {store}");
+    let top = project
+        .top_node()
+        .and_then(|config| runtime.node(&config.name).map(|node| (config, node)));
+    if let Some((config, server)) =
+        top.and_then(|(config, node)| node.server.as_ref().map(|s| (config, s)))
+    {
+        let ca = config.common_address;
+        println!("Look at it from another terminal (the dispatch side, CA {ca}):");
+        println!(
+            "  cargo run --release -p stanice -- iec104 client {} --ca {ca} --gi",
+            server.local_addr()
+        );
+        println!(
+            "  cargo run --release -p stanice -- iec104 command {} --ca {ca} --ioa 2021 --type C_SC_NA_1 --value 1",
+            server.local_addr()
+        );
+        println!(
+            "  cargo run --release -p stanice -- points {}",
+            project.folder.display()
+        );
+        println!(
+            "  cargo run --release -p stanice -- events {} --since 10m",
+            project.folder.display()
+        );
+    }
+    println!("Type a fault or operation here (`help` lists them); Ctrl-C stops.");
+}
+
+const HELP: &str = "\
+faults:      supply-loss TNS_USTI|TNS_VALMEZ|UTILITY|T1|T2, generator-fail-to-start,
+             stuck-closed NAME, stuck-open NAME, breaker-tripped NAME, lamp-failure BOARD,
+             fuse-blown NAME, surge-arrester NAME, emergency-off RH2|RZZ|RDA, door-open NAME,
+             supply-unit-fault NAME, network-switch-fault NAME, module-pulled MODULE,
+             communication-lost MODULE;  `clear FAULT` or `clear all` removes them
+operations:  selector BOARD local|remote, manual-switch BOARD on|off, close NAME, open NAME,
+             illuminance LUX|auto
+links:       link-cut NODE/LINK, link-restore NODE/LINK
+other:       status, help";
+
+/// Reads operations from standard input until it closes.
+async fn console(runtime: &Runtime) {
+    let mut lines = tokio::io::BufReader::new(tokio::io::stdin()).lines();
+    while let Ok(Some(line)) = lines.next_line().await {
+        let line = line.trim();
+        match line {
+            "" => {}
+            "help" => println!("{HELP}"),
+            "status" => print_status(runtime),
+            _ => match runtime.operate(line).await {
+                Ok(()) => println!("ok: {line}"),
+                Err(error) => println!("error: {error}"),
+            },
+        }
+    }
+    // Standard input closed (e.g. run from a script): keep running until stopped.
+    std::future::pending::<()>().await;
+}
+
+fn print_status(runtime: &Runtime) {
+    let clock = runtime.clock();
+    println!(
+        "simulated time {} ({} s since start)",
+        clock.utc_at(clock.now()).format("%Y-%m-%d %H:%M:%S UTC"),
+        clock.now().as_secs()
+    );
+    for node in runtime.nodes() {
+        let invalid = node
+            .points
+            .points()
+            .iter()
+            .filter(|p| p.quality.invalid)
+            .count();
+        let links: Vec<String> = node
+            .links
+            .iter()
+            .map(|l| format!("{} {}", l.name(), if l.is_up() { "up" } else { "DOWN" }))
+            .collect();
+        let clients = node
+            .server
+            .as_ref()
+            .map(|s| s.stats().connections)
+            .unwrap_or(0);
+        println!(
+            "  {:<8} {invalid} invalid point(s), {clients} client(s), links: {}",
+            node.points.name(),
+            if links.is_empty() {
+                "-".to_owned()
+            } else {
+                links.join(", ")
+            }
+        );
+    }
+}
