@@ -2,6 +2,7 @@
 // Helpers used by the tests panic on error: their panics are the failure report.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+mod control;
 mod devices;
 mod faults;
 mod lighting;
