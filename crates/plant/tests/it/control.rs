@@ -72,6 +72,13 @@ fn build_plc(files: &[&str], program: &str, cycle: Duration) -> Plc {
                 .join("\n")
         )
     });
+    let warnings: Vec<String> = compiled
+        .checked
+        .warnings
+        .iter()
+        .map(|d| d.render(&map))
+        .collect();
+    assert!(warnings.is_empty(), "{}", warnings.join("\n"));
     let mut plc = Plc::try_new(compiled, map).unwrap();
     plc.add_task(TaskConfig::cyclic(
         "main",
