@@ -798,6 +798,28 @@ impl PointDb {
         Ok(Some(point.snapshot(received, cause, send)))
     }
 
+    /// Like [`update`](Self::update), but reports the value even when it equals the last
+    /// reported one: for events a lower node sent spontaneously, each of which is a change
+    /// there. (A replay after a link outage may start with the value an interrogation
+    /// already brought; dropping it would lose an event and its time tag.)
+    pub fn update_event<'a>(
+        &mut self,
+        key: impl Into<PointKey<'a>>,
+        value: PointValue,
+        quality: Quality,
+        source_time: Option<SourceTime>,
+        received: DateTime<Utc>,
+        cause: EventCause,
+    ) -> Result<Option<PointChange>, PointDbError> {
+        let key = key.into();
+        if let Some(change) = self.update(key, value, quality, source_time, received, cause)? {
+            return Ok(Some(change));
+        }
+        let point = self.point_mut(key)?;
+        let send = point.spec.transmission == Transmission::Spontaneous;
+        Ok(Some(point.snapshot(received, cause, send)))
+    }
+
     /// Sets IV on every point the predicate selects (keeping value and other flags) and
     /// returns the changes, stamped with `now` as source time (the node detected the
     /// failure). Points already invalid are not reported again.

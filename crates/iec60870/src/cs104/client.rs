@@ -46,6 +46,10 @@ pub struct ClientConfig {
     pub apci: ApciConfig,
     /// ASDU field sizes.
     pub asdu: AsduParams,
+    /// Start data transfer (STARTDT) as soon as connected. Off: the connection is a
+    /// standby of a redundancy group, connected and tested but sent no data, until
+    /// [`ClientHandle::start_data_transfer`]; from then on every reconnection starts.
+    pub start_on_connect: bool,
     /// Send a station interrogation after each start of data transfer.
     pub interrogate_on_start: bool,
     /// Send a clock synchronisation (the host's UTC time) after each start.
@@ -78,6 +82,7 @@ impl ClientConfig {
             addresses: vec![address.into()],
             common_address,
             originator: 0,
+            start_on_connect: true,
             apci: ApciConfig::default(),
             asdu: AsduParams::IEC104,
             interrogate_on_start: false,
@@ -161,6 +166,8 @@ enum Request {
         asdu: Asdu,
         reply: oneshot::Sender<Result<RequestOutcome, ClientError>>,
     },
+    /// Start data transfer on a standby connection.
+    Start,
     /// Stop; the sender is dropped once the connection is closed.
     Close(oneshot::Sender<()>),
 }
@@ -298,6 +305,17 @@ impl ClientHandle {
         self.exchange(asdu).await
     }
 
+    /// Starts data transfer on a standby connection (`start_on_connect = false`): the
+    /// server makes this connection the active one of its redundancy group and sends what
+    /// the previous active connection left unacknowledged, then everything new. Returns
+    /// at once; [`ClientEvent::Started`] follows.
+    pub async fn start_data_transfer(&self) -> Result<(), ClientError> {
+        self.requests
+            .send(Request::Start)
+            .await
+            .map_err(|_| ClientError::Stopped)
+    }
+
     /// Closes the connection politely and stops the client: acknowledges every ASDU
     /// received (so that the server does not send them again to the next connection of
     /// its redundancy group), closes the socket, and returns once that is done. Requests
@@ -420,6 +438,7 @@ async fn run(
     events: mpsc::Sender<ClientEvent>,
 ) {
     let mut delay = config.reconnect_delay;
+    let mut start = config.start_on_connect;
     loop {
         let mut connected_once = false;
         let mut last_failure = None;
@@ -432,6 +451,7 @@ async fn run(
                     result = &mut attempt => break result,
                     request = requests.recv() => match request {
                         None | Some(Request::Close(_)) => return,
+                        Some(Request::Start) => start = true,
                         Some(Request::Exchange { reply, .. }) => {
                             let _ = reply.send(Err(ClientError::NotConnected));
                         }
@@ -450,12 +470,12 @@ async fn run(
                     let span = tracing::info_span!("iec104_client", %peer);
                     let outcome = match stream {
                         Transport::Plain(stream) => {
-                            drive(&config, stream, &mut requests, &events)
+                            drive(&config, stream, &mut requests, &events, &mut start)
                                 .instrument(span)
                                 .await
                         }
                         Transport::Tls(stream) => {
-                            drive(&config, *stream, &mut requests, &events)
+                            drive(&config, *stream, &mut requests, &events, &mut start)
                                 .instrument(span)
                                 .await
                         }
@@ -499,6 +519,7 @@ async fn run(
                     () = &mut wait => break,
                     request = requests.recv() => match request {
                         None | Some(Request::Close(_)) => return,
+                        Some(Request::Start) => start = true,
                         Some(Request::Exchange { reply, .. }) => {
                             let _ = reply.send(Err(ClientError::NotConnected));
                         }
@@ -550,6 +571,7 @@ async fn drive<S>(
     stream: S,
     requests: &mut mpsc::Receiver<Request>,
     events: &mpsc::Sender<ClientEvent>,
+    start: &mut bool,
 ) -> DriveEnd
 where
     S: AsyncRead + AsyncWrite + Unpin,
@@ -557,8 +579,10 @@ where
     let (mut reader, mut writer) = tokio::io::split(stream);
     let now = tokio::time::Instant::now().into_std();
     let mut session = Session::new(config.apci.clone(), Role::ControllingStation, now);
-    if let Err(error) = session.start_data_transfer(now) {
-        return DriveEnd::Lost(format!("cannot start data transfer: {error}"));
+    if *start {
+        if let Err(error) = session.start_data_transfer(now) {
+            return DriveEnd::Lost(format!("cannot start data transfer: {error}"));
+        }
     }
     let mut pending: Vec<Pending> = Vec::new();
     let mut outgoing: VecDeque<Vec<u8>> = VecDeque::new();
@@ -740,6 +764,15 @@ where
                 Some(Request::Close(done)) => {
                     closing = Some(done);
                     break DriveEnd::Closed;
+                }
+                Some(Request::Start) => {
+                    if !*start {
+                        *start = true;
+                        let now = tokio::time::Instant::now().into_std();
+                        if let Err(error) = session.start_data_transfer(now) {
+                            break DriveEnd::Lost(format!("cannot start data transfer: {error}"));
+                        }
+                    }
                 }
                 Some(Request::Exchange { asdu, reply }) => {
                     if !started {

@@ -214,8 +214,9 @@ fn apply(spec: &LinkSpec, node: &NodePoints, origin: &str, asdu: &Asdu) {
     if asdu.cot.negative || asdu.cot.test || !asdu.type_id.is_monitor() {
         return;
     }
-    let cause = asdu.cot.cause;
-    let event_cause = match cause.value() {
+    let cause = asdu.cot.cause.value();
+    let event = matches!(cause, 3 | 11 | 12);
+    let event_cause = match cause {
         11 => EventCause::ReturnRemote,
         12 => EventCause::ReturnLocal,
         // Spontaneous, periodic, background, read and interrogation answers: for the
@@ -249,6 +250,7 @@ fn apply(spec: &LinkSpec, node: &NodePoints, origin: &str, asdu: &Asdu) {
                 source_time,
                 event_cause,
                 origin,
+                event,
             ) {
                 tracing::warn!(node = %node.name(), link = %spec.name, %error, "value from the link refused");
             }

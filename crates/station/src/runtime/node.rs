@@ -90,7 +90,8 @@ impl NodePoints {
     }
 
     /// Updates a point and publishes the change, if any. `origin` is recorded with the
-    /// event (the node itself, or the link the value came over).
+    /// event (the node itself, or the link the value came over). An `event` (a value the
+    /// source sent spontaneously) is published even when unchanged.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn update<'a>(
         &self,
@@ -100,6 +101,7 @@ impl NodePoints {
         source_time: Option<SourceTime>,
         cause: EventCause,
         origin: &str,
+        event: bool,
     ) -> Result<(), PointDbError> {
         let now = self.clock.now();
         // A value without its own time (an interrogation answer, a PLC variable) is
@@ -110,7 +112,12 @@ impl NodePoints {
             invalid: false,
         }));
         let mut db = self.lock();
-        if let Some(change) = db.update(key, value, quality, source_time, now, cause)? {
+        let change = if event {
+            db.update_event(key, value, quality, source_time, now, cause)?
+        } else {
+            db.update(key, value, quality, source_time, now, cause)?
+        };
+        if let Some(change) = change {
             self.publish(&change, origin);
         }
         Ok(())
