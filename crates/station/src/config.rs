@@ -44,8 +44,12 @@
 //! programs = ["RH2Logic"]              # PROGRAM names declared in the node's sources
 //! watchdog_ms = 200                    # optional
 //!
-//! [[node.io]]                          # plant signal <-> PLC variable
-//! signal = "RH2_P1_SA1_Dalkove"
+//! [node.set]                           # optional: PLC values written after the cold start
+//! "LightingBoard.Zpozdeni" = "T#2s"    # variable path = IEC literal
+//!
+//! [[node.io]]                          # plant signal <-> PLC variable; the pseudo-signal
+//! signal = "RH2_P1_SA1_Dalkove"         # "module-fault:MODULE" is TRUE while that I/O
+//!                                      # module is pulled or unreachable
 //! variable = "RH2Logic.SA1_Dalkove"
 //!
 //! [[node.point]]
@@ -60,6 +64,7 @@
 //! cycle_ms = 1000                      # required with (and only with) cyclic
 //! groups = [1, 3]                      # interrogation groups 1..=16; default none
 //! deadband = 0.5                       # measurements (M_ME_*) only; absolute, >= 0
+//! invalid_when = "RDRTIO.PoruchaModul9" # optional BOOL variable: TRUE sends the point IV
 //! description = "breaker FA1 closed"   # optional
 //!
 //! [[node.command]]
@@ -82,6 +87,11 @@
 //! interrogate_on_start = true          # default true
 //! clock_sync = true                    # default true: this node is the lower one's time source
 //! status_point = "COMM_RH2"            # optional: a point of this node showing the link state
+//! republish = { ioa_offset = 1000 }    # optional, links to project nodes: every point and
+//!                                      # command of the lower node (its republished ones
+//!                                      # too) appears here, same name, IOA + ioa_offset
+//!                                      # (default 0), as a concentrator maps a whole
+//!                                      # outstation; explicit points may stand beside them
 //! ```
 //!
 //! # Checks
@@ -176,6 +186,9 @@ pub struct NodeConfig {
     pub commands: Vec<CommandConfig>,
     /// IEC 104 client links to lower nodes.
     pub links: Vec<LinkConfig>,
+    /// Values written into the PLC after its cold start (variable path -> IEC literal):
+    /// parameters such as a board's switch-on delay.
+    pub initial_values: Vec<(String, String)>,
 }
 
 /// A node's IEC 104 server, `[node.server]`.
@@ -298,6 +311,9 @@ pub struct PointConfig {
     pub groups: Vec<u8>,
     /// Absolute deadband (measurements only).
     pub deadband: Option<f64>,
+    /// A BOOL PLC variable: while TRUE the point is sent invalid (IV), as the TC700 does
+    /// for the points of a faulty I/O module (spec 7.2).
+    pub invalid_when: Option<String>,
     /// Free text.
     pub description: String,
 }
@@ -350,6 +366,8 @@ pub struct LinkConfig {
     pub clock_sync: bool,
     /// A point of this node showing the link's state.
     pub status_point: Option<String>,
+    /// Every point and command of the lower node republished here, IOA + this offset.
+    pub republish: Option<u32>,
 }
 
 impl Project {
@@ -579,6 +597,8 @@ struct RawNode {
     command: Vec<RawCommand>,
     #[serde(default)]
     link: Vec<RawLink>,
+    #[serde(default)]
+    set: std::collections::BTreeMap<String, String>,
 }
 
 #[derive(Deserialize)]
@@ -649,6 +669,7 @@ struct RawPoint {
     #[serde(default)]
     groups: Vec<i64>,
     deadband: Option<f64>,
+    invalid_when: Option<String>,
     #[serde(default)]
     description: String,
 }
@@ -681,6 +702,14 @@ struct RawLink {
     #[serde(default = "yes")]
     clock_sync: bool,
     status_point: Option<String>,
+    republish: Option<RawRepublish>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawRepublish {
+    #[serde(default)]
+    ioa_offset: i64,
 }
 
 // ---------------------------------------------------------------------------------------
@@ -1336,6 +1365,7 @@ impl Ctx<'_> {
                 transmission,
                 groups,
                 deadband: point.deadband,
+                invalid_when: point.invalid_when.clone(),
                 description: point.description.clone(),
             });
         }
@@ -1438,6 +1468,11 @@ impl Ctx<'_> {
             points,
             commands,
             links: Vec::new(),
+            initial_values: raw
+                .set
+                .iter()
+                .map(|(path, value)| (path.clone(), value.clone()))
+                .collect(),
         }
     }
 
@@ -1579,6 +1614,7 @@ impl Ctx<'_> {
                         interrogate_on_start: link.interrogate_on_start,
                         clock_sync: link.clock_sync,
                         status_point: link.status_point.clone(),
+                        republish: None,
                     });
                 }
             }
@@ -1586,7 +1622,168 @@ impl Ctx<'_> {
         for (node, links) in nodes.iter_mut().zip(built) {
             node.links = links;
         }
+        let cycles_before = self.errors.len();
         self.check_cycles(raw, &edges);
+        if self.errors.len() == cycles_before {
+            self.expand_republish(raw, nodes, &edges);
+        }
+    }
+
+    /// Adds the points and commands of `republish` links, lower nodes first (the link
+    /// graph is known to be acyclic here), so that republishing is transitive.
+    fn expand_republish(
+        &mut self,
+        raw: &RawProject,
+        nodes: &mut [NodeConfig],
+        edges: &[Vec<(usize, usize)>],
+    ) {
+        fn visit(
+            n: usize,
+            edges: &[Vec<(usize, usize)>],
+            done: &mut [bool],
+            order: &mut Vec<usize>,
+        ) {
+            if done.get(n).copied().unwrap_or(true) {
+                return;
+            }
+            if let Some(flag) = done.get_mut(n) {
+                *flag = true;
+            }
+            for &(t, _) in edges.get(n).map(Vec::as_slice).unwrap_or_default() {
+                visit(t, edges, done, order);
+            }
+            order.push(n);
+        }
+        let mut done = vec![false; raw.node.len()];
+        let mut order = Vec::new();
+        for n in 0..raw.node.len() {
+            visit(n, edges, &mut done, &mut order);
+        }
+        for n in order {
+            let Some(raw_node) = raw.node.get(n) else {
+                continue;
+            };
+            for &(t, l) in edges.get(n).map(Vec::as_slice).unwrap_or_default() {
+                let Some(raw_link) = raw_node.link.get(l) else {
+                    continue;
+                };
+                let Some(republish) = &raw_link.republish else {
+                    continue;
+                };
+                let at = vec![K("node"), I(n), K("link"), I(l), K("republish")];
+                let offset = match u32::try_from(republish.ioa_offset) {
+                    Ok(offset) if offset <= Ioa::MAX.get() => offset,
+                    _ => {
+                        self.err(
+                            &at,
+                            format!(
+                                "ioa_offset {} is outside 0..=16777215",
+                                republish.ioa_offset
+                            ),
+                        );
+                        continue;
+                    }
+                };
+                let Some(lower) = nodes.get(t).cloned() else {
+                    continue;
+                };
+                let Some(this) = nodes.get_mut(n) else {
+                    continue;
+                };
+                let mut names: HashSet<String> =
+                    this.points.iter().map(|p| p.name.clone()).collect();
+                let mut ioas: HashSet<u32> = this.points.iter().map(|p| p.ioa.get()).collect();
+                let mut problems = Vec::new();
+                for point in &lower.points {
+                    let ioa = point
+                        .ioa
+                        .get()
+                        .checked_add(offset)
+                        .and_then(|i| Ioa::try_new(i).ok());
+                    let Some(ioa) = ioa else {
+                        problems.push(format!(
+                            "point `{}` (IOA {}) + {offset} is past the largest IOA",
+                            point.name, point.ioa
+                        ));
+                        continue;
+                    };
+                    if !names.insert(point.name.clone()) {
+                        problems.push(format!(
+                            "point `{}` of `{}` is already a point of `{}`",
+                            point.name, lower.name, this.name
+                        ));
+                        continue;
+                    }
+                    if !ioas.insert(ioa.get()) {
+                        problems.push(format!(
+                            "point `{}` of `{}` lands on IOA {ioa}, already used at `{}`",
+                            point.name, lower.name, this.name
+                        ));
+                        continue;
+                    }
+                    this.points.push(PointConfig {
+                        name: point.name.clone(),
+                        type_id: point.type_id,
+                        ioa,
+                        source: PointSource::Link {
+                            link: raw_link.name.clone(),
+                            ioa: point.ioa,
+                        },
+                        transmission: Transmission::Spontaneous,
+                        groups: point.groups.clone(),
+                        deadband: None,
+                        invalid_when: None,
+                        description: point.description.clone(),
+                    });
+                }
+                let mut command_names: HashSet<String> =
+                    this.commands.iter().map(|c| c.name.clone()).collect();
+                let mut command_ioas: HashSet<u32> =
+                    this.commands.iter().map(|c| c.ioa.get()).collect();
+                for command in &lower.commands {
+                    let ioa = command
+                        .ioa
+                        .get()
+                        .checked_add(offset)
+                        .and_then(|i| Ioa::try_new(i).ok());
+                    let Some(ioa) = ioa else {
+                        problems.push(format!(
+                            "command `{}` (IOA {}) + {offset} is past the largest IOA",
+                            command.name, command.ioa
+                        ));
+                        continue;
+                    };
+                    if !command_names.insert(command.name.clone())
+                        || !command_ioas.insert(ioa.get())
+                    {
+                        problems.push(format!(
+                            "command `{}` of `{}` (IOA {ioa} here) clashes with a command of `{}`",
+                            command.name, lower.name, this.name
+                        ));
+                        continue;
+                    }
+                    this.commands.push(CommandConfig {
+                        name: command.name.clone(),
+                        type_id: command.type_id,
+                        ioa,
+                        target: CommandTarget::Link {
+                            link: raw_link.name.clone(),
+                            ioa: command.ioa,
+                        },
+                        select_required: command.select_required,
+                        remote_enable: None,
+                        pulse: None,
+                        description: command.description.clone(),
+                    });
+                }
+                if let Some(link) = this.links.iter_mut().find(|x| x.name == raw_link.name) {
+                    link.republish = Some(offset);
+                }
+                for message in problems {
+                    self.err(&at, message);
+                }
+            }
+        }
     }
 
     /// Reports each back edge of a depth-first search of the link graph.

@@ -43,6 +43,8 @@ pub(crate) struct LinkSpec {
 enum LinkControl {
     Cut,
     Restore,
+    /// The runtime stops: close without reporting the link lost.
+    Stop,
 }
 
 /// A running link: its state, its client (for forwarded commands), cut and restore.
@@ -83,6 +85,11 @@ impl LinkHandle {
     pub fn restore(&self) {
         let _ = self.control.send(LinkControl::Restore);
     }
+
+    /// Closes the link for good (runtime shutdown).
+    pub(crate) fn stop(&self) {
+        let _ = self.control.send(LinkControl::Stop);
+    }
 }
 
 /// Starts a link's task on the current tokio runtime.
@@ -112,7 +119,7 @@ async fn run(
             match control.recv().await {
                 Some(LinkControl::Restore) => cut = false,
                 Some(LinkControl::Cut) => {}
-                None => return,
+                Some(LinkControl::Stop) | None => return,
             }
             continue;
         }
@@ -169,7 +176,8 @@ async fn run(
                         break;
                     }
                     Some(LinkControl::Restore) => {}
-                    None => {
+                    Some(LinkControl::Stop) | None => {
+                        *handle.client.lock().unwrap_or_else(|poison| poison.into_inner()) = None;
                         client.close().await;
                         return;
                     }

@@ -546,7 +546,7 @@ impl Runtime {
         // Links first, so that no node reports its lower nodes lost while stopping.
         for node in &self.nodes {
             for link in &node.links {
-                link.cut();
+                link.stop();
                 if let Some(client) = link.client() {
                     client.close().await;
                 }

@@ -88,6 +88,8 @@ struct InputBinding {
     signal: String,
     leaf: Leaf,
     valid: bool,
+    /// `module-fault:MODULE`: TRUE while the module is unavailable.
+    module_fault: Option<String>,
 }
 
 struct OutputBinding {
@@ -103,6 +105,8 @@ struct SourcedPoint {
     leaf: Leaf,
     /// The input binding feeding this variable, whose module validity is the point's.
     input: Option<usize>,
+    /// A BOOL variable that makes the point invalid while TRUE.
+    invalid_when: Option<Leaf>,
     last: Option<(PointValue, bool)>,
 }
 
@@ -368,6 +372,14 @@ impl SimNode {
         }
         if let Some(plant) = plant.as_deref() {
             for input in &mut self.inputs {
+                if let Some(module) = &input.module_fault {
+                    let fault = !plant
+                        .modules()
+                        .iter()
+                        .any(|m| &m.name == module && m.valid());
+                    plc.write_leaf(&input.leaf, Val::Int(i64::from(fault)));
+                    continue;
+                }
                 match plant.read(&input.signal) {
                     Ok(reading) => {
                         input.valid = reading.valid;
@@ -418,7 +430,12 @@ impl SimNode {
             let Ok(v) = plc.read_leaf(&point.leaf) else {
                 continue;
             };
+            let forced_invalid = point
+                .invalid_when
+                .as_ref()
+                .is_some_and(|leaf| matches!(plc.read_leaf(leaf), Ok(Val::Int(x)) if x != 0));
             let valid = self.stopped.is_none()
+                && !forced_invalid
                 && point
                     .input
                     .and_then(|i| self.inputs.get(i))
@@ -590,6 +607,10 @@ fn build_node(
     })?;
     let mut plc = Plc::try_new(compiled, sources)
         .map_err(|error| setup(format!("PLC cold start failed: {error}")))?;
+    for (path, value) in &config.initial_values {
+        plc.write(path, value)
+            .map_err(|error| setup(format!("set `{path}` = `{value}`: {error}")))?;
+    }
     for task in &config.tasks {
         let interval = i64::try_from(task.interval.as_nanos()).unwrap_or(i64::MAX);
         let programs: Vec<&str> = task.programs.iter().map(String::as_str).collect();
@@ -615,17 +636,30 @@ fn build_node(
                 binding.signal
             )));
         };
+        let target = leaf(&plc, &binding.variable, "I/O variable")?;
+        if let Some(module) = binding.signal.strip_prefix("module-fault:") {
+            if !plant.modules().iter().any(|m| m.name == module) {
+                return Err(setup(format!("the plant has no I/O module `{module}`")));
+            }
+            sim.inputs.push(InputBinding {
+                signal: binding.signal.clone(),
+                leaf: target,
+                valid: true,
+                module_fault: Some(module.to_owned()),
+            });
+            continue;
+        }
         let info = plant
             .signals()
             .iter()
             .find(|s| s.name == binding.signal)
             .ok_or_else(|| setup(format!("the plant has no signal `{}`", binding.signal)))?;
-        let target = leaf(&plc, &binding.variable, "I/O variable")?;
         match info.direction {
             Direction::Input => sim.inputs.push(InputBinding {
                 signal: binding.signal.clone(),
                 leaf: target,
                 valid: true,
+                module_fault: None,
             }),
             Direction::Output => sim.outputs.push(OutputBinding {
                 signal: binding.signal.clone(),
@@ -646,11 +680,17 @@ fn build_node(
             };
             let target = leaf(&plc, path, &format!("point `{}` source", point.name))?;
             let input = sim.inputs.iter().position(|i| i.leaf.path == target.path);
+            let invalid_when = point
+                .invalid_when
+                .as_deref()
+                .map(|path| leaf(&plc, path, &format!("point `{}` invalid_when", point.name)))
+                .transpose()?;
             sim.sourced.push(SourcedPoint {
                 id,
                 type_id: point.type_id,
                 leaf: target,
                 input,
+                invalid_when,
                 last: None,
             });
         }

@@ -172,7 +172,9 @@ fn vsetin_example_loads() {
     };
     assert_eq!(project.station.name, "Vsetín");
     let names: Vec<&str> = project.nodes.iter().map(|n| n.name.as_str()).collect();
-    assert_eq!(names, ["RH2", "RH1.1", "RDRT"]);
+    assert_eq!(&names[..6], ["RDRT", "RH1.1", "RH2", "RZS1", "RZZ", "RDA"]);
+    assert_eq!(names.len(), 6 + 13);
+    assert!(names.contains(&"ROV12") && names.contains(&"OR"));
 
     let rh2 = project.node("RH2").unwrap();
     let ioas: Vec<u32> = rh2.points.iter().map(|p| p.ioa.get()).collect();
@@ -193,10 +195,13 @@ fn vsetin_example_loads() {
     );
     assert_eq!(rh2.tasks[0].programs, ["RH2Logic"]);
 
+    // RH1.1 republishes RH2 whole (same IOAs) beside its own link status point 280.
     let rh11 = project.node("RH1.1").unwrap();
-    assert_eq!(rh11.points.len(), 18);
+    assert_eq!(rh11.points.len(), 19);
+    assert_eq!(rh11.points[0].source, PointSource::LinkStatus("RH2".into()));
+    assert_eq!(rh11.link("RH2").unwrap().republish, Some(0));
     assert_eq!(
-        rh11.points[0].source,
+        rh11.points[1].source,
         PointSource::Link {
             link: "RH2".into(),
             ioa: Ioa::from(281u16)
@@ -223,6 +228,27 @@ fn vsetin_example_loads() {
     );
     let status = rdrt.point("COMM_RH").unwrap();
     assert_eq!(status.source, PointSource::LinkStatus("RH".into()));
+    // Transitive republishing: RH2's points reach RDRT through RH1.1 at their thesis IOAs,
+    // RZZ's through RZS1 shifted by 100, lighting board k at k * 1000.
+    assert_eq!(rdrt.point("RH2_V1_FA1_Zapnut").unwrap().ioa.get(), 281);
+    assert_eq!(
+        rdrt.point("RH2_V1_FA1_Zapnut").unwrap().source,
+        PointSource::Link {
+            link: "RH".into(),
+            ioa: Ioa::from(281u16)
+        }
+    );
+    assert_eq!(rdrt.point("RZZ_V1_FA1_Zapnut").unwrap().ioa.get(), 381);
+    assert_eq!(rdrt.point("ROV05_Osv_Zap").unwrap().ioa.get(), 5011);
+    assert_eq!(rdrt.point("OR_Energie_kWh").unwrap().ioa.get(), 13_032);
+    let forwarded: Vec<u32> = rdrt
+        .commands
+        .iter()
+        .filter(|c| c.name.starts_with("RH2_"))
+        .map(|c| c.ioa.get())
+        .collect();
+    assert_eq!(forwarded, [2021, 2022]);
+    assert_eq!(rdrt.points.len(), 404);
     assert_eq!(
         rdrt.link("RH").unwrap().status_point.as_deref(),
         Some("COMM_RH")
@@ -1030,4 +1056,137 @@ node = "B"
     );
     assert!(errors[0].key.starts_with("node[0]"), "{errors:#?}");
     assert!(errors[0].line >= 4, "{errors:#?}");
+}
+
+// ---------------------------------------------------------------------------------------
+// republishing, pulses, initial values, invalid_when
+
+#[test]
+fn republish_maps_a_whole_lower_node_with_an_offset() {
+    let toml = format!(
+        "{TWO_NODES}{}",
+        r#"[[node.link]]
+name = "L"
+node = "Low"
+republish = { ioa_offset = 1000 }
+"#
+    );
+    let project = load(&toml, &[]).unwrap();
+    let top = project.node("Top").unwrap();
+    let point = top.point("P").unwrap();
+    assert_eq!(point.ioa.get(), 1010);
+    assert_eq!(
+        point.source,
+        PointSource::Link {
+            link: "L".into(),
+            ioa: Ioa::from(10u16)
+        }
+    );
+    assert_eq!(top.commands.len(), 1);
+    assert_eq!(top.commands[0].ioa.get(), 1020);
+    assert_eq!(
+        top.commands[0].target,
+        CommandTarget::Link {
+            link: "L".into(),
+            ioa: Ioa::from(20u16)
+        }
+    );
+    assert_eq!(top.link("L").unwrap().republish, Some(1000));
+}
+
+#[test]
+fn republish_clashes_and_bad_offsets_name_the_link() {
+    let toml = format!(
+        "{TWO_NODES}{}",
+        r#"[[node.point]]
+name = "Own"
+type = "M_SP_NA_1"
+ioa = 10
+[[node.link]]
+name = "L"
+node = "Low"
+status_point = "Own"
+republish = { ioa_offset = 0 }
+"#
+    );
+    expect_only(
+        &toml,
+        &[],
+        30,
+        13,
+        "node[1].link[0].republish",
+        "lands on IOA 10, already used",
+    );
+    let toml = format!(
+        "{TWO_NODES}{}",
+        r#"[[node.link]]
+name = "L"
+node = "Low"
+republish = { ioa_offset = -5 }
+"#
+    );
+    expect_only(
+        &toml,
+        &[],
+        25,
+        13,
+        "node[1].link[0].republish",
+        "outside 0..=16777215",
+    );
+}
+
+#[test]
+fn pulse_initial_values_and_invalid_when_are_read() {
+    let toml = r#"[station]
+name = "X"
+time_zone = "UTC"
+[[node]]
+name = "A"
+common_address = 1
+sources = ["plc/main.st"]
+[node.set]
+"Main.A" = "TRUE"
+[[node.point]]
+name = "P"
+type = "M_SP_NA_1"
+ioa = 1
+source = "Main.A"
+invalid_when = "Main.A"
+[[node.command]]
+name = "C"
+type = "C_SC_NA_1"
+ioa = 2
+target = "Main.A"
+pulse_ms = 250
+[[node.command]]
+name = "D"
+type = "C_SC_NA_1"
+ioa = 3
+target = "Main.A"
+pulse_ms = 0
+"#;
+    let errors = errors(toml, &[PLC]);
+    expect(
+        &errors,
+        27,
+        12,
+        "node[0].command[1].pulse_ms",
+        "outside 1..=3600000",
+    );
+    assert_eq!(errors.len(), 1, "{errors:#?}");
+    let fixed = toml.replace("pulse_ms = 0", "pulse_ms = 1");
+    let project = load(&fixed, &[PLC]).unwrap();
+    let node = project.node("A").unwrap();
+    assert_eq!(
+        node.initial_values,
+        [("Main.A".to_owned(), "TRUE".to_owned())]
+    );
+    assert_eq!(
+        node.point("P").unwrap().invalid_when.as_deref(),
+        Some("Main.A")
+    );
+    assert_eq!(
+        node.commands[0].pulse,
+        Some(std::time::Duration::from_millis(250))
+    );
 }

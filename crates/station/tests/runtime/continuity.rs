@@ -12,7 +12,13 @@ use station::store::{EventQuery, Order};
 use crate::harness::*;
 
 fn rdrt_address(runtime: &station::runtime::Runtime) -> std::net::SocketAddr {
-    runtime.node("RDRT").unwrap().server.as_ref().unwrap().local_addr()
+    runtime
+        .node("RDRT")
+        .unwrap()
+        .server
+        .as_ref()
+        .unwrap()
+        .local_addr()
 }
 
 /// (value, time tag in ms since the epoch) of a single point received with a CP56 tag.
@@ -135,7 +141,15 @@ async fn two_dispatch_connections_switch_over_without_loss() {
         });
     }
     eventually("two connections", || {
-        runtime.node("RDRT").unwrap().server.as_ref().unwrap().stats().connections == 2
+        runtime
+            .node("RDRT")
+            .unwrap()
+            .server
+            .as_ref()
+            .unwrap()
+            .stats()
+            .connections
+            == 2
     })
     .await;
 
@@ -156,7 +170,10 @@ async fn two_dispatch_connections_switch_over_without_loss() {
         dispatch_values(&active, 283).ends_with(&sequence)
     })
     .await;
-    assert!(standby_log.lock().unwrap().is_empty(), "the standby got data");
+    assert!(
+        standby_log.lock().unwrap().is_empty(),
+        "the standby got data"
+    );
 
     // A's link dies; B takes over; events continue meanwhile.
     active.client.close().await;

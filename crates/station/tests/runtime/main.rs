@@ -8,6 +8,6 @@
     clippy::indexing_slicing
 )]
 
-mod harness;
 mod continuity;
+mod harness;
 mod hierarchy;

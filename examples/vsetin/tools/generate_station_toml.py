@@ -1,0 +1,330 @@
+#!/usr/bin/env python3
+"""Writes examples/vsetin/station.toml, the Vsetín railway station project.
+
+The project is plain TOML and runs as it is; this script only saves typing the thirteen
+lighting boards and the repeated board points. Edit the tables below and run
+
+    python3 examples/vsetin/tools/generate_station_toml.py
+
+IOA plan (spec shared/spec/railway-station.md sections 5-7; where it is silent, ours):
+  RDRT own points      1-10 SP of module P9, 21 HMI local, 24/25 module faults,
+                       26-29 switchroom doors, 32/33 links RH/RZS, 50-62 links ROV01..OR;
+                       command 2001 HMI local
+  RH2 (via RH1.1)      281-298 (thesis), commands 2021/2022 (thesis); RH1.1's link 280
+  RZZ (via RZS1)       381-398 (RZZ's own 281-298 + 100), commands 2121/2122
+  RDA (via RZS1)       401-421, command 2201; RZS1's links: 380 RZZ, 400 RDA
+  lighting board k     k*1000 + n (ROV01 = 1, ..., ROV12 = 12, OR = 13):
+                       points n = 1-22 and 31/32, commands n = 51-64
+Ports: port_base + 0 RDRT, 1 RH1.1, 2 RH2, 3 RZS1, 4 RZZ, 5 RDA, 9 + k lighting board k.
+"""
+
+from pathlib import Path
+
+OUT = Path(__file__).resolve().parent.parent / "station.toml"
+LIGHTING = [f"ROV{k:02d}" for k in range(1, 13)] + ["OR"]
+
+out = []
+
+
+def emit(text=""):
+    out.append(text)
+
+
+def table(header, **fields):
+    emit(f"[{header}]" if not header.startswith("[") else header)
+    for key, value in fields.items():
+        emit(f"{key} = {toml(value)}")
+    emit()
+
+
+def toml(value):
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (int, float)):
+        return str(value)
+    if isinstance(value, list):
+        return "[" + ", ".join(toml(v) for v in value) + "]"
+    if isinstance(value, dict):
+        return "{ " + ", ".join(f"{k} = {toml(v)}" for k, v in value.items()) + " }"
+    return '"' + str(value).replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def node(name, description, ca, port_offset=None, sources=None, allowed=True, groups=None):
+    emit("# " + "-" * 87)
+    table("[[node]]", name=name, description=description, common_address=ca,
+          **({"sources": sources} if sources else {}))
+    if port_offset is not None:
+        server = {"port_offset": port_offset}
+        if allowed:
+            server["allowed_clients"] = ["127.0.0.1"]
+        if groups:
+            server["redundancy_groups"] = groups
+        table("node.server", **server)
+
+
+def task(name, interval_ms, programs, watchdog_ms):
+    table("[[node.task]]", name=name, interval_ms=interval_ms, priority=1,
+          programs=programs, watchdog_ms=watchdog_ms)
+
+
+def io(signal, variable):
+    table("[[node.io]]", signal=signal, variable=variable)
+
+
+def point(name, type_id, ioa, source=None, description="", **extra):
+    fields = {"name": name, "type": type_id, "ioa": ioa}
+    if source:
+        fields["source"] = source
+    fields.update(extra)
+    fields["description"] = description
+    table("[[node.point]]", **fields)
+
+
+def command(name, type_id, ioa, target, description, **extra):
+    table("[[node.command]]", name=name, type=type_id, ioa=ioa, target=target, **extra,
+          description=description)
+
+
+def link(name, target, status_point=None, republish=None):
+    fields = {"name": name, "node": target}
+    if status_point:
+        fields["status_point"] = status_point
+    if republish is not None:
+        fields["republish"] = {"ioa_offset": republish}
+    table("[[node.link]]", **fields)
+
+
+emit("""# The Vsetín railway station (shared/spec/railway-station.md): power boards RH2, RZZ and
+# RDA (LOGO!), the concentrators RH1.1 and RZS1 (S7-1500), twelve lighting-tower boards
+# ROV01..ROV12 (S7-1200) and the OŘ-area lighting (S7-1500), and the central PLC RDRT
+# (Tecomat TC700) serving the dispatch systems. Every node is an IEC 104 server; each
+# upper node concentrates the ones below over IEC 104 links on loopback.
+#
+# Written by tools/generate_station_toml.py (its header has the IOA and port plan); the
+# format is documented in crates/station/src/config.rs.
+""")
+table("station", name="Vsetín", time_zone="Europe/Prague", store="sqlite:events.sqlite",
+      retention_days=60, port_base=2404, bind="127.0.0.1", plant="vsetin")
+
+# --------------------------------------------------------------------------------------
+# Power boards RH2 and RZZ: the LOGO! QF1 logic (spec 5.1, 5.2).
+BOARD_INPUTS = [
+    # (plant signal suffix, variable, point suffix for names, description)
+    ("V1_FA1_Zapnut", "FA1_Zapnut", "breaker FA1 closed"),
+    ("V1_FA1.1", "FA1_1", "breaker FA1.1 closed"),
+    ("V1_FA1.2", "FA1_2", "breaker FA1.2 closed"),
+    ("V1_FA1.3", "FA1_3", "breaker FA1.3 closed"),
+    ("V1_FA1.4", "FA1_4", "breaker FA1.4 closed"),
+    ("V1_FA1.5", "FA1_5", "breaker FA1.5 closed"),
+    ("P1_FA110.0", "FA110_0", "breaker FA110.0 (110 V circuit) closed"),
+    ("P1_FA110.1", "FA110_1", "breaker FA110.1 closed"),
+    ("P1_FA110.2", "FA110_2", "breaker FA110.2 closed"),
+    ("P1_KHU1_Napeti_na_privodu", "KHU1_NapetiNaPrivodu", "voltage present on incoming feeder (relay KHU1)"),
+    ("P1_KHU3_Napeti_na_pripojeni", "KHU3_NapetiNaPripojeni", "voltage present on connection (relay KHU3)"),
+    ("P1_SA1_Mistne", "SA1_Mistne", "selector SA1 in local"),
+    ("P1_SA1_Dalkove", "SA1_Dalkove", "selector SA1 in remote"),
+    ("P1_FU1_Pretavena_pojistka", "FU1_PretavenaPojistka", "fuse FU1 blown"),
+    ("P1_FV1_Prepetova_ochrana", "FV1_PrepetovaOchrana", "surge protection FV1 tripped"),
+    ("P1_KHV{B}_Havarijni_vypnuti", "HavarijniVyp", "emergency off of {B}"),
+    ("P1_FV110_Prepetova_ochrana", "FV110_PrepetovaOchrana", "surge protection FV110 (110 V) tripped"),
+    ("P1_G110.2_Napeti_zdroje", "G110_2_NapetiZdroje", "voltage of source G110.2"),
+]
+
+
+def power_board(board, program, source, ca, port_offset, description):
+    node(board, description, ca, port_offset, sources=[source])
+    task("main", 50, [program], 200)
+    for suffix, variable, _ in BOARD_INPUTS:
+        io(f"{board}_{suffix.replace('{B}', board)}", f"{program}.{variable}")
+    io(f"{board}_QF1_Zapnut", f"{program}.QF1_Zapnut")
+    io(f"{board}_QF1_Vyp", f"{program}.QF1_OFF")
+    io(f"{board}_QF1_Zap", f"{program}.QF1_ON")
+    for i, (suffix, variable, text) in enumerate(BOARD_INPUTS):
+        suffix = suffix.replace("{B}", board)
+        point(f"{board}_{suffix}", "M_SP_TB_1", 281 + i, f"{program}.{variable}",
+              text.replace("{B}", board))
+    command(f"{board}_VypnoutQF1", "C_SC_NA_1", 2021, f"{program}.Cmd_VypnoutQF1", "open QF1",
+            remote_enable=f"{program}.SA1_Dalkove", pulse_ms=500)
+    command(f"{board}_ZapnoutQF1", "C_SC_NA_1", 2022, f"{program}.Cmd_ZapnoutQF1", "close QF1",
+            remote_enable=f"{program}.SA1_Dalkove", pulse_ms=500)
+
+
+# --------------------------------------------------------------------------------------
+node("RDRT", "central PLC (Tecomat TC700) and HMI", 1, 0, sources=["plc/rdrt_io.st"],
+     allowed=False, groups=[{"name": "dispatch"}])
+task("main", 100, ["RDRTIO"], 400)
+for signal, variable in [
+    ("RDRT_FV230", "DI0_FV230"), ("RDRT_FV110", "DI1_FV110"), ("RDRT_FV24", "DI2_FV24"),
+    ("RDRT_G230_OK", "DI3_G230_OK"), ("RDRT_G110_OK", "DI4_G110_OK"), ("RDRT_G24_OK", "DI5_G24_OK"),
+    ("RDRT_Rezerva_DI6", "DI6_Rezerva"), ("RDRT_Switch_ABB_OK", "DI7_ABB_OK"),
+    ("RDRT_Switch_Korenix_Porucha", "DI8_Korenix_Porucha"),
+    ("RDRT_Switch_Siemens_Porucha", "DI9_Siemens_Porucha"),
+    ("RDRT_Dvere_NN", "P6_Dvere_NN"), ("RDRT_Dvere_VN", "P6_Dvere_VN"),
+    ("RDRT_Dvere_T1", "P6_Dvere_T1"), ("RDRT_Dvere_T2", "P6_Dvere_T2"),
+    ("module-fault:RDRT_P6", "PoruchaModul6"), ("module-fault:RDRT_P9", "PoruchaModul9"),
+]:
+    io(signal, f"RDRTIO.{variable}")
+for ioa, variable, text in [
+    (1, "SP1_FV230", "surge arrester FV230 tripped"),
+    (2, "SP2_FV110", "surge arrester FV110 tripped"),
+    (3, "SP3_FV24", "surge arrester FV24 tripped"),
+    (4, "SP4_G230", "power supply G230 fault"),
+    (5, "SP5_G110", "switch/supply G110 fault"),
+    (6, "SP6_G24", "supply G24 fault"),
+    (7, "SP7_Rezerva", "spare input DI6"),
+    (8, "SP8_Korenix", "Korenix switch fault"),
+    (9, "SP9_ABB", "ABB switch fault"),
+    (10, "SP10_Siemens", "Siemens switch fault"),
+]:
+    # Spec 7.2: points 1..20 are sent invalid while module P9 is faulty or removed.
+    point(f"RDRT_{variable}", "M_SP_TB_1", ioa, f"RDRTIO.{variable}", text,
+          groups=[1], invalid_when="RDRTIO.PoruchaModul9")
+point("RDRT_SP21_HMI_Mistne", "M_SP_TB_1", 21, "RDRTIO.HmiLokalne",
+      "HMI local mode (set by command 2001)", groups=[1])
+point("RDRT_SP24_PoruchaModul6", "M_SP_TB_1", 24, "RDRTIO.SP24_PoruchaModul6", "module P6 fault", groups=[1])
+point("RDRT_SP25_PoruchaModul9", "M_SP_TB_1", 25, "RDRTIO.SP25_PoruchaModul9", "module P9 fault", groups=[1])
+for ioa, variable, text in [
+    (26, "SP26_Dvere_NN", "LV switchroom door open"),
+    (27, "SP27_Dvere_VN", "HV switchroom door open"),
+    (28, "SP28_Dvere_T1", "transformer chamber T1 door open"),
+    (29, "SP29_Dvere_T2", "transformer chamber T2 door open"),
+]:
+    point(f"RDRT_{variable}", "M_SP_TB_1", ioa, f"RDRTIO.{variable}", text, groups=[1],
+          invalid_when="RDRTIO.PoruchaModul6")
+point("COMM_RH", "M_SP_TB_1", 32, None, "communication failure to the S7-1500 RH (TRUE = link down)", groups=[1])
+point("COMM_RZS", "M_SP_TB_1", 33, None, "communication failure to the S7-1500 RZS (TRUE = link down)", groups=[1])
+for k, board in enumerate(LIGHTING, start=1):
+    point(f"COMM_{board}", "M_SP_TB_1", 49 + k, None,
+          f"communication failure to lighting board {board} (TRUE = link down)", groups=[1])
+command("RDRT_HMI_Mistne", "C_SC_NA_1", 2001, "RDRTIO.HmiLokalne", "HMI local mode on/off (spec 7.4)")
+link("RH", "RH1.1", "COMM_RH", republish=0)
+link("RZS", "RZS1", "COMM_RZS", republish=0)
+for k, board in enumerate(LIGHTING, start=1):
+    link(board, board, f"COMM_{board}", republish=1000 * k)
+
+# --------------------------------------------------------------------------------------
+node("RH1.1", "main board concentrator (S7-1500)", 11, 1)
+point("COMM_RH2", "M_SP_TB_1", 280, None, "communication failure to the LOGO! of RH2")
+link("RH2", "RH2", "COMM_RH2", republish=0)
+
+power_board("RH2", "RH2Logic", "plc/rh2_logic.st", 21, 2, "board RH2 (LOGO!), fed from T2")
+
+node("RZS1", "standby-supply board concentrator (S7-1500)", 12, 3)
+point("COMM_RZZ", "M_SP_TB_1", 380, None, "communication failure to the LOGO! of RZZ")
+point("COMM_RDA", "M_SP_TB_1", 400, None, "communication failure to the LOGO! of RDA")
+link("RZZ", "RZZ", "COMM_RZZ", republish=100)
+link("RDA", "RDA", "COMM_RDA", republish=0)
+
+power_board("RZZ", "RZZLogic", "plc/rzz_logic.st", 22, 4, "board RZZ (LOGO!), fed from T1")
+
+# --------------------------------------------------------------------------------------
+node("RDA", "transfer board mains / diesel generator (LOGO!)", 23, 5, sources=["plc/rda_transfer.st"])
+task("main", 50, ["RDATransfer"], 200)
+for signal, variable in [
+    ("RDA_KHU1_Napeti_sit", "KHU1_NapetiSit"), ("RDA_KHU2_Napeti_DA", "KHU2_NapetiDA"),
+    ("RDA_KHU3_Napeti_RZS", "KHU3_NapetiRZS"), ("RDA_KM1_Zapnut", "KM1_Zapnut"),
+    ("RDA_KM2_Zapnut", "KM2_Zapnut"), ("RDA_SA1_Mistne", "SA1_Mistne"),
+    ("RDA_SA1_Dalkove", "SA1_Dalkove"), ("RDA_KHVRDA_Havarijni_vypnuti", "HavarijniVyp"),
+    ("RDA_DA_Bezi", "DA_Bezi"), ("RDA_DA_Pripraven", "DA_Pripraven"),
+    ("RDA_DA_Porucha", "DA_Porucha"), ("RDA_FV1_Prepetova_ochrana", "FV1_PrepetovaOchrana"),
+    ("RDA_FU1_Pretavena_pojistka", "FU1_PretavenaPojistka"),
+    ("RDA_KM1_Zap", "KM1_Zap"), ("RDA_KM2_Zap", "KM2_Zap"), ("RDA_DA_Start", "DA_Start"),
+]:
+    io(signal, f"RDATransfer.{variable}")
+for ioa, variable, text in [
+    (401, "KM1_Zapnut", "contactor KM1 (supply from RH1.1, mains) closed"),
+    (402, "KM2_Zapnut", "contactor KM2 (supply from the diesel generator) closed"),
+    (403, "KHU1_NapetiSit", "mains voltage present"),
+    (404, "KHU2_NapetiDA", "generator voltage present"),
+    (405, "KHU3_NapetiRZS", "RZS busbar voltage present"),
+    (406, "SA1_Mistne", "selector SA1 in local"),
+    (407, "SA1_Dalkove", "selector SA1 in remote"),
+    (408, "HavarijniVyp", "emergency off of RDA"),
+    (409, "DA_Bezi", "generator running"),
+    (410, "DA_Pripraven", "generator ready (voltage settled)"),
+    (411, "DA_Porucha", "generator failed to start"),
+    (412, "FV1_PrepetovaOchrana", "surge protection FV1 tripped"),
+    (413, "FU1_PretavenaPojistka", "fuse FU1 blown"),
+    (414, "NaSiti", "RZS fed from the mains"),
+    (415, "NaDA", "RZS fed from the diesel generator"),
+    (416, "BezNapeti", "RZS without supply"),
+    (417, "Porucha", "transfer fault (summary)"),
+    (418, "Porucha_DA", "generator fault"),
+    (419, "Porucha_KM1", "contactor KM1 does not follow its coil"),
+    (420, "Porucha_KM2", "contactor KM2 does not follow its coil"),
+]:
+    point(f"RDA_{variable}", "M_SP_TB_1", ioa, f"RDATransfer.{variable}", text)
+point("RDA_Stav", "M_ME_TE_1", 421, "RDATransfer.Stav",
+      "transfer state: 0 start, 1 mains, 2 generator starting, 3 settling, 4 on generator, 5 returning, 9 emergency off")
+command("RDA_ProvozDA", "C_SC_NA_1", 2201, "RDATransfer.Cmd_ProvozDA",
+        "run RZS from the diesel generator (test run; level, held until switched off)",
+        remote_enable="RDATransfer.SA1_Dalkove")
+
+# --------------------------------------------------------------------------------------
+LIGHTING_INPUTS = [
+    ("Dalkove", "Dalkove"), ("Cidlo", "Cidlo"), ("PrRele", "PrRele"),
+    ("KM1_Zapnut", "KM1_Zapnut"), ("Rucne_Zap", "Rucne_Zap"), ("Dvere", "Dvere"),
+    ("Termostat_Min", "Termostat_Min"), ("Termostat_Max", "Termostat_Max"),
+    ("FV1_Prepetova_ochrana", "FV1_PrepetovaOchrana"),
+    ("FU1_Pretavena_pojistka", "FU1_PretavenaPojistka"), ("Napeti", "Napeti"),
+    ("P_kW", "P_kW"), ("Energie_kWh", "Energie_kWh"),
+]
+LIGHTING_POINTS = [
+    (1, "Dalkove", "LightingBoard.Dalkove", "remote control enabled"),
+    (2, "Zap_Z_Rozvadece", "LightingBoard.Vystupy.Zap_Z_Rozvadece", "lighting under local (cabinet) control"),
+    (3, "Osv_Rucne", "LightingBoard.Vystupy.Osv_Rucne", "manual mode in force"),
+    (4, "Set_Astral", "LightingBoard.Vystupy.Set_Astral", "astronomical mode in force"),
+    (5, "Set_Cidlo", "LightingBoard.Vystupy.Set_Cidlo", "dusk-sensor mode in force"),
+    (6, "Set_Cas", "LightingBoard.Vystupy.Set_Cas", "time-window mode in force"),
+    (7, "Zap_Rucne", "LightingBoard.Vystupy.Zap_Rucne", "lit by manual command"),
+    (8, "Zap_Astral", "LightingBoard.Vystupy.Zap_Astral", "astronomical criterion: dark"),
+    (9, "Zap_Cidlo", "LightingBoard.Vystupy.Zap_Cidlo", "dusk-sensor criterion: dark"),
+    (10, "Zap_Cas", "LightingBoard.Vystupy.Zap_Cas", "inside a time window"),
+    (11, "Osv_Zap", "LightingBoard.Vystupy.Osv_Zap", "lighting ON command"),
+    (12, "PrRele", "LightingBoard.PrRele", "lamp-circuit feedback relay"),
+    (13, "Osv_Por", "LightingBoard.Vystupy.Osv_Por", "lighting-circuit fault"),
+    (14, "KM1_Zapnut", "LightingBoard.KM1_Zapnut", "lighting contactor KM1 closed"),
+    (15, "Porucha_KM1", "LightingBoard.Porucha_KM1", "contactor KM1 does not follow its coil"),
+    (16, "Dvere", "LightingBoard.Dvere", "cabinet door open"),
+    (17, "Termostat_Min", "LightingBoard.Termostat_Min", "cabinet thermostat min"),
+    (18, "Termostat_Max", "LightingBoard.Termostat_Max", "cabinet thermostat max"),
+    (19, "FV1_Prepetova_ochrana", "LightingBoard.FV1_PrepetovaOchrana", "surge arrester tripped"),
+    (20, "FU1_Pretavena_pojistka", "LightingBoard.FU1_PretavenaPojistka", "lamp-circuit fuse blown"),
+    (21, "Napeti", "LightingBoard.Napeti", "board supply present"),
+    (22, "Cidlo", "LightingBoard.Cidlo", "dusk sensor: dark"),
+]
+LIGHTING_COMMANDS = [
+    (51, "W_Rucne", "C_SC_NA_1", "LightingBoard.Vstupy.W_Rucne", "request manual mode", {}),
+    (52, "W_ZapRucne", "C_SC_NA_1", "LightingBoard.Vstupy.W_ZapRucne", "manual on/off", {}),
+    (53, "W_Astral", "C_SC_NA_1", "LightingBoard.Vstupy.W_Astral", "enable astronomical mode", {}),
+    (54, "W_Cidlo", "C_SC_NA_1", "LightingBoard.Vstupy.W_Cidlo", "enable dusk-sensor mode", {}),
+    (55, "W_Cas", "C_SC_NA_1", "LightingBoard.Vstupy.W_Cas", "enable time-window mode", {}),
+    (56, "W_SetTime", "C_SC_NA_1", "LightingBoard.Vstupy.W_SetTime",
+     "take over the four window times (strobe)", {"pulse_ms": 1000}),
+    (61, "W_Cas1Zap", "C_SE_NB_1", "LightingBoard.Cas1Zap_min", "window 1 on, minutes after midnight", {}),
+    (62, "W_Cas1Vyp", "C_SE_NB_1", "LightingBoard.Cas1Vyp_min", "window 1 off, minutes after midnight", {}),
+    (63, "W_Cas2Zap", "C_SE_NB_1", "LightingBoard.Cas2Zap_min", "window 2 on, minutes after midnight", {}),
+    (64, "W_Cas2Vyp", "C_SE_NB_1", "LightingBoard.Cas2Vyp_min", "window 2 off, minutes after midnight", {}),
+]
+
+for k, board in enumerate(LIGHTING, start=1):
+    what = "OŘ-area lighting (S7-1500 in DT)" if board == "OR" else f"lighting tower board {board} (S7-1200)"
+    node(board, what, 100 + k, 9 + k, sources=["plc/osvetleni.st", "plc/lighting_board.st"])
+    task("main", 100, ["LightingBoard"], 400)
+    # Staggered switch-on (spec 4.9, RS-A8: index x 2 s); astronomical mode until the
+    # dispatch sets another.
+    table("node.set", **{'"LightingBoard.Zpozdeni"': f"T#{2 * k}s",
+                         '"LightingBoard.Vstupy.W_Astral"': "TRUE"})
+    for suffix, variable in LIGHTING_INPUTS:
+        io(f"{board}_{suffix}", f"LightingBoard.{variable}")
+    io(f"{board}_OvladanyQ", "LightingBoard.OvladanyQ")
+    for n, name, source, text in LIGHTING_POINTS:
+        point(f"{board}_{name}", "M_SP_TB_1", n, source, text)
+    point(f"{board}_P_kW", "M_ME_TF_1", 31, "LightingBoard.P_kW", "lamp power, kW", deadband=0.1)
+    point(f"{board}_Energie_kWh", "M_ME_TF_1", 32, "LightingBoard.Energie_kWh", "lamp energy, kWh", deadband=0.5)
+    for n, name, type_id, target, text, extra in LIGHTING_COMMANDS:
+        command(f"{board}_{name}", type_id, n, target, text,
+                remote_enable="LightingBoard.Dalkove", **extra)
+
+OUT.write_text("\n".join(out).rstrip() + "\n", encoding="utf-8")
+print(f"wrote {OUT}")
