@@ -47,6 +47,12 @@
 //! [node.set]                           # optional: PLC values written after the cold start
 //! "LightingBoard.Zpozdeni" = "T#2s"    # variable path = IEC literal
 //!
+//! [[node.table]]                       # optional: a CSV file loaded into PLC arrays
+//! file = "calendar/vsetin-weekly.csv"  # header row; `#` lines are comments
+//! index = "week"                       # the column with each row's array index
+//! columns = { off_utc = "LightingBoard.Osvetleni.sunrise_data" }   # cell -> path[index];
+//!                                      # HH:MM[:SS] cells become TOD#HH:MM:SS literals
+//!
 //! [[node.io]]                          # plant signal <-> PLC variable; the pseudo-signal
 //! signal = "RH2_P1_SA1_Dalkove"         # "module-fault:MODULE" is TRUE while that I/O
 //!                                      # module is pulled or unreachable
@@ -189,6 +195,20 @@ pub struct NodeConfig {
     /// Values written into the PLC after its cold start (variable path -> IEC literal):
     /// parameters such as a board's switch-on delay.
     pub initial_values: Vec<(String, String)>,
+    /// Data tables loaded into PLC arrays after the cold start.
+    pub tables: Vec<TableConfig>,
+}
+
+/// A CSV file loaded into PLC arrays, `[[node.table]]`: the lighting calendar is data, not
+/// code (spec 4.4).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct TableConfig {
+    /// The CSV file (a header row; lines starting with `#` are comments).
+    pub file: PathBuf,
+    /// The column holding each row's array index.
+    pub index: String,
+    /// Column name -> array variable path; cell `v` of row `i` goes to `path[i]`.
+    pub columns: Vec<(String, String)>,
 }
 
 /// A node's IEC 104 server, `[node.server]`.
@@ -599,6 +619,16 @@ struct RawNode {
     link: Vec<RawLink>,
     #[serde(default)]
     set: std::collections::BTreeMap<String, String>,
+    #[serde(default)]
+    table: Vec<RawTable>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTable {
+    file: String,
+    index: String,
+    columns: std::collections::BTreeMap<String, String>,
 }
 
 #[derive(Deserialize)]
@@ -1472,6 +1502,24 @@ impl Ctx<'_> {
                 .set
                 .iter()
                 .map(|(path, value)| (path.clone(), value.clone()))
+                .collect(),
+            tables: raw
+                .table
+                .iter()
+                .enumerate()
+                .map(|(t, table)| TableConfig {
+                    file: self.existing_file(
+                        folder,
+                        &table.file,
+                        &[K("node"), I(n), K("table"), I(t), K("file")],
+                    ),
+                    index: table.index.clone(),
+                    columns: table
+                        .columns
+                        .iter()
+                        .map(|(column, path)| (column.clone(), path.clone()))
+                        .collect(),
+                })
                 .collect(),
         }
     }

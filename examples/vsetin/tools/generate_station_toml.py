@@ -315,6 +315,11 @@ for k, board in enumerate(LIGHTING, start=1):
     # dispatch sets another.
     table("node.set", **{'"LightingBoard.Zpozdeni"': f"T#{2 * k}s",
                          '"LightingBoard.Vstupy.W_Astral"': "TRUE"})
+    # The weekly calendar is data (spec 4.4): generated for Vsetín by
+    # `cargo run -p plant --example lighting_calendar`, replaceable by the official E 11 file.
+    table("[[node.table]]", file="calendar/vsetin-weekly.csv", index="week",
+          columns={"off_utc": "LightingBoard.Osvetleni.sunrise_data",
+                   "on_utc": "LightingBoard.Osvetleni.sunset_data"})
     for suffix, variable in LIGHTING_INPUTS:
         io(f"{board}_{suffix}", f"LightingBoard.{variable}")
     io(f"{board}_OvladanyQ", "LightingBoard.OvladanyQ")

@@ -611,6 +611,9 @@ fn build_node(
         plc.write(path, value)
             .map_err(|error| setup(format!("set `{path}` = `{value}`: {error}")))?;
     }
+    for table in &config.tables {
+        load_table(&mut plc, table).map_err(setup)?;
+    }
     for task in &config.tasks {
         let interval = i64::try_from(task.interval.as_nanos()).unwrap_or(i64::MAX);
         let programs: Vec<&str> = task.programs.iter().map(String::as_str).collect();
@@ -721,6 +724,66 @@ fn build_node(
     }
     sim.plc = Some(plc);
     Ok(sim)
+}
+
+/// Loads a CSV table into PLC arrays; errors name the file and line.
+fn load_table(plc: &mut Plc, table: &crate::config::TableConfig) -> Result<(), String> {
+    let file = table.file.display();
+    let text = std::fs::read_to_string(&table.file).map_err(|e| format!("{file}: {e}"))?;
+    let mut rows = text
+        .lines()
+        .enumerate()
+        .filter(|(_, line)| !line.trim_start().starts_with('#') && !line.trim().is_empty());
+    let Some((_, header)) = rows.next() else {
+        return Err(format!("{file}: no header row"));
+    };
+    let header: Vec<&str> = header.split(',').map(str::trim).collect();
+    let position = |name: &str| {
+        header
+            .iter()
+            .position(|h| *h == name)
+            .ok_or_else(|| format!("{file}: no column `{name}` in the header"))
+    };
+    let index_column = position(&table.index)?;
+    let columns = table
+        .columns
+        .iter()
+        .map(|(column, path)| Ok((position(column)?, path)))
+        .collect::<Result<Vec<_>, String>>()?;
+    for (number, line) in rows {
+        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+        let at = |message: String| format!("{file}:{}: {message}", number + 1);
+        let index: i64 = cells
+            .get(index_column)
+            .and_then(|c| c.parse().ok())
+            .ok_or_else(|| at(format!("`{}` is not an index", line.trim())))?;
+        for (column, path) in &columns {
+            let cell = cells
+                .get(*column)
+                .ok_or_else(|| at("missing cell".to_owned()))?;
+            let literal = if !cell.contains('#')
+                && cell.split(':').count() >= 2
+                && cell
+                    .split(':')
+                    .all(|part| part.chars().all(|c| c.is_ascii_digit()))
+            {
+                let parts: Vec<&str> = cell.split(':').collect();
+                let seconds = parts.get(2).copied().unwrap_or("00");
+                format!(
+                    "TOD#{:0>2}:{:0>2}:{:0>2}",
+                    parts.first().copied().unwrap_or("0"),
+                    parts.get(1).copied().unwrap_or("0"),
+                    seconds
+                )
+            } else {
+                (*cell).to_owned()
+            };
+            let target = format!("{path}[{index}]");
+            plc.write(&target, &literal)
+                .map_err(|error| at(format!("{target} := {literal}: {error}")))?;
+        }
+    }
+    Ok(())
 }
 
 /// The simulation thread's loop.

@@ -11,3 +11,5 @@
 mod continuity;
 mod harness;
 mod hierarchy;
+mod lighting;
+mod power;
