@@ -133,7 +133,7 @@ BOARD_INPUTS = [
 
 def power_board(board, program, source, ca, port_offset, description):
     node(board, description, ca, port_offset, sources=[source])
-    task("main", 50, [program], 200)
+    task("main", 10, [program], 100)  # a LOGO! scans in milliseconds
     for suffix, variable, _ in BOARD_INPUTS:
         io(f"{board}_{suffix.replace('{B}', board)}", f"{program}.{variable}")
     io(f"{board}_QF1_Zapnut", f"{program}.QF1_Zapnut")
@@ -219,7 +219,7 @@ power_board("RZZ", "RZZLogic", "plc/rzz_logic.st", 22, 4, "board RZZ (LOGO!), fe
 
 # --------------------------------------------------------------------------------------
 node("RDA", "transfer board mains / diesel generator (LOGO!)", 23, 5, sources=["plc/rda_transfer.st"])
-task("main", 50, ["RDATransfer"], 200)
+task("main", 10, ["RDATransfer"], 100)
 for signal, variable in [
     ("RDA_KHU1_Napeti_sit", "KHU1_NapetiSit"), ("RDA_KHU2_Napeti_DA", "KHU2_NapetiDA"),
     ("RDA_KHU3_Napeti_RZS", "KHU3_NapetiRZS"), ("RDA_KM1_Zapnut", "KM1_Zapnut"),

@@ -54,7 +54,7 @@ pub use clock::{NodeClock, Pacing, SimClock};
 pub use link::LinkHandle;
 pub use node::NodePoints;
 pub use recorder::Recorder;
-pub use simulation::{CommandRefusal, Simulation};
+pub use simulation::{CommandRefusal, OutputChange, Simulation};
 
 use command::{NodeHandler, Route, RoutedCommand};
 use link::LinkSpec;

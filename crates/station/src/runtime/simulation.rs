@@ -131,6 +131,22 @@ struct Pulse {
     leaf: Leaf,
 }
 
+/// A plant output driven to a new value by a node's PLC, for observers
+/// ([`Simulation::observe_outputs`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct OutputChange {
+    /// The node whose PLC drove it.
+    pub node: String,
+    /// The plant signal.
+    pub signal: String,
+    /// The new value.
+    pub value: Value,
+    /// Simulated time of the change.
+    pub time: Duration,
+    /// Wall-clock instant it was driven (latency measurements).
+    pub at: Instant,
+}
+
 /// The plant and the nodes' PLCs; owned by the simulation thread.
 pub struct Simulation {
     clock: Arc<SimClock>,
@@ -139,6 +155,7 @@ pub struct Simulation {
     plant: Option<VsetinPlant>,
     nodes: Vec<SimNode>,
     pulses: Vec<Pulse>,
+    observers: Vec<mpsc::Sender<OutputChange>>,
 }
 
 impl Simulation {
@@ -181,6 +198,7 @@ impl Simulation {
             plant,
             nodes: built,
             pulses: Vec::new(),
+            observers: Vec::new(),
         })
     }
 
@@ -200,6 +218,13 @@ impl Simulation {
             .iter_mut()
             .find(|n| n.points.name() == node)
             .and_then(|n| n.plc.as_mut())
+    }
+
+    /// Reports every plant output a PLC drives to a new value from now on.
+    pub fn observe_outputs(&mut self) -> mpsc::Receiver<OutputChange> {
+        let (sender, receiver) = mpsc::channel();
+        self.observers.push(sender);
+        receiver
     }
 
     /// Injects a fault or performs a hand operation given in text form: a plant fault
@@ -299,9 +324,14 @@ impl Simulation {
                 plc.write_leaf(&leaf, Val::Int(0));
             }
         }
-        let Simulation { plant, nodes, .. } = self;
+        let Simulation {
+            plant,
+            nodes,
+            observers,
+            ..
+        } = self;
         for node in nodes.iter_mut() {
-            node.cycle(now, plant.as_mut());
+            node.cycle(now, plant.as_mut(), observers);
         }
         for node in nodes.iter() {
             let utc = node.points.clock().at(now);
@@ -362,7 +392,12 @@ impl Simulation {
 }
 
 impl SimNode {
-    fn cycle(&mut self, now: Duration, plant: Option<&mut VsetinPlant>) {
+    fn cycle(
+        &mut self,
+        now: Duration,
+        plant: Option<&mut VsetinPlant>,
+        observers: &[mpsc::Sender<OutputChange>],
+    ) {
         let Some(plc) = self.plc.as_mut() else { return };
         let due = plc
             .next_due()
@@ -421,6 +456,15 @@ impl SimNode {
                         tracing::warn!(signal = %output.signal, %error, "output not driven");
                     }
                     output.last = Some(value);
+                    for observer in observers.iter() {
+                        let _ = observer.send(OutputChange {
+                            node: self.points.name().to_owned(),
+                            signal: output.signal.clone(),
+                            value,
+                            time: now,
+                            at: Instant::now(),
+                        });
+                    }
                 }
             }
         }
