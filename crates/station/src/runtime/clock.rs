@@ -7,7 +7,7 @@
 //! cycles, time tags and store records of a node read its node clock.
 
 use std::sync::atomic::{AtomicBool, AtomicI64, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use chrono::{DateTime, Offset as _, TimeZone as _, Utc};
@@ -58,6 +58,8 @@ pub struct NodeClock {
     offset_ns: AtomicI64,
     synchronised: AtomicBool,
     zone: Tz,
+    /// Clocks of lower nodes in this process that take this node's time.
+    followers: Mutex<Vec<Arc<NodeClock>>>,
 }
 
 impl NodeClock {
@@ -68,6 +70,7 @@ impl NodeClock {
             offset_ns: AtomicI64::new(0),
             synchronised: AtomicBool::new(false),
             zone,
+            followers: Mutex::new(Vec::new()),
         })
     }
 
@@ -92,12 +95,30 @@ impl NodeClock {
         i64::from(offset.local_minus_utc()) * 1_000_000_000
     }
 
-    /// Sets the clock so that it shows `utc` now (a clock synchronisation).
+    /// Sets the clock so that it shows `utc` now (a clock synchronisation), and the clocks
+    /// of its followers with it.
     pub fn synchronise(&self, utc: DateTime<Utc>) {
         let sim_utc = self.sim.utc_at(self.sim.now());
         let offset = (utc - sim_utc).num_nanoseconds().unwrap_or(0);
         self.offset_ns.store(offset, Ordering::Release);
         self.synchronised.store(true, Ordering::Release);
+        let followers = self
+            .followers
+            .lock()
+            .unwrap_or_else(|poison| poison.into_inner())
+            .clone();
+        for follower in followers {
+            follower.synchronise(utc);
+        }
+    }
+
+    /// Makes `lower` (a node below this one, in the same process) take this clock's time
+    /// whenever it is synchronised. The link graph is acyclic, so the chain ends.
+    pub(crate) fn add_follower(&self, lower: Arc<NodeClock>) {
+        self.followers
+            .lock()
+            .unwrap_or_else(|poison| poison.into_inner())
+            .push(lower);
     }
 
     /// Whether a synchronisation has been received since the start.

@@ -55,8 +55,9 @@ pub(crate) struct NodeHandler {
     pub commands: HashMap<u32, RoutedCommand>,
     /// Set once the links are up (they start after every server of the process).
     pub links: std::sync::OnceLock<HashMap<String, LinkHandle>>,
-    /// Links whose lower node takes this node's time.
-    pub sync_links: Vec<String>,
+    /// Links whose lower node takes this node's time, with the lower node's clock when it
+    /// runs in this process (set directly, see [`super::link`]).
+    pub sync_links: Vec<(String, Option<Arc<super::clock::NodeClock>>)>,
     pub simulation: mpsc::Sender<SimRequest>,
 }
 
@@ -94,7 +95,11 @@ impl StationHandler for NodeHandler {
         self.points.clock().synchronise(source.time);
         tracing::info!(node = %self.points.name(), %peer, time = %source.time, "clock synchronised");
         // Pass the time down at once rather than at the next periodic synchronisation.
-        for name in &self.sync_links {
+        // Lower nodes in this process followed already (NodeClock::synchronise).
+        for (name, local) in &self.sync_links {
+            if local.is_some() {
+                continue;
+            }
             let Some(client) = self
                 .links
                 .get()

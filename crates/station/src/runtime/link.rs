@@ -22,6 +22,7 @@ use tokio::sync::mpsc;
 use crate::pointdb::{from_element, PointId};
 use crate::store::EventCause;
 
+use super::clock::NodeClock;
 use super::node::NodePoints;
 
 /// How often a node re-synchronises the clocks of the nodes below it.
@@ -38,6 +39,10 @@ pub(crate) struct LinkSpec {
     pub status_point: Option<String>,
     /// Remote IOA -> the local points it feeds.
     pub points: HashMap<u32, Vec<PointId>>,
+    /// The lower node's clock when it runs in this process: both read the one simulated
+    /// clock, so it is set directly. (A C_CS_NA_1 would arrive late by the network delay
+    /// times the simulation speed, and skew the lower clock by that much.)
+    pub local_clock: Option<Arc<NodeClock>>,
 }
 
 enum LinkControl {
@@ -148,7 +153,7 @@ async fn run(
                             });
                         }
                         if spec.clock_sync {
-                            synchronise(&node, &client);
+                            synchronise(&spec, &node, &client);
                         }
                     }
                     Some(ClientEvent::Asdu(asdu)) => apply(&spec, &node, &origin, &asdu),
@@ -162,7 +167,7 @@ async fn run(
                 },
                 _ = sync_timer.tick(), if spec.clock_sync => {
                     if handle.is_up() {
-                        synchronise(&node, &client);
+                        synchronise(&spec, &node, &client);
                     }
                 }
                 request = control.recv() => match request {
@@ -203,7 +208,11 @@ fn set_down(spec: &LinkSpec, node: &NodePoints, origin: &str) {
     });
 }
 
-fn synchronise(node: &NodePoints, client: &ClientHandle) {
+fn synchronise(spec: &LinkSpec, node: &NodePoints, client: &ClientHandle) {
+    if let Some(lower) = &spec.local_clock {
+        lower.synchronise(node.clock().now());
+        return;
+    }
     let time = node.zone().to_cp56(node.clock().now());
     let client = client.clone();
     let name = node.name().to_owned();

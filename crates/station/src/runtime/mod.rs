@@ -285,6 +285,25 @@ impl Runtime {
             .map_err(|_| RuntimeError::Stopped)?;
         scan_answer.await.map_err(|_| RuntimeError::Stopped)?;
 
+        // The clocks of the nodes in this process, for links that set them directly.
+        let local_clocks: HashMap<String, Arc<NodeClock>> = shared
+            .iter()
+            .map(|(_, points)| (points.name().to_owned(), Arc::clone(points.clock())))
+            .collect();
+        let lower_clock = |link: &crate::config::LinkConfig| match &link.target {
+            crate::config::LinkTarget::Node(name) => local_clocks.get(name).cloned(),
+            crate::config::LinkTarget::Address(_) => None,
+        };
+        for (index, points) in &shared {
+            let Some(config) = project.nodes.get(*index) else {
+                continue;
+            };
+            for link in config.links.iter().filter(|l| l.clock_sync) {
+                if let Some(lower) = lower_clock(link) {
+                    points.clock().add_follower(lower);
+                }
+            }
+        }
         let mut nodes = Vec::new();
         let mut handlers = Vec::new();
         for (sim_index, (index, points)) in shared.iter().enumerate() {
@@ -322,7 +341,7 @@ impl Runtime {
                     .links
                     .iter()
                     .filter(|l| l.clock_sync)
-                    .map(|l| l.name.clone())
+                    .map(|l| (l.name.clone(), lower_clock(l)))
                     .collect(),
                 simulation: requests.clone(),
             });
@@ -417,6 +436,7 @@ impl Runtime {
                     clock_sync: link.clock_sync,
                     status_point: link.status_point.clone(),
                     points: map,
+                    local_clock: lower_clock(link),
                 };
                 let handle = link::spawn_link(spec, Arc::clone(points));
                 by_name.insert(link.name.clone(), handle.clone());

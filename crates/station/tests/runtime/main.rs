@@ -13,3 +13,4 @@ mod harness;
 mod hierarchy;
 mod lighting;
 mod power;
+mod time;
