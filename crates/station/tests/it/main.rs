@@ -13,6 +13,7 @@ mod config;
 mod fixture;
 mod pointdb;
 mod retention;
+mod runtime_store;
 mod specific;
 mod suite;
 
