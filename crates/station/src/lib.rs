@@ -2,15 +2,14 @@
 //!
 //! A station is a hierarchy of nodes (controllers) run from a project folder: PLC programs
 //! feed point databases, nodes publish them over IEC 60870-5-104 and concentrate the nodes
-//! below them, and every value change and command is recorded. The runtime is being built
-//! module by module:
+//! below them, and every value change and command is recorded.
 //!
-//! | module        | what it does                                                      | state   |
-//! |---------------|-------------------------------------------------------------------|---------|
-//! | [`config`]    | the project folder: `station.toml`, nodes, points, links, errors with file:line | present |
-//! | [`pointdb`]   | per-node typed values with quality and source time, report by exception | present |
-//! | [`runtime`]   | runs a project: simulated clock, plant and PLCs, servers, links (concentration, commands down the hierarchy), recording | present |
-//! | [`store`]     | the event and command-audit store (SQLite, PostgreSQL), retention | present |
+//! | module        | what it does                                                      |
+//! |---------------|-------------------------------------------------------------------|
+//! | [`config`]    | the project folder: `station.toml`, nodes, points, links, tables, errors with file:line:col |
+//! | [`pointdb`]   | per-node typed values with quality and source time, report by exception |
+//! | [`runtime`]   | runs a project: simulated clock, plant and PLCs, servers, links (concentration, commands down the hierarchy), recording |
+//! | [`store`]     | the event and command-audit store (SQLite, PostgreSQL), retention |
 #![cfg_attr(
     not(test),
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
