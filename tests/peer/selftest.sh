@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # End-to-end self test of the peer tooling, without any Stanice code:
 # c104_server.py <-> c104_client.py on 127.0.0.1 under capture.sh, checked
-# by check_capture.py; a big GI from raw104.py gi-server; and deliberately
-# broken frames that check_capture.py must reject.
+# by check_capture.py; a big GI from raw104.py gi-server; deliberately
+# broken frames that check_capture.py must reject; a c104_dispatch.py
+# scenario.
 #
 #   bash tests/peer/selftest.sh            (needs root for the capture)
 #
@@ -221,6 +222,34 @@ start_server "$T" "$P" --feedback-cot retrem && {
         >"$OUT/$T.client.jsonl" 2>"$OUT/$T.client.err"
     got="$(jq_py "$OUT/$T.client.jsonl" '[(d["ioa"], d["value"], d["cot"]) for d in L if "cot" in d and "type" in d]')"
     [ "$got" = "[(3021, True, 'RETURN_INFO_REMOTE')]" ] && pass "$T: feedback $got" || fail "$T: feedback $got"
+    stop_server "$T" >/dev/null
+}
+
+# ------------------------------------------------------------------ 6
+# c104_dispatch.py: a scenario of GI, commands and expected events
+T=dispatch
+P="$(free_port)"
+start_server "$T" "$P" && {
+    steps='[{"step":"gi","until_valid":2},
+            {"step":"command","command":"C_SC_NA_1:2021:1"},
+            {"step":"expect","ioa":3021,"value":true,"type":"M_SP_NA_1","timeout":5},
+            {"step":"command","command":"C_DC_NA_1:2100:ON"},
+            {"step":"expect","ioa":3100,"value":2,"timeout":5},
+            {"step":"command","command":"C_SC_NA_1:2029:1:expect-fail"},
+            {"step":"command","command":"C_SC_NA_1:2999:1:expect-fail"}]'
+    timeout 60 "$PY" "$HERE/c104_dispatch.py" --port "$P" --steps "$steps" \
+        >"$OUT/$T.client.jsonl" 2>"$OUT/$T.client.err"
+    rc=$?
+    [ $rc -eq 0 ] && pass "$T: scenario of 7 steps passed" \
+                  || fail "$T: dispatch exit $rc ($(tail -n1 "$OUT/$T.client.jsonl"))"
+    gi="$(jq_py "$OUT/$T.client.jsonl" '[(d["objects"], d["decoded_objects"], d["invalid"]) for d in L if d.get("event")=="gi_done"]')"
+    [ "$gi" = "[(45, 45, 0)]" ] && pass "$T: GI of 45 points decoded" || fail "$T: GI $gi"
+    tb="$(jq_py "$OUT/$T.client.jsonl" '[(d["type"], d["value"], d["time"] is not None) for d in L if d.get("ioa")==150 and "event" not in d]')"
+    [ "$tb" = "[('M_SP_TB_1', True, True)]" ] && pass "$T: time-tagged point $tb" || fail "$T: IOA 150 $tb"
+    # c104's own server sends its time-tagged points in the GI (COT 20), which
+    # its client flags: the two time-tagged ASDUs of the GI
+    c="$(jq_py "$OUT/$T.client.jsonl" '[d["c104_complaints"] for d in L if d.get("event")=="summary"]')"
+    [ "$c" = "[{'INVALID_COT': 2}]" ] && pass "$T: c104 complaints $c" || fail "$T: c104 complaints $c"
     stop_server "$T" >/dev/null
 }
 
