@@ -50,10 +50,23 @@ pub(crate) fn run(args: PointsArgs) -> anyhow::Result<ExitCode> {
         .collect();
     rows.sort_by(|a, b| a.0.cmp(&b.0).then_with(|| a.1.cmp(&b.1)));
     let mut out = csv::Writer::from_writer(std::io::stdout());
-    out.write_record(["ioa", "type", "name", "description"])?;
-    for (ioa, type_id, name, description) in rows {
-        out.write_record([ioa.to_string(), type_id, name, description])?;
+    let written = (|| -> Result<(), csv::Error> {
+        out.write_record(["ioa", "type", "name", "description"])?;
+        for (ioa, type_id, name, description) in rows {
+            out.write_record([ioa.to_string(), type_id, name, description])?;
+        }
+        out.flush()?;
+        Ok(())
+    })();
+    match written {
+        // A reader that stops early (`| head`) is not an error.
+        Err(error)
+            if error.is_io_error()
+                && matches!(error.kind(), csv::ErrorKind::Io(e) if e.kind() == std::io::ErrorKind::BrokenPipe) =>
+        {
+            Ok(ExitCode::SUCCESS)
+        }
+        Err(error) => Err(error.into()),
+        Ok(()) => Ok(ExitCode::SUCCESS),
     }
-    out.flush()?;
-    Ok(ExitCode::SUCCESS)
 }

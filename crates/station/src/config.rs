@@ -33,7 +33,9 @@
 //! allowed_clients = ["127.0.0.1"]      # default: any
 //! redundancy_groups = [ { name = "dispatch-A", clients = ["127.0.0.1"] } ]
 //!                                      # default: one catch-all group "default";
-//!                                      # a group without clients is a catch-all
+//!                                      # a group without clients is a catch-all;
+//!                                      # refuse_commands_when = "BOOL variable": the
+//!                                      # group's commands are refused while it is TRUE
 //! tls = { certificate = "tls/rh11.pem", private_key = "tls/rh11.key", trust_anchors = "tls/ca.pem" }
 //!                                      # optional; the files must exist
 //!
@@ -83,6 +85,7 @@
 //!                                          # remote commands are refused
 //! pulse_ms = 500                       # optional, single/double commands on a variable:
 //!                                      # reset to FALSE after this time
+//! from_groups = ["hmi"]                # optional: only clients of these redundancy groups
 //! description = "open QF1"             # optional
 //!
 //! [[node.link]]                        # IEC 104 client link to a lower node
@@ -231,6 +234,10 @@ pub struct RedundancyGroup {
     pub name: String,
     /// Client addresses of the group; empty means a catch-all group.
     pub clients: Vec<IpAddr>,
+    /// A BOOL variable of the node: while TRUE, commands from this group's clients are
+    /// refused (the TC700's per-link command permission, e.g. dispatch commands blocked
+    /// while the local HMI has control, spec 7.5).
+    pub refuse_commands_when: Option<String>,
 }
 
 /// TLS certificate, key and trust anchors (PEM files).
@@ -358,6 +365,9 @@ pub struct CommandConfig {
     /// until the next command. A command's QU (short/long pulse, persistent) is honoured
     /// as well: QU 1 and 2 pulse for this time (500 ms when not set), QU 3 persists.
     pub pulse: Option<Duration>,
+    /// Only clients of these redundancy groups may send it (empty: any client), as the
+    /// TC700 accepts its HMI-local command only over the HMI link (spec 7.4).
+    pub from_groups: Vec<String>,
     /// Free text.
     pub description: String,
 }
@@ -647,6 +657,7 @@ struct RawGroup {
     name: String,
     #[serde(default)]
     clients: Vec<String>,
+    refuse_commands_when: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -716,6 +727,8 @@ struct RawCommand {
     select_required: bool,
     remote_enable: Option<String>,
     pulse_ms: Option<i64>,
+    #[serde(default)]
+    from_groups: Vec<String>,
     #[serde(default)]
     description: String,
 }
@@ -1163,6 +1176,7 @@ impl Ctx<'_> {
                 None => vec![RedundancyGroup {
                     name: "default".to_owned(),
                     clients: Vec::new(),
+                    refuse_commands_when: None,
                 }],
                 Some(groups) => {
                     let mut out = Vec::new();
@@ -1187,6 +1201,7 @@ impl Ctx<'_> {
                         out.push(RedundancyGroup {
                             name: group.name.clone(),
                             clients,
+                            refuse_commands_when: group.refuse_commands_when.clone(),
                         });
                     }
                     out
@@ -1456,6 +1471,17 @@ impl Ctx<'_> {
                     CommandTarget::Variable(command.target.clone())
                 }
             };
+            for (g, group) in command.from_groups.iter().enumerate() {
+                let known = server.as_ref().is_some_and(|s: &ServerConfig| {
+                    s.redundancy_groups.iter().any(|r| &r.name == group)
+                });
+                if !known {
+                    self.err(
+                        &[K("node"), I(n), K("command"), I(c), K("from_groups"), I(g)],
+                        format!("node `{}` has no redundancy group `{group}`", raw.name),
+                    );
+                }
+            }
             let pulse = match command.pulse_ms {
                 None => None,
                 Some(ms) if (1..=3_600_000).contains(&ms) => {
@@ -1483,6 +1509,7 @@ impl Ctx<'_> {
                 select_required: command.select_required,
                 remote_enable: command.remote_enable.clone(),
                 pulse,
+                from_groups: command.from_groups.clone(),
                 description: command.description.clone(),
             });
         }
@@ -1821,6 +1848,7 @@ impl Ctx<'_> {
                         select_required: command.select_required,
                         remote_enable: None,
                         pulse: None,
+                        from_groups: Vec::new(),
                         description: command.description.clone(),
                     });
                 }

@@ -8,7 +8,8 @@
 //! changed:
 //!
 //! - **Report by exception.** A change is returned when the value or the quality differs
-//!   from the last *reported* one. For measured values (normalized, scaled and floating
+//!   from the last *reported* one (before the first update: the type's zero with IV, the
+//!   state interrogation shows). For measured values (normalized, scaled and floating
 //!   point types) with a deadband, a value change smaller than the deadband since the last
 //!   reported value is not reported (a change equal to the deadband is); the database
 //!   still holds the new value. A quality change is always reported.
@@ -700,7 +701,11 @@ impl PointDb {
                 source_time: None,
                 received: None,
                 kind,
-                reported: None,
+                // The initial state (zero, IV) is what interrogation shows before any
+                // update: an update that leaves it so is no change worth sending (a
+                // concentrator starting before its lower nodes would otherwise send a
+                // burst of invalid values upward).
+                reported: Some((kind.initial(), Quality::INVALID)),
                 next_due: None,
                 spec,
             });

@@ -150,8 +150,11 @@ def power_board(board, program, source, ca, port_offset, description):
 
 
 # --------------------------------------------------------------------------------------
+# Redundancy groups by client address: the local HMI panel (its own link, spec 7.5) and
+# every other client as the dispatch systems, whose commands the HMI-local mode blocks.
 node("RDRT", "central PLC (Tecomat TC700) and HMI", 1, 0, sources=["plc/rdrt_io.st"],
-     allowed=False, groups=[{"name": "dispatch"}])
+     allowed=False, groups=[{"name": "hmi", "clients": ["127.0.0.2"]},
+                            {"name": "dispatch", "refuse_commands_when": "RDRTIO.PovelyBlokovany"}])
 task("main", 100, ["RDRTIO"], 400)
 for signal, variable in [
     ("RDRT_FV230", "DI0_FV230"), ("RDRT_FV110", "DI1_FV110"), ("RDRT_FV24", "DI2_FV24"),
@@ -196,7 +199,8 @@ point("COMM_RZS", "M_SP_TB_1", 33, None, "communication failure to the S7-1500 R
 for k, board in enumerate(LIGHTING, start=1):
     point(f"COMM_{board}", "M_SP_TB_1", 49 + k, None,
           f"communication failure to lighting board {board} (TRUE = link down)", groups=[1])
-command("RDRT_HMI_Mistne", "C_SC_NA_1", 2001, "RDRTIO.HmiLokalne", "HMI local mode on/off (spec 7.4)")
+command("RDRT_HMI_Mistne", "C_SC_NA_1", 2001, "RDRTIO.HmiLokalne", "HMI local mode on/off (spec 7.4)",
+        from_groups=["hmi"])
 link("RH", "RH1.1", "COMM_RH", republish=0)
 link("RZS", "RZS1", "COMM_RZS", republish=0)
 for k, board in enumerate(LIGHTING, start=1):

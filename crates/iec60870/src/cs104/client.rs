@@ -42,6 +42,9 @@ pub struct ClientConfig {
     pub common_address: CommonAddress,
     /// Our originator address (0 when unused).
     pub originator: u8,
+    /// The local address to connect from (a multi-homed host; the server chooses a
+    /// redundancy group and the command authority by it); `None` lets the system choose.
+    pub local_address: Option<std::net::IpAddr>,
     /// APCI parameters (k, w, t0..t3).
     pub apci: ApciConfig,
     /// ASDU field sizes.
@@ -82,6 +85,7 @@ impl ClientConfig {
             addresses: vec![address.into()],
             common_address,
             originator: 0,
+            local_address: None,
             start_on_connect: true,
             apci: ApciConfig::default(),
             asdu: AsduParams::IEC104,
@@ -537,7 +541,30 @@ enum Transport {
 }
 
 async fn connect(config: &ClientConfig, address: &str) -> Result<(Transport, SocketAddr), String> {
-    let stream = tokio::time::timeout(config.apci.t0, TcpStream::connect(address))
+    let attempt = async {
+        match config.local_address {
+            None => TcpStream::connect(address).await,
+            Some(local) => {
+                let remote = tokio::net::lookup_host(address)
+                    .await?
+                    .find(|remote| remote.is_ipv4() == local.is_ipv4())
+                    .ok_or_else(|| {
+                        std::io::Error::new(
+                            std::io::ErrorKind::AddrNotAvailable,
+                            format!("no address of the family of {local}"),
+                        )
+                    })?;
+                let socket = if local.is_ipv4() {
+                    tokio::net::TcpSocket::new_v4()?
+                } else {
+                    tokio::net::TcpSocket::new_v6()?
+                };
+                socket.bind(SocketAddr::new(local, 0))?;
+                socket.connect(remote).await
+            }
+        }
+    };
+    let stream = tokio::time::timeout(config.apci.t0, attempt)
         .await
         .map_err(|_| format!("t0 expired connecting to {address}"))?
         .map_err(|error| format!("cannot connect to {address}: {error}"))?;

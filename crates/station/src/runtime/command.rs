@@ -47,6 +47,8 @@ pub(crate) enum Route {
 pub(crate) struct RoutedCommand {
     pub name: String,
     pub route: Route,
+    /// Only clients of these redundancy groups may send it (empty: any).
+    pub from_groups: Vec<String>,
 }
 
 /// The [`StationHandler`] of a node's server.
@@ -59,6 +61,22 @@ pub(crate) struct NodeHandler {
     /// runs in this process (set directly, see [`super::link`]).
     pub sync_links: Vec<(String, Option<Arc<super::clock::NodeClock>>)>,
     pub simulation: mpsc::Sender<SimRequest>,
+    /// The server's redundancy groups (command authority per group).
+    pub groups: Vec<crate::config::RedundancyGroup>,
+    /// This node's index on the simulation thread (authority variables are read there).
+    pub sim_node: usize,
+}
+
+impl NodeHandler {
+    /// The redundancy group a client belongs to, chosen as the server chooses it: the
+    /// first group naming its address, else the first catch-all group.
+    fn group_of(&self, peer: SocketAddr) -> Option<&crate::config::RedundancyGroup> {
+        let ip = peer.ip().to_canonical();
+        self.groups
+            .iter()
+            .find(|g| g.clients.contains(&ip))
+            .or_else(|| self.groups.iter().find(|g| g.clients.is_empty()))
+    }
 }
 
 impl StationHandler for NodeHandler {
@@ -74,7 +92,33 @@ impl StationHandler for NodeHandler {
             command: command.clone(),
             name: routed.name.clone(),
         };
+        let group = self.group_of(command.peer).cloned();
+        let group_name = group.as_ref().map(|g| g.name.clone()).unwrap_or_default();
+        if !routed.from_groups.is_empty() && !routed.from_groups.contains(&group_name) {
+            let detail = format!(
+                "accepted only from {} (this client is in `{group_name}`)",
+                routed.from_groups.join(", ")
+            );
+            return server::ready(this.finish(CommandOutcome::Refused, detail));
+        }
+        let blocked_by = group.and_then(|g| g.refuse_commands_when);
+        let sim_node = self.sim_node;
         Box::pin(async move {
+            if let Some(variable) = blocked_by {
+                match read_bool(&simulation, sim_node, &variable).await {
+                    Some(false) => {}
+                    Some(true) => {
+                        let detail = format!(
+                            "commands from `{group_name}` are blocked while {variable} is TRUE"
+                        );
+                        return this.finish(CommandOutcome::RefusedLocalMode, detail);
+                    }
+                    None => {
+                        let detail = format!("command authority {variable} cannot be read");
+                        return this.finish(CommandOutcome::Refused, detail);
+                    }
+                }
+            }
             let (outcome, detail) = match routed.route {
                 Route::Plc { node, pulse } => {
                     execute_on_plc(&simulation, node, &command, pulse).await
@@ -157,6 +201,17 @@ impl Recorded {
         });
         handler_outcome
     }
+}
+
+/// Reads a BOOL variable of a node's PLC on the simulation thread.
+async fn read_bool(simulation: &mpsc::Sender<SimRequest>, node: usize, path: &str) -> Option<bool> {
+    let (reply, answer) = oneshot::channel();
+    let path = path.to_owned();
+    let request = SimRequest::With(Box::new(move |sim| {
+        let _ = reply.send(sim.read_bool(node, &path));
+    }));
+    simulation.send(request).ok()?;
+    answer.await.ok().flatten()
 }
 
 async fn execute_on_plc(

@@ -329,6 +329,7 @@ impl Runtime {
                         RoutedCommand {
                             name: command.name.clone(),
                             route,
+                            from_groups: command.from_groups.clone(),
                         },
                     )
                 })
@@ -344,6 +345,12 @@ impl Runtime {
                     .map(|l| (l.name.clone(), lower_clock(l)))
                     .collect(),
                 simulation: requests.clone(),
+                groups: config
+                    .server
+                    .as_ref()
+                    .map(|s| s.redundancy_groups.clone())
+                    .unwrap_or_default(),
+                sim_node: sim_index,
             });
             let server = match (&config.server, config.server_address(&project.station)) {
                 (Some(server_config), Some(address)) => {

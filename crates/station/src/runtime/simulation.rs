@@ -220,6 +220,15 @@ impl Simulation {
             .and_then(|n| n.plc.as_mut())
     }
 
+    /// A BOOL (or integer: non-zero) variable of the node with this simulation index.
+    pub(crate) fn read_bool(&self, node: usize, path: &str) -> Option<bool> {
+        let plc = self.nodes.get(node)?.plc.as_ref()?;
+        match plc.read(path).ok()? {
+            Val::Int(x) => Some(x != 0),
+            _ => None,
+        }
+    }
+
     /// Reports every plant output a PLC drives to a new value from now on.
     pub fn observe_outputs(&mut self) -> mpsc::Receiver<OutputChange> {
         let (sender, receiver) = mpsc::channel();
@@ -657,6 +666,16 @@ fn build_node(
     }
     for table in &config.tables {
         load_table(&mut plc, table).map_err(setup)?;
+    }
+    for group in config.server.iter().flat_map(|s| &s.redundancy_groups) {
+        if let Some(path) = &group.refuse_commands_when {
+            plc.leaf(path).map_err(|error| {
+                setup(format!(
+                    "redundancy group `{}` refuse_commands_when `{path}`: {error}",
+                    group.name
+                ))
+            })?;
+        }
     }
     for task in &config.tasks {
         let interval = i64::try_from(task.interval.as_nanos()).unwrap_or(i64::MAX);

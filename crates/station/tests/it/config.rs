@@ -1190,3 +1190,37 @@ pulse_ms = 0
         Some(std::time::Duration::from_millis(250))
     );
 }
+
+#[test]
+fn command_groups_must_be_redundancy_groups_of_the_node() {
+    let toml = r#"[station]
+name = "X"
+time_zone = "UTC"
+[[node]]
+name = "A"
+common_address = 1
+sources = ["plc/main.st"]
+[node.server]
+port_offset = 0
+redundancy_groups = [{ name = "hmi", clients = ["127.0.0.2"] }, { name = "dispatch", refuse_commands_when = "Main.A" }]
+[[node.command]]
+name = "C"
+type = "C_SC_NA_1"
+ioa = 2
+target = "Main.A"
+from_groups = ["hmi", "scada"]
+"#;
+    expect_only(
+        toml,
+        &[PLC],
+        16,
+        23,
+        "node[0].command[0].from_groups[1]",
+        "no redundancy group `scada`",
+    );
+    let project = load(&toml.replace(", \"scada\"", ""), &[PLC]).unwrap();
+    let node = project.node("A").unwrap();
+    assert_eq!(node.commands[0].from_groups, ["hmi"]);
+    let groups = &node.server.as_ref().unwrap().redundancy_groups;
+    assert_eq!(groups[1].refuse_commands_when.as_deref(), Some("Main.A"));
+}

@@ -157,7 +157,19 @@ pub(crate) struct Dispatch {
 impl Dispatch {
     /// Connects to `address` (common address `ca`) and records every monitor object.
     pub(crate) async fn connect(address: SocketAddr, ca: u16, interrogate: bool) -> Dispatch {
+        Dispatch::connect_from(address, ca, interrogate, None).await
+    }
+
+    /// As [`Dispatch::connect`], from a given local address (127.0.0.2 is the HMI panel of
+    /// the Vsetín project).
+    pub(crate) async fn connect_from(
+        address: SocketAddr,
+        ca: u16,
+        interrogate: bool,
+        local: Option<std::net::IpAddr>,
+    ) -> Dispatch {
         let mut config = ClientConfig::new(address.to_string(), CommonAddress::new(ca));
+        config.local_address = local;
         config.interrogate_on_start = interrogate;
         config.reconnect_delay = Duration::from_millis(100);
         let (client, mut events) = spawn_client(config);

@@ -30,8 +30,9 @@ async fn dispatch_reads_the_board_through_two_concentrators() {
     })
     .await;
     // The plant's steady state: FA breakers closed, voltage present, SA1 in remote,
-    // no fuse or arrester fault, no emergency off.
-    for (ioa, expected) in [
+    // no fuse or arrester fault, no emergency off. (Links that came up while the GI ran
+    // may still bring values in: wait for them to settle.)
+    let expected = [
         (281, true),
         (282, true),
         (290, true),
@@ -41,10 +42,19 @@ async fn dispatch_reads_the_board_through_two_concentrators() {
         (294, false),
         (296, false),
         (298, true),
-    ] {
+    ];
+    let settled = || {
+        expected.iter().all(|(ioa, value)| {
+            dispatch
+                .last(*ioa)
+                .is_some_and(|r| r.on() == Some(*value) && !r.invalid())
+        })
+    };
+    eventually("the board's values at dispatch", settled).await;
+    // Nothing invalid was sent after the values arrived.
+    for (ioa, value) in expected {
         let got = dispatch.last(ioa).unwrap();
-        assert_eq!(got.on(), Some(expected), "IOA {ioa}: {got:?}");
-        assert!(!got.invalid(), "IOA {ioa} invalid: {got:?}");
+        assert_eq!(got.on(), Some(value), "IOA {ioa}: {got:?}");
     }
     // The link status point of RDRT reports RH1.1 reachable.
     assert_eq!(dispatch.last(32).unwrap().on(), Some(false));
@@ -177,5 +187,63 @@ async fn a_pulled_module_invalidates_its_points_up_to_dispatch() {
         (281..=298).all(|ioa| dispatch.last(ioa).is_some_and(|r| !r.invalid()))
     })
     .await;
+    runtime.shutdown().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn hmi_local_mode_blocks_dispatch_commands_but_not_the_hmi() {
+    let runtime = start(vsetin_project(), StoreChoice::Url("sqlite::memory:".into())).await;
+    runtime.advance(Duration::from_secs(1)).await.unwrap();
+    links_up(&runtime).await;
+    let address = rdrt_address(&runtime);
+    let dispatch = Dispatch::connect(address, RDRT_CA, true).await;
+    let hmi = Dispatch::connect_from(address, RDRT_CA, true, Some([127, 0, 0, 2].into())).await;
+
+    // The HMI-local command is accepted only over the HMI's link.
+    assert!(!dispatch.single_command(2001, true, false).await);
+    assert!(hmi.single_command(2001, true, false).await);
+    advance_until(&runtime, Duration::from_millis(100), "SP 21 set", || {
+        dispatch.last(21).and_then(|r| r.on()) == Some(true)
+    })
+    .await;
+    // Now the dispatch is refused, the HMI still commands the station.
+    assert!(!dispatch.single_command(2021, true, false).await);
+    assert!(hmi.single_command(2021, true, false).await);
+    advance_until(
+        &runtime,
+        Duration::from_millis(100),
+        "QF1 opened by the HMI",
+        || hmi.last(291).and_then(|r| r.on()) == Some(false),
+    )
+    .await;
+    // HMI local off: the dispatch has control again.
+    assert!(hmi.single_command(2001, false, false).await);
+    runtime.advance(Duration::from_millis(300)).await.unwrap();
+    assert!(dispatch.single_command(2022, true, false).await);
+
+    runtime.recorder().flush().await;
+    let commands = runtime
+        .store()
+        .unwrap()
+        .query_commands(&CommandQuery::default().with_node("RDRT"))
+        .await
+        .unwrap()
+        .items;
+    let refused: Vec<_> = commands
+        .iter()
+        .filter(|c| c.outcome != CommandOutcome::Executed)
+        .map(|c| (c.point.as_str(), c.outcome, c.detail.as_str()))
+        .collect();
+    assert_eq!(refused.len(), 2, "{refused:?}");
+    assert!(refused
+        .iter()
+        .any(|(point, outcome, detail)| *point == "RDRT_HMI_Mistne"
+            && *outcome == CommandOutcome::Refused
+            && detail.contains("accepted only from hmi")));
+    assert!(refused
+        .iter()
+        .any(|(point, outcome, detail)| *point == "RH2_VypnoutQF1"
+            && *outcome == CommandOutcome::RefusedLocalMode
+            && detail.contains("RDRTIO.PovelyBlokovany")));
     runtime.shutdown().await;
 }
