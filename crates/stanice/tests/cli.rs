@@ -392,7 +392,7 @@ fn demo_serves_the_station_to_dispatch() {
     // The whole station: the TC700's own points, the boards behind both concentrators
     // (RH2 at the thesis' addresses) and the thirteen lighting boards.
     for ioa in [
-        1, 10, 21, 32, 33, 50, 62, 280, 281, 298, 381, 398, 401, 415, 1001, 1011, 13_032,
+        1, 10, 21, 32, 33, 50, 62, 280, 281, 298, 381, 398, 401, 415, 10_101, 10_111, 11_332,
     ] {
         assert!(
             interrogated.contains(&ioa),

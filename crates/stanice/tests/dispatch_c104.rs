@@ -308,13 +308,13 @@ fn scenario() -> Value {
         command("C_SC_NA_1:2022:1"),
         expect(291, true),
         // Lighting tower ROV01: manual mode, lamps on, then off.
-        command("C_SC_NA_1:1051:1"),
-        command("C_SC_NA_1:1052:1"),
-        expect(1011, true),
-        expect(1014, true),
-        expect(1012, true),
-        command("C_SC_NA_1:1052:0"),
-        expect(1011, false),
+        command("C_SC_NA_1:10151:1"),
+        command("C_SC_NA_1:10152:1"),
+        expect(10111, true),
+        expect(10114, true),
+        expect(10112, true),
+        command("C_SC_NA_1:10152:0"),
+        expect(10111, false),
         // No such address: refused with cause 47.
         command("C_SC_NA_1:999:1:expect-fail"),
     ])
@@ -476,9 +476,9 @@ fn c104_dispatch_reads_the_station_and_operates_it() {
         (292, false, "RH2 SA1 local"),
         (32, false, "link to RH down"),
         (33, false, "link to RZS down"),
-        (1001, true, "ROV01 remote control"),
+        (10101, true, "ROV01 remote control"),
         (291, true, "RH2 busbar voltage"),
-        (1011, false, "ROV01 lighting on"),
+        (10111, false, "ROV01 lighting on"),
     ] {
         transcript.check(
             value_of(ioa) == (json!(on), json!(0)),
@@ -506,14 +506,14 @@ fn c104_dispatch_reads_the_station_and_operates_it() {
     }
 
     // Lighting of ROV01: manual mode and lamps on, then off.
-    for (command, value) in [(1051, true), (1052, true), (1052, false)] {
+    for (command, value) in [(10151, true), (10152, true), (10152, false)] {
         let result = transcript.command(command, value);
         transcript.check(
             result["ok"] == true && result["confirm"] == "positive",
             &format!("command {command} = {value}: {result}"),
         );
     }
-    for (event, on) in [(1011, true), (1014, true), (1012, true), (1011, false)] {
+    for (event, on) in [(10111, true), (10114, true), (10112, true), (10111, false)] {
         transcript.expected(event, on);
     }
 

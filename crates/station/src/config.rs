@@ -106,7 +106,8 @@
 //! # Checks
 //!
 //! Besides syntax and types: duplicate node, task, point, command and link names; duplicate
-//! IOAs within a node (points and commands separately); IOA 0 or above 16 777 215; common
+//! IOAs within a node (a command may not share an IOA with a point either: most
+//! controlling stations keep one information object per address); IOA 0 or above 16 777 215; common
 //! address 0 or 65535; point types that are not monitor types and command types that are
 //! not commands; `link:` sources and targets that are malformed, name no link of the node,
 //! or (for a link to a project node) an IOA the lower node does not serve as a point
@@ -1445,6 +1446,14 @@ impl Ctx<'_> {
                             &at("ioa"),
                             format!("IOA {a} is also used by command `{other}`"),
                         );
+                    } else if let Some(point) = point_ioas.get(&a) {
+                        // Many controlling stations (lib60870, most SCADA) keep one
+                        // information object per address: a command and a point on one
+                        // IOA would clash there.
+                        self.err(
+                            &at("ioa"),
+                            format!("IOA {a} is also the address of point `{point}`"),
+                        );
                     } else {
                         command_ioas.insert(a, command.name.clone());
                     }
@@ -1768,6 +1777,8 @@ impl Ctx<'_> {
                 let mut names: HashSet<String> =
                     this.points.iter().map(|p| p.name.clone()).collect();
                 let mut ioas: HashSet<u32> = this.points.iter().map(|p| p.ioa.get()).collect();
+                // Points and commands share one address space at the controlling station.
+                ioas.extend(this.commands.iter().map(|c| c.ioa.get()));
                 let mut problems = Vec::new();
                 for point in &lower.points {
                     let ioa = point
@@ -1828,6 +1839,13 @@ impl Ctx<'_> {
                         ));
                         continue;
                     };
+                    if ioas.contains(&ioa.get()) && !command_ioas.contains(&ioa.get()) {
+                        problems.push(format!(
+                            "command `{}` of `{}` lands on IOA {ioa}, the address of a point at `{}`",
+                            command.name, lower.name, this.name
+                        ));
+                        continue;
+                    }
                     if !command_names.insert(command.name.clone())
                         || !command_ioas.insert(ioa.get())
                     {

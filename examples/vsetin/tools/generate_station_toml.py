@@ -13,8 +13,10 @@ IOA plan (spec shared/spec/railway-station.md sections 5-7; where it is silent, 
   RH2 (via RH1.1)      281-298 (thesis), commands 2021/2022 (thesis); RH1.1's link 280
   RZZ (via RZS1)       381-398 (RZZ's own 281-298 + 100), commands 2121/2122
   RDA (via RZS1)       401-421, command 2201; RZS1's links: 380 RZZ, 400 RDA
-  lighting board k     k*1000 + n (ROV01 = 1, ..., ROV12 = 12, OR = 13):
+  lighting board k     10000 + 100*k + n (ROV01 = 1, ..., ROV12 = 12, OR = 13):
                        points n = 1-22 and 31/32, commands n = 51-64
+                       (no IOA is both a point and a command: many controlling
+                       stations keep one object per address)
 Ports: port_base + 0 RDRT, 1 RH1.1, 2 RH2, 3 RZS1, 4 RZZ, 5 RDA, 9 + k lighting board k.
 """
 
@@ -204,7 +206,7 @@ command("RDRT_HMI_Mistne", "C_SC_NA_1", 2001, "RDRTIO.HmiLokalne", "HMI local mo
 link("RH", "RH1.1", "COMM_RH", republish=0)
 link("RZS", "RZS1", "COMM_RZS", republish=0)
 for k, board in enumerate(LIGHTING, start=1):
-    link(board, board, f"COMM_{board}", republish=1000 * k)
+    link(board, board, f"COMM_{board}", republish=10_000 + 100 * k)
 
 # --------------------------------------------------------------------------------------
 node("RH1.1", "main board concentrator (S7-1500)", 11, 1)

@@ -96,7 +96,7 @@ deadband = 0.5
 [[node.command]]
 name = "C"
 type = "C_SC_NA_1"
-ioa = 1
+ioa = 2
 target = "Main.A"
 "#,
         &[PLC],
@@ -229,7 +229,7 @@ fn vsetin_example_loads() {
     let status = rdrt.point("COMM_RH").unwrap();
     assert_eq!(status.source, PointSource::LinkStatus("RH".into()));
     // Transitive republishing: RH2's points reach RDRT through RH1.1 at their thesis IOAs,
-    // RZZ's through RZS1 shifted by 100, lighting board k at k * 1000.
+    // RZZ's through RZS1 shifted by 100, lighting board k at 10000 + 100 k.
     assert_eq!(rdrt.point("RH2_V1_FA1_Zapnut").unwrap().ioa.get(), 281);
     assert_eq!(
         rdrt.point("RH2_V1_FA1_Zapnut").unwrap().source,
@@ -239,8 +239,8 @@ fn vsetin_example_loads() {
         }
     );
     assert_eq!(rdrt.point("RZZ_V1_FA1_Zapnut").unwrap().ioa.get(), 381);
-    assert_eq!(rdrt.point("ROV05_Osv_Zap").unwrap().ioa.get(), 5011);
-    assert_eq!(rdrt.point("OR_Energie_kWh").unwrap().ioa.get(), 13_032);
+    assert_eq!(rdrt.point("ROV05_Osv_Zap").unwrap().ioa.get(), 10_511);
+    assert_eq!(rdrt.point("OR_Energie_kWh").unwrap().ioa.get(), 11_332);
     let forwarded: Vec<u32> = rdrt
         .commands
         .iter()
@@ -408,7 +408,7 @@ common_address = 2
 }
 
 #[test]
-fn duplicate_ioas_points_and_commands_separately() {
+fn duplicate_ioas_of_points_and_commands() {
     let toml = r#"[station]
 name = "X"
 time_zone = "UTC"
@@ -444,14 +444,23 @@ target = "M.D"
         "node[0].point[1].ioa",
         "also used by point `P1`",
     );
+    // A command on a point's address clashes too (one object per address at most
+    // controlling stations).
+    expect(
+        &errors,
+        20,
+        7,
+        "node[0].command[0].ioa",
+        "also the address of point `P1`",
+    );
     expect(
         &errors,
         25,
         7,
         "node[0].command[1].ioa",
-        "also used by command `C1`",
+        "also the address of point `P1`",
     );
-    assert_eq!(errors.len(), 2, "{errors:#?}");
+    assert_eq!(errors.len(), 3, "{errors:#?}");
 }
 
 #[test]
@@ -499,7 +508,7 @@ source = "M.A"
 [[node.command]]
 name = "C1"
 type = "M_SP_NA_1"
-ioa = 1
+ioa = 3
 target = "M.C"
 "#;
     let errors = errors(toml, &[]);
@@ -548,7 +557,7 @@ source = "link:B"
 [[node.command]]
 name = "C1"
 type = "C_SC_NA_1"
-ioa = 1
+ioa = 3
 target = "link:B/8"
 "#;
     let errors = errors(toml, &[]);
@@ -1223,4 +1232,68 @@ from_groups = ["hmi", "scada"]
     assert_eq!(node.commands[0].from_groups, ["hmi"]);
     let groups = &node.server.as_ref().unwrap().redundancy_groups;
     assert_eq!(groups[1].refuse_commands_when.as_deref(), Some("Main.A"));
+}
+
+// ---------------------------------------------------------------------------------------
+// robustness: nothing panics, every problem is an error with a position
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(300))]
+
+    #[test]
+    fn arbitrary_text_never_panics(text in "\\PC{0,400}") {
+        let folder = Path::new("/nonexistent");
+        let _ = Project::parse(folder, &folder.join("station.toml"), &text);
+    }
+
+    #[test]
+    fn mutated_example_never_panics_and_errors_have_positions(
+        cuts in proptest::collection::vec((0usize..6000, 0usize..40, "\\PC{0,12}"), 1..4)
+    ) {
+        let original = std::fs::read_to_string(example_folder().join("station.toml")).unwrap();
+        let mut text: Vec<char> = original.chars().take(6000).collect();
+        for (at, len, insert) in cuts {
+            let at = at.min(text.len());
+            let end = (at + len).min(text.len());
+            text.splice(at..end, insert.chars());
+        }
+        let text: String = text.into_iter().collect();
+        let folder = example_folder();
+        if let Err(errors) = Project::parse(&folder, &folder.join("station.toml"), &text) {
+            let lines = text.lines().count().max(1);
+            for error in errors.errors() {
+                proptest::prop_assert!(error.line <= lines + 1, "{error}");
+            }
+        }
+    }
+}
+
+#[test]
+fn a_command_may_not_share_an_ioa_with_a_point() {
+    let toml = r#"[station]
+name = "X"
+time_zone = "UTC"
+[[node]]
+name = "A"
+common_address = 1
+sources = ["plc/main.st"]
+[[node.point]]
+name = "P"
+type = "M_SP_NA_1"
+ioa = 7
+source = "Main.A"
+[[node.command]]
+name = "C"
+type = "C_SC_NA_1"
+ioa = 7
+target = "Main.A"
+"#;
+    expect_only(
+        toml,
+        &[PLC],
+        16,
+        7,
+        "node[0].command[0].ioa",
+        "also the address of point `P`",
+    );
 }
