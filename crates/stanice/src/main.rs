@@ -7,9 +7,11 @@
 //!   `stanice demo` runs the Vsetín railway station.
 //! - `stanice points` / `stanice events`: a node's data points; the event store.
 //! - `stanice plc ...`: checks and runs Structured Text.
+//! - `stanice hmi` / `stanice user`: the web HMI and its users.
 
 mod demo;
 mod events;
+mod hmi;
 mod iec104;
 mod plc;
 mod points;
@@ -45,6 +47,11 @@ enum Command {
     Points(points::PointsArgs),
     /// Query the event store: value changes or, with --commands, the command audit.
     Events(events::EventsArgs),
+    /// Web HMI for a station (browser SCADA, itself an IEC 104 controlling station).
+    Hmi(hmi::HmiArgs),
+    /// Manage the HMI's users (levels 0-9, argon2 password hashes).
+    #[command(subcommand)]
+    User(hmi::UserCommand),
     /// Soft PLC: check and run Structured Text.
     #[command(subcommand)]
     Plc(plc::PlcCommand),
@@ -77,6 +84,8 @@ fn main() -> std::process::ExitCode {
             Command::Run(args) => run::run(args).await,
             Command::Points(args) => points::run(args),
             Command::Events(args) => events::run(args).await,
+            Command::Hmi(args) => hmi::run(args).await,
+            Command::User(command) => hmi::user(command),
             Command::Plc(command) => plc::run(command).await,
         }
     });

@@ -46,6 +46,10 @@ pub(crate) struct RunOptions {
     /// Stop after this many real seconds (runs until Ctrl-C otherwise).
     #[arg(long)]
     duration: Option<f64>,
+    /// Also serve the project's web HMI (its `hmi/` folder) on 127.0.0.1:8080 + (port
+    /// base - 2404); the demo does by default.
+    #[arg(long)]
+    hmi: bool,
 }
 
 pub(crate) async fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
@@ -102,6 +106,12 @@ pub(crate) async fn run_project(
     .await
     .context("the station does not start")?;
     print_banner(&runtime, &store_shown, options.speed, demo);
+    let hmi = if options.hmi || demo {
+        start_hmi(&runtime, options.store.as_deref() == Some("none")).await?
+    } else {
+        None
+    };
+    println!("Type a fault or operation here (`help` lists them); Ctrl-C stops.");
     let stop = async {
         match options.duration {
             Some(seconds) => {
@@ -114,10 +124,61 @@ pub(crate) async fn run_project(
     };
     tokio::select! {
         () = stop => {}
-        () = console(&runtime) => {}
+        () = console(&runtime, hmi.as_ref()) => {}
+    }
+    if let Some(hmi) = hmi {
+        hmi.shutdown().await;
     }
     runtime.shutdown().await;
     Ok(ExitCode::SUCCESS)
+}
+
+/// Starts the project's web HMI (`PROJECT/hmi/`) against its top node, when the project
+/// has one. It connects from 127.0.0.2, the address the Vsetín project gives its HMI
+/// link (HMI-local mode, spec 7.4).
+async fn start_hmi(runtime: &Runtime, memory_store: bool) -> anyhow::Result<Option<hmi::Hmi>> {
+    let project = runtime.project();
+    let screens = project.folder.join("hmi");
+    if !screens.join("hmi.toml").is_file() {
+        println!("  (no web HMI: {} has no hmi.toml)", screens.display());
+        return Ok(None);
+    }
+    let Some((top, server)) = project.top_node().and_then(|config| {
+        runtime
+            .node(&config.name)
+            .and_then(|node| node.server.as_ref())
+            .map(|server| (config, server))
+    }) else {
+        return Ok(None);
+    };
+    let offset = i32::from(project.station.port_base) - 2404;
+    let port = u16::try_from(8080 + offset).unwrap_or(8080);
+    let store = if memory_store {
+        "sqlite::memory:".to_owned()
+    } else {
+        format!(
+            "sqlite:{}",
+            project.folder.join("hmi-events.sqlite").display()
+        )
+    };
+    let hmi = hmi::Hmi::start(hmi::HmiOptions {
+        screens: screens.clone(),
+        users: screens.join("users.toml"),
+        connect: vec![server.local_addr().to_string()],
+        common_address: top.common_address,
+        listen: std::net::SocketAddr::from(([127, 0, 0, 1], port)),
+        store: Some(store),
+        zone: station::pointdb::TimeZonePolicy::Zone(project.station.time_zone),
+        local_address: Some(std::net::IpAddr::from([127, 0, 0, 2])),
+    })
+    .await
+    .context("the web HMI does not start")?;
+    println!(
+        "  HMI      http://{}/  (users in {}: the demo's are operator / operator-vsetin, admin / admin-vsetin, viewer / viewer-vsetin)",
+        hmi.address,
+        screens.join("users.toml").display()
+    );
+    Ok(Some(hmi))
 }
 
 fn print_banner(runtime: &Runtime, store: &str, speed: f64, demo: bool) {
@@ -177,7 +238,6 @@ fn print_banner(runtime: &Runtime, store: &str, speed: f64, demo: bool) {
             project.folder.display()
         );
     }
-    println!("Type a fault or operation here (`help` lists them); Ctrl-C stops.");
 }
 
 const HELP: &str = "\
@@ -188,11 +248,11 @@ faults:      supply-loss TNS_USTI|TNS_VALMEZ|UTILITY|T1|T2, generator-fail-to-st
              communication-lost MODULE;  `clear FAULT` or `clear all` removes them
 operations:  selector BOARD local|remote, manual-switch BOARD on|off, close NAME, open NAME,
              illuminance LUX|auto
-links:       link-cut NODE/LINK, link-restore NODE/LINK
+links:       link-cut NODE/LINK, link-restore NODE/LINK; hmi-link-cut, hmi-link-restore
 other:       status, help";
 
 /// Reads operations from standard input until it closes.
-async fn console(runtime: &Runtime) {
+async fn console(runtime: &Runtime, hmi: Option<&hmi::Hmi>) {
     let mut lines = tokio::io::BufReader::new(tokio::io::stdin()).lines();
     while let Ok(Some(line)) = lines.next_line().await {
         let line = line.trim();
@@ -200,6 +260,13 @@ async fn console(runtime: &Runtime) {
             "" => {}
             "help" => println!("{HELP}"),
             "status" => print_status(runtime),
+            "hmi-link-cut" | "hmi-link-restore" => match hmi {
+                Some(hmi) => {
+                    hmi.station.set_link(line == "hmi-link-restore");
+                    println!("ok: {line}");
+                }
+                None => println!("error: no web HMI runs here"),
+            },
             _ => match runtime.operate(line).await {
                 Ok(()) => println!("ok: {line}"),
                 Err(error) => println!("error: {error}"),

@@ -1,0 +1,291 @@
+//! The screens folder: `hmi.toml`, `points.csv` and the SVG mimics (docs/HMI.md).
+
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+
+use iec60870::asdu::TypeId;
+use serde::Deserialize;
+
+use crate::HmiError;
+
+/// One row of `points.csv`: what the station serves at an address.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointRow {
+    /// Information object address.
+    pub ioa: u32,
+    /// IEC type.
+    pub type_id: TypeId,
+    /// Name.
+    pub name: String,
+    /// Description.
+    pub description: String,
+}
+
+/// A mimic screen.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScreenConfig {
+    /// URL-safe id.
+    pub id: String,
+    /// Title shown in the navigation.
+    pub title: String,
+    /// The SVG file, relative to the folder.
+    pub file: PathBuf,
+}
+
+/// A control: who may use a command and how.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControlConfig {
+    /// A command name of `points.csv`.
+    pub command: String,
+    /// Permission level needed, 0..=9.
+    pub level: u8,
+    /// Select-before-operate.
+    #[serde(default)]
+    pub select: bool,
+    /// Text of the confirmation step.
+    #[serde(default)]
+    pub confirm: Option<String>,
+    /// A single point that is TRUE while the target is in local mode: a refusal is then
+    /// reported as "refused by local mode".
+    #[serde(default)]
+    pub local_point: Option<String>,
+}
+
+/// An alarm on a single point.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AlarmConfig {
+    /// A single point of `points.csv`.
+    pub point: String,
+    /// The alarm is raised while the point has this value (default TRUE).
+    #[serde(default = "yes")]
+    pub when: bool,
+    /// 1 (highest) ..= 4.
+    pub priority: u8,
+    /// Text shown.
+    pub text: String,
+    /// Whether it needs an operator acknowledgement.
+    #[serde(default)]
+    pub acknowledge: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+fn default_level() -> u8 {
+    5
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawConfig {
+    title: String,
+    #[serde(default = "default_level")]
+    default_control_level: u8,
+    #[serde(default)]
+    screen: Vec<ScreenConfig>,
+    #[serde(default)]
+    control: Vec<ControlConfig>,
+    #[serde(default)]
+    alarm: Vec<AlarmConfig>,
+    #[serde(default)]
+    trend: Vec<TrendConfig>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TrendConfig {
+    point: String,
+}
+
+/// A loaded screens folder.
+#[derive(Debug, Clone)]
+pub struct HmiConfig {
+    /// The folder.
+    pub folder: PathBuf,
+    /// Station title.
+    pub title: String,
+    /// Level for controls not listed.
+    pub default_control_level: u8,
+    /// Screens, in navigation order.
+    pub screens: Vec<ScreenConfig>,
+    /// Controls.
+    pub controls: Vec<ControlConfig>,
+    /// Alarms.
+    pub alarms: Vec<AlarmConfig>,
+    /// Points kept for trends.
+    pub trends: Vec<String>,
+    /// The station's points and commands.
+    pub points: Vec<PointRow>,
+}
+
+impl HmiConfig {
+    /// Loads `folder/hmi.toml` and `folder/points.csv` and checks the references between
+    /// them; errors name the file (and line for TOML and CSV).
+    pub fn load(folder: &Path) -> Result<HmiConfig, HmiError> {
+        let file = folder.join("hmi.toml");
+        let text = std::fs::read_to_string(&file)
+            .map_err(|e| HmiError::Config(format!("{}: {e}", file.display())))?;
+        let raw: RawConfig = toml::from_str(&text).map_err(|e| {
+            let (line, column) = e
+                .span()
+                .map(|span| line_col(&text, span.start))
+                .unwrap_or((0, 0));
+            HmiError::Config(format!(
+                "{}:{line}:{column}: {}",
+                file.display(),
+                e.message()
+            ))
+        })?;
+        let points = load_points(&folder.join("points.csv"))?;
+        let config = HmiConfig {
+            folder: folder.to_path_buf(),
+            title: raw.title,
+            default_control_level: raw.default_control_level.min(9),
+            screens: raw.screen,
+            controls: raw.control,
+            alarms: raw.alarm,
+            trends: raw.trend.into_iter().map(|t| t.point).collect(),
+            points,
+        };
+        config.check()?;
+        Ok(config)
+    }
+
+    fn check(&self) -> Result<(), HmiError> {
+        let file = self.folder.join("hmi.toml");
+        let bad = |message: String| HmiError::Config(format!("{}: {message}", file.display()));
+        let names: HashSet<&str> = self.points.iter().map(|p| p.name.as_str()).collect();
+        let commands: HashSet<&str> = self
+            .points
+            .iter()
+            .filter(|p| p.type_id.is_command())
+            .map(|p| p.name.as_str())
+            .collect();
+        let mut ids = HashSet::new();
+        for screen in &self.screens {
+            if screen.id.is_empty()
+                || !screen
+                    .id
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+            {
+                return Err(bad(format!("screen id `{}` is not URL-safe", screen.id)));
+            }
+            if !ids.insert(screen.id.as_str()) {
+                return Err(bad(format!("duplicate screen id `{}`", screen.id)));
+            }
+            if !self.folder.join(&screen.file).is_file() {
+                return Err(bad(format!(
+                    "screen `{}`: file {} not found",
+                    screen.id,
+                    screen.file.display()
+                )));
+            }
+        }
+        for control in &self.controls {
+            if !commands.contains(control.command.as_str()) {
+                return Err(bad(format!(
+                    "control `{}` is no command of points.csv",
+                    control.command
+                )));
+            }
+            if control.level > 9 {
+                return Err(bad(format!("control `{}`: level above 9", control.command)));
+            }
+            if let Some(local) = &control.local_point {
+                if !names.contains(local.as_str()) {
+                    return Err(bad(format!(
+                        "control `{}`: no point `{local}`",
+                        control.command
+                    )));
+                }
+            }
+        }
+        for alarm in &self.alarms {
+            let single = self.points.iter().any(|p| {
+                p.name == alarm.point
+                    && matches!(
+                        p.type_id,
+                        TypeId::M_SP_NA_1 | TypeId::M_SP_TA_1 | TypeId::M_SP_TB_1
+                    )
+            });
+            if !single {
+                return Err(bad(format!(
+                    "alarm on `{}`: no single point of that name",
+                    alarm.point
+                )));
+            }
+            if !(1..=4).contains(&alarm.priority) {
+                return Err(bad(format!(
+                    "alarm on `{}`: priority is 1..=4",
+                    alarm.point
+                )));
+            }
+        }
+        for trend in &self.trends {
+            if !names.contains(trend.as_str()) {
+                return Err(bad(format!("trend of `{trend}`: no such point")));
+            }
+        }
+        Ok(())
+    }
+
+    /// The control settings of a command (the defaults when it is not listed).
+    pub fn control(&self, command: &str) -> ControlConfig {
+        self.controls
+            .iter()
+            .find(|c| c.command == command)
+            .cloned()
+            .unwrap_or(ControlConfig {
+                command: command.to_owned(),
+                level: self.default_control_level,
+                select: false,
+                confirm: None,
+                local_point: None,
+            })
+    }
+}
+
+fn load_points(file: &Path) -> Result<Vec<PointRow>, HmiError> {
+    let bad = |line: u64, message: String| {
+        HmiError::Config(format!("{}:{line}: {message}", file.display()))
+    };
+    let mut reader = csv::Reader::from_path(file)
+        .map_err(|e| HmiError::Config(format!("{}: {e}", file.display())))?;
+    let mut rows = Vec::new();
+    let mut seen = HashSet::new();
+    for record in reader.records() {
+        let record =
+            record.map_err(|e| bad(e.position().map_or(0, |p| p.line()), e.to_string()))?;
+        let line = record.position().map_or(0, |p| p.line());
+        let field = |i: usize| record.get(i).unwrap_or("").trim().to_owned();
+        let ioa: u32 = field(0)
+            .parse()
+            .map_err(|_| bad(line, format!("`{}` is not an IOA", field(0))))?;
+        let type_id: TypeId = field(1)
+            .parse()
+            .map_err(|_| bad(line, format!("unknown type `{}`", field(1))))?;
+        let name = field(2);
+        if name.is_empty() || !seen.insert(name.clone()) {
+            return Err(bad(line, format!("empty or duplicate name `{name}`")));
+        }
+        rows.push(PointRow {
+            ioa,
+            type_id,
+            name,
+            description: field(3),
+        });
+    }
+    Ok(rows)
+}
+
+fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let before = text.get(..offset).unwrap_or(text);
+    let line = before.matches('\n').count() + 1;
+    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, column)
+}

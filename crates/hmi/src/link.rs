@@ -1,0 +1,636 @@
+//! The HMI's link to the station: an IEC 104 controlling station keeping every point of
+//! `points.csv` with its quality, recording changes and commands in the HMI's own store,
+//! evaluating alarms and broadcasting everything to the browsers.
+//!
+//! When the link is lost every point turns invalid at once (and the browsers blink);
+//! after reconnection a general interrogation brings the values back.
+
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, RwLock};
+use std::time::Duration;
+
+use chrono::{DateTime, Utc};
+use iec60870::asdu::{
+    Asdu, CommandQualifier, CommonAddress, DoublePointState, Element, Ioa, SetpointQualifier,
+    TimeTag, TypeId,
+};
+use iec60870::cs104::client::{spawn_client, ClientConfig, ClientError, ClientEvent, ClientHandle};
+use serde::Serialize;
+use serde_json::{json, Value};
+use station::pointdb::TimeZonePolicy;
+use station::runtime::Recorder;
+use station::store::{
+    Actor, CommandOutcome, CommandPhase, CommandRecord, EventCause, EventRecord, PointValue,
+    Quality, SourceTime,
+};
+use tokio::sync::{broadcast, mpsc};
+
+use crate::alarms::{Alarm, Alarms};
+use crate::config::{HmiConfig, PointRow};
+
+/// A point as the browsers see it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PointView {
+    /// Name.
+    pub name: String,
+    /// Address.
+    pub ioa: u32,
+    /// IEC type mnemonic.
+    #[serde(rename = "type")]
+    pub type_name: String,
+    /// Description.
+    pub description: String,
+    /// bool (single), 0..=3 (double), number, or null before the first value.
+    pub value: Value,
+    /// Invalid (IV, or the link is down).
+    pub invalid: bool,
+    /// Quality flags set.
+    pub quality: Vec<&'static str>,
+    /// Source time.
+    pub time: Option<DateTime<Utc>>,
+}
+
+/// What a control came to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ControlOutcome {
+    /// Confirmed positively.
+    Executed,
+    /// Confirmed negatively.
+    Refused,
+    /// Refused by the station, the target being in local mode.
+    RefusedLocal,
+    /// The user's level is too low (decided by the HMI).
+    RefusedPermission,
+    /// No confirmation in time.
+    TimedOut,
+    /// No link to the station.
+    NoLink,
+}
+
+impl ControlOutcome {
+    fn audit(self) -> CommandOutcome {
+        match self {
+            ControlOutcome::Executed => CommandOutcome::Executed,
+            ControlOutcome::Refused => CommandOutcome::Refused,
+            ControlOutcome::RefusedLocal => CommandOutcome::RefusedLocalMode,
+            ControlOutcome::RefusedPermission => CommandOutcome::RefusedPermission,
+            ControlOutcome::TimedOut => CommandOutcome::TimedOut,
+            ControlOutcome::NoLink => CommandOutcome::Failed,
+        }
+    }
+}
+
+enum LinkControl {
+    Cut,
+    Restore,
+}
+
+/// The station as the HMI knows it.
+pub struct Station {
+    config: HmiConfig,
+    points: RwLock<Vec<PointView>>,
+    by_ioa: HashMap<u32, usize>,
+    by_name: HashMap<String, usize>,
+    up: AtomicBool,
+    addresses: Vec<String>,
+    common_address: CommonAddress,
+    node_label: String,
+    live: broadcast::Sender<String>,
+    client: Mutex<Option<ClientHandle>>,
+    control: mpsc::UnboundedSender<LinkControl>,
+    recorder: Recorder,
+    alarms: Mutex<Alarms>,
+    zone: TimeZonePolicy,
+    local_address: Option<std::net::IpAddr>,
+}
+
+impl std::fmt::Debug for Station {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Station")
+            .field("addresses", &self.addresses)
+            .field("up", &self.is_up())
+            .finish_non_exhaustive()
+    }
+}
+
+fn view_of(row: &PointRow) -> PointView {
+    PointView {
+        name: row.name.clone(),
+        ioa: row.ioa,
+        type_name: row.type_id.to_string(),
+        description: row.description.clone(),
+        value: Value::Null,
+        invalid: true,
+        quality: vec!["IV"],
+        time: None,
+    }
+}
+
+fn quality_flags(q: Quality) -> Vec<&'static str> {
+    let mut flags = Vec::new();
+    for (set, name) in [
+        (q.invalid, "IV"),
+        (q.not_topical, "NT"),
+        (q.substituted, "SB"),
+        (q.blocked, "BL"),
+        (q.overflow, "OV"),
+    ] {
+        if set {
+            flags.push(name);
+        }
+    }
+    flags
+}
+
+fn json_value(value: &PointValue) -> Value {
+    match value {
+        PointValue::Bool(b) => json!(b),
+        PointValue::DoublePoint(d) => json!(d),
+        PointValue::Int(i) => json!(i),
+        PointValue::Float(f) if f.is_finite() => json!(f),
+        PointValue::Float(_) => Value::Null,
+        PointValue::Bits(b) => json!(b),
+        PointValue::Text(t) => json!(t),
+    }
+}
+
+impl Station {
+    /// Connects to the station (`addresses`: main and alternates) with common address
+    /// `ca`, on the current tokio runtime.
+    pub fn spawn(
+        config: HmiConfig,
+        addresses: Vec<String>,
+        ca: CommonAddress,
+        recorder: Recorder,
+        zone: TimeZonePolicy,
+        local_address: Option<std::net::IpAddr>,
+    ) -> Arc<Station> {
+        let monitor: Vec<&PointRow> = config
+            .points
+            .iter()
+            .filter(|p| p.type_id.is_monitor())
+            .collect();
+        let by_ioa = monitor
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (p.ioa, i))
+            .collect();
+        let by_name = monitor
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (p.name.clone(), i))
+            .collect();
+        let points = monitor.iter().map(|p| view_of(p)).collect();
+        let (live, _) = broadcast::channel(4096);
+        let (control, control_rx) = mpsc::unbounded_channel();
+        let alarms = Alarms::new(&config.alarms);
+        let station = Arc::new(Station {
+            node_label: format!("CA{}", ca.get()),
+            config,
+            points: RwLock::new(points),
+            by_ioa,
+            by_name,
+            up: AtomicBool::new(false),
+            addresses,
+            common_address: ca,
+            live,
+            client: Mutex::new(None),
+            control,
+            recorder,
+            alarms: Mutex::new(alarms),
+            zone,
+            local_address,
+        });
+        tokio::spawn(run(Arc::clone(&station), control_rx));
+        station
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &HmiConfig {
+        &self.config
+    }
+
+    /// Whether data transfer with the station is started.
+    pub fn is_up(&self) -> bool {
+        self.up.load(Ordering::Acquire)
+    }
+
+    /// The station's address(es).
+    pub fn addresses(&self) -> &[String] {
+        &self.addresses
+    }
+
+    /// Every point.
+    pub fn points(&self) -> Vec<PointView> {
+        self.points
+            .read()
+            .unwrap_or_else(|p| p.into_inner())
+            .clone()
+    }
+
+    /// One point by name.
+    pub fn point(&self, name: &str) -> Option<PointView> {
+        let index = *self.by_name.get(name)?;
+        self.points
+            .read()
+            .unwrap_or_else(|p| p.into_inner())
+            .get(index)
+            .cloned()
+    }
+
+    /// Subscribes to the live messages (JSON text).
+    pub fn subscribe(&self) -> broadcast::Receiver<String> {
+        self.live.subscribe()
+    }
+
+    /// The link state message.
+    pub fn link_json(&self) -> Value {
+        json!({"up": self.is_up(), "address": self.addresses.join(",")})
+    }
+
+    /// The alarm list.
+    pub fn alarms(&self) -> Vec<Alarm> {
+        self.alarms
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .listed()
+    }
+
+    /// Acknowledges an alarm.
+    pub fn acknowledge(&self, id: usize, user: &str) -> Option<Alarm> {
+        let alarm = self
+            .alarms
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .acknowledge(id)?;
+        tracing::info!(user, alarm = %alarm.text, "alarm acknowledged");
+        self.broadcast_alarm(&alarm);
+        Some(alarm)
+    }
+
+    /// Shelves an alarm for `minutes` (0 unshelves).
+    pub fn shelve(&self, id: usize, minutes: u32, user: &str) -> Option<Alarm> {
+        let until =
+            (minutes > 0).then(|| Utc::now() + chrono::Duration::minutes(i64::from(minutes)));
+        let alarm = self
+            .alarms
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .shelve(id, until)?;
+        tracing::info!(user, alarm = %alarm.text, minutes, "alarm shelved");
+        self.broadcast_alarm(&alarm);
+        Some(alarm)
+    }
+
+    /// Cuts the link to the station (a test of what the operator sees), or restores it.
+    pub fn set_link(&self, up: bool) {
+        let _ = self.control.send(if up {
+            LinkControl::Restore
+        } else {
+            LinkControl::Cut
+        });
+    }
+
+    fn broadcast_alarm(&self, alarm: &Alarm) {
+        let mut message = serde_json::to_value(alarm).unwrap_or(Value::Null);
+        if let Value::Object(map) = &mut message {
+            map.insert("type".into(), json!("alarm"));
+        }
+        let _ = self.live.send(message.to_string());
+    }
+
+    fn broadcast_point(&self, point: &PointView) {
+        let mut message = serde_json::to_value(point).unwrap_or(Value::Null);
+        if let Value::Object(map) = &mut message {
+            map.insert("type".into(), json!("point"));
+        }
+        let _ = self.live.send(message.to_string());
+    }
+
+    fn set_up(&self, up: bool) {
+        if self.up.swap(up, Ordering::AcqRel) == up {
+            return;
+        }
+        tracing::info!(up, "station link");
+        let _ = self.live.send(
+            json!({"type": "link", "up": up, "address": self.addresses.join(",")}).to_string(),
+        );
+        if up {
+            return;
+        }
+        // Every value is invalid at once: the operator must not act on stale values.
+        let changed: Vec<PointView> = {
+            let mut points = self.points.write().unwrap_or_else(|p| p.into_inner());
+            points
+                .iter_mut()
+                .filter(|p| !p.invalid)
+                .map(|p| {
+                    p.invalid = true;
+                    if !p.quality.contains(&"IV") {
+                        p.quality.insert(0, "IV");
+                    }
+                    p.clone()
+                })
+                .collect()
+        };
+        for point in &changed {
+            self.broadcast_point(point);
+        }
+    }
+
+    fn apply(&self, asdu: &Asdu) {
+        if asdu.cot.negative || !asdu.type_id.is_monitor() {
+            return;
+        }
+        let cause = asdu.cot.cause.value();
+        if !matches!(cause, 1..=3 | 5 | 11 | 12 | 20..=36) {
+            return;
+        }
+        for object in &asdu.objects {
+            let Some(&index) = self.by_ioa.get(&object.ioa.get()) else {
+                continue;
+            };
+            let Ok((value, quality, source)) = station::pointdb::from_element(
+                asdu.type_id,
+                &object.element,
+                object.time.as_ref(),
+                self.zone,
+            ) else {
+                continue;
+            };
+            let received = Utc::now();
+            let time = source.map(|s| s.time).or(Some(received));
+            let view = {
+                let mut points = self.points.write().unwrap_or_else(|p| p.into_inner());
+                let Some(point) = points.get_mut(index) else {
+                    continue;
+                };
+                let new_value = json_value(&value);
+                let changed = point.value != new_value || point.invalid != quality.invalid;
+                point.value = new_value;
+                point.invalid = quality.invalid;
+                point.quality = quality_flags(quality);
+                point.time = time;
+                if !changed && !matches!(cause, 3 | 11 | 12) {
+                    continue;
+                }
+                point.clone()
+            };
+            self.broadcast_point(&view);
+            self.recorder.event(EventRecord {
+                id: None,
+                node: self.node_label.clone(),
+                point: view.name.clone(),
+                ioa: Some(view.ioa),
+                value: value.clone(),
+                quality,
+                source_time: source.or(Some(SourceTime {
+                    time: received,
+                    invalid: false,
+                })),
+                received_time: received,
+                cause: match cause {
+                    11 => EventCause::ReturnRemote,
+                    12 => EventCause::ReturnLocal,
+                    20..=36 => EventCause::Interrogated,
+                    1 => EventCause::Cyclic,
+                    _ => EventCause::Spontaneous,
+                },
+                origin: self.addresses.join(","),
+            });
+            if let PointValue::Bool(on) = value {
+                let changed = self.alarms.lock().unwrap_or_else(|p| p.into_inner()).point(
+                    &view.name,
+                    on,
+                    quality.invalid,
+                    received,
+                );
+                for alarm in &changed {
+                    self.broadcast_alarm(alarm);
+                }
+            }
+        }
+    }
+
+    /// Operates a command for `user` (whose level was checked by the caller): select first
+    /// when the control requires it, then execute; records the outcome.
+    pub async fn operate(&self, user: &str, command: &str, value: f64) -> (ControlOutcome, String) {
+        let control = self.config.control(command);
+        let Some(row) = self
+            .config
+            .points
+            .iter()
+            .find(|p| p.name == command && p.type_id.is_command())
+        else {
+            return (ControlOutcome::Refused, format!("no command `{command}`"));
+        };
+        let client = self
+            .client
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .clone();
+        let (outcome, detail) = match (client, self.is_up()) {
+            (Some(client), true) => {
+                let result = async {
+                    if control.select {
+                        let selected = send(&client, row, value, true).await?;
+                        if !selected.0 {
+                            return Ok((false, format!("select refused (cause {})", selected.1)));
+                        }
+                    }
+                    let executed = send(&client, row, value, false).await?;
+                    Ok::<_, ClientError>((executed.0, format!("cause {}", executed.1)))
+                }
+                .await;
+                match result {
+                    Ok((true, _)) => (ControlOutcome::Executed, String::new()),
+                    Ok((false, detail)) => {
+                        let local = control
+                            .local_point
+                            .as_deref()
+                            .and_then(|p| self.point(p))
+                            .is_some_and(|p| p.value == json!(true));
+                        if local {
+                            (
+                                ControlOutcome::RefusedLocal,
+                                format!("the target is in local mode ({detail})"),
+                            )
+                        } else {
+                            (
+                                ControlOutcome::Refused,
+                                format!("refused by the station ({detail})"),
+                            )
+                        }
+                    }
+                    Err(ClientError::Timeout(what)) => (
+                        ControlOutcome::TimedOut,
+                        format!("no {what} from the station"),
+                    ),
+                    Err(error) => (ControlOutcome::NoLink, error.to_string()),
+                }
+            }
+            _ => (ControlOutcome::NoLink, "no link to the station".into()),
+        };
+        self.audit(user, command, row.ioa, value, outcome, &detail);
+        (outcome, detail)
+    }
+
+    /// Records a control attempt (also one refused for permission).
+    pub fn audit(
+        &self,
+        user: &str,
+        command: &str,
+        ioa: u32,
+        value: f64,
+        outcome: ControlOutcome,
+        detail: &str,
+    ) {
+        tracing::info!(user, command, value, ?outcome, detail, "control");
+        self.recorder.command(CommandRecord {
+            id: None,
+            time: Utc::now(),
+            actor: Actor::User(user.to_owned()),
+            node: self.node_label.clone(),
+            point: command.to_owned(),
+            ioa: Some(ioa),
+            value: PointValue::Float(value),
+            phase: CommandPhase::Execute,
+            outcome: outcome.audit(),
+            detail: detail.to_owned(),
+        });
+        let _ = self.live.send(
+            json!({"type": "command", "user": user, "command": command, "value": value,
+                   "outcome": outcome})
+            .to_string(),
+        );
+    }
+
+    /// The recorder of the HMI's store.
+    pub fn recorder(&self) -> &Recorder {
+        &self.recorder
+    }
+}
+
+/// Sends one command; `(positive, cause)`.
+async fn send(
+    client: &ClientHandle,
+    row: &PointRow,
+    value: f64,
+    select: bool,
+) -> Result<(bool, u8), ClientError> {
+    let ioa = Ioa::try_new(row.ioa).map_err(|e| ClientError::Encode(e.to_string()))?;
+    let qualifier =
+        CommandQualifier::new(0, select).map_err(|e| ClientError::Encode(e.to_string()))?;
+    let set_qualifier =
+        SetpointQualifier::new(0, select).map_err(|e| ClientError::Encode(e.to_string()))?;
+    let base = row.type_id;
+    let (type_id, element) = match base {
+        TypeId::C_SC_NA_1 | TypeId::C_SC_TA_1 => (
+            TypeId::C_SC_NA_1,
+            Element::SingleCommand {
+                on: value != 0.0,
+                qualifier,
+            },
+        ),
+        TypeId::C_DC_NA_1 | TypeId::C_DC_TA_1 => (
+            TypeId::C_DC_NA_1,
+            Element::DoubleCommand {
+                state: if value != 0.0 {
+                    DoublePointState::On
+                } else {
+                    DoublePointState::Off
+                },
+                qualifier,
+            },
+        ),
+        TypeId::C_SE_NB_1 | TypeId::C_SE_TB_1 => (
+            TypeId::C_SE_NB_1,
+            Element::SetpointScaled {
+                value: value
+                    .round()
+                    .clamp(f64::from(i16::MIN), f64::from(i16::MAX)) as i16,
+                qualifier: set_qualifier,
+            },
+        ),
+        TypeId::C_SE_NC_1 | TypeId::C_SE_TC_1 => (
+            TypeId::C_SE_NC_1,
+            Element::SetpointFloat {
+                value: value as f32,
+                qualifier: set_qualifier,
+            },
+        ),
+        TypeId::C_SE_NA_1 | TypeId::C_SE_TA_1 => (
+            TypeId::C_SE_NA_1,
+            Element::SetpointNormalized {
+                raw: (value.clamp(-1.0, 1.0) * 32767.0).round() as i16,
+                qualifier: set_qualifier,
+            },
+        ),
+        other => {
+            return Err(ClientError::Encode(format!(
+                "{other} is not operated from the HMI"
+            )))
+        }
+    };
+    let outcome = client.command(type_id, ioa, element, None).await?;
+    Ok((outcome.positive, outcome.cause.value()))
+}
+
+async fn run(station: Arc<Station>, mut control: mpsc::UnboundedReceiver<LinkControl>) {
+    let mut cut = false;
+    loop {
+        if cut {
+            match control.recv().await {
+                Some(LinkControl::Restore) => cut = false,
+                Some(LinkControl::Cut) => continue,
+                None => return,
+            }
+        }
+        let mut config = ClientConfig::new(
+            station.addresses.first().cloned().unwrap_or_default(),
+            station.common_address,
+        );
+        config.addresses = station.addresses.clone();
+        config.local_address = station.local_address;
+        config.interrogate_on_start = true;
+        config.reconnect_delay = Duration::from_millis(300);
+        config.reconnect_delay_max = Duration::from_secs(5);
+        config.command_timeout = Duration::from_secs(5);
+        let (client, mut events) = spawn_client(config);
+        *station.client.lock().unwrap_or_else(|p| p.into_inner()) = Some(client.clone());
+        loop {
+            tokio::select! {
+                event = events.recv() => match event {
+                    None => break,
+                    Some(ClientEvent::Started) => station.set_up(true),
+                    Some(ClientEvent::Disconnected { .. }) => station.set_up(false),
+                    Some(ClientEvent::Asdu(asdu)) => station.apply(&asdu),
+                    Some(_) => {}
+                },
+                request = control.recv() => match request {
+                    Some(LinkControl::Cut) => {
+                        *station.client.lock().unwrap_or_else(|p| p.into_inner()) = None;
+                        client.close().await;
+                        station.set_up(false);
+                        cut = true;
+                        break;
+                    }
+                    Some(LinkControl::Restore) => {}
+                    None => {
+                        client.close().await;
+                        return;
+                    }
+                },
+            }
+        }
+    }
+}
+
+/// The time tag of an element, if any (for tests and views).
+pub fn time_of(tag: Option<&TimeTag>, zone: TimeZonePolicy) -> Option<DateTime<Utc>> {
+    tag.and_then(TimeTag::as_cp56)
+        .and_then(|t| zone.from_cp56(t))
+        .map(|s| s.time)
+}

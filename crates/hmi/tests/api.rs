@@ -1,0 +1,637 @@
+//! The HMI's API against the running Vsetín station (in process, simulated clock, real
+//! IEC 104 on loopback): login and levels, controls with select-before-operate and their
+//! audit, live updates over WebSocket, every value invalid when the link is lost, alarms,
+//! and bad input refused cleanly.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
+
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use futures_util::StreamExt as _;
+use hmi::{Hmi, HmiOptions};
+use serde_json::{json, Value};
+use station::config::Project;
+use station::pointdb::TimeZonePolicy;
+use station::runtime::{Pacing, Runtime, RuntimeOptions, StoreChoice};
+use tokio::io::{AsyncReadExt as _, AsyncWriteExt as _};
+
+fn vsetin() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/vsetin")
+}
+
+/// A screens folder for the test: the top node's points, three users, one screen.
+fn screens(project: &Project, dir: &Path) {
+    let top = project.top_node().unwrap();
+    let mut csv = String::from("ioa,type,name,description\n");
+    for p in &top.points {
+        csv.push_str(&format!(
+            "{},{},{},\"{}\"\n",
+            p.ioa, p.type_id, p.name, p.description
+        ));
+    }
+    for c in &top.commands {
+        csv.push_str(&format!(
+            "{},{},{},\"{}\"\n",
+            c.ioa, c.type_id, c.name, c.description
+        ));
+    }
+    std::fs::write(dir.join("points.csv"), csv).unwrap();
+    std::fs::write(
+        dir.join("hmi.toml"),
+        r#"title = "Vsetín test"
+default_control_level = 5
+[[screen]]
+id = "rh"
+title = "RH"
+file = "rh.svg"
+[[control]]
+command = "RH2_VypnoutQF1"
+level = 5
+select = true
+local_point = "RH2_P1_SA1_Mistne"
+[[control]]
+command = "RH2_ZapnoutQF1"
+level = 5
+select = true
+local_point = "RH2_P1_SA1_Mistne"
+[[alarm]]
+point = "RH2_P1_FV1_Prepetova_ochrana"
+priority = 3
+text = "RH2 surge arrester"
+acknowledge = true
+"#,
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("rh.svg"),
+        r#"<svg xmlns="http://www.w3.org/2000/svg"><rect data-point="RH2_V1_FA1_Zapnut"/></svg>"#,
+    )
+    .unwrap();
+    let mut users = hmi::users::Users::load(&dir.join("users.toml")).unwrap();
+    users.add("operator", 5, "operator-pass").unwrap();
+    users.add("viewer", 0, "viewer-pass").unwrap();
+}
+
+struct Setup {
+    runtime: Runtime,
+    hmi: Hmi,
+    _dir: tempfile::TempDir,
+}
+
+async fn setup() -> Setup {
+    let project = Project::load(&vsetin()).unwrap();
+    let base = loop {
+        let port = std::net::TcpListener::bind("127.0.0.1:0")
+            .unwrap()
+            .local_addr()
+            .unwrap()
+            .port();
+        if port < 60_000
+            && (0..23).all(|i| std::net::TcpListener::bind(("127.0.0.1", port + i)).is_ok())
+        {
+            break port;
+        }
+    };
+    let project = project.with_port_base(base);
+    let dir = tempfile::tempdir().unwrap();
+    screens(&project, dir.path());
+    let runtime = Runtime::start(
+        project,
+        RuntimeOptions {
+            nodes: Vec::new(),
+            pacing: Pacing::Manual,
+            start: chrono::Utc::now(),
+            store: StoreChoice::Disabled,
+        },
+    )
+    .await
+    .unwrap();
+    runtime.advance(Duration::from_secs(1)).await.unwrap();
+    let rdrt = runtime
+        .node("RDRT")
+        .unwrap()
+        .server
+        .as_ref()
+        .unwrap()
+        .local_addr();
+    let hmi = Hmi::start(HmiOptions {
+        screens: dir.path().to_path_buf(),
+        users: dir.path().join("users.toml"),
+        connect: vec![rdrt.to_string()],
+        common_address: iec60870::asdu::CommonAddress::new(1),
+        listen: "127.0.0.1:0".parse().unwrap(),
+        store: Some("sqlite::memory:".into()),
+        zone: TimeZonePolicy::Zone(chrono_tz::Europe::Prague),
+        local_address: Some([127, 0, 0, 2].into()),
+    })
+    .await
+    .unwrap();
+    Setup {
+        runtime,
+        hmi,
+        _dir: dir,
+    }
+}
+
+struct Reply {
+    status: u16,
+    headers: Vec<(String, String)>,
+    body: String,
+}
+
+impl Reply {
+    fn json(&self) -> Value {
+        serde_json::from_str(&self.body).unwrap_or_else(|e| panic!("{e}: {}", self.body))
+    }
+}
+
+/// One HTTP/1.1 request on a fresh connection.
+async fn http(
+    address: SocketAddr,
+    method: &str,
+    path: &str,
+    headers: &[(&str, &str)],
+    body: &str,
+) -> Reply {
+    let mut stream = tokio::net::TcpStream::connect(address).await.unwrap();
+    let mut request =
+        format!("{method} {path} HTTP/1.1\r\nHost: {address}\r\nConnection: close\r\n");
+    for (name, value) in headers {
+        request.push_str(&format!("{name}: {value}\r\n"));
+    }
+    if !body.is_empty() || method == "POST" {
+        request.push_str(&format!(
+            "Content-Type: application/json\r\nContent-Length: {}\r\n",
+            body.len()
+        ));
+    }
+    request.push_str("\r\n");
+    request.push_str(body);
+    stream.write_all(request.as_bytes()).await.unwrap();
+    let mut raw = Vec::new();
+    tokio::time::timeout(Duration::from_secs(10), stream.read_to_end(&mut raw))
+        .await
+        .unwrap()
+        .unwrap();
+    let text = String::from_utf8_lossy(&raw).into_owned();
+    let (head, body) = text.split_once("\r\n\r\n").unwrap_or((&text, ""));
+    let mut lines = head.lines();
+    let status = lines
+        .next()
+        .unwrap()
+        .split(' ')
+        .nth(1)
+        .unwrap()
+        .parse()
+        .unwrap();
+    let headers = lines
+        .filter_map(|l| l.split_once(':'))
+        .map(|(n, v)| (n.trim().to_ascii_lowercase(), v.trim().to_owned()))
+        .collect();
+    Reply {
+        status,
+        headers,
+        body: body.to_owned(),
+    }
+}
+
+struct Client {
+    address: SocketAddr,
+    cookie: String,
+    csrf: String,
+}
+
+impl Client {
+    async fn login(address: SocketAddr, user: &str, password: &str) -> Client {
+        let reply = http(
+            address,
+            "POST",
+            "/api/login",
+            &[],
+            &json!({"username": user, "password": password}).to_string(),
+        )
+        .await;
+        assert_eq!(reply.status, 200, "{}", reply.body);
+        let cookie = reply
+            .headers
+            .iter()
+            .find(|(n, _)| n == "set-cookie")
+            .map(|(_, v)| v.split(';').next().unwrap().to_owned())
+            .unwrap();
+        let set_cookie = &reply
+            .headers
+            .iter()
+            .find(|(n, _)| n == "set-cookie")
+            .unwrap()
+            .1;
+        assert!(set_cookie.contains("HttpOnly") && set_cookie.contains("SameSite=Strict"));
+        Client {
+            address,
+            cookie,
+            csrf: reply.json()["csrf"].as_str().unwrap().to_owned(),
+        }
+    }
+
+    async fn get(&self, path: &str) -> Reply {
+        http(self.address, "GET", path, &[("Cookie", &self.cookie)], "").await
+    }
+
+    async fn post(&self, path: &str, body: Value) -> Reply {
+        http(
+            self.address,
+            "POST",
+            path,
+            &[("Cookie", &self.cookie), ("X-CSRF-Token", &self.csrf)],
+            &body.to_string(),
+        )
+        .await
+    }
+
+    async fn point(&self, name: &str) -> Value {
+        let points = self.get("/api/points").await.json();
+        points["points"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|p| p["name"] == name)
+            .unwrap()
+            .clone()
+    }
+}
+
+async fn until(what: &str, mut check: impl AsyncFnMut() -> bool) {
+    for _ in 0..300 {
+        if check().await {
+            return;
+        }
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
+    panic!("timed out waiting until {what}");
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn operator_controls_viewer_is_refused_and_both_are_audited() {
+    let s = setup().await;
+    let operator = Client::login(s.hmi.address, "operator", "operator-pass").await;
+    until("the station values", async || {
+        operator.point("RH2_P1_KHU3_Napeti_na_pripojeni").await["value"] == json!(true)
+    })
+    .await;
+    let controls = operator.get("/api/controls").await.json();
+    let open = controls
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["command"] == "RH2_VypnoutQF1")
+        .unwrap();
+    assert_eq!(open["select"], json!(true));
+    assert_eq!(open["allowed"], json!(true));
+
+    // Operator: select-before-operate through RDRT -> RH1.1 -> RH2, QF1 opens.
+    let reply = operator
+        .post(
+            "/api/command",
+            json!({"command": "RH2_VypnoutQF1", "value": true}),
+        )
+        .await;
+    assert_eq!(reply.json()["outcome"], "executed", "{}", reply.body);
+    for _ in 0..50 {
+        s.runtime.advance(Duration::from_millis(100)).await.unwrap();
+        if operator.point("RH2_P1_KHU3_Napeti_na_pripojeni").await["value"] == json!(false) {
+            break;
+        }
+    }
+    assert_eq!(
+        operator.point("RH2_P1_KHU3_Napeti_na_pripojeni").await["value"],
+        json!(false)
+    );
+
+    // Viewer: sees everything, controls nothing.
+    let viewer = Client::login(s.hmi.address, "viewer", "viewer-pass").await;
+    assert_eq!(
+        viewer.point("RH2_P1_KHU3_Napeti_na_pripojeni").await["value"],
+        json!(false)
+    );
+    let reply = viewer
+        .post(
+            "/api/command",
+            json!({"command": "RH2_ZapnoutQF1", "value": true}),
+        )
+        .await;
+    assert_eq!(reply.status, 403);
+    assert_eq!(reply.json()["outcome"], "refused-permission");
+
+    // Local mode at the board: the station refuses, the HMI says why.
+    s.runtime.operate("selector RH2 local").await.unwrap();
+    for _ in 0..50 {
+        s.runtime.advance(Duration::from_millis(100)).await.unwrap();
+        if operator.point("RH2_P1_SA1_Mistne").await["value"] == json!(true) {
+            break;
+        }
+    }
+    let reply = operator
+        .post(
+            "/api/command",
+            json!({"command": "RH2_ZapnoutQF1", "value": true}),
+        )
+        .await;
+    assert_eq!(reply.json()["outcome"], "refused-local", "{}", reply.body);
+
+    // The event list has the commands with the users' names, and the value changes.
+    s.hmi.station.recorder().flush().await;
+    let events = operator.get("/api/events?kind=command").await.json();
+    let commands: Vec<(String, String, String)> = events["items"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| {
+            (
+                e["user"].as_str().unwrap().into(),
+                e["point"].as_str().unwrap().into(),
+                e["outcome"].as_str().unwrap().into(),
+            )
+        })
+        .collect();
+    assert!(
+        commands.contains(&(
+            "operator".into(),
+            "RH2_VypnoutQF1".into(),
+            "Executed".into()
+        )),
+        "{commands:?}"
+    );
+    assert!(
+        commands.contains(&(
+            "viewer".into(),
+            "RH2_ZapnoutQF1".into(),
+            "RefusedPermission".into()
+        )),
+        "{commands:?}"
+    );
+    assert!(
+        commands.contains(&(
+            "operator".into(),
+            "RH2_ZapnoutQF1".into(),
+            "RefusedLocalMode".into()
+        )),
+        "{commands:?}"
+    );
+    let by_viewer = operator.get("/api/events?user=viewer").await.json();
+    assert_eq!(by_viewer["items"].as_array().unwrap().len(), 1);
+    let values = operator
+        .get("/api/events?kind=value&point=RH2_P1_KHU3*")
+        .await
+        .json();
+    assert!(values["items"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|e| e["value"] == json!(false)));
+    // Paging: one item per page walks the whole list without repeats.
+    let mut seen = std::collections::HashSet::new();
+    let mut cursor: Option<String> = None;
+    for _ in 0..10_000 {
+        let path = match &cursor {
+            Some(c) => format!("/api/events?limit=1&cursor={c}"),
+            None => "/api/events?limit=1".to_owned(),
+        };
+        let page = operator.get(&path).await.json();
+        for item in page["items"].as_array().unwrap() {
+            assert!(
+                seen.insert(item["id"].as_str().unwrap().to_owned()),
+                "repeated {item}"
+            );
+        }
+        match page["next"].as_str() {
+            Some(next) => cursor = Some(next.to_owned()),
+            None => break,
+        }
+    }
+    let all = operator.get("/api/events?limit=1000").await.json();
+    assert_eq!(seen.len(), all["items"].as_array().unwrap().len());
+    s.hmi.shutdown().await;
+    s.runtime.shutdown().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn bad_input_is_refused_cleanly() {
+    let s = setup().await;
+    let address = s.hmi.address;
+    let viewer = Client::login(address, "viewer", "viewer-pass").await;
+    // Wrong passwords, then the rate limit (even the right password is refused then, and
+    // from this address for any user).
+    for _ in 0..5 {
+        let reply = http(
+            address,
+            "POST",
+            "/api/login",
+            &[],
+            r#"{"username":"operator","password":"guess"}"#,
+        )
+        .await;
+        assert_eq!(reply.status, 401);
+    }
+    let reply = http(
+        address,
+        "POST",
+        "/api/login",
+        &[],
+        r#"{"username":"operator","password":"operator-pass"}"#,
+    )
+    .await;
+    assert_eq!(reply.status, 429);
+    assert!(reply.json()["retry_after_s"].as_u64().unwrap() > 0);
+    // Malformed and oversized bodies.
+    assert_eq!(
+        http(address, "POST", "/api/login", &[], "{not json")
+            .await
+            .status,
+        400
+    );
+    let huge = format!(r#"{{"username":"{}","password":"x"}}"#, "a".repeat(100_000));
+    assert_eq!(
+        http(address, "POST", "/api/login", &[], &huge).await.status,
+        413
+    );
+    let other = http(
+        address,
+        "POST",
+        "/api/login",
+        &[],
+        r#"{"username":"viewer","password":"viewer-pass"}"#,
+    )
+    .await;
+    assert_eq!(other.status, 429);
+    // A session opened before the lockout keeps working.
+    // No session, forged CSRF token, unknown command and screen.
+    assert_eq!(
+        http(address, "GET", "/api/points", &[], "").await.status,
+        401
+    );
+    assert_eq!(http(address, "GET", "/", &[], "").await.status, 303);
+    let forged = http(
+        address,
+        "POST",
+        "/api/command",
+        &[("Cookie", &viewer.cookie), ("X-CSRF-Token", "0000")],
+        r#"{"command":"RH2_VypnoutQF1","value":true}"#,
+    )
+    .await;
+    assert_eq!(forged.status, 403);
+    let missing = http(
+        address,
+        "POST",
+        "/api/command",
+        &[("Cookie", &viewer.cookie)],
+        r#"{"command":"RH2_VypnoutQF1","value":true}"#,
+    )
+    .await;
+    assert_eq!(missing.status, 403);
+    assert_eq!(
+        viewer
+            .post("/api/command", json!({"command": "NO_SUCH", "value": 1}))
+            .await
+            .status,
+        404
+    );
+    assert_eq!(
+        viewer
+            .post(
+                "/api/command",
+                json!({"command": "RH2_VypnoutQF1", "value": "open"})
+            )
+            .await
+            .status,
+        400
+    );
+    assert_eq!(viewer.get("/api/screens/nothing").await.status, 404);
+    assert_eq!(viewer.get("/api/trend?point=NO_SUCH").await.status, 404);
+    assert_eq!(viewer.get("/api/events?cursor=garbage").await.status, 400);
+    // A request replayed after logout finds no session.
+    assert_eq!(viewer.post("/api/logout", json!({})).await.status, 200);
+    assert_eq!(
+        viewer
+            .post(
+                "/api/command",
+                json!({"command": "RH2_VypnoutQF1", "value": true})
+            )
+            .await
+            .status,
+        401
+    );
+    // The server still serves.
+    assert_eq!(http(address, "GET", "/login", &[], "").await.status, 200);
+    s.hmi.shutdown().await;
+    s.runtime.shutdown().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn live_updates_alarms_and_every_value_invalid_on_link_loss() {
+    let s = setup().await;
+    let operator = Client::login(s.hmi.address, "operator", "operator-pass").await;
+    until("link up", async || {
+        operator.get("/api/points").await.json()["link"]["up"] == json!(true)
+    })
+    .await;
+    let mut request =
+        tokio_tungstenite::tungstenite::client::IntoClientRequest::into_client_request(format!(
+            "ws://{}/api/live",
+            s.hmi.address
+        ))
+        .unwrap();
+    request
+        .headers_mut()
+        .insert("Cookie", operator.cookie.parse().unwrap());
+    let (mut socket, _) = tokio_tungstenite::connect_async(request).await.unwrap();
+    let mut next = async || -> Value {
+        let message = tokio::time::timeout(Duration::from_secs(10), socket.next())
+            .await
+            .unwrap()
+            .unwrap()
+            .unwrap();
+        serde_json::from_str(message.to_text().unwrap()).unwrap()
+    };
+    let snapshot = next().await;
+    assert_eq!(snapshot["type"], "snapshot");
+    assert!(snapshot["points"].as_array().unwrap().len() > 400);
+
+    // A surge arrester trips at the board: the point and its alarm arrive live.
+    s.runtime.operate("surge-arrester RH2_FV1").await.unwrap();
+    s.runtime.advance(Duration::from_millis(200)).await.unwrap();
+    let (mut point_seen, mut alarm_seen) = (false, false);
+    for _ in 0..2000 {
+        let message = next().await;
+        if message["type"] == "point"
+            && message["name"] == "RH2_P1_FV1_Prepetova_ochrana"
+            && message["value"] == json!(true)
+        {
+            point_seen = true;
+        }
+        if message["type"] == "alarm" && message["active"] == json!(true) {
+            alarm_seen = true;
+        }
+        if point_seen && alarm_seen {
+            break;
+        }
+    }
+    assert!(point_seen && alarm_seen);
+    let alarms = operator.get("/api/alarms").await.json();
+    let id = alarms[0]["id"].as_u64().unwrap();
+    assert_eq!(
+        operator
+            .post(&format!("/api/alarms/{id}/acknowledge"), json!({}))
+            .await
+            .json()["acknowledged"],
+        json!(true)
+    );
+    assert!(operator
+        .post(&format!("/api/alarms/{id}/shelve"), json!({"minutes": 30}))
+        .await
+        .json()["shelved_until"]
+        .is_string());
+
+    // The HMI loses the station: link down, and every value invalid at once.
+    s.hmi.station.set_link(false);
+    let mut invalid = std::collections::HashSet::new();
+    let mut link_down = false;
+    let total = snapshot["points"].as_array().unwrap().len();
+    for _ in 0..5000 {
+        let message = next().await;
+        if message["type"] == "link" && message["up"] == json!(false) {
+            link_down = true;
+        }
+        if link_down && message["type"] == "point" && message["invalid"] == json!(true) {
+            invalid.insert(message["name"].as_str().unwrap().to_owned());
+        }
+        // Every point that was valid is re-sent invalid (the few never valid need not be).
+        if link_down && invalid.len() + 5 >= total {
+            break;
+        }
+    }
+    assert!(link_down);
+    let points = operator.get("/api/points").await.json();
+    assert!(points["points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|p| p["invalid"] == json!(true)));
+    assert!(
+        invalid.len() + 5 >= total,
+        "{} of {total} re-sent invalid",
+        invalid.len()
+    );
+    // Back: values valid again after the interrogation.
+    s.hmi.station.set_link(true);
+    until("valid again", async || {
+        operator.point("RH2_V1_FA1_Zapnut").await["invalid"] == json!(false)
+    })
+    .await;
+    s.hmi.shutdown().await;
+    s.runtime.shutdown().await;
+}

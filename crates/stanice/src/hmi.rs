@@ -1,0 +1,172 @@
+//! `stanice hmi`: the web HMI for a station (docs/HMI.md), and `stanice user`: its users.
+
+use std::io::BufRead as _;
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Duration;
+
+use anyhow::Context as _;
+use clap::{Args, Subcommand};
+use hmi::{Hmi, HmiOptions};
+use iec60870::asdu::CommonAddress;
+use station::pointdb::TimeZonePolicy;
+
+/// Arguments of `stanice hmi`.
+#[derive(Args, Debug)]
+pub(crate) struct HmiArgs {
+    /// The station: HOST:PORT, alternates after commas.
+    #[arg(long, value_delimiter = ',', required = true)]
+    connect: Vec<String>,
+    /// The station's common address.
+    #[arg(long, default_value_t = 1)]
+    ca: u16,
+    /// The screens folder (hmi.toml, points.csv, SVG mimics).
+    #[arg(long)]
+    screens: PathBuf,
+    /// The users file; default: users.toml in the screens folder.
+    #[arg(long)]
+    users: Option<PathBuf>,
+    /// Where browsers connect.
+    #[arg(long, default_value = "127.0.0.1:8080")]
+    listen: SocketAddr,
+    /// The HMI's event store (`sqlite:PATH`, `postgres://...`, `none`).
+    #[arg(long, default_value = "sqlite:hmi-events.sqlite")]
+    store: String,
+    /// The time zone of the station's time tags (IANA name, or UTC).
+    #[arg(long, default_value = "Europe/Prague")]
+    time_zone: String,
+    /// Connect to the station from this local address.
+    #[arg(long)]
+    local_address: Option<std::net::IpAddr>,
+    /// Stop after this many seconds (runs until Ctrl-C otherwise).
+    #[arg(long)]
+    duration: Option<f64>,
+}
+
+pub(crate) fn zone(name: &str) -> anyhow::Result<TimeZonePolicy> {
+    if name.eq_ignore_ascii_case("utc") {
+        return Ok(TimeZonePolicy::Utc);
+    }
+    let tz: chrono_tz::Tz = name
+        .parse()
+        .map_err(|_| anyhow::anyhow!("unknown time zone `{name}`"))?;
+    Ok(TimeZonePolicy::Zone(tz))
+}
+
+pub(crate) async fn run(args: HmiArgs) -> anyhow::Result<ExitCode> {
+    let users = args
+        .users
+        .clone()
+        .unwrap_or_else(|| args.screens.join("users.toml"));
+    let hmi = Hmi::start(HmiOptions {
+        screens: args.screens.clone(),
+        users: users.clone(),
+        connect: args.connect.clone(),
+        common_address: CommonAddress::new(args.ca),
+        listen: args.listen,
+        store: (args.store != "none").then(|| args.store.clone()),
+        zone: zone(&args.time_zone)?,
+        local_address: args.local_address,
+    })
+    .await
+    .context("the HMI does not start")?;
+    println!(
+        "Stanice HMI on http://{} for the station at {} (CA {})",
+        hmi.address,
+        args.connect.join(","),
+        args.ca
+    );
+    println!(
+        "  users: {} (stanice user add NAME --level N --users FILE)",
+        users.display()
+    );
+    match args.duration {
+        Some(seconds) => tokio::time::sleep(Duration::from_secs_f64(seconds.clamp(0.0, 1e9))).await,
+        None => {
+            let _ = tokio::signal::ctrl_c().await;
+        }
+    }
+    hmi.shutdown().await;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `stanice user ...`.
+#[derive(Subcommand, Debug)]
+pub(crate) enum UserCommand {
+    /// Adds a user; the password is read from standard input (one line).
+    Add {
+        /// User name.
+        name: String,
+        /// Permission level 0..=9 (0 = read-only).
+        #[arg(long)]
+        level: u8,
+        /// The users file.
+        #[arg(long, default_value = "users.toml")]
+        users: PathBuf,
+    },
+    /// Removes a user.
+    Remove {
+        /// User name.
+        name: String,
+        /// The users file.
+        #[arg(long, default_value = "users.toml")]
+        users: PathBuf,
+    },
+    /// Sets a user's password (from standard input) and optionally level.
+    Passwd {
+        /// User name.
+        name: String,
+        /// New permission level.
+        #[arg(long)]
+        level: Option<u8>,
+        /// The users file.
+        #[arg(long, default_value = "users.toml")]
+        users: PathBuf,
+    },
+    /// Lists the users and their levels.
+    List {
+        /// The users file.
+        #[arg(long, default_value = "users.toml")]
+        users: PathBuf,
+    },
+}
+
+fn read_password() -> anyhow::Result<String> {
+    if std::io::IsTerminal::is_terminal(&std::io::stdin()) {
+        eprint!("password: ");
+    }
+    let mut line = String::new();
+    std::io::stdin().lock().read_line(&mut line)?;
+    Ok(line.trim_end_matches(['\r', '\n']).to_owned())
+}
+
+pub(crate) fn user(command: UserCommand) -> anyhow::Result<ExitCode> {
+    match command {
+        UserCommand::Add { name, level, users } => {
+            let mut file = hmi::users::Users::load(&users)?;
+            let password = read_password()?;
+            file.add(&name, level, &password)?;
+            println!(
+                "user {name} added with level {level} to {}",
+                users.display()
+            );
+        }
+        UserCommand::Remove { name, users } => {
+            hmi::users::Users::load(&users)?.remove(&name)?;
+            println!("user {name} removed from {}", users.display());
+        }
+        UserCommand::Passwd { name, level, users } => {
+            let mut file = hmi::users::Users::load(&users)?;
+            let password = read_password()?;
+            file.passwd(&name, &password, level)?;
+            println!("password of {name} changed in {}", users.display());
+        }
+        UserCommand::List { users } => {
+            for (name, level) in hmi::users::Users::load(&users)?.list() {
+                println!("{name}\t{level}");
+            }
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
