@@ -740,71 +740,18 @@ impl Cx<'_> {
                 unary(*op, v, &ty)
             }
             ExprKind::Binary(op, a, b) => {
-                let ta = self.c.final_ty(a.id);
-                let tb = self.c.final_ty(b.id);
-                let timey =
-                    |t: &Ty| matches!(t, Ty::Time | Ty::LTime | Ty::Tod | Ty::Dt | Ty::Date);
-                let fusable = matches!(
-                    op,
-                    BinOp::Add
-                        | BinOp::Div
-                        | BinOp::Mod
-                        | BinOp::Sub
-                        | BinOp::Mul
-                        | BinOp::Lt
-                        | BinOp::Gt
-                        | BinOp::Le
-                        | BinOp::Ge
-                        | BinOp::Eq
-                        | BinOp::Ne
-                        | BinOp::Xor
-                ) && ta.lane() == Some(Lane::Int)
-                    && tb.lane() == Some(Lane::Int)
-                    && !timey(&ta)
-                    && !timey(&tb)
-                    && (self.simple_int(a).is_some() || self.simple_int(b).is_some());
-                let cmp = matches!(
-                    op,
-                    BinOp::Lt | BinOp::Gt | BinOp::Le | BinOp::Ge | BinOp::Eq | BinOp::Ne
-                );
-                if cmp
-                    && ta == tb
-                    && ta.lane() == Some(Lane::Int)
-                    && self.c.ty(a.id) == ta
-                    && self.c.ty(b.id) == tb
-                {
-                    if let (Some(ea), Some(eb)) = (self.elem_int(a), self.elem_int(b)) {
-                        if let Some(f) = super::fused::elem_cmp(*op, ea, eb, ty_is_u64(&ta)) {
-                            return CE::I(f);
-                        }
-                    }
+                if let Ok(f) = self.fused_natural(e, super::fused::Value) {
+                    return CE::I(f);
                 }
-                if fusable {
-                    if let (Some(sa), Some(sb)) = (self.int_src(a), self.int_src(b)) {
-                        if let Some(f) = super::fused::int_binary(*op, sa, sb, &ta, &ty, e.span) {
-                            return CE::I(f);
-                        }
-                    }
-                }
-                let real_fusable = ta.is_real()
-                    && ta == tb
-                    && !matches!(
-                        op,
-                        BinOp::Pow | BinOp::Mod | BinOp::And | BinOp::Or | BinOp::Xor
-                    )
-                    && (self.simple_real(a).is_some() || self.simple_real(b).is_some());
-                if real_fusable {
+                if let Some((op, a, b, single)) = self.real_fusable(e) {
                     if let (Some(sa), Some(sb)) = (self.real_src(a), self.real_src(b)) {
-                        let single = if ty.is_real() {
-                            ty == Ty::Real
-                        } else {
-                            ta == Ty::Real
-                        };
-                        if let Some(f) = super::fused::real_binary(*op, sa, sb, single) {
+                        if let Some(f) = super::fused::real_binary(op, sa, sb, single) {
                             return f;
                         }
                     }
                 }
+                let ta = self.c.final_ty(a.id);
+                let tb = self.c.final_ty(b.id);
                 let va = self.expr(a);
                 let vb = self.expr(b);
                 binary(*op, va, vb, &ta, &tb, &ty, e.span)

@@ -2,7 +2,7 @@
 
 use super::expr::konst_i;
 use super::{Cx, IFn, CE};
-use crate::check::{PouId, Res, Size};
+use crate::check::{Lane, PouId, Res, Size};
 use crate::syntax::*;
 use crate::vm::{Fault, FaultKind, Flow, StmtFn, Vm};
 
@@ -152,28 +152,41 @@ impl Cx<'_> {
                     self.error(target.span, "cannot compile this assignment target");
                     return nop();
                 };
+                let plain = matches!(p.base, super::expr::Base::Frame | super::expr::Base::Abs)
+                    && p.dynamic.is_none()
+                    && p.index1.is_none()
+                    && p.bit.is_none()
+                    && p.direct.is_none()
+                    && p.range.is_none()
+                    && p.char_ix.is_none();
+                let frame = p.base == super::expr::Base::Frame;
+                let vlane = self.c.final_ty(value.id).lane();
+                match (plain, p.ty.lane(), vlane) {
+                    (true, Some(Lane::Int), Some(Lane::Int)) => {
+                        let off = p.off.i;
+                        return self.int_into(value, super::fused::StoreI { off, frame });
+                    }
+                    (true, Some(Lane::Real), Some(Lane::Real)) => {
+                        let off = p.off.r;
+                        return self.real_into(value, super::fused::StoreR { off, frame });
+                    }
+                    _ => {}
+                }
                 let v = self.expr(value);
                 self.store(&p, v)
             }
             StmtKind::Call(e) => self.call_stmt(e),
             StmtKind::If(arms, els) => {
+                if let [(c, b)] = arms.as_slice() {
+                    let then = self.block(b);
+                    let els = els.as_ref().map(|b| self.block(b)).unwrap_or_default();
+                    return self.int_into(c, super::fused::Branch { then, els });
+                }
                 let arms: Vec<(IFn, Vec<StmtFn>)> = arms
                     .iter()
                     .map(|(c, b)| (self.cond(c), self.block(b)))
                     .collect();
                 let els = els.as_ref().map(|b| self.block(b)).unwrap_or_default();
-                if arms.len() == 1 {
-                    let Some((c, b)) = arms.into_iter().next() else {
-                        return nop();
-                    };
-                    return Box::new(move |vm| {
-                        if c(vm)? != 0 {
-                            run_block(&b, vm)
-                        } else {
-                            run_block(&els, vm)
-                        }
-                    });
-                }
                 Box::new(move |vm| {
                     for (c, b) in &arms {
                         if c(vm)? != 0 {

@@ -111,8 +111,10 @@ impl Fault {
     }
 }
 
-/// How a statement finished.
+/// How a statement finished. Word-sized, so that `Result<Flow, Fault>` is a pair of
+/// scalars returned in two registers (like `Result<i64, Fault>`), not through memory.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(i64)]
 pub enum Flow {
     /// Go on with the next statement.
     Normal,

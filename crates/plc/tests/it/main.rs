@@ -7,6 +7,7 @@
 )]
 
 mod conformance;
+mod fused;
 mod fuzzish;
 mod railway;
 mod runtime;

@@ -1,0 +1,220 @@
+//! The fused closures (inline operands, inline binary operations, stores and branches
+//! without inner calls) compute exactly what the generic operators compute: every
+//! expression is evaluated twice, once in a fusable shape and once with its operands
+//! passed through a function (which defeats fusion), over random and edge values.
+
+use plc::task::{ClockReading, TaskConfig};
+use plc::Plc;
+
+/// Integer types with their ranges.
+const INTS: &[(&str, i128, i128)] = &[
+    ("SINT", -128, 127),
+    ("INT", -32768, 32767),
+    ("DINT", i32::MIN as i128, i32::MAX as i128),
+    ("LINT", i64::MIN as i128, i64::MAX as i128),
+    ("USINT", 0, 255),
+    ("UINT", 0, 65535),
+    ("UDINT", 0, u32::MAX as i128),
+    ("ULINT", 0, u64::MAX as i128),
+    ("BYTE", 0, 255),
+    ("WORD", 0, 65535),
+    ("DWORD", 0, u32::MAX as i128),
+];
+
+/// Expressions over `x`, `y` (integers); `#` is replaced by the type name.
+const INT_EXPRS: &[&str] = &[
+    "x + y",
+    "x - y",
+    "x * y",
+    "x + y * 3",
+    "(x * y) + (x - y)",
+    "x - (y + 1)",
+    "x > y",
+    "x <= y",
+    "x = y",
+    "x <> y",
+    "(x + 1) > (y - 1)",
+    "x < y + 5",
+    "x >= y",
+];
+
+/// Signed-only expressions (division and remainder by constants).
+const SIGNED_EXPRS: &[&str] = &[
+    "x MOD 7",
+    "x / 3",
+    "x / -3",
+    "x MOD -7",
+    "(x * y) MOD 7",
+    "(x - y) / 3",
+    "x + (y MOD 5)",
+    "(x + y) MOD 2",
+];
+
+/// Bit-string-only expressions.
+const BIT_EXPRS: &[&str] = &["x XOR y", "x AND y", "x OR y", "(x AND y) XOR x"];
+
+const REAL_EXPRS: &[&str] = &[
+    "x * 0.999999 + 0.5",
+    "x / y",
+    "x - y * 2.0",
+    "(x + y) * (x - y)",
+    "x * y",
+];
+
+const REAL_CMPS: &[&str] = &["x > y", "x <= y", "x = y", "x * 2.0 < y + 1.0"];
+
+struct Gen {
+    src: String,
+    globals: String,
+    body: String,
+    vars: String,
+    pairs: Vec<(String, String)>,
+    n: usize,
+}
+
+impl Gen {
+    /// `fused` in the fusable shape, `generic` with `x`, `y` through `ID_T`.
+    fn case(&mut self, ty: &str, res_ty: &str, expr: &str, x: &str, y: &str, global: bool) {
+        self.n += 1;
+        let n = self.n;
+        let fused = expr.replace('x', x).replace('y', y);
+        let generic = expr
+            .replace('x', &format!("ID_{ty}({x})"))
+            .replace('y', &format!("ID_{ty}({y})"));
+        let (r, q) = (format!("r{n}"), format!("q{n}"));
+        if global {
+            self.globals.push_str(&format!("{r} : {res_ty}; "));
+        } else {
+            self.vars.push_str(&format!("{r} : {res_ty}; "));
+        }
+        self.vars.push_str(&format!("{q} : {res_ty}; "));
+        self.body.push_str(&format!("{r} := {fused};\n{q} := {generic};\n"));
+        let path = |v: &str| {
+            if global {
+                v.to_string()
+            } else {
+                format!("Main.{v}")
+            }
+        };
+        self.pairs.push((path(&r), format!("Main.{q}")));
+        if res_ty == "BOOL" {
+            // the same condition as a branch
+            self.n += 1;
+            let (r, q) = (format!("r{}", self.n), format!("q{}", self.n));
+            self.vars.push_str(&format!("{r}, {q} : INT; "));
+            self.body.push_str(&format!(
+                "IF {fused} THEN {r} := 1; ELSE {r} := 2; END_IF\n\
+                 IF {generic} THEN {q} := 1; ELSE {q} := 2; END_IF\n\
+                 IF {fused} THEN {r} := {r} + 10; END_IF\n\
+                 IF {generic} THEN {q} := {q} + 10; END_IF\n"
+            ));
+            self.pairs
+                .push((format!("Main.{r}"), format!("Main.{q}")));
+        }
+    }
+}
+
+fn xorshift(s: &mut u64) -> u64 {
+    *s ^= *s << 13;
+    *s ^= *s >> 7;
+    *s ^= *s << 17;
+    *s
+}
+
+#[test]
+fn fused_forms_match_the_generic_operators() {
+    let mut g = Gen {
+        src: String::new(),
+        globals: String::new(),
+        body: String::new(),
+        vars: String::new(),
+        pairs: Vec::new(),
+        n: 0,
+    };
+    let mut inputs: Vec<(String, i128, i128)> = Vec::new();
+    for (k, &(ty, lo, hi)) in INTS.iter().enumerate() {
+        g.src.push_str(&format!(
+            "FUNCTION ID_{ty} : {ty} VAR_INPUT v : {ty}; END_VAR ID_{ty} := v; END_FUNCTION\n"
+        ));
+        let (x, y) = (format!("x{k}"), format!("y{k}"));
+        g.vars.push_str(&format!("{x}, {y} : {ty}; "));
+        inputs.push((format!("Main.{x}"), lo, hi));
+        inputs.push((format!("Main.{y}"), lo, hi));
+        let signed = lo < 0;
+        let bits = ty.ends_with("WORD") || ty == "BYTE";
+        let mut exprs: Vec<&str> = INT_EXPRS.to_vec();
+        if signed {
+            exprs.extend(SIGNED_EXPRS);
+        }
+        if bits {
+            exprs.retain(|e| !e.contains('*') && !e.contains('+') && !e.contains('-'));
+            exprs.extend(BIT_EXPRS);
+        }
+        for (i, e) in exprs.iter().enumerate() {
+            let cmp = e.contains('>') || e.contains('<') || e.contains('=');
+            let res = if cmp { "BOOL" } else { ty };
+            g.case(ty, res, e, &x, &y, i % 3 == 0);
+        }
+    }
+    for (k, ty) in ["REAL", "LREAL"].iter().enumerate() {
+        g.src.push_str(&format!(
+            "FUNCTION ID_{ty} : {ty} VAR_INPUT v : {ty}; END_VAR ID_{ty} := v; END_FUNCTION\n"
+        ));
+        let (x, y) = (format!("rx{k}"), format!("ry{k}"));
+        g.vars.push_str(&format!("{x}, {y} : {ty}; "));
+        inputs.push((format!("Main.{x}"), -1000, 1000));
+        inputs.push((format!("Main.{y}"), -1000, 1000));
+        for (i, e) in REAL_EXPRS.iter().enumerate() {
+            g.case(ty, ty, e, &x, &y, i % 2 == 0);
+        }
+        for (i, e) in REAL_CMPS.iter().enumerate() {
+            g.case(ty, "BOOL", e, &x, &y, i % 2 == 0);
+        }
+    }
+    // the identifiers x and y inside names (rx0, ...) must not be replaced twice:
+    // every name used above starts with a letter other than x/y or is replaced whole
+    let src = format!(
+        "{}VAR_GLOBAL {} END_VAR\nPROGRAM Main\nVAR {} END_VAR\n{}END_PROGRAM\n",
+        g.src, g.globals, g.vars, g.body
+    );
+    let (sources, r) = plc::build(&[("t.st".to_string(), src.clone())]);
+    let compiled = match r {
+        Ok(c) => c,
+        Err(d) => panic!(
+            "{}\n{src}",
+            d.iter()
+                .map(|d| d.render(&sources))
+                .collect::<Vec<_>>()
+                .join("\n")
+        ),
+    };
+    let mut p = Plc::new(compiled, sources);
+    p.add_task(TaskConfig::cyclic("main", 0, &["Main"])).unwrap();
+    let mut seed: u64 = 0x9E37_79B9_7F4A_7C15;
+    for round in 0..400 {
+        for (path, lo, hi) in &inputs {
+            let span = (hi - lo) as u128 + 1;
+            let r = xorshift(&mut seed);
+            let v: i128 = match (round + r as usize) % 5 {
+                0 => *lo,
+                1 => *hi,
+                2 => 0.clamp(*lo, *hi),
+                3 => (r % 7) as i128 - 3,
+                _ => lo + (u128::from(r) % span) as i128,
+            }
+            .clamp(*lo, *hi);
+            let text = if path.contains(".r") {
+                format!("{:.3}", v as f64 / 7.0)
+            } else {
+                v.to_string()
+            };
+            p.write(path, &text).unwrap();
+        }
+        let faults = p.run_cycle(ClockReading::default());
+        assert!(faults.is_empty(), "{faults:?}");
+        for (a, b) in &g.pairs {
+            let (va, vb) = (p.read_text(a).unwrap(), p.read_text(b).unwrap());
+            assert_eq!(va, vb, "{a} vs {b} in round {round}\n{src}");
+        }
+    }
+}
