@@ -50,6 +50,9 @@ pub(crate) struct RunOptions {
     /// base - 2404); the demo does by default.
     #[arg(long)]
     hmi: bool,
+    /// The web HMI's port instead (0: any free port).
+    #[arg(long)]
+    hmi_port: Option<u16>,
 }
 
 pub(crate) async fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
@@ -107,7 +110,12 @@ pub(crate) async fn run_project(
     .context("the station does not start")?;
     print_banner(&runtime, &store_shown, options.speed, demo);
     let hmi = if options.hmi || demo {
-        start_hmi(&runtime, options.store.as_deref() == Some("none")).await?
+        start_hmi(
+            &runtime,
+            options.store.as_deref() == Some("none"),
+            options.hmi_port,
+        )
+        .await
     } else {
         None
     };
@@ -136,23 +144,21 @@ pub(crate) async fn run_project(
 /// Starts the project's web HMI (`PROJECT/hmi/`) against its top node, when the project
 /// has one. It connects from 127.0.0.2, the address the Vsetín project gives its HMI
 /// link (HMI-local mode, spec 7.4).
-async fn start_hmi(runtime: &Runtime, memory_store: bool) -> anyhow::Result<Option<hmi::Hmi>> {
+async fn start_hmi(runtime: &Runtime, memory_store: bool, port: Option<u16>) -> Option<hmi::Hmi> {
     let project = runtime.project();
     let screens = project.folder.join("hmi");
     if !screens.join("hmi.toml").is_file() {
         println!("  (no web HMI: {} has no hmi.toml)", screens.display());
-        return Ok(None);
+        return None;
     }
-    let Some((top, server)) = project.top_node().and_then(|config| {
+    let (top, server) = project.top_node().and_then(|config| {
         runtime
             .node(&config.name)
             .and_then(|node| node.server.as_ref())
             .map(|server| (config, server))
-    }) else {
-        return Ok(None);
-    };
+    })?;
     let offset = i32::from(project.station.port_base) - 2404;
-    let port = u16::try_from(8080 + offset).unwrap_or(8080);
+    let port = port.unwrap_or_else(|| u16::try_from(8080 + offset).unwrap_or(0));
     let store = if memory_store {
         "sqlite::memory:".to_owned()
     } else {
@@ -161,7 +167,7 @@ async fn start_hmi(runtime: &Runtime, memory_store: bool) -> anyhow::Result<Opti
             project.folder.join("hmi-events.sqlite").display()
         )
     };
-    let hmi = hmi::Hmi::start(hmi::HmiOptions {
+    let started = hmi::Hmi::start(hmi::HmiOptions {
         screens: screens.clone(),
         users: screens.join("users.toml"),
         connect: vec![server.local_addr().to_string()],
@@ -171,14 +177,21 @@ async fn start_hmi(runtime: &Runtime, memory_store: bool) -> anyhow::Result<Opti
         zone: station::pointdb::TimeZonePolicy::Zone(project.station.time_zone),
         local_address: Some(std::net::IpAddr::from([127, 0, 0, 2])),
     })
-    .await
-    .context("the web HMI does not start")?;
+    .await;
+    // The station runs whatever becomes of its HMI.
+    let hmi = match started {
+        Ok(hmi) => hmi,
+        Err(error) => {
+            println!("  HMI      not started: {error}");
+            return None;
+        }
+    };
     println!(
         "  HMI      http://{}/  (users in {}: the demo's are operator / operator-vsetin, admin / admin-vsetin, viewer / viewer-vsetin)",
         hmi.address,
         screens.join("users.toml").display()
     );
-    Ok(Some(hmi))
+    Some(hmi)
 }
 
 fn print_banner(runtime: &Runtime, store: &str, speed: f64, demo: bool) {
