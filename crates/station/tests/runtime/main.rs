@@ -9,6 +9,7 @@
 )]
 
 mod continuity;
+mod distributed;
 mod harness;
 mod hierarchy;
 mod lighting;
