@@ -169,7 +169,7 @@ pub(crate) fn lvalue_name(e: &Expr) -> String {
 /// How the index value is computed.
 pub(crate) enum IdxSrc {
     /// `var + k` (or a constant), wrapped to the index expression's type.
-    Inline(super::fused::Opnd, i64, Ty),
+    Inline(super::fused::Opnd, i64, super::stmt::Wrap),
     /// Any expression.
     Expr(IFn),
 }
@@ -188,12 +188,12 @@ impl Index1 {
     #[inline(always)]
     pub(crate) fn eval(&self, vm: &mut Vm) -> Result<usize, Fault> {
         let v = match &self.f {
-            IdxSrc::Inline(o, k, t) => {
+            IdxSrc::Inline(o, k, w) => {
                 let x = o.get(vm)?;
                 if *k == 0 {
                     x
                 } else {
-                    t.wrap(x.wrapping_add(*k))
+                    w.apply(x.wrapping_add(*k))
                 }
             }
             IdxSrc::Expr(f) => f(vm)?,
@@ -471,7 +471,7 @@ impl Cx<'_> {
     fn inline_index(&self, e: &Expr) -> Option<IdxSrc> {
         let t = self.c.final_ty(e.id);
         if let Some(o) = self.simple_int(e) {
-            return Some(IdxSrc::Inline(o, 0, t));
+            return Some(IdxSrc::Inline(o, 0, super::stmt::Wrap::of(&t)));
         }
         if self.c.coerce.contains_key(&e.id) {
             return None;
@@ -489,7 +489,7 @@ impl Cx<'_> {
         } else {
             k
         };
-        Some(IdxSrc::Inline(o, k, t))
+        Some(IdxSrc::Inline(o, k, super::stmt::Wrap::of(&t)))
     }
 
     /// Loads a scalar from a place.

@@ -9,11 +9,13 @@
 //! value itself (an expression closure), a store into a statically addressed variable
 //! (`x := a + b` in one closure) or a branch (`IF a > b THEN` in one closure).
 
+use super::expr::{Base, Index1, Place};
 use super::stmt::{run_block, Wrap};
 use super::{Cx, IFn, RFn};
 use crate::check::{Lane, Res, Ty};
 use crate::syntax::{BinOp, Expr, ExprKind, Literal};
 use crate::vm::{Fault, Flow, StmtFn, Vm};
+use std::rc::Rc;
 
 /// An operand read without a closure call.
 #[derive(Clone, Copy)]
@@ -69,6 +71,23 @@ impl IGet for Elem {
     #[inline(always)]
     fn eval(&self, vm: &mut Vm) -> Result<i64, Fault> {
         self.get(vm)
+    }
+}
+
+/// An integer cell at a static offset plus one run-time index (`t[i].Q`, `a[i + 1]`).
+pub(crate) struct IdxLoad {
+    ix: Rc<Index1>,
+    off: usize,
+    /// Relative to the frame (else absolute).
+    frame: bool,
+}
+
+impl IGet for IdxLoad {
+    #[inline(always)]
+    fn eval(&self, vm: &mut Vm) -> Result<i64, Fault> {
+        let k = self.ix.eval(vm)?;
+        let b = if self.frame { vm.frame.i } else { 0 };
+        vm.geti(b + self.off + k * self.ix.stride.i)
     }
 }
 
@@ -383,11 +402,51 @@ impl Cx<'_> {
         if let Some(b) = self.inline_bin(e) {
             return sink.build(move |vm| b.eval(vm));
         }
+        let place_expr = matches!(e.kind, ExprKind::Index(..) | ExprKind::Member(..))
+            && self.c.final_ty(e.id) == self.c.ty(e.id)
+            && !matches!(
+                self.c.res.get(&e.id),
+                Some(Res::EnumValue(_) | Res::WStringLiteral(_))
+            );
+        if place_expr {
+            // as in Cx::expr: the place, loaded
+            let Some(p) = self.place(e) else {
+                self.error(e.span, "cannot compile this access");
+                return sink.build(|_| Ok(0));
+            };
+            return self.load_into(&p, sink);
+        }
         let sink = match self.fused_binary(e, sink) {
             Ok(out) => return out,
             Err(sink) => sink,
         };
         match self.expr(e) {
+            super::CE::I(f) => sink.build(move |vm| f(vm)),
+            _ => sink.build(|_| Ok(0)),
+        }
+    }
+
+    /// The integer value at a place into `sink`: the same value and faults as
+    /// [`Cx::load`], one-index accesses without an inner call.
+    fn load_into<S: ISink>(&self, p: &Place, sink: S) -> S::Out {
+        let plain = p.char_ix.is_none()
+            && p.direct.is_none()
+            && p.bit.is_none()
+            && p.ty.lane() == Some(Lane::Int);
+        if plain {
+            if let Some(el) = Elem::of(p) {
+                return sink.build(move |vm| el.get(vm));
+            }
+            if let (Some(ix), Base::Frame | Base::Abs) = (p.index1.clone(), p.base) {
+                let l = IdxLoad {
+                    ix,
+                    off: p.off.i,
+                    frame: p.base == Base::Frame,
+                };
+                return sink.build(move |vm| l.eval(vm));
+            }
+        }
+        match self.load(p) {
             super::CE::I(f) => sink.build(move |vm| f(vm)),
             _ => sink.build(|_| Ok(0)),
         }
@@ -944,13 +1003,13 @@ impl Elem {
             return None;
         }
         let ix = p.index1.as_ref()?;
-        let IdxSrc::Inline(Opnd::F(var), k, t) = &ix.f else {
+        let IdxSrc::Inline(Opnd::F(var), k, wrap) = &ix.f else {
             return None;
         };
         Some(Elem {
             var: *var,
             k: *k,
-            wrap: Wrap::of(t),
+            wrap: *wrap,
             lo: ix.lo,
             hi: ix.hi,
             stride: ix.stride.i,

@@ -107,12 +107,26 @@ fn nop() -> StmtFn {
 }
 
 impl Cx<'_> {
+    /// The statements of a block; consecutive integer moves (`t := a[j]; a[j] := a[j + 1];
+    /// a[j + 1] := t;`) run as one closure.
     pub(crate) fn block(&mut self, stmts: &[Stmt]) -> Vec<StmtFn> {
-        stmts
-            .iter()
-            .filter(|s| !matches!(s.kind, StmtKind::Empty))
-            .map(|s| self.stmt(s))
-            .collect()
+        let mut out = Vec::new();
+        let mut moves: Vec<Move> = Vec::new();
+        for s in stmts {
+            if matches!(s.kind, StmtKind::Empty) {
+                continue;
+            }
+            if let StmtKind::Assign(target, value) = &s.kind {
+                if let Some(m) = self.int_move(target, value) {
+                    moves.push(m);
+                    continue;
+                }
+            }
+            flush_moves(&mut moves, &mut out);
+            out.push(self.stmt(s));
+        }
+        flush_moves(&mut moves, &mut out);
+        out
     }
 
     fn cond(&mut self, e: &Expr) -> IFn {
@@ -389,30 +403,56 @@ impl Cx<'_> {
             crate::check::Ty::String(n) | crate::check::Ty::WString(n) => n as usize,
             _ => return None,
         };
-        let rest: Vec<super::SFn> = args
+        let rest: Vec<Part> = args
             .iter()
             .skip(1)
-            .map(|a| match self.expr(&a.value) {
-                CE::S(f) => Some(f),
+            .map(|a| match (&a.value.kind, self.expr(&a.value)) {
+                // a literal's value is its text (STRING to STRING: no conversion)
+                (ExprKind::Literal(Literal::String(s, _)), CE::S(_))
+                    if self.c.final_ty(a.value.id) == self.c.ty(a.value.id) =>
+                {
+                    Some(Part::K(s.clone()))
+                }
+                (_, CE::S(f)) => Some(Part::E(f)),
                 _ => None,
             })
             .collect::<Option<_>>()?;
-        let addr = p.addr();
-        Some(Box::new(move |vm| {
-            let mut parts = Vec::with_capacity(rest.len());
-            for f in &rest {
-                parts.push(f(vm)?);
-            }
-            let at = addr(vm)?;
-            let cell = vm.strs.get_mut(at.s).ok_or_else(Fault::memory)?;
-            let mut count = cell.chars().count();
-            for part in parts {
-                for ch in part.chars() {
-                    if count >= max {
-                        break;
+        let addr = match (p.base, &p.dynamic, p.bit, p.direct, &p.char_ix) {
+            (super::expr::Base::Frame, None, None, None, None) => SAddr::F(p.off.s),
+            (super::expr::Base::Abs, None, None, None, None) => SAddr::A(p.off.s),
+            _ => SAddr::D(p.addr()),
+        };
+        if rest.len() == 1 {
+            let part = rest.into_iter().next()?;
+            return Some(Box::new(move |vm| {
+                match &part {
+                    Part::K(k) => append(addr.cell(vm)?, k, max),
+                    Part::E(f) => {
+                        let v = f(vm)?;
+                        append(addr.cell(vm)?, &v, max);
                     }
-                    cell.push(ch);
-                    count += 1;
+                }
+                Ok(Flow::Normal)
+            }));
+        }
+        Some(Box::new(move |vm| {
+            // every argument first (one may read the target), then the appends
+            let mut vals = Vec::with_capacity(rest.len());
+            for part in &rest {
+                if let Part::E(f) = part {
+                    vals.push(f(vm)?);
+                }
+            }
+            let cell = addr.cell(vm)?;
+            let mut vals = vals.into_iter();
+            for part in &rest {
+                match part {
+                    Part::K(k) => append(cell, k, max),
+                    Part::E(_) => {
+                        if let Some(v) = vals.next() {
+                            append(cell, &v, max);
+                        }
+                    }
                 }
             }
             Ok(Flow::Normal)
@@ -422,22 +462,18 @@ impl Cx<'_> {
     /// `x := y` between integer locals and fast array elements (no conversion, no
     /// subrange): one closure without inner calls.
     fn int_copy(&mut self, target: &Expr, value: &Expr) -> Option<StmtFn> {
-        use super::fused::{Elem, Opnd};
-        enum Dst {
-            F(usize),
-            E(Elem),
-        }
-        enum Val {
-            O(Opnd),
-            E(Elem),
-        }
+        self.int_move(target, value).map(Move::stmt)
+    }
+
+    /// `x := y` between integer locals and fast array elements, if it is one.
+    fn int_move(&mut self, target: &Expr, value: &Expr) -> Option<Move> {
         let tt = self.c.ty(target.id);
         if tt.lane() != Some(crate::check::Lane::Int) || self.c.final_ty(value.id) != tt {
             return None;
         }
         let val = match self.simple_int(value) {
-            Some(o) => Val::O(o),
-            None => Val::E(self.elem_int(value)?),
+            Some(o) => MVal::O(o),
+            None => MVal::E(self.elem_int(value)?),
         };
         let dst = match &target.kind {
             ExprKind::Name { .. } => {
@@ -450,33 +486,12 @@ impl Cx<'_> {
                 {
                     return None;
                 }
-                Dst::F(p.off.i)
+                MDst::F(p.off.i)
             }
-            ExprKind::Index(..) => Dst::E(self.elem_int(target)?),
+            ExprKind::Index(..) => MDst::E(self.elem_int(target)?),
             _ => return None,
         };
-        Some(match (dst, val) {
-            (Dst::F(o), Val::O(v)) => Box::new(move |vm| {
-                let x = v.get(vm)?;
-                vm.seti(vm.frame.i + o, x)?;
-                Ok(Flow::Normal)
-            }),
-            (Dst::F(o), Val::E(v)) => Box::new(move |vm| {
-                let x = v.get(vm)?;
-                vm.seti(vm.frame.i + o, x)?;
-                Ok(Flow::Normal)
-            }),
-            (Dst::E(d), Val::O(v)) => Box::new(move |vm| {
-                let x = v.get(vm)?;
-                d.set(vm, x)?;
-                Ok(Flow::Normal)
-            }),
-            (Dst::E(d), Val::E(v)) => Box::new(move |vm| {
-                let x = v.get(vm)?;
-                d.set(vm, x)?;
-                Ok(Flow::Normal)
-            }),
-        })
+        Some(Move { dst, val })
     }
 
     /// Value of a constant CASE label.
@@ -605,19 +620,141 @@ fn native_fb_call(
             super::expr::Binder::Code(_) => None,
         })
         .collect::<Option<_>>()?;
-    let body = crate::stdlib::timers::native_body(pou)?;
+    let fb = crate::stdlib::timers::NativeFb::of(pou)?;
     let addr = std::rc::Rc::clone(addr);
     Some(Box::new(move |vm| {
-        let base = addr.get(vm)?;
+        let base = addr.get(vm)?.i;
         for (off, o) in &binds {
             let x = o.get(vm)?;
-            vm.seti(base.i + off, x)?;
+            vm.seti(base + off, x)?;
         }
-        let saved = std::mem::replace(&mut vm.frame, base);
-        let r = body(vm);
-        vm.frame = saved;
-        r.map(|_| Flow::Normal)
+        fb.run(vm, base)?;
+        Ok(Flow::Normal)
     }))
+}
+
+/// An appended CONCAT argument.
+enum Part {
+    /// A literal.
+    K(String),
+    /// Anything else.
+    E(super::SFn),
+}
+
+/// The string cell an in-place CONCAT appends to.
+enum SAddr {
+    /// Frame-relative.
+    F(usize),
+    /// Absolute.
+    A(usize),
+    /// Computed.
+    D(super::AddrFn),
+}
+
+impl SAddr {
+    #[inline(always)]
+    fn cell<'v>(&self, vm: &'v mut Vm) -> Result<&'v mut String, Fault> {
+        let at = match self {
+            SAddr::F(o) => vm.frame.s + o,
+            SAddr::A(o) => *o,
+            SAddr::D(a) => a(vm)?.s,
+        };
+        vm.strs.get_mut(at).ok_or_else(Fault::memory)
+    }
+}
+
+/// Appends `part` to `cell`, keeping at most `max` characters.
+#[inline]
+fn append(cell: &mut String, part: &str, max: usize) {
+    // bytes >= characters: nothing to cut
+    if cell.len() + part.len() <= max {
+        cell.push_str(part);
+        return;
+    }
+    let room = max.saturating_sub(cell.chars().count());
+    cell.extend(part.chars().take(room));
+}
+
+/// Where an integer move writes.
+#[derive(Clone, Copy)]
+enum MDst {
+    /// Frame-relative integer cell.
+    F(usize),
+    /// Fast array element.
+    E(super::fused::Elem),
+}
+
+/// What an integer move reads.
+#[derive(Clone, Copy)]
+enum MVal {
+    /// Inline operand.
+    O(super::fused::Opnd),
+    /// Fast array element.
+    E(super::fused::Elem),
+}
+
+/// `x := y` between integer locals and fast array elements.
+#[derive(Clone, Copy)]
+struct Move {
+    dst: MDst,
+    val: MVal,
+}
+
+impl Move {
+    #[inline(always)]
+    fn run(&self, vm: &mut Vm) -> Result<(), Fault> {
+        let x = match self.val {
+            MVal::O(v) => v.get(vm)?,
+            MVal::E(v) => v.get(vm)?,
+        };
+        match self.dst {
+            MDst::F(o) => vm.seti(vm.frame.i + o, x),
+            MDst::E(d) => d.set(vm, x),
+        }
+    }
+
+    /// The move as a statement of its own.
+    fn stmt(self) -> StmtFn {
+        match (self.dst, self.val) {
+            (MDst::F(o), MVal::O(v)) => Box::new(move |vm| {
+                let x = v.get(vm)?;
+                vm.seti(vm.frame.i + o, x)?;
+                Ok(Flow::Normal)
+            }),
+            (MDst::F(o), MVal::E(v)) => Box::new(move |vm| {
+                let x = v.get(vm)?;
+                vm.seti(vm.frame.i + o, x)?;
+                Ok(Flow::Normal)
+            }),
+            (MDst::E(d), MVal::O(v)) => Box::new(move |vm| {
+                let x = v.get(vm)?;
+                d.set(vm, x)?;
+                Ok(Flow::Normal)
+            }),
+            (MDst::E(d), MVal::E(v)) => Box::new(move |vm| {
+                let x = v.get(vm)?;
+                d.set(vm, x)?;
+                Ok(Flow::Normal)
+            }),
+        }
+    }
+}
+
+/// Appends the pending moves to `out`: one statement, or one closure for a run of them.
+fn flush_moves(moves: &mut Vec<Move>, out: &mut Vec<StmtFn>) {
+    match moves.len() {
+        0 => {}
+        1 => out.extend(moves.drain(..).map(Move::stmt)),
+        _ => {
+            let run: Box<[Move]> = std::mem::take(moves).into_boxed_slice();
+            out.push(Box::new(move |vm| {
+                for m in run.iter() {
+                    m.run(vm)?;
+                }
+                Ok(Flow::Normal)
+            }));
+        }
+    }
 }
 
 /// Wrapping to an integer type's width, decided at compile time.

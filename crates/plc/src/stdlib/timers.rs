@@ -2,140 +2,168 @@
 //!
 //! The prelude declares these blocks in ST — their interface and the reference semantics —
 //! and the compiler swaps in these bodies, which implement exactly the same ST code over
-//! the instance memory. A program with 1,000 timers then costs a few nanoseconds per timer.
+//! the instance memory. A body takes the instance's integer cells as one fixed-size array
+//! (one bounds check per call, the variables at their declared positions), so a program
+//! with 1,000 timers costs a few nanoseconds per timer.
 
 use crate::check::PouInfo;
 use crate::vm::{Fault, Flow, StmtFn, Vm};
 
-fn off(pou: &PouInfo, name: &str) -> Option<usize> {
-    pou.var(&name.to_uppercase()).map(|(_, v)| v.offset.i)
+/// A standard FB with a native body.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NativeFb {
+    /// On-delay timer.
+    Ton,
+    /// Off-delay timer.
+    Tof,
+    /// Pulse timer.
+    Tp,
+    /// Rising edge.
+    RTrig,
+    /// Falling edge.
+    FTrig,
 }
 
-#[inline]
-fn get(vm: &Vm, a: usize) -> Result<i64, Fault> {
-    vm.geti(vm.frame.i + a)
+impl NativeFb {
+    /// The native body for a standard FB, if it has one and its instance layout is the
+    /// one the body assumes (the variables in declaration order from integer cell 0).
+    pub fn of(pou: &PouInfo) -> Option<NativeFb> {
+        if !pou.stdlib {
+            return None;
+        }
+        const TIMER: &[&str] = &["IN", "PT", "Q", "ET", "RUNNING", "START"];
+        let (kind, names): (NativeFb, &[&str]) = match pou.name.as_str() {
+            "TON" => (NativeFb::Ton, TIMER),
+            "TOF" => (NativeFb::Tof, TIMER),
+            "TP" => (NativeFb::Tp, &["IN", "PT", "Q", "ET", "PREV", "START"]),
+            "R_TRIG" => (NativeFb::RTrig, &["CLK", "Q", "M"]),
+            "F_TRIG" => (NativeFb::FTrig, &["CLK", "Q", "M"]),
+            _ => return None,
+        };
+        for (k, name) in names.iter().enumerate() {
+            let (_, v) = pou.var(name)?;
+            if v.offset.i != k || v.ty.lane() != Some(crate::check::Lane::Int) {
+                return None;
+            }
+        }
+        Some(kind)
+    }
+
+    /// Runs the body on the instance whose integer cells start at `base`.
+    #[inline]
+    pub fn run(self, vm: &mut Vm, base: usize) -> Result<(), Fault> {
+        let now = vm.now;
+        match self {
+            NativeFb::Ton => ton(cells(vm, base)?, now),
+            NativeFb::Tof => tof(cells(vm, base)?, now),
+            NativeFb::Tp => tp(cells(vm, base)?, now),
+            NativeFb::RTrig => trig(cells(vm, base)?, true),
+            NativeFb::FTrig => trig(cells(vm, base)?, false),
+        }
+        Ok(())
+    }
 }
 
-#[inline]
-fn set(vm: &mut Vm, a: usize, v: i64) -> Result<(), Fault> {
-    vm.seti(vm.frame.i + a, v)
+/// The `N` integer cells of an instance.
+#[inline(always)]
+fn cells<const N: usize>(vm: &mut Vm, base: usize) -> Result<&mut [i64; N], Fault> {
+    base.checked_add(N)
+        .and_then(|end| vm.ints.get_mut(base..end))
+        .and_then(|s| <&mut [i64; N]>::try_from(s).ok())
+        .ok_or_else(Fault::memory)
 }
 
-/// The native body for a standard FB, if there is one.
+/// TON: `Q` once `IN` has been TRUE for `PT`.
+#[inline(always)]
+fn ton(c: &mut [i64; 6], now: i64) {
+    let [inp, pt, q, et, running, start] = c;
+    if *inp != 0 {
+        if *running == 0 {
+            *running = 1;
+            *start = now;
+        }
+        if *q == 0 {
+            let e = now.wrapping_sub(*start);
+            if e >= *pt {
+                *et = *pt;
+                *q = 1;
+            } else {
+                *et = e;
+            }
+        }
+    } else {
+        *running = 0;
+        *q = 0;
+        *et = 0;
+    }
+}
+
+/// TOF: `Q` stays TRUE for `PT` after `IN` falls.
+#[inline(always)]
+fn tof(c: &mut [i64; 6], now: i64) {
+    let [inp, pt, q, et, running, start] = c;
+    if *inp != 0 {
+        *q = 1;
+        *et = 0;
+        *running = 0;
+    } else if *q != 0 {
+        if *running == 0 {
+            *running = 1;
+            *start = now;
+        }
+        let e = now.wrapping_sub(*start);
+        if e >= *pt {
+            *et = *pt;
+            *q = 0;
+            *running = 0;
+        } else {
+            *et = e;
+        }
+    }
+}
+
+/// TP: a pulse of `PT` on a rising `IN`, not retriggerable.
+#[inline(always)]
+fn tp(c: &mut [i64; 6], now: i64) {
+    let [inp, pt, q, et, prev, start] = c;
+    let i = *inp != 0;
+    if *q == 0 && i && *prev == 0 && *et == 0 {
+        *q = 1;
+        *start = now;
+    }
+    if *q != 0 {
+        let e = now.wrapping_sub(*start);
+        if e >= *pt {
+            *et = *pt;
+            *q = 0;
+        } else {
+            *et = e;
+        }
+    }
+    if *q == 0 && !i {
+        *et = 0;
+    }
+    *prev = i64::from(i);
+}
+
+/// R_TRIG / F_TRIG.
+#[inline(always)]
+fn trig(c: &mut [i64; 3], rising: bool) {
+    let [clk, q, m] = c;
+    let (now, before) = (*clk != 0, *m != 0);
+    *q = i64::from(if rising {
+        now && !before
+    } else {
+        !now && before
+    });
+    *m = i64::from(now);
+}
+
+/// The native body for a standard FB as a POU body (on the instance at `vm.frame`).
 pub fn native_body(pou: &PouInfo) -> Option<StmtFn> {
-    if !pou.stdlib {
-        return None;
-    }
-    match pou.name.as_str() {
-        "TON" => {
-            let (i, pt, q, et, run, st) = (
-                off(pou, "IN")?,
-                off(pou, "PT")?,
-                off(pou, "Q")?,
-                off(pou, "ET")?,
-                off(pou, "running")?,
-                off(pou, "start")?,
-            );
-            Some(Box::new(move |vm| {
-                if get(vm, i)? != 0 {
-                    if get(vm, run)? == 0 {
-                        set(vm, run, 1)?;
-                        set(vm, st, vm.now)?;
-                    }
-                    if get(vm, q)? == 0 {
-                        let e = vm.now.wrapping_sub(get(vm, st)?);
-                        let p = get(vm, pt)?;
-                        if e >= p {
-                            set(vm, et, p)?;
-                            set(vm, q, 1)?;
-                        } else {
-                            set(vm, et, e)?;
-                        }
-                    }
-                } else {
-                    set(vm, run, 0)?;
-                    set(vm, q, 0)?;
-                    set(vm, et, 0)?;
-                }
-                Ok(Flow::Normal)
-            }))
-        }
-        "TOF" => {
-            let (i, pt, q, et, run, st) = (
-                off(pou, "IN")?,
-                off(pou, "PT")?,
-                off(pou, "Q")?,
-                off(pou, "ET")?,
-                off(pou, "running")?,
-                off(pou, "start")?,
-            );
-            Some(Box::new(move |vm| {
-                if get(vm, i)? != 0 {
-                    set(vm, q, 1)?;
-                    set(vm, et, 0)?;
-                    set(vm, run, 0)?;
-                } else if get(vm, q)? != 0 {
-                    if get(vm, run)? == 0 {
-                        set(vm, run, 1)?;
-                        set(vm, st, vm.now)?;
-                    }
-                    let e = vm.now.wrapping_sub(get(vm, st)?);
-                    let p = get(vm, pt)?;
-                    if e >= p {
-                        set(vm, et, p)?;
-                        set(vm, q, 0)?;
-                        set(vm, run, 0)?;
-                    } else {
-                        set(vm, et, e)?;
-                    }
-                }
-                Ok(Flow::Normal)
-            }))
-        }
-        "TP" => {
-            let (i, pt, q, et, prev, st) = (
-                off(pou, "IN")?,
-                off(pou, "PT")?,
-                off(pou, "Q")?,
-                off(pou, "ET")?,
-                off(pou, "prev")?,
-                off(pou, "start")?,
-            );
-            Some(Box::new(move |vm| {
-                let inp = get(vm, i)? != 0;
-                if get(vm, q)? == 0 && inp && get(vm, prev)? == 0 && get(vm, et)? == 0 {
-                    set(vm, q, 1)?;
-                    set(vm, st, vm.now)?;
-                }
-                if get(vm, q)? != 0 {
-                    let e = vm.now.wrapping_sub(get(vm, st)?);
-                    let p = get(vm, pt)?;
-                    if e >= p {
-                        set(vm, et, p)?;
-                        set(vm, q, 0)?;
-                    } else {
-                        set(vm, et, e)?;
-                    }
-                }
-                if get(vm, q)? == 0 && !inp {
-                    set(vm, et, 0)?;
-                }
-                set(vm, prev, i64::from(inp))?;
-                Ok(Flow::Normal)
-            }))
-        }
-        "R_TRIG" | "F_TRIG" => {
-            let rising = pou.name == "R_TRIG";
-            let (clk, q, m) = (off(pou, "CLK")?, off(pou, "Q")?, off(pou, "M")?);
-            Some(Box::new(move |vm| {
-                let c = get(vm, clk)? != 0;
-                let mem = get(vm, m)? != 0;
-                let out = if rising { c && !mem } else { !c && mem };
-                set(vm, q, i64::from(out))?;
-                set(vm, m, i64::from(c))?;
-                Ok(Flow::Normal)
-            }))
-        }
-        _ => None,
-    }
+    let fb = NativeFb::of(pou)?;
+    Some(Box::new(move |vm| {
+        fb.run(vm, vm.frame.i)?;
+        Ok(Flow::Normal)
+    }))
 }

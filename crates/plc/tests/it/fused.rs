@@ -88,7 +88,8 @@ impl Gen {
             self.vars.push_str(&format!("{r} : {res_ty}; "));
         }
         self.vars.push_str(&format!("{q} : {res_ty}; "));
-        self.body.push_str(&format!("{r} := {fused};\n{q} := {generic};\n"));
+        self.body
+            .push_str(&format!("{r} := {fused};\n{q} := {generic};\n"));
         let path = |v: &str| {
             if global {
                 v.to_string()
@@ -108,8 +109,7 @@ impl Gen {
                  IF {fused} THEN {r} := {r} + 10; END_IF\n\
                  IF {generic} THEN {q} := {q} + 10; END_IF\n"
             ));
-            self.pairs
-                .push((format!("Main.{r}"), format!("Main.{q}")));
+            self.pairs.push((format!("Main.{r}"), format!("Main.{q}")));
         }
     }
 }
@@ -189,7 +189,8 @@ fn fused_forms_match_the_generic_operators() {
         ),
     };
     let mut p = Plc::new(compiled, sources);
-    p.add_task(TaskConfig::cyclic("main", 0, &["Main"])).unwrap();
+    p.add_task(TaskConfig::cyclic("main", 0, &["Main"]))
+        .unwrap();
     let mut seed: u64 = 0x9E37_79B9_7F4A_7C15;
     for round in 0..400 {
         for (path, lo, hi) in &inputs {
@@ -217,4 +218,35 @@ fn fused_forms_match_the_generic_operators() {
             assert_eq!(va, vb, "{a} vs {b} in round {round}\n{src}");
         }
     }
+}
+
+/// `s := CONCAT(s, ...)` appends in place; the same text as the generic CONCAT (whose
+/// first argument is not the target), with truncation at the declared length counted
+/// in characters, multi-byte characters, literal and computed parts.
+#[test]
+fn in_place_concat_matches_the_generic_concat() {
+    let src = "PROGRAM Main
+VAR a, b : STRING[7]; c, d : STRING[7]; e, f : WSTRING[5]; g, h : STRING[30]; i : INT; END_VAR
+a := CONCAT(a, 'é');           b := CONCAT(CONCAT(b, ''), 'é');
+c := CONCAT(c, 'x', INT_TO_STRING(i), 'žž');
+d := CONCAT(CONCAT(d, ''), 'x', INT_TO_STRING(i), 'žž');
+e := CONCAT(e, \"ab\");       f := CONCAT(CONCAT(f, \"\"), \"ab\");
+g := CONCAT(g, g, 'é');        h := CONCAT(CONCAT(h, ''), h, 'é');
+i := i + 1;
+END_PROGRAM";
+    let (sources, r) = plc::build(&[("t.st".to_string(), src.to_string())]);
+    let mut p = Plc::new(r.unwrap(), sources);
+    p.add_task(TaskConfig::cyclic("main", 0, &["Main"]))
+        .unwrap();
+    for round in 0..12 {
+        assert!(p.run_cycle(ClockReading::default()).is_empty());
+        for (x, y) in [("a", "b"), ("c", "d"), ("e", "f"), ("g", "h")] {
+            let (vx, vy) = (
+                p.read_text(&format!("Main.{x}")).unwrap(),
+                p.read_text(&format!("Main.{y}")).unwrap(),
+            );
+            assert_eq!(vx, vy, "{x} vs {y} in round {round}");
+        }
+    }
+    assert_eq!(p.read_text("Main.a").unwrap(), "'ééééééé'");
 }
