@@ -1,0 +1,565 @@
+//! The web HMI in a real browser: headless Chromium driven over WebDriver (`fantoccini`
+//! against Debian's `chromedriver`), against the Vsetín station running in this process
+//! (the station runtime with every node and the plant simulation, as `stanice demo` runs
+//! it) and the HMI library connected to its top controller RDRT from 127.0.0.2, the
+//! address of the station's HMI link.
+//!
+//! What a person would do and see: log in (and fail with a wrong password), watch a breaker
+//! change when the plant trips it, operate QF1 of RH2 through the control dialog and read
+//! the outcome, find that command in the event list under the user's name, watch every
+//! value turn invalid and blink when the station link is cut (and when the browser's own
+//! live connection drops, until it reconnects), and, as the read-only user, see the
+//! controls disabled and be refused by the server.
+//!
+//! Chromium and chromedriver come from `scripts/install-test-deps.sh`. Without them the
+//! tests say SKIPPED and pass, unless `STANICE_REQUIRE_PEERS=1` (set by `scripts/test.sh`,
+//! hence in CI), where a missing browser fails them.
+//!
+//! `cargo test -p hmi --test browser -- --ignored screenshots` writes the PNGs of
+//! `docs/screenshots/` (run by hand; see the README's "Web HMI").
+
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing,
+    missing_docs
+)]
+
+use std::net::{IpAddr, SocketAddr, TcpListener, TcpStream};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use chrono::{DateTime, Utc};
+use fantoccini::{Client, ClientBuilder, Locator};
+use hmi::{Hmi, HmiOptions};
+use serde_json::{json, Value};
+use station::config::Project;
+use station::pointdb::TimeZonePolicy;
+use station::runtime::{Pacing, Runtime, RuntimeOptions, StoreChoice};
+
+/// How long any one thing may take to appear in the browser.
+const WAIT: Duration = Duration::from_secs(10);
+
+fn repository_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn vsetin() -> PathBuf {
+    repository_root().join("examples/vsetin")
+}
+
+// ---------------------------------------------------------------------------- browser
+
+/// chromedriver and a Chromium for it, or None (then the test is skipped, unless peers
+/// are required).
+fn browser_available() -> Option<(PathBuf, Option<PathBuf>)> {
+    let found = |names: &[&str]| {
+        names.iter().find_map(|name| {
+            std::env::var_os("PATH").and_then(|paths| {
+                std::env::split_paths(&paths)
+                    .map(|dir| dir.join(name))
+                    .find(|path| path.is_file())
+            })
+        })
+    };
+    let driver = std::env::var_os("CHROMEDRIVER")
+        .map(PathBuf::from)
+        .or_else(|| found(&["chromedriver"]));
+    let chromium = std::env::var_os("CHROMIUM")
+        .map(PathBuf::from)
+        .or_else(|| found(&["chromium", "chromium-browser", "google-chrome"]));
+    if let (Some(driver), Some(chromium)) = (&driver, &chromium) {
+        return Some((driver.clone(), Some(chromium.clone())));
+    }
+    let message = format!(
+        "browser tests need chromedriver and chromium (found: {}, {}); run scripts/install-test-deps.sh",
+        driver.map_or("no chromedriver".into(), |p| p.display().to_string()),
+        chromium.map_or("no chromium".into(), |p| p.display().to_string()),
+    );
+    if std::env::var("STANICE_REQUIRE_PEERS").as_deref() == Ok("1") {
+        panic!("{message}");
+    }
+    eprintln!("SKIPPED: {message}");
+    None
+}
+
+fn free_port() -> u16 {
+    TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
+}
+
+/// A base port whose next `count` ports are free (the station's nodes listen there).
+fn free_port_range(count: u16) -> u16 {
+    for _ in 0..100 {
+        let base = free_port();
+        if base.checked_add(count).is_some()
+            && (0..count).all(|i| TcpListener::bind(("127.0.0.1", base + i)).is_ok())
+        {
+            return base;
+        }
+    }
+    panic!("no free port range");
+}
+
+/// chromedriver on a free loopback port, killed when dropped, with a fresh profile folder.
+struct Driver {
+    child: Child,
+    url: String,
+    chromium: Option<PathBuf>,
+    profile: tempfile::TempDir,
+    sessions: std::sync::atomic::AtomicUsize,
+}
+
+impl Driver {
+    fn start(driver: &Path, chromium: Option<PathBuf>) -> Driver {
+        let port = free_port();
+        let child = Command::new(driver)
+            .arg(format!("--port={port}"))
+            .arg("--allowed-ips=127.0.0.1")
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        let deadline = Instant::now() + WAIT;
+        while TcpStream::connect(("127.0.0.1", port)).is_err() {
+            assert!(Instant::now() < deadline, "chromedriver does not listen on {port}");
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        Driver {
+            child,
+            url: format!("http://127.0.0.1:{port}"),
+            chromium,
+            profile: tempfile::tempdir().unwrap(),
+            sessions: std::sync::atomic::AtomicUsize::new(0),
+        }
+    }
+
+    /// A new headless Chromium session.
+    async fn session(&self, width: u32, height: u32) -> Client {
+        let mut args = vec![
+            "--headless".to_owned(),
+            "--no-sandbox".to_owned(),
+            "--disable-gpu".to_owned(),
+            "--disable-quic".to_owned(),
+            "--no-first-run".to_owned(),
+            "--disable-background-networking".to_owned(),
+            "--disable-component-update".to_owned(),
+            "--disable-sync".to_owned(),
+            "--disable-dev-shm-usage".to_owned(),
+            "--autoplay-policy=no-user-gesture-required".to_owned(),
+            format!("--window-size={width},{height}"),
+        ];
+        let n = self.sessions.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let profile = self.profile.path().join(format!("profile-{n}"));
+        args.push(format!("--user-data-dir={}", profile.display()));
+        let mut options = json!({ "args": args });
+        if let Some(binary) = &self.chromium {
+            options["binary"] = json!(binary.display().to_string());
+        }
+        let mut capabilities = serde_json::Map::new();
+        capabilities.insert("browserName".into(), json!("chrome"));
+        capabilities.insert("goog:chromeOptions".into(), options);
+        let connector = hyper_util::client::legacy::connect::HttpConnector::new();
+        ClientBuilder::new(connector)
+            .capabilities(capabilities)
+            .connect(&self.url)
+            .await
+            .expect("no WebDriver session (is chromium installed and matching chromedriver?)")
+    }
+}
+
+impl Drop for Driver {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+// ---------------------------------------------------------------------------- station + HMI
+
+/// The Vsetín station (every node, the plant) and its web HMI, as `stanice demo` runs them.
+struct Site {
+    runtime: Option<Runtime>,
+    hmi: Option<Hmi>,
+    url: String,
+}
+
+impl Site {
+    async fn start(start: DateTime<Utc>, speed: f64) -> Site {
+        let folder = vsetin();
+        let project = Project::load(&folder)
+            .unwrap_or_else(|e| panic!("{:?}", e.errors()))
+            .with_port_base(free_port_range(23));
+        let zone = project.station.time_zone;
+        let runtime = Runtime::start(
+            project,
+            RuntimeOptions {
+                nodes: Vec::new(),
+                pacing: Pacing::RealTime { speed },
+                start,
+                store: StoreChoice::Disabled,
+            },
+        )
+        .await
+        .unwrap();
+        let top = runtime.project().top_node().unwrap().clone();
+        let server = runtime
+            .node(&top.name)
+            .and_then(|node| node.server.as_ref())
+            .unwrap()
+            .local_addr();
+        let screens = folder.join("hmi");
+        let hmi = Hmi::start(HmiOptions {
+            screens: screens.clone(),
+            users: screens.join("users.toml"),
+            connect: vec![server.to_string()],
+            common_address: top.common_address,
+            listen: SocketAddr::from(([127, 0, 0, 1], 0)),
+            store: Some("sqlite::memory:".into()),
+            zone: TimeZonePolicy::Zone(zone),
+            // The station's HMI link: the address its redundancy group "hmi" names.
+            local_address: Some(IpAddr::from([127, 0, 0, 2])),
+        })
+        .await
+        .unwrap();
+        let url = format!("http://{}", hmi.address);
+        Site {
+            runtime: Some(runtime),
+            hmi: Some(hmi),
+            url,
+        }
+    }
+
+    fn hmi(&self) -> &Hmi {
+        self.hmi.as_ref().unwrap()
+    }
+
+    /// A line of the demo's console (`breaker-tripped RH2_FA1.1`, ...).
+    async fn operate(&self, line: &str) {
+        self.runtime
+            .as_ref()
+            .unwrap()
+            .operate(line)
+            .await
+            .unwrap_or_else(|e| panic!("{line}: {e}"));
+    }
+
+    async fn stop(mut self) {
+        if let Some(hmi) = self.hmi.take() {
+            hmi.shutdown().await;
+        }
+        if let Some(runtime) = self.runtime.take() {
+            runtime.shutdown().await;
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------- helpers
+
+/// Evaluates a JavaScript expression in the page.
+async fn js(client: &Client, expression: &str) -> Value {
+    client
+        .execute(&format!("return ({expression});"), Vec::new())
+        .await
+        .unwrap_or_else(|e| panic!("script `{expression}` failed: {e}"))
+}
+
+/// Waits until a JavaScript expression is truthy; fails with `what` (and the page's state)
+/// after [`WAIT`]. Returns how long it took.
+async fn until(client: &Client, expression: &str, what: &str) -> Duration {
+    let started = Instant::now();
+    loop {
+        let value = client
+            .execute(&format!("try {{ return Boolean({expression}); }} catch (e) {{ return false; }}"), Vec::new())
+            .await
+            .unwrap_or(Value::Bool(false));
+        if value == Value::Bool(true) {
+            return started.elapsed();
+        }
+        if started.elapsed() > WAIT {
+            let state = js(
+                client,
+                "JSON.stringify({url: location.href, current: document.body.dataset.current, \
+                 ws: window.HMI && HMI.wsOpen, link: window.HMI && HMI.link, \
+                 toasts: [...document.querySelectorAll('.toast')].map(t => t.textContent), \
+                 message: (document.getElementById('login-message') || {}).textContent})",
+            )
+            .await;
+            panic!("timed out after {WAIT:?} waiting for {what} (`{expression}`); page: {state}");
+        }
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+}
+
+async fn click(client: &Client, css: &str) {
+    client
+        .find(Locator::Css(css))
+        .await
+        .unwrap_or_else(|e| panic!("no element `{css}`: {e}"))
+        .click()
+        .await
+        .unwrap_or_else(|e| panic!("cannot click `{css}`: {e}"));
+}
+
+/// Logs in through the login page's form.
+async fn log_in(client: &Client, url: &str, user: &str, password: &str) {
+    client.goto(&format!("{url}/")).await.unwrap();
+    until(client, "location.pathname === '/login' && document.getElementById('login-form')", "the login page").await;
+    let name = client.find(Locator::Id("username")).await.unwrap();
+    name.clear().await.unwrap();
+    name.send_keys(user).await.unwrap();
+    let field = client.find(Locator::Id("password")).await.unwrap();
+    field.clear().await.unwrap();
+    field.send_keys(password).await.unwrap();
+    click(client, "#login-button").await;
+}
+
+/// Logs in and waits for the application with live, valid values.
+async fn log_in_ready(client: &Client, url: &str, user: &str, password: &str) {
+    log_in(client, url, user, password).await;
+    until(client, "location.pathname === '/' && document.body.dataset.ready === 'true'", "the application page").await;
+    until(client, "HMI.wsOpen && HMI.link.up && HMI.points.size > 400", "the live snapshot with the station link up").await;
+}
+
+async fn show_screen(client: &Client, id: &str) {
+    client
+        .execute(&format!("location.hash = '#screen/{id}';"), Vec::new())
+        .await
+        .unwrap();
+    until(client, &format!("document.querySelector('#mimic svg[data-screen=\"{id}\"]')"), &format!("screen {id}")).await;
+}
+
+/// The attribute of the first element matching `css`, through the DOM.
+async fn attribute(client: &Client, css: &str, name: &str) -> Value {
+    js(client, &format!("(document.querySelector({css:?}) || {{getAttribute: () => 'MISSING'}}).getAttribute({name:?})")).await
+}
+
+// ---------------------------------------------------------------------------- the tests
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn operator_and_viewer_in_a_real_browser() {
+    let Some((driver, chromium)) = browser_available() else {
+        return;
+    };
+    let started = Instant::now();
+    let site = Site::start(Utc::now(), 1.0).await;
+    let driver = Driver::start(&driver, chromium);
+    let client = driver.session(1280, 800).await;
+    let url = site.url.clone();
+    let mut timings = Vec::new();
+
+    // --- Login: a wrong password is refused in words, the right one opens the HMI.
+    log_in(&client, &url, "operator", "not-the-password").await;
+    until(&client, "document.getElementById('login-message').textContent.includes('Wrong user name or password')", "the wrong-password message").await;
+    log_in_ready(&client, &url, "operator", "operator-vsetin").await;
+    assert_eq!(js(&client, "document.getElementById('user-name').textContent").await, json!("operator"));
+    assert_eq!(js(&client, "document.getElementById('user-level').textContent").await, json!("level 5"));
+    assert_eq!(attribute(&client, "#link", "data-state").await, json!("up"));
+    timings.push(("logged in, live", started.elapsed()));
+
+    // --- A breaker trips in the plant: the RH2 panel shows FA1.1 open.
+    show_screen(&client, "rh2").await;
+    let fa11 = r#"document.querySelector('#mimic rect.breaker[data-point="RH2_V1_FA1.1"]')"#;
+    until(&client, &format!("{fa11}.getAttribute('data-value') === 'on' && !{fa11}.hasAttribute('data-invalid')"), "FA1.1 closed and valid").await;
+    site.operate("breaker-tripped RH2_FA1.1").await;
+    let took = until(&client, &format!("{fa11}.getAttribute('data-value') === 'off'"), "FA1.1 shown open after the trip").await;
+    timings.push(("breaker trip shown", took));
+
+    // --- Operate QF1 (open) through the dialog: value, confirmation, outcome in words.
+    let qf1 = r#"document.querySelector('#mimic rect.breaker[data-point="RH2_P1_KHU3_Napeti_na_pripojeni"]')"#;
+    until(&client, &format!("{qf1}.getAttribute('data-value') === 'on'"), "QF1 closed (voltage behind it)").await;
+    assert_eq!(
+        js(&client, r#"document.querySelector('[data-command="RH2_VypnoutQF1"]').classList.contains('disabled')"#).await,
+        json!(false),
+        "the operator (level 5) may open QF1"
+    );
+    click(&client, r#"[data-command="RH2_VypnoutQF1"] rect"#).await;
+    until(&client, "document.getElementById('control-dialog').open && document.getElementById('control-dialog').dataset.step === 'value'", "the control dialog").await;
+    assert!(js(&client, "document.getElementById('control-title').textContent").await.as_str().unwrap().contains("Open QF1"));
+    click(&client, "#control-next").await;
+    until(&client, "document.getElementById('control-dialog').dataset.step === 'confirm'", "the confirmation step").await;
+    let confirm = js(&client, "document.getElementById('control-confirm').textContent").await;
+    assert!(confirm.as_str().unwrap().contains("Open feeder breaker QF1 of RH2?"), "{confirm}");
+    assert_eq!(js(&client, "document.getElementById('control-sbo').hidden").await, json!(false), "QF1 is select-before-operate");
+    let sent = Instant::now();
+    click(&client, "#control-execute").await;
+    until(&client, "document.getElementById('control-outcome').dataset.outcome !== 'pending'", "the command's outcome").await;
+    timings.push(("QF1 open: outcome shown", sent.elapsed()));
+    let outcome = js(&client, "[document.getElementById('control-outcome').dataset.outcome, document.getElementById('control-outcome').textContent]").await;
+    assert_eq!(outcome[0], json!("executed"), "outcome: {outcome}");
+    assert!(outcome[1].as_str().unwrap().contains("executed"), "{outcome}");
+    until(&client, &format!("{qf1}.getAttribute('data-value') === 'off'"), "QF1 shown open (no voltage behind it)").await;
+    until(&client, r#"document.querySelector('#mimic path.bus[data-energised]') && !document.querySelector('#mimic path.bus[data-energised]').classList.contains('energised')"#, "the RH2 busbar drawn dead").await;
+    timings.push(("QF1 open: busbar dead", sent.elapsed()));
+    click(&client, "#control-step-result button").await;
+    until(&client, "!document.getElementById('control-dialog').open", "the dialog closed").await;
+
+    // --- The command is in the event list with the user's name.
+    client.execute("location.hash = '#events';", Vec::new()).await.unwrap();
+    until(&client, "document.body.dataset.current === 'events'", "the event page").await;
+    client
+        .execute("const f = document.getElementById('event-filter'); f.kind.value = 'command'; f.point.value = 'RH2_*'; f.requestSubmit();", Vec::new())
+        .await
+        .unwrap();
+    let row = r#"[...document.querySelectorAll('#event-table tbody tr[data-kind="command"]')].find(r => r.textContent.includes('RH2_VypnoutQF1'))"#;
+    until(&client, row, "the QF1 command in the event list").await;
+    let cells = js(&client, &format!("[...{row}.children].map(c => c.textContent)")).await;
+    assert_eq!(cells[2], json!("RH2_VypnoutQF1"), "{cells}");
+    assert_eq!(cells[4], json!("operator"), "the event names the user: {cells}");
+    assert!(cells[5].as_str().unwrap().to_lowercase().contains("executed"), "{cells}");
+
+    // --- The station link is cut: every bound value turns invalid and blinks.
+    show_screen(&client, "supply").await;
+    until(&client, "document.querySelectorAll('#mimic [data-point], #mimic [data-energised], #mimic [data-text]').length > 20", "the supply screen's bindings").await;
+    let cut = Instant::now();
+    site.hmi().station.set_link(false);
+    let all_invalid = "[...document.querySelectorAll('#mimic [data-point], #mimic [data-energised], #mimic [data-text]')].every(e => e.getAttribute('data-invalid') === 'true')";
+    until(&client, all_invalid, "every bound element invalid after the link cut").await;
+    timings.push(("link cut: all invalid", cut.elapsed()));
+    assert_eq!(attribute(&client, "#link", "data-state").await, json!("down"));
+    let blink = js(&client, r#"[...document.querySelectorAll('#mimic [data-invalid="true"]')].map(e => getComputedStyle(e).animationName).filter(n => !n.startsWith('lost')).length"#).await;
+    assert_eq!(blink, json!(0), "every invalid element runs a 'lost' blink animation");
+    let banner = js(&client, "getComputedStyle(document.getElementById('mimic-banner')).display").await;
+    assert_ne!(banner, json!("none"), "the link-down banner shows");
+    site.hmi().station.set_link(true);
+    until(&client, "HMI.link.up && !document.querySelector('#mimic [data-invalid]')", "valid values again after the link returns").await;
+    timings.push(("link restored: all valid", cut.elapsed()));
+
+    // --- The browser's own live connection drops: same blinking, then it reconnects.
+    client.execute("HMI.ws.close();", Vec::new()).await.unwrap();
+    until(&client, &format!("!HMI.wsOpen && {all_invalid}"), "every bound element invalid while the WebSocket is closed").await;
+    assert_eq!(attribute(&client, "#link", "data-state").await, json!("offline"));
+    until(&client, "HMI.wsOpen && !document.querySelector('#mimic [data-invalid]')", "the WebSocket reconnected with valid values").await;
+
+    // --- The read-only user: controls disabled, and the server refuses them anyway.
+    click(&client, "#logout").await;
+    until(&client, "location.pathname === '/login'", "the login page after logging out").await;
+    log_in_ready(&client, &url, "viewer", "viewer-vsetin").await;
+    assert_eq!(js(&client, "document.getElementById('user-level').textContent").await, json!("level 0"));
+    show_screen(&client, "rh2").await;
+    let disabled = js(&client, "[...document.querySelectorAll('#mimic [data-command]')].every(e => e.classList.contains('disabled'))").await;
+    assert_eq!(disabled, json!(true), "every control is disabled for the viewer");
+    click(&client, r#"[data-command="RH2_ZapnoutQF1"] rect"#).await;
+    until(&client, "[...document.querySelectorAll('.toast')].some(t => t.textContent.includes('not permitted'))", "the not-permitted message").await;
+    assert_eq!(js(&client, "document.getElementById('control-dialog').open").await, json!(false), "no dialog for a disabled control");
+    let refused = client
+        .execute_async(
+            "const done = arguments[arguments.length - 1]; \
+             HMI.post('/api/command', {command: 'RH2_ZapnoutQF1', value: 1}).then(r => done([r.status, r.body.outcome]));",
+            Vec::new(),
+        )
+        .await
+        .unwrap();
+    assert_eq!(refused, json!([403, "refused-permission"]), "the server refuses the viewer's command");
+
+    client.close().await.unwrap();
+    drop(driver);
+    site.stop().await;
+    let total = started.elapsed();
+    for (what, took) in &timings {
+        eprintln!("  {what}: {:.0} ms", took.as_secs_f64() * 1000.0);
+    }
+    eprintln!("browser test: {:.1} s in all", total.as_secs_f64());
+    assert!(total < Duration::from_secs(60), "the browser test took {total:?}");
+}
+
+/// Screenshots of the main screens for docs/screenshots/ (run by hand:
+/// `cargo test -p hmi --test browser -- --ignored screenshots`).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+#[ignore = "writes docs/screenshots/*.png; run by hand"]
+async fn screenshots() {
+    let Some((driver, chromium)) = browser_available() else {
+        return;
+    };
+    // A winter evening at 60 x speed: the towers switch on one after another, power and
+    // energy climb, and a minute of real time makes an hour of trend.
+    let start: DateTime<Utc> = "2025-01-15T15:30:00Z".parse().unwrap();
+    let site = Site::start(start, 60.0).await;
+    let driver = Driver::start(&driver, chromium);
+    let client = driver.session(1280, 860).await;
+    let out = repository_root().join("docs/screenshots");
+    std::fs::create_dir_all(&out).unwrap();
+    let shoot = |name: &'static str| {
+        let client = client.clone();
+        let path = out.join(name);
+        async move {
+            tokio::time::sleep(Duration::from_millis(400)).await;
+            let png = client.screenshot().await.unwrap();
+            std::fs::write(&path, png).unwrap();
+            eprintln!("wrote {}", path.display());
+        }
+    };
+
+    log_in_ready(&client, &site.url, "admin", "admin-vsetin").await;
+    // Let the evening come on (about 40 simulated minutes), then some faults to look at.
+    tokio::time::sleep(Duration::from_secs(40)).await;
+    site.operate("lamp-failure ROV03").await;
+    site.operate("breaker-tripped RH2_FA1.3").await;
+    site.operate("door-open RDRT_NN").await;
+    site.operate("fuse-blown RZZ_FU1").await;
+    tokio::time::sleep(Duration::from_secs(3)).await;
+
+    show_screen(&client, "supply").await;
+    shoot("supply.png").await;
+    show_screen(&client, "rh2").await;
+    shoot("rh2.png").await;
+    show_screen(&client, "rda").await;
+    shoot("rda.png").await;
+    show_screen(&client, "lighting").await;
+    shoot("lighting.png").await;
+    show_screen(&client, "topology").await;
+    shoot("topology.png").await;
+
+    // The control dialog at its confirmation step.
+    show_screen(&client, "rh2").await;
+    click(&client, r#"[data-command="RH2_VypnoutQF1"] rect"#).await;
+    until(&client, "document.getElementById('control-dialog').open", "the control dialog").await;
+    click(&client, "#control-next").await;
+    shoot("control.png").await;
+    click(&client, "#control-execute").await;
+    until(&client, "document.getElementById('control-outcome').dataset.outcome !== 'pending'", "the outcome").await;
+    click(&client, "#control-step-result button").await;
+
+    client.execute("location.hash = '#events';", Vec::new()).await.unwrap();
+    until(&client, "document.querySelectorAll('#event-table tbody tr[data-kind]').length > 5", "events").await;
+    shoot("events.png").await;
+    client.execute("location.hash = '#alarms';", Vec::new()).await.unwrap();
+    until(&client, "document.querySelectorAll('#alarm-table tbody tr').length > 0", "alarms").await;
+    shoot("alarms.png").await;
+    client
+        .execute("location.hash = '#trends'; ", Vec::new())
+        .await
+        .unwrap();
+    until(&client, "document.getElementById('trend-point').options.length > 0", "the trend list").await;
+    client
+        .execute("const s = document.getElementById('trend-point'); s.value = 'ROV01_P_kW'; s.dispatchEvent(new Event('change'));", Vec::new())
+        .await
+        .unwrap();
+    until(&client, "HMI.trend.samples.length > 1 && !HMI.trend.loading", "trend samples").await;
+    shoot("trends.png").await;
+
+    // The link cut: everything blinks (caught in the "lost" phase or not, it is marked).
+    show_screen(&client, "supply").await;
+    site.hmi().station.set_link(false);
+    until(&client, "document.body.classList.contains('link-down')", "link down").await;
+    tokio::time::sleep(Duration::from_millis(600)).await;
+    shoot("link-down.png").await;
+    site.hmi().station.set_link(true);
+
+    // A phone: the navigation collapses behind the menu button, the screen fits the width.
+    client.set_window_size(390, 844).await.unwrap();
+    show_screen(&client, "supply").await;
+    shoot("mobile.png").await;
+    click(&client, "#nav-toggle").await;
+    shoot("mobile-menu.png").await;
+
+    client.close().await.unwrap();
+    drop(driver);
+    site.stop().await;
+}
