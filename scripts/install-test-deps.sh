@@ -7,6 +7,10 @@
 #   * postgresql  (Debian package; the server binaries with which
 #                  scripts/with-postgres.sh runs a throwaway cluster for the
 #                  event store's PostgreSQL tests)
+#   * chromium    (Debian packages chromium, chromium-driver and a font,
+#                  fonts-dejavu-core; the web HMI's browser tests,
+#                  crates/hmi/tests/browser.rs, drive headless Chromium
+#                  through chromedriver over WebDriver)
 #
 # Choice of Python environment: c104 is installed with pip into the machine's
 # own python3 (no venv). c104 ships a manylinux wheel for CPython 3.11 on
@@ -121,9 +125,20 @@ else
     log "postgresql installed: $(ls -d /usr/lib/postgresql/*/bin | sort -V | tail -n1)"
 fi
 
+# ---------------------------------------------------------------- chromium
+# The browser and its WebDriver come from the same Debian source package, so their
+# versions always match. Headless only: no X server is needed.
+apt_install chromium chromium-driver fonts-dejavu-core
+if ! command -v chromedriver >/dev/null 2>&1; then
+    log "ERROR: chromium-driver installed but no chromedriver on PATH"
+    exit 1
+fi
+log "chromium: $(chromium --version 2>/dev/null | head -n1)"
+
 # ---------------------------------------------------------------- verify
 # c104 2.2.1 has no c104.__version__ attribute (its .pyi claims one); the
 # compiled module c104._c104 carries it.
 log "verify: $("$PYTHON" -c 'import c104, c104._c104 as m; print("c104", m.__version__)')"
 log "verify: $(tshark --version 2>/dev/null | head -n1)"
 log "verify: $("$(ls -d /usr/lib/postgresql/*/bin | sort -V | tail -n1)/initdb" --version)"
+log "verify: $(chromedriver --version 2>/dev/null | head -n1)"
