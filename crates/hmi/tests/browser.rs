@@ -128,7 +128,10 @@ impl Driver {
             .unwrap();
         let deadline = Instant::now() + WAIT;
         while TcpStream::connect(("127.0.0.1", port)).is_err() {
-            assert!(Instant::now() < deadline, "chromedriver does not listen on {port}");
+            assert!(
+                Instant::now() < deadline,
+                "chromedriver does not listen on {port}"
+            );
             std::thread::sleep(Duration::from_millis(50));
         }
         Driver {
@@ -155,7 +158,9 @@ impl Driver {
             "--autoplay-policy=no-user-gesture-required".to_owned(),
             format!("--window-size={width},{height}"),
         ];
-        let n = self.sessions.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let n = self
+            .sessions
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let profile = self.profile.path().join(format!("profile-{n}"));
         args.push(format!("--user-data-dir={}", profile.display()));
         let mut options = json!({ "args": args });
@@ -276,7 +281,10 @@ async fn until(client: &Client, expression: &str, what: &str) -> Duration {
     let started = Instant::now();
     loop {
         let value = client
-            .execute(&format!("try {{ return Boolean({expression}); }} catch (e) {{ return false; }}"), Vec::new())
+            .execute(
+                &format!("try {{ return Boolean({expression}); }} catch (e) {{ return false; }}"),
+                Vec::new(),
+            )
             .await
             .unwrap_or(Value::Bool(false));
         if value == Value::Bool(true) {
@@ -310,7 +318,12 @@ async fn click(client: &Client, css: &str) {
 /// Logs in through the login page's form.
 async fn log_in(client: &Client, url: &str, user: &str, password: &str) {
     client.goto(&format!("{url}/")).await.unwrap();
-    until(client, "location.pathname === '/login' && document.getElementById('login-form')", "the login page").await;
+    until(
+        client,
+        "location.pathname === '/login' && document.getElementById('login-form')",
+        "the login page",
+    )
+    .await;
     let name = client.find(Locator::Id("username")).await.unwrap();
     name.clear().await.unwrap();
     name.send_keys(user).await.unwrap();
@@ -323,8 +336,18 @@ async fn log_in(client: &Client, url: &str, user: &str, password: &str) {
 /// Logs in and waits for the application with live, valid values.
 async fn log_in_ready(client: &Client, url: &str, user: &str, password: &str) {
     log_in(client, url, user, password).await;
-    until(client, "location.pathname === '/' && document.body.dataset.ready === 'true'", "the application page").await;
-    until(client, "HMI.wsOpen && HMI.link.up && HMI.points.size > 400", "the live snapshot with the station link up").await;
+    until(
+        client,
+        "location.pathname === '/' && document.body.dataset.ready === 'true'",
+        "the application page",
+    )
+    .await;
+    until(
+        client,
+        "HMI.wsOpen && HMI.link.up && HMI.points.size > 400",
+        "the live snapshot with the station link up",
+    )
+    .await;
 }
 
 async fn show_screen(client: &Client, id: &str) {
@@ -332,7 +355,12 @@ async fn show_screen(client: &Client, id: &str) {
         .execute(&format!("location.hash = '#screen/{id}';"), Vec::new())
         .await
         .unwrap();
-    until(client, &format!("document.querySelector('#mimic svg[data-screen=\"{id}\"]')"), &format!("screen {id}")).await;
+    until(
+        client,
+        &format!("document.querySelector('#mimic svg[data-screen=\"{id}\"]')"),
+        &format!("screen {id}"),
+    )
+    .await;
 }
 
 /// The attribute of the first element matching `css`, through the DOM.
@@ -358,22 +386,45 @@ async fn operator_and_viewer_in_a_real_browser() {
     log_in(&client, &url, "operator", "not-the-password").await;
     until(&client, "document.getElementById('login-message').textContent.includes('Wrong user name or password')", "the wrong-password message").await;
     log_in_ready(&client, &url, "operator", "operator-vsetin").await;
-    assert_eq!(js(&client, "document.getElementById('user-name').textContent").await, json!("operator"));
-    assert_eq!(js(&client, "document.getElementById('user-level').textContent").await, json!("level 5"));
+    assert_eq!(
+        js(&client, "document.getElementById('user-name').textContent").await,
+        json!("operator")
+    );
+    assert_eq!(
+        js(&client, "document.getElementById('user-level').textContent").await,
+        json!("level 5")
+    );
     assert_eq!(attribute(&client, "#link", "data-state").await, json!("up"));
     timings.push(("logged in, live", started.elapsed()));
 
     // --- A breaker trips in the plant: the RH2 panel shows FA1.1 open.
     show_screen(&client, "rh2").await;
     let fa11 = r#"document.querySelector('#mimic rect.breaker[data-point="RH2_V1_FA1.1"]')"#;
-    until(&client, &format!("{fa11}.getAttribute('data-value') === 'on' && !{fa11}.hasAttribute('data-invalid')"), "FA1.1 closed and valid").await;
+    until(
+        &client,
+        &format!(
+            "{fa11}.getAttribute('data-value') === 'on' && !{fa11}.hasAttribute('data-invalid')"
+        ),
+        "FA1.1 closed and valid",
+    )
+    .await;
     site.operate("breaker-tripped RH2_FA1.1").await;
-    let took = until(&client, &format!("{fa11}.getAttribute('data-value') === 'off'"), "FA1.1 shown open after the trip").await;
+    let took = until(
+        &client,
+        &format!("{fa11}.getAttribute('data-value') === 'off'"),
+        "FA1.1 shown open after the trip",
+    )
+    .await;
     timings.push(("breaker trip shown", took));
 
     // --- Operate QF1 (open) through the dialog: value, confirmation, outcome in words.
     let qf1 = r#"document.querySelector('#mimic rect.breaker[data-point="RH2_P1_KHU3_Napeti_na_pripojeni"]')"#;
-    until(&client, &format!("{qf1}.getAttribute('data-value') === 'on'"), "QF1 closed (voltage behind it)").await;
+    until(
+        &client,
+        &format!("{qf1}.getAttribute('data-value') === 'on'"),
+        "QF1 closed (voltage behind it)",
+    )
+    .await;
     assert_eq!(
         js(&client, r#"document.querySelector('[data-command="RH2_VypnoutQF1"]').classList.contains('disabled')"#).await,
         json!(false),
@@ -381,38 +432,105 @@ async fn operator_and_viewer_in_a_real_browser() {
     );
     click(&client, r#"[data-command="RH2_VypnoutQF1"] rect"#).await;
     until(&client, "document.getElementById('control-dialog').open && document.getElementById('control-dialog').dataset.step === 'value'", "the control dialog").await;
-    assert!(js(&client, "document.getElementById('control-title').textContent").await.as_str().unwrap().contains("Open QF1"));
+    assert!(js(
+        &client,
+        "document.getElementById('control-title').textContent"
+    )
+    .await
+    .as_str()
+    .unwrap()
+    .contains("Open QF1"));
     click(&client, "#control-next").await;
-    until(&client, "document.getElementById('control-dialog').dataset.step === 'confirm'", "the confirmation step").await;
-    let confirm = js(&client, "document.getElementById('control-confirm').textContent").await;
-    assert!(confirm.as_str().unwrap().contains("Open feeder breaker QF1 of RH2?"), "{confirm}");
-    assert_eq!(js(&client, "document.getElementById('control-sbo').hidden").await, json!(false), "QF1 is select-before-operate");
+    until(
+        &client,
+        "document.getElementById('control-dialog').dataset.step === 'confirm'",
+        "the confirmation step",
+    )
+    .await;
+    let confirm = js(
+        &client,
+        "document.getElementById('control-confirm').textContent",
+    )
+    .await;
+    assert!(
+        confirm
+            .as_str()
+            .unwrap()
+            .contains("Open feeder breaker QF1 of RH2?"),
+        "{confirm}"
+    );
+    assert_eq!(
+        js(&client, "document.getElementById('control-sbo').hidden").await,
+        json!(false),
+        "QF1 is select-before-operate"
+    );
     let sent = Instant::now();
     click(&client, "#control-execute").await;
-    until(&client, "document.getElementById('control-outcome').dataset.outcome !== 'pending'", "the command's outcome").await;
+    until(
+        &client,
+        "document.getElementById('control-outcome').dataset.outcome !== 'pending'",
+        "the command's outcome",
+    )
+    .await;
     timings.push(("QF1 open: outcome shown", sent.elapsed()));
     let outcome = js(&client, "[document.getElementById('control-outcome').dataset.outcome, document.getElementById('control-outcome').textContent]").await;
     assert_eq!(outcome[0], json!("executed"), "outcome: {outcome}");
-    assert!(outcome[1].as_str().unwrap().contains("executed"), "{outcome}");
-    until(&client, &format!("{qf1}.getAttribute('data-value') === 'off'"), "QF1 shown open (no voltage behind it)").await;
+    assert!(
+        outcome[1].as_str().unwrap().contains("executed"),
+        "{outcome}"
+    );
+    until(
+        &client,
+        &format!("{qf1}.getAttribute('data-value') === 'off'"),
+        "QF1 shown open (no voltage behind it)",
+    )
+    .await;
     until(&client, r#"document.querySelector('#mimic path.bus[data-energised]') && !document.querySelector('#mimic path.bus[data-energised]').classList.contains('energised')"#, "the RH2 busbar drawn dead").await;
     timings.push(("QF1 open: busbar dead", sent.elapsed()));
     click(&client, "#control-step-result button").await;
-    until(&client, "!document.getElementById('control-dialog').open", "the dialog closed").await;
+    until(
+        &client,
+        "!document.getElementById('control-dialog').open",
+        "the dialog closed",
+    )
+    .await;
 
     // --- The command is in the event list with the user's name.
-    client.execute("location.hash = '#events';", Vec::new()).await.unwrap();
-    until(&client, "document.body.dataset.current === 'events'", "the event page").await;
+    client
+        .execute("location.hash = '#events';", Vec::new())
+        .await
+        .unwrap();
+    until(
+        &client,
+        "document.body.dataset.current === 'events'",
+        "the event page",
+    )
+    .await;
     client
         .execute("const f = document.getElementById('event-filter'); f.kind.value = 'command'; f.point.value = 'RH2_*'; f.requestSubmit();", Vec::new())
         .await
         .unwrap();
     let row = r#"[...document.querySelectorAll('#event-table tbody tr[data-kind="command"]')].find(r => r.textContent.includes('RH2_VypnoutQF1'))"#;
     until(&client, row, "the QF1 command in the event list").await;
-    let cells = js(&client, &format!("[...{row}.children].map(c => c.textContent)")).await;
+    let cells = js(
+        &client,
+        &format!("[...{row}.children].map(c => c.textContent)"),
+    )
+    .await;
     assert_eq!(cells[2], json!("RH2_VypnoutQF1"), "{cells}");
-    assert_eq!(cells[4], json!("operator"), "the event names the user: {cells}");
-    assert!(cells[5].as_str().unwrap().to_lowercase().contains("executed"), "{cells}");
+    assert_eq!(
+        cells[4],
+        json!("operator"),
+        "the event names the user: {cells}"
+    );
+    assert!(
+        cells[5]
+            .as_str()
+            .unwrap()
+            .to_lowercase()
+            .contains("executed"),
+        "{cells}"
+    );
 
     // --- The station link is cut: every bound value turns invalid and blinks.
     show_screen(&client, "supply").await;
@@ -420,34 +538,84 @@ async fn operator_and_viewer_in_a_real_browser() {
     let cut = Instant::now();
     site.hmi().station.set_link(false);
     let all_invalid = "[...document.querySelectorAll('#mimic [data-point], #mimic [data-energised], #mimic [data-text]')].every(e => e.getAttribute('data-invalid') === 'true')";
-    until(&client, all_invalid, "every bound element invalid after the link cut").await;
+    until(
+        &client,
+        all_invalid,
+        "every bound element invalid after the link cut",
+    )
+    .await;
     timings.push(("link cut: all invalid", cut.elapsed()));
-    assert_eq!(attribute(&client, "#link", "data-state").await, json!("down"));
+    assert_eq!(
+        attribute(&client, "#link", "data-state").await,
+        json!("down")
+    );
     let blink = js(&client, r#"[...document.querySelectorAll('#mimic [data-invalid="true"]')].map(e => getComputedStyle(e).animationName).filter(n => !n.startsWith('lost')).length"#).await;
-    assert_eq!(blink, json!(0), "every invalid element runs a 'lost' blink animation");
-    let banner = js(&client, "getComputedStyle(document.getElementById('mimic-banner')).display").await;
+    assert_eq!(
+        blink,
+        json!(0),
+        "every invalid element runs a 'lost' blink animation"
+    );
+    let banner = js(
+        &client,
+        "getComputedStyle(document.getElementById('mimic-banner')).display",
+    )
+    .await;
     assert_ne!(banner, json!("none"), "the link-down banner shows");
     site.hmi().station.set_link(true);
-    until(&client, "HMI.link.up && !document.querySelector('#mimic [data-invalid]')", "valid values again after the link returns").await;
+    until(
+        &client,
+        "HMI.link.up && !document.querySelector('#mimic [data-invalid]')",
+        "valid values again after the link returns",
+    )
+    .await;
     timings.push(("link restored: all valid", cut.elapsed()));
 
     // --- The browser's own live connection drops: same blinking, then it reconnects.
     client.execute("HMI.ws.close();", Vec::new()).await.unwrap();
-    until(&client, &format!("!HMI.wsOpen && {all_invalid}"), "every bound element invalid while the WebSocket is closed").await;
-    assert_eq!(attribute(&client, "#link", "data-state").await, json!("offline"));
-    until(&client, "HMI.wsOpen && !document.querySelector('#mimic [data-invalid]')", "the WebSocket reconnected with valid values").await;
+    until(
+        &client,
+        &format!("!HMI.wsOpen && {all_invalid}"),
+        "every bound element invalid while the WebSocket is closed",
+    )
+    .await;
+    assert_eq!(
+        attribute(&client, "#link", "data-state").await,
+        json!("offline")
+    );
+    until(
+        &client,
+        "HMI.wsOpen && !document.querySelector('#mimic [data-invalid]')",
+        "the WebSocket reconnected with valid values",
+    )
+    .await;
 
     // --- The read-only user: controls disabled, and the server refuses them anyway.
     click(&client, "#logout").await;
-    until(&client, "location.pathname === '/login'", "the login page after logging out").await;
+    until(
+        &client,
+        "location.pathname === '/login'",
+        "the login page after logging out",
+    )
+    .await;
     log_in_ready(&client, &url, "viewer", "viewer-vsetin").await;
-    assert_eq!(js(&client, "document.getElementById('user-level').textContent").await, json!("level 0"));
+    assert_eq!(
+        js(&client, "document.getElementById('user-level').textContent").await,
+        json!("level 0")
+    );
     show_screen(&client, "rh2").await;
     let disabled = js(&client, "[...document.querySelectorAll('#mimic [data-command]')].every(e => e.classList.contains('disabled'))").await;
-    assert_eq!(disabled, json!(true), "every control is disabled for the viewer");
+    assert_eq!(
+        disabled,
+        json!(true),
+        "every control is disabled for the viewer"
+    );
     click(&client, r#"[data-command="RH2_ZapnoutQF1"] rect"#).await;
     until(&client, "[...document.querySelectorAll('.toast')].some(t => t.textContent.includes('not permitted'))", "the not-permitted message").await;
-    assert_eq!(js(&client, "document.getElementById('control-dialog').open").await, json!(false), "no dialog for a disabled control");
+    assert_eq!(
+        js(&client, "document.getElementById('control-dialog').open").await,
+        json!(false),
+        "no dialog for a disabled control"
+    );
     let refused = client
         .execute_async(
             "const done = arguments[arguments.length - 1]; \
@@ -456,7 +624,11 @@ async fn operator_and_viewer_in_a_real_browser() {
         )
         .await
         .unwrap();
-    assert_eq!(refused, json!([403, "refused-permission"]), "the server refuses the viewer's command");
+    assert_eq!(
+        refused,
+        json!([403, "refused-permission"]),
+        "the server refuses the viewer's command"
+    );
 
     client.close().await.unwrap();
     drop(driver);
@@ -466,7 +638,10 @@ async fn operator_and_viewer_in_a_real_browser() {
         eprintln!("  {what}: {:.0} ms", took.as_secs_f64() * 1000.0);
     }
     eprintln!("browser test: {:.1} s in all", total.as_secs_f64());
-    assert!(total < Duration::from_secs(60), "the browser test took {total:?}");
+    assert!(
+        total < Duration::from_secs(60),
+        "the browser test took {total:?}"
+    );
 }
 
 /// Screenshots of the main screens for docs/screenshots/ (run by hand:
@@ -519,35 +694,76 @@ async fn screenshots() {
     // The control dialog at its confirmation step.
     show_screen(&client, "rh2").await;
     click(&client, r#"[data-command="RH2_VypnoutQF1"] rect"#).await;
-    until(&client, "document.getElementById('control-dialog').open", "the control dialog").await;
+    until(
+        &client,
+        "document.getElementById('control-dialog').open",
+        "the control dialog",
+    )
+    .await;
     click(&client, "#control-next").await;
     shoot("control.png").await;
     click(&client, "#control-execute").await;
-    until(&client, "document.getElementById('control-outcome').dataset.outcome !== 'pending'", "the outcome").await;
+    until(
+        &client,
+        "document.getElementById('control-outcome').dataset.outcome !== 'pending'",
+        "the outcome",
+    )
+    .await;
     click(&client, "#control-step-result button").await;
 
-    client.execute("location.hash = '#events';", Vec::new()).await.unwrap();
-    until(&client, "document.querySelectorAll('#event-table tbody tr[data-kind]').length > 5", "events").await;
+    client
+        .execute("location.hash = '#events';", Vec::new())
+        .await
+        .unwrap();
+    until(
+        &client,
+        "document.querySelectorAll('#event-table tbody tr[data-kind]').length > 5",
+        "events",
+    )
+    .await;
     shoot("events.png").await;
-    client.execute("location.hash = '#alarms';", Vec::new()).await.unwrap();
-    until(&client, "document.querySelectorAll('#alarm-table tbody tr').length > 0", "alarms").await;
+    client
+        .execute("location.hash = '#alarms';", Vec::new())
+        .await
+        .unwrap();
+    until(
+        &client,
+        "document.querySelectorAll('#alarm-table tbody tr').length > 0",
+        "alarms",
+    )
+    .await;
     shoot("alarms.png").await;
     client
         .execute("location.hash = '#trends'; ", Vec::new())
         .await
         .unwrap();
-    until(&client, "document.getElementById('trend-point').options.length > 0", "the trend list").await;
+    until(
+        &client,
+        "document.getElementById('trend-point').options.length > 0",
+        "the trend list",
+    )
+    .await;
     client
         .execute("const s = document.getElementById('trend-point'); s.value = 'ROV01_P_kW'; s.dispatchEvent(new Event('change'));", Vec::new())
         .await
         .unwrap();
-    until(&client, "HMI.trend.samples.length > 1 && !HMI.trend.loading", "trend samples").await;
+    until(
+        &client,
+        "HMI.trend.samples.length > 1 && !HMI.trend.loading",
+        "trend samples",
+    )
+    .await;
     shoot("trends.png").await;
 
     // The link cut: everything blinks (caught in the "lost" phase or not, it is marked).
     show_screen(&client, "supply").await;
     site.hmi().station.set_link(false);
-    until(&client, "document.body.classList.contains('link-down')", "link down").await;
+    until(
+        &client,
+        "document.body.classList.contains('link-down')",
+        "link down",
+    )
+    .await;
     tokio::time::sleep(Duration::from_millis(600)).await;
     shoot("link-down.png").await;
     site.hmi().station.set_link(true);
