@@ -27,6 +27,44 @@ fn tick(vm: &mut Vm, span: Span) -> Result<(), Fault> {
     Ok(())
 }
 
+/// A FOR loop over a local counter with a constant step and no subrange.
+struct LocalFor {
+    set_from: StmtFn,
+    to: IFn,
+    /// Frame-relative cell of the counter.
+    o: usize,
+    step: i64,
+    wrap: Wrap,
+    span: Span,
+}
+
+impl LocalFor {
+    #[inline(always)]
+    fn run(
+        &self,
+        vm: &mut Vm,
+        body: impl Fn(&mut Vm) -> Result<Flow, Fault>,
+    ) -> Result<Flow, Fault> {
+        let (o, step) = (self.o, self.step);
+        (self.set_from)(vm)?;
+        let end = (self.to)(vm)?;
+        let mut cur = vm.geti(vm.frame.i + o)?;
+        while !((step >= 0 && cur > end) || (step < 0 && cur < end)) {
+            tick(vm, self.span)?;
+            match body(vm)? {
+                Flow::Exit => return Ok(Flow::Normal),
+                Flow::Return => return Ok(Flow::Return),
+                _ => {}
+            }
+            // the body may have changed the variable
+            let at = vm.frame.i + o;
+            cur = vm.geti(at)?.saturating_add(step);
+            vm.seti(at, self.wrap.apply(cur))?;
+        }
+        Ok(Flow::Normal)
+    }
+}
+
 /// Label ranges and body of a CASE arm.
 type CaseArm = (Vec<(i64, i64)>, Vec<StmtFn>);
 
@@ -192,6 +230,17 @@ impl Cx<'_> {
             StmtKind::Call(e) => self.call_stmt(e),
             StmtKind::If(arms, els) => {
                 if let [(c, b)] = arms.as_slice() {
+                    let els_moves = match els {
+                        Some(e) => self.moves_of(e),
+                        None => Some(Vec::new()),
+                    };
+                    if let (Some(then), Some(els)) = (self.moves_of(b), els_moves) {
+                        let sink = BranchMoves {
+                            then: then.into_boxed_slice(),
+                            els: els.into_boxed_slice(),
+                        };
+                        return self.int_into(c, sink);
+                    }
                     let then = self.block(b);
                     let els = els.as_ref().map(|b| self.block(b)).unwrap_or_default();
                     return self.int_into(c, super::fused::Branch { then, els });
@@ -285,26 +334,22 @@ impl Cx<'_> {
                 let range = p.range.clone();
                 if let (Cell::Frame(o), Some(step), None) = (&cell, by_const, &range) {
                     // the common case: a local counter and a constant step
-                    let o = *o;
-                    let wrap = Wrap::of(&vt);
-                    return Box::new(move |vm| {
-                        set_from(vm)?;
-                        let end = to(vm)?;
-                        let mut cur = vm.geti(vm.frame.i + o)?;
-                        while !((step >= 0 && cur > end) || (step < 0 && cur < end)) {
-                            tick(vm, span)?;
-                            match run_block(&body, vm)? {
-                                Flow::Exit => return Ok(Flow::Normal),
-                                Flow::Return => return Ok(Flow::Return),
-                                _ => {}
-                            }
-                            // the body may have changed the variable
-                            let at = vm.frame.i + o;
-                            cur = vm.geti(at)?.saturating_add(step);
-                            vm.seti(at, wrap.apply(cur))?;
+                    let lp = LocalFor {
+                        set_from,
+                        to,
+                        o: *o,
+                        step,
+                        wrap: Wrap::of(&vt),
+                        span,
+                    };
+                    let mut body = body;
+                    if body.len() == 1 {
+                        if let Some(one) = body.pop() {
+                            // one statement: called directly
+                            return Box::new(move |vm| lp.run(vm, |vm| one(vm)));
                         }
-                        Ok(Flow::Normal)
-                    });
+                    }
+                    return Box::new(move |vm| lp.run(vm, |vm| run_block(&body, vm)));
                 }
                 Box::new(move |vm| {
                     set_from(vm)?;
@@ -463,6 +508,18 @@ impl Cx<'_> {
     /// subrange): one closure without inner calls.
     fn int_copy(&mut self, target: &Expr, value: &Expr) -> Option<StmtFn> {
         self.int_move(target, value).map(Move::stmt)
+    }
+
+    /// The statements as integer moves, if they all are.
+    fn moves_of(&mut self, stmts: &[Stmt]) -> Option<Vec<Move>> {
+        stmts
+            .iter()
+            .filter(|s| !matches!(s.kind, StmtKind::Empty))
+            .map(|s| match &s.kind {
+                StmtKind::Assign(target, value) => self.int_move(target, value),
+                _ => None,
+            })
+            .collect()
     }
 
     /// `x := y` between integer locals and fast array elements, if it is one.
@@ -737,6 +794,27 @@ impl Move {
                 Ok(Flow::Normal)
             }),
         }
+    }
+}
+
+/// `IF cond THEN <moves> ELSE <moves> END_IF` with the condition computed inline: one
+/// closure for the whole statement.
+struct BranchMoves {
+    then: Box<[Move]>,
+    els: Box<[Move]>,
+}
+
+impl super::fused::ISink for BranchMoves {
+    type Out = StmtFn;
+    fn build<G: Fn(&mut Vm) -> Result<i64, Fault> + 'static>(self, g: G) -> StmtFn {
+        let BranchMoves { then, els } = self;
+        Box::new(move |vm| {
+            let run = if g(vm)? != 0 { &then } else { &els };
+            for m in run.iter() {
+                m.run(vm)?;
+            }
+            Ok(Flow::Normal)
+        })
     }
 }
 
