@@ -532,6 +532,107 @@ async fn operator_and_viewer_in_a_real_browser() {
         "{cells}"
     );
 
+    // --- Paging over the whole history (the start-up image alone is hundreds of values):
+    // the next page continues with older events.
+    client
+        .execute(
+            "const f = document.getElementById('event-filter'); f.reset();",
+            Vec::new(),
+        )
+        .await
+        .unwrap();
+    until(
+        &client,
+        "document.querySelectorAll('#event-table tbody tr[data-kind]').length === 50 && !document.getElementById('events-older').disabled",
+        "a full first page of events with an older page",
+    )
+    .await;
+    let last_of_first = js(
+        &client,
+        "[...document.querySelectorAll('#event-table tbody tr[data-kind]')].pop().dataset.id",
+    )
+    .await;
+    let oldest_time = "[...document.querySelectorAll('#event-table tbody tr[data-kind]')].pop().children[0].textContent";
+    let first_page_oldest = js(&client, oldest_time).await;
+    click(&client, "#events-older").await;
+    until(
+        &client,
+        "document.getElementById('events-page').textContent.startsWith('page 2')",
+        "the second page",
+    )
+    .await;
+    let second = js(&client, "[...document.querySelectorAll('#event-table tbody tr[data-kind]')].map(r => [r.dataset.id, r.children[0].textContent])").await;
+    let second = second.as_array().unwrap();
+    assert!(!second.is_empty(), "the second page has events");
+    assert!(
+        second.iter().all(|row| row[0] != last_of_first),
+        "pages do not overlap"
+    );
+    assert!(
+        second[0][1].as_str().unwrap() <= first_page_oldest.as_str().unwrap(),
+        "page 2 starts where page 1 ended: {} after {}",
+        second[0][1],
+        first_page_oldest
+    );
+
+    // --- An alarm of priority 1: listed in red, the badge and the sound call for attention,
+    // acknowledged from the alarm list (the sound stops), shelved.
+    site.operate("emergency-off RH2").await;
+    client
+        .execute("location.hash = '#alarms';", Vec::new())
+        .await
+        .unwrap();
+    let alarm_row = r#"document.querySelector('#alarm-table tr[data-point="RH2_P1_KHVRH2_Havarijni_vypnuti"]')"#;
+    until(
+        &client,
+        &format!("{alarm_row} && {alarm_row}.classList.contains('active') && {alarm_row}.classList.contains('unack')"),
+        "the emergency-off alarm, active and unacknowledged",
+    )
+    .await;
+    assert_eq!(
+        js(&client, &format!("{alarm_row}.dataset.priority")).await,
+        json!("1")
+    );
+    assert_eq!(
+        js(
+            &client,
+            "document.getElementById('alarm-count').dataset.priority"
+        )
+        .await,
+        json!("1")
+    );
+    until(
+        &client,
+        "document.body.dataset.sound === 'playing-p1'",
+        "the alarm sound on",
+    )
+    .await;
+    click(
+        &client,
+        r#"#alarm-table tr[data-point="RH2_P1_KHVRH2_Havarijni_vypnuti"] button.ack"#,
+    )
+    .await;
+    until(
+        &client,
+        &format!(
+            "!{alarm_row}.classList.contains('unack') && document.body.dataset.sound === 'silent'"
+        ),
+        "the alarm acknowledged and the sound off",
+    )
+    .await;
+    click(
+        &client,
+        r#"#alarm-table tr[data-point="RH2_P1_KHVRH2_Havarijni_vypnuti"] button.shelve"#,
+    )
+    .await;
+    until(
+        &client,
+        &format!("{alarm_row}.classList.contains('shelved')"),
+        "the alarm shelved",
+    )
+    .await;
+    site.operate("clear emergency-off RH2").await;
+
     // --- The station link is cut: every bound value turns invalid and blinks.
     show_screen(&client, "supply").await;
     until(&client, "document.querySelectorAll('#mimic [data-point], #mimic [data-energised], #mimic [data-text]').length > 20", "the supply screen's bindings").await;
