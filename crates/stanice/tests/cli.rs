@@ -399,7 +399,7 @@ fn demo_serves_the_station_to_dispatch() {
             "IOA {ioa} missing: {interrogated:?}"
         );
     }
-    assert_eq!(interrogated.len(), 404);
+    assert_eq!(interrogated.len(), 408);
 }
 
 /// A base port whose next `count` ports are free.

@@ -35,7 +35,9 @@
 //!                                      # default: one catch-all group "default";
 //!                                      # a group without clients is a catch-all;
 //!                                      # refuse_commands_when = "BOOL variable": the
-//!                                      # group's commands are refused while it is TRUE
+//!                                      # group's commands are refused while it is TRUE;
+//!                                      # status_point = "COMM_HMI": a point TRUE while no
+//!                                      # client of the group is connected
 //! tls = { certificate = "tls/rh11.pem", private_key = "tls/rh11.key", trust_anchors = "tls/ca.pem" }
 //!                                      # optional; the files must exist
 //!
@@ -239,6 +241,9 @@ pub struct RedundancyGroup {
     /// refused (the TC700's per-link command permission, e.g. dispatch commands blocked
     /// while the local HMI has control, spec 7.5).
     pub refuse_commands_when: Option<String>,
+    /// A single point of the node: TRUE while no client of this group is connected (the
+    /// TC700's link-failure points 38-41 of its upper links, spec 7.3).
+    pub status_point: Option<String>,
 }
 
 /// TLS certificate, key and trust anchors (PEM files).
@@ -291,6 +296,9 @@ pub enum PointSource {
     /// The state of the node's client link with this name (TRUE = link down), for a point
     /// named by the link's `status_point`; such a point has no `source`.
     LinkStatus(String),
+    /// Whether a controlling station of the server's redundancy group with this name is
+    /// connected (TRUE = none is), for a point named by the group's `status_point`.
+    ClientStatus(String),
 }
 
 /// Where a command goes.
@@ -659,6 +667,7 @@ struct RawGroup {
     #[serde(default)]
     clients: Vec<String>,
     refuse_commands_when: Option<String>,
+    status_point: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -1178,6 +1187,7 @@ impl Ctx<'_> {
                     name: "default".to_owned(),
                     clients: Vec::new(),
                     refuse_commands_when: None,
+                    status_point: None,
                 }],
                 Some(groups) => {
                     let mut out = Vec::new();
@@ -1203,6 +1213,7 @@ impl Ctx<'_> {
                             name: group.name.clone(),
                             clients,
                             refuse_commands_when: group.refuse_commands_when.clone(),
+                            status_point: group.status_point.clone(),
                         });
                     }
                     out
@@ -1330,7 +1341,30 @@ impl Ctx<'_> {
                 .link
                 .iter()
                 .find(|l| l.status_point.as_deref() == Some(point.name.as_str()));
+            let group_of = raw
+                .server
+                .as_ref()
+                .and_then(|s| s.redundancy_groups.as_ref())
+                .and_then(|groups| {
+                    groups
+                        .iter()
+                        .find(|g| g.status_point.as_deref() == Some(point.name.as_str()))
+                });
+            if let (None, None, Some(group)) = (&point.source, status_of, group_of) {
+                if !matches!(type_id, TypeId::M_SP_NA_1 | TypeId::M_SP_TB_1) {
+                    self.err(
+                        &at("type"),
+                        format!(
+                            "the status point of redundancy group `{}` must be M_SP_NA_1 or M_SP_TB_1",
+                            group.name
+                        ),
+                    );
+                }
+            }
             let source = match (&point.source, status_of) {
+                (None, None) if group_of.is_some() => {
+                    PointSource::ClientStatus(group_of.map(|g| g.name.clone()).unwrap_or_default())
+                }
                 (None, Some(link)) => {
                     if !matches!(type_id, TypeId::M_SP_NA_1 | TypeId::M_SP_TB_1) {
                         self.err(
@@ -1346,7 +1380,7 @@ impl Ctx<'_> {
                 (None, None) => {
                     self.err(
                         &node(&[K("point"), I(p)]),
-                        "missing source (only a link's status_point has none)",
+                        "missing source (only the status point of a link or a redundancy group has none)",
                     );
                     PointSource::Variable(String::new())
                 }

@@ -8,7 +8,8 @@ lighting boards and the repeated board points. Edit the tables below and run
 
 IOA plan (spec shared/spec/railway-station.md sections 5-7; where it is silent, ours):
   RDRT own points      1-10 SP of module P9, 21 HMI local, 24/25 module faults,
-                       26-29 switchroom doors, 32/33 links RH/RZS, 50-62 links ROV01..OR;
+                       26-29 switchroom doors, 32/33 links RH/RZS, 38-41 upper links
+                       ED/MŘS/HMI/service, 50-62 links ROV01..OR;
                        command 2001 HMI local
   RH2 (via RH1.1)      281-298 (thesis), commands 2021/2022 (thesis); RH1.1's link 280
   RZZ (via RZS1)       381-398 (RZZ's own 281-298 + 100), commands 2121/2122
@@ -152,11 +153,22 @@ def power_board(board, program, source, ca, port_offset, description):
 
 
 # --------------------------------------------------------------------------------------
-# Redundancy groups by client address: the local HMI panel (its own link, spec 7.5) and
-# every other client as the dispatch systems, whose commands the HMI-local mode blocks.
+# The TC700's upper links (spec 7.5) as redundancy groups chosen by client address: the
+# local HMI panel, ED (electric dispatch, with service), MŘS, the service access, and every
+# other client as the dispatch systems DDTS/DŘT. While HMI-local mode is on, commands from
+# all but the HMI are refused (AllowCmd, 7.5). Each link's failure is a point (7.3).
+BLOCKED = "RDRTIO.PovelyBlokovany"
 node("RDRT", "central PLC (Tecomat TC700) and HMI", 1, 0, sources=["plc/rdrt_io.st"],
-     allowed=False, groups=[{"name": "hmi", "clients": ["127.0.0.2"]},
-                            {"name": "dispatch", "refuse_commands_when": "RDRTIO.PovelyBlokovany"}])
+     allowed=False, groups=[
+         {"name": "hmi", "clients": ["127.0.0.2"], "status_point": "COMM_HMI"},
+         {"name": "ed", "clients": ["127.0.0.3"], "status_point": "COMM_ED",
+          "refuse_commands_when": BLOCKED},
+         {"name": "mrs", "clients": ["127.0.0.4"], "status_point": "COMM_MRS",
+          "refuse_commands_when": BLOCKED},
+         {"name": "service", "clients": ["127.0.0.5"], "status_point": "COMM_SERVIS",
+          "refuse_commands_when": BLOCKED},
+         {"name": "dispatch", "refuse_commands_when": BLOCKED},
+     ])
 task("main", 100, ["RDRTIO"], 400)
 for signal, variable in [
     ("RDRT_FV230", "DI0_FV230"), ("RDRT_FV110", "DI1_FV110"), ("RDRT_FV24", "DI2_FV24"),
@@ -198,6 +210,11 @@ for ioa, variable, text in [
           invalid_when="RDRTIO.PoruchaModul6")
 point("COMM_RH", "M_SP_TB_1", 32, None, "communication failure to the S7-1500 RH (TRUE = link down)", groups=[1])
 point("COMM_RZS", "M_SP_TB_1", 33, None, "communication failure to the S7-1500 RZS (TRUE = link down)", groups=[1])
+for ioa, name, text in [(38, "COMM_ED", "link to ED (electric dispatch) down"),
+                        (39, "COMM_MRS", "link to MŘS down"),
+                        (40, "COMM_HMI", "link to the local HMI down"),
+                        (41, "COMM_SERVIS", "service link down")]:
+    point(name, "M_SP_TB_1", ioa, None, text + " (no client connected)", groups=[1])
 for k, board in enumerate(LIGHTING, start=1):
     point(f"COMM_{board}", "M_SP_TB_1", 49 + k, None,
           f"communication failure to lighting board {board} (TRUE = link down)", groups=[1])

@@ -65,6 +65,8 @@ pub(crate) struct NodeHandler {
     pub groups: Vec<crate::config::RedundancyGroup>,
     /// This node's index on the simulation thread (authority variables are read there).
     pub sim_node: usize,
+    /// Connected controlling stations per redundancy group (for their status points).
+    pub connected: std::sync::Mutex<HashMap<String, usize>>,
 }
 
 impl NodeHandler {
@@ -162,6 +164,35 @@ impl StationHandler for NodeHandler {
 
     fn connection_changed(&self, peer: SocketAddr, connected: bool, started: bool) {
         tracing::info!(node = %self.points.name(), %peer, connected, started, "controlling station");
+        if started {
+            return;
+        }
+        let Some(group) = self.group_of(peer) else {
+            return;
+        };
+        let count = {
+            let mut map = self
+                .connected
+                .lock()
+                .unwrap_or_else(|poison| poison.into_inner());
+            let count = map.entry(group.name.clone()).or_insert(0);
+            *count = if connected {
+                count.saturating_add(1)
+            } else {
+                count.saturating_sub(1)
+            };
+            *count
+        };
+        if let Some(point) = &group.status_point {
+            let origin = format!("clients:{}", group.name);
+            self.points.change_with(&origin, |db, now| {
+                db.set_link_status(point.as_str(), count > 0, now)
+                    .ok()
+                    .flatten()
+                    .into_iter()
+                    .collect()
+            });
+        }
     }
 }
 

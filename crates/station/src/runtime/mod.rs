@@ -189,6 +189,7 @@ pub fn point_specs(node: &NodeConfig) -> Vec<PointSpec> {
                 PointSource::Variable(path) => path.clone(),
                 PointSource::Link { link, ioa } => format!("link:{link}/{ioa}"),
                 PointSource::LinkStatus(link) => format!("status:{link}"),
+                PointSource::ClientStatus(group) => format!("clients:{group}"),
             },
             description: point.description.clone(),
         })
@@ -351,6 +352,7 @@ impl Runtime {
                     .map(|s| s.redundancy_groups.clone())
                     .unwrap_or_default(),
                 sim_node: sim_index,
+                connected: std::sync::Mutex::default(),
             });
             let server = match (&config.server, config.server_address(&project.station)) {
                 (Some(server_config), Some(address)) => {
@@ -396,6 +398,16 @@ impl Runtime {
                             source,
                         })?;
                     points.attach_server(handle.clone());
+                    // No controlling station is connected yet.
+                    let origin = config.name.clone();
+                    points.change_with(&origin, |db, now| {
+                        server_config
+                            .redundancy_groups
+                            .iter()
+                            .filter_map(|g| g.status_point.as_deref())
+                            .filter_map(|p| db.set_link_status(p, false, now).ok().flatten())
+                            .collect()
+                    });
                     Some(handle)
                 }
                 _ => None,

@@ -248,7 +248,11 @@ fn vsetin_example_loads() {
         .map(|c| c.ioa.get())
         .collect();
     assert_eq!(forwarded, [2021, 2022]);
-    assert_eq!(rdrt.points.len(), 404);
+    assert_eq!(rdrt.points.len(), 408);
+    assert_eq!(
+        rdrt.point("COMM_HMI").unwrap().source,
+        PointSource::ClientStatus("hmi".into())
+    );
     assert_eq!(
         rdrt.link("RH").unwrap().status_point.as_deref(),
         Some("COMM_RH")

@@ -197,7 +197,17 @@ async fn hmi_local_mode_blocks_dispatch_commands_but_not_the_hmi() {
     links_up(&runtime).await;
     let address = rdrt_address(&runtime);
     let dispatch = Dispatch::connect(address, RDRT_CA, true).await;
+    eventually("the HMI link reported down", || {
+        dispatch.last(40).and_then(|r| r.on()) == Some(true)
+    })
+    .await;
     let hmi = Dispatch::connect_from(address, RDRT_CA, true, Some([127, 0, 0, 2].into())).await;
+    // Its link-failure point (SP 40) clears when the HMI connects; ED's (38) stays set.
+    eventually("the HMI link reported up", || {
+        dispatch.last(40).and_then(|r| r.on()) == Some(false)
+    })
+    .await;
+    assert_eq!(dispatch.last(38).and_then(|r| r.on()), Some(true));
 
     // The HMI-local command is accepted only over the HMI's link.
     assert!(!dispatch.single_command(2001, true, false).await);
