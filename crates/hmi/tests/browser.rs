@@ -753,10 +753,10 @@ async fn screenshots() {
     let Some((driver, chromium)) = browser_available() else {
         return;
     };
-    // A winter evening at 60 x speed: the towers switch on one after another, power and
-    // energy climb, and a minute of real time makes an hour of trend.
-    let start: DateTime<Utc> = "2025-01-15T15:30:00Z".parse().unwrap();
-    let site = Site::start(start, 60.0).await;
+    // A winter evening at 30 x speed: the towers switch on one after another at dusk and
+    // their power shows in the trend.
+    let start: DateTime<Utc> = "2025-01-15T15:15:00Z".parse().unwrap();
+    let site = Site::start(start, 30.0).await;
     let driver = Driver::start(&driver, chromium);
     let client = driver.session(1280, 860).await;
     let out = repository_root().join("docs/screenshots");
@@ -773,7 +773,20 @@ async fn screenshots() {
     };
 
     log_in_ready(&client, &site.url, "admin", "admin-vsetin").await;
-    // Let the evening come on (about 40 simulated minutes), then some faults to look at.
+    // The start-up transients (links coming up) are acknowledged; then the evening comes
+    // on (about 20 simulated minutes), with some faults to look at.
+    client
+        .execute("location.hash = '#alarms';", Vec::new())
+        .await
+        .unwrap();
+    until(
+        &client,
+        "document.body.dataset.current === 'alarms'",
+        "the alarm page",
+    )
+    .await;
+    tokio::time::sleep(Duration::from_secs(2)).await;
+    click(&client, "#alarm-ack-all").await;
     tokio::time::sleep(Duration::from_secs(40)).await;
     site.operate("lamp-failure ROV03").await;
     site.operate("breaker-tripped RH2_FA1.3").await;
@@ -792,9 +805,10 @@ async fn screenshots() {
     show_screen(&client, "topology").await;
     shoot("topology.png").await;
 
-    // The control dialog at its confirmation step.
+    // The control dialog at its confirmation step (closing QF1, which is closed: the
+    // command is executed and recorded, the station stays as it is).
     show_screen(&client, "rh2").await;
-    click(&client, r#"[data-command="RH2_VypnoutQF1"] rect"#).await;
+    click(&client, r#"[data-command="RH2_ZapnoutQF1"] rect"#).await;
     until(
         &client,
         "document.getElementById('control-dialog').open",
@@ -810,6 +824,7 @@ async fn screenshots() {
         "the outcome",
     )
     .await;
+    shoot("control-outcome.png").await;
     click(&client, "#control-step-result button").await;
 
     client
