@@ -731,6 +731,28 @@ async fn operator_and_viewer_in_a_real_browser() {
         "the server refuses the viewer's command"
     );
 
+    // The viewer watches the alarms but neither acknowledges nor shelves them.
+    site.operate("door-open RDRT_VN").await;
+    client
+        .execute("location.hash = '#alarms';", Vec::new())
+        .await
+        .unwrap();
+    until(
+        &client,
+        r#"document.querySelector('#alarm-table tr[data-point="RDRT_SP27_Dvere_VN"]')"#,
+        "the door alarm in the viewer's list",
+    )
+    .await;
+    assert_eq!(
+        js(
+            &client,
+            "document.querySelectorAll('#alarm-table button').length"
+        )
+        .await,
+        json!(0),
+        "no alarm buttons for the read-only user"
+    );
+
     client.close().await.unwrap();
     drop(driver);
     site.stop().await;

@@ -89,25 +89,35 @@
     }
   }
 
-  function row(alarm) {
+  /** Acknowledge / shelve buttons; a read-only user (level 0) watches only. */
+  function actionsFor(alarm) {
     const actions = HMI.el("td", { class: "actions" });
+    if (!HMI.session || HMI.session.level === 0) {
+      actions.append(HMI.el("span", { class: "muted", title: "Your level (0) is read-only.", text: "read-only" }));
+      return actions;
+    }
     if (unacknowledged(alarm)) {
       actions.append(HMI.el("button", { type: "button", class: "ack", text: "Acknowledge", onclick: () => act(alarm, "acknowledge") }), " ");
     }
     if (shelved(alarm)) {
       actions.append(HMI.el("button", { type: "button", class: "secondary unshelve", text: "Unshelve", onclick: () => act(alarm, "shelve", { minutes: 0 }) }));
-    } else {
-      const select = HMI.el(
-        "select",
-        { "aria-label": "Shelve for minutes" },
-        ...SHELVE_MINUTES.map((m) => HMI.el("option", { value: String(m), text: m < 60 ? `${m} min` : `${m / 60} h` })),
-      );
-      actions.append(
-        HMI.el("button", { type: "button", class: "secondary shelve", text: "Shelve", onclick: () => act(alarm, "shelve", { minutes: Number(select.value) }) }),
-        " ",
-        select,
-      );
+      return actions;
     }
+    const select = HMI.el(
+      "select",
+      { "aria-label": "Shelve for minutes" },
+      ...SHELVE_MINUTES.map((m) => HMI.el("option", { value: String(m), text: m < 60 ? `${m} min` : `${m / 60} h` })),
+    );
+    actions.append(
+      HMI.el("button", { type: "button", class: "secondary shelve", text: "Shelve", onclick: () => act(alarm, "shelve", { minutes: Number(select.value) }) }),
+      " ",
+      select,
+    );
+    return actions;
+  }
+
+  function row(alarm) {
+    const actions = actionsFor(alarm);
     const classes = [alarm.active ? "active" : "cleared", unacknowledged(alarm) ? "unack" : "", shelved(alarm) ? "shelved" : ""].join(" ").trim();
     return HMI.el(
       "tr",
@@ -235,6 +245,7 @@
     const f = document.getElementById("alarm-filter");
     f.addEventListener("input", render);
     f.addEventListener("submit", (event) => event.preventDefault());
+    document.getElementById("alarm-ack-all").hidden = HMI.session && HMI.session.level === 0;
     document.getElementById("alarm-ack-all").addEventListener("click", async () => {
       for (const alarm of visible().filter(unacknowledged)) await act(alarm, "acknowledge");
     });
