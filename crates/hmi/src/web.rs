@@ -67,6 +67,7 @@ pub fn router(state: AppState) -> Router {
         .route("/api/alarms/{id}/acknowledge", post(acknowledge))
         .route("/api/alarms/{id}/shelve", post(shelve))
         .route("/api/trend", get(trend))
+        .route("/api/trends", get(trends))
         .route("/api/live", get(live))
         .fallback(not_found)
         .layer(DefaultBodyLimit::max(MAX_BODY))
@@ -602,6 +603,21 @@ async fn shelve(
         .shelve(id, request.minutes.min(7 * 24 * 60), &session.user)
         .ok_or_else(|| error(StatusCode::NOT_FOUND, "no such alarm"))?;
     Ok(Json(json!(alarm)))
+}
+
+async fn trends(
+    State(state): State<AppState>,
+    headers: HeaderMap,
+) -> Result<Json<Value>, ApiError> {
+    session(&state, &headers)?;
+    let config = state.station.config();
+    let list: Vec<Value> = config
+        .trends
+        .iter()
+        .filter_map(|name| config.points.iter().find(|p| &p.name == name))
+        .map(|p| json!({"point": p.name, "description": p.description}))
+        .collect();
+    Ok(Json(json!(list)))
 }
 
 #[derive(Deserialize)]

@@ -512,6 +512,7 @@ async fn bad_input_is_refused_cleanly() {
     );
     assert_eq!(viewer.get("/api/screens/nothing").await.status, 404);
     assert_eq!(viewer.get("/api/trend?point=NO_SUCH").await.status, 404);
+    assert_eq!(viewer.get("/api/trends").await.json(), json!([]));
     assert_eq!(viewer.get("/api/events?cursor=garbage").await.status, 400);
     // A request replayed after logout finds no session.
     assert_eq!(viewer.post("/api/logout", json!({})).await.status, 200);
