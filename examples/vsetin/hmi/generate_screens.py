@@ -465,15 +465,22 @@ def lighting():
 def topology():
     svg = Svg("Vsetín — controllers and links", 1200, 720)
     heading(svg, "Topology — controllers and IEC 104 links",
-            "Green = link up, red dashed = communication failure (COMM_* points of the TC700 and concentrators).")
+            "Green = link up, red dashed = link down or no client (COMM_* points of the TC700 and concentrators).")
 
-    svg.comment("Upper systems served by RDRT (no status points in this project: drawn plain)")
+    svg.comment("Upper systems served by RDRT (spec 7.5): ED, MŘS and the service access have their"
+                " link points (SP 38, 39, 41: TRUE while no client of theirs is connected); DDTS and"
+                " DŘT share the dispatch group, which has none")
     svg.open("g", id="upper")
-    for i, name in enumerate(["DDTS", "DŘT", "ED", "MŘS", "Servis"]):
+    for i, (name, comm) in enumerate([("DDTS", None), ("DŘT", None), ("ED", "COMM_ED"),
+                                      ("MŘS", "COMM_MRS"), ("Servis", "COMM_SERVIS")]):
         x = 300 + i * 130
-        svg.el("rect", x=x, y=75, width=100, height=34, rx=5, class_="frame")
+        if comm:
+            svg.el("path", d=f"M {x + 50} 109 V 150", class_="comm", data_point=use(comm))
+            svg.el("rect", x=x, y=75, width=100, height=34, rx=5, class_="comm-node", data_point=comm)
+        else:
+            svg.el("path", d=f"M {x + 50} 109 V 150", class_="wire")
+            svg.el("rect", x=x, y=75, width=100, height=34, rx=5, class_="frame")
         svg.text(x + 50, 97, name, "label", "middle")
-        svg.el("path", d=f"M {x + 50} 109 V 150", class_="wire")
     svg.el("path", d="M 350 150 H 870", class_="wire")
     svg.el("path", d="M 600 150 V 170", class_="wire")
     svg.close("g")
