@@ -575,6 +575,57 @@ async fn operator_and_viewer_in_a_real_browser() {
         first_page_oldest
     );
 
+    // --- Trends: the configured list, the last hour, a drag zooms in, "Zoom out" goes back.
+    client
+        .execute("location.hash = '#trends';", Vec::new())
+        .await
+        .unwrap();
+    until(
+        &client,
+        "[...document.getElementById('trend-point').options].some(o => o.value === 'ROV01_P_kW')",
+        "the trend list with ROV01_P_kW",
+    )
+    .await;
+    client
+        .execute("const s = document.getElementById('trend-point'); s.value = 'ROV01_P_kW'; s.dispatchEvent(new Event('change')); document.querySelector('#trend-form [data-range=\"3600\"]').click();", Vec::new())
+        .await
+        .unwrap();
+    until(
+        &client,
+        "!HMI.trend.loading && HMI.trend.point === 'ROV01_P_kW' && HMI.trend.to - HMI.trend.from === 3600000 && HMI.trend.samples.length > 0",
+        "an hour of ROV01_P_kW with its samples",
+    )
+    .await;
+    // Not following live values, so that the range stays put while zooming.
+    let before = js(
+        &client,
+        "(document.getElementById('trend-follow').checked = false, [HMI.trend.from, HMI.trend.to])",
+    )
+    .await;
+    client
+        .execute(
+            "const c = document.getElementById('trend-canvas'); const r = c.getBoundingClientRect(); \
+             const at = (type, f) => c.dispatchEvent(new PointerEvent(type, {bubbles: true, pointerId: 1, \
+               clientX: r.left + r.width * f, clientY: r.top + r.height / 2})); \
+             at('pointerdown', 0.3); at('pointermove', 0.5); at('pointermove', 0.7); at('pointerup', 0.7);",
+            Vec::new(),
+        )
+        .await
+        .unwrap();
+    until(
+        &client,
+        &format!("!HMI.trend.loading && HMI.trend.zoomStack.length === 1 && HMI.trend.from > {} && HMI.trend.to < {}", before[0], before[1]),
+        "the chart zoomed into the dragged range",
+    )
+    .await;
+    click(&client, "#trend-back").await;
+    until(
+        &client,
+        &format!("!HMI.trend.loading && HMI.trend.zoomStack.length === 0 && HMI.trend.from === {} && HMI.trend.to === {}", before[0], before[1]),
+        "the chart back at the hour",
+    )
+    .await;
+
     // --- An alarm of priority 1: listed in red, the badge and the sound call for attention,
     // acknowledged from the alarm list (the sound stops), shelved.
     site.operate("emergency-off RH2").await;
@@ -691,6 +742,11 @@ async fn operator_and_viewer_in_a_real_browser() {
     .await;
 
     // --- The read-only user: controls disabled, and the server refuses them anyway.
+    assert_eq!(
+        js(&client, "HMI.errors").await,
+        json!([]),
+        "script errors in the operator's page"
+    );
     click(&client, "#logout").await;
     until(
         &client,
@@ -751,6 +807,11 @@ async fn operator_and_viewer_in_a_real_browser() {
         .await,
         json!(0),
         "no alarm buttons for the read-only user"
+    );
+    assert_eq!(
+        js(&client, "HMI.errors").await,
+        json!([]),
+        "script errors in the viewer's page"
     );
 
     client.close().await.unwrap();

@@ -23,6 +23,7 @@ const HMI = (window.HMI = {
   current: null, // {page, argument}
   clockOffset: 0, // station clock minus browser clock (ms), from live time tags
   listeners: {},
+  errors: [], // uncaught script errors of this page (the browser tests expect none)
 
   // ------------------------------------------------------------------ events between parts
   on(type, handler) {
@@ -405,6 +406,13 @@ const HMI = (window.HMI = {
     this.connect();
     document.body.dataset.ready = "true";
   },
+});
+
+window.addEventListener("error", (event) => HMI.errors.push(String(event.message || event.error)));
+window.addEventListener("unhandledrejection", (event) => {
+  const reason = event.reason && event.reason.message ? event.reason.message : String(event.reason);
+  // A request cut short by leaving for the login page is no error.
+  if (reason !== "not logged in") HMI.errors.push(reason);
 });
 
 document.addEventListener("DOMContentLoaded", () => {

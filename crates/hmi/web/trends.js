@@ -313,7 +313,11 @@
 
   function pointerDown(event) {
     if (!state.plot) return;
-    canvas().setPointerCapture(event.pointerId);
+    try {
+      canvas().setPointerCapture(event.pointerId);
+    } catch (error) {
+      /* a synthetic event has no pointer to capture */
+    }
     state.drag = { x0: localX(event), x1: localX(event) };
     draw();
   }
