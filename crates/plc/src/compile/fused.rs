@@ -1021,9 +1021,13 @@ impl Elem {
     #[inline(always)]
     fn cell(&self, vm: &Vm) -> Result<usize, Fault> {
         let fi = vm.frame.i;
-        let x = self
-            .wrap
-            .apply(vm.geti(fi + self.var)?.wrapping_add(self.k));
+        let v = vm.geti(fi + self.var)?;
+        // a variable's value is already wrapped to its type (as in Index1::eval)
+        let x = if self.k == 0 {
+            v
+        } else {
+            self.wrap.apply(v.wrapping_add(self.k))
+        };
         if x < self.lo || x > self.hi {
             return Err(crate::vm::FaultKind::IndexOutOfRange {
                 span: self.span,

@@ -36,6 +36,9 @@ struct LocalFor {
     step: i64,
     wrap: Wrap,
     span: Span,
+    /// The body cannot write the counter ([`MayWrite`]): the next value is
+    /// computed from the current one without reading the cell back.
+    kept: bool,
 }
 
 impl LocalFor {
@@ -56,12 +59,143 @@ impl LocalFor {
                 Flow::Return => return Ok(Flow::Return),
                 _ => {}
             }
-            // the body may have changed the variable
+            // the body may have changed the variable (unless it cannot: then the cell
+            // holds `cur`, which is inside the counter's type while the body runs)
             let at = vm.frame.i + o;
-            cur = vm.geti(at)?.saturating_add(step);
+            let now = if self.kept { cur } else { vm.geti(at)? };
+            cur = now.saturating_add(step);
             vm.seti(at, self.wrap.apply(cur))?;
         }
         Ok(Flow::Normal)
+    }
+}
+
+/// Whether the statements of a POU may write one of its local variables (conservative):
+/// an assignment or FOR counter rooted at it, at a VAR_IN_OUT (which may refer to it), at
+/// a program's or FB instance's member (`Main.i`, `g.i`: maybe the running instance) or
+/// a dereference; a call with an argument mentioning any of these (VAR_IN_OUT, `=>`); a
+/// call of a user FUNCTION or FB (its body may write `Main.i`).
+struct MayWrite<'a> {
+    c: &'a crate::check::Checked,
+    /// The POU's variables.
+    vars: &'a [crate::check::VarInfo],
+    /// The variable.
+    r: &'a Res,
+}
+
+impl MayWrite<'_> {
+    fn block(&self, stmts: &[Stmt]) -> bool {
+        stmts.iter().any(|s| self.stmt(s))
+    }
+
+    fn stmt(&self, s: &Stmt) -> bool {
+        let e = |x: &Expr| self.expr(x);
+        match &s.kind {
+            StmtKind::Assign(t, v) => self.rooted(t) || e(t) || e(v),
+            StmtKind::Call(x) => e(x),
+            StmtKind::If(arms, els) => {
+                arms.iter().any(|(x, b)| e(x) || self.block(b))
+                    || els.as_ref().is_some_and(|b| self.block(b))
+            }
+            StmtKind::Case(sel, arms, els) => {
+                e(sel)
+                    || arms.iter().any(|(_, b)| self.block(b))
+                    || els.as_ref().is_some_and(|b| self.block(b))
+            }
+            StmtKind::For {
+                var,
+                from,
+                to,
+                by,
+                body,
+            } => {
+                self.rooted(var)
+                    || e(var)
+                    || e(from)
+                    || e(to)
+                    || by.as_ref().is_some_and(&e)
+                    || self.block(body)
+            }
+            StmtKind::While(x, b) | StmtKind::Repeat(b, x) => e(x) || self.block(b),
+            StmtKind::Exit | StmtKind::Continue | StmtKind::Return | StmtKind::Empty => false,
+        }
+    }
+
+    /// The variable itself or a VAR_IN_OUT of the POU.
+    fn names_it(&self, e: &Expr) -> bool {
+        match self.c.res.get(&e.id) {
+            Some(r) if r == self.r => true,
+            Some(Res::Local(i)) => self.vars.get(*i).is_none_or(|v| v.kind == VarKind::InOut),
+            _ => false,
+        }
+    }
+
+    /// A call of a user FUNCTION or FB: its body may write a program's variable through
+    /// the program's name.
+    fn user_call(&self, call: &Expr) -> bool {
+        match self.c.res.get(&call.id) {
+            Some(Res::CallFb(p) | Res::CallFunction(p)) => self.c.pou(*p).is_none_or(|p| !p.stdlib),
+            Some(Res::CallBuiltin(_)) => false,
+            _ => true,
+        }
+    }
+
+    /// `P.x` of a program, or `inst.x` of an FB instance (which may be the one running).
+    fn program_member(&self, b: &Expr) -> bool {
+        matches!(self.c.res.get(&b.id), Some(Res::Program(_)))
+            || matches!(self.c.ty(b.id), crate::check::Ty::Fb(_))
+    }
+
+    /// Whether an l-value designates (part of) the variable, or might.
+    fn rooted(&self, t: &Expr) -> bool {
+        match &t.kind {
+            ExprKind::Name { .. } => self.names_it(t),
+            ExprKind::Member(b, _) => self.program_member(b) || self.rooted(b),
+            ExprKind::Bit(b, _) | ExprKind::Index(b, _) => self.rooted(b),
+            ExprKind::Deref(_) => true,
+            ExprKind::Literal(_)
+            | ExprKind::Unary(..)
+            | ExprKind::Binary(..)
+            | ExprKind::Call(..)
+            | ExprKind::TypedEnum(..)
+            | ExprKind::Direct(_) => false,
+        }
+    }
+
+    /// Whether evaluating `e` may write the variable: a call whose arguments mention it.
+    fn expr(&self, e: &Expr) -> bool {
+        let sub = |x: &Expr| self.expr(x);
+        match &e.kind {
+            ExprKind::Call(callee, args) => {
+                self.user_call(e) || args.iter().any(|a| self.mentions(&a.value)) || sub(callee)
+            }
+            // reading writes nothing
+            ExprKind::Member(b, _)
+            | ExprKind::Deref(b)
+            | ExprKind::Bit(b, _)
+            | ExprKind::Unary(_, b) => sub(b),
+            ExprKind::Index(b, ix) => sub(b) || ix.iter().any(sub),
+            ExprKind::Binary(_, a, b) => sub(a) || sub(b),
+            ExprKind::Literal(_)
+            | ExprKind::Name { .. }
+            | ExprKind::TypedEnum(..)
+            | ExprKind::Direct(_) => false,
+        }
+    }
+
+    /// Whether the variable (or a VAR_IN_OUT) is named anywhere in `e`.
+    fn mentions(&self, e: &Expr) -> bool {
+        let sub = |x: &Expr| self.mentions(x);
+        match &e.kind {
+            ExprKind::Name { .. } => self.names_it(e),
+            ExprKind::Call(callee, args) => sub(callee) || args.iter().any(|a| sub(&a.value)),
+            ExprKind::Member(b, _) => self.program_member(b) || sub(b),
+            ExprKind::Deref(_) => true,
+            ExprKind::Bit(b, _) | ExprKind::Unary(_, b) => sub(b),
+            ExprKind::Index(b, ix) => sub(b) || ix.iter().any(sub),
+            ExprKind::Binary(_, a, b) => sub(a) || sub(b),
+            ExprKind::Literal(_) | ExprKind::TypedEnum(..) | ExprKind::Direct(_) => false,
+        }
     }
 }
 
@@ -326,6 +460,7 @@ impl Cx<'_> {
                     }
                     _ => Cell::Dyn(p.addr()),
                 };
+                let body_ast = body.as_slice();
                 let body = self.block(body);
                 let span = s.span;
                 // a subrange counter: every value the body runs with is checked; the
@@ -334,6 +469,16 @@ impl Cx<'_> {
                 let range = p.range.clone();
                 if let (Cell::Frame(o), Some(step), None) = (&cell, by_const, &range) {
                     // the common case: a local counter and a constant step
+                    let vars = self
+                        .pou
+                        .and_then(|p| self.c.pou(p))
+                        .map(|p| p.vars.as_slice());
+                    let kept = match (self.c.res.get(&var.id), vars) {
+                        (Some(r @ Res::Local(_)), Some(vars)) => {
+                            !MayWrite { c: self.c, vars, r }.block(body_ast)
+                        }
+                        _ => false,
+                    };
                     let lp = LocalFor {
                         set_from,
                         to,
@@ -341,6 +486,7 @@ impl Cx<'_> {
                         step,
                         wrap: Wrap::of(&vt),
                         span,
+                        kept,
                     };
                     let mut body = body;
                     if body.len() == 1 {
@@ -678,16 +824,65 @@ fn native_fb_call(
         })
         .collect::<Option<_>>()?;
     let fb = crate::stdlib::timers::NativeFb::of(pou)?;
-    let addr = std::rc::Rc::clone(addr);
-    Some(Box::new(move |vm| {
-        let base = addr.get(vm)?.i;
-        for (off, o) in &binds {
-            let x = o.get(vm)?;
-            vm.seti(base + off, x)?;
+    let binds = binds.into_boxed_slice();
+    // the instance's integer base, computed for the address's shape (the other lanes
+    // are not needed: these FBs have integer cells only)
+    Some(match &**addr {
+        InstAddr::Frame(o) => {
+            let o = o.i;
+            native_call(move |vm| Ok(vm.frame.i + o), binds, fb)
         }
-        fb.run(vm, base)?;
+        InstAddr::Abs(o) => {
+            let o = o.i;
+            native_call(move |_| Ok(o), binds, fb)
+        }
+        InstAddr::FrameIndexed(o, ix) => {
+            let (o, ix) = (o.i, std::rc::Rc::clone(ix));
+            native_call(
+                move |vm| {
+                    let k = ix.eval(vm)?;
+                    Ok(vm.frame.i + o + ix.stride.i.saturating_mul(k))
+                },
+                binds,
+                fb,
+            )
+        }
+        InstAddr::AbsIndexed(o, ix) => {
+            let (o, ix) = (o.i, std::rc::Rc::clone(ix));
+            native_call(
+                move |vm| {
+                    let k = ix.eval(vm)?;
+                    Ok(o + ix.stride.i.saturating_mul(k))
+                },
+                binds,
+                fb,
+            )
+        }
+        InstAddr::Dyn(a) => {
+            let a = std::rc::Rc::clone(a);
+            native_call(move |vm| Ok(a(vm)?.i), binds, fb)
+        }
+    })
+}
+
+/// Binds inline arguments into the instance at `base` and runs the native body.
+fn native_call<G>(
+    base: G,
+    binds: Box<[(usize, super::fused::Opnd)]>,
+    fb: crate::stdlib::timers::NativeFb,
+) -> StmtFn
+where
+    G: Fn(&mut Vm) -> Result<usize, Fault> + 'static,
+{
+    Box::new(move |vm| {
+        let b = base(vm)?;
+        for (off, o) in binds.iter() {
+            let x = o.get(vm)?;
+            vm.seti(b + off, x)?;
+        }
+        fb.run(vm, b)?;
         Ok(Flow::Normal)
-    }))
+    })
 }
 
 /// An appended CONCAT argument.

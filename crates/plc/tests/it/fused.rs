@@ -250,3 +250,54 @@ END_PROGRAM";
     }
     assert_eq!(p.read_text("Main.a").unwrap(), "'ééééééé'");
 }
+
+/// A FOR loop reads its counter back after the body unless the body cannot write it; every
+/// way of writing it is seen: assignment, VAR_IN_OUT, `=>`, through the program's name,
+/// through a global instance's name, from a user function's body.
+#[test]
+fn for_counter_written_by_the_body_is_read_back() {
+    let src = "
+FUNCTION Bump : INT VAR_IN_OUT x : INT; END_VAR x := x + 1; Bump := 0; END_FUNCTION
+FUNCTION Poke : INT VAR_INPUT v : INT; END_VAR Main.k := v; Poke := 0; END_FUNCTION
+FUNCTION_BLOCK Out VAR_OUTPUT o : INT; END_VAR o := 100; END_FUNCTION_BLOCK
+FUNCTION_BLOCK Loop VAR_INPUT i : INT; END_VAR VAR_OUTPUT n : INT; END_VAR
+n := 0; FOR i := 1 TO 10 DO g.i := 20; n := n + 1; END_FOR
+END_FUNCTION_BLOCK
+VAR_GLOBAL g : Loop; END_VAR
+PROGRAM Main
+VAR i, j, k, m, n1, n2, n3, n4, n5, n6, d : INT; f : Out; END_VAR
+FOR i := 1 TO 10 DO d := Bump(x := i); n1 := n1 + 1; END_FOR
+FOR j := 1 TO 10 DO f(o => j); n2 := n2 + 1; END_FOR
+FOR k := 1 TO 10 DO d := Poke(v := 40); n3 := n3 + 1; END_FOR
+FOR m := 1 TO 10 DO Main.m := 30; n4 := n4 + 1; END_FOR
+g(); n5 := g.n;
+FOR m := 1 TO 10 DO IF m = 2 THEN m := 8; END_IF n6 := n6 + 1; END_FOR
+END_PROGRAM";
+    let (sources, r) = plc::build(&[("t.st".to_string(), src.to_string())]);
+    let compiled = match r {
+        Ok(c) => c,
+        Err(d) => panic!(
+            "{}",
+            d.iter()
+                .map(|d| d.render(&sources))
+                .collect::<Vec<_>>()
+                .join("\n")
+        ),
+    };
+    let mut p = Plc::new(compiled, sources);
+    p.add_task(TaskConfig::cyclic("main", 0, &["Main"]))
+        .unwrap();
+    assert!(p.run_cycle(ClockReading::default()).is_empty());
+    let read = |path: &str| p.read_text(path).unwrap();
+    // i: 1 (bumped to 2), 3, 5, 7, 9 -> 5 rounds, ends at 11
+    assert_eq!((read("Main.n1"), read("Main.i")), ("5".into(), "11".into()));
+    assert_eq!(
+        (read("Main.n2"), read("Main.j")),
+        ("1".into(), "101".into())
+    );
+    assert_eq!((read("Main.n3"), read("Main.k")), ("1".into(), "41".into()));
+    assert_eq!(read("Main.n4"), "1");
+    assert_eq!(read("Main.n5"), "1");
+    // 1, 2 (set to 8), 9, 10
+    assert_eq!((read("Main.n6"), read("Main.m")), ("4".into(), "11".into()));
+}
