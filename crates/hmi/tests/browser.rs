@@ -6,10 +6,13 @@
 //!
 //! What a person would do and see: log in (and fail with a wrong password), watch a breaker
 //! change when the plant trips it, operate QF1 of RH2 through the control dialog and read
-//! the outcome, find that command in the event list under the user's name, watch every
-//! value turn invalid and blink when the station link is cut (and when the browser's own
-//! live connection drops, until it reconnects), and, as the read-only user, see the
-//! controls disabled and be refused by the server.
+//! the outcome, find that command in the event list under the user's name and page back
+//! through the history, zoom a trend, acknowledge and shelve a priority-1 alarm (badge and
+//! sound), watch every value turn invalid and blink when the station link is cut (and when
+//! the browser's own live connection drops, until it reconnects); as the read-only user,
+//! see the controls disabled, be refused by the server and get no alarm buttons; and be
+//! told to wait after guessing passwords. One station and one browser for all of it, in
+//! about ten seconds.
 //!
 //! Chromium and chromedriver come from `scripts/install-test-deps.sh`. Without them the
 //! tests say SKIPPED and pass, unless `STANICE_REQUIRE_PEERS=1` (set by `scripts/test.sh`,
@@ -812,6 +815,49 @@ async fn operator_and_viewer_in_a_real_browser() {
         js(&client, "HMI.errors").await,
         json!([]),
         "script errors in the viewer's page"
+    );
+
+    // --- Guessing passwords: after a few failures the login page says how long to wait
+    // (last: it locks this address out).
+    click(&client, "#logout").await;
+    until(&client, "location.pathname === '/login'", "the login page").await;
+    let mut locked = false;
+    for _ in 0..10 {
+        client
+            .execute(
+                "document.getElementById('username').value = 'intruder'; \
+                 document.getElementById('password').value = 'guess'; \
+                 document.getElementById('login-message').textContent = '';",
+                Vec::new(),
+            )
+            .await
+            .unwrap();
+        click(&client, "#login-button").await;
+        until(
+            &client,
+            "/Wrong|Too many/.test(document.getElementById('login-message').textContent)",
+            "the answer to a wrong login",
+        )
+        .await;
+        let message = js(
+            &client,
+            "document.getElementById('login-message').textContent",
+        )
+        .await;
+        if message
+            .as_str()
+            .unwrap()
+            .starts_with("Too many failed logins. Try again in")
+        {
+            locked = true;
+            break;
+        }
+    }
+    assert!(locked, "the login page never told of the lockout");
+    assert_eq!(
+        js(&client, "document.getElementById('login-button').disabled").await,
+        json!(true),
+        "the button waits out the lockout"
     );
 
     client.close().await.unwrap();
