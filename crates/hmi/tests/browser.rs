@@ -420,6 +420,23 @@ async fn operator_and_viewer_in_a_real_browser() {
     .await;
     timings.push(("breaker trip shown", took));
 
+    // Hovering a bound element tells its point.
+    let hover = js(
+        &client,
+        &format!(
+            "(() => {{ const e = {fa11}; const r = e.getBoundingClientRect(); \
+             e.dispatchEvent(new PointerEvent('pointermove', {{bubbles: true, clientX: r.left + 2, clientY: r.top + 2}})); \
+             const i = document.getElementById('point-info'); return [i && !i.hidden, i && i.textContent]; }})()"
+        ),
+    )
+    .await;
+    assert_eq!(hover[0], json!(true), "point information shows: {hover}");
+    assert!(
+        hover[1].as_str().unwrap().contains("RH2_V1_FA1.1")
+            && hover[1].as_str().unwrap().contains("IOA 282"),
+        "{hover}"
+    );
+
     // --- Operate QF1 (open) through the dialog: value, confirmation, outcome in words.
     let qf1 = r#"document.querySelector('#mimic rect.breaker[data-point="RH2_P1_KHU3_Napeti_na_pripojeni"]')"#;
     until(
@@ -690,6 +707,11 @@ async fn operator_and_viewer_in_a_real_browser() {
     // --- The station link is cut: every bound value turns invalid and blinks.
     show_screen(&client, "supply").await;
     until(&client, "document.querySelectorAll('#mimic [data-point], #mimic [data-energised], #mimic [data-text]').length > 20", "the supply screen's bindings").await;
+    assert_eq!(
+        js(&client, r#"[...document.querySelectorAll('[data-command="RDRT_HMI_Mistne"]')].map(e => e.classList.contains('disabled'))"#).await,
+        json!([true, true]),
+        "the control authority needs level 7, not the operator's 5"
+    );
     let cut = Instant::now();
     site.hmi().station.set_link(false);
     let all_invalid = "[...document.querySelectorAll('#mimic [data-point], #mimic [data-energised], #mimic [data-text]')].every(e => e.getAttribute('data-invalid') === 'true')";
@@ -923,7 +945,34 @@ async fn screenshots() {
     site.operate("fuse-blown RZZ_FU1").await;
     tokio::time::sleep(Duration::from_secs(3)).await;
 
+    // The administrator takes the control authority to this HMI (level 7).
     show_screen(&client, "supply").await;
+    click(
+        &client,
+        r#"[data-command="RDRT_HMI_Mistne"][data-command-value="1"] rect"#,
+    )
+    .await;
+    until(
+        &client,
+        "document.getElementById('control-dialog').open",
+        "the authority dialog",
+    )
+    .await;
+    click(&client, "#control-next").await;
+    click(&client, "#control-execute").await;
+    until(
+        &client,
+        "document.getElementById('control-outcome').dataset.outcome === 'executed'",
+        "the authority switched",
+    )
+    .await;
+    click(&client, "#control-step-result button").await;
+    until(
+        &client,
+        r#"document.querySelector('rect.authority').getAttribute('data-value') === 'on'"#,
+        "the authority shown as local",
+    )
+    .await;
     shoot("supply.png").await;
     show_screen(&client, "rh2").await;
     shoot("rh2.png").await;

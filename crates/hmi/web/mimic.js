@@ -383,8 +383,42 @@
     dialogState = null;
   }
 
+  // ------------------------------------------------------------------ point information
+  // Hovering (or touching) a bound element shows its point: name, description, value,
+  // quality and time tag.
+  let info = null;
+  function pointInfo(event) {
+    const element = event.target.closest && event.target.closest("[data-point], [data-text], [data-energised]");
+    if (!element || !svgRoot || !svgRoot.contains(element)) {
+      if (info) info.hidden = true;
+      return;
+    }
+    const name = element.getAttribute("data-point") || element.getAttribute("data-text") || element.getAttribute("data-energised");
+    const point = HMI.points.get(name);
+    if (!info) {
+      info = HMI.el("div", { id: "point-info", role: "tooltip" });
+      document.body.append(info);
+    }
+    const quality = !point ? "unknown point" : HMI.isInvalid(point) ? `invalid${point.quality && point.quality.length ? ` (${point.quality.join(" ")})` : ""}` : (point.quality || []).join(" ") || "good";
+    info.replaceChildren(
+      HMI.el("strong", { text: name }),
+      HMI.el("div", { class: "muted", text: point ? `${point.description || ""} — IOA ${point.ioa}, ${point.type || ""}` : "" }),
+      HMI.el("div", { text: `value ${point ? HMI.formatValue(point.value, point.type) : "—"}, ${quality}` }),
+      HMI.el("div", { class: "muted", text: point && point.time ? `time tag ${HMI.formatTime(point.time, true)}` : "no time tag" }),
+    );
+    info.hidden = false;
+    const x = Math.min(event.clientX + 14, window.innerWidth - info.offsetWidth - 8);
+    const y = event.clientY + 16 + info.offsetHeight > window.innerHeight ? event.clientY - info.offsetHeight - 12 : event.clientY + 16;
+    info.style.left = `${Math.max(4, x)}px`;
+    info.style.top = `${Math.max(4, y)}px`;
+  }
+
   HMI.on("ready", () => {
     const box = document.getElementById("mimic");
+    box.addEventListener("pointermove", pointInfo);
+    box.addEventListener("pointerleave", () => {
+      if (info) info.hidden = true;
+    });
     box.classList.toggle("natural", localStorage.getItem("stanice.mimic") === "natural");
     box.addEventListener("click", (event) => {
       const element = event.target.closest("[data-command]");
