@@ -39,6 +39,8 @@ struct LocalFor {
     /// The body cannot write the counter ([`MayWrite`]): the next value is
     /// computed from the current one without reading the cell back.
     kept: bool,
+    /// The body never touches the loop budget ([`leaf_body`]).
+    leaf: bool,
 }
 
 impl LocalFor {
@@ -52,22 +54,82 @@ impl LocalFor {
         (self.set_from)(vm)?;
         let end = (self.to)(vm)?;
         let mut cur = vm.geti(vm.frame.i + o)?;
-        while !((step >= 0 && cur > end) || (step < 0 && cur < end)) {
-            tick(vm, self.span)?;
-            match body(vm)? {
-                Flow::Exit => return Ok(Flow::Normal),
-                Flow::Return => return Ok(Flow::Return),
-                _ => {}
+        // a leaf body does not use the budget: it is counted down here and stored once
+        let mut left = vm.budget;
+        let r = (|| {
+            while !((step >= 0 && cur > end) || (step < 0 && cur < end)) {
+                if self.leaf {
+                    if left == 0 {
+                        return Err(Fault::from(FaultKind::LoopBudget(self.span)));
+                    }
+                    left -= 1;
+                } else {
+                    tick(vm, self.span)?;
+                }
+                match body(vm)? {
+                    Flow::Exit => return Ok(Flow::Normal),
+                    Flow::Return => return Ok(Flow::Return),
+                    _ => {}
+                }
+                // the body may have changed the variable (unless it cannot: then the cell
+                // holds `cur`, which is inside the counter's type while the body runs)
+                let at = vm.frame.i + o;
+                let now = if self.kept { cur } else { vm.geti(at)? };
+                cur = now.saturating_add(step);
+                vm.seti(at, self.wrap.apply(cur))?;
             }
-            // the body may have changed the variable (unless it cannot: then the cell
-            // holds `cur`, which is inside the counter's type while the body runs)
-            let at = vm.frame.i + o;
-            let now = if self.kept { cur } else { vm.geti(at)? };
-            cur = now.saturating_add(step);
-            vm.seti(at, self.wrap.apply(cur))?;
+            Ok(Flow::Normal)
+        })();
+        if self.leaf {
+            vm.budget = left;
         }
-        Ok(Flow::Normal)
+        r
     }
+}
+
+/// Whether running `stmts` never touches the loop budget: no loops, no calls other than
+/// built-in functions and FBs with a native body.
+fn leaf_body(c: &crate::check::Checked, stmts: &[Stmt]) -> bool {
+    fn expr(c: &crate::check::Checked, e: &Expr) -> bool {
+        let sub = |x: &Expr| expr(c, x);
+        match &e.kind {
+            ExprKind::Call(callee, args) => {
+                let native = match c.res.get(&e.id) {
+                    Some(Res::CallBuiltin(_)) => true,
+                    Some(Res::CallFb(p)) => c
+                        .pou(*p)
+                        .is_some_and(|p| crate::stdlib::timers::NativeFb::of(p).is_some()),
+                    _ => false,
+                };
+                native && sub(callee) && args.iter().all(|a| sub(&a.value))
+            }
+            ExprKind::Member(b, _)
+            | ExprKind::Deref(b)
+            | ExprKind::Bit(b, _)
+            | ExprKind::Unary(_, b) => sub(b),
+            ExprKind::Index(b, ix) => sub(b) && ix.iter().all(sub),
+            ExprKind::Binary(_, a, b) => sub(a) && sub(b),
+            ExprKind::Literal(_)
+            | ExprKind::Name { .. }
+            | ExprKind::TypedEnum(..)
+            | ExprKind::Direct(_) => true,
+        }
+    }
+    stmts.iter().all(|s| match &s.kind {
+        StmtKind::Assign(t, v) => expr(c, t) && expr(c, v),
+        StmtKind::Call(x) => expr(c, x),
+        StmtKind::If(arms, els) => {
+            arms.iter().all(|(x, b)| expr(c, x) && leaf_body(c, b))
+                && els.as_ref().is_none_or(|b| leaf_body(c, b))
+        }
+        StmtKind::Case(sel, arms, els) => {
+            expr(c, sel)
+                && arms.iter().all(|(_, b)| leaf_body(c, b))
+                && els.as_ref().is_none_or(|b| leaf_body(c, b))
+        }
+        StmtKind::For { .. } | StmtKind::While(..) | StmtKind::Repeat(..) => false,
+        StmtKind::Exit | StmtKind::Continue | StmtKind::Return | StmtKind::Empty => true,
+    })
 }
 
 /// Whether the statements of a POU may write one of its local variables (conservative):
@@ -487,6 +549,7 @@ impl Cx<'_> {
                         wrap: Wrap::of(&vt),
                         span,
                         kept,
+                        leaf: leaf_body(self.c, body_ast),
                     };
                     let mut body = body;
                     if body.len() == 1 {

@@ -301,3 +301,33 @@ END_PROGRAM";
     // 1, 2 (set to 8), 9, 10
     assert_eq!((read("Main.n6"), read("Main.m")), ("4".into(), "11".into()));
 }
+
+/// A FOR loop whose body cannot touch the budget counts it down locally: the fault comes
+/// at the same iteration, and the next loop of the cycle sees what is left.
+#[test]
+fn leaf_for_loops_share_the_cycle_budget() {
+    let src = "PROGRAM Main VAR i : DINT; x, y : DINT; END_VAR
+x := 0; y := 0;
+FOR i := 1 TO 600 DO x := x + 1; END_FOR
+FOR i := 1 TO 600 DO y := y + 1; END_FOR
+END_PROGRAM";
+    let (sources, r) = plc::build(&[("t.st".to_string(), src.to_string())]);
+    let mut p = Plc::new(r.unwrap(), sources);
+    p.loop_budget = 1000;
+    p.add_task(TaskConfig::cyclic("main", 0, &["Main"]))
+        .unwrap();
+    let faults = p.run_cycle(ClockReading::default());
+    assert_eq!(faults.len(), 1);
+    assert!(
+        faults[0].message.contains("loop iteration budget"),
+        "{}",
+        faults[0].message
+    );
+    assert!(
+        p.render(&faults[0]).starts_with("t.st:4:1:"),
+        "{}",
+        p.render(&faults[0])
+    );
+    assert_eq!(p.read_text("Main.x").unwrap(), "600");
+    assert_eq!(p.read_text("Main.y").unwrap(), "400");
+}
