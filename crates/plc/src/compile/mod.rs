@@ -14,29 +14,41 @@
 //! allocator. A register bytecode or a Cranelift JIT remains possible behind the same
 //! [`Compiled`] interface.
 //!
-//! Hot paths are fused (`fused.rs`): integer and REAL operations whose operands are
-//! constants or statically addressed variables read them inline; one-index array accesses
-//! (`a[i]`, `a[i + 1]`) compute their cell inline, and on local arrays indexed by a local
-//! (`fused::Elem`) load, store, compare and copy in one closure; 32-bit DIV/MOD by a
-//! constant multiply instead of dividing; FOR loops over a local counter with a constant
-//! step run a specialised loop; FB instance addresses and constant FB arguments avoid
-//! closure calls; `s := CONCAT(s, ...)` appends in place; TON/TOF/TP/R_TRIG/F_TRIG run
-//! native bodies, called directly when every argument is an inline operand.
+//! Hot paths are fused (`fused.rs`): integer and REAL operations read operands that are
+//! constants, statically addressed variables or an inline operation of two such leaves
+//! that cannot fault (`i * i`, `x * 0.5`, `n > 3`) without a call, and deliver their
+//! result into a *sink*: the value, a store into a statically addressed variable
+//! (`x := a + b` is one closure) or a branch (`IF a > b THEN` is one closure). One-index
+//! array accesses (`a[i]`, `a[i + 1]`, `t[i].Q`) compute their cell inline, and on local
+//! arrays indexed by a local (`fused::Elem`) load, store, compare and copy in one
+//! closure; runs of integer moves (`t := a[j]; a[j] := a[j + 1]; a[j + 1] := t`), alone
+//! or as the branches of an IF, are one closure; 32-bit DIV/MOD by a constant multiply
+//! instead of dividing; FOR loops over a local counter with a constant step run a
+//! specialised loop that calls a one-statement body directly, keeps the counter in a
+//! register when the body cannot write it and the loop budget when the body cannot use
+//! it; FB instance addresses and constant FB arguments avoid closure calls;
+//! `s := CONCAT(s, ...)` appends in place; TON/TOF/TP/R_TRIG/F_TRIG run native bodies
+//! over the instance's cells, called directly when every argument is an inline operand.
+//! `Result<Flow, Fault>` is two words, returned in registers.
 //!
-//! Measured with `cargo bench -p plc --bench st_vs_native` (release, one core of an AMD
-//! EPYC development machine), time per scan, ST vs the same algorithm in Rust:
+//! Measured with `cargo bench -p plc --bench st_vs_native` (release, one core of a
+//! shared 2-core AMD EPYC VM; minimum of several runs), time per scan, ST vs the same
+//! algorithm in Rust:
 //!
 //! | program | ST | native | ratio |
 //! |---|---|---|---|
-//! | integer loop, 100k iterations | 1.1 ms | 0.22 ms | 5.1x |
-//! | LREAL loop, 100k iterations | 1.1 ms | 0.19 ms | 6x |
-//! | string building, 100 CONCATs | 12.5 us | 2.6 us | 5x |
-//! | 1,000 TON instances per scan | 25 us | 1.7 us | 15x |
-//! | bubble sort of 200 DINTs | 0.44 ms | 0.012 ms | 37x (native is vectorised) |
+//! | integer loop, 100k iterations | 1.0 ms | 0.21 ms | 4.7x (was 5.4x) |
+//! | LREAL loop, 100k iterations | 0.63 ms | 0.19 ms | 3.4x (was 6.2x) |
+//! | string building, 100 CONCATs | 4.6 us | 2.5 us | 1.8x (was 5.1x) |
+//! | 1,000 TON instances per scan | 15 us | 1.7 us | 8.8x (was 14.4x) |
+//! | bubble sort of 200 DINTs | 0.34 ms | 0.012 ms | 27x (was 36x) |
 //!
-//! The remaining gap is per-statement dispatch (one indirect call per statement and per
-//! non-trivial operand, `Result` propagation, the loop budget); closing it needs a register
-//! bytecode or a JIT for loop bodies.
+//! The remaining gap is per-statement dispatch: an indirect call per statement (and per
+//! operand that is neither a leaf nor an inline operation), `Result` propagation, every
+//! variable in memory (the native sort keeps `a[j]` in a register across iterations, two
+//! compares per loop turn) and a bounds check on every cell access (no `unsafe`).
+//! Closing it needs a register bytecode with a whole-loop compiler or a JIT for loop
+//! bodies.
 
 mod builtins;
 mod expr;
