@@ -304,7 +304,10 @@ impl Station {
     fn broadcast_point(&self, point: &PointView) {
         let mut message = serde_json::to_value(point).unwrap_or(Value::Null);
         if let Value::Object(map) = &mut message {
-            map.insert("type".into(), json!("point"));
+            // `type` names the message; the point's IEC type travels as `iec_type`.
+            if let Some(iec) = map.insert("type".into(), json!("point")) {
+                map.insert("iec_type".into(), iec);
+            }
         }
         let _ = self.live.send(message.to_string());
     }

@@ -17,7 +17,9 @@ use axum::{Json, Router};
 use chrono::{DateTime, Utc};
 use serde::Deserialize;
 use serde_json::{json, Value};
-use station::store::{CommandQuery, Cursor, EventQuery, EventStore, Order};
+use station::store::{
+    CommandOutcome, CommandQuery, Cursor, EventQuery, EventStore, Order, TimeBasis,
+};
 
 use crate::auth::{constant_time_eq, LoginLimiter, Session, Sessions};
 use crate::link::{ControlOutcome, Station};
@@ -459,7 +461,10 @@ async fn events(
     let mut values_exhausted = !want_values;
     let mut commands_exhausted = !want_commands;
     if want_values {
+        // Ordered by when the HMI received them, the clock commands are stamped with, so
+        // that values and commands interleave truly even if the station's clock differs.
         let mut q = EventQuery::default()
+            .with_time_basis(TimeBasis::Received)
             .with_range(query.from, query.to)
             .with_order(Order::NewestFirst)
             .with_limit(limit)
@@ -476,12 +481,14 @@ async fn events(
             .map_err(|e| error(StatusCode::BAD_REQUEST, e.to_string()))?;
         values_exhausted = page.next.is_none();
         for e in page.items {
-            let time = e.event_time();
+            let time = e.received_time;
             let id = e.id.unwrap_or_default();
             items.push((
                 time.timestamp_millis(),
-                json!({"id": format!("v{id}"), "time": time, "kind": "value", "point": e.point,
-                       "ioa": e.ioa, "value": crate_value(&e.value), "invalid": e.quality.invalid}),
+                json!({"id": format!("v{id}"), "time": time,
+                       "source_time": e.source_time.map(|s| s.time), "kind": "value",
+                       "point": e.point, "ioa": e.ioa, "value": crate_value(&e.value),
+                       "invalid": e.quality.invalid}),
                 true,
                 Cursor::new(time.timestamp_millis(), id),
             ));
@@ -513,7 +520,7 @@ async fn events(
                 c.time.timestamp_millis(),
                 json!({"id": format!("c{id}"), "time": c.time, "kind": "command", "point": c.point,
                        "ioa": c.ioa, "value": crate_value(&c.value), "user": c.actor.name(),
-                       "outcome": format!("{:?}", c.outcome), "detail": c.detail}),
+                       "outcome": outcome_word(c.outcome), "detail": c.detail}),
                 false,
                 Cursor::new(c.time.timestamp_millis(), id),
             ));
@@ -549,6 +556,18 @@ async fn events(
     Ok(Json(json!({"items": list, "next": next})))
 }
 
+/// The outcome as `/api/command` words it.
+fn outcome_word(outcome: CommandOutcome) -> &'static str {
+    match outcome {
+        CommandOutcome::Executed => "executed",
+        CommandOutcome::RefusedLocalMode => "refused-local",
+        CommandOutcome::RefusedPermission => "refused-permission",
+        CommandOutcome::Refused => "refused",
+        CommandOutcome::Failed => "no-link",
+        CommandOutcome::TimedOut => "timed-out",
+    }
+}
+
 fn crate_value(value: &station::store::PointValue) -> Value {
     use station::store::PointValue;
     match value {
@@ -559,6 +578,18 @@ fn crate_value(value: &station::store::PointValue) -> Value {
         PointValue::Bits(b) => json!(b),
         PointValue::Text(t) => json!(t),
     }
+}
+
+/// Level 0 is read-only: it sees everything and changes nothing, alarms included.
+fn read_only_refused(session: &Session, peer: SocketAddr) -> Result<(), ApiError> {
+    if session.level == 0 {
+        tracing::warn!(%peer, user = %session.user, "read-only user refused an alarm change");
+        return Err(error(
+            StatusCode::FORBIDDEN,
+            "read-only users cannot change alarms",
+        ));
+    }
+    Ok(())
 }
 
 async fn alarms(
@@ -576,6 +607,7 @@ async fn acknowledge(
     Path(id): Path<usize>,
 ) -> Result<Json<Value>, ApiError> {
     let session = session_for_change(&state, &headers, peer)?;
+    read_only_refused(&session, peer)?;
     let alarm = state
         .station
         .acknowledge(id, &session.user)
@@ -597,6 +629,7 @@ async fn shelve(
     body: Result<Json<ShelveRequest>, axum::extract::rejection::JsonRejection>,
 ) -> Result<Json<Value>, ApiError> {
     let session = session_for_change(&state, &headers, peer)?;
+    read_only_refused(&session, peer)?;
     let Json(request) = body.map_err(|e| error(e.status(), e.to_string()))?;
     let alarm = state
         .station

@@ -362,7 +362,7 @@ async fn operator_controls_viewer_is_refused_and_both_are_audited() {
         commands.contains(&(
             "operator".into(),
             "RH2_VypnoutQF1".into(),
-            "Executed".into()
+            "executed".into()
         )),
         "{commands:?}"
     );
@@ -370,7 +370,7 @@ async fn operator_controls_viewer_is_refused_and_both_are_audited() {
         commands.contains(&(
             "viewer".into(),
             "RH2_ZapnoutQF1".into(),
-            "RefusedPermission".into()
+            "refused-permission".into()
         )),
         "{commands:?}"
     );
@@ -378,7 +378,7 @@ async fn operator_controls_viewer_is_refused_and_both_are_audited() {
         commands.contains(&(
             "operator".into(),
             "RH2_ZapnoutQF1".into(),
-            "RefusedLocalMode".into()
+            "refused-local".into()
         )),
         "{commands:?}"
     );
@@ -513,6 +513,22 @@ async fn bad_input_is_refused_cleanly() {
     assert_eq!(viewer.get("/api/screens/nothing").await.status, 404);
     assert_eq!(viewer.get("/api/trend?point=NO_SUCH").await.status, 404);
     assert_eq!(viewer.get("/api/trends").await.json(), json!([]));
+    // Read-only: no alarm changes either.
+    assert_eq!(
+        viewer
+            .post("/api/alarms/0/acknowledge", json!({}))
+            .await
+            .status,
+        403
+    );
+    // Read-only: no alarm changes either.
+    assert_eq!(
+        viewer
+            .post("/api/alarms/0/acknowledge", json!({}))
+            .await
+            .status,
+        403
+    );
     assert_eq!(viewer.get("/api/events?cursor=garbage").await.status, 400);
     // A request replayed after logout finds no session.
     assert_eq!(viewer.post("/api/logout", json!({})).await.status, 200);

@@ -1,0 +1,305 @@
+//! The live path of the web HMI, end to end: a value changes at the station until the
+//! browser's DOM shows it, at p50/p99, with 10,000 points on one screen.
+//!
+//! ```text
+//! cargo bench -p hmi --bench live [-- --samples N]
+//! ```
+//!
+//! An IEC 104 outstation (this workspace's server) holds 10,000 measured values; the HMI
+//! runs in this process, connected to it; a headless Chromium (Debian's, through
+//! chromedriver) shows a screen of 10,000 bound elements. A MutationObserver stamps the
+//! moment the measured element's `data-value` changes (`performance.timeOrigin + now()`,
+//! the same wall clock as the Rust side's `SystemTime`). Two conditions, side by side:
+//! the screen otherwise quiet, and the screen under load with all 10,000 points changing
+//! every second (10,000 updates/s through the whole path).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use std::net::{SocketAddr, TcpListener, TcpStream};
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+
+use fantoccini::{Client, ClientBuilder};
+use hmi::{Hmi, HmiOptions};
+use iec60870::asdu::{CommonAddress, Element, Ioa, Quality, TypeId};
+use iec60870::cs104::server::{
+    spawn_server, MonitorPoint, ProcessImage, ReadOnlyStation, ServerConfig,
+};
+use serde_json::{json, Value};
+use station::pointdb::TimeZonePolicy;
+
+const POINTS: u32 = 10_000;
+
+fn now_ms() -> f64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .unwrap()
+        .as_secs_f64()
+        * 1e3
+}
+
+fn free_port() -> u16 {
+    TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
+}
+
+fn float(value: f32) -> Element {
+    Element::Float {
+        value,
+        quality: Quality::GOOD,
+    }
+}
+
+fn screens(dir: &Path) {
+    let mut csv = String::from("ioa,type,name,description\n");
+    let mut svg =
+        String::from("<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 1000 1000\">\n");
+    for i in 1..=POINTS {
+        csv.push_str(&format!("{i},M_ME_NC_1,P{i:05},measurement {i}\n"));
+        let (x, y) = ((i - 1) % 100 * 10, (i - 1) / 100 * 10);
+        svg.push_str(&format!(
+            "<rect x=\"{x}\" y=\"{y}\" width=\"9\" height=\"9\" data-point=\"P{i:05}\"/>\n"
+        ));
+    }
+    svg.push_str("</svg>\n");
+    std::fs::write(dir.join("points.csv"), csv).unwrap();
+    std::fs::write(dir.join("grid.svg"), svg).unwrap();
+    std::fs::write(
+        dir.join("hmi.toml"),
+        "title = \"10,000 points\"\n[[screen]]\nid = \"grid\"\ntitle = \"Grid\"\nfile = \"grid.svg\"\n",
+    )
+    .unwrap();
+    let mut users = hmi::users::Users::load(&dir.join("users.toml")).unwrap();
+    users.add("bench", 0, "bench-password").unwrap();
+}
+
+async fn browser(driver_url: &str, profile: &Path) -> Client {
+    let args = vec![
+        "--headless".to_owned(),
+        "--no-sandbox".to_owned(),
+        "--disable-gpu".to_owned(),
+        "--disable-quic".to_owned(),
+        "--no-first-run".to_owned(),
+        "--disable-background-networking".to_owned(),
+        "--disable-component-update".to_owned(),
+        "--disable-sync".to_owned(),
+        "--disable-dev-shm-usage".to_owned(),
+        "--window-size=1280,1024".to_owned(),
+        format!("--user-data-dir={}", profile.display()),
+    ];
+    let mut capabilities = serde_json::Map::new();
+    capabilities.insert("browserName".into(), json!("chrome"));
+    capabilities.insert(
+        "goog:chromeOptions".into(),
+        json!({"args": args, "binary": "/usr/bin/chromium"}),
+    );
+    ClientBuilder::new(hyper_util::client::legacy::connect::HttpConnector::new())
+        .capabilities(capabilities)
+        .connect(driver_url)
+        .await
+        .expect("no WebDriver session")
+}
+
+async fn js(client: &Client, script: &str) -> Value {
+    client.execute(script, vec![]).await.unwrap()
+}
+
+fn report(name: &str, mut samples: Vec<f64>) {
+    samples.sort_by(f64::total_cmp);
+    let at = |p: f64| samples[((samples.len() as f64 - 1.0) * p).round() as usize];
+    println!(
+        "{name:<52} n={:<4} p50 {:>6.2} ms  p99 {:>6.2} ms  max {:>6.2} ms",
+        samples.len(),
+        at(0.5),
+        at(0.99),
+        samples[samples.len() - 1]
+    );
+}
+
+fn main() {
+    let samples: usize = std::env::args()
+        .skip_while(|a| a != "--samples")
+        .nth(1)
+        .and_then(|n| n.parse().ok())
+        .unwrap_or(200);
+    if !Path::new("/usr/bin/chromedriver").exists() {
+        eprintln!("SKIPPED: the HMI live benchmark needs chromium and chromedriver (scripts/install-test-deps.sh)");
+        return;
+    }
+    tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .unwrap()
+        .block_on(run(samples));
+}
+
+async fn run(samples: usize) {
+    // The outstation.
+    let mut image = ProcessImage::new();
+    for i in 1..=POINTS {
+        image
+            .add_monitor(MonitorPoint {
+                ioa: Ioa::try_new(i).unwrap(),
+                event_type: TypeId::M_ME_NC_1,
+                groups: 0,
+                element: float(0.0),
+                time: None,
+            })
+            .unwrap();
+    }
+    let server = spawn_server(
+        ServerConfig::new("127.0.0.1:0".parse().unwrap(), CommonAddress::new(1)),
+        image,
+        Arc::new(ReadOnlyStation),
+    )
+    .await
+    .unwrap();
+    // The HMI.
+    let dir = tempfile::tempdir().unwrap();
+    screens(dir.path());
+    let hmi = Hmi::start(HmiOptions {
+        screens: dir.path().to_path_buf(),
+        users: dir.path().join("users.toml"),
+        connect: vec![server.local_addr().to_string()],
+        common_address: CommonAddress::new(1),
+        listen: "127.0.0.1:0".parse().unwrap(),
+        store: None,
+        zone: TimeZonePolicy::Utc,
+        local_address: None,
+    })
+    .await
+    .unwrap();
+    let url = format!("http://{}", hmi.address);
+    // The browser.
+    let port = free_port();
+    let mut driver = Command::new("/usr/bin/chromedriver")
+        .args([format!("--port={port}"), "--allowed-ips=127.0.0.1".into()])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while TcpStream::connect(SocketAddr::from(([127, 0, 0, 1], port))).is_err() {
+        assert!(Instant::now() < deadline, "chromedriver does not start");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let profile = tempfile::tempdir().unwrap();
+    let client = browser(&format!("http://127.0.0.1:{port}"), profile.path()).await;
+    client.goto(&format!("{url}/login")).await.unwrap();
+    let login = client
+        .execute_async(
+            "const done = arguments[arguments.length - 1];\
+             fetch('/api/login', {method: 'POST', headers: {'Content-Type': 'application/json'},\
+               body: JSON.stringify({username: 'bench', password: 'bench-password'})})\
+             .then(r => done(r.status)).catch(e => done(String(e)));",
+            vec![],
+        )
+        .await
+        .unwrap();
+    assert_eq!(login, json!(200));
+    client.goto(&format!("{url}/#screen/grid")).await.unwrap();
+    let ready = Instant::now();
+    loop {
+        let shown = js(
+            &client,
+            "return document.querySelectorAll('[data-point][data-value]').length;",
+        )
+        .await;
+        if shown.as_u64() == Some(u64::from(POINTS)) {
+            break;
+        }
+        assert!(
+            ready.elapsed() < Duration::from_secs(60),
+            "the screen did not fill: {shown}"
+        );
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    println!(
+        "HMI live path: IEC 104 outstation -> HMI -> WebSocket -> Chromium DOM; screen of {POINTS} bound elements ({} ms to fill)",
+        ready.elapsed().as_millis()
+    );
+    js(
+        &client,
+        "window.__seen = []; const target = document.querySelector('[data-point=\"P00001\"]');\
+         new MutationObserver(() => window.__seen.push([target.getAttribute('data-value'),\
+           performance.timeOrigin + performance.now()]))\
+         .observe(target, {attributes: true, attributeFilter: ['data-value']}); return true;",
+    )
+    .await;
+
+    let mut value = 0.0f32;
+    for load in [false, true] {
+        let running = Arc::new(AtomicBool::new(load));
+        let background = {
+            let running = Arc::clone(&running);
+            let server = server.clone();
+            tokio::spawn(async move {
+                // Every point but the measured one, once a second, in steps of 1,000 every
+                // 100 ms.
+                let mut round = 0u32;
+                while running.load(Ordering::Relaxed) {
+                    for k in 0..1_000u32 {
+                        let ioa = 2 + (round * 1_000 + k) % (POINTS - 1);
+                        let _ =
+                            server.update(Ioa::try_new(ioa).unwrap(), float(round as f32), None);
+                    }
+                    round += 1;
+                    tokio::time::sleep(Duration::from_millis(100)).await;
+                }
+            })
+        };
+        if load {
+            tokio::time::sleep(Duration::from_secs(2)).await;
+        }
+        let mut latencies = Vec::new();
+        for i in 0..samples {
+            value += 1.0;
+            js(&client, "window.__seen.length = 0; return true;").await;
+            let sent = now_ms();
+            server
+                .update(Ioa::try_new(1).unwrap(), float(value), None)
+                .unwrap();
+            let expected = format!("{value}");
+            let deadline = Instant::now() + Duration::from_secs(10);
+            let shown = loop {
+                let seen = js(&client, "return window.__seen;").await;
+                if let Some(time) = seen.as_array().and_then(|list| {
+                    list.iter()
+                        .find(|entry| {
+                            entry[0].as_str().is_some_and(|v| {
+                                v.parse::<f32>().ok() == expected.parse::<f32>().ok()
+                            })
+                        })
+                        .and_then(|entry| entry[1].as_f64())
+                }) {
+                    break time;
+                }
+                assert!(Instant::now() < deadline, "value {value} never shown");
+                tokio::time::sleep(Duration::from_millis(2)).await;
+            };
+            latencies.push(shown - sent);
+            tokio::time::sleep(Duration::from_millis(10 + (i as u64 * 7) % 13)).await;
+        }
+        running.store(false, Ordering::Relaxed);
+        let _ = background.await;
+        report(
+            if load {
+                "station -> DOM, all 10,000 points changing every s"
+            } else {
+                "station -> DOM, quiet screen of 10,000 points"
+            },
+            latencies,
+        );
+    }
+    let _ = client.close().await;
+    let _ = driver.kill();
+    let _ = driver.wait();
+    hmi.shutdown().await;
+    server.shutdown();
+}
