@@ -18,7 +18,7 @@ use chrono::{DateTime, Utc};
 use serde::Deserialize;
 use serde_json::{json, Value};
 use station::store::{
-    CommandOutcome, CommandQuery, Cursor, EventQuery, EventStore, Order, TimeBasis,
+    CommandOutcome, CommandQuery, Cursor, EventQuery, EventStore, Order, PointFilter, TimeBasis,
 };
 
 use crate::auth::{constant_time_eq, LoginLimiter, Session, Sessions};
@@ -469,12 +469,7 @@ async fn events(
             .with_order(Order::NewestFirst)
             .with_limit(limit)
             .with_after(value_after);
-        if let Some(point) = &query.point {
-            q = match point.strip_suffix('*') {
-                Some(prefix) => q.with_point_prefix(prefix),
-                None => q.with_point(point),
-            };
-        }
+        q.point = query.point.as_deref().map(PointFilter::parse);
         let page = store
             .query_events(&q)
             .await
@@ -500,12 +495,7 @@ async fn events(
             .with_order(Order::NewestFirst)
             .with_limit(limit)
             .with_after(command_after);
-        if let Some(point) = &query.point {
-            q = match point.strip_suffix('*') {
-                Some(prefix) => q.with_point_prefix(prefix),
-                None => q.with_point(point),
-            };
-        }
+        q.point = query.point.as_deref().map(PointFilter::parse);
         if let Some(user) = &query.user {
             q = q.with_actor_name(user);
         }

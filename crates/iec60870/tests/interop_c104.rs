@@ -18,10 +18,14 @@
     clippy::indexing_slicing
 )]
 
+#[path = "../../../tests/peer/harness.rs"]
+mod peer;
+
+use peer::{peer_script, peers_available, Capture};
+
 use std::collections::HashMap;
 use std::io::{BufRead, BufReader};
 use std::net::SocketAddr;
-use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -38,41 +42,6 @@ use iec60870::cs104::server::{
 use serde_json::Value;
 use tokio::sync::mpsc;
 
-fn repository_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn peer_script(name: &str) -> PathBuf {
-    repository_root().join("tests/peer").join(name)
-}
-
-/// Whether c104 and tshark are here; panics when they must be (CI) and are not.
-fn peers_available() -> bool {
-    let c104 = Command::new("python3")
-        .args(["-c", "import c104"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|status| status.success());
-    let tshark = Command::new("tshark")
-        .arg("--version")
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|status| status.success());
-    if c104 && tshark {
-        return true;
-    }
-    let message = format!(
-        "interoperability peers missing (c104: {c104}, tshark: {tshark}); run scripts/install-test-deps.sh"
-    );
-    if std::env::var("STANICE_REQUIRE_PEERS").as_deref() == Ok("1") {
-        panic!("{message}");
-    }
-    eprintln!("SKIPPED: {message}");
-    false
-}
-
 /// A free loopback port (bound and released; the peers bind it right after).
 fn free_port() -> u16 {
     std::net::TcpListener::bind("127.0.0.1:0")
@@ -80,83 +49,6 @@ fn free_port() -> u16 {
         .local_addr()
         .unwrap()
         .port()
-}
-
-/// A tshark capture of one port, checked by the IEC 104 dissector when stopped.
-struct Capture {
-    file: PathBuf,
-    port: u16,
-    stopped: bool,
-}
-
-impl Capture {
-    fn start(port: u16) -> Capture {
-        let file = std::env::temp_dir().join(format!(
-            "stanice-interop-{port}-{}.pcapng",
-            std::process::id()
-        ));
-        let status = Command::new("bash")
-            .arg(peer_script("capture.sh"))
-            .args(["start", &port.to_string()])
-            .arg(&file)
-            .status()
-            .unwrap();
-        assert!(status.success(), "tshark capture did not start");
-        Capture {
-            file,
-            port,
-            stopped: false,
-        }
-    }
-
-    /// Stops the capture and fails the test on any frame the dissector finds malformed,
-    /// undecodable or of unknown type. Returns the checker's JSON report.
-    fn stop_and_check(mut self) -> Value {
-        self.stopped = true;
-        let status = Command::new("bash")
-            .arg(peer_script("capture.sh"))
-            .arg("stop")
-            .arg(&self.file)
-            .stdout(Stdio::null())
-            .status()
-            .unwrap();
-        assert!(status.success(), "tshark capture did not stop cleanly");
-        let output = Command::new("python3")
-            .arg(peer_script("check_capture.py"))
-            .arg(&self.file)
-            .arg(self.port.to_string())
-            .arg("--json")
-            .output()
-            .unwrap();
-        let stdout = String::from_utf8_lossy(&output.stdout);
-        assert!(
-            output.status.success(),
-            "tshark found problems in our frames:\n{stdout}\n{}",
-            String::from_utf8_lossy(&output.stderr)
-        );
-        let _ = std::fs::remove_file(&self.file);
-        stdout
-            .lines()
-            .rev()
-            .find_map(|line| serde_json::from_str(line).ok())
-            .unwrap_or(Value::Null)
-    }
-}
-
-impl Drop for Capture {
-    /// A test that fails before checking its capture must not leave tshark running.
-    fn drop(&mut self) {
-        if !self.stopped {
-            let _ = Command::new("bash")
-                .arg(peer_script("capture.sh"))
-                .arg("stop")
-                .arg(&self.file)
-                .stdout(Stdio::null())
-                .stderr(Stdio::null())
-                .status();
-            let _ = std::fs::remove_file(&self.file);
-        }
-    }
 }
 
 /// A peer process whose JSON lines are collected as they come.
@@ -280,7 +172,7 @@ async fn our_client_reads_and_commands_a_c104_outstation() {
         return;
     }
     let port = free_port();
-    let capture = Capture::start(port);
+    let capture = Capture::start("interop", port);
     let server = c104_server(port, &[]);
     let ready_line = server.wait_for("ready", 30).await;
     let expected_points = ready_line["gi_points"].as_u64().unwrap();
@@ -473,7 +365,7 @@ async fn our_client_receives_c104_spontaneous_events_in_order() {
         return;
     }
     let port = free_port();
-    let capture = Capture::start(port);
+    let capture = Capture::start("interop", port);
     let server = c104_server(
         port,
         &[
@@ -662,7 +554,7 @@ async fn c104_client_reads_and_commands_our_outstation() {
         return;
     }
     let port = free_port();
-    let capture = Capture::start(port);
+    let capture = Capture::start("interop", port);
     let recorder = Arc::new(Recorder::default());
     let config = ServerConfig::new(
         SocketAddr::from(([127, 0, 0, 1], port)),

@@ -6,7 +6,7 @@ use std::process::ExitCode;
 
 use chrono::{DateTime, Utc};
 use clap::Args;
-use station::store::{open_store, CommandQuery, EventQuery, Order, Quality};
+use station::store::{open_store, CommandQuery, EventQuery, Order, PointFilter, Quality};
 
 use crate::run::load_project;
 
@@ -85,20 +85,14 @@ pub(crate) async fn run(args: EventsArgs) -> anyhow::Result<ExitCode> {
         .map(|s| parse_since(s, Utc::now()))
         .transpose()?;
     let limit = args.limit.clamp(1, station::store::MAX_PAGE_SIZE);
+    let point = args.point.as_deref().map(PointFilter::parse);
     if args.commands {
         let mut query = CommandQuery::default()
             .with_range(since, args.until)
             .with_order(Order::NewestFirst)
             .with_limit(limit);
-        if let Some(point) = &args.point {
-            query = match point.strip_suffix('*') {
-                Some(prefix) => query.with_point_prefix(prefix),
-                None => query.with_point(point),
-            };
-        }
-        if let Some(node) = &args.node {
-            query = query.with_node(node);
-        }
+        query.point = point;
+        query.node = args.node.clone();
         let page = store.query_commands(&query).await?;
         println!("time,node,point,ioa,value,phase,outcome,actor,detail");
         for c in page.items.iter().rev() {
@@ -120,15 +114,8 @@ pub(crate) async fn run(args: EventsArgs) -> anyhow::Result<ExitCode> {
             .with_range(since, args.until)
             .with_order(Order::NewestFirst)
             .with_limit(limit);
-        if let Some(point) = &args.point {
-            query = match point.strip_suffix('*') {
-                Some(prefix) => query.with_point_prefix(prefix),
-                None => query.with_point(point),
-            };
-        }
-        if let Some(node) = &args.node {
-            query = query.with_node(node);
-        }
+        query.point = point;
+        query.node = args.node.clone();
         let page = store.query_events(&query).await?;
         println!("time,node,point,ioa,value,quality,cause,origin");
         for e in page.items.iter().rev() {

@@ -15,9 +15,14 @@
     clippy::indexing_slicing
 )]
 
+#[path = "../../../tests/peer/harness.rs"]
+mod peer;
+
+use peer::{peer_script, peers_available, repository_root, Capture};
+
 use std::collections::BTreeSet;
 use std::io::{BufRead, BufReader, Read};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::{Child, Command, Output, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -28,43 +33,8 @@ use serde_json::{json, Value};
 /// modes keep the lamps off and only the manual command lights them.
 const DEMO_START: &str = "2025-06-16T09:00:00Z";
 
-fn repository_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn peer_script(name: &str) -> PathBuf {
-    repository_root().join("tests/peer").join(name)
-}
-
 fn vsetin() -> PathBuf {
     repository_root().join("examples/vsetin")
-}
-
-/// Whether c104 and tshark are here; panics when they must be (CI) and are not.
-fn peers_available() -> bool {
-    let c104 = Command::new("python3")
-        .args(["-c", "import c104"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|status| status.success());
-    let tshark = Command::new("tshark")
-        .arg("--version")
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|status| status.success());
-    if c104 && tshark {
-        return true;
-    }
-    let message = format!(
-        "interoperability peers missing (c104: {c104}, tshark: {tshark}); run scripts/install-test-deps.sh"
-    );
-    if std::env::var("STANICE_REQUIRE_PEERS").as_deref() == Ok("1") {
-        panic!("{message}");
-    }
-    eprintln!("SKIPPED: {message}");
-    false
 }
 
 fn free_port() -> u16 {
@@ -125,83 +95,6 @@ fn run_bounded(mut command: Command, seconds: u64) -> (Output, bool) {
         stderr: stderr.join().unwrap(),
     };
     (output, finished)
-}
-
-/// A tshark capture of one port, checked by the IEC 104 dissector when stopped.
-struct Capture {
-    file: PathBuf,
-    port: u16,
-    stopped: bool,
-}
-
-impl Capture {
-    fn start(port: u16) -> Capture {
-        let file = std::env::temp_dir().join(format!(
-            "stanice-dispatch-{port}-{}.pcapng",
-            std::process::id()
-        ));
-        let status = Command::new("bash")
-            .arg(peer_script("capture.sh"))
-            .args(["start", &port.to_string()])
-            .arg(&file)
-            .status()
-            .unwrap();
-        assert!(status.success(), "tshark capture did not start");
-        Capture {
-            file,
-            port,
-            stopped: false,
-        }
-    }
-
-    /// Stops the capture and fails the test on any frame the dissector finds malformed,
-    /// undecodable or of unknown type. Returns the checker's JSON report.
-    fn stop_and_check(mut self) -> Value {
-        self.stopped = true;
-        let status = Command::new("bash")
-            .arg(peer_script("capture.sh"))
-            .arg("stop")
-            .arg(&self.file)
-            .stdout(Stdio::null())
-            .status()
-            .unwrap();
-        assert!(status.success(), "tshark capture did not stop cleanly");
-        let output = Command::new("python3")
-            .arg(peer_script("check_capture.py"))
-            .arg(&self.file)
-            .arg(self.port.to_string())
-            .arg("--json")
-            .output()
-            .unwrap();
-        let stdout = String::from_utf8_lossy(&output.stdout);
-        assert!(
-            output.status.success(),
-            "tshark found problems on the dispatch link:\n{stdout}\n{}",
-            String::from_utf8_lossy(&output.stderr)
-        );
-        let _ = std::fs::remove_file(&self.file);
-        stdout
-            .lines()
-            .rev()
-            .find_map(|line| serde_json::from_str(line).ok())
-            .unwrap_or(Value::Null)
-    }
-}
-
-impl Drop for Capture {
-    /// A test that fails before checking its capture must not leave tshark running.
-    fn drop(&mut self) {
-        if !self.stopped {
-            let _ = Command::new("bash")
-                .arg(peer_script("capture.sh"))
-                .arg("stop")
-                .arg(&self.file)
-                .stdout(Stdio::null())
-                .stderr(Stdio::null())
-                .status();
-            let _ = std::fs::remove_file(&self.file);
-        }
-    }
 }
 
 /// `stanice demo`, killed when dropped. Its stdout and stderr are drained all the time (a
@@ -398,7 +291,7 @@ fn c104_dispatch_reads_the_station_and_operates_it() {
     let started = Instant::now();
     let monitor = monitor_ioas();
     let port = free_port_range(23);
-    let capture = Capture::start(port);
+    let capture = Capture::start("dispatch", port);
     let demo = Demo::start(port);
 
     let mut command = Command::new("python3");

@@ -952,6 +952,13 @@ fn ioa(value: i64) -> Result<Ioa, String> {
 }
 
 /// Splits `link:NAME/IOA`; `Ok(None)` for a variable path.
+/// An IOA moved by a republishing offset, if still an IOA.
+fn shifted(ioa: Ioa, offset: u32) -> Option<Ioa> {
+    ioa.get()
+        .checked_add(offset)
+        .and_then(|i| Ioa::try_new(i).ok())
+}
+
 fn parse_link_ref(text: &str) -> Result<Option<(String, Ioa)>, String> {
     let Some(rest) = text.strip_prefix("link:") else {
         if text.trim().is_empty() {
@@ -1815,11 +1822,7 @@ impl Ctx<'_> {
                 ioas.extend(this.commands.iter().map(|c| c.ioa.get()));
                 let mut problems = Vec::new();
                 for point in &lower.points {
-                    let ioa = point
-                        .ioa
-                        .get()
-                        .checked_add(offset)
-                        .and_then(|i| Ioa::try_new(i).ok());
+                    let ioa = shifted(point.ioa, offset);
                     let Some(ioa) = ioa else {
                         problems.push(format!(
                             "point `{}` (IOA {}) + {offset} is past the largest IOA",
@@ -1861,11 +1864,7 @@ impl Ctx<'_> {
                 let mut command_ioas: HashSet<u32> =
                     this.commands.iter().map(|c| c.ioa.get()).collect();
                 for command in &lower.commands {
-                    let ioa = command
-                        .ioa
-                        .get()
-                        .checked_add(offset)
-                        .and_then(|i| Ioa::try_new(i).ok());
+                    let ioa = shifted(command.ioa, offset);
                     let Some(ioa) = ioa else {
                         problems.push(format!(
                             "command `{}` (IOA {}) + {offset} is past the largest IOA",

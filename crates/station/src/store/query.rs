@@ -50,6 +50,16 @@ pub enum PointFilter {
     Prefix(String),
 }
 
+impl PointFilter {
+    /// The filter a user types: a point name, or a prefix when it ends in `*` (`RH2_*`).
+    pub fn parse(text: &str) -> PointFilter {
+        match text.strip_suffix('*') {
+            Some(prefix) => PointFilter::Prefix(prefix.to_owned()),
+            None => PointFilter::Exact(text.to_owned()),
+        }
+    }
+}
+
 /// Where the next page starts: the `(time, id)` key of the last row of the previous page.
 ///
 /// Its text form (`Display`/`FromStr`, `<ms>:<id>`) can travel in URLs.
