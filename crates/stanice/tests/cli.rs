@@ -399,7 +399,7 @@ fn demo_serves_the_station_to_dispatch() {
             "IOA {ioa} missing: {interrogated:?}"
         );
     }
-    assert_eq!(interrogated.len(), 408);
+    assert_eq!(interrogated.len(), 416);
 }
 
 /// A base port whose next `count` ports are free.
@@ -562,7 +562,7 @@ fn points_lists_what_the_top_controller_serves() {
     let output = run_bounded(command, 20);
     let text = String::from_utf8_lossy(&output.stdout);
     assert!(!text.contains("COMM_RH"), "{text}");
-    assert_eq!(text.lines().count(), 1 + 18 + 2);
+    assert_eq!(text.lines().count(), 1 + 18 + 4 + 2);
 }
 
 #[test]

@@ -682,6 +682,9 @@ def hmi_toml():
         out.append(toml_table("trend", point=use(f"{b}_P_kW")))
         out.append(toml_table("trend", point=use(f"{b}_Energie_kWh")))
     out.append(toml_table("trend", point=use("RDA_Stav")))
+    for board in ["RH2", "RZZ"]:
+        for meter in ["U", "P_kW", "I_A", "Energie_kWh"]:
+            out.append(toml_table("trend", point=use(f"{board}_{meter}")))
     (HERE / "hmi.toml").write_text("\n".join(out), encoding="utf-8")
     print("wrote hmi.toml")
 

@@ -11,8 +11,10 @@ IOA plan (spec shared/spec/railway-station.md sections 5-7; where it is silent, 
                        26-29 switchroom doors, 32/33 links RH/RZS, 38-41 upper links
                        ED/MŘS/HMI/service, 50-62 links ROV01..OR;
                        command 2001 HMI local
-  RH2 (via RH1.1)      281-298 (thesis), commands 2021/2022 (thesis); RH1.1's link 280
-  RZZ (via RZS1)       381-398 (RZZ's own 281-298 + 100), commands 2121/2122
+  RH2 (via RH1.1)      281-298 (thesis), commands 2021/2022 (thesis), meter 271-274;
+                       RH1.1's link 280
+  RZZ (via RZS1)       381-398 (RZZ's own 281-298 + 100), meter 371-374, commands
+                       2121/2122
   RDA (via RZS1)       401-421, command 2201; RZS1's links: 380 RZZ, 400 RDA
   lighting board k     10000 + 100*k + n (ROV01 = 1, ..., ROV12 = 12, OR = 13):
                        points n = 1-22 and 31/32, commands n = 51-64
@@ -140,12 +142,20 @@ def power_board(board, program, source, ca, port_offset, description):
     for suffix, variable, _ in BOARD_INPUTS:
         io(f"{board}_{suffix.replace('{B}', board)}", f"{program}.{variable}")
     io(f"{board}_QF1_Zapnut", f"{program}.QF1_Zapnut")
+    for meter in ["U", "P_kW", "I_A", "Energie_kWh"]:
+        io(f"{board}_{meter}", f"{program}.{meter}")
     io(f"{board}_QF1_Vyp", f"{program}.QF1_OFF")
     io(f"{board}_QF1_Zap", f"{program}.QF1_ON")
     for i, (suffix, variable, text) in enumerate(BOARD_INPUTS):
         suffix = suffix.replace("{B}", board)
         point(f"{board}_{suffix}", "M_SP_TB_1", 281 + i, f"{program}.{variable}",
               text.replace("{B}", board))
+    # The board's meter (not in the thesis' point list; ours): float with deadband.
+    for ioa, meter, text, deadband in [(271, "U", "busbar voltage, V", 5.0),
+                                       (272, "P_kW", "load power, kW", 0.5),
+                                       (273, "I_A", "phase current, A", 1.0),
+                                       (274, "Energie_kWh", "energy meter, kWh", 1.0)]:
+        point(f"{board}_{meter}", "M_ME_TF_1", ioa, f"{program}.{meter}", text, deadband=deadband)
     command(f"{board}_VypnoutQF1", "C_SC_NA_1", 2021, f"{program}.Cmd_VypnoutQF1", "open QF1",
             remote_enable=f"{program}.SA1_Dalkove", pulse_ms=500)
     command(f"{board}_ZapnoutQF1", "C_SC_NA_1", 2022, f"{program}.Cmd_ZapnoutQF1", "close QF1",

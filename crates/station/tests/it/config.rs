@@ -177,9 +177,20 @@ fn vsetin_example_loads() {
     assert!(names.contains(&"ROV12") && names.contains(&"OR"));
 
     let rh2 = project.node("RH2").unwrap();
-    let ioas: Vec<u32> = rh2.points.iter().map(|p| p.ioa.get()).collect();
-    assert_eq!(ioas, (281..=298).collect::<Vec<_>>());
-    assert!(rh2.points.iter().all(|p| p.type_id == TypeId::M_SP_TB_1));
+    let single: Vec<u32> = rh2
+        .points
+        .iter()
+        .filter(|p| p.type_id == TypeId::M_SP_TB_1)
+        .map(|p| p.ioa.get())
+        .collect();
+    assert_eq!(single, (281..=298).collect::<Vec<_>>());
+    let meter: Vec<u32> = rh2
+        .points
+        .iter()
+        .filter(|p| p.type_id == TypeId::M_ME_TF_1)
+        .map(|p| p.ioa.get())
+        .collect();
+    assert_eq!(meter, [271, 272, 273, 274]);
     let commands: Vec<(u32, TypeId)> = rh2
         .commands
         .iter()
@@ -197,7 +208,7 @@ fn vsetin_example_loads() {
 
     // RH1.1 republishes RH2 whole (same IOAs) beside its own link status point 280.
     let rh11 = project.node("RH1.1").unwrap();
-    assert_eq!(rh11.points.len(), 19);
+    assert_eq!(rh11.points.len(), 23);
     assert_eq!(rh11.points[0].source, PointSource::LinkStatus("RH2".into()));
     assert_eq!(rh11.link("RH2").unwrap().republish, Some(0));
     assert_eq!(
@@ -248,7 +259,7 @@ fn vsetin_example_loads() {
         .map(|c| c.ioa.get())
         .collect();
     assert_eq!(forwarded, [2021, 2022]);
-    assert_eq!(rdrt.points.len(), 408);
+    assert_eq!(rdrt.points.len(), 416);
     assert_eq!(
         rdrt.point("COMM_HMI").unwrap().source,
         PointSource::ClientStatus("hmi".into())
