@@ -173,6 +173,25 @@ fn migrate(conn: &Connection) -> Result<(), StoreError> {
 }
 
 impl SqliteStore {
+    /// Runs a query on a reader connection and maps every row.
+    async fn select<T: Send + 'static>(
+        &self,
+        sql: String,
+        params: Vec<Param>,
+        row: fn(&Row<'_>) -> rusqlite::Result<T>,
+    ) -> Result<Vec<T>, StoreError> {
+        let params = sql_params(params);
+        self.readers
+            .run(move |c| {
+                let mut stmt = c.prepare_cached(&sql)?;
+                let rows = stmt
+                    .query_map(params_from_iter(params), row)?
+                    .collect::<Result<Vec<_>, _>>()?;
+                Ok(rows)
+            })
+            .await
+    }
+
     /// Opens (creating and migrating when needed) the database file at `path`.
     pub async fn open(path: impl AsRef<Path>) -> Result<SqliteStore, StoreError> {
         let path = path.as_ref().to_path_buf();
@@ -353,17 +372,7 @@ impl EventStore for SqliteStore {
     fn query_events<'a>(&'a self, query: &'a EventQuery) -> StoreFuture<'a, Page<EventRecord>> {
         Box::pin(async move {
             let (sql, params) = event_sql(query, Dialect::Sqlite)?;
-            let params = sql_params(params);
-            let rows = self
-                .readers
-                .run(move |c| {
-                    let mut stmt = c.prepare_cached(&sql)?;
-                    let rows = stmt
-                        .query_map(params_from_iter(params), raw_event)?
-                        .collect::<Result<Vec<_>, _>>()?;
-                    Ok(rows)
-                })
-                .await?;
+            let rows = self.select(sql, params, raw_event).await?;
             let items = rows
                 .into_iter()
                 .map(RawEvent::decode)
@@ -379,17 +388,7 @@ impl EventStore for SqliteStore {
     ) -> StoreFuture<'a, Page<CommandRecord>> {
         Box::pin(async move {
             let (sql, params) = command_sql(query, Dialect::Sqlite)?;
-            let params = sql_params(params);
-            let rows = self
-                .readers
-                .run(move |c| {
-                    let mut stmt = c.prepare_cached(&sql)?;
-                    let rows = stmt
-                        .query_map(params_from_iter(params), raw_command)?
-                        .collect::<Result<Vec<_>, _>>()?;
-                    Ok(rows)
-                })
-                .await?;
+            let rows = self.select(sql, params, raw_command).await?;
             let items = rows
                 .into_iter()
                 .map(RawCommand::decode)
