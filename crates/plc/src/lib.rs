@@ -63,7 +63,7 @@ pub mod syntax;
 pub mod task;
 pub mod vm;
 
-pub use compile::Compiled;
+pub use compile::{CompileOptions, Compiled};
 pub use diagnostics::{Code, Diagnostic, Severity};
 pub use syntax::SourceMap;
 pub use task::{Plc, PlcError};
@@ -74,12 +74,20 @@ pub const PRELUDE_NAME: &str = "<stdlib>";
 /// Parses, checks and compiles `files` (name, text) together with the standard library.
 /// The returned source map renders the diagnostics; warnings come back with success too.
 pub fn build(files: &[(String, String)]) -> (SourceMap, Result<Compiled, Vec<Diagnostic>>) {
+    build_with(files, CompileOptions::default())
+}
+
+/// Like [`build`] with explicit [`CompileOptions`].
+pub fn build_with(
+    files: &[(String, String)],
+    options: CompileOptions,
+) -> (SourceMap, Result<Compiled, Vec<Diagnostic>>) {
     let mut sources = SourceMap::new();
     sources.add(PRELUDE_NAME, stdlib::PRELUDE);
     for (name, text) in files {
         sources.add(name.clone(), text.clone());
     }
-    let result = build_sources(&sources);
+    let result = build_sources_with(&sources, options);
     (sources, result)
 }
 
@@ -89,6 +97,14 @@ pub fn build(files: &[(String, String)]) -> (SourceMap, Result<Compiled, Vec<Dia
 /// POUs that the program names (directly or through other prelude POUs) are checked and
 /// compiled, so a small program does not pay for the whole standard library.
 pub fn build_sources(sources: &SourceMap) -> Result<Compiled, Vec<Diagnostic>> {
+    build_sources_with(sources, CompileOptions::default())
+}
+
+/// Like [`build_sources`] with explicit [`CompileOptions`].
+pub fn build_sources_with(
+    sources: &SourceMap,
+    options: CompileOptions,
+) -> Result<Compiled, Vec<Diagnostic>> {
     let mut unit = syntax::CompilationUnit::default();
     let mut diags = Vec::new();
     let mut stdlib_items = 0;
@@ -129,7 +145,7 @@ pub fn build_sources(sources: &SourceMap) -> Result<Compiled, Vec<Diagnostic>> {
         return Err(diags);
     }
     let checked = check::check(unit, stdlib_items)?;
-    compile::compile(checked)
+    compile::compile_with(checked, options)
 }
 
 /// The standard-library prelude, parsed once per process.

@@ -53,6 +53,7 @@
 mod builtins;
 mod expr;
 mod fused;
+mod jit;
 mod stmt;
 
 use crate::check::{Checked, PouId, Size, Ty};
@@ -88,10 +89,42 @@ pub struct Compiled {
     pub code: Rc<Code>,
     /// Initialises the global variables (absolute addresses, frame 0).
     pub global_init: Rc<InitFn>,
+    /// How many loops run as machine code ([`CompileOptions::jit`]).
+    pub jit_loops: usize,
+}
+
+/// How a program is compiled.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CompileOptions {
+    /// Compile loops to machine code where the host supports it (see `compile::jit`);
+    /// off, every statement runs as closures. On by default unless the environment
+    /// variable `STANICE_PLC_JIT` is `0`.
+    pub jit: bool,
+}
+
+impl Default for CompileOptions {
+    fn default() -> Self {
+        CompileOptions {
+            jit: std::env::var("STANICE_PLC_JIT").map_or(true, |v| v.trim() != "0"),
+        }
+    }
+}
+
+/// Compiles a checked program with the default options.
+pub fn compile(checked: Checked) -> Result<Compiled, Vec<Diagnostic>> {
+    compile_with(checked, CompileOptions::default())
 }
 
 /// Compiles a checked program.
-pub fn compile(checked: Checked) -> Result<Compiled, Vec<Diagnostic>> {
+pub fn compile_with(
+    checked: Checked,
+    options: CompileOptions,
+) -> Result<Compiled, Vec<Diagnostic>> {
+    let jit = if options.jit {
+        jit::JitEngine::host()
+    } else {
+        None
+    };
     let mut pous = Vec::new();
     let mut diags = Vec::new();
     let global_init;
@@ -100,6 +133,7 @@ pub fn compile(checked: Checked) -> Result<Compiled, Vec<Diagnostic>> {
             c: &checked,
             pou: None,
             diags: &mut diags,
+            jit: jit.clone(),
         };
         let mut ops = Vec::new();
         for g in &checked.globals {
@@ -112,6 +146,7 @@ pub fn compile(checked: Checked) -> Result<Compiled, Vec<Diagnostic>> {
                 c: &checked,
                 pou: Some(PouId(i)),
                 diags: cx.diags,
+                jit: jit.clone(),
             };
             let mut ops = Vec::new();
             for v in &p.vars {
@@ -140,6 +175,7 @@ pub fn compile(checked: Checked) -> Result<Compiled, Vec<Diagnostic>> {
         checked,
         code: Rc::new(Code { pous }),
         global_init: Rc::new(global_init),
+        jit_loops: jit.as_ref().map_or(0, |j| j.compiled.get()),
     })
 }
 
@@ -156,6 +192,8 @@ pub(crate) struct Cx<'a> {
     pub(crate) c: &'a Checked,
     pub(crate) pou: Option<PouId>,
     pub(crate) diags: &'a mut Vec<Diagnostic>,
+    /// Compiles loops to machine code when set.
+    pub(crate) jit: Option<Rc<jit::JitEngine>>,
 }
 
 impl Cx<'_> {

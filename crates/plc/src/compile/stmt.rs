@@ -371,6 +371,21 @@ impl Cx<'_> {
     }
 
     fn stmt(&mut self, s: &Stmt) -> StmtFn {
+        if matches!(
+            s.kind,
+            StmtKind::For { .. } | StmtKind::While(..) | StmtKind::Repeat(..)
+        ) {
+            if let Some(engine) = self.jit.clone() {
+                if let Some(mut l) = super::jit::lower_loop(self, &engine, s) {
+                    if l.needs_fallback() {
+                        self.jit = None;
+                        l.fallback = Some(self.stmt(s));
+                        self.jit = Some(engine);
+                    }
+                    return Box::new(move |vm| l.run(vm));
+                }
+            }
+        }
         match &s.kind {
             StmtKind::Assign(target, value) => {
                 let tt = self.c.ty(target.id);
@@ -761,7 +776,7 @@ impl Cx<'_> {
     }
 
     /// Value of a constant CASE label.
-    fn const_value(&mut self, e: &Expr) -> Option<i64> {
+    pub(crate) fn const_value(&mut self, e: &Expr) -> Option<i64> {
         match &e.kind {
             ExprKind::Literal(Literal::Int(v, _)) => Some(*v as i64),
             ExprKind::Literal(Literal::Bool(b)) => Some(i64::from(*b)),

@@ -49,6 +49,60 @@ impl NativeFb {
         Some(kind)
     }
 
+    /// A small number naming the block (for generated code).
+    pub fn code(self) -> u32 {
+        self as u32
+    }
+
+    /// The block named by [`NativeFb::code`].
+    pub fn from_code(code: u32) -> Option<NativeFb> {
+        [
+            NativeFb::Ton,
+            NativeFb::Tof,
+            NativeFb::Tp,
+            NativeFb::RTrig,
+            NativeFb::FTrig,
+        ]
+        .into_iter()
+        .find(|f| f.code() == code)
+    }
+
+    /// How many integer cells of the instance the body uses (from cell 0).
+    pub fn cells(self) -> usize {
+        match self {
+            NativeFb::Ton | NativeFb::Tof | NativeFb::Tp => 6,
+            NativeFb::RTrig | NativeFb::FTrig => 3,
+        }
+    }
+
+    /// Runs the body on the instance's integer cells (at least [`NativeFb::cells`]; a
+    /// shorter slice is left alone).
+    #[inline]
+    pub fn run_cells(self, c: &mut [i64], now: i64) {
+        match self {
+            NativeFb::Ton => {
+                if let Some(c) = c.first_chunk_mut() {
+                    ton(c, now);
+                }
+            }
+            NativeFb::Tof => {
+                if let Some(c) = c.first_chunk_mut() {
+                    tof(c, now);
+                }
+            }
+            NativeFb::Tp => {
+                if let Some(c) = c.first_chunk_mut() {
+                    tp(c, now);
+                }
+            }
+            NativeFb::RTrig | NativeFb::FTrig => {
+                if let Some(c) = c.first_chunk_mut() {
+                    trig(c, self == NativeFb::RTrig);
+                }
+            }
+        }
+    }
+
     /// Runs the body on the instance whose integer cells start at `base`.
     #[inline]
     pub fn run(self, vm: &mut Vm, base: usize) -> Result<(), Fault> {

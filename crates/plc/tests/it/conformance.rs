@@ -8,6 +8,10 @@
 //! - `(* expect-error: 3:5: undeclared name 'y' *)` a diagnostic at line:col whose message
 //!   contains the text; the program must not compile;
 //! - `(* expect-fault: division by zero *)` the task faults with this text.
+//!
+//! Every program runs twice, with loops compiled to machine code and as closures only
+//! ([`plc::CompileOptions::jit`]); both runs must meet the expectations and end with the
+//! same value in every variable and the same faults at the same positions.
 
 use plc::task::{ClockReading, TaskConfig};
 use std::path::{Path, PathBuf};
@@ -86,11 +90,20 @@ fn spec(text: &str) -> Spec {
     s
 }
 
-fn run_one(path: &Path) -> Result<(), String> {
+/// What a run leaves behind: every variable (`path = value`), the faults as rendered, and
+/// how many loops ran as machine code.
+#[derive(Debug, PartialEq, Default)]
+struct Outcome {
+    variables: Vec<String>,
+    faults: Vec<String>,
+    jit_loops: usize,
+}
+
+fn run_one(path: &Path, jit: bool) -> Result<Outcome, String> {
     let text = std::fs::read_to_string(path).map_err(|e| e.to_string())?;
     let spec = spec(&text);
     let name = path.file_name().unwrap().to_string_lossy().to_string();
-    let (sources, result) = plc::build(&[(name.clone(), text)]);
+    let (sources, result) = plc::build_with(&[(name.clone(), text)], plc::CompileOptions { jit });
     if !spec.errors.is_empty() {
         let diags = match result {
             Ok(_) => return Err("compiled, but errors were expected".into()),
@@ -119,7 +132,7 @@ fn run_one(path: &Path) -> Result<(), String> {
                 ));
             }
         }
-        return Ok(());
+        return Ok(Outcome::default());
     }
     let compiled = result.map_err(|d| {
         d.iter()
@@ -127,6 +140,7 @@ fn run_one(path: &Path) -> Result<(), String> {
             .collect::<Vec<_>>()
             .join("\n")
     })?;
+    let jit_loops = compiled.jit_loops;
     let mut plc = plc::Plc::new(compiled, sources);
     plc.loop_budget = 1_000_000;
     let program = spec.program.clone().unwrap_or_else(|| "Main".into());
@@ -163,11 +177,50 @@ fn run_one(path: &Path) -> Result<(), String> {
             Err(e) => errs.push(format!("{p}: {e}")),
         }
     }
-    if errs.is_empty() {
-        Ok(())
-    } else {
-        Err(errs.join("\n"))
+    if !errs.is_empty() {
+        return Err(errs.join("\n"));
     }
+    let variables = plc
+        .leaves()
+        .iter()
+        .map(|l| match plc.read_leaf(l) {
+            Ok(v) => format!(
+                "{} = {}",
+                l.path,
+                plc::task::format_value(plc.checked(), &l.ty, &v)
+            ),
+            Err(e) => format!("{}: {e}", l.path),
+        })
+        .collect();
+    Ok(Outcome {
+        variables,
+        faults: faults.iter().map(|d| plc.render(d)).collect(),
+        jit_loops,
+    })
+}
+
+/// Runs a program both ways and compares the outcomes.
+fn run_both(path: &Path) -> Result<usize, String> {
+    let closures = run_one(path, false).map_err(|e| format!("closures: {e}"))?;
+    let mut jit = run_one(path, true).map_err(|e| format!("jit: {e}"))?;
+    let loops = jit.jit_loops;
+    jit.jit_loops = 0;
+    if closures != jit {
+        let diff: Vec<String> = closures
+            .variables
+            .iter()
+            .zip(jit.variables.iter())
+            .filter(|(a, b)| a != b)
+            .map(|(a, b)| format!("closures {a} / jit {b}"))
+            .collect();
+        return Err(format!(
+            "the two runs differ:\n{}\nfaults: {:?} / {:?}",
+            diff.join("\n"),
+            closures.faults,
+            jit.faults
+        ));
+    }
+    Ok(loops)
 }
 
 #[test]
@@ -182,19 +235,26 @@ fn conformance_suite() {
     let filter = std::env::var("PLC_CONFORMANCE").ok();
     let mut failed = Vec::new();
     let mut passed = 0;
+    let mut jit_loops = 0;
     for f in &files {
         if let Some(flt) = &filter {
             if !f.to_string_lossy().contains(flt.as_str()) {
                 continue;
             }
         }
-        match std::panic::catch_unwind(|| run_one(f)) {
-            Ok(Ok(())) => passed += 1,
+        match std::panic::catch_unwind(|| run_both(f)) {
+            Ok(Ok(loops)) => {
+                passed += 1;
+                jit_loops += loops;
+            }
             Ok(Err(e)) => failed.push(format!("{}: {e}", f.display())),
             Err(_) => failed.push(format!("{}: PANIC", f.display())),
         }
     }
-    eprintln!("conformance: {passed} passed, {} failed", failed.len());
+    eprintln!(
+        "conformance: {passed} passed, {} failed; {jit_loops} loops compiled to machine code",
+        failed.len()
+    );
     assert!(
         failed.is_empty(),
         "{} conformance program(s) failed:\n{}",
@@ -202,4 +262,11 @@ fn conformance_suite() {
         failed.join("\n\n")
     );
     assert!(passed >= 1);
+    if filter.is_none() {
+        // the suite's loops are in the JIT subset: most of them must really run as code
+        assert!(
+            jit_loops >= 30,
+            "only {jit_loops} loops compiled to machine code"
+        );
+    }
 }

@@ -9,5 +9,6 @@
 mod conformance;
 mod fused;
 mod fuzzish;
+mod jit;
 mod railway;
 mod runtime;

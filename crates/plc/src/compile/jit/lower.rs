@@ -1,0 +1,1455 @@
+//! Lowering of one loop statement to Cranelift IR, mirroring the closure compiler's
+//! semantics operation by operation (wrapping, conversions, evaluation order, faults).
+
+use super::{ctx_offset, Extents, FaultSite, JitEngine, JitLoop};
+use crate::check::{Lane, PouId, Res, Size, Ty};
+use crate::compile::expr::lvalue_name;
+use crate::compile::Cx;
+use crate::stdlib::timers::NativeFb;
+use crate::syntax::{
+    BinOp, CaseLabel, Expr, ExprKind, Literal, Span, Stmt, StmtKind, UnOp, VarKind,
+};
+use cranelift_codegen::ir::condcodes::{FloatCC, IntCC};
+use cranelift_codegen::ir::{
+    types, AbiParam, Block, InstBuilder, MemFlagsData, SigRef, Signature, Type, Value,
+};
+use cranelift_frontend::{FunctionBuilder, Variable};
+use std::collections::{HashMap, HashSet};
+use std::rc::Rc;
+
+/// Why a loop stays with the closures (not an error: the closures handle everything).
+#[derive(Debug)]
+struct Unsupported;
+
+type L<T> = Result<T, Unsupported>;
+
+/// A statically addressed cell: lane, frame-relative or absolute, offset in the lane.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+struct CellKey {
+    real: bool,
+    frame: bool,
+    off: usize,
+}
+
+/// Cells that indexed accesses or native FB bodies reach (never kept in registers).
+#[derive(Clone, Copy, Debug)]
+struct Region {
+    frame: bool,
+    start: Size,
+    len: Size,
+}
+
+impl Region {
+    fn contains(&self, k: CellKey) -> bool {
+        let (start, len) = if k.real {
+            (self.start.r, self.len.r)
+        } else {
+            (self.start.i, self.len.i)
+        };
+        self.frame == k.frame && k.off >= start && k.off - start < len
+    }
+}
+
+/// One run-time index of a place.
+struct DynIndex<'e> {
+    expr: &'e Expr,
+    lo: i64,
+    hi: i64,
+    stride: Size,
+}
+
+/// Where a value lives, resolved statically as far as possible.
+struct JPlace<'e> {
+    frame: bool,
+    off: Size,
+    /// Run-time indices, in evaluation order.
+    dynamic: Vec<DynIndex<'e>>,
+    /// The outermost aggregate an index selects in (set with the first run-time index).
+    region: Option<Region>,
+    ty: Ty,
+    bit: Option<u32>,
+    range: Option<(i64, i64)>,
+}
+
+impl JPlace<'_> {
+    /// Whether the cell is in the REAL lane (a bit of an integer is not).
+    fn real(&self) -> bool {
+        self.bit.is_none() && self.ty.lane() == Some(Lane::Real)
+    }
+}
+
+/// A value in a register.
+#[derive(Clone, Copy)]
+enum JV {
+    I(Value),
+    R(Value),
+}
+
+/// An index expression over a register cell: `v`, `v + k` or `v - k` (as `k`), at one
+/// version (count of assignments) of the cell.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+struct IndexKey {
+    cell: CellKey,
+    version: u32,
+    k: i64,
+}
+
+/// An index already checked against `lo..hi` where the check dominates the code being
+/// emitted: its offset from `lo` is reused without a second check.
+#[derive(Clone, Copy)]
+struct Checked {
+    key: IndexKey,
+    lo: i64,
+    hi: i64,
+    rel: Value,
+}
+
+/// The loop targets of EXIT and CONTINUE.
+struct LoopTargets {
+    exit: Block,
+    next: Block,
+}
+
+/// Compiles the loop statement `s` of the POU `cx` compiles, or `None` when any part of
+/// it is outside the JIT subset.
+pub(crate) fn lower_loop(cx: &mut Cx<'_>, engine: &Rc<JitEngine>, s: &Stmt) -> Option<JitLoop> {
+    let mut excluded: HashSet<CellKey> = HashSet::new();
+    // A cell first kept in a register may turn out to be reachable by an indexed access
+    // found later in the loop; the second attempt keeps such cells in memory.
+    for _ in 0..2 {
+        match attempt(cx, engine, s, &excluded) {
+            Ok(Attempt::Done(l)) => return Some(l),
+            Ok(Attempt::Conflicts(c)) => excluded.extend(c),
+            Err(Unsupported) => return None,
+        }
+    }
+    None
+}
+
+enum Attempt {
+    Done(JitLoop),
+    Conflicts(Vec<CellKey>),
+}
+
+fn attempt(
+    cx: &mut Cx<'_>,
+    engine: &Rc<JitEngine>,
+    s: &Stmt,
+    excluded: &HashSet<CellKey>,
+) -> L<Attempt> {
+    let ptr = engine.pointer_type().ok_or(Unsupported)?;
+    let frontend = engine.frontend_config().ok_or(Unsupported)?;
+    if ptr != types::I64 {
+        return Err(Unsupported);
+    }
+    let mut ctx = engine.ctx.try_borrow_mut().map_err(|_| Unsupported)?;
+    let mut fctx = engine.fctx.try_borrow_mut().map_err(|_| Unsupported)?;
+    ctx.func.signature.params.push(AbiParam::new(ptr));
+    ctx.func.signature.returns.push(AbiParam::new(types::I64));
+    let call_conv = ctx.func.signature.call_conv;
+    let result = {
+        let mut b = FunctionBuilder::new(&mut ctx.func, &mut fctx);
+        let mut fb_sig = Signature::new(call_conv);
+        fb_sig.params.push(AbiParam::new(types::I32));
+        fb_sig.params.push(AbiParam::new(ptr));
+        fb_sig.params.push(AbiParam::new(types::I64));
+        let fb_sig = b.import_signature(fb_sig);
+        let entry = b.create_block();
+        b.append_block_params_for_function_params(entry);
+        b.switch_to_block(entry);
+        let ctxp = *b.block_params(entry).first().ok_or(Unsupported)?;
+        let flags = MemFlagsData::trusted();
+        let ints = b.ins().load(ptr, flags, ctxp, ctx_offset::INTS);
+        let reals = b.ins().load(ptr, flags, ctxp, ctx_offset::REALS);
+        let frame_i = b.ins().load(types::I64, flags, ctxp, ctx_offset::FRAME_I);
+        let frame_r = b.ins().load(types::I64, flags, ctxp, ctx_offset::FRAME_R);
+        let now = b.ins().load(types::I64, flags, ctxp, ctx_offset::NOW);
+        let budget0 = b.ins().load(types::I64, flags, ctxp, ctx_offset::BUDGET);
+        let fi = b.ins().ishl_imm_s(frame_i, 3);
+        let frame_ints = b.ins().iadd(ints, fi);
+        let fr = b.ins().ishl_imm_s(frame_r, 3);
+        let frame_reals = b.ins().iadd(reals, fr);
+        let budget = b.declare_var(types::I64);
+        b.def_var(budget, budget0);
+        let prologue = b.create_block();
+        b.ins().jump(prologue, &[]);
+        let body = b.create_block();
+        let exit = b.create_block();
+        b.append_block_param(exit, types::I64);
+        b.switch_to_block(body);
+        let mut lw = Lower {
+            cx,
+            b,
+            ctxp,
+            ints,
+            reals,
+            frame_ints,
+            frame_reals,
+            now,
+            budget,
+            exit,
+            fb_sig,
+            vars: HashMap::new(),
+            order: Vec::new(),
+            dirty: HashSet::new(),
+            excluded,
+            regions: Vec::new(),
+            extents: Extents::default(),
+            faults: Vec::new(),
+            loops: Vec::new(),
+            versions: HashMap::new(),
+            checked: Vec::new(),
+        };
+        let lowered = lw.stmt(s);
+        match lowered {
+            Ok(()) => {
+                let zero = lw.b.ins().iconst(types::I64, 0);
+                lw.b.ins().jump(exit, &[zero.into()]);
+                lw.finish(prologue, body);
+                let conflicts: Vec<CellKey> = lw
+                    .order
+                    .iter()
+                    .copied()
+                    .filter(|k| lw.regions.iter().any(|r| r.contains(*k)))
+                    .collect();
+                let Lower {
+                    extents, faults, b, ..
+                } = lw;
+                b.finalize(frontend);
+                Ok((conflicts, extents, faults))
+            }
+            Err(e) => Err(e),
+        }
+    };
+    let (conflicts, extents, faults) = match result {
+        Ok(r) => r,
+        Err(e) => {
+            // an abandoned function leaves the builder context mid-way
+            ctx.clear();
+            *fctx = cranelift_frontend::FunctionBuilderContext::new();
+            return Err(e);
+        }
+    };
+    if !conflicts.is_empty() {
+        ctx.clear();
+        return Ok(Attempt::Conflicts(conflicts));
+    }
+    let code = engine.finish(&mut ctx).ok_or(Unsupported)?;
+    Ok(Attempt::Done(JitLoop {
+        code,
+        extents,
+        faults: faults.into_boxed_slice(),
+        fallback: None,
+        _engine: Rc::clone(engine),
+    }))
+}
+
+struct Lower<'a, 'b, 'x> {
+    cx: &'a mut Cx<'b>,
+    b: FunctionBuilder<'a>,
+    ctxp: Value,
+    ints: Value,
+    reals: Value,
+    frame_ints: Value,
+    frame_reals: Value,
+    now: Value,
+    budget: Variable,
+    exit: Block,
+    fb_sig: SigRef,
+    /// Cells kept in registers, in order of first use.
+    vars: HashMap<CellKey, Variable>,
+    order: Vec<CellKey>,
+    /// Cells written (stored back on the way out).
+    dirty: HashSet<CellKey>,
+    excluded: &'x HashSet<CellKey>,
+    regions: Vec<Region>,
+    extents: Extents,
+    faults: Vec<FaultSite>,
+    loops: Vec<LoopTargets>,
+    /// Assignments so far per register cell (in emission order).
+    versions: HashMap<CellKey, u32>,
+    /// Index checks valid at the point of emission: scoped like the dominator tree
+    /// (truncated after a branch, emptied inside a loop).
+    checked: Vec<Checked>,
+}
+
+const DAY: i64 = 86_400_000_000_000;
+
+fn flags() -> MemFlagsData {
+    MemFlagsData::trusted()
+}
+
+/// Byte offset of a cell as an immediate.
+fn byte_off(cell: usize) -> L<i32> {
+    cell.checked_mul(8)
+        .and_then(|b| i32::try_from(b).ok())
+        .ok_or(Unsupported)
+}
+
+fn is_u64(t: &Ty) -> bool {
+    matches!(t, Ty::ULInt | Ty::LWord)
+}
+
+fn timey(t: &Ty) -> bool {
+    matches!(t, Ty::Time | Ty::LTime | Ty::Tod | Ty::Dt | Ty::Date)
+}
+
+/// Plain integers: the value is the number (no time scaling).
+fn plain_int(t: &Ty) -> bool {
+    t.is_int() || t.is_bits() || *t == Ty::Bool || matches!(t, Ty::Enum(_))
+}
+
+/// Whether evaluating `e` may fault (then AND/OR of BOOL must short-circuit as the
+/// closures do).
+fn may_fault(e: &Expr) -> bool {
+    match &e.kind {
+        ExprKind::Binary(BinOp::Div | BinOp::Mod, ..) | ExprKind::Index(..) => true,
+        ExprKind::Call(..) => true,
+        ExprKind::Binary(_, a, b) => may_fault(a) || may_fault(b),
+        ExprKind::Unary(_, a) | ExprKind::Member(a, _) | ExprKind::Bit(a, _) => may_fault(a),
+        _ => false,
+    }
+}
+
+impl<'e> Lower<'_, '_, '_> {
+    // ---- places ----------------------------------------------------------------
+
+    fn resolve(&mut self, e: &'e Expr) -> L<JPlace<'e>> {
+        let c = self.cx.c;
+        match &e.kind {
+            ExprKind::Name { .. } => match c.res.get(&e.id) {
+                Some(Res::Local(i)) => {
+                    let v = c
+                        .pou(self.cx.pou.ok_or(Unsupported)?)
+                        .and_then(|p| p.vars.get(*i))
+                        .ok_or(Unsupported)?;
+                    if v.kind == VarKind::InOut {
+                        return Err(Unsupported);
+                    }
+                    Ok(JPlace {
+                        frame: true,
+                        off: v.offset,
+                        dynamic: Vec::new(),
+                        region: None,
+                        ty: v.ty.clone(),
+                        bit: None,
+                        range: v.range,
+                    })
+                }
+                Some(Res::Global(g)) => {
+                    let v = c.globals.get(*g).ok_or(Unsupported)?;
+                    Ok(JPlace {
+                        frame: false,
+                        off: v.offset,
+                        dynamic: Vec::new(),
+                        region: None,
+                        ty: v.ty.clone(),
+                        bit: None,
+                        range: v.range,
+                    })
+                }
+                _ => Err(Unsupported),
+            },
+            ExprKind::Member(base, _) => {
+                // another program's variables may alias this frame: closures only
+                if matches!(c.res.get(&base.id), Some(Res::Program(_))) {
+                    return Err(Unsupported);
+                }
+                let mut p = self.resolve(base)?;
+                if p.bit.is_some() {
+                    return Err(Unsupported);
+                }
+                let (off, ty, range) = match (&p.ty, c.res.get(&e.id)) {
+                    (Ty::Struct(id), Some(Res::Field(i))) => {
+                        let f = c
+                            .types
+                            .struct_def(*id)
+                            .and_then(|d| d.fields.get(*i))
+                            .ok_or(Unsupported)?;
+                        (f.offset, f.ty.clone(), f.range)
+                    }
+                    (Ty::Fb(_), Some(Res::PouVar(pid, i))) => {
+                        let v = c
+                            .pou(*pid)
+                            .and_then(|p| p.vars.get(*i))
+                            .ok_or(Unsupported)?;
+                        (v.offset, v.ty.clone(), v.range)
+                    }
+                    _ => return Err(Unsupported),
+                };
+                p.off = p.off.plus(off);
+                p.ty = ty;
+                p.range = range;
+                Ok(p)
+            }
+            ExprKind::Bit(base, bit) => {
+                let mut p = self.resolve(base)?;
+                if p.bit.is_some() || p.ty.lane() != Some(Lane::Int) || *bit > 63 {
+                    return Err(Unsupported);
+                }
+                p.range = None;
+                p.bit = Some(*bit);
+                p.ty = Ty::Bool;
+                Ok(p)
+            }
+            ExprKind::Index(base, idx) => {
+                let mut p = self.resolve(base)?;
+                if p.bit.is_some() {
+                    return Err(Unsupported);
+                }
+                let Ty::Array(a) = p.ty.clone() else {
+                    return Err(Unsupported);
+                };
+                if idx.len() != a.dims.len() {
+                    return Err(Unsupported);
+                }
+                let mut strides = vec![1usize; a.dims.len()];
+                let mut acc = 1usize;
+                for (k, (lo, hi)) in a.dims.iter().enumerate().rev() {
+                    if let Some(s) = strides.get_mut(k) {
+                        *s = acc;
+                    }
+                    acc = acc.saturating_mul(usize::try_from(hi - lo + 1).unwrap_or(0));
+                }
+                let mut static_lin = 0usize;
+                let mut fresh: Vec<DynIndex<'e>> = Vec::new();
+                for ((ix, (lo, hi)), stride) in idx.iter().zip(a.dims.iter()).zip(strides.iter()) {
+                    if let ExprKind::Literal(Literal::Int(v, _)) = &ix.kind {
+                        let v = i64::try_from(*v).map_err(|_| Unsupported)?;
+                        if v < *lo || v > *hi {
+                            return Err(Unsupported);
+                        }
+                        static_lin += usize::try_from(v - lo).map_err(|_| Unsupported)? * stride;
+                        continue;
+                    }
+                    fresh.push(DynIndex {
+                        expr: ix,
+                        lo: *lo,
+                        hi: *hi,
+                        stride: a.elem_size.times(*stride),
+                    });
+                }
+                if !fresh.is_empty() && p.region.is_none() {
+                    p.region = Some(Region {
+                        frame: p.frame,
+                        start: p.off,
+                        len: c.size_of(&p.ty),
+                    });
+                }
+                p.off = p.off.plus(a.elem_size.times(static_lin));
+                // the new indices are evaluated before the earlier ones, as the closures do
+                fresh.append(&mut p.dynamic);
+                p.dynamic = fresh;
+                p.ty = a.elem.clone();
+                p.range = a.elem_range;
+                Ok(p)
+            }
+            _ => Err(Unsupported),
+        }
+    }
+
+    /// The register of a statically addressed cell kept in one, if it is.
+    fn var_of(&mut self, p: &JPlace<'_>) -> Option<Variable> {
+        if !p.dynamic.is_empty() {
+            return None;
+        }
+        let real = p.real();
+        let key = CellKey {
+            real,
+            frame: p.frame,
+            off: if real { p.off.r } else { p.off.i },
+        };
+        if self.excluded.contains(&key) {
+            return None;
+        }
+        if let Some(v) = self.vars.get(&key) {
+            return Some(*v);
+        }
+        let v = self
+            .b
+            .declare_var(if real { types::F64 } else { types::I64 });
+        self.vars.insert(key, v);
+        self.order.push(key);
+        Some(v)
+    }
+
+    /// Records the cells an access may touch (checked on entry) and returns the byte
+    /// address of the place's cell (index faults included) as base + immediate offset.
+    fn address(&mut self, p: &JPlace<'e>) -> L<(Value, i32)> {
+        let real = p.real();
+        let one = if real {
+            Size { i: 0, r: 1, s: 0 }
+        } else {
+            Size { i: 1, r: 0, s: 0 }
+        };
+        match p.region {
+            Some(r) if !p.dynamic.is_empty() => {
+                self.regions.push(r);
+                self.extents.cover(r.frame, r.start, r.start.plus(r.len));
+            }
+            _ => self.extents.cover(p.frame, p.off, p.off.plus(one)),
+        }
+        let base = match (p.frame, real) {
+            (true, false) => self.frame_ints,
+            (true, true) => self.frame_reals,
+            (false, false) => self.ints,
+            (false, true) => self.reals,
+        };
+        let off = byte_off(if real { p.off.r } else { p.off.i })?;
+        if p.dynamic.is_empty() {
+            return Ok((base, off));
+        }
+        let mut lin: Option<Value> = None;
+        for d in &p.dynamic {
+            let key = self.index_key(d.expr);
+            let known = key.and_then(|key| {
+                self.checked
+                    .iter()
+                    .find(|c| c.key == key && c.lo == d.lo && c.hi == d.hi)
+                    .map(|c| c.rel)
+            });
+            let rel = match known {
+                Some(rel) => rel,
+                None => self.checked_index(d, key)?,
+            };
+            let stride = if real { d.stride.r } else { d.stride.i };
+            let bytes = i64::try_from(stride.checked_mul(8).ok_or(Unsupported)?)
+                .map_err(|_| Unsupported)?;
+            let part = self.b.ins().imul_imm_s(rel, bytes);
+            lin = Some(match lin {
+                None => part,
+                Some(l) => self.b.ins().iadd(l, part),
+            });
+        }
+        let lin = lin.ok_or(Unsupported)?;
+        Ok((self.b.ins().iadd(base, lin), off))
+    }
+
+    /// Evaluates an index, checks it against its bounds (a fault outside) and returns
+    /// its offset from the lower bound.
+    fn checked_index(&mut self, d: &DynIndex<'e>, key: Option<IndexKey>) -> L<Value> {
+        {
+            let JV::I(v) = self.expr(d.expr)? else {
+                return Err(Unsupported);
+            };
+            let rel = self.b.ins().iadd_imm_s(v, d.lo.wrapping_neg());
+            let span = u64::try_from(d.hi - d.lo).map_err(|_| Unsupported)?;
+            let out = self.b.ins().icmp_imm_s(
+                IntCC::UnsignedGreaterThan,
+                rel,
+                i64::try_from(span).map_err(|_| Unsupported)?,
+            );
+            self.fault_if(
+                out,
+                FaultSite::Index {
+                    span: d.expr.span,
+                    lo: d.lo,
+                    hi: d.hi,
+                },
+                Some(v),
+            );
+            if let Some(key) = key {
+                self.checked.push(Checked {
+                    key,
+                    lo: d.lo,
+                    hi: d.hi,
+                    rel,
+                });
+            }
+            Ok(rel)
+        }
+    }
+
+    /// The key of an index expression `v`, `v + k` or `v - k` over a register cell
+    /// without conversions, if it is one.
+    fn index_key(&mut self, e: &'e Expr) -> Option<IndexKey> {
+        let c = self.cx.c;
+        let (name, k) = match &e.kind {
+            ExprKind::Name { .. } => (e, 0),
+            ExprKind::Binary(op @ (BinOp::Add | BinOp::Sub), a, b) => {
+                let ExprKind::Literal(Literal::Int(k, _)) = &b.kind else {
+                    return None;
+                };
+                if c.coerce.contains_key(&b.id) || !matches!(a.kind, ExprKind::Name { .. }) {
+                    return None;
+                }
+                let k = i64::try_from(*k).ok()?;
+                (
+                    &**a,
+                    if *op == BinOp::Sub {
+                        k.checked_neg()?
+                    } else {
+                        k
+                    },
+                )
+            }
+            _ => return None,
+        };
+        if c.coerce.contains_key(&e.id) || c.coerce.contains_key(&name.id) {
+            return None;
+        }
+        let p = self.resolve(name).ok()?;
+        if p.real() || p.bit.is_some() || p.ty.lane() != Some(Lane::Int) {
+            return None;
+        }
+        self.var_of(&p)?;
+        let cell = CellKey {
+            real: false,
+            frame: p.frame,
+            off: p.off.i,
+        };
+        Some(IndexKey {
+            cell,
+            version: self.versions.get(&cell).copied().unwrap_or(0),
+            k,
+        })
+    }
+
+    /// Loads the cell of a place (the whole cell for a bit access).
+    fn load_cell(&mut self, p: &JPlace<'e>) -> L<Value> {
+        let ty = if p.real() { types::F64 } else { types::I64 };
+        if let Some(v) = self.var_of(p) {
+            self.address(p)?;
+            return Ok(self.b.use_var(v));
+        }
+        let (base, off) = self.address(p)?;
+        Ok(self.b.ins().load(ty, flags(), base, off))
+    }
+
+    fn load(&mut self, p: &JPlace<'e>) -> L<JV> {
+        let v = self.load_cell(p)?;
+        if let Some(bit) = p.bit {
+            let s = self.b.ins().sshr_imm_s(v, i64::from(bit));
+            return Ok(JV::I(self.b.ins().band_imm_s(s, 1)));
+        }
+        Ok(if p.real() { JV::R(v) } else { JV::I(v) })
+    }
+
+    /// Stores an evaluated value (range already checked) into a place.
+    fn store(&mut self, p: &JPlace<'e>, v: JV) -> L<()> {
+        let v = match (v, p.real()) {
+            (JV::I(v), false) => v,
+            (JV::R(v), true) => v,
+            _ => return Err(Unsupported),
+        };
+        let var = self.var_of(p);
+        let (base, off) = self.address(p)?;
+        let v = match p.bit {
+            Some(bit) => {
+                let old = match var {
+                    Some(var) => self.b.use_var(var),
+                    None => self.b.ins().load(types::I64, flags(), base, off),
+                };
+                let m = 1i64 << bit;
+                let set = self.b.ins().bor_imm_s(old, m);
+                let clear = self.b.ins().band_imm_s(old, !m);
+                self.b.ins().select(v, set, clear)
+            }
+            None => v,
+        };
+        match var {
+            Some(var) => {
+                self.b.def_var(var, v);
+                let real = p.real();
+                let key = CellKey {
+                    real,
+                    frame: p.frame,
+                    off: if real { p.off.r } else { p.off.i },
+                };
+                self.dirty.insert(key);
+                *self.versions.entry(key).or_insert(0) += 1;
+            }
+            None => {
+                self.b.ins().store(flags(), v, base, off);
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks a value stored into a subrange place.
+    fn range_check(&mut self, v: Value, range: Option<(i64, i64)>, span: Span, name: &str) {
+        let Some((lo, hi)) = range else { return };
+        let below = self.b.ins().icmp_imm_s(IntCC::SignedLessThan, v, lo);
+        let above = self.b.ins().icmp_imm_s(IntCC::SignedGreaterThan, v, hi);
+        let out = self.b.ins().bor(below, above);
+        self.fault_if(
+            out,
+            FaultSite::Range {
+                span,
+                name: Rc::from(name),
+                lo,
+                hi,
+            },
+            Some(v),
+        );
+    }
+
+    // ---- control ---------------------------------------------------------------
+
+    /// Leaves with fault `site` when `cond` holds.
+    fn fault_if(&mut self, cond: Value, site: FaultSite, value: Option<Value>) {
+        let k = self.faults.len() as i64;
+        self.faults.push(site);
+        let bad = self.b.create_block();
+        let ok = self.b.create_block();
+        self.b.set_cold_block(bad);
+        self.b.ins().brif(cond, bad, &[], ok, &[]);
+        self.b.switch_to_block(bad);
+        if let Some(v) = value {
+            self.b
+                .ins()
+                .store(flags(), v, self.ctxp, ctx_offset::FAULT_VALUE);
+        }
+        let code = self.b.ins().iconst(types::I64, -(k + 1));
+        self.b.ins().jump(self.exit, &[code.into()]);
+        self.b.switch_to_block(ok);
+    }
+
+    /// Ends the current block with a jump and goes on in a fresh (unreachable) one.
+    fn jump_away(&mut self, to: Block, code: Option<i64>) {
+        match code {
+            Some(c) => {
+                let v = self.b.ins().iconst(types::I64, c);
+                self.b.ins().jump(to, &[v.into()]);
+            }
+            None => {
+                self.b.ins().jump(to, &[]);
+            }
+        }
+        let dead = self.b.create_block();
+        self.b.switch_to_block(dead);
+    }
+
+    /// One iteration of the loop budget.
+    fn tick(&mut self, span: Span) {
+        let left = self.b.use_var(self.budget);
+        let none = self.b.ins().icmp_imm_s(IntCC::Equal, left, 0);
+        self.fault_if(none, FaultSite::LoopBudget(span), None);
+        let left = self.b.use_var(self.budget);
+        let less = self.b.ins().iadd_imm_s(left, -1);
+        self.b.def_var(self.budget, less);
+    }
+
+    /// The exit block (register cells written back) and the prologue (register cells
+    /// loaded), emitted once the body is known.
+    fn finish(&mut self, prologue: Block, body: Block) {
+        self.b.switch_to_block(self.exit);
+        let code = self.b.block_params(self.exit).first().copied();
+        for key in self.order.clone() {
+            if !self.dirty.contains(&key) {
+                continue;
+            }
+            let Some(&var) = self.vars.get(&key) else {
+                continue;
+            };
+            let v = self.b.use_var(var);
+            let base = self.base_of(key);
+            if let Ok(off) = byte_off(key.off) {
+                self.b.ins().store(flags(), v, base, off);
+            }
+        }
+        let left = self.b.use_var(self.budget);
+        self.b
+            .ins()
+            .store(flags(), left, self.ctxp, ctx_offset::BUDGET);
+        match code {
+            Some(c) => self.b.ins().return_(&[c]),
+            None => self
+                .b
+                .ins()
+                .trap(cranelift_codegen::ir::TrapCode::unwrap_user(1)),
+        };
+        self.b.switch_to_block(prologue);
+        for key in self.order.clone() {
+            let Some(&var) = self.vars.get(&key) else {
+                continue;
+            };
+            let base = self.base_of(key);
+            let ty = if key.real { types::F64 } else { types::I64 };
+            if let Ok(off) = byte_off(key.off) {
+                let v = self.b.ins().load(ty, flags(), base, off);
+                self.b.def_var(var, v);
+            }
+        }
+        self.b.ins().jump(body, &[]);
+        self.b.seal_all_blocks();
+    }
+
+    fn base_of(&self, k: CellKey) -> Value {
+        match (k.frame, k.real) {
+            (true, false) => self.frame_ints,
+            (true, true) => self.frame_reals,
+            (false, false) => self.ints,
+            (false, true) => self.reals,
+        }
+    }
+
+    // ---- statements ------------------------------------------------------------
+
+    fn block(&mut self, stmts: &'e [Stmt]) -> L<()> {
+        for s in stmts {
+            self.stmt(s)?;
+        }
+        Ok(())
+    }
+
+    fn cond(&mut self, e: &'e Expr) -> L<Value> {
+        match self.expr(e)? {
+            JV::I(v) => Ok(v),
+            JV::R(_) => Err(Unsupported),
+        }
+    }
+
+    fn stmt(&mut self, s: &'e Stmt) -> L<()> {
+        match &s.kind {
+            StmtKind::Empty => Ok(()),
+            StmtKind::Assign(target, value) => {
+                let p = self.resolve(target)?;
+                if p.ty.lane().is_none() || p.ty.lane() == Some(Lane::Str) {
+                    return Err(Unsupported);
+                }
+                let v = self.expr(value)?;
+                if let (JV::I(x), Some(_)) = (v, p.range) {
+                    self.range_check(x, p.range, target.span, &lvalue_name(target));
+                }
+                self.store(&p, v)
+            }
+            StmtKind::Call(e) => self.call(e),
+            StmtKind::If(arms, els) => {
+                let merge = self.b.create_block();
+                let scope = self.checked.len();
+                for (c, body) in arms {
+                    let c = self.cond(c)?;
+                    let then = self.b.create_block();
+                    let next = self.b.create_block();
+                    self.b.ins().brif(c, then, &[], next, &[]);
+                    self.b.switch_to_block(then);
+                    let arm = self.checked.len();
+                    self.block(body)?;
+                    self.checked.truncate(arm);
+                    self.b.ins().jump(merge, &[]);
+                    self.b.switch_to_block(next);
+                }
+                if let Some(els) = els {
+                    self.block(els)?;
+                }
+                self.checked.truncate(scope);
+                self.b.ins().jump(merge, &[]);
+                self.b.switch_to_block(merge);
+                Ok(())
+            }
+            StmtKind::Case(sel, arms, els) => {
+                let v = self.cond(sel)?;
+                let merge = self.b.create_block();
+                for (labels, body) in arms {
+                    let mut hit: Option<Value> = None;
+                    for l in labels {
+                        let (lo, hi) = match l {
+                            CaseLabel::Value(e) => {
+                                let k = self.cx.const_value(e).ok_or(Unsupported)?;
+                                (k, k)
+                            }
+                            CaseLabel::Range(a, b) => (
+                                self.cx.const_value(a).ok_or(Unsupported)?,
+                                self.cx.const_value(b).ok_or(Unsupported)?,
+                            ),
+                        };
+                        let h = if lo == hi {
+                            self.b.ins().icmp_imm_s(IntCC::Equal, v, lo)
+                        } else {
+                            let a = self
+                                .b
+                                .ins()
+                                .icmp_imm_s(IntCC::SignedGreaterThanOrEqual, v, lo);
+                            let b = self.b.ins().icmp_imm_s(IntCC::SignedLessThanOrEqual, v, hi);
+                            self.b.ins().band(a, b)
+                        };
+                        hit = Some(match hit {
+                            None => h,
+                            Some(x) => self.b.ins().bor(x, h),
+                        });
+                    }
+                    let Some(hit) = hit else { continue };
+                    let then = self.b.create_block();
+                    let next = self.b.create_block();
+                    self.b.ins().brif(hit, then, &[], next, &[]);
+                    self.b.switch_to_block(then);
+                    let arm = self.checked.len();
+                    self.block(body)?;
+                    self.checked.truncate(arm);
+                    self.b.ins().jump(merge, &[]);
+                    self.b.switch_to_block(next);
+                }
+                if let Some(els) = els {
+                    let arm = self.checked.len();
+                    self.block(els)?;
+                    self.checked.truncate(arm);
+                }
+                self.b.ins().jump(merge, &[]);
+                self.b.switch_to_block(merge);
+                Ok(())
+            }
+            StmtKind::For {
+                var,
+                from,
+                to,
+                by,
+                body,
+            } => {
+                let p = self.resolve(var)?;
+                if !p.dynamic.is_empty()
+                    || p.bit.is_some()
+                    || p.range.is_some()
+                    || p.ty.lane() != Some(Lane::Int)
+                {
+                    return Err(Unsupported);
+                }
+                let vt = p.ty.clone();
+                let f = self.expr(from)?;
+                self.store(&p, f)?;
+                let end = self.cond(to)?;
+                let (step, sign) = match by {
+                    None => (self.b.ins().iconst(types::I64, 1), Some(true)),
+                    Some(b) => {
+                        let k = match &b.kind {
+                            ExprKind::Literal(Literal::Int(v, _)) => i64::try_from(*v).ok(),
+                            _ => None,
+                        };
+                        let v = self.cond(b)?;
+                        (v, k.map(|k| k >= 0))
+                    }
+                };
+                let JV::I(cur0) = self.load(&p)? else {
+                    return Err(Unsupported);
+                };
+                let head = self.b.create_block();
+                let cur = self.b.append_block_param(head, types::I64);
+                let body_b = self.b.create_block();
+                let next = self.b.create_block();
+                let after = self.b.create_block();
+                self.b.ins().jump(head, &[cur0.into()]);
+                // checks made before the loop may not hold for later iterations
+                let outer = std::mem::take(&mut self.checked);
+                self.b.switch_to_block(head);
+                let past_up = self.b.ins().icmp(IntCC::SignedGreaterThan, cur, end);
+                let past_down = self.b.ins().icmp(IntCC::SignedLessThan, cur, end);
+                let done = match sign {
+                    Some(true) => past_up,
+                    Some(false) => past_down,
+                    None => {
+                        let up = self
+                            .b
+                            .ins()
+                            .icmp_imm_s(IntCC::SignedGreaterThanOrEqual, step, 0);
+                        self.b.ins().select(up, past_up, past_down)
+                    }
+                };
+                self.b.ins().brif(done, after, &[], body_b, &[]);
+                self.b.switch_to_block(body_b);
+                self.tick(s.span);
+                self.loops.push(LoopTargets { exit: after, next });
+                let r = self.block(body);
+                self.loops.pop();
+                r?;
+                self.checked.clear();
+                self.b.ins().jump(next, &[]);
+                self.b.switch_to_block(next);
+                let JV::I(now) = self.load(&p)? else {
+                    return Err(Unsupported);
+                };
+                // a counter of 32 bits or less stepped by a constant below 2^31 cannot
+                // leave the i64 range: no saturation needed
+                let narrow = vt.bits() <= 32 && (vt.is_int() || vt.is_bits());
+                let small_step = match by {
+                    None => true,
+                    Some(b) => {
+                        matches!(&b.kind, ExprKind::Literal(Literal::Int(k, _)) if k.unsigned_abs() < 1 << 31)
+                    }
+                };
+                let stepped = if narrow && small_step {
+                    self.b.ins().iadd(now, step)
+                } else {
+                    self.saturating_add(now, step)
+                };
+                let wrapped = self.wrap(&vt, stepped);
+                self.store(&p, JV::I(wrapped))?;
+                self.b.ins().jump(head, &[stepped.into()]);
+                self.checked = outer;
+                self.b.switch_to_block(after);
+                Ok(())
+            }
+            StmtKind::While(c, body) => {
+                let head = self.b.create_block();
+                let body_b = self.b.create_block();
+                let after = self.b.create_block();
+                self.b.ins().jump(head, &[]);
+                let outer = std::mem::take(&mut self.checked);
+                self.b.switch_to_block(head);
+                let c = self.cond(c)?;
+                self.b.ins().brif(c, body_b, &[], after, &[]);
+                self.b.switch_to_block(body_b);
+                self.tick(s.span);
+                self.loops.push(LoopTargets {
+                    exit: after,
+                    next: head,
+                });
+                let r = self.block(body);
+                self.loops.pop();
+                r?;
+                self.b.ins().jump(head, &[]);
+                self.checked = outer;
+                self.b.switch_to_block(after);
+                Ok(())
+            }
+            StmtKind::Repeat(body, c) => {
+                let body_b = self.b.create_block();
+                let test = self.b.create_block();
+                let after = self.b.create_block();
+                self.b.ins().jump(body_b, &[]);
+                let outer = std::mem::take(&mut self.checked);
+                self.b.switch_to_block(body_b);
+                self.tick(s.span);
+                self.loops.push(LoopTargets {
+                    exit: after,
+                    next: test,
+                });
+                let r = self.block(body);
+                self.loops.pop();
+                r?;
+                // CONTINUE jumps to the test from inside the body
+                self.checked.clear();
+                self.b.ins().jump(test, &[]);
+                self.b.switch_to_block(test);
+                let c = self.cond(c)?;
+                self.b.ins().brif(c, after, &[], body_b, &[]);
+                self.checked = outer;
+                self.b.switch_to_block(after);
+                Ok(())
+            }
+            StmtKind::Exit => {
+                let to = self.loops.last().map(|l| l.exit).ok_or(Unsupported)?;
+                self.jump_away(to, None);
+                Ok(())
+            }
+            StmtKind::Continue => {
+                let to = self.loops.last().map(|l| l.next).ok_or(Unsupported)?;
+                self.jump_away(to, None);
+                Ok(())
+            }
+            StmtKind::Return => {
+                self.jump_away(self.exit, Some(3));
+                Ok(())
+            }
+        }
+    }
+
+    /// A call of a standard FB with a native body, inputs only.
+    fn call(&mut self, e: &'e Expr) -> L<()> {
+        let c = self.cx.c;
+        let ExprKind::Call(callee, args) = &e.kind else {
+            return Err(Unsupported);
+        };
+        let Some(Res::CallFb(pid)) = c.res.get(&e.id) else {
+            return Err(Unsupported);
+        };
+        let pid: PouId = *pid;
+        let pou = c.pou(pid).ok_or(Unsupported)?;
+        let fb = NativeFb::of(pou).ok_or(Unsupported)?;
+        let size = c.size_of(&Ty::Fb(pid));
+        if size.i < fb.cells() {
+            return Err(Unsupported);
+        }
+        let mut inst = self.resolve(callee)?;
+        if inst.bit.is_some() || inst.ty != Ty::Fb(pid) {
+            return Err(Unsupported);
+        }
+        // the body writes the instance's cells: never kept in registers
+        if inst.region.is_none() || inst.dynamic.is_empty() {
+            inst.region = Some(Region {
+                frame: inst.frame,
+                start: inst.off,
+                len: size,
+            });
+        }
+        let r = inst.region.ok_or(Unsupported)?;
+        self.regions.push(r);
+        self.extents.cover(r.frame, r.start, r.start.plus(r.len));
+        // the instance address first, then the arguments, as the closures do
+        let (base, off) = if inst.dynamic.is_empty() {
+            let base = if inst.frame {
+                self.frame_ints
+            } else {
+                self.ints
+            };
+            (base, byte_off(inst.off.i)?)
+        } else {
+            self.address(&inst)?
+        };
+        let cells = self.b.ins().iadd_imm_s(base, i64::from(off));
+        let positional: Vec<usize> = pou
+            .vars
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| matches!(v.kind, VarKind::Input | VarKind::InOut))
+            .map(|(i, _)| i)
+            .collect();
+        let mut pos = 0;
+        for a in args {
+            if a.output {
+                return Err(Unsupported);
+            }
+            let idx = match &a.name {
+                Some(n) => pou.var(&n.key).map(|(i, _)| i).ok_or(Unsupported)?,
+                None => {
+                    let i = *positional.get(pos).ok_or(Unsupported)?;
+                    pos += 1;
+                    i
+                }
+            };
+            let v = pou.vars.get(idx).ok_or(Unsupported)?;
+            if v.kind != VarKind::Input || v.ty.lane() != Some(Lane::Int) || v.offset.i >= size.i {
+                return Err(Unsupported);
+            }
+            let JV::I(x) = self.expr(&a.value)? else {
+                return Err(Unsupported);
+            };
+            self.range_check(x, v.range, a.value.span, &v.name);
+            self.b.ins().store(flags(), x, cells, byte_off(v.offset.i)?);
+        }
+        let code = self.b.ins().iconst(types::I32, i64::from(fb.code()));
+        let entry = self.b.ins().iconst(
+            types::I64,
+            super::native_fb_entry as *const () as usize as i64,
+        );
+        self.b
+            .ins()
+            .call_indirect(self.fb_sig, entry, &[code, cells, self.now]);
+        Ok(())
+    }
+
+    // ---- expressions -----------------------------------------------------------
+
+    fn expr(&mut self, e: &'e Expr) -> L<JV> {
+        let v = self.expr_natural(e)?;
+        match self.cx.c.coerce.get(&e.id) {
+            Some(to) => {
+                let from = self.cx.c.ty(e.id);
+                self.convert(v, &from, &to.clone())
+            }
+            None => Ok(v),
+        }
+    }
+
+    fn iconst(&mut self, v: i64) -> JV {
+        JV::I(self.b.ins().iconst(types::I64, v))
+    }
+
+    fn rconst(&mut self, v: f64) -> JV {
+        JV::R(self.b.ins().f64const(v))
+    }
+
+    fn expr_natural(&mut self, e: &'e Expr) -> L<JV> {
+        let c = self.cx.c;
+        let ty = c.ty(e.id);
+        match &e.kind {
+            ExprKind::Literal(l) => match l {
+                Literal::Int(v, _) => {
+                    if ty.is_real() {
+                        Ok(self.rconst(crate::stdlib::conv::fit_real(*v as f64, &ty)))
+                    } else {
+                        Ok(self.iconst(*v as i64))
+                    }
+                }
+                Literal::Real(v, _) => Ok(self.rconst(crate::stdlib::conv::fit_real(*v, &ty))),
+                Literal::Bool(b) => Ok(self.iconst(i64::from(*b))),
+                Literal::Time(v, _) => Ok(self.iconst(i64::try_from(*v).unwrap_or(i64::MAX))),
+                Literal::Date(v) | Literal::Tod(v) | Literal::Dt(v) => Ok(self.iconst(*v)),
+                Literal::String(..) => Err(Unsupported),
+            },
+            ExprKind::Name { .. }
+            | ExprKind::Member(..)
+            | ExprKind::Index(..)
+            | ExprKind::Bit(..) => {
+                match c.res.get(&e.id) {
+                    Some(Res::EnumValue(v)) => return Ok(self.iconst(*v)),
+                    Some(Res::WStringLiteral(_)) => return Err(Unsupported),
+                    _ => {}
+                }
+                let p = self.resolve(e)?;
+                if !matches!(p.ty.lane(), Some(Lane::Int | Lane::Real)) {
+                    return Err(Unsupported);
+                }
+                self.load(&p)
+            }
+            ExprKind::TypedEnum(..) => match c.res.get(&e.id) {
+                Some(Res::EnumValue(v)) => Ok(self.iconst(*v)),
+                _ => Ok(self.iconst(0)),
+            },
+            ExprKind::Unary(op, a) => {
+                let v = self.expr(a)?;
+                Ok(match (op, v) {
+                    (UnOp::Plus, v) => v,
+                    (UnOp::Neg, JV::I(x)) => {
+                        let n = self.b.ins().ineg(x);
+                        JV::I(self.wrap(&ty, n))
+                    }
+                    (UnOp::Neg, JV::R(x)) => JV::R(self.b.ins().fneg(x)),
+                    (UnOp::Not, JV::I(x)) => {
+                        if ty == Ty::Bool {
+                            let z = self.b.ins().icmp_imm_s(IntCC::Equal, x, 0);
+                            JV::I(self.b.ins().uextend(types::I64, z))
+                        } else {
+                            let n = self.b.ins().bnot(x);
+                            JV::I(self.wrap(&ty, n))
+                        }
+                    }
+                    (_, v) => v,
+                })
+            }
+            ExprKind::Binary(op, a, b) => self.binary(*op, a, b, &ty, e.span),
+            _ => Err(Unsupported),
+        }
+    }
+
+    fn binary(&mut self, op: BinOp, a: &'e Expr, b: &'e Expr, ty: &Ty, span: Span) -> L<JV> {
+        use BinOp::*;
+        let c = self.cx.c;
+        let (ta, tb) = (c.final_ty(a.id), c.final_ty(b.id));
+        if matches!(op, And | Or) && *ty == Ty::Bool && may_fault(b) {
+            return self.short_circuit(op == And, a, b);
+        }
+        let va = self.expr(a)?;
+        let vb = self.expr(b)?;
+        let cmp = matches!(op, Lt | Gt | Le | Ge | Eq | Ne);
+        match (va, vb) {
+            (JV::I(x), JV::I(y)) => {
+                if cmp {
+                    let u = is_u64(&ta) || is_u64(&tb);
+                    let cc = match (op, u) {
+                        (Lt, false) => IntCC::SignedLessThan,
+                        (Gt, false) => IntCC::SignedGreaterThan,
+                        (Le, false) => IntCC::SignedLessThanOrEqual,
+                        (Ge, false) => IntCC::SignedGreaterThanOrEqual,
+                        (Lt, true) => IntCC::UnsignedLessThan,
+                        (Gt, true) => IntCC::UnsignedGreaterThan,
+                        (Le, true) => IntCC::UnsignedLessThanOrEqual,
+                        (Ge, true) => IntCC::UnsignedGreaterThanOrEqual,
+                        (Eq, _) => IntCC::Equal,
+                        _ => IntCC::NotEqual,
+                    };
+                    let r = self.b.ins().icmp(cc, x, y);
+                    return Ok(JV::I(self.b.ins().uextend(types::I64, r)));
+                }
+                if timey(&ta) || timey(&tb) {
+                    let r = match op {
+                        Add => self.b.ins().iadd(x, y),
+                        Sub => self.b.ins().isub(x, y),
+                        Mul => return Ok(JV::I(self.b.ins().imul(x, y))),
+                        Div => return Ok(JV::I(self.sdiv(x, y, span, false)?)),
+                        _ => return Err(Unsupported),
+                    };
+                    if *ty == Ty::Tod {
+                        return Ok(JV::I(self.rem_euclid_day(r)));
+                    }
+                    return Ok(JV::I(r));
+                }
+                let u64op = is_u64(ty);
+                let r = match op {
+                    Add => self.b.ins().iadd(x, y),
+                    Sub => self.b.ins().isub(x, y),
+                    Mul => self.b.ins().imul(x, y),
+                    Div | Mod => {
+                        if u64op {
+                            self.nonzero(y, span);
+                            let r = if op == Div {
+                                self.b.ins().udiv(x, y)
+                            } else {
+                                self.b.ins().urem(x, y)
+                            };
+                            return Ok(JV::I(r));
+                        }
+                        self.sdiv(x, y, span, op == Mod)?
+                    }
+                    And => return Ok(JV::I(self.b.ins().band(x, y))),
+                    Or => return Ok(JV::I(self.b.ins().bor(x, y))),
+                    Xor => return Ok(JV::I(self.b.ins().bxor(x, y))),
+                    _ => return Err(Unsupported),
+                };
+                Ok(JV::I(self.wrap(ty, r)))
+            }
+            (JV::R(x), JV::R(y)) => {
+                if cmp {
+                    let cc = match op {
+                        Lt => FloatCC::LessThan,
+                        Gt => FloatCC::GreaterThan,
+                        Le => FloatCC::LessThanOrEqual,
+                        Ge => FloatCC::GreaterThanOrEqual,
+                        Eq => FloatCC::Equal,
+                        _ => FloatCC::NotEqual,
+                    };
+                    let r = self.b.ins().fcmp(cc, x, y);
+                    return Ok(JV::I(self.b.ins().uextend(types::I64, r)));
+                }
+                let r = match op {
+                    Add => self.b.ins().fadd(x, y),
+                    Sub => self.b.ins().fsub(x, y),
+                    Mul => self.b.ins().fmul(x, y),
+                    Div => self.b.ins().fdiv(x, y),
+                    _ => return Err(Unsupported),
+                };
+                Ok(JV::R(self.fit(ty, r)))
+            }
+            _ => Err(Unsupported),
+        }
+    }
+
+    /// BOOL AND/OR whose right operand may fault: evaluated only when needed.
+    fn short_circuit(&mut self, and: bool, a: &'e Expr, b: &'e Expr) -> L<JV> {
+        let x = self.cond(a)?;
+        let rhs = self.b.create_block();
+        let merge = self.b.create_block();
+        let r = self.b.append_block_param(merge, types::I64);
+        if and {
+            self.b.ins().brif(x, rhs, &[], merge, &[x.into()]);
+        } else {
+            self.b.ins().brif(x, merge, &[x.into()], rhs, &[]);
+        }
+        self.b.switch_to_block(rhs);
+        let scope = self.checked.len();
+        let y = self.cond(b)?;
+        self.checked.truncate(scope);
+        self.b.ins().jump(merge, &[y.into()]);
+        self.b.switch_to_block(merge);
+        Ok(JV::I(r))
+    }
+
+    fn nonzero(&mut self, y: Value, span: Span) {
+        let z = self.b.ins().icmp_imm_s(IntCC::Equal, y, 0);
+        self.fault_if(z, FaultSite::DivisionByZero(span), None);
+    }
+
+    /// Signed division or remainder with Rust's wrapping results (`MIN / -1 = MIN`,
+    /// `MIN MOD -1 = 0`), after the division-by-zero fault.
+    fn sdiv(&mut self, x: Value, y: Value, span: Span, rem: bool) -> L<Value> {
+        self.nonzero(y, span);
+        let minus_one = self.b.ins().icmp_imm_s(IntCC::Equal, y, -1);
+        let one = self.b.ins().iconst(types::I64, 1);
+        let safe = self.b.ins().select(minus_one, one, y);
+        Ok(if rem {
+            let r = self.b.ins().srem(x, safe);
+            let zero = self.b.ins().iconst(types::I64, 0);
+            self.b.ins().select(minus_one, zero, r)
+        } else {
+            let q = self.b.ins().sdiv(x, safe);
+            let n = self.b.ins().ineg(x);
+            self.b.ins().select(minus_one, n, q)
+        })
+    }
+
+    fn rem_euclid_day(&mut self, r: Value) -> Value {
+        let m = self.b.ins().srem_imm_s(r, DAY);
+        let neg = self.b.ins().icmp_imm_s(IntCC::SignedLessThan, m, 0);
+        let up = self.b.ins().iadd_imm_s(m, DAY);
+        self.b.ins().select(neg, up, m)
+    }
+
+    /// `a + b` saturating at the i64 range.
+    fn saturating_add(&mut self, a: Value, b: Value) -> Value {
+        let sum = self.b.ins().iadd(a, b);
+        // overflow when both operands have the sign the sum lacks
+        let sa = self.b.ins().bxor(a, sum);
+        let sb = self.b.ins().bxor(b, sum);
+        let both = self.b.ins().band(sa, sb);
+        let over = self.b.ins().icmp_imm_s(IntCC::SignedLessThan, both, 0);
+        let up = self
+            .b
+            .ins()
+            .icmp_imm_s(IntCC::SignedGreaterThanOrEqual, b, 0);
+        let max = self.b.ins().iconst(types::I64, i64::MAX);
+        let min = self.b.ins().iconst(types::I64, i64::MIN);
+        let sat = self.b.ins().select(up, max, min);
+        self.b.ins().select(over, sat, sum)
+    }
+
+    /// Wraps an integer to the width of `ty` (as [`Ty::wrap`]).
+    fn wrap(&mut self, ty: &Ty, v: Value) -> Value {
+        let ins = |b: &mut FunctionBuilder<'_>, narrow: Type, signed: bool| {
+            let n = b.ins().ireduce(narrow, v);
+            if signed {
+                b.ins().sextend(types::I64, n)
+            } else {
+                b.ins().uextend(types::I64, n)
+            }
+        };
+        match ty {
+            Ty::Bool => {
+                let nz = self.b.ins().icmp_imm_s(IntCC::NotEqual, v, 0);
+                self.b.ins().uextend(types::I64, nz)
+            }
+            Ty::SInt => ins(&mut self.b, types::I8, true),
+            Ty::Int => ins(&mut self.b, types::I16, true),
+            Ty::DInt => ins(&mut self.b, types::I32, true),
+            Ty::USInt | Ty::Byte => ins(&mut self.b, types::I8, false),
+            Ty::UInt | Ty::Word => ins(&mut self.b, types::I16, false),
+            Ty::UDInt | Ty::DWord => ins(&mut self.b, types::I32, false),
+            _ => v,
+        }
+    }
+
+    /// Rounds to REAL precision when `ty` is REAL (as `conv::fit_real`).
+    fn fit(&mut self, ty: &Ty, v: Value) -> Value {
+        if *ty == Ty::Real {
+            let s = self.b.ins().fdemote(types::F32, v);
+            self.b.ins().fpromote(types::F64, s)
+        } else {
+            v
+        }
+    }
+
+    /// Implicit conversions (as `compile::expr::convert` for numbers).
+    fn convert(&mut self, v: JV, from: &Ty, to: &Ty) -> L<JV> {
+        if from == to {
+            return Ok(v);
+        }
+        match (v, to.lane()) {
+            (JV::I(x), Some(Lane::Int)) => {
+                let same_repr = (from.is_int() || from.is_bits() || *from == Ty::Bool)
+                    && (to.is_int() || to.is_bits())
+                    && from.converts_to(to);
+                if same_repr || (from.is_duration() && to.is_duration()) {
+                    return Ok(JV::I(x));
+                }
+                if plain_int(from) && plain_int(to) {
+                    return Ok(JV::I(self.wrap(to, x)));
+                }
+                Err(Unsupported)
+            }
+            (JV::I(x), Some(Lane::Real)) => {
+                if !plain_int(from) {
+                    return Err(Unsupported);
+                }
+                let f = if is_u64(from) {
+                    self.b.ins().fcvt_from_uint(types::F64, x)
+                } else {
+                    self.b.ins().fcvt_from_sint(types::F64, x)
+                };
+                Ok(JV::R(self.fit(to, f)))
+            }
+            (JV::R(x), Some(Lane::Int)) => {
+                if *to == Ty::Bool {
+                    let z = self.b.ins().f64const(0.0);
+                    let ne = self.b.ins().fcmp(FloatCC::NotEqual, x, z);
+                    return Ok(JV::I(self.b.ins().uextend(types::I64, ne)));
+                }
+                if !plain_int(to) || is_u64(to) {
+                    return Err(Unsupported);
+                }
+                let r = self.b.ins().nearest(x);
+                let i = self.b.ins().fcvt_to_sint_sat(types::I64, r);
+                Ok(JV::I(self.wrap(to, i)))
+            }
+            (JV::R(x), Some(Lane::Real)) => Ok(JV::R(self.fit(to, x))),
+            _ => Err(Unsupported),
+        }
+    }
+}
