@@ -23,6 +23,10 @@ cargo +nightly fuzz build --release
 for target in $targets; do
     echo "fuzz smoke: $target for ${seconds}s"
     mkdir -p "corpus/$target"
+    case "$target" in
+        # start the Structured Text targets from the conformance programs
+        plc_*) cp ../crates/plc/tests/conformance/*.st "corpus/$target/" ;;
+    esac
     cargo +nightly fuzz run --release "$target" "corpus/$target" -- \
         -max_total_time="$seconds" -rss_limit_mb=2048 -print_final_stats=1 2>&1 \
         | grep -E 'stat::number_of_executed_units|Done|ERROR|panicked|SUMMARY' || true

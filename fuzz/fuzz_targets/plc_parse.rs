@@ -18,7 +18,9 @@ fuzz_target!(|data: &[u8]| {
         let mut p = plc::Plc::new(compiled, sources);
         p.loop_budget = 10_000;
         for name in ["Main", "MAIN", "main"] {
-            if p.add_task(plc::task::TaskConfig::cyclic("t", 1_000_000, &[name])).is_ok() {
+            if p.add_task(plc::task::TaskConfig::cyclic("t", 1_000_000, &[name]))
+                .is_ok()
+            {
                 break;
             }
         }

@@ -1,5 +1,7 @@
 //! Representative ST programs against the same algorithms in native Rust, side by side.
-//! Run: `cargo bench -p plc --bench st_vs_native`. Prints time per scan and the ratio.
+//! Run: `cargo bench -p plc --bench st_vs_native`. Prints the time per scan of the ST
+//! program as compiled (loops as machine code), as closures only, and of native Rust, the
+//! ratio ST/native, and what building each program costs with and without the JIT.
 #![allow(
     clippy::unwrap_used,
     clippy::expect_used,
@@ -120,9 +122,16 @@ fn tons(ts: &mut [Ton], now: i64) -> i32 {
     n
 }
 
-fn time_st(src: &str, scans: u32) -> f64 {
-    let (sources, r) = plc::build(&[("bench.st".into(), src.into())]);
-    let mut p = plc::Plc::new(r.unwrap_or_else(|d| panic!("{d:?}")), sources);
+fn time_st(src: &str, scans: u32, jit: bool) -> f64 {
+    let (sources, r) = plc::build_with(
+        &[("bench.st".into(), src.into())],
+        plc::CompileOptions { jit },
+    );
+    let compiled = r.unwrap_or_else(|d| panic!("{d:?}"));
+    if !jit {
+        assert_eq!(compiled.jit_loops, 0, "closures only");
+    }
+    let mut p = plc::Plc::new(compiled, sources);
     p.add_task(TaskConfig::cyclic("t", 0, &["Main"])).unwrap();
     let mut now = ClockReading::default();
     p.run_cycle(now);
@@ -152,54 +161,83 @@ fn main() {
             "string" => (STRINGS, 20000),
             _ => (INT_LOOP, 200),
         };
-        println!("{:.1}us", time_st(src, scans) * 1e6);
+        println!("{:.1}us", time_st(src, scans, true) * 1e6);
         return;
     }
     let mut ts = vec![Ton::default(); 1000];
     let mut now = 0i64;
-    let rows: Vec<(&str, f64, f64)> = vec![
+    let rows: Vec<(&str, f64, f64, f64)> = vec![
         (
             "integer loop (100k)",
-            time_st(INT_LOOP, 20),
+            time_st(INT_LOOP, 20, true),
+            time_st(INT_LOOP, 20, false),
             time_native(|| i64::from(int_loop()), 200),
         ),
         (
             "REAL loop (100k)",
-            time_st(REAL_LOOP, 20),
+            time_st(REAL_LOOP, 20, true),
+            time_st(REAL_LOOP, 20, false),
             time_native(|| real_loop() as i64, 200),
         ),
         (
             "bubble sort (200)",
-            time_st(SORT, 20),
-            time_native(|| i64::from(sort()), 200),
+            time_st(SORT, 50, true),
+            time_st(SORT, 20, false),
+            time_native(|| i64::from(sort()), 500),
         ),
         (
-            "string building (100)",
-            time_st(STRINGS, 200),
+            "string building (100) *",
+            time_st(STRINGS, 200, true),
+            time_st(STRINGS, 200, false),
             time_native(|| strings() as i64, 2000),
         ),
         (
             "1000 TON per scan",
-            time_st(TONS, 200),
+            time_st(TONS, 500, true),
+            time_st(TONS, 200, false),
             time_native(
                 || {
                     now += 1_000_000;
                     i64::from(tons(&mut ts, now))
                 },
-                2000,
+                5000,
             ),
         ),
     ];
     println!(
-        "{:<24} {:>12} {:>12} {:>8}",
-        "program", "ST/scan", "native/scan", "ratio"
+        "{:<24} {:>12} {:>12} {:>12} {:>8}",
+        "program", "ST/scan", "closures", "native/scan", "ratio"
     );
-    for (name, st, native) in rows {
+    for (name, st, closures, native) in rows {
         println!(
-            "{name:<24} {:>10.1}us {:>10.1}us {:>7.1}x",
+            "{name:<24} {:>10.1}us {:>10.1}us {:>10.1}us {:>7.1}x",
             st * 1e6,
+            closures * 1e6,
             native * 1e6,
             st / native
+        );
+    }
+    println!("* strings are outside the JIT subset: that loop runs as closures either way");
+    // what the JIT costs when a program is built (every program above, best of 5)
+    let all = [INT_LOOP, REAL_LOOP, SORT, STRINGS, TONS];
+    for jit in [false, true] {
+        let best = (0..5)
+            .map(|_| {
+                let start = Instant::now();
+                for src in all {
+                    let (_, r) = plc::build_with(
+                        &[("bench.st".into(), src.into())],
+                        plc::CompileOptions { jit },
+                    );
+                    black_box(r.is_ok());
+                }
+                start.elapsed().as_secs_f64() / all.len() as f64
+            })
+            .fold(f64::MAX, f64::min);
+        println!(
+            "build per program ({}): {:.2} ms",
+            if jit { "with JIT" } else { "closures only" },
+            best * 1e3
         );
     }
 }

@@ -8,7 +8,8 @@
 //!                 check: declarations, layout, names, types ◄─┘
 //!                 (side tables keyed by NodeId: expr_ty, coerce, res)
 //!                                                             │
-//!                 compile: closures per expression/statement ◄┘ ──► Compiled
+//!                 compile: closures per expression/statement,  ◄┘ ──► Compiled
+//!                          loops as machine code (compile::jit)
 //!                                                             │
 //!                 task::Plc: memory image (vm), tasks, scan cycle, watchdog,
 //!                 retain/persistent, forcing, I/O image, paths ◄┘
@@ -24,7 +25,8 @@
 //!   [`check::Checked`]: types and their three-lane memory layout, POU signatures, name
 //!   resolution and IEC implicit (widening) conversions. The AST is not modified.
 //! - [`compile`]: [`check::Checked`] to [`compile::Compiled`], closure-compiled code
-//!   (see the module for why closures).
+//!   (see the module for why closures), loops compiled to machine code by Cranelift where
+//!   they are in its subset (the one module with `unsafe`: calling that code).
 //! - [`vm`]: memory image, values, run-time faults, value formatting.
 //! - [`stdlib`]: standard FBs written in ST (timers, edges, counters, bistables, DTL) and
 //!   native built-in functions (numeric, bit, selection, string, conversion, time).

@@ -42,6 +42,10 @@ pub(crate) struct RunArgs {
     /// Set a variable before the first cycle: `PATH=VALUE` (IEC literal), repeatable.
     #[arg(long = "set", value_name = "PATH=VALUE")]
     set: Vec<String>,
+    /// Run loops as closures instead of machine code (the reference semantics; also
+    /// `STANICE_PLC_JIT=0`).
+    #[arg(long = "no-jit")]
+    no_jit: bool,
 }
 
 fn load(files: &[PathBuf]) -> anyhow::Result<Vec<(String, String)>> {
@@ -78,7 +82,9 @@ pub(crate) async fn run(command: PlcCommand) -> anyhow::Result<ExitCode> {
         }
         PlcCommand::Run(args) => {
             let files = load(&args.files)?;
-            let (sources, result) = plc::build(&files);
+            let mut options = plc::CompileOptions::default();
+            options.jit &= !args.no_jit;
+            let (sources, result) = plc::build_with(&files, options);
             let compiled = match result {
                 Ok(c) => c,
                 Err(diags) => {

@@ -478,6 +478,40 @@ fn plc_run_prints_the_program_after_n_cycles_on_virtual_time() {
 }
 
 #[test]
+fn plc_run_prints_the_same_with_and_without_the_jit() {
+    let source = write_source(
+        "sort.st",
+        "PROGRAM Main\nVAR a : ARRAY[1..6] OF DINT := [5, -3, 9, 0, 9, 1]; i, j, t : DINT; sum : LREAL; END_VAR\n\
+         FOR i := 1 TO 5 DO FOR j := 1 TO 6 - i DO\n\
+         IF a[j] > a[j + 1] THEN t := a[j]; a[j] := a[j + 1]; a[j + 1] := t; END_IF\n\
+         END_FOR END_FOR\nFOR i := 1 TO 6 DO sum := sum + a[i] * 0.5; END_FOR\nEND_PROGRAM\n",
+    );
+    let run = |extra: &[&str]| {
+        let mut command = stanice();
+        command
+            .args(["plc", "run"])
+            .arg(&source)
+            .args(["--program", "Main"])
+            .args(extra);
+        let output = run_bounded(command, 20);
+        assert!(
+            output.status.success(),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        String::from_utf8_lossy(&output.stdout).to_string()
+    };
+    let compiled = run(&[]);
+    assert!(
+        compiled.contains("Main.a[1] = -3\n")
+            && compiled.contains("Main.a[6] = 9\n")
+            && compiled.contains("Main.sum = 10.5\n"),
+        "{compiled}"
+    );
+    assert_eq!(compiled, run(&["--no-jit"]));
+}
+
+#[test]
 fn plc_check_reports_file_line_col_and_fails() {
     let good = write_source(
         "good.st",

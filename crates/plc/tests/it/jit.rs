@@ -302,7 +302,8 @@ END_PROGRAM";
 
 #[test]
 fn an_index_changed_in_a_branch_is_checked_again() {
-    let src = "PROGRAM Main VAR i, j, x, y : DINT; a : ARRAY[1..5] OF DINT := [1, 2, 3, 4, 5]; END_VAR
+    let src =
+        "PROGRAM Main VAR i, j, x, y : DINT; a : ARRAY[1..5] OF DINT := [1, 2, 3, 4, 5]; END_VAR
 j := 2;
 FOR i := 1 TO 3 DO
   x := x + a[j];
@@ -312,7 +313,10 @@ END_FOR
 END_PROGRAM";
     assert_eq!(assert_same(src, 1), 1);
     let (vars, faults, _) = run(src, true, 1);
-    assert!(faults[0].contains("array index 9 out of range 1..5"), "{faults:?}");
+    assert!(
+        faults[0].contains("array index 9 out of range 1..5"),
+        "{faults:?}"
+    );
     assert!(faults[0].starts_with("p.st:6:14:"), "{faults:?}");
     assert!(vars.contains(&"Main.x = 4".to_string()), "{vars:?}");
     assert!(vars.contains(&"Main.y = 2".to_string()), "{vars:?}");

@@ -150,7 +150,6 @@ fn attempt(
     let result = {
         let mut b = FunctionBuilder::new(&mut ctx.func, &mut fctx);
         let mut fb_sig = Signature::new(call_conv);
-        fb_sig.params.push(AbiParam::new(types::I32));
         fb_sig.params.push(AbiParam::new(ptr));
         fb_sig.params.push(AbiParam::new(types::I64));
         let fb_sig = b.import_signature(fb_sig);
@@ -1116,14 +1115,13 @@ impl<'e> Lower<'_, '_, '_> {
             self.range_check(x, v.range, a.value.span, &v.name);
             self.b.ins().store(flags(), x, cells, byte_off(v.offset.i)?);
         }
-        let code = self.b.ins().iconst(types::I32, i64::from(fb.code()));
-        let entry = self.b.ins().iconst(
-            types::I64,
-            super::native_fb_entry as *const () as usize as i64,
-        );
+        let entry = self
+            .b
+            .ins()
+            .iconst(types::I64, super::native_fb_entry(fb) as usize as i64);
         self.b
             .ins()
-            .call_indirect(self.fb_sig, entry, &[code, cells, self.now]);
+            .call_indirect(self.fb_sig, entry, &[cells, self.now]);
         Ok(())
     }
 

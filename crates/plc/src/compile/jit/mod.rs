@@ -338,14 +338,25 @@ impl JitLoop {
     }
 }
 
-/// Entry of the native FB bodies for the generated code: runs `fb` on the `n` cells at
+/// The entry of a native FB body for the generated code: `extern "C" fn(cells, now)`.
+fn native_fb_entry(fb: NativeFb) -> *const u8 {
+    match fb {
+        NativeFb::Ton => native_fb::<0> as *const u8,
+        NativeFb::Tof => native_fb::<1> as *const u8,
+        NativeFb::Tp => native_fb::<2> as *const u8,
+        NativeFb::RTrig => native_fb::<3> as *const u8,
+        NativeFb::FTrig => native_fb::<4> as *const u8,
+    }
+}
+
+/// Runs the native body with code `FB` ([`NativeFb::code`]) on the instance cells at
 /// `cells`.
 ///
 /// # Safety
 /// `cells` points to at least `NativeFb::cells()` initialised cells of the integer lane
 /// that nothing else references during the call.
-unsafe extern "C" fn native_fb_entry(fb: u32, cells: *mut i64, now: i64) {
-    let Some(fb) = NativeFb::from_code(fb) else {
+unsafe extern "C" fn native_fb<const FB: u32>(cells: *mut i64, now: i64) {
+    let Some(fb) = NativeFb::from_code(FB) else {
         return;
     };
     // SAFETY: guaranteed by the caller (the extent of the instance was checked).
