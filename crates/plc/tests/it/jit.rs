@@ -15,7 +15,17 @@ i0, i1, i2, k : DINT; tm : ARRAY[1..3] OF TON; st : STRUCT_T;
 END_VAR
 ";
 
-const TYPES: &str = "TYPE STRUCT_T : STRUCT p : DINT; q : LREAL; END_STRUCT; END_TYPE\n";
+const TYPES: &str = "TYPE STRUCT_T : STRUCT p : DINT; q : LREAL; END_STRUCT; END_TYPE
+VAR_GLOBAL gc : DINT := 2; ga : ARRAY[1..4] OF DINT; END_VAR\n";
+
+/// The variables of [`DECLS`] inside a FB, for loops that run on instance frames.
+const FB_DECLS: &str = "FUNCTION_BLOCK Work
+VAR a, b, c : DINT := 3; s : INT := -7; t : SINT := 100; l : LINT := 1; u : UDINT := 5;
+w : WORD := 16#F0F0; x : LREAL := 0.5; r : REAL := 1.25; f, g : BOOL;
+arr : ARRAY[1..8] OF DINT; m : ARRAY[0..2, 1..3] OF INT; rr : ARRAY[1..4] OF LREAL;
+i0, i1, i2, k : DINT; tm : ARRAY[1..3] OF TON; st : STRUCT_T;
+END_VAR
+";
 
 /// Every variable after `cycles` cycles, and the rendered faults.
 fn run(src: &str, jit: bool, cycles: i64) -> (Vec<String>, Vec<String>, usize) {
@@ -91,6 +101,8 @@ fn dint_leaf() -> impl Strategy<Value = String> {
         Just("arr[b - 2]".to_string()),
         Just("arr[i1 + 3]".to_string()),
         Just("arr[i2]".to_string()),
+        Just("gc".to_string()),
+        Just("ga[(gc MOD 4) + 1]".to_string()),
         Just("m[1, 2]".to_string()),
         Just("m[b MOD 3, 1 + (c MOD 3)]".to_string()),
     ]
@@ -186,6 +198,7 @@ fn stmt(depth: u32) -> BoxedStrategy<String> {
         bool_expr().prop_map(|e| format!("tm[(a MOD 3) + 1](IN := {e}, PT := T#25ms);")),
         Just("b := b + 1;".to_string()),
         Just("c := c - 1;".to_string()),
+        Just("gc := gc + c; ga[(c MOD 4) + 1] := gc;".to_string()),
         Just("arr[c + 1] := arr[c] + arr[i1 + 3];".to_string()),
         Just("IF arr[b] > arr[b + 1] THEN k := arr[b]; arr[b] := arr[b + 1]; arr[b + 1] := k; END_IF;".to_string()),
     ];
@@ -213,7 +226,7 @@ fn stmt(depth: u32) -> BoxedStrategy<String> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 200, .. ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 150, .. ProptestConfig::default() })]
 
     /// Random loops: closures and machine code agree on every variable and fault.
     #[test]
@@ -223,6 +236,19 @@ proptest! {
             body.join("\n")
         );
         let loops = assert_same(&src, 3);
+        prop_assert!(loops >= 1, "the loop did not compile to machine code:\n{}", src);
+    }
+
+    /// The same inside a FB: instances in an array, in the program and as a global.
+    #[test]
+    fn random_loops_in_fb_instances_agree(body in prop::collection::vec(stmt(2), 1..4)) {
+        let src = format!(
+            "{TYPES}VAR_GLOBAL gw : Work; END_VAR\n{FB_DECLS}FOR i0 := 1 TO 2 DO {} END_FOR;\nEND_FUNCTION_BLOCK\n\
+             PROGRAM Main VAR one : Work; many : ARRAY[1..2] OF Work; j : INT; END_VAR\n\
+             one(); FOR j := 1 TO 2 DO many[j](); END_FOR; gw();\nEND_PROGRAM\n",
+            body.join("\n")
+        );
+        let loops = assert_same(&src, 2);
         prop_assert!(loops >= 1, "the loop did not compile to machine code:\n{}", src);
     }
 }
