@@ -799,6 +799,22 @@ impl<'e> Lower<'_, '_, '_> {
         }
     }
 
+    /// One arm of an IF or CASE: `body` when `cond` holds, then on to `merge`; the code
+    /// goes on in the block for the next arm.
+    fn arm(&mut self, cond: Value, body: &'e [Stmt], merge: Block) -> L<()> {
+        let then = self.b.create_block();
+        let next = self.b.create_block();
+        self.b.ins().brif(cond, then, &[], next, &[]);
+        self.b.switch_to_block(then);
+        // checks inside the arm do not hold after it
+        let scope = self.checked.len();
+        self.block(body)?;
+        self.checked.truncate(scope);
+        self.b.ins().jump(merge, &[]);
+        self.b.switch_to_block(next);
+        Ok(())
+    }
+
     fn stmt(&mut self, s: &'e Stmt) -> L<()> {
         match &s.kind {
             StmtKind::Empty => Ok(()),
@@ -819,15 +835,7 @@ impl<'e> Lower<'_, '_, '_> {
                 let scope = self.checked.len();
                 for (c, body) in arms {
                     let c = self.cond(c)?;
-                    let then = self.b.create_block();
-                    let next = self.b.create_block();
-                    self.b.ins().brif(c, then, &[], next, &[]);
-                    self.b.switch_to_block(then);
-                    let arm = self.checked.len();
-                    self.block(body)?;
-                    self.checked.truncate(arm);
-                    self.b.ins().jump(merge, &[]);
-                    self.b.switch_to_block(next);
+                    self.arm(c, body, merge)?;
                 }
                 if let Some(els) = els {
                     self.block(els)?;
@@ -869,15 +877,7 @@ impl<'e> Lower<'_, '_, '_> {
                         });
                     }
                     let Some(hit) = hit else { continue };
-                    let then = self.b.create_block();
-                    let next = self.b.create_block();
-                    self.b.ins().brif(hit, then, &[], next, &[]);
-                    self.b.switch_to_block(then);
-                    let arm = self.checked.len();
-                    self.block(body)?;
-                    self.checked.truncate(arm);
-                    self.b.ins().jump(merge, &[]);
-                    self.b.switch_to_block(next);
+                    self.arm(hit, body, merge)?;
                 }
                 if let Some(els) = els {
                     let arm = self.checked.len();
