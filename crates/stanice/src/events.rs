@@ -77,7 +77,7 @@ pub(crate) async fn run(args: EventsArgs) -> anyhow::Result<ExitCode> {
     let url = args
         .store
         .clone()
-        .unwrap_or_else(|| station::runtime::resolve_store_url(&project));
+        .unwrap_or_else(|| project.station.store.clone());
     let store = open_store(&url).await?;
     let since = args
         .since

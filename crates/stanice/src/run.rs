@@ -91,7 +91,7 @@ pub(crate) async fn run_project(
         Some(url) => StoreChoice::Url(url.to_owned()),
     };
     let store_shown = match &store {
-        StoreChoice::Project => station::runtime::resolve_store_url(&project),
+        StoreChoice::Project => project.station.store.clone(),
         StoreChoice::Url(url) => url.clone(),
         StoreChoice::Disabled => "none".to_owned(),
     };

@@ -665,3 +665,78 @@ fn run_records_events_that_events_lists() {
         "{text}"
     );
 }
+
+/// A copy of the Vsetín project in `parent/name`, without its event stores, so that a test
+/// runs it from a folder of its own with a relative path.
+fn copy_vsetin(parent: &std::path::Path, name: &str) -> PathBuf {
+    fn copy(from: &std::path::Path, to: &std::path::Path) {
+        std::fs::create_dir_all(to).unwrap();
+        for entry in std::fs::read_dir(from).unwrap() {
+            let entry = entry.unwrap();
+            let file_name = entry.file_name();
+            if file_name.to_string_lossy().contains(".sqlite") {
+                continue;
+            }
+            if entry.file_type().unwrap().is_dir() {
+                copy(&entry.path(), &to.join(&file_name));
+            } else {
+                std::fs::copy(entry.path(), to.join(&file_name)).unwrap();
+            }
+        }
+    }
+    let project = parent.join(name);
+    let _ = std::fs::remove_dir_all(&project);
+    copy(&vsetin(), &project);
+    project
+}
+
+fn fresh_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("stanice-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn assert_success(output: &Output) -> String {
+    assert!(
+        output.status.success(),
+        "{}\n{}",
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr)
+    );
+    String::from_utf8_lossy(&output.stdout).into_owned()
+}
+
+/// The project's files are resolved against a relative project folder once: `run` reads
+/// `proj/plc/...` and writes `proj/events.sqlite`, not `proj/proj/...` (issue 11).
+#[test]
+fn a_relative_project_path_is_resolved_once() {
+    let dir = fresh_dir("relative");
+    copy_vsetin(&dir, "proj");
+    let port = free_port_range(23);
+    let mut run = stanice();
+    run.current_dir(&dir)
+        .args(["run", "proj", "--port-base", &port.to_string()])
+        .args(["--speed", "60", "--duration", "2"]);
+    let banner = assert_success(&run_bounded(run, 60));
+    assert!(
+        banner.contains("events and command audit: sqlite:proj/events.sqlite"),
+        "{banner}"
+    );
+    assert!(dir.join("proj/events.sqlite").is_file());
+    assert!(!dir.join("proj/proj").exists());
+
+    let mut events = stanice();
+    events
+        .current_dir(&dir)
+        .args(["events", "proj", "--since", "1h", "--point", "RH2_*"]);
+    let text = assert_success(&run_bounded(events, 30));
+    assert!(text.lines().count() > 1, "no events: {text}");
+
+    let mut points = stanice();
+    points
+        .current_dir(&dir)
+        .args(["points", "proj", "--node", "RH2"]);
+    let text = assert_success(&run_bounded(points, 30));
+    assert!(text.contains("RH2_VypnoutQF1"), "{text}");
+}

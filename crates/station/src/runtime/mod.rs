@@ -226,7 +226,7 @@ impl Runtime {
         let store_url = match &options.store {
             StoreChoice::Disabled => None,
             StoreChoice::Url(url) => Some(url.clone()),
-            StoreChoice::Project => Some(resolve_store_url(&project)),
+            StoreChoice::Project => Some(project.station.store.clone()),
         };
         let store: Option<Arc<dyn EventStore>> = match store_url {
             Some(url) => Some(Arc::from(open_store(&url).await?)),
@@ -364,10 +364,11 @@ impl Runtime {
                         .map(|g| RedundancyGroupConfig::new(g.name.clone(), g.clients.clone()))
                         .collect();
                     if let Some(tls) = &server_config.tls {
+                        // Already resolved against the project folder by the configuration.
                         let files = iec60870::cs104::tls::TlsFiles {
-                            certificate: project.folder.join(&tls.certificate),
-                            private_key: project.folder.join(&tls.private_key),
-                            trust_anchors: project.folder.join(&tls.trust_anchors),
+                            certificate: tls.certificate.clone(),
+                            private_key: tls.private_key.clone(),
+                            trust_anchors: tls.trust_anchors.clone(),
                         };
                         let tls = files
                             .load()
@@ -616,16 +617,4 @@ impl Drop for Runtime {
             }
         }
     }
-}
-
-/// The project's store URL with a relative SQLite path resolved in the project folder.
-pub fn resolve_store_url(project: &Project) -> String {
-    let url = project.station.store.trim();
-    if let Some(rest) = url.strip_prefix("sqlite:") {
-        let path = rest.strip_prefix("//").unwrap_or(rest);
-        if path != ":memory:" && !std::path::Path::new(path).is_absolute() {
-            return format!("sqlite:{}", project.folder.join(path).display());
-        }
-    }
-    url.to_owned()
 }

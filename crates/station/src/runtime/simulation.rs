@@ -184,12 +184,7 @@ impl Simulation {
             let Some(config) = project.nodes.get(*index) else {
                 continue;
             };
-            built.push(build_node(
-                project,
-                config,
-                Arc::clone(points),
-                plant.as_ref(),
-            )?);
+            built.push(build_node(config, Arc::clone(points), plant.as_ref())?);
         }
         Ok(Simulation {
             clock,
@@ -622,7 +617,6 @@ fn parse_action(text: &str) -> Option<Result<Action, PlantError>> {
 }
 
 fn build_node(
-    project: &Project,
     config: &NodeConfig,
     points: Arc<NodePoints>,
     plant: Option<&VsetinPlant>,
@@ -642,9 +636,10 @@ fn build_node(
         return Ok(sim);
     }
     let mut files = Vec::new();
-    for source in &config.sources {
-        let path = project.folder.join(source);
-        let text = std::fs::read_to_string(&path)
+    // The configuration resolved the sources against the project folder already: joining
+    // the folder again doubled a relative project path (`examples/vsetin/examples/vsetin`).
+    for path in &config.sources {
+        let text = std::fs::read_to_string(path)
             .map_err(|error| setup(format!("cannot read {}: {error}", path.display())))?;
         files.push((path.display().to_string(), text));
     }
