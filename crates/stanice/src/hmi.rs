@@ -55,6 +55,7 @@ pub(crate) fn zone(name: &str) -> anyhow::Result<TimeZonePolicy> {
 }
 
 pub(crate) async fn run(args: HmiArgs) -> anyhow::Result<ExitCode> {
+    let mut interrupt = crate::interrupt::Interrupt::listen();
     let users = args
         .users
         .clone()
@@ -83,9 +84,7 @@ pub(crate) async fn run(args: HmiArgs) -> anyhow::Result<ExitCode> {
     );
     match args.duration {
         Some(seconds) => tokio::time::sleep(Duration::from_secs_f64(seconds.clamp(0.0, 1e9))).await,
-        None => {
-            let _ = tokio::signal::ctrl_c().await;
-        }
+        None => interrupt.recv().await,
     }
     hmi.shutdown().await;
     Ok(ExitCode::SUCCESS)

@@ -13,6 +13,7 @@ mod demo;
 mod events;
 mod hmi;
 mod iec104;
+mod interrupt;
 mod plc;
 mod points;
 mod run;

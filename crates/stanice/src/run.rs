@@ -5,6 +5,7 @@
 //! standard input inject faults and hand operations (`supply-loss T1`, `selector RH2
 //! local`, `link-cut RDRT/RH`, `clear all`, `status`, `help`).
 
+use std::io::BufRead as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Duration;
@@ -14,7 +15,8 @@ use chrono::{DateTime, Utc};
 use clap::Args;
 use station::config::Project;
 use station::runtime::{Pacing, Runtime, RuntimeOptions, StoreChoice};
-use tokio::io::AsyncBufReadExt as _;
+
+use crate::interrupt::Interrupt;
 
 /// Arguments of `stanice run`.
 #[derive(Args, Debug)]
@@ -78,6 +80,8 @@ pub(crate) async fn run_project(
     options: RunOptions,
     demo: bool,
 ) -> anyhow::Result<ExitCode> {
+    // From the start: a Ctrl-C while the station starts stops it once started, cleanly.
+    let mut interrupt = Interrupt::listen();
     let mut project = load_project(folder)?;
     if let Some(base) = options.port_base {
         project = project.with_port_base(base);
@@ -125,9 +129,7 @@ pub(crate) async fn run_project(
             Some(seconds) => {
                 tokio::time::sleep(Duration::from_secs_f64(seconds.clamp(0.0, 1e9))).await
             }
-            None => {
-                let _ = tokio::signal::ctrl_c().await;
-            }
+            None => interrupt.recv().await,
         }
     };
     tokio::select! {
@@ -264,10 +266,34 @@ operations:  selector BOARD local|remote, manual-switch BOARD on|off, close NAME
 links:       link-cut NODE/LINK, link-restore NODE/LINK; hmi-link-cut, hmi-link-restore
 other:       status, help";
 
+/// Standard input's lines, read on a thread of their own.
+///
+/// Not `tokio::io::stdin`: it reads on the runtime's blocking pool, and the runtime waits
+/// for that read when it shuts down, so Ctrl-C stopped the station only once Enter was
+/// pressed. A plain thread blocked in `read` does not hold up the process's exit.
+fn stdin_lines() -> tokio::sync::mpsc::Receiver<String> {
+    let (sender, receiver) = tokio::sync::mpsc::channel(16);
+    let spawned = std::thread::Builder::new()
+        .name("console".to_owned())
+        .spawn(move || {
+            for line in std::io::stdin().lock().lines() {
+                let Ok(line) = line else { break };
+                if sender.blocking_send(line).is_err() {
+                    break;
+                }
+            }
+        });
+    if let Err(error) = spawned {
+        // The station runs on without its console (the receiver sees a closed channel).
+        eprintln!("warning: no console: {error}");
+    }
+    receiver
+}
+
 /// Reads operations from standard input until it closes.
 async fn console(runtime: &Runtime, hmi: Option<&hmi::Hmi>) {
-    let mut lines = tokio::io::BufReader::new(tokio::io::stdin()).lines();
-    while let Ok(Some(line)) = lines.next_line().await {
+    let mut lines = stdin_lines();
+    while let Some(line) = lines.recv().await {
         let line = line.trim();
         match line {
             "" => {}

@@ -740,3 +740,51 @@ fn a_relative_project_path_is_resolved_once() {
     let text = assert_success(&run_bounded(points, 30));
     assert!(text.contains("RH2_VypnoutQF1"), "{text}");
 }
+
+/// Sends SIGINT as Ctrl-C in a terminal does (std has no signals; `kill` is everywhere).
+fn interrupt(child: &Child) {
+    let status = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+}
+
+/// Ctrl-C stops `stanice run` while its console waits for a line on a terminal-like
+/// standard input that stays open, and the events recorded so far reach the store.
+#[test]
+fn ctrl_c_stops_the_station_and_flushes_the_store() {
+    let dir = fresh_dir("ctrl-c");
+    let project = copy_vsetin(&dir, "proj");
+    let port = free_port_range(23);
+    let mut run = stanice();
+    run.stdin(Stdio::piped())
+        .arg("run")
+        .arg(&project)
+        .args(["--port-base", &port.to_string(), "--speed", "60"])
+        .args(["--hmi", "--hmi-port", "0"]);
+    let mut station = start_until(run, "Ctrl-C stops");
+    assert!(station.0.stdin.is_some(), "standard input must stay open");
+    interrupt(&station.0);
+    // Within a second on an idle machine; the bound is generous for a busy one.
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let status = loop {
+        if let Some(status) = station.0.try_wait().unwrap() {
+            break status;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "the station did not stop on Ctrl-C"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    assert!(status.success(), "{status}");
+
+    let mut events = stanice();
+    events.arg("events").arg(&project).args(["--since", "1h"]);
+    let text = assert_success(&run_bounded(events, 30));
+    assert!(
+        text.lines().any(|l| l.contains(",RDRT,")),
+        "the store has no events after Ctrl-C: {text}"
+    );
+}

@@ -68,6 +68,8 @@ pub(crate) async fn run(args: ClientArgs) -> anyhow::Result<ExitCode> {
         let name = iec60870::cs104::tls::server_name(&host)?;
         config.tls = Some((iec60870::cs104::tls::client_config(&pem)?, name));
     }
+    // One listener for the whole loop: a Ctrl-C between two events is not lost.
+    let mut interrupt = crate::interrupt::Interrupt::listen();
     let (client, mut events) = spawn_client(config);
     let deadline = args.duration.map(|seconds| {
         tokio::time::Instant::now() + Duration::from_secs_f64(seconds.clamp(0.0, 1e9))
@@ -77,7 +79,7 @@ pub(crate) async fn run(args: ClientArgs) -> anyhow::Result<ExitCode> {
         let event = tokio::select! {
             event = events.recv() => event,
             () = sleep_until(deadline) => break,
-            _ = tokio::signal::ctrl_c() => break,
+            () = interrupt.recv() => break,
         };
         let Some(event) = event else { break };
         let gi_terminated = matches!(&event, ClientEvent::Asdu(asdu)

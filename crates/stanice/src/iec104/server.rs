@@ -159,6 +159,7 @@ pub(crate) async fn run(args: ServerArgs) -> anyhow::Result<ExitCode> {
         points.monitor.len(),
         points.commands.len()
     );
+    let mut interrupt = crate::interrupt::Interrupt::listen();
     let server = serve_points(config, points).await?;
     println!(
         "IEC 104 outstation on {} (common address {}), {summary}",
@@ -174,9 +175,7 @@ pub(crate) async fn run(args: ServerArgs) -> anyhow::Result<ExitCode> {
             Some(seconds) => {
                 tokio::time::sleep(Duration::from_secs_f64(seconds.clamp(0.0, 1e9))).await
             }
-            None => {
-                let _ = tokio::signal::ctrl_c().await;
-            }
+            None => interrupt.recv().await,
         }
     };
     stop.await;
