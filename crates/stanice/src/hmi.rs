@@ -100,17 +100,15 @@ pub(crate) enum UserCommand {
         /// Permission level 0..=9 (0 = read-only).
         #[arg(long)]
         level: u8,
-        /// The users file.
-        #[arg(long, default_value = "users.toml")]
-        users: PathBuf,
+        #[command(flatten)]
+        file: UsersFileArgs,
     },
     /// Removes a user.
     Remove {
         /// User name.
         name: String,
-        /// The users file.
-        #[arg(long, default_value = "users.toml")]
-        users: PathBuf,
+        #[command(flatten)]
+        file: UsersFileArgs,
     },
     /// Sets a user's password (from standard input) and optionally level.
     Passwd {
@@ -119,16 +117,48 @@ pub(crate) enum UserCommand {
         /// New permission level.
         #[arg(long)]
         level: Option<u8>,
-        /// The users file.
-        #[arg(long, default_value = "users.toml")]
-        users: PathBuf,
+        #[command(flatten)]
+        file: UsersFileArgs,
     },
     /// Lists the users and their levels.
     List {
-        /// The users file.
-        #[arg(long, default_value = "users.toml")]
-        users: PathBuf,
+        #[command(flatten)]
+        file: UsersFileArgs,
     },
+}
+
+/// Which users file a `stanice user` command edits. There is no default: a users file
+/// quietly created in the current directory is one no HMI reads.
+#[derive(Args, Debug)]
+#[group(required = true, multiple = false)]
+pub(crate) struct UsersFileArgs {
+    /// The users file.
+    #[arg(long)]
+    users: Option<PathBuf>,
+    /// A project folder: its web HMI's users file (`PROJECT/hmi/users.toml`), the one
+    /// `stanice run --hmi` and `stanice demo` read.
+    #[arg(long)]
+    project: Option<PathBuf>,
+}
+
+impl UsersFileArgs {
+    fn path(&self) -> anyhow::Result<PathBuf> {
+        match (&self.users, &self.project) {
+            (Some(users), _) => Ok(users.clone()),
+            (None, Some(project)) => {
+                if !project.join(station::config::PROJECT_FILE).is_file() {
+                    anyhow::bail!(
+                        "{} is not a project folder (no {})",
+                        project.display(),
+                        station::config::PROJECT_FILE
+                    );
+                }
+                Ok(crate::run::users_file(project))
+            }
+            // clap requires one of the two; kept as an error rather than a panic.
+            (None, None) => anyhow::bail!("give the users file: --users FILE or --project FOLDER"),
+        }
+    }
 }
 
 fn read_password() -> anyhow::Result<String> {
@@ -142,7 +172,8 @@ fn read_password() -> anyhow::Result<String> {
 
 pub(crate) fn user(command: UserCommand) -> anyhow::Result<ExitCode> {
     match command {
-        UserCommand::Add { name, level, users } => {
+        UserCommand::Add { name, level, file } => {
+            let users = file.path()?;
             let mut file = hmi::users::Users::load(&users)?;
             let password = read_password()?;
             file.add(&name, level, &password)?;
@@ -151,18 +182,20 @@ pub(crate) fn user(command: UserCommand) -> anyhow::Result<ExitCode> {
                 users.display()
             );
         }
-        UserCommand::Remove { name, users } => {
+        UserCommand::Remove { name, file } => {
+            let users = file.path()?;
             hmi::users::Users::load(&users)?.remove(&name)?;
             println!("user {name} removed from {}", users.display());
         }
-        UserCommand::Passwd { name, level, users } => {
+        UserCommand::Passwd { name, level, file } => {
+            let users = file.path()?;
             let mut file = hmi::users::Users::load(&users)?;
             let password = read_password()?;
             file.passwd(&name, &password, level)?;
             println!("password of {name} changed in {}", users.display());
         }
-        UserCommand::List { users } => {
-            for (name, level) in hmi::users::Users::load(&users)?.list() {
+        UserCommand::List { file } => {
+            for (name, level) in hmi::users::Users::load(&file.path()?)?.list() {
                 println!("{name}\t{level}");
             }
         }

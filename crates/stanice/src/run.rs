@@ -143,12 +143,22 @@ pub(crate) async fn run_project(
     Ok(ExitCode::SUCCESS)
 }
 
+/// The project's web HMI folder: screens, points and users.
+fn hmi_folder(project: &Path) -> PathBuf {
+    project.join("hmi")
+}
+
+/// The users file of the project's web HMI (`stanice user --project` edits it).
+pub(crate) fn users_file(project: &Path) -> PathBuf {
+    hmi_folder(project).join("users.toml")
+}
+
 /// Starts the project's web HMI (`PROJECT/hmi/`) against its top node, when the project
 /// has one. It connects from 127.0.0.2, the address the Vsetín project gives its HMI
 /// link (HMI-local mode, spec 7.4).
 async fn start_hmi(runtime: &Runtime, memory_store: bool, port: Option<u16>) -> Option<hmi::Hmi> {
     let project = runtime.project();
-    let screens = project.folder.join("hmi");
+    let screens = hmi_folder(&project.folder);
     if !screens.join("hmi.toml").is_file() {
         println!("  (no web HMI: {} has no hmi.toml)", screens.display());
         return None;
@@ -171,7 +181,7 @@ async fn start_hmi(runtime: &Runtime, memory_store: bool, port: Option<u16>) -> 
     };
     let started = hmi::Hmi::start(hmi::HmiOptions {
         screens: screens.clone(),
-        users: screens.join("users.toml"),
+        users: users_file(&project.folder),
         connect: vec![server.local_addr().to_string()],
         common_address: top.common_address,
         listen: std::net::SocketAddr::from(([127, 0, 0, 1], port)),
@@ -191,7 +201,7 @@ async fn start_hmi(runtime: &Runtime, memory_store: bool, port: Option<u16>) -> 
     println!(
         "  HMI      http://{}/  (users in {}: the demo's are operator / operator-vsetin, admin / admin-vsetin, viewer / viewer-vsetin)",
         hmi.address,
-        screens.join("users.toml").display()
+        users_file(&project.folder).display()
     );
     Some(hmi)
 }

@@ -788,3 +788,68 @@ fn ctrl_c_stops_the_station_and_flushes_the_store() {
         "the store has no events after Ctrl-C: {text}"
     );
 }
+
+/// Runs `command` with `input` on its standard input.
+fn run_with_input(mut command: Command, input: &str) -> Output {
+    let mut child = command
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    {
+        use std::io::Write as _;
+        let mut stdin = child.stdin.take().unwrap();
+        stdin.write_all(input.as_bytes()).unwrap();
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// `stanice user` edits the users file it is given, or the project's; without either it
+/// refuses instead of writing `./users.toml` that no HMI reads.
+#[test]
+fn user_commands_need_a_users_file_or_a_project() {
+    let dir = fresh_dir("users");
+    let mut add = stanice();
+    add.current_dir(&dir)
+        .args(["user", "add", "alice", "--level", "3"]);
+    let output = run_with_input(add, "alice-secret\n");
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("--users") && stderr.contains("--project"),
+        "{stderr}"
+    );
+    assert!(!dir.join("users.toml").exists());
+
+    let mut not_a_project = stanice();
+    not_a_project
+        .current_dir(&dir)
+        .args(["user", "list", "--project", "."]);
+    let output = run_bounded(not_a_project, 30);
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("not a project folder"), "{stderr}");
+
+    copy_vsetin(&dir, "proj");
+    let mut add = stanice();
+    add.current_dir(&dir)
+        .args(["user", "add", "alice", "--level", "3", "--project", "proj"]);
+    let text = assert_success(&run_with_input(add, "alice-secret\n"));
+    assert!(text.contains("proj/hmi/users.toml"), "{text}");
+    let mut list = stanice();
+    list.current_dir(&dir)
+        .args(["user", "list", "--project", "proj"]);
+    let text = assert_success(&run_bounded(list, 30));
+    assert!(text.lines().any(|l| l == "alice\t3"), "{text}");
+    assert!(text.lines().any(|l| l.starts_with("operator\t")), "{text}");
+    assert!(!dir.join("users.toml").exists());
+
+    let users = dir.join("elsewhere.toml");
+    let mut add = stanice();
+    add.current_dir(&dir)
+        .args(["user", "add", "bob", "--level", "0", "--users"])
+        .arg(&users);
+    assert_success(&run_with_input(add, "bob-secret\n"));
+    assert!(std::fs::read_to_string(&users).unwrap().contains("bob"));
+}
