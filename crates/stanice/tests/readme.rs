@@ -1,0 +1,438 @@
+//! Every command of README.md's `sh` blocks, run as written from the repository root with
+//! the `stanice` binary under test: what a newcomer types first has to work.
+//!
+//! One-shot commands must exit 0. Long-running ones (a station, the demo, an outstation, a
+//! client, the HMI) must show a sign of life (a line of output and, for a server, its
+//! listening port), still be running after it, and stop cleanly on Ctrl-C (SIGINT). A client
+//! or a command runs against the outstation the README starts just before it.
+//!
+//! The README's commands use its fixed ports (2404, 8080), so they run one after another,
+//! and this is a test binary of its own: cargo runs test binaries one at a time, so no other
+//! test of this crate runs beside it.
+
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
+
+use std::io::{BufRead as _, BufReader, Read};
+use std::net::{SocketAddr, TcpListener, TcpStream};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::sync::mpsc::{channel, Receiver};
+use std::time::{Duration, Instant};
+
+/// README lines that are not run, each with the reason.
+const SKIPPED: &[(&str, &str)] = &[
+    (
+        "bash scripts/test.sh",
+        "the whole test suite, this test included; it also installs packages",
+    ),
+    (
+        "cargo bench -p iec60870 --bench iec104_vs_c104",
+        "a benchmark: a release build and minutes of measurement, and it needs c104",
+    ),
+    (
+        "cargo bench -p plc --bench st_vs_native",
+        "a benchmark: a release build and minutes of measurement",
+    ),
+    (
+        "cargo bench -p station --bench latency",
+        "a benchmark: a release build and minutes of measurement",
+    ),
+    (
+        "cargo bench -p station --bench store",
+        "a benchmark: a release build and minutes of measurement",
+    ),
+    (
+        "cargo bench -p hmi --bench live",
+        "a benchmark: a release build and headless Chromium",
+    ),
+];
+
+/// Generous bounds: the machine may be busy building or testing something else.
+const START_TIMEOUT: Duration = Duration::from_secs(180);
+const ONE_SHOT_TIMEOUT: Duration = Duration::from_secs(120);
+const STOP_TIMEOUT: Duration = Duration::from_secs(30);
+const PORT_FREE_TIMEOUT: Duration = Duration::from_secs(60);
+
+fn repository_root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .canonicalize()
+        .unwrap()
+}
+
+/// Splits a command line into words as a POSIX shell does for the simple lines of the
+/// README: blanks separate words, single and double quotes group, a `#` starting a word
+/// starts a comment.
+fn shell_words(line: &str) -> Vec<String> {
+    let mut words = Vec::new();
+    let mut word: Option<String> = None;
+    let mut chars = line.chars();
+    while let Some(c) = chars.next() {
+        match c {
+            ' ' | '\t' => {
+                if let Some(done) = word.take() {
+                    words.push(done);
+                }
+            }
+            '#' if word.is_none() => break,
+            '\'' => {
+                let word = word.get_or_insert_with(String::new);
+                for c in chars.by_ref() {
+                    if c == '\'' {
+                        break;
+                    }
+                    word.push(c);
+                }
+            }
+            '"' => {
+                let word = word.get_or_insert_with(String::new);
+                while let Some(c) = chars.next() {
+                    match c {
+                        '"' => break,
+                        '\\' => word.extend(chars.next()),
+                        c => word.push(c),
+                    }
+                }
+            }
+            '\\' => word.get_or_insert_with(String::new).extend(chars.next()),
+            c => word.get_or_insert_with(String::new).push(c),
+        }
+    }
+    words.extend(word);
+    words
+}
+
+/// The command lines of the README's `sh` blocks, as words, comments dropped.
+fn readme_commands(readme: &str) -> Vec<Vec<String>> {
+    let mut commands = Vec::new();
+    let mut in_sh = false;
+    for line in readme.lines() {
+        let trimmed = line.trim();
+        if in_sh {
+            if trimmed.starts_with("```") {
+                in_sh = false;
+                continue;
+            }
+            let words = shell_words(trimmed);
+            if !words.is_empty() {
+                commands.push(words);
+            }
+        } else if trimmed == "```sh" {
+            in_sh = true;
+        }
+    }
+    commands
+}
+
+/// The arguments of `stanice` in a README line: `stanice ARGS` or
+/// `cargo run ... -p stanice ... -- ARGS`; `None` for any other program.
+fn stanice_arguments(words: &[String]) -> Option<Vec<String>> {
+    match words {
+        [first, rest @ ..] if first == "stanice" => Some(rest.to_vec()),
+        [cargo, run, rest @ ..] if cargo == "cargo" && run == "run" => {
+            let split = rest
+                .iter()
+                .position(|w| w == "--")
+                .unwrap_or_else(|| panic!("`{}`: no `--` before the arguments", words.join(" ")));
+            assert!(
+                rest[..split]
+                    .windows(2)
+                    .any(|w| w[0] == "-p" && w[1] == "stanice"),
+                "`{}` does not run the stanice package",
+                words.join(" ")
+            );
+            Some(rest[split + 1..].to_vec())
+        }
+        _ => None,
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    /// Runs until stopped (Ctrl-C).
+    LongRunning,
+    /// Runs until stopped, and the clients and commands after it talk to it.
+    Outstation,
+    /// Talks to the outstation started before it, until stopped.
+    Client,
+    /// Talks to the outstation started before it, then exits.
+    PeerOneShot,
+    /// Exits by itself.
+    OneShot,
+}
+
+fn kind(arguments: &[String]) -> Kind {
+    let words: Vec<&str> = arguments.iter().map(String::as_str).collect();
+    match words.as_slice() {
+        ["run" | "demo" | "hmi", ..] => Kind::LongRunning,
+        ["iec104", "server", ..] => Kind::Outstation,
+        ["iec104", "client", ..] => Kind::Client,
+        ["iec104", "command", ..] => Kind::PeerOneShot,
+        _ => Kind::OneShot,
+    }
+}
+
+/// The address a long-running command listens on, if it serves: `--listen ADDR`, or the
+/// top node of the Vsetín project (port_base 2404) for `run` and `demo`.
+fn listen_address(arguments: &[String]) -> Option<SocketAddr> {
+    if let Some(i) = arguments.iter().position(|a| a == "--listen") {
+        return Some(arguments[i + 1].parse().unwrap());
+    }
+    match arguments.first().map(String::as_str) {
+        Some("run" | "demo") => Some(SocketAddr::from(([127, 0, 0, 1], 2404))),
+        _ => None,
+    }
+}
+
+/// Waits until `address` can be bound: the previous command's server has let it go and
+/// nobody else on the machine holds it.
+fn wait_port_free(address: SocketAddr) {
+    let deadline = Instant::now() + PORT_FREE_TIMEOUT;
+    while TcpListener::bind(address).is_err() {
+        assert!(
+            Instant::now() < deadline,
+            "{address} stays in use: the README's commands need it"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
+/// A command running in the background, its output collected line by line.
+struct Running {
+    line: String,
+    child: Child,
+    lines: Receiver<String>,
+    seen: Vec<String>,
+}
+
+impl Running {
+    fn start(line: &str, arguments: &[String]) -> Running {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_stanice"))
+            .args(arguments)
+            .current_dir(repository_root())
+            // Kept open, as a terminal's: the station's console waits on it.
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let (sender, lines) = channel();
+        let stdout = child.stdout.take().unwrap();
+        let stderr = child.stderr.take().unwrap();
+        for pipe in [
+            Box::new(stdout) as Box<dyn Read + Send>,
+            Box::new(stderr) as Box<dyn Read + Send>,
+        ] {
+            let sender = sender.clone();
+            // Drains the pipe to its end, so the child never blocks on a full one.
+            std::thread::spawn(move || {
+                for line in BufReader::new(pipe).lines().map_while(Result::ok) {
+                    let _ = sender.send(line);
+                }
+            });
+        }
+        Running {
+            line: line.to_owned(),
+            child,
+            lines,
+            seen: Vec::new(),
+        }
+    }
+
+    fn collect(&mut self) {
+        let lines: Vec<String> = self.lines.try_iter().collect();
+        self.seen.extend(lines);
+    }
+
+    fn output(&mut self) -> String {
+        if self.exited().is_some() {
+            // The pipes end with the process: wait for its last lines.
+            while let Ok(line) = self.lines.recv_timeout(Duration::from_secs(5)) {
+                self.seen.push(line);
+            }
+        } else {
+            self.collect();
+        }
+        self.seen.join("\n")
+    }
+
+    /// Fails the test with what the command printed.
+    fn fail(&mut self, what: &str) -> ! {
+        let output = self.output();
+        panic!("`{}` {what}:\n{output}", self.line)
+    }
+
+    fn exited(&mut self) -> Option<ExitStatus> {
+        self.child.try_wait().unwrap()
+    }
+
+    /// Waits for a line of output and, for a server, a connection to its port.
+    fn wait_for_life(&mut self, listen: Option<SocketAddr>) {
+        let deadline = Instant::now() + START_TIMEOUT;
+        loop {
+            if let Some(status) = self.exited() {
+                self.fail(&format!("ended while starting ({status})"));
+            }
+            if let Ok(line) = self.lines.recv_timeout(Duration::from_millis(100)) {
+                self.seen.push(line);
+            }
+            let serving = listen.is_none_or(|address| {
+                TcpStream::connect_timeout(&address, Duration::from_millis(200)).is_ok()
+            });
+            if !self.seen.is_empty() && serving {
+                break;
+            }
+            if Instant::now() > deadline {
+                self.fail(&format!("showed no sign of life within {START_TIMEOUT:?}"));
+            }
+        }
+        if let Some(status) = self.exited() {
+            self.fail(&format!("ended after starting ({status})"));
+        }
+    }
+
+    /// Ctrl-C, as in a terminal; the command must stop cleanly.
+    fn interrupt(mut self) {
+        let status = Command::new("kill")
+            .args(["-INT", &self.child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(status.success());
+        let deadline = Instant::now() + STOP_TIMEOUT;
+        let status = loop {
+            if let Some(status) = self.exited() {
+                break status;
+            }
+            if Instant::now() > deadline {
+                let _ = self.child.kill();
+                let _ = self.child.wait();
+                self.fail(&format!("did not stop within {STOP_TIMEOUT:?} of Ctrl-C"));
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        };
+        if !status.success() {
+            self.fail(&format!("failed on Ctrl-C ({status})"));
+        }
+    }
+}
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        // After a failed assertion: never leave a process holding the README's ports.
+        if self.exited().is_none() {
+            let _ = self.child.kill();
+            let _ = self.child.wait();
+        }
+    }
+}
+
+fn run_one_shot(line: &str, arguments: &[String]) {
+    let mut running = Running::start(line, arguments);
+    // Nothing for it on standard input: a one-shot command must not wait for it.
+    drop(running.child.stdin.take());
+    let deadline = Instant::now() + ONE_SHOT_TIMEOUT;
+    let status = loop {
+        if let Some(status) = running.exited() {
+            break status;
+        }
+        if Instant::now() > deadline {
+            running.fail(&format!("did not finish within {ONE_SHOT_TIMEOUT:?}"));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    if !status.success() {
+        running.fail(&format!("failed ({status})"));
+    }
+}
+
+/// Files a README command leaves in the repository root that are no part of it: the web
+/// HMI's default event store is `hmi-events.sqlite` in the current directory.
+fn stray_files(root: &Path) -> Vec<PathBuf> {
+    [
+        "hmi-events.sqlite",
+        "hmi-events.sqlite-wal",
+        "hmi-events.sqlite-shm",
+    ]
+    .iter()
+    .map(|name| root.join(name))
+    .filter(|path| path.exists())
+    .collect()
+}
+
+#[test]
+fn shell_words_split_like_a_shell() {
+    assert_eq!(
+        shell_words("stanice events examples/vsetin --point 'RH2_*'   # comment"),
+        ["stanice", "events", "examples/vsetin", "--point", "RH2_*"]
+    );
+    assert_eq!(shell_words("a \"b c\" d#e # f"), ["a", "b c", "d#e"]);
+    assert_eq!(shell_words("# only a comment"), Vec::<String>::new());
+}
+
+#[test]
+fn every_readme_command_works_as_written() {
+    let root = repository_root();
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let commands = readme_commands(&readme);
+    assert!(commands.len() >= 10, "{commands:?}");
+    let strays_before = stray_files(&root);
+
+    let mut outstation: Option<Running> = None;
+    let mut ran = 0;
+    for words in &commands {
+        let line = words.join(" ");
+        let Some(arguments) = stanice_arguments(words) else {
+            let Some((_, reason)) = SKIPPED.iter().find(|(skipped, _)| *skipped == line) else {
+                panic!(
+                    "README command `{line}` is neither run nor listed in SKIPPED with a reason"
+                );
+            };
+            eprintln!("README: {line} skipped: {reason}");
+            continue;
+        };
+        let kind = kind(&arguments);
+        eprintln!("README: {line} ({kind:?})");
+        if matches!(kind, Kind::Client | Kind::PeerOneShot) {
+            let server = outstation.as_mut().unwrap_or_else(|| {
+                panic!("`{line}` needs the outstation the README starts before it")
+            });
+            if server.exited().is_some() {
+                server.fail("ended before its clients ran");
+            }
+        } else if let Some(server) = outstation.take() {
+            // The outstation's clients are done: it gives the port back to what follows.
+            server.interrupt();
+        }
+        match kind {
+            Kind::OneShot | Kind::PeerOneShot => run_one_shot(&line, &arguments),
+            Kind::LongRunning | Kind::Outstation | Kind::Client => {
+                let listen = listen_address(&arguments);
+                if let Some(address) = listen {
+                    wait_port_free(address);
+                }
+                let mut running = Running::start(&line, &arguments);
+                running.wait_for_life(listen);
+                if kind == Kind::Outstation {
+                    outstation = Some(running);
+                } else {
+                    running.interrupt();
+                }
+            }
+        }
+        ran += 1;
+    }
+    if let Some(server) = outstation.take() {
+        server.interrupt();
+    }
+    for path in stray_files(&root) {
+        if !strays_before.contains(&path) {
+            let _ = std::fs::remove_file(path);
+        }
+    }
+    assert!(ran >= 10, "only {ran} README commands ran");
+}
