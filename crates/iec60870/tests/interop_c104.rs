@@ -311,8 +311,7 @@ async fn our_client_reads_and_commands_a_c104_outstation() {
             .unwrap()
             .positive
     );
-    let stamped =
-        iec60870::cs104::server::time_tag_now(iec60870::cs104::server::TimeZonePolicy::Utc);
+    let stamped = iec60870::cs104::server::time_tag_now(iec60870::time::TimeZonePolicy::Utc);
     let timed = client
         .command(
             TypeId::C_SC_TA_1,
@@ -508,6 +507,7 @@ fn our_image() -> ProcessImage {
                 ioa: ioa(address),
                 command_type,
                 select_required,
+                max_age: None,
             })
             .unwrap();
     }

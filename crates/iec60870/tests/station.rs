@@ -17,6 +17,10 @@ mod common;
 
 #[path = "station/client.rs"]
 mod client;
+#[path = "station/command_age.rs"]
+mod command_age;
+#[path = "station/command_sequence.rs"]
+mod command_sequence;
 #[path = "station/commands.rs"]
 mod commands;
 #[path = "station/events.rs"]
@@ -25,6 +29,8 @@ mod events;
 mod interrogation;
 #[path = "station/redundancy.rs"]
 mod redundancy;
+#[path = "station/redundancy_modes.rs"]
+mod redundancy_modes;
 #[path = "station/requests.rs"]
 mod requests;
 #[path = "station/robustness.rs"]

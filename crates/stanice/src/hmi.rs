@@ -35,23 +35,13 @@ pub(crate) struct HmiArgs {
     store: String,
     /// The time zone of the station's time tags (IANA name, or UTC).
     #[arg(long, default_value = "Europe/Prague")]
-    time_zone: String,
+    time_zone: TimeZonePolicy,
     /// Connect to the station from this local address.
     #[arg(long)]
     local_address: Option<std::net::IpAddr>,
     /// Stop after this many seconds (runs until Ctrl-C otherwise).
     #[arg(long)]
     duration: Option<f64>,
-}
-
-pub(crate) fn zone(name: &str) -> anyhow::Result<TimeZonePolicy> {
-    if name.eq_ignore_ascii_case("utc") {
-        return Ok(TimeZonePolicy::Utc);
-    }
-    let tz: chrono_tz::Tz = name
-        .parse()
-        .map_err(|_| anyhow::anyhow!("unknown time zone `{name}`"))?;
-    Ok(TimeZonePolicy::Zone(tz))
 }
 
 pub(crate) async fn run(args: HmiArgs) -> anyhow::Result<ExitCode> {
@@ -67,7 +57,7 @@ pub(crate) async fn run(args: HmiArgs) -> anyhow::Result<ExitCode> {
         common_address: CommonAddress::new(args.ca),
         listen: args.listen,
         store: (args.store != "none").then(|| args.store.clone()),
-        zone: zone(&args.time_zone)?,
+        zone: args.time_zone,
         local_address: args.local_address,
     })
     .await

@@ -40,6 +40,15 @@
 //!                                      # client of the group is connected
 //! tls = { certificate = "tls/rh11.pem", private_key = "tls/rh11.key", trust_anchors = "tls/ca.pem" }
 //!                                      # optional; the files must exist
+//! redundancy = "groups-by-address"     # default; how clients share data: "single-group"
+//!                                      # (one started connection for all clients),
+//!                                      # "connection-is-group" (each connection its own
+//!                                      # buffer: independent masters), "groups-by-address"
+//!                                      # (the redundancy_groups); in the first two the
+//!                                      # groups only classify clients for authority and
+//!                                      # status points
+//! max_command_age_ms = 10000           # optional: time-tagged commands older (or further
+//!                                      # in the future) than this are refused
 //!
 //! [[node.task]]
 //! name = "fast"
@@ -88,6 +97,7 @@
 //! pulse_ms = 500                       # optional, single/double commands on a variable:
 //!                                      # reset to FALSE after this time
 //! from_groups = ["hmi"]                # optional: only clients of these redundancy groups
+//! max_age_ms = 5000                    # optional: this command's own maximum command delay
 //! description = "open QF1"             # optional
 //!
 //! [[node.link]]                        # IEC 104 client link to a lower node
@@ -228,6 +238,11 @@ pub struct ServerConfig {
     pub redundancy_groups: Vec<RedundancyGroup>,
     /// TLS files, resolved against the project folder.
     pub tls: Option<TlsFiles>,
+    /// How clients form redundancy groups (`redundancy`); `GroupsByAddress` carries the
+    /// groups' addresses.
+    pub redundancy: iec60870::cs104::server::RedundancyMode,
+    /// The maximum command delay of time-tagged commands (`max_command_age_ms`).
+    pub max_command_age: Option<Duration>,
 }
 
 /// A redundancy group of a server: the connections of its clients share one event buffer.
@@ -377,6 +392,9 @@ pub struct CommandConfig {
     /// Only clients of these redundancy groups may send it (empty: any client), as the
     /// TC700 accepts its HMI-local command only over the HMI link (spec 7.4).
     pub from_groups: Vec<String>,
+    /// Its own maximum command delay for time-tagged commands (`max_age_ms`), instead of
+    /// the server's.
+    pub max_age: Option<Duration>,
     /// Free text.
     pub description: String,
 }
@@ -658,6 +676,8 @@ struct RawServer {
     allowed_clients: Vec<String>,
     redundancy_groups: Option<Vec<RawGroup>>,
     tls: Option<RawTls>,
+    redundancy: Option<String>,
+    max_command_age_ms: Option<i64>,
 }
 
 #[derive(Deserialize)]
@@ -737,6 +757,7 @@ struct RawCommand {
     select_required: bool,
     remote_enable: Option<String>,
     pulse_ms: Option<i64>,
+    max_age_ms: Option<i64>,
     #[serde(default)]
     from_groups: Vec<String>,
     #[serde(default)]
@@ -1126,6 +1147,16 @@ impl Ctx<'_> {
         }
     }
 
+    /// A duration in milliseconds of at most a day; an error at `path` otherwise.
+    fn duration_ms(&mut self, ms: i64, path: &[Seg], key: &str) -> Option<Duration> {
+        if (1..=86_400_000).contains(&ms) {
+            Some(Duration::from_millis(ms.unsigned_abs()))
+        } else {
+            self.err(path, format!("{key} {ms} is outside 1..=86400000"));
+            None
+        }
+    }
+
     fn ips(&mut self, texts: &[String], path: &[Seg]) -> Vec<IpAddr> {
         let mut out = Vec::new();
         for (i, text) in texts.iter().enumerate() {
@@ -1243,11 +1274,42 @@ impl Ctx<'_> {
                     &node(&[K("server"), K("tls"), K("trust_anchors")]),
                 ),
             });
+            let group_configs = redundancy_groups
+                .iter()
+                .map(|g| {
+                    iec60870::cs104::server::RedundancyGroupConfig::new(
+                        g.name.clone(),
+                        g.clients.clone(),
+                    )
+                })
+                .collect();
+            let mode_name = s.redundancy.as_deref().unwrap_or("groups-by-address");
+            let redundancy =
+                iec60870::cs104::server::RedundancyMode::from_name(mode_name, group_configs)
+                    .unwrap_or_else(|| {
+                        self.err(
+                            &node(&[K("server"), K("redundancy")]),
+                            format!(
+                                "unknown redundancy mode `{mode_name}` (one of {})",
+                                iec60870::cs104::server::RedundancyMode::NAMES.join(", ")
+                            ),
+                        );
+                        iec60870::cs104::server::RedundancyMode::SingleGroup
+                    });
+            let max_command_age = s.max_command_age_ms.and_then(|ms| {
+                self.duration_ms(
+                    ms,
+                    &node(&[K("server"), K("max_command_age_ms")]),
+                    "max_command_age_ms",
+                )
+            });
             ServerConfig {
                 port_offset,
                 allowed_clients,
                 redundancy_groups,
                 tls,
+                redundancy,
+                max_command_age,
             }
         });
 
@@ -1551,7 +1613,11 @@ impl Ctx<'_> {
                     None
                 }
             };
+            let max_age = command
+                .max_age_ms
+                .and_then(|ms| self.duration_ms(ms, &at("max_age_ms"), "max_age_ms"));
             commands.push(CommandConfig {
+                max_age,
                 name: command.name.clone(),
                 type_id,
                 ioa: address,
@@ -1900,6 +1966,7 @@ impl Ctx<'_> {
                         remote_enable: None,
                         pulse: None,
                         from_groups: Vec::new(),
+                        max_age: command.max_age,
                         description: command.description.clone(),
                     });
                 }

@@ -41,8 +41,7 @@
 use std::collections::HashMap;
 use std::time::Duration;
 
-use chrono::{DateTime, LocalResult, NaiveDateTime, Offset as _, TimeZone, Utc};
-use chrono_tz::{OffsetComponents, Tz};
+use chrono::{DateTime, Utc};
 use iec60870::asdu::{
     BinaryCounterReading, Cause, Cp56Time2a, DoublePointState, Element, Ioa, StepPosition, TimeTag,
     TypeId,
@@ -199,77 +198,7 @@ impl std::fmt::Display for PointKey<'_> {
     }
 }
 
-/// The time zone CP56Time2a tags are written and read in. (The server's own
-/// `cs104::server::TimeZonePolicy` governs only the tags it stamps itself, for updates
-/// given without a time; configure both alike.)
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum TimeZonePolicy {
-    /// UTC, SU never set.
-    Utc,
-    /// Local time of a zone (e.g. `Europe/Prague`), SU set while daylight-saving time is in
-    /// force.
-    Zone(Tz),
-}
-
-impl TimeZonePolicy {
-    /// The CP56Time2a of an instant. Outside 2000..=2099 the tag is
-    /// [`Cp56Time2a::default`] (IV set).
-    pub fn to_cp56(self, time: DateTime<Utc>) -> Cp56Time2a {
-        let (naive, summer) = match self {
-            TimeZonePolicy::Utc => (time.naive_utc(), false),
-            TimeZonePolicy::Zone(tz) => {
-                let local = time.with_timezone(&tz);
-                let summer = !local.offset().dst_offset().is_zero();
-                (local.naive_local(), summer)
-            }
-        };
-        match Cp56Time2a::from_naive(naive) {
-            Ok(tag) => tag.with_summer_time(summer),
-            Err(_) => Cp56Time2a::default(),
-        }
-    }
-
-    /// The instant of a CP56Time2a; the tag's own IV is carried into
-    /// [`SourceTime::invalid`]. In a zone, an ambiguous local time (the hour repeated when
-    /// summer time ends) is resolved by the SU bit; a local time that does not exist (the
-    /// hour skipped when it begins) is read with the standard offset and marked invalid.
-    /// `None` for a date that does not exist.
-    pub fn from_cp56(self, tag: &Cp56Time2a) -> Option<SourceTime> {
-        let naive = tag.to_naive().ok()?;
-        let (time, invalid) = match self {
-            TimeZonePolicy::Utc => (naive.and_utc(), false),
-            TimeZonePolicy::Zone(tz) => resolve_local(tz, naive, tag.is_summer_time())?,
-        };
-        Some(SourceTime {
-            time,
-            invalid: invalid || tag.is_invalid(),
-        })
-    }
-}
-
-fn resolve_local(tz: Tz, naive: NaiveDateTime, summer: bool) -> Option<(DateTime<Utc>, bool)> {
-    match tz.from_local_datetime(&naive) {
-        LocalResult::Single(t) => Some((t.with_timezone(&Utc), false)),
-        LocalResult::Ambiguous(a, b) => {
-            let a_summer = !a.offset().dst_offset().is_zero();
-            let pick = if a_summer == summer { a } else { b };
-            Some((pick.with_timezone(&Utc), false))
-        }
-        LocalResult::None => {
-            // Read with the offset in force just before the gap (standard time).
-            let before = naive.checked_sub_signed(chrono::TimeDelta::hours(3))?;
-            let offset = match tz.from_local_datetime(&before) {
-                LocalResult::Single(t) => t.offset().fix(),
-                LocalResult::Ambiguous(t, _) => t.offset().fix(),
-                LocalResult::None => return None,
-            };
-            let utc = naive.checked_sub_signed(chrono::TimeDelta::seconds(i64::from(
-                offset.local_minus_utc(),
-            )))?;
-            Some((utc.and_utc(), true))
-        }
-    }
-}
+pub use iec60870::time::TimeZonePolicy;
 
 /// The value kinds, one per supported element family.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -668,9 +668,8 @@ where
                     started = true;
                     backlog.push_back(ClientEvent::Started);
                     if config.clock_sync_on_start {
-                        let time = crate::cs104::server::time_tag_now(
-                            crate::cs104::server::TimeZonePolicy::Utc,
-                        );
+                        let time =
+                            crate::cs104::server::time_tag_now(crate::time::TimeZonePolicy::Utc);
                         let mut asdu = Asdu::new(
                             TypeId::C_CS_NA_1,
                             Cot::new(Cause::ACTIVATION),

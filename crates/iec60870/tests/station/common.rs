@@ -178,6 +178,7 @@ pub(crate) fn command_point(
         ioa: ioa(address),
         command_type,
         select_required,
+        max_age: None,
     }
 }
 

@@ -6,7 +6,9 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use iec60870::asdu::{Element, TypeId};
-use iec60870::cs104::server::{ProcessImage, ReadOnlyStation, RedundancyGroupConfig};
+use iec60870::cs104::server::{
+    ProcessImage, ReadOnlyStation, RedundancyGroupConfig, RedundancyMode,
+};
 use iec60870::cs104::ApciConfig;
 
 use crate::common::*;
@@ -168,10 +170,10 @@ async fn groups_chosen_by_client_address_each_get_every_event() {
     init_logs();
     let mut config = server_config();
     config.listen = "0.0.0.0:0".parse().unwrap();
-    config.redundancy_groups = vec![
+    config.redundancy = RedundancyMode::GroupsByAddress(vec![
         RedundancyGroupConfig::new("one", vec![localhost(1)]),
         RedundancyGroupConfig::new("two", vec![localhost(2)]),
-    ];
+    ]);
     let server = start_server(config, image(), Arc::new(ReadOnlyStation)).await;
     let address = (localhost(1), server.local_addr().port()).into();
     let mut one = RawPeer::connect_with(address, Some(localhost(1)), ApciConfig::default()).await;

@@ -7,7 +7,9 @@ use std::time::{Duration, Instant};
 
 use iec60870::apci::{encode_i_frame, SeqNum};
 use iec60870::asdu::{Cause, TypeId};
-use iec60870::cs104::server::{ProcessImage, ReadOnlyStation, RedundancyGroupConfig, ServerHandle};
+use iec60870::cs104::server::{
+    ProcessImage, ReadOnlyStation, RedundancyGroupConfig, RedundancyMode, ServerHandle,
+};
 use iec60870::cs104::ApciConfig;
 
 use crate::common::*;
@@ -28,10 +30,10 @@ fn image() -> ProcessImage {
 async fn fast_server() -> ServerHandle {
     let mut config = server_config();
     config.apci = fast_apci();
-    config.redundancy_groups = vec![
+    config.redundancy = RedundancyMode::GroupsByAddress(vec![
         RedundancyGroupConfig::new("operator", vec![IpAddr::from([127, 0, 0, 1])]),
         RedundancyGroupConfig::catch_all("others"),
-    ];
+    ]);
     start_server(config, image(), Arc::new(ReadOnlyStation)).await
 }
 

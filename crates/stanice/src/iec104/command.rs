@@ -95,16 +95,6 @@ pub(crate) async fn run(args: CommandArgs) -> anyhow::Result<ExitCode> {
             return Ok(ExitCode::from(2));
         }
     }
-    // Print everything else the station sends meanwhile (return information).
-    let printer = tokio::spawn(async move {
-        while let Some(event) = events.recv().await {
-            if let ClientEvent::Asdu(asdu) = &event {
-                if !asdu.type_id.is_command() {
-                    println!("{}", render::analyser_text(&event));
-                }
-            }
-        }
-    });
     let mut steps = Vec::new();
     if args.select {
         steps.push((
@@ -116,9 +106,15 @@ pub(crate) async fn run(args: CommandArgs) -> anyhow::Result<ExitCode> {
     let mut code = ExitCode::SUCCESS;
     for (step, element) in steps {
         println!("-> {step} {} ioa={} {}", args.type_id, ioa, element);
-        let outcome = client
-            .command(args.type_id, ioa, element, command_time(args.type_id))
-            .await;
+        let outcome = exchange(
+            &client,
+            &mut events,
+            args.type_id,
+            ioa,
+            element,
+            command_time(args.type_id),
+        )
+        .await;
         if !report(step, &outcome) {
             code = match outcome {
                 Ok(_) => ExitCode::from(1),
@@ -127,11 +123,83 @@ pub(crate) async fn run(args: CommandArgs) -> anyhow::Result<ExitCode> {
             break;
         }
     }
-    // Let return information arrive before closing.
-    tokio::time::sleep(Duration::from_millis(200)).await;
+    // Return information that follows the termination is still shown.
+    let linger = tokio::time::sleep(Duration::from_millis(200));
+    tokio::pin!(linger);
+    loop {
+        tokio::select! {
+            () = &mut linger => break,
+            event = events.recv() => match event {
+                Some(event) => print_received(&event),
+                None => break,
+            },
+        }
+    }
     client.close().await;
-    printer.abort();
     Ok(code)
+}
+
+/// Sends one command and prints every ASDU as it arrives (the confirmation, the return
+/// information, the termination), stamped with its arrival time; returns the outcome once
+/// the ASDUs of its exchange have been printed.
+async fn exchange(
+    client: &iec60870::cs104::client::ClientHandle,
+    events: &mut tokio::sync::mpsc::Receiver<ClientEvent>,
+    type_id: TypeId,
+    ioa: Ioa,
+    element: iec60870::asdu::Element,
+    time: Option<iec60870::time::Cp56Time2a>,
+) -> Result<RequestOutcome, ClientError> {
+    let mut answers_printed = 0;
+    let answers = |event: &ClientEvent| match event {
+        ClientEvent::Asdu(asdu) => {
+            asdu.type_id == type_id && asdu.objects.first().is_some_and(|o| o.ioa == ioa)
+        }
+        _ => false,
+    };
+    let command = client.command(type_id, ioa, element, time);
+    tokio::pin!(command);
+    let outcome = loop {
+        tokio::select! {
+            outcome = &mut command => break outcome,
+            event = events.recv() => match event {
+                Some(event) => {
+                    answers_printed += usize::from(answers(&event));
+                    print_received(&event);
+                }
+                None => break (&mut command).await,
+            },
+        }
+    };
+    // The client hands the answers to the event stream too; show those not shown yet
+    // before the verdict (bounded: the stream may have closed).
+    if let Ok(outcome) = &outcome {
+        let _ = tokio::time::timeout(Duration::from_secs(1), async {
+            while answers_printed < outcome.responses.len() {
+                match events.recv().await {
+                    Some(event) => {
+                        answers_printed += usize::from(answers(&event));
+                        print_received(&event);
+                    }
+                    None => break,
+                }
+            }
+        })
+        .await;
+    }
+    outcome
+}
+
+/// One received event, as the protocol analyser prints it (with its arrival time).
+fn print_received(event: &ClientEvent) {
+    if let ClientEvent::Asdu(asdu) = event {
+        let arrow = if asdu.type_id.is_command() {
+            "<-"
+        } else {
+            "  "
+        };
+        println!("{arrow} {}", render::analyser_text(event));
+    }
 }
 
 /// A time tag for the time-tagged command types: now, in UTC.
@@ -145,12 +213,6 @@ fn command_time(type_id: TypeId) -> Option<iec60870::time::Cp56Time2a> {
 fn report(step: &str, outcome: &Result<RequestOutcome, ClientError>) -> bool {
     match outcome {
         Ok(outcome) => {
-            for asdu in &outcome.responses {
-                println!(
-                    "<- {}",
-                    render::analyser_text(&ClientEvent::Asdu(asdu.clone()))
-                );
-            }
             if outcome.positive {
                 let termination = if outcome.terminated {
                     " and terminated"

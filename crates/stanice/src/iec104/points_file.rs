@@ -33,7 +33,11 @@ pub(crate) struct PointList {
     pub(crate) image: ProcessImage,
     pub(crate) monitor: Vec<PointRow>,
     pub(crate) commands: Vec<PointRow>,
-    pub(crate) names: HashMap<u32, String>,
+    /// Names of monitor points by address.
+    pub(crate) monitor_names: HashMap<u32, String>,
+    /// Names of command points by address (a command and a monitor point may share an
+    /// address: the monitor point then returns the command's effect).
+    pub(crate) command_names: HashMap<u32, String>,
 }
 
 pub(crate) fn load(path: &Path) -> anyhow::Result<PointList> {
@@ -98,6 +102,9 @@ pub(crate) fn parse(text: &str) -> anyhow::Result<PointList> {
                 })
                 .map_err(|error| anyhow::anyhow!("{line}: {error}"))?;
             list.monitor.push(PointRow { ioa });
+            if !name.is_empty() {
+                list.monitor_names.insert(ioa.get(), name);
+            }
         } else if type_id.is_command() {
             let select_required = match field(select_column).to_ascii_lowercase().as_str() {
                 "" | "0" | "false" | "no" => false,
@@ -109,14 +116,15 @@ pub(crate) fn parse(text: &str) -> anyhow::Result<PointList> {
                     ioa,
                     command_type: type_id,
                     select_required,
+                    max_age: None,
                 })
                 .map_err(|error| anyhow::anyhow!("{line}: {error}"))?;
             list.commands.push(PointRow { ioa });
+            if !name.is_empty() {
+                list.command_names.insert(ioa.get(), name);
+            }
         } else {
             bail!("{line}: {type_id} is neither a monitor nor a command type");
-        }
-        if !name.is_empty() {
-            list.names.insert(ioa.get(), name);
         }
     }
     Ok(list)
@@ -152,7 +160,20 @@ mod tests {
         .unwrap();
         assert_eq!(list.monitor.len(), 2);
         assert_eq!(list.commands.len(), 1);
-        assert_eq!(list.names.get(&281).map(String::as_str), Some("FA1"));
+        assert_eq!(
+            list.monitor_names.get(&281).map(String::as_str),
+            Some("FA1")
+        );
+    }
+
+    #[test]
+    fn a_command_and_its_feedback_point_keep_their_own_names() {
+        let list = parse(
+            "ioa,type,value,name\n2021,M_DP_NA_1,1,QF1 position\n2021,C_DC_NA_1,,QF1 command\n",
+        )
+        .unwrap();
+        assert_eq!(list.monitor_names[&2021], "QF1 position");
+        assert_eq!(list.command_names[&2021], "QF1 command");
     }
 
     #[test]

@@ -13,8 +13,8 @@ use std::time::Duration;
 use clap::Args;
 use iec60870::asdu::{Cause, CommonAddress, Element, Quality};
 use iec60870::cs104::server::{
-    ready, spawn_server, Command, CommandFuture, CommandOutcome, ServerConfig, ServerHandle,
-    StationHandler,
+    ready, spawn_server, Command, CommandFuture, CommandOutcome, CommandRefusal,
+    RedundancyGroupConfig, RedundancyMode, ServerConfig, ServerHandle, StationHandler,
 };
 
 use super::points_file::{self, PointList};
@@ -44,6 +44,25 @@ pub(crate) struct ServerArgs {
     /// Connections served at once.
     #[arg(long, default_value_t = 64)]
     max_connections: usize,
+    /// How clients share the data: `connection-is-group` (each connection gets every
+    /// event on its own: independent masters never disturb each other), `single-group`
+    /// (one started connection for all clients: a second master's STARTDT takes the data
+    /// from the first, which stays connected on standby; the standard's redundancy), or
+    /// `groups-by-address` (the --group groups: main and standby of each control centre).
+    #[arg(long, default_value = "connection-is-group", value_parser = RedundancyMode::NAMES)]
+    mode: String,
+    /// A redundancy group for `--mode groups-by-address`: `NAME=IP[,IP...]`, or `NAME=`
+    /// for a group that takes every client no other group names. Repeatable.
+    #[arg(long = "group", value_name = "NAME=IPS")]
+    groups: Vec<String>,
+    /// Refuse time-tagged commands older than this many seconds, or further in the
+    /// future (the maximum command delay); not checked unless given.
+    #[arg(long, value_name = "SECONDS")]
+    max_command_age: Option<f64>,
+    /// The zone of time tags: `UTC` or a zone name such as `Europe/Prague` (SU set in
+    /// summer time).
+    #[arg(long, default_value = "UTC")]
+    time_zone: iec60870::time::TimeZonePolicy,
     #[command(flatten)]
     link: LinkOptions,
 }
@@ -51,6 +70,7 @@ pub(crate) struct ServerArgs {
 /// Logs commands and makes a monitor point at the same address follow them.
 struct CommandLogger {
     server: OnceLock<ServerHandle>,
+    /// Command point names by address.
     names: std::collections::HashMap<u32, String>,
 }
 
@@ -85,6 +105,19 @@ impl StationHandler for CommandLogger {
         ready(CommandOutcome::Executed)
     }
 
+    fn command_refused(&self, command: &Command, refusal: &CommandRefusal) {
+        let name = self
+            .names
+            .get(&command.ioa.get())
+            .map(|name| format!(" ({name})"))
+            .unwrap_or_default();
+        let step = if command.select { "select" } else { "execute" };
+        println!(
+            "command {} ioa={}{name} {} {step} from {}: REFUSED: {refusal}",
+            command.type_id, command.ioa, command.element, command.peer
+        );
+    }
+
     fn handle_clock_sync(&self, time: iec60870::time::Cp56Time2a, peer: SocketAddr) -> bool {
         println!("clock synchronisation from {peer}: {time}");
         true
@@ -98,6 +131,38 @@ impl StationHandler for CommandLogger {
         };
         println!("client {peer} {what}");
     }
+}
+
+/// The redundancy mode of `--mode` with the groups of `--group`.
+fn redundancy_mode(mode: &str, groups: &[String]) -> anyhow::Result<RedundancyMode> {
+    let groups = groups
+        .iter()
+        .map(|group| {
+            let (name, addresses) = group
+                .split_once('=')
+                .ok_or_else(|| anyhow::anyhow!("--group {group}: expected NAME=IP[,IP...]"))?;
+            let clients = addresses
+                .split(',')
+                .map(str::trim)
+                .filter(|address| !address.is_empty())
+                .map(|address| {
+                    address.parse().map_err(|_| {
+                        anyhow::anyhow!("--group {group}: '{address}' is not an IP address")
+                    })
+                })
+                .collect::<anyhow::Result<Vec<_>>>()?;
+            Ok(RedundancyGroupConfig::new(name.trim(), clients))
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    if !groups.is_empty() && mode != "groups-by-address" {
+        anyhow::bail!("--group needs --mode groups-by-address");
+    }
+    let mode = RedundancyMode::from_name(mode, groups)
+        .ok_or_else(|| anyhow::anyhow!("unknown --mode {mode}"))?;
+    if mode == RedundancyMode::GroupsByAddress(Vec::new()) {
+        anyhow::bail!("--mode groups-by-address needs at least one --group NAME=IP[,IP...]");
+    }
+    Ok(mode)
 }
 
 /// The monitor value a command sets.
@@ -133,7 +198,7 @@ pub(crate) async fn serve_points(
 ) -> anyhow::Result<ServerHandle> {
     let handler = Arc::new(CommandLogger {
         server: OnceLock::new(),
-        names: points.names.clone(),
+        names: points.command_names.clone(),
     });
     let server = spawn_server(
         config,
@@ -150,14 +215,24 @@ pub(crate) async fn run(args: ServerArgs) -> anyhow::Result<ExitCode> {
     let mut config = ServerConfig::new(args.listen, CommonAddress::new(args.ca));
     config.apci = args.link.apci()?;
     config.max_connections = args.max_connections;
+    config.redundancy = redundancy_mode(&args.mode, &args.groups)?;
+    config.time_zone = args.time_zone;
+    config.max_command_age = args
+        .max_command_age
+        .map(|seconds| {
+            Duration::try_from_secs_f64(seconds)
+                .map_err(|_| anyhow::anyhow!("--max-command-age {seconds}: not a duration"))
+        })
+        .transpose()?;
     if let Some(pem) = args.link.tls()? {
         config.tls = Some(iec60870::cs104::tls::server_config(&pem)?);
     }
     let monitor_rows = points.monitor.clone();
     let summary = format!(
-        "{} monitor points, {} command points",
+        "{} monitor points, {} command points, redundancy {}",
         points.monitor.len(),
-        points.commands.len()
+        points.commands.len(),
+        config.redundancy.name(),
     );
     let mut interrupt = crate::interrupt::Interrupt::listen();
     let server = serve_points(config, points).await?;

@@ -133,6 +133,24 @@ impl StationHandler for NodeHandler {
         })
     }
 
+    fn command_refused(&self, command: &server::Command, refusal: &server::CommandRefusal) {
+        let name = self.commands.get(&command.ioa.get()).map_or_else(
+            || format!("IOA {}", command.ioa),
+            |routed| routed.name.clone(),
+        );
+        let recorded = Recorded {
+            points: Arc::clone(&self.points),
+            command: command.clone(),
+            name,
+        };
+        // The reason (the age of a stale command, ...) is the audit record's detail.
+        let _ = recorded.finish(CommandOutcome::Refused, refusal.to_string());
+    }
+
+    fn now(&self) -> chrono::DateTime<chrono::Utc> {
+        self.points.clock().now()
+    }
+
     fn handle_clock_sync(&self, time: Cp56Time2a, peer: SocketAddr) -> bool {
         let Some(source) = self.points.zone().from_cp56(&time) else {
             tracing::warn!(node = %self.points.name(), %peer, "clock synchronisation with an impossible date refused");

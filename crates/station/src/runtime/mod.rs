@@ -38,7 +38,7 @@ use std::time::Duration;
 
 use chrono::{DateTime, Utc};
 use iec60870::cs104::server::{
-    spawn_server, CommandPoint, RedundancyGroupConfig, ServerConfig, ServerError, ServerHandle,
+    spawn_server, CommandPoint, ServerConfig, ServerError, ServerHandle,
 };
 use tokio::sync::oneshot;
 
@@ -358,11 +358,9 @@ impl Runtime {
                 (Some(server_config), Some(address)) => {
                     let mut server = ServerConfig::new(address, config.common_address);
                     server.allowed_clients = server_config.allowed_clients.clone();
-                    server.redundancy_groups = server_config
-                        .redundancy_groups
-                        .iter()
-                        .map(|g| RedundancyGroupConfig::new(g.name.clone(), g.clients.clone()))
-                        .collect();
+                    server.redundancy = server_config.redundancy.clone();
+                    server.max_command_age = server_config.max_command_age;
+                    server.time_zone = zone;
                     if let Some(tls) = &server_config.tls {
                         // Already resolved against the project folder by the configuration.
                         let files = iec60870::cs104::tls::TlsFiles {
@@ -387,6 +385,7 @@ impl Runtime {
                                 ioa: command.ioa,
                                 command_type: command.type_id,
                                 select_required: command.select_required,
+                                max_age: command.max_age,
                             })
                             .map_err(|error| {
                                 RuntimeError::Setup(format!("node `{}`: {error}", config.name))

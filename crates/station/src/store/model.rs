@@ -133,14 +133,9 @@ pub fn quality_from_bits(bits: u8) -> Quality {
     }
 }
 
-/// The source time stamp of an event, as the outstation tagged it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct SourceTime {
-    /// The time, UTC; the store keeps milliseconds and drops anything finer.
-    pub time: DateTime<Utc>,
-    /// The time tag's IV bit: the outstation's clock was not synchronised or failed.
-    pub invalid: bool,
-}
+/// The source time stamp of an event, as the outstation tagged it (the instant its
+/// CP56Time2a stands for under the link's time zone policy, with the tag's IV bit).
+pub use iec60870::time::SourceTime;
 
 /// Why an event was produced (the cause of transmission, as the station sees it).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

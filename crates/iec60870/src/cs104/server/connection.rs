@@ -9,6 +9,7 @@
 use std::collections::VecDeque;
 use std::net::SocketAddr;
 use std::sync::Arc;
+use std::time::Duration;
 
 use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt};
 use tokio::sync::watch;
@@ -16,12 +17,12 @@ use tracing::Instrument;
 
 use crate::asdu::{
     mirror_with_cause, object_len, pack_objects, Asdu, AsduHeader, AsduParams, Cause,
-    CommonAddress, Cot, DoublePointState, Element, InformationObject, Ioa, TypeId,
+    CommonAddress, Cot, DoublePointState, Element, InformationObject, Ioa, TimeTag, TypeId,
 };
 use crate::cs104::session::{Role, Session, SessionEvent};
 
-use super::group::Group;
-use super::handler::{Command, CommandFuture, CommandOutcome};
+use super::group::{Group, QueuedEvent};
+use super::handler::{Command, CommandFuture, CommandOutcome, CommandRefusal, TerminationFuture};
 use super::{Selection, Shared};
 
 /// Answers queued for a client that does not acknowledge them: beyond this the client is
@@ -53,6 +54,21 @@ struct CommandReply {
     outcome: CommandOutcome,
 }
 
+/// A command termination (ACT_TERM) waiting for its place: after every event its group
+/// queued before the command terminated, so that the return information comes between
+/// the confirmation and the termination.
+struct Termination {
+    /// Sent once the group has no event left with a lower sequence number.
+    after_seq: u64,
+    asdu: Vec<u8>,
+}
+
+/// A confirmed command whose application has not yet terminated it.
+struct Terminating {
+    future: TerminationFuture,
+    request: Vec<u8>,
+}
+
 /// A command waiting for the handler's outcome. Polled by the connection's own loop
 /// rather than a spawned task and a channel: an idle connection then holds no channel
 /// buffers (memory per connection matters with a thousand clients).
@@ -62,6 +78,9 @@ struct PendingCommand {
     select: bool,
     ioa: u32,
     selection: Option<Selection>,
+    /// An execute holds back the group's return information (cause 11) queued from
+    /// this sequence number on until its confirmation has gone out.
+    holds_return_from: Option<u64>,
 }
 
 /// Resolves when one of the pending commands has its outcome; pending while none has.
@@ -91,6 +110,22 @@ fn next_outcome(
     })
 }
 
+/// Resolves with the request of a confirmed command once its application terminated it;
+/// pending while none has.
+fn next_termination(
+    terminating: &mut Vec<Terminating>,
+) -> impl std::future::Future<Output = Vec<u8>> + '_ {
+    std::future::poll_fn(move |context| {
+        let ready = terminating
+            .iter_mut()
+            .position(|command| command.future.as_mut().poll(context).is_ready());
+        match ready {
+            Some(index) => std::task::Poll::Ready(terminating.swap_remove(index).request),
+            None => std::task::Poll::Pending,
+        }
+    })
+}
+
 /// An interrogation being streamed to the client, a chunk at a time as the window allows.
 struct Interrogation {
     request: Vec<u8>,
@@ -105,7 +140,7 @@ struct Interrogation {
 struct Connection {
     shared: Arc<Shared>,
     id: u64,
-    group: usize,
+    group: Arc<Group>,
     peer: SocketAddr,
     session: Session,
     /// Confirmations and other answers: sent before anything else.
@@ -118,6 +153,10 @@ struct Connection {
     /// Alternates group events and interrogation chunks so neither starves the other.
     prefer_interrogation: bool,
     pending_commands: Vec<PendingCommand>,
+    /// Confirmed commands waiting for their application to terminate them.
+    terminating: Vec<Terminating>,
+    /// Terminations waiting for the events queued before them, oldest first.
+    terminations: VecDeque<Termination>,
     /// Malformed ASDUs received so far (see [`MAX_MALFORMED_ASDUS`]).
     malformed_asdus: u32,
 }
@@ -125,7 +164,7 @@ struct Connection {
 pub(super) async fn run<S>(
     shared: Arc<Shared>,
     id: u64,
-    group: usize,
+    group: Arc<Group>,
     peer: SocketAddr,
     stream: S,
     shutdown: watch::Receiver<bool>,
@@ -134,7 +173,7 @@ pub(super) async fn run<S>(
 {
     let span = tracing::info_span!("iec104_connection", %peer, id);
     async move {
-        tracing::info!(group = %shared.groups.get(group).map(|g| g.config.name.as_str()).unwrap_or("?"), "client connected");
+        tracing::info!(group = %group.config.name, "client connected");
         shared.handler.connection_changed(peer, true, false);
         let now = tokio::time::Instant::now().into_std();
         let mut connection = Connection {
@@ -149,6 +188,8 @@ pub(super) async fn run<S>(
             active: false,
             prefer_interrogation: false,
             pending_commands: Vec::new(),
+            terminating: Vec::new(),
+            terminations: VecDeque::new(),
             malformed_asdus: 0,
         };
         let reason = connection.drive(stream, shutdown).await;
@@ -162,7 +203,7 @@ pub(super) async fn run<S>(
 
 impl Connection {
     fn group(&self) -> Option<&Group> {
-        self.shared.groups.get(self.group)
+        Some(&self.group)
     }
 
     fn params(&self) -> &AsduParams {
@@ -176,10 +217,7 @@ impl Connection {
         let (mut reader, mut writer) = tokio::io::split(stream);
         let mut input = vec![0u8; READ_BUFFER];
         let mut output = Vec::new();
-        let shared = Arc::clone(&self.shared);
-        let Some(group) = shared.groups.get(self.group) else {
-            return "no such redundancy group".to_owned();
-        };
+        let group = Arc::clone(&self.group);
         loop {
             // Registered before the group's queue is looked at, so that an event queued
             // from now on wakes this connection (no lost wake-up between the check and the
@@ -245,6 +283,9 @@ impl Connection {
                 reply = next_outcome(&mut self.pending_commands), if !self.pending_commands.is_empty() => {
                     self.finish_command(reply);
                 }
+                request = next_termination(&mut self.terminating), if !self.terminating.is_empty() => {
+                    self.terminate(&request);
+                }
                 _ = shutdown.changed() => return "server shut down".to_owned(),
             }
         }
@@ -285,15 +326,20 @@ impl Connection {
     }
 
     fn activate(&mut self) {
-        let Some(group) = self.shared.groups.get(self.group) else {
-            return;
-        };
+        let group = Arc::clone(&self.group);
         let mut state = group.lock();
         if let Some(previous) = state.active {
             if previous != self.id {
-                tracing::info!(
-                    previous,
-                    "switch-over: this connection takes over the group"
+                // At warn level: with independent masters in one group this is the moment
+                // one of them silently stops getting data.
+                let previous_peer = state
+                    .active_peer
+                    .map_or_else(|| "?".to_owned(), |peer| peer.to_string());
+                tracing::warn!(
+                    group = %group.config.name,
+                    previous_connection = previous,
+                    "take-over: {} started data transfer and takes the redundancy group's data from {previous_peer}, which goes on standby",
+                    self.peer,
                 );
                 let in_flight = std::mem::take(&mut state.in_flight);
                 for asdu in in_flight.into_iter().rev() {
@@ -302,6 +348,7 @@ impl Connection {
             }
         }
         state.active = Some(self.id);
+        state.active_peer = Some(self.peer);
         drop(state);
         self.active = true;
         // Wake the connection that lost the group (and ourselves).
@@ -320,10 +367,12 @@ impl Connection {
         }
         self.forget_acknowledged();
         self.active = false;
-        if let Some(group) = self.shared.groups.get(self.group) {
+        {
+            let group = Arc::clone(&self.group);
             let mut state = group.lock();
             if state.active == Some(self.id) {
                 state.active = None;
+                state.active_peer = None;
                 let in_flight = std::mem::take(&mut state.in_flight);
                 if !in_flight.is_empty() {
                     tracing::info!(
@@ -382,6 +431,14 @@ impl Connection {
                 }
                 continue;
             }
+            if self.termination_due() {
+                if let Some(termination) = self.terminations.pop_front() {
+                    if !self.send(now, termination.asdu) {
+                        break;
+                    }
+                    continue;
+                }
+            }
             let from_interrogation = if self.prefer_interrogation {
                 self.next_interrogation_asdu()
             } else {
@@ -418,16 +475,22 @@ impl Connection {
     fn send_group_asdu(&mut self, now: std::time::Instant) -> bool {
         let params = self.shared.config.asdu;
         let common_address = self.shared.config.common_address;
-        let Some(group) = self.shared.groups.get(self.group) else {
-            return false;
-        };
+        let group = Arc::clone(&self.group);
         let mut state = group.lock();
         if state.active != Some(self.id) {
             return false;
         }
+        let gate = self.event_gate();
         let asdu = match state.retransmit.pop_front() {
             Some(asdu) => asdu,
             None => {
+                if !state
+                    .events
+                    .front()
+                    .is_some_and(|event| gate.lets_through(event))
+                {
+                    return false;
+                }
                 let Some(first) = state.events.pop_front() else {
                     return false;
                 };
@@ -437,7 +500,9 @@ impl Connection {
                 while asdu.objects.len() < capacity {
                     match state.events.front() {
                         Some(next)
-                            if next.type_id == asdu.type_id && next.cause == asdu.cot.cause =>
+                            if next.type_id == asdu.type_id
+                                && next.cause == asdu.cot.cause
+                                && gate.lets_through(next) =>
                         {
                             if let Some(next) = state.events.pop_front() {
                                 asdu.objects.push(next.object);
@@ -464,6 +529,49 @@ impl Connection {
                 state.retransmit.push_front(asdu);
                 false
             }
+        }
+    }
+
+    /// Which of the group's events may go out now (see [`EventGate`]).
+    fn event_gate(&self) -> EventGate {
+        EventGate {
+            before_termination: self.terminations.front().map(|t| t.after_seq),
+            hold_return_from: self
+                .pending_commands
+                .iter()
+                .filter_map(|command| command.holds_return_from)
+                .min(),
+        }
+    }
+
+    /// Whether the oldest waiting termination may go out: the group has sent every event
+    /// queued before it (or this connection no longer carries the group's data).
+    fn termination_due(&self) -> bool {
+        let Some(termination) = self.terminations.front() else {
+            return false;
+        };
+        if !self.active {
+            return true;
+        }
+        let state = self.group.lock();
+        if state.active != Some(self.id) {
+            return true;
+        }
+        state.retransmit.is_empty()
+            && state
+                .events
+                .front()
+                .is_none_or(|event| event.seq >= termination.after_seq)
+    }
+
+    /// Queues the termination of an executed command behind the events queued so far.
+    fn terminate(&mut self, request: &[u8]) {
+        match mirror_with_cause(request, self.params(), Cause::ACTIVATION_TERMINATION, false) {
+            Ok(asdu) => {
+                let after_seq = self.group.lock().next_seq;
+                self.terminations.push_back(Termination { after_seq, asdu });
+            }
+            Err(error) => tracing::warn!(%error, "cannot mirror request"),
         }
     }
 
@@ -795,23 +903,31 @@ impl Connection {
             );
             return self.reply(&raw, Cause::ACTIVATION_CON, true);
         };
+        let select = object.element.is_select();
+        let key = object.ioa.get();
+        let command = Command {
+            type_id: asdu.type_id,
+            common_address: asdu.common_address,
+            ioa: object.ioa,
+            element: object.element.clone(),
+            time: object.time,
+            originator: asdu.cot.originator,
+            select,
+            peer: self.peer,
+        };
         let point = self.shared.read_image().command(object.ioa).cloned();
         let Some(point) = point else {
-            tracing::warn!(ioa = %object.ioa, "command to an unknown address");
-            return self.reply(&raw, Cause::UNKNOWN_OBJECT_ADDRESS, true);
+            return self.refuse(&raw, &command, CommandRefusal::UnknownAddress);
         };
         if base_command_type(point.command_type) != base_command_type(asdu.type_id) {
-            tracing::warn!(ioa = %object.ioa, expected = %point.command_type, got = %asdu.type_id, "command of the wrong type");
-            return self.reply(&raw, Cause::ACTIVATION_CON, true);
+            let expected = point.command_type;
+            return self.refuse(&raw, &command, CommandRefusal::WrongType { expected });
         }
         if let Element::DoubleCommand { state, .. } = &object.element {
             if !matches!(state, DoublePointState::On | DoublePointState::Off) {
-                tracing::warn!(ioa = %object.ioa, "double command with a state that is not permitted");
-                return self.reply(&raw, Cause::ACTIVATION_CON, true);
+                return self.refuse(&raw, &command, CommandRefusal::StateNotPermitted);
             }
         }
-        let select = object.element.is_select();
-        let key = object.ioa.get();
         if cause == Cause::DEACTIVATION {
             let mut selections = self.shared.lock_selections();
             let ours = selections
@@ -822,6 +938,11 @@ impl Connection {
             }
             drop(selections);
             return self.reply(&raw, Cause::DEACTIVATION_CON, !ours);
+        }
+        if let Some(limit) = point.max_age.or(self.shared.config.max_command_age) {
+            if let Err(refusal) = self.check_age(&command, limit) {
+                return self.refuse(&raw, &command, refusal);
+            }
         }
         let originator = asdu.cot.originator;
         let tokio_now = tokio::time::Instant::now();
@@ -853,25 +974,16 @@ impl Connection {
             }
             drop(selections);
             if !matches {
-                tracing::warn!(ioa = %object.ioa, "execute without a matching selection: refused");
-                return self.reply(&raw, Cause::ACTIVATION_CON, true);
+                return self.refuse(&raw, &command, CommandRefusal::NoSelection);
             }
         }
-        let command = Command {
-            type_id: asdu.type_id,
-            common_address: asdu.common_address,
-            ioa: object.ioa,
-            element: object.element.clone(),
-            time: object.time,
-            originator,
-            select,
-            peer: self.peer,
-        };
         tracing::info!(%command.type_id, ioa = %command.ioa, element = %command.element, select, "command");
         if self.pending_commands.len() >= MAX_PENDING_COMMANDS {
-            tracing::warn!(ioa = %command.ioa, "too many commands waiting for their outcome: refused");
-            return self.reply(&raw, Cause::ACTIVATION_CON, true);
+            return self.refuse(&raw, &command, CommandRefusal::TooManyPending);
         }
+        // Return information of an execute that the application queues before it decides
+        // (or while it does) must still follow the confirmation.
+        let holds_return_from = (!select).then(|| self.group.lock().next_seq);
         let future = self.shared.handler.handle_command(command);
         self.pending_commands.push(PendingCommand {
             future,
@@ -879,21 +991,95 @@ impl Connection {
             select,
             ioa: key,
             selection: pending_selection,
+            holds_return_from,
         });
     }
 
+    /// Checks a time-tagged command's age against the maximum command delay, on the
+    /// station's clock with the tag read in the server's zone.
+    fn check_age(&self, command: &Command, limit: Duration) -> Result<(), CommandRefusal> {
+        let Some(TimeTag::Cp56(tag)) = command.time else {
+            return Ok(());
+        };
+        let Some(sent) = self.shared.config.time_zone.from_cp56(&tag) else {
+            return Err(CommandRefusal::TimeUnusable);
+        };
+        if sent.invalid {
+            return Err(CommandRefusal::TimeUnusable);
+        }
+        let now = self.shared.handler.now();
+        let age = now.signed_duration_since(sent.time);
+        match age.to_std() {
+            Ok(age) if age > limit => Err(CommandRefusal::Stale { age, limit }),
+            Ok(_) => Ok(()),
+            // Negative: the tag is ahead of the station's clock.
+            Err(_) => match (-age).to_std() {
+                Ok(ahead) if ahead > limit => Err(CommandRefusal::FromTheFuture { ahead, limit }),
+                _ => Ok(()),
+            },
+        }
+    }
+
+    /// Refuses a command the server itself finds wrong: a negative confirmation (cause 47
+    /// for an unknown address, else ACT_CON), a warning naming the peer, and the
+    /// application told so that it can audit it.
+    fn refuse(&mut self, raw: &[u8], command: &Command, refusal: CommandRefusal) {
+        tracing::warn!(
+            type_id = %command.type_id,
+            ioa = %command.ioa,
+            element = %command.element,
+            select = command.select,
+            reason = %refusal,
+            "command refused"
+        );
+        self.shared.handler.command_refused(command, &refusal);
+        let cause = match refusal {
+            CommandRefusal::UnknownAddress => Cause::UNKNOWN_OBJECT_ADDRESS,
+            _ => Cause::ACTIVATION_CON,
+        };
+        self.reply(raw, cause, true);
+    }
+
     fn finish_command(&mut self, reply: CommandReply) {
-        let executed = reply.outcome == CommandOutcome::Executed;
-        tracing::info!(ioa = reply.ioa, select = reply.select, ?reply.outcome, "command outcome");
-        if executed {
+        let positive = reply.outcome.is_positive();
+        tracing::info!(ioa = reply.ioa, select = reply.select, outcome = ?reply.outcome, "command outcome");
+        if positive {
             if let Some(selection) = reply.selection {
                 self.shared.lock_selections().insert(reply.ioa, selection);
             }
         }
-        self.reply(&reply.request, Cause::ACTIVATION_CON, !executed);
-        if executed && !reply.select {
-            self.reply(&reply.request, Cause::ACTIVATION_TERMINATION, false);
+        self.reply(&reply.request, Cause::ACTIVATION_CON, !positive);
+        if reply.select {
+            return;
         }
+        match reply.outcome {
+            CommandOutcome::Executed => self.terminate(&reply.request),
+            CommandOutcome::Confirmed(future) => self.terminating.push(Terminating {
+                future,
+                request: reply.request,
+            }),
+            CommandOutcome::Refused => {}
+        }
+    }
+}
+
+/// Which of the group's events a connection may send now, keeping the command sequence:
+/// nothing queued at or after a waiting termination's place, and no return information
+/// (cause 11) queued since an execute arrived whose confirmation has not gone out yet.
+struct EventGate {
+    before_termination: Option<u64>,
+    hold_return_from: Option<u64>,
+}
+
+impl EventGate {
+    fn lets_through(&self, event: &QueuedEvent) -> bool {
+        let after_termination = self
+            .before_termination
+            .is_some_and(|place| event.seq >= place);
+        let held_return = self
+            .hold_return_from
+            .is_some_and(|from| event.seq >= from && event.cause == Cause::RETURN_REMOTE);
+        !after_termination && !held_return
     }
 }
 

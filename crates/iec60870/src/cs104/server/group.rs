@@ -7,7 +7,7 @@
 //! acknowledged are put back at the front, so a switch-over loses nothing.
 
 use std::collections::VecDeque;
-use std::net::IpAddr;
+use std::net::{IpAddr, SocketAddr};
 use std::sync::Mutex;
 
 use tokio::sync::Notify;
@@ -37,6 +37,56 @@ impl RedundancyGroupConfig {
     /// A group that takes every client.
     pub fn catch_all(name: impl Into<String>) -> Self {
         Self::new(name, Vec::new())
+    }
+}
+
+/// How a server forms redundancy groups from its clients (the three modes of lib60870 and
+/// of most outstations).
+///
+/// Only one connection of a group carries data at a time: a STARTDT on another
+/// connection of the same group takes the data over (the previous connection stays open,
+/// on standby, and the server logs the take-over naming both peers). Groups never take
+/// data from each other: each has its own event buffer.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub enum RedundancyMode {
+    /// Every client in one group with one event buffer: the standard's redundancy (one
+    /// controlling station with a main and a standby connection). A second, independent
+    /// master's STARTDT silently takes the data from the first.
+    #[default]
+    SingleGroup,
+    /// Each connection is a group of its own with its own event buffer, filled from the
+    /// moment it connects: independent masters never disturb each other, and nothing is
+    /// kept for a connection that is gone.
+    ConnectionIsGroup,
+    /// Groups by client address: each group's clients share its buffer (main and standby
+    /// of one control centre); a group without addresses takes every client no other
+    /// group names, and a client no group takes is refused.
+    GroupsByAddress(Vec<RedundancyGroupConfig>),
+}
+
+impl RedundancyMode {
+    /// The names of the modes as the command line and project files spell them.
+    pub const NAMES: [&'static str; 3] =
+        ["single-group", "connection-is-group", "groups-by-address"];
+
+    /// The mode's name as the command line and project files spell it.
+    pub fn name(&self) -> &'static str {
+        match self {
+            RedundancyMode::SingleGroup => Self::NAMES[0],
+            RedundancyMode::ConnectionIsGroup => Self::NAMES[1],
+            RedundancyMode::GroupsByAddress(_) => Self::NAMES[2],
+        }
+    }
+
+    /// The mode of a name (see [`RedundancyMode::NAMES`]), with the groups that
+    /// `groups-by-address` forms; `None` for an unknown name.
+    pub fn from_name(name: &str, groups: Vec<RedundancyGroupConfig>) -> Option<Self> {
+        match name {
+            "single-group" => Some(RedundancyMode::SingleGroup),
+            "connection-is-group" => Some(RedundancyMode::ConnectionIsGroup),
+            "groups-by-address" => Some(RedundancyMode::GroupsByAddress(groups)),
+            _ => None,
+        }
     }
 }
 
@@ -73,6 +123,9 @@ pub(crate) struct QueuedEvent {
     pub(crate) type_id: TypeId,
     pub(crate) cause: Cause,
     pub(crate) object: InformationObject,
+    /// The event's place in the group's sequence (set by [`Group::push`]): a command
+    /// termination waits for the events queued before it.
+    pub(crate) seq: u64,
 }
 
 #[derive(Debug)]
@@ -85,6 +138,10 @@ pub(crate) struct GroupState {
     pub(crate) in_flight: VecDeque<Vec<u8>>,
     pub(crate) events: VecDeque<QueuedEvent>,
     pub(crate) active: Option<u64>,
+    /// The peer of the active connection (named in the take-over warning).
+    pub(crate) active_peer: Option<SocketAddr>,
+    /// The sequence number the next queued event gets.
+    pub(crate) next_seq: u64,
     dropped: u64,
     overflowing: bool,
 }
@@ -114,6 +171,8 @@ impl Group {
                 in_flight: VecDeque::new(),
                 events: VecDeque::new(),
                 active: None,
+                active_peer: None,
+                next_seq: 0,
                 dropped: 0,
                 overflowing: false,
             }),
@@ -132,8 +191,10 @@ impl Group {
     }
 
     /// Queues an event, applying the overflow policy.
-    pub(crate) fn push(&self, event: QueuedEvent) {
+    pub(crate) fn push(&self, mut event: QueuedEvent) {
         let mut state = self.lock();
+        event.seq = state.next_seq;
+        state.next_seq += 1;
         if state.events.len() >= self.capacity {
             state.dropped += 1;
             if !state.overflowing {

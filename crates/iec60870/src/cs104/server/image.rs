@@ -57,6 +57,10 @@ pub struct CommandPoint {
     pub command_type: TypeId,
     /// Whether an execute must be preceded by a select (select-before-operate).
     pub select_required: bool,
+    /// The largest age of a time-tagged command to this point (the interoperability
+    /// list's maximum command delay); `None` takes the server's
+    /// [`ServerConfig::max_command_age`](super::ServerConfig::max_command_age).
+    pub max_age: Option<std::time::Duration>,
 }
 
 /// Why a point could not be added or updated.

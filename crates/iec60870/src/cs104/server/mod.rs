@@ -37,23 +37,16 @@ use crate::asdu::{
     AsduParams, Cause, CommonAddress, Element, InformationObject, Ioa, TimeTag, TypeId,
 };
 use crate::cs104::config::ApciConfig;
-use crate::time::Cp56Time2a;
+use crate::time::{Cp56Time2a, TimeZonePolicy};
 
-pub use group::{GroupStats, OverflowPolicy, RedundancyGroupConfig};
-pub use handler::{ready, Command, CommandFuture, CommandOutcome, ReadOnlyStation, StationHandler};
+pub use group::{GroupStats, OverflowPolicy, RedundancyGroupConfig, RedundancyMode};
+pub use handler::{
+    ready, Command, CommandFuture, CommandOutcome, CommandRefusal, ReadOnlyStation, StationHandler,
+    TerminationFuture,
+};
 pub use image::{CommandPoint, ImageError, MonitorPoint, ProcessImage};
 
 use group::{Group, QueuedEvent};
-
-/// Which clock a time tag stamped by the server reads.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum TimeZonePolicy {
-    /// Coordinated universal time, SU bit clear (the default: unambiguous across DST).
-    #[default]
-    Utc,
-    /// The host's local time, SU bit set in summer time.
-    Local,
-}
 
 /// Configuration of a server.
 #[derive(Debug, Clone)]
@@ -67,8 +60,9 @@ pub struct ServerConfig {
     pub apci: ApciConfig,
     /// ASDU field sizes (IEC 104: COT 2, CA 2, IOA 3 octets, 249 octets at most).
     pub asdu: AsduParams,
-    /// Redundancy groups; empty means one group that takes every client.
-    pub redundancy_groups: Vec<RedundancyGroupConfig>,
+    /// How clients form redundancy groups (one group, a group per connection, or groups
+    /// by client address).
+    pub redundancy: RedundancyMode,
     /// Clients allowed to connect; empty allows every client.
     pub allowed_clients: Vec<IpAddr>,
     /// Connections served at once; further clients are refused.
@@ -79,13 +73,18 @@ pub struct ServerConfig {
     pub overflow_policy: OverflowPolicy,
     /// How long a selection (select-before-operate) waits for its execute.
     pub select_timeout: Duration,
+    /// The largest age of a time-tagged command (the interoperability list's maximum
+    /// command delay), measured on [`StationHandler::now`] with the time tag read in
+    /// [`ServerConfig::time_zone`]: an older command, or one further in the future, gets a
+    /// negative confirmation. A command point may set its own. `None`: not checked.
+    pub max_command_age: Option<Duration>,
     /// Accept commands with cause 5 (request) as activation, as some gateways do
     /// (spec IEC-A3). Off by default: such commands get a negative confirmation with
     /// cause 45.
     pub accept_request_as_activation: bool,
     /// Send an end of initialisation (M_EI_NA_1) to the first started connection.
     pub send_end_of_initialisation: bool,
-    /// Clock used for time tags the server stamps itself.
+    /// The zone of every time tag the server reads or stamps itself.
     pub time_zone: TimeZonePolicy,
     /// TLS (IEC 62351-3): when set, every connection must complete a TLS handshake.
     pub tls: Option<Arc<tokio_rustls::rustls::ServerConfig>>,
@@ -99,12 +98,13 @@ impl ServerConfig {
             common_address,
             apci: ApciConfig::default(),
             asdu: AsduParams::IEC104,
-            redundancy_groups: Vec::new(),
+            redundancy: RedundancyMode::SingleGroup,
             allowed_clients: Vec::new(),
             max_connections: 64,
             event_buffer_capacity: 100_000,
             overflow_policy: OverflowPolicy::DropOldest,
             select_timeout: Duration::from_secs(10),
+            max_command_age: None,
             accept_request_as_activation: false,
             send_end_of_initialisation: true,
             time_zone: TimeZonePolicy::Utc,
@@ -159,7 +159,12 @@ pub(crate) struct Selection {
 pub(crate) struct Shared {
     pub(crate) config: ServerConfig,
     pub(crate) image: RwLock<ProcessImage>,
-    pub(crate) groups: Vec<Group>,
+    /// The redundancy groups: fixed at start (one group, or the configured groups by
+    /// address), or one per open connection.
+    pub(crate) groups: RwLock<Vec<Arc<Group>>>,
+    /// Whether the end of initialisation still has to go to the first connection's own
+    /// group (a group per connection: no group exists at start to queue it in).
+    end_of_initialisation_pending: std::sync::atomic::AtomicBool,
     pub(crate) handler: Arc<dyn StationHandler>,
     pub(crate) selections: Mutex<HashMap<u32, Selection>>,
     next_connection_id: AtomicU64,
@@ -187,49 +192,79 @@ impl Shared {
             .unwrap_or_else(|poisoned| poisoned.into_inner())
     }
 
-    /// The group a client belongs to: the first naming its address, else the first
-    /// catch-all group.
-    fn group_for(&self, ip: IpAddr) -> Option<usize> {
+    fn read_groups(&self) -> std::sync::RwLockReadGuard<'_, Vec<Arc<Group>>> {
         self.groups
-            .iter()
-            .position(|group| group.accepts(ip))
-            .or_else(|| self.groups.iter().position(Group::is_catch_all))
+            .read()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
     }
 
+    fn write_groups(&self) -> std::sync::RwLockWriteGuard<'_, Vec<Arc<Group>>> {
+        self.groups
+            .write()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    /// The group a new connection belongs to: in a group per connection a new group of
+    /// its own; otherwise the first group naming its address, else the first catch-all
+    /// group.
+    fn group_for(&self, ip: IpAddr, connection: u64) -> Option<Arc<Group>> {
+        if self.config.redundancy == RedundancyMode::ConnectionIsGroup {
+            let group = Arc::new(Group::new(
+                RedundancyGroupConfig::new(format!("connection-{connection}"), vec![ip]),
+                self.config.event_buffer_capacity,
+                self.config.overflow_policy,
+            ));
+            if self
+                .end_of_initialisation_pending
+                .swap(false, Ordering::Relaxed)
+            {
+                group.push(end_of_initialisation());
+            }
+            self.write_groups().push(Arc::clone(&group));
+            return Some(group);
+        }
+        let groups = self.read_groups();
+        groups
+            .iter()
+            .find(|group| group.accepts(ip))
+            .or_else(|| groups.iter().find(|group| group.is_catch_all()))
+            .cloned()
+    }
+
+    /// Forgets a connection's own group when the connection ends.
+    fn release_connection_group(&self, group: &Arc<Group>) {
+        if self.config.redundancy == RedundancyMode::ConnectionIsGroup {
+            self.write_groups()
+                .retain(|other| !Arc::ptr_eq(other, group));
+        }
+    }
+
+    /// The station's time as a time tag in the server's zone.
     pub(crate) fn now_time_tag(&self) -> Cp56Time2a {
-        time_tag_now(self.config.time_zone)
+        self.config.time_zone.to_cp56(self.handler.now())
     }
 }
 
 /// The host's time as a CP56Time2a in the given zone. Outside the years the tag can hold
 /// (2000..=2099) the tag says 2000-01-01 00:00 with IV set rather than lie.
 pub fn time_tag_now(zone: TimeZonePolicy) -> Cp56Time2a {
-    let (naive, summer) = match zone {
-        TimeZonePolicy::Utc => (chrono::Utc::now().naive_utc(), false),
-        TimeZonePolicy::Local => {
-            let local = chrono::Local::now();
-            (local.naive_local(), is_summer_time(&local))
-        }
-    };
-    match Cp56Time2a::from_naive(naive) {
-        Ok(time) => time.with_summer_time(summer),
-        Err(_) => Cp56Time2a::default(),
-    }
+    zone.to_cp56(chrono::Utc::now())
 }
 
-/// Whether a local time is in daylight-saving time: its offset is larger than the
-/// smaller of the offsets in January and July of its year.
-fn is_summer_time(local: &chrono::DateTime<chrono::Local>) -> bool {
-    use chrono::{Datelike, Offset, TimeZone};
-    let offset_at = |month: u32| {
-        chrono::Local
-            .with_ymd_and_hms(local.year(), month, 1, 12, 0, 0)
-            .single()
-            .map(|t| t.offset().fix().local_minus_utc())
-    };
-    match (offset_at(1), offset_at(7)) {
-        (Some(january), Some(july)) => local.offset().fix().local_minus_utc() > january.min(july),
-        _ => false,
+/// The end of initialisation (M_EI_NA_1, cause 4) a server sends after its start.
+fn end_of_initialisation() -> QueuedEvent {
+    QueuedEvent {
+        type_id: TypeId::M_EI_NA_1,
+        cause: Cause::INITIALISED,
+        object: InformationObject {
+            ioa: Ioa::default(),
+            element: Element::EndOfInitialisation {
+                cause: 0,
+                after_parameter_change: false,
+            },
+            time: None,
+        },
+        seq: 0,
     }
 }
 
@@ -262,41 +297,32 @@ pub async fn spawn_server(
         .apci
         .validate()
         .map_err(|error| ServerError::Config(error.to_string()))?;
-    let groups: Vec<Group> = if config.redundancy_groups.is_empty() {
-        vec![Group::new(
-            RedundancyGroupConfig::catch_all("default"),
+    let groups: Vec<Arc<Group>> = match &config.redundancy {
+        RedundancyMode::SingleGroup => vec![RedundancyGroupConfig::catch_all("default")],
+        RedundancyMode::ConnectionIsGroup => Vec::new(),
+        RedundancyMode::GroupsByAddress(groups) if groups.is_empty() => {
+            return Err(ServerError::Config(
+                "redundancy groups by client address need at least one group".to_owned(),
+            ))
+        }
+        RedundancyMode::GroupsByAddress(groups) => groups.clone(),
+    }
+    .into_iter()
+    .map(|group| {
+        Arc::new(Group::new(
+            group,
             config.event_buffer_capacity,
             config.overflow_policy,
-        )]
-    } else {
-        config
-            .redundancy_groups
-            .iter()
-            .map(|group| {
-                Group::new(
-                    group.clone(),
-                    config.event_buffer_capacity,
-                    config.overflow_policy,
-                )
-            })
-            .collect()
-    };
+        ))
+    })
+    .collect();
     if config.send_end_of_initialisation {
         for group in &groups {
-            group.push(QueuedEvent {
-                type_id: TypeId::M_EI_NA_1,
-                cause: Cause::INITIALISED,
-                object: InformationObject {
-                    ioa: Ioa::default(),
-                    element: Element::EndOfInitialisation {
-                        cause: 0,
-                        after_parameter_change: false,
-                    },
-                    time: None,
-                },
-            });
+            group.push(end_of_initialisation());
         }
     }
+    let end_of_initialisation_pending =
+        config.send_end_of_initialisation && config.redundancy == RedundancyMode::ConnectionIsGroup;
     let listener =
         TcpListener::bind(config.listen)
             .await
@@ -314,7 +340,10 @@ pub async fn spawn_server(
     let shared = Arc::new(Shared {
         config,
         image: RwLock::new(image),
-        groups,
+        groups: RwLock::new(groups),
+        end_of_initialisation_pending: std::sync::atomic::AtomicBool::new(
+            end_of_initialisation_pending,
+        ),
         handler,
         selections: Mutex::new(HashMap::new()),
         next_connection_id: AtomicU64::new(1),
@@ -367,7 +396,8 @@ async fn accept_loop(
             tracing::warn!(%peer, open, "connection refused: connection limit reached");
             continue;
         }
-        let Some(group) = shared.group_for(ip) else {
+        let id = shared.next_connection_id.fetch_add(1, Ordering::Relaxed);
+        let Some(group) = shared.group_for(ip, id) else {
             shared.refused.fetch_add(1, Ordering::Relaxed);
             tracing::warn!(%peer, "connection refused: no redundancy group takes this client");
             continue;
@@ -375,13 +405,13 @@ async fn accept_loop(
         let _ = stream.set_nodelay(true);
         shared.accepted.fetch_add(1, Ordering::Relaxed);
         shared.open_connections.fetch_add(1, Ordering::Relaxed);
-        let id = shared.next_connection_id.fetch_add(1, Ordering::Relaxed);
         let shared = Arc::clone(&shared);
         let shutdown = shutdown.clone();
         let tls = tls.clone();
         tokio::spawn(async move {
             match tls {
                 None => {
+                    let group = Arc::clone(&group);
                     connection::run(Arc::clone(&shared), id, group, peer, stream, shutdown).await
                 }
                 Some(acceptor) => {
@@ -389,6 +419,7 @@ async fn accept_loop(
                         tokio::time::timeout(shared.config.apci.t1, acceptor.accept(stream)).await;
                     match handshake {
                         Ok(Ok(stream)) => {
+                            let group = Arc::clone(&group);
                             connection::run(Arc::clone(&shared), id, group, peer, stream, shutdown)
                                 .await
                         }
@@ -397,6 +428,7 @@ async fn accept_loop(
                     }
                 }
             }
+            shared.release_connection_group(&group);
             shared.open_connections.fetch_sub(1, Ordering::Relaxed);
         });
     }
@@ -460,11 +492,12 @@ impl ServerHandle {
         let mut image = self.shared.write_image();
         image.set(ioa, element.clone(), time)?;
         let object = InformationObject { ioa, element, time };
-        for group in &self.shared.groups {
+        for group in self.shared.read_groups().iter() {
             group.push(QueuedEvent {
                 type_id,
                 cause,
                 object: object.clone(),
+                seq: 0,
             });
         }
         drop(image);
@@ -493,7 +526,12 @@ impl ServerHandle {
             connections: self.shared.open_connections.load(Ordering::Relaxed),
             accepted: self.shared.accepted.load(Ordering::Relaxed),
             refused: self.shared.refused.load(Ordering::Relaxed),
-            groups: self.shared.groups.iter().map(Group::stats).collect(),
+            groups: self
+                .shared
+                .read_groups()
+                .iter()
+                .map(|group| group.stats())
+                .collect(),
         }
     }
 

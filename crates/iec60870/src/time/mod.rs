@@ -26,11 +26,16 @@
 //! 17 gives 2017, and a [`NaiveDateTime`] outside 2000..2099 cannot be encoded. The tag
 //! carries wall-clock fields without a zone; whether they are UTC or local time (with SU
 //! marking summer time) is a setting of the link, decided by the station, not by this
-//! codec. The conversions here are therefore to and from [`NaiveDateTime`].
+//! codec. The conversions here are therefore to and from [`NaiveDateTime`]; the link's
+//! [`TimeZonePolicy`] turns tags into instants and back.
 
 use std::fmt;
 
 use chrono::{Datelike, NaiveDate, NaiveDateTime, Timelike};
+
+mod zone;
+
+pub use zone::{SourceTime, TimeZonePolicy, UnknownTimeZone};
 
 /// Why a time tag could not be built or decoded.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
