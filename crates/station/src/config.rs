@@ -98,6 +98,12 @@
 //!                                      # reset to FALSE after this time
 //! from_groups = ["hmi"]                # optional: only clients of these redundancy groups
 //! max_age_ms = 5000                    # optional: this command's own maximum command delay
+//! feedback = "RH2_QF1_Position"        # optional, commands on a PLC variable: the point of
+//!                                      # this node that returns the command's effect; its
+//!                                      # first change after an execute is sent as return
+//!                                      # information (cause 11) between ACT_CON and ACT_TERM
+//! feedback_timeout_ms = 5000           # default 5000: ACT_TERM without return information
+//!                                      # after this long (wall-clock time)
 //! description = "open QF1"             # optional
 //!
 //! [[node.link]]                        # IEC 104 client link to a lower node
@@ -395,9 +401,25 @@ pub struct CommandConfig {
     /// Its own maximum command delay for time-tagged commands (`max_age_ms`), instead of
     /// the server's.
     pub max_age: Option<Duration>,
+    /// The point that returns the command's effect, and how long an execute waits for it
+    /// before it is terminated without (`feedback`, `feedback_timeout_ms`).
+    pub feedback: Option<Feedback>,
     /// Free text.
     pub description: String,
 }
+
+/// The return information of a command: a point of the node and the wait for it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Feedback {
+    /// The point's name.
+    pub point: String,
+    /// How long an execute waits for the point to change.
+    pub timeout: Duration,
+}
+
+/// How long an execute waits for its return information when the project sets no
+/// `feedback_timeout_ms`.
+pub const DEFAULT_FEEDBACK_TIMEOUT: Duration = Duration::from_secs(5);
 
 /// The other end of a client link.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -758,6 +780,8 @@ struct RawCommand {
     remote_enable: Option<String>,
     pulse_ms: Option<i64>,
     max_age_ms: Option<i64>,
+    feedback: Option<String>,
+    feedback_timeout_ms: Option<i64>,
     #[serde(default)]
     from_groups: Vec<String>,
     #[serde(default)]
@@ -1616,8 +1640,44 @@ impl Ctx<'_> {
             let max_age = command
                 .max_age_ms
                 .and_then(|ms| self.duration_ms(ms, &at("max_age_ms"), "max_age_ms"));
+            let feedback = match &command.feedback {
+                None => {
+                    if command.feedback_timeout_ms.is_some() {
+                        self.err(
+                            &at("feedback_timeout_ms"),
+                            "feedback_timeout_ms needs feedback",
+                        );
+                    }
+                    None
+                }
+                Some(point) => {
+                    if !point_names.contains(point) {
+                        self.err(
+                            &at("feedback"),
+                            format!("node `{}` has no point `{point}`", raw.name),
+                        );
+                    }
+                    if matches!(target, CommandTarget::Link { .. }) {
+                        self.err(
+                            &at("feedback"),
+                            "a forwarded command's return information comes from the node that executes it",
+                        );
+                    }
+                    let timeout = match command.feedback_timeout_ms {
+                        None => DEFAULT_FEEDBACK_TIMEOUT,
+                        Some(ms) => self
+                            .duration_ms(ms, &at("feedback_timeout_ms"), "feedback_timeout_ms")
+                            .unwrap_or(DEFAULT_FEEDBACK_TIMEOUT),
+                    };
+                    Some(Feedback {
+                        point: point.clone(),
+                        timeout,
+                    })
+                }
+            };
             commands.push(CommandConfig {
                 max_age,
+                feedback,
                 name: command.name.clone(),
                 type_id,
                 ioa: address,
@@ -1967,6 +2027,7 @@ impl Ctx<'_> {
                         pulse: None,
                         from_groups: Vec::new(),
                         max_age: command.max_age,
+                        feedback: None,
                         description: command.description.clone(),
                     });
                 }

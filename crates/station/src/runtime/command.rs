@@ -7,6 +7,12 @@
 //! link is sent to the lower node with the same qualifier (a select stays a select) and
 //! its confirmation becomes this node's. Each is audited in the store with the peer's
 //! address, the time on the node's clock, the target, the value and the outcome.
+//!
+//! The command sequence (ACT_CON, return information, ACT_TERM) holds on every path: a
+//! command with a feedback point is confirmed when the PLC took it and terminated once
+//! the point's next change went out as return information (or its wait ran out); a
+//! forwarded command is confirmed when the lower node confirmed it and terminated when
+//! the lower node's termination arrived, after the data that came before it.
 
 use std::collections::HashMap;
 use std::net::SocketAddr;
@@ -14,7 +20,7 @@ use std::sync::{mpsc, Arc};
 use std::time::Duration;
 
 use iec60870::asdu::{DoublePointState, Element, RegulatingStepState, TimeTag};
-use iec60870::cs104::server::{self, CommandFuture, StationHandler};
+use iec60870::cs104::server::{self, CommandFuture, StationHandler, TerminationFuture};
 use iec60870::time::Cp56Time2a;
 use plc::vm::Val;
 use tokio::sync::oneshot;
@@ -49,6 +55,8 @@ pub(crate) struct RoutedCommand {
     pub route: Route,
     /// Only clients of these redundancy groups may send it (empty: any).
     pub from_groups: Vec<String>,
+    /// The point returning its effect (commands on a PLC variable).
+    pub feedback: Option<crate::config::Feedback>,
 }
 
 /// The [`StationHandler`] of a node's server.
@@ -121,15 +129,30 @@ impl StationHandler for NodeHandler {
                     }
                 }
             }
-            let (outcome, detail) = match routed.route {
+            let (outcome, detail, termination) = match routed.route {
                 Route::Plc { node, pulse } => {
-                    execute_on_plc(&simulation, node, &command, pulse).await
+                    // Asked before the PLC gets the command: its change may be quick.
+                    let feedback = routed
+                        .feedback
+                        .filter(|_| !command.select)
+                        .map(|feedback| (this.points.expect_return(&feedback.point), feedback));
+                    let (outcome, detail) =
+                        execute_on_plc(&simulation, node, &command, pulse).await;
+                    let termination = feedback.map(|(returned, feedback)| {
+                        await_return(returned, feedback, this.points.name().to_owned())
+                    });
+                    (outcome, detail, termination)
                 }
                 Route::Link { link, ioa } => {
                     forward(handler_links.get(&link), &link, ioa, &command).await
                 }
             };
-            this.finish(outcome, detail)
+            match (this.finish(outcome, detail), termination) {
+                (server::CommandOutcome::Executed, Some(termination)) => {
+                    server::CommandOutcome::Confirmed(termination)
+                }
+                (reply, _) => reply,
+            }
         })
     }
 
@@ -307,26 +330,109 @@ async fn execute_on_plc(
     }
 }
 
+/// Terminates a confirmed command once its feedback point's change has gone out as
+/// return information, or when the wait runs out.
+fn await_return(
+    returned: tokio::sync::oneshot::Receiver<()>,
+    feedback: crate::config::Feedback,
+    node: String,
+) -> TerminationFuture {
+    Box::pin(async move {
+        if tokio::time::timeout(feedback.timeout, returned)
+            .await
+            .is_err()
+        {
+            tracing::info!(
+                %node, point = %feedback.point, timeout_ms = feedback.timeout.as_millis(),
+                "no return information: the command is terminated without it"
+            );
+        }
+    })
+}
+
+/// Sends a command down a link. The confirmation is the lower node's, as the link task
+/// meets it; an executed command's termination waits for the lower node's termination to
+/// reach the link task too (the return information before it is then published here).
 async fn forward(
     link: Option<&LinkHandle>,
     name: &str,
     ioa: iec60870::asdu::Ioa,
     command: &server::Command,
-) -> (CommandOutcome, String) {
-    let Some(client) = link.and_then(LinkHandle::client) else {
-        return (CommandOutcome::Failed, format!("link {name} is cut"));
+) -> (CommandOutcome, String, Option<TerminationFuture>) {
+    let Some(link) = link else {
+        return (CommandOutcome::Failed, format!("link {name} is cut"), None);
     };
-    if !link.is_some_and(LinkHandle::is_up) {
-        return (CommandOutcome::Failed, format!("link {name} is down"));
+    let Some(client) = link.client() else {
+        return (CommandOutcome::Failed, format!("link {name} is cut"), None);
+    };
+    if !link.is_up() {
+        return (CommandOutcome::Failed, format!("link {name} is down"), None);
     }
     let time = match &command.time {
         Some(TimeTag::Cp56(tag)) => Some(*tag),
         _ => None,
     };
-    match client
-        .command(command.type_id, ioa, command.element.clone(), time)
-        .await
-    {
+    let answers = link.watch_command(command.type_id, ioa);
+    let (type_id, element) = (command.type_id, command.element.clone());
+    let mut request =
+        tokio::spawn(async move { client.command(type_id, ioa, element, time).await });
+    let mut confirmed = answers.confirmed;
+    let mut terminated = answers.terminated;
+    let positive = tokio::select! {
+        seen = &mut confirmed => seen.ok(),
+        result = &mut request => {
+            // Answered before the link task met the confirmation: for a terminated
+            // execute, let the link task catch up with the termination (and the return
+            // information before it) first.
+            if !command.select && matches!(result, Ok(Ok(ref outcome)) if outcome.terminated) {
+                let _ = tokio::time::timeout(Duration::from_secs(2), terminated).await;
+            }
+            let (outcome, detail) = request_outcome(result, name, ioa);
+            return (outcome, detail, None);
+        }
+    };
+    if positive != Some(true) {
+        // Refused (or the link went away): the request's own result says why.
+        let (outcome, detail) = request_outcome(request.await, name, ioa);
+        return (outcome, detail, None);
+    }
+    let detail = format!("confirmed by {name} (IOA {ioa})");
+    if command.select {
+        request.abort();
+        return (CommandOutcome::Executed, detail, None);
+    }
+    let termination: TerminationFuture = Box::pin(async move {
+        tokio::select! {
+            _ = &mut terminated => {}
+            result = &mut request => {
+                // The request ends on the termination too, maybe before the link task
+                // got there: wait (bounded) for the link task, which publishes the return
+                // information before it.
+                if matches!(result, Ok(Ok(ref outcome)) if outcome.terminated) {
+                    let _ = tokio::time::timeout(Duration::from_secs(2), terminated).await;
+                }
+            }
+        }
+    });
+    (CommandOutcome::Executed, detail, Some(termination))
+}
+
+/// The audit outcome of a forwarded command's request.
+fn request_outcome(
+    result: Result<
+        Result<iec60870::cs104::client::RequestOutcome, iec60870::cs104::client::ClientError>,
+        tokio::task::JoinError,
+    >,
+    name: &str,
+    ioa: iec60870::asdu::Ioa,
+) -> (CommandOutcome, String) {
+    let Ok(result) = result else {
+        return (
+            CommandOutcome::Failed,
+            format!("{name}: the request was lost"),
+        );
+    };
+    match result {
         Ok(outcome) if outcome.positive => (
             CommandOutcome::Executed,
             format!("confirmed by {name} (IOA {ioa})"),

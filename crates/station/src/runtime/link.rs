@@ -7,7 +7,10 @@
 //! reconnection the lower node's buffered events and the general interrogation bring
 //! them back. On start (and every [`CLOCK_SYNC_PERIOD`]) the node synchronises the lower
 //! node's clock with its own, so it stays the time source while its upper link is down.
-//! Commands forwarded down the link use the same client ([`LinkHandle::client`]).
+//! Commands forwarded down the link use the same client ([`LinkHandle::client`]); the
+//! link task reports their confirmation and termination as it meets them in the lower
+//! node's stream ([`LinkHandle::watch_command`]), after the data received before them, so
+//! a forwarded command's return information is published here before its termination.
 
 use std::collections::HashMap;
 use std::net::SocketAddr;
@@ -15,9 +18,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use iec60870::asdu::{Asdu, CommonAddress};
+use iec60870::asdu::{Asdu, Cause, CommonAddress, Ioa, TypeId};
 use iec60870::cs104::client::{spawn_client, ClientConfig, ClientEvent, ClientHandle};
-use tokio::sync::mpsc;
+use tokio::sync::{mpsc, oneshot};
 
 use crate::pointdb::{from_element, PointId};
 use crate::store::EventCause;
@@ -59,6 +62,36 @@ pub struct LinkHandle {
     control: mpsc::UnboundedSender<LinkControl>,
     client: Arc<Mutex<Option<ClientHandle>>>,
     up: Arc<AtomicBool>,
+    commands: Arc<Mutex<Vec<CommandWatch>>>,
+}
+
+/// A forwarded command whose answers the link task looks out for.
+#[derive(Debug)]
+struct CommandWatch {
+    type_id: TypeId,
+    ioa: Ioa,
+    confirmed: Option<oneshot::Sender<bool>>,
+    terminated: Option<oneshot::Sender<()>>,
+}
+
+impl CommandWatch {
+    fn abandoned(&self) -> bool {
+        self.confirmed
+            .as_ref()
+            .is_none_or(oneshot::Sender::is_closed)
+            && self
+                .terminated
+                .as_ref()
+                .is_none_or(oneshot::Sender::is_closed)
+    }
+}
+
+/// The answers of a forwarded command, as the link task meets them: its confirmation
+/// (positive or not), then its termination.
+#[derive(Debug)]
+pub(crate) struct CommandAnswers {
+    pub confirmed: oneshot::Receiver<bool>,
+    pub terminated: oneshot::Receiver<()>,
 }
 
 impl LinkHandle {
@@ -91,6 +124,60 @@ impl LinkHandle {
         let _ = self.control.send(LinkControl::Restore);
     }
 
+    /// Watches for the answers of a command about to be sent down the link (type and the
+    /// lower node's address).
+    pub(crate) fn watch_command(&self, type_id: TypeId, ioa: Ioa) -> CommandAnswers {
+        let (confirmed, confirmed_rx) = oneshot::channel();
+        let (terminated, terminated_rx) = oneshot::channel();
+        let mut commands = self.lock_commands();
+        commands.retain(|watch| !watch.abandoned());
+        commands.push(CommandWatch {
+            type_id,
+            ioa,
+            confirmed: Some(confirmed),
+            terminated: Some(terminated),
+        });
+        CommandAnswers {
+            confirmed: confirmed_rx,
+            terminated: terminated_rx,
+        }
+    }
+
+    fn lock_commands(&self) -> std::sync::MutexGuard<'_, Vec<CommandWatch>> {
+        self.commands
+            .lock()
+            .unwrap_or_else(|poison| poison.into_inner())
+    }
+
+    /// Passes a command's answer from the lower node to whoever forwarded the command.
+    fn answered(&self, asdu: &Asdu) {
+        let Some(object) = asdu.objects.first() else {
+            return;
+        };
+        let cause = asdu.cot.cause;
+        let confirmation = cause == Cause::ACTIVATION_CON || (44..=47).contains(&cause.value());
+        let termination = cause == Cause::ACTIVATION_TERMINATION;
+        if !confirmation && !termination {
+            return;
+        }
+        let mut commands = self.lock_commands();
+        for watch in commands
+            .iter_mut()
+            .filter(|watch| watch.type_id == asdu.type_id && watch.ioa == object.ioa)
+        {
+            if confirmation {
+                if let Some(confirmed) = watch.confirmed.take() {
+                    let _ = confirmed.send(!asdu.cot.negative);
+                }
+            } else if let Some(terminated) = watch.terminated.take() {
+                let _ = terminated.send(());
+            }
+        }
+        commands.retain(|watch| {
+            !watch.abandoned() && !(watch.confirmed.is_none() && watch.terminated.is_none())
+        });
+    }
+
     /// Closes the link for good (runtime shutdown).
     pub(crate) fn stop(&self) {
         let _ = self.control.send(LinkControl::Stop);
@@ -105,6 +192,7 @@ pub(crate) fn spawn_link(spec: LinkSpec, node: Arc<NodePoints>) -> LinkHandle {
         control,
         client: Arc::new(Mutex::new(None)),
         up: Arc::new(AtomicBool::new(false)),
+        commands: Arc::new(Mutex::new(Vec::new())),
     };
     tokio::spawn(run(spec, node, receiver, handle.clone()));
     handle
@@ -156,7 +244,12 @@ async fn run(
                             synchronise(&spec, &node, &client);
                         }
                     }
-                    Some(ClientEvent::Asdu(asdu)) => apply(&spec, &node, &origin, &asdu),
+                    Some(ClientEvent::Asdu(asdu)) => {
+                        apply(&spec, &node, &origin, &asdu);
+                        if asdu.type_id.is_command() {
+                            handle.answered(&asdu);
+                        }
+                    }
                     Some(ClientEvent::Disconnected { reason }) => {
                         if handle.up.swap(false, Ordering::AcqRel) {
                             tracing::warn!(node = %node.name(), link = %spec.name, %reason, "link down");

@@ -331,6 +331,7 @@ impl Runtime {
                             name: command.name.clone(),
                             route,
                             from_groups: command.from_groups.clone(),
+                            feedback: command.feedback.clone(),
                         },
                     )
                 })

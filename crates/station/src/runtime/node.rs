@@ -4,7 +4,13 @@
 //! keeps the three in step: a change reported by the database goes to the server (sent
 //! or only imaged, by the point's transmission) and to the store, under one lock so that
 //! clients and the store see changes in the order the database took them.
+//!
+//! A command's return information: the command handler asks for the next change of the
+//! command's feedback point ([`NodePoints::expect_return`]); that change goes out with
+//! cause 11 (return information caused by a remote command), and only once it is queued at
+//! the server is the command told, so that its termination follows it.
 
+use std::collections::HashMap;
 use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
 
 use chrono::{DateTime, Utc};
@@ -25,6 +31,9 @@ pub struct NodePoints {
     zone: TimeZonePolicy,
     recorder: Recorder,
     clock: Arc<NodeClock>,
+    /// Commands waiting for the next change of a point (by name) as their return
+    /// information; a waiter that gave up has dropped its receiver.
+    returns: Mutex<HashMap<String, Vec<tokio::sync::oneshot::Sender<()>>>>,
 }
 
 impl NodePoints {
@@ -42,7 +51,36 @@ impl NodePoints {
             zone,
             recorder,
             clock,
+            returns: Mutex::new(HashMap::new()),
         })
+    }
+
+    /// Resolves once the point's next change has been published as return information
+    /// (cause 11). Ask before the command is carried out, so that a fast change is not
+    /// missed; drop the receiver to stop waiting.
+    pub(crate) fn expect_return(&self, point: &str) -> tokio::sync::oneshot::Receiver<()> {
+        let (sender, receiver) = tokio::sync::oneshot::channel();
+        self.returns
+            .lock()
+            .unwrap_or_else(|poison| poison.into_inner())
+            .entry(point.to_owned())
+            .or_default()
+            .push(sender);
+        receiver
+    }
+
+    /// The commands waiting for this point's change as their return information (those
+    /// that still wait).
+    fn take_return_waiters(&self, point: &str) -> Vec<tokio::sync::oneshot::Sender<()>> {
+        let mut returns = self
+            .returns
+            .lock()
+            .unwrap_or_else(|poison| poison.into_inner());
+        let waiters = returns.remove(point).unwrap_or_default();
+        waiters
+            .into_iter()
+            .filter(|waiter| !waiter.is_closed())
+            .collect()
     }
 
     /// The node's name.
@@ -137,6 +175,17 @@ impl NodePoints {
     }
 
     fn publish(&self, change: &PointChange, origin: &str) {
+        let waiters = self.take_return_waiters(&change.name);
+        let returned;
+        let change = if waiters.is_empty() {
+            change
+        } else {
+            returned = PointChange {
+                cause: EventCause::ReturnRemote,
+                ..change.clone()
+            };
+            &returned
+        };
         if let Some(server) = self.server.get() {
             if let Err(error) = change.publish(server, self.zone) {
                 tracing::warn!(node = %self.name, point = %change.name, %error, "not published");
@@ -144,5 +193,8 @@ impl NodePoints {
         }
         self.recorder
             .event(change.to_event_record(&self.name, origin));
+        for waiter in waiters {
+            let _ = waiter.send(());
+        }
     }
 }

@@ -8,6 +8,7 @@
     clippy::indexing_slicing
 )]
 
+mod command_sequence;
 mod continuity;
 mod distributed;
 mod harness;
