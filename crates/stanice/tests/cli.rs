@@ -853,3 +853,250 @@ fn user_commands_need_a_users_file_or_a_project() {
     assert_success(&run_with_input(add, "bob-secret\n"));
     assert!(std::fs::read_to_string(&users).unwrap().contains("bob"));
 }
+
+/// Starts a process, waits until a stdout line contains `marker`, and keeps every later
+/// stdout line for the test to look at.
+fn start_watching(
+    mut command: Command,
+    marker: &str,
+) -> (Background, std::sync::Arc<std::sync::Mutex<Vec<String>>>) {
+    let mut child = command
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let stdout = child.stdout.take().unwrap();
+    let lines = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    let collected = std::sync::Arc::clone(&lines);
+    std::thread::spawn(move || {
+        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+            collected.lock().unwrap().push(line);
+        }
+    });
+    let background = Background(child);
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while !lines
+        .lock()
+        .unwrap()
+        .iter()
+        .any(|line| line.contains(marker))
+    {
+        assert!(
+            Instant::now() < deadline,
+            "never saw '{marker}'; saw {:?}",
+            lines.lock().unwrap()
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    (background, lines)
+}
+
+/// Waits (bounded) until one of the lines contains `needle`.
+fn wait_for_line(lines: &std::sync::Mutex<Vec<String>>, needle: &str) -> String {
+    let deadline = Instant::now() + Duration::from_secs(10);
+    loop {
+        if let Some(line) = lines.lock().unwrap().iter().find(|l| l.contains(needle)) {
+            return line.clone();
+        }
+        assert!(
+            Instant::now() < deadline,
+            "no line with '{needle}' in {:?}",
+            lines.lock().unwrap()
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// A command point and the monitor point that returns its effect, on one address.
+const FEEDBACK_POINTS: &str = "ioa,type,value,name\n\
+3000,M_DP_NA_1,1,QF1 position\n\
+3000,C_DC_NA_1,,QF1 command\n\
+3001,C_SC_NA_1,,horn\n";
+
+fn send_command(port: u16, ioa: &str, kind: &str, value: &str) -> Output {
+    let mut command = stanice();
+    command.args([
+        "iec104",
+        "command",
+        &format!("127.0.0.1:{port}"),
+        "--ca",
+        "7",
+        "--ioa",
+        ioa,
+        "--type",
+        kind,
+        "--value",
+        value,
+        "--timeout",
+        "5",
+    ]);
+    run_bounded(command, 20)
+}
+
+#[test]
+fn the_test_tool_confirms_returns_and_terminates_in_order_and_names_the_command() {
+    let port = free_port();
+    let mut server = stanice();
+    server
+        .args([
+            "iec104",
+            "server",
+            "--listen",
+            &format!("127.0.0.1:{port}"),
+            "--ca",
+            "7",
+            "--points",
+        ])
+        .arg(write_points(FEEDBACK_POINTS));
+    let (_server, server_lines) = start_watching(server, "IEC 104 outstation on");
+    assert!(
+        wait_for_line(&server_lines, "IEC 104 outstation on")
+            .contains("redundancy connection-is-group"),
+        "the test tool's default mode"
+    );
+
+    let output = send_command(port, "3000", "C_DC_NA_1", "ON");
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(output.status.code(), Some(0), "{text}");
+    let position = |needle: &str| {
+        text.lines()
+            .position(|line| line.contains(needle))
+            .unwrap_or_else(|| panic!("no '{needle}' in\n{text}"))
+    };
+    let (confirmation, returned, termination) = (
+        position("cot=actcon(7)"),
+        position("cot=retrem(11)"),
+        position("cot=actterm(10)"),
+    );
+    assert!(
+        confirmation < returned && returned < termination,
+        "ACT_CON, return information, ACT_TERM expected in that order:\n{text}"
+    );
+    // Each answer is printed when it arrives, before the verdict.
+    assert!(termination < position("execute: positive confirmation and terminated"));
+    // The server names the command by the command point, not the monitor point beside it.
+    let logged = wait_for_line(&server_lines, "command C_DC_NA_1 ioa=3000");
+    assert!(logged.contains("(QF1 command)"), "{logged}");
+}
+
+#[test]
+fn the_test_tool_refuses_time_tagged_commands_older_than_its_maximum_command_delay() {
+    // The command tool stamps its commands in UTC; a server reading tags as the time of
+    // Kiritimati (UTC+14) finds them 14 hours old.
+    let port = free_port();
+    let mut server = stanice();
+    server
+        .args([
+            "iec104",
+            "server",
+            "--listen",
+            &format!("127.0.0.1:{port}"),
+            "--ca",
+            "7",
+            "--max-command-age",
+            "30",
+            "--time-zone",
+            "Pacific/Kiritimati",
+            "--points",
+        ])
+        .arg(write_points(FEEDBACK_POINTS));
+    let (_server, server_lines) = start_watching(server, "IEC 104 outstation on");
+    let output = send_command(port, "3001", "C_SC_TA_1", "1");
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(output.status.code(), Some(1), "{text}");
+    assert!(text.contains("execute: NEGATIVE confirmation"), "{text}");
+    let refused = wait_for_line(&server_lines, "REFUSED");
+    assert!(
+        refused.contains("s old, more than the 30.000 s allowed"),
+        "{refused}"
+    );
+
+    // Untagged commands are not checked.
+    let output = send_command(port, "3001", "C_SC_NA_1", "1");
+    assert_eq!(output.status.code(), Some(0));
+
+    // A UTC server with the same limit executes the same command.
+    let port = free_port();
+    let mut server = stanice();
+    server
+        .args([
+            "iec104",
+            "server",
+            "--listen",
+            &format!("127.0.0.1:{port}"),
+            "--ca",
+            "7",
+            "--max-command-age",
+            "30",
+            "--points",
+        ])
+        .arg(write_points(FEEDBACK_POINTS));
+    let _server = start_until(server, "IEC 104 outstation on");
+    let output = send_command(port, "3001", "C_SC_TA_1", "1");
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&output.stdout)
+    );
+}
+
+#[test]
+fn the_test_tool_checks_its_redundancy_options() {
+    let points = write_points(FEEDBACK_POINTS);
+    for (args, message) in [
+        (
+            vec!["--mode", "groups-by-address"],
+            "needs at least one --group",
+        ),
+        (
+            vec!["--group", "a=127.0.0.1"],
+            "--group needs --mode groups-by-address",
+        ),
+        (vec!["--mode", "nonsense"], "invalid value 'nonsense'"),
+        (
+            vec!["--mode", "groups-by-address", "--group", "a=not-an-ip"],
+            "'not-an-ip' is not an IP address",
+        ),
+    ] {
+        let mut server = stanice();
+        server
+            .args([
+                "iec104",
+                "server",
+                "--listen",
+                "127.0.0.1:0",
+                "--duration",
+                "0.1",
+                "--points",
+            ])
+            .arg(&points)
+            .args(&args);
+        let output = run_bounded(server, 20);
+        let text = String::from_utf8_lossy(&output.stderr);
+        assert!(!output.status.success(), "{args:?} was accepted");
+        assert!(text.contains(message), "{args:?}: {text}");
+    }
+    let mut server = stanice();
+    server
+        .args([
+            "iec104",
+            "server",
+            "--listen",
+            "127.0.0.1:0",
+            "--duration",
+            "0.1",
+            "--mode",
+            "groups-by-address",
+            "--group",
+            "dispatch-a=127.0.0.1,127.0.0.2",
+            "--group",
+            "others=",
+            "--points",
+        ])
+        .arg(&points);
+    let output = run_bounded(server, 20);
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{text}");
+    assert!(text.contains("redundancy groups-by-address"), "{text}");
+}
