@@ -75,6 +75,7 @@ struct CommandWatch {
 }
 
 impl CommandWatch {
+    /// Nothing left to report: each answer was passed on or its receiver is gone.
     fn abandoned(&self) -> bool {
         self.confirmed
             .as_ref()
@@ -173,9 +174,8 @@ impl LinkHandle {
                 let _ = terminated.send(());
             }
         }
-        commands.retain(|watch| {
-            !watch.abandoned() && !(watch.confirmed.is_none() && watch.terminated.is_none())
-        });
+        // Answered in full, or nobody waits any more (a taken sender counts as abandoned).
+        commands.retain(|watch| !watch.abandoned());
     }
 
     /// Closes the link for good (runtime shutdown).

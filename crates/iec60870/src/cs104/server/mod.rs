@@ -3,21 +3,37 @@
 //! # Shape
 //!
 //! ```text
-//!  accept loop ──(allow-list, connection cap, group by client IP, TLS)──> connection tasks
-//!                                                                         │  own a Session
-//!  ServerHandle::update ──> ProcessImage (current values) ──> GI / read   │  and a socket
+//!  accept loop ──(allow-list, connection cap, redundancy group, TLS)──> connection tasks
+//!                                                                       │  own a Session
+//!  ServerHandle::update ──> ProcessImage (current values) ──> GI / read │  and a socket
 //!                      └──> every Group's event buffer ──> the group's started connection
 //! ```
 //!
 //! - [`image`]: the process image, answering interrogation and read.
-//! - [`group`]: redundancy groups; one started connection per group, one bounded event
-//!   buffer per group that keeps events while nobody is started and survives switch-over.
-//! - [`handler`]: the application's hooks (commands, clock sync, reset, parameters).
+//! - [`group`]: redundancy groups ([`RedundancyMode`]: one group, a group per
+//!   connection, or groups by client address); one started connection per group, one
+//!   bounded event buffer per group that keeps events while nobody is started and survives
+//!   switch-over.
+//! - [`handler`]: the application's hooks (commands, refusals, the station's clock, clock
+//!   sync, reset, parameters).
 //! - `connection`: one task per TCP (or TLS) connection, driving a sans-IO
 //!   [`Session`](super::session::Session) and answering requests.
 //!
-//! Time tags stamped by the server (for points updated without a time) follow
-//! [`ServerConfig::time_zone`]; the default is UTC.
+//! # Commands
+//!
+//! A command is checked here first (known address, type, double-command state,
+//! select-before-operate, the maximum command delay of a time-tagged command measured on
+//! [`StationHandler::now`]); what fails gets its negative confirmation and goes to
+//! [`StationHandler::command_refused`]. The rest go to
+//! [`StationHandler::handle_command`], and the connection keeps the standard's sequence
+//! whatever the application does: ACT_CON, then the return information (cause 11) queued
+//! since the command arrived, then ACT_TERM after every event queued before the
+//! application terminated the command ([`CommandOutcome`]). Each event of a group carries
+//! a sequence number for this.
+//!
+//! Time tags read or stamped by the server (commands' ages, points updated without a
+//! time) follow [`ServerConfig::time_zone`] on the station's clock; the default is UTC on
+//! the host's clock.
 
 mod connection;
 pub mod group;
