@@ -234,28 +234,8 @@ fn client_prints_analyser_lines_and_simulated_events() {
 fn command_exit_codes_follow_the_confirmation() {
     let port = free_port();
     let _server = outstation(port, &[]);
-    let address = format!("127.0.0.1:{port}");
     let command = |ioa: &str, kind: &str, value: &str, select: bool| {
-        let mut command = stanice();
-        command.args([
-            "iec104",
-            "command",
-            &address,
-            "--ca",
-            "7",
-            "--ioa",
-            ioa,
-            "--type",
-            kind,
-            "--value",
-            value,
-            "--timeout",
-            "5",
-        ]);
-        if select {
-            command.arg("--select");
-        }
-        run_bounded(command, 20)
+        send_command(port, ioa, kind, value, select)
     };
     let positive = command("2021", "C_SC_NA_1", "1", false);
     let text = String::from_utf8_lossy(&positive.stdout);
@@ -913,7 +893,26 @@ const FEEDBACK_POINTS: &str = "ioa,type,value,name\n\
 3000,C_DC_NA_1,,QF1 command\n\
 3001,C_SC_NA_1,,horn\n";
 
-fn send_command(port: u16, ioa: &str, kind: &str, value: &str) -> Output {
+/// `stanice iec104 server` on `port` (common address 7) serving FEEDBACK_POINTS, with
+/// `extra` options.
+fn feedback_outstation(port: u16, extra: &[&str]) -> Command {
+    let mut server = stanice();
+    server
+        .args([
+            "iec104",
+            "server",
+            "--listen",
+            &format!("127.0.0.1:{port}"),
+            "--ca",
+            "7",
+        ])
+        .args(extra)
+        .arg("--points")
+        .arg(write_points(FEEDBACK_POINTS));
+    server
+}
+
+fn send_command(port: u16, ioa: &str, kind: &str, value: &str, select: bool) -> Output {
     let mut command = stanice();
     command.args([
         "iec104",
@@ -930,24 +929,16 @@ fn send_command(port: u16, ioa: &str, kind: &str, value: &str) -> Output {
         "--timeout",
         "5",
     ]);
+    if select {
+        command.arg("--select");
+    }
     run_bounded(command, 20)
 }
 
 #[test]
 fn the_test_tool_confirms_returns_and_terminates_in_order_and_names_the_command() {
     let port = free_port();
-    let mut server = stanice();
-    server
-        .args([
-            "iec104",
-            "server",
-            "--listen",
-            &format!("127.0.0.1:{port}"),
-            "--ca",
-            "7",
-            "--points",
-        ])
-        .arg(write_points(FEEDBACK_POINTS));
+    let server = feedback_outstation(port, &[]);
     let (_server, server_lines) = start_watching(server, "IEC 104 outstation on");
     assert!(
         wait_for_line(&server_lines, "IEC 104 outstation on")
@@ -955,7 +946,7 @@ fn the_test_tool_confirms_returns_and_terminates_in_order_and_names_the_command(
         "the test tool's default mode"
     );
 
-    let output = send_command(port, "3000", "C_DC_NA_1", "ON");
+    let output = send_command(port, "3000", "C_DC_NA_1", "ON", false);
     let text = String::from_utf8_lossy(&output.stdout);
     assert_eq!(output.status.code(), Some(0), "{text}");
     let position = |needle: &str| {
@@ -984,24 +975,17 @@ fn the_test_tool_refuses_time_tagged_commands_older_than_its_maximum_command_del
     // The command tool stamps its commands in UTC; a server reading tags as the time of
     // Kiritimati (UTC+14) finds them 14 hours old.
     let port = free_port();
-    let mut server = stanice();
-    server
-        .args([
-            "iec104",
-            "server",
-            "--listen",
-            &format!("127.0.0.1:{port}"),
-            "--ca",
-            "7",
+    let server = feedback_outstation(
+        port,
+        &[
             "--max-command-age",
             "30",
             "--time-zone",
             "Pacific/Kiritimati",
-            "--points",
-        ])
-        .arg(write_points(FEEDBACK_POINTS));
+        ],
+    );
     let (_server, server_lines) = start_watching(server, "IEC 104 outstation on");
-    let output = send_command(port, "3001", "C_SC_TA_1", "1");
+    let output = send_command(port, "3001", "C_SC_TA_1", "1", false);
     let text = String::from_utf8_lossy(&output.stdout);
     assert_eq!(output.status.code(), Some(1), "{text}");
     assert!(text.contains("execute: NEGATIVE confirmation"), "{text}");
@@ -1012,27 +996,14 @@ fn the_test_tool_refuses_time_tagged_commands_older_than_its_maximum_command_del
     );
 
     // Untagged commands are not checked.
-    let output = send_command(port, "3001", "C_SC_NA_1", "1");
+    let output = send_command(port, "3001", "C_SC_NA_1", "1", false);
     assert_eq!(output.status.code(), Some(0));
 
     // A UTC server with the same limit executes the same command.
     let port = free_port();
-    let mut server = stanice();
-    server
-        .args([
-            "iec104",
-            "server",
-            "--listen",
-            &format!("127.0.0.1:{port}"),
-            "--ca",
-            "7",
-            "--max-command-age",
-            "30",
-            "--points",
-        ])
-        .arg(write_points(FEEDBACK_POINTS));
+    let server = feedback_outstation(port, &["--max-command-age", "30"]);
     let _server = start_until(server, "IEC 104 outstation on");
-    let output = send_command(port, "3001", "C_SC_TA_1", "1");
+    let output = send_command(port, "3001", "C_SC_TA_1", "1", false);
     assert_eq!(
         output.status.code(),
         Some(0),

@@ -531,6 +531,36 @@ impl Element {
         element
     }
 
+    /// The monitor value a command leaves behind once carried out, good quality: what a
+    /// station returns as the command's return information on a point of the matching
+    /// family (single command -> single point, set-point -> measured value, ...). `None`
+    /// for a regulating step (the new position is the device's) and for what is not a
+    /// command.
+    pub fn commanded_value(&self) -> Option<Element> {
+        let quality = Quality::GOOD;
+        Some(match self {
+            Element::SingleCommand { on, .. } => Element::SinglePoint { on: *on, quality },
+            Element::DoubleCommand { state, .. } => Element::DoublePoint {
+                state: *state,
+                quality,
+            },
+            Element::SetpointNormalized { raw, .. } => Element::Normalized { raw: *raw, quality },
+            Element::SetpointScaled { value, .. } => Element::Scaled {
+                value: *value,
+                quality,
+            },
+            Element::SetpointFloat { value, .. } => Element::Float {
+                value: *value,
+                quality,
+            },
+            Element::BitstringCommand { bits } => Element::Bitstring {
+                bits: *bits,
+                quality,
+            },
+            _ => return None,
+        })
+    }
+
     /// The fraction of a normalized value: `raw / 32768`, in -1.0 ..= 1 - 2^-15
     /// (0x2AE5 = 10981 gives 0.335114).
     pub fn normalized_value(raw: i16) -> f32 {

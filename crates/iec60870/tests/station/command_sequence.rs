@@ -106,34 +106,12 @@ fn command_element(type_id: TypeId, select: bool) -> Element {
     }
 }
 
-/// The monitor value a command leaves behind.
+/// The monitor value a command leaves behind (a regulating step: position 1).
 fn feedback_of(command: &Element) -> Element {
-    let quality = Quality::GOOD;
-    match command {
-        Element::SingleCommand { on, .. } => Element::SinglePoint { on: *on, quality },
-        Element::DoubleCommand { state, .. } => Element::DoublePoint {
-            state: *state,
-            quality,
-        },
-        Element::RegulatingStep { .. } => Element::StepPosition {
-            position: StepPosition::new(1, false).unwrap(),
-            quality,
-        },
-        Element::SetpointNormalized { raw, .. } => Element::Normalized { raw: *raw, quality },
-        Element::SetpointScaled { value, .. } => Element::Scaled {
-            value: *value,
-            quality,
-        },
-        Element::SetpointFloat { value, .. } => Element::Float {
-            value: *value,
-            quality,
-        },
-        Element::BitstringCommand { bits } => Element::Bitstring {
-            bits: *bits,
-            quality,
-        },
-        other => panic!("no feedback for {other:?}"),
-    }
+    command.commanded_value().unwrap_or(Element::StepPosition {
+        position: StepPosition::new(1, false).unwrap(),
+        quality: Quality::GOOD,
+    })
 }
 
 /// A station whose command points return their effect on a feedback point.

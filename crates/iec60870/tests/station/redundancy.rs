@@ -16,7 +16,7 @@ use crate::common::*;
 const QUIET: Duration = Duration::from_millis(300);
 const STARTDT_ACT: [u8; 6] = [0x68, 0x04, 0x07, 0x00, 0x00, 0x00];
 
-fn image() -> ProcessImage {
+pub(crate) fn image() -> ProcessImage {
     let mut image = ProcessImage::new();
     image
         .add_monitor(monitor(1, TypeId::M_ME_NB_1, 0, scaled(0)))
@@ -24,7 +24,7 @@ fn image() -> ProcessImage {
     image
 }
 
-fn localhost(last: u8) -> IpAddr {
+pub(crate) fn localhost(last: u8) -> IpAddr {
     IpAddr::from([127, 0, 0, last])
 }
 

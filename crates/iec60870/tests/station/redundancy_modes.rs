@@ -2,31 +2,19 @@
 //! for every client, a group per connection, groups by client address; with two and
 //! three clients, the take-over warning, and no connection closed by another's STARTDT.
 
-use std::net::IpAddr;
 use std::sync::Arc;
 use std::time::Duration;
 
 use iec60870::asdu::{Cause, Element, TypeId};
 use iec60870::cs104::server::{
-    ProcessImage, ReadOnlyStation, RedundancyGroupConfig, RedundancyMode, ServerHandle,
+    ReadOnlyStation, RedundancyGroupConfig, RedundancyMode, ServerHandle,
 };
 use iec60870::cs104::ApciConfig;
 
 use crate::common::*;
+use crate::redundancy::{image, localhost};
 
 const QUIET: Duration = Duration::from_millis(300);
-
-fn image() -> ProcessImage {
-    let mut image = ProcessImage::new();
-    image
-        .add_monitor(monitor(1, TypeId::M_ME_NB_1, 0, scaled(0)))
-        .unwrap();
-    image
-}
-
-fn localhost(last: u8) -> IpAddr {
-    IpAddr::from([127, 0, 0, last])
-}
 
 async fn server(mode: RedundancyMode) -> ServerHandle {
     let mut config = server_config();

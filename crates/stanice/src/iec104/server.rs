@@ -11,7 +11,7 @@ use std::sync::{Arc, OnceLock};
 use std::time::Duration;
 
 use clap::Args;
-use iec60870::asdu::{Cause, CommonAddress, Element, Quality};
+use iec60870::asdu::{Cause, CommonAddress};
 use iec60870::cs104::server::{
     ready, spawn_server, Command, CommandFuture, CommandOutcome, CommandRefusal,
     RedundancyGroupConfig, RedundancyMode, ServerConfig, ServerHandle, StationHandler,
@@ -74,8 +74,9 @@ struct CommandLogger {
     names: std::collections::HashMap<u32, String>,
 }
 
-impl StationHandler for CommandLogger {
-    fn handle_command(&self, command: Command) -> CommandFuture {
+impl CommandLogger {
+    /// Prints a command and what became of it, naming the command point.
+    fn log(&self, command: &Command, what: &dyn std::fmt::Display) {
         let name = self
             .names
             .get(&command.ioa.get())
@@ -83,11 +84,18 @@ impl StationHandler for CommandLogger {
             .unwrap_or_default();
         let step = if command.select { "select" } else { "execute" };
         println!(
-            "command {} ioa={}{name} {} {step} from {}: confirmed",
+            "command {} ioa={}{name} {} {step} from {}: {what}",
             command.type_id, command.ioa, command.element, command.peer
         );
+    }
+}
+
+impl StationHandler for CommandLogger {
+    fn handle_command(&self, command: Command) -> CommandFuture {
+        self.log(&command, &"confirmed");
         if !command.select {
-            if let (Some(server), Some(element)) = (self.server.get(), follow(&command.element)) {
+            let follows = (self.server.get(), command.element.commanded_value());
+            if let (Some(server), Some(element)) = follows {
                 if let Some(point) = server.get(command.ioa) {
                     if element.family_matches(point.event_type) {
                         if let Err(error) = server.update_with_cause(
@@ -106,16 +114,7 @@ impl StationHandler for CommandLogger {
     }
 
     fn command_refused(&self, command: &Command, refusal: &CommandRefusal) {
-        let name = self
-            .names
-            .get(&command.ioa.get())
-            .map(|name| format!(" ({name})"))
-            .unwrap_or_default();
-        let step = if command.select { "select" } else { "execute" };
-        println!(
-            "command {} ioa={}{name} {} {step} from {}: REFUSED: {refusal}",
-            command.type_id, command.ioa, command.element, command.peer
-        );
+        self.log(command, &format_args!("REFUSED: {refusal}"));
     }
 
     fn handle_clock_sync(&self, time: iec60870::time::Cp56Time2a, peer: SocketAddr) -> bool {
@@ -163,32 +162,6 @@ fn redundancy_mode(mode: &str, groups: &[String]) -> anyhow::Result<RedundancyMo
         anyhow::bail!("--mode groups-by-address needs at least one --group NAME=IP[,IP...]");
     }
     Ok(mode)
-}
-
-/// The monitor value a command sets.
-fn follow(command: &Element) -> Option<Element> {
-    let quality = Quality::default();
-    Some(match command {
-        Element::SingleCommand { on, .. } => Element::SinglePoint { on: *on, quality },
-        Element::DoubleCommand { state, .. } => Element::DoublePoint {
-            state: *state,
-            quality,
-        },
-        Element::SetpointNormalized { raw, .. } => Element::Normalized { raw: *raw, quality },
-        Element::SetpointScaled { value, .. } => Element::Scaled {
-            value: *value,
-            quality,
-        },
-        Element::SetpointFloat { value, .. } => Element::Float {
-            value: *value,
-            quality,
-        },
-        Element::BitstringCommand { bits } => Element::Bitstring {
-            bits: *bits,
-            quality,
-        },
-        _ => return None,
-    })
 }
 
 /// Starts an outstation for a loaded point list.
