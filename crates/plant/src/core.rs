@@ -142,6 +142,16 @@ pub enum PlantError {
         /// The name given.
         name: String,
     },
+    /// A short device name that fits several devices of the kind wanted.
+    #[error("`{name}` could be the {kind} {}: type one of these names", candidates.join(", "))]
+    AmbiguousDevice {
+        /// What was looked for (breaker, fuse, board...).
+        kind: &'static str,
+        /// The name given.
+        name: String,
+        /// Every device it fits, sorted.
+        candidates: Vec<String>,
+    },
     /// `advance_to` with a time before the current time.
     #[error("time {requested:?} is before the plant's time {now:?}")]
     TimeWentBackwards {

@@ -182,3 +182,288 @@ pub enum Action {
     /// the sun model again.
     SetIlluminance(Option<f64>),
 }
+
+/// What kind of device a fault or hand operation names: the set its name is looked up in
+/// ([`crate::VsetinPlant::device_names`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum DeviceKind {
+    /// A supply: a 6 kV line, the utility connection, a transformer.
+    Supply,
+    /// A breaker or a contactor.
+    SwitchingDevice,
+    /// A breaker (motorised QF or manual FA).
+    Breaker,
+    /// A lighting board.
+    LightingBoard,
+    /// A fuse with an indication contact.
+    Fuse,
+    /// A surge arrester with an indication contact.
+    SurgeArrester,
+    /// A board with an emergency-off button.
+    EmergencyOffBoard,
+    /// A door with a contact.
+    Door,
+    /// An auxiliary power-supply unit.
+    SupplyUnit,
+    /// A network switch with a fault contact.
+    NetworkSwitch,
+    /// An I/O or communication module.
+    Module,
+    /// A board with a local/remote selector or a remote-enable switch.
+    SelectorBoard,
+}
+
+impl DeviceKind {
+    /// What the kind is called in messages ("breaker or contactor").
+    pub fn label(self) -> &'static str {
+        match self {
+            DeviceKind::Supply => "supply",
+            DeviceKind::SwitchingDevice => "breaker or contactor",
+            DeviceKind::Breaker => "breaker",
+            DeviceKind::LightingBoard => "lighting board",
+            DeviceKind::Fuse => "fuse",
+            DeviceKind::SurgeArrester => "surge arrester",
+            DeviceKind::EmergencyOffBoard => "board with emergency off",
+            DeviceKind::Door => "door",
+            DeviceKind::SupplyUnit => "supply unit",
+            DeviceKind::NetworkSwitch => "network switch",
+            DeviceKind::Module => "module",
+            DeviceKind::SelectorBoard => "board with a selector",
+        }
+    }
+}
+
+impl fmt::Display for DeviceKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.label())
+    }
+}
+
+/// The text form of one fault or hand operation, for help texts: what a person types and
+/// which device names it takes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct OperationSyntax {
+    /// The first word (`stuck-open`, `selector`).
+    pub keyword: &'static str,
+    /// The whole form with placeholders (`selector BOARD local|remote`).
+    pub usage: &'static str,
+    /// The kind of device the placeholder names, if it takes one.
+    pub device: Option<DeviceKind>,
+    /// A fault (stays until cleared) rather than a hand operation.
+    pub fault: bool,
+}
+
+const fn fault_syntax(
+    keyword: &'static str,
+    usage: &'static str,
+    device: Option<DeviceKind>,
+) -> OperationSyntax {
+    OperationSyntax {
+        keyword,
+        usage,
+        device,
+        fault: true,
+    }
+}
+
+const fn action_syntax(
+    keyword: &'static str,
+    usage: &'static str,
+    device: Option<DeviceKind>,
+) -> OperationSyntax {
+    OperationSyntax {
+        keyword,
+        usage,
+        device,
+        fault: false,
+    }
+}
+
+/// Every fault and hand operation, in the order help texts list them.
+const SYNTAX: &[OperationSyntax] = &[
+    fault_syntax("supply-loss", "supply-loss NAME", Some(DeviceKind::Supply)),
+    fault_syntax("generator-fail-to-start", "generator-fail-to-start", None),
+    fault_syntax(
+        "stuck-closed",
+        "stuck-closed NAME",
+        Some(DeviceKind::SwitchingDevice),
+    ),
+    fault_syntax(
+        "stuck-open",
+        "stuck-open NAME",
+        Some(DeviceKind::SwitchingDevice),
+    ),
+    fault_syntax(
+        "breaker-tripped",
+        "breaker-tripped NAME",
+        Some(DeviceKind::Breaker),
+    ),
+    fault_syntax(
+        "lamp-failure",
+        "lamp-failure BOARD",
+        Some(DeviceKind::LightingBoard),
+    ),
+    fault_syntax("fuse-blown", "fuse-blown NAME", Some(DeviceKind::Fuse)),
+    fault_syntax(
+        "surge-arrester",
+        "surge-arrester NAME",
+        Some(DeviceKind::SurgeArrester),
+    ),
+    fault_syntax(
+        "emergency-off",
+        "emergency-off BOARD",
+        Some(DeviceKind::EmergencyOffBoard),
+    ),
+    fault_syntax("door-open", "door-open NAME", Some(DeviceKind::Door)),
+    fault_syntax(
+        "supply-unit-fault",
+        "supply-unit-fault NAME",
+        Some(DeviceKind::SupplyUnit),
+    ),
+    fault_syntax(
+        "network-switch-fault",
+        "network-switch-fault NAME",
+        Some(DeviceKind::NetworkSwitch),
+    ),
+    fault_syntax(
+        "module-pulled",
+        "module-pulled MODULE",
+        Some(DeviceKind::Module),
+    ),
+    fault_syntax(
+        "communication-lost",
+        "communication-lost MODULE",
+        Some(DeviceKind::Module),
+    ),
+    action_syntax(
+        "selector",
+        "selector BOARD local|remote",
+        Some(DeviceKind::SelectorBoard),
+    ),
+    action_syntax(
+        "manual-switch",
+        "manual-switch BOARD on|off",
+        Some(DeviceKind::LightingBoard),
+    ),
+    action_syntax("close", "close NAME", Some(DeviceKind::Breaker)),
+    action_syntax("open", "open NAME", Some(DeviceKind::Breaker)),
+    action_syntax("illuminance", "illuminance LUX|auto", None),
+];
+
+/// Every fault and hand operation with the kind of device it names.
+pub fn operation_syntax() -> &'static [OperationSyntax] {
+    SYNTAX
+}
+
+impl Fault {
+    /// The kind of device [`Fault::device`] names.
+    pub fn device_kind(&self) -> Option<DeviceKind> {
+        SYNTAX
+            .iter()
+            .find(|syntax| syntax.fault && syntax.keyword == self.keyword())
+            .and_then(|syntax| syntax.device)
+    }
+
+    /// The same fault on another device (no change for a fault without one).
+    pub fn with_device(&self, device: String) -> Fault {
+        match self {
+            Fault::GeneratorFailToStart => Fault::GeneratorFailToStart,
+            Fault::SupplyLoss(_) => Fault::SupplyLoss(device),
+            Fault::StuckClosed(_) => Fault::StuckClosed(device),
+            Fault::StuckOpen(_) => Fault::StuckOpen(device),
+            Fault::BreakerTripped(_) => Fault::BreakerTripped(device),
+            Fault::LampFailure(_) => Fault::LampFailure(device),
+            Fault::FuseBlown(_) => Fault::FuseBlown(device),
+            Fault::SurgeArresterTripped(_) => Fault::SurgeArresterTripped(device),
+            Fault::EmergencyOff(_) => Fault::EmergencyOff(device),
+            Fault::DoorOpen(_) => Fault::DoorOpen(device),
+            Fault::SupplyUnitFault(_) => Fault::SupplyUnitFault(device),
+            Fault::NetworkSwitchFault(_) => Fault::NetworkSwitchFault(device),
+            Fault::ModulePulled(_) => Fault::ModulePulled(device),
+            Fault::CommunicationLost(_) => Fault::CommunicationLost(device),
+        }
+    }
+}
+
+impl Action {
+    /// The device the operation names and its kind, if any.
+    pub fn device(&self) -> Option<(DeviceKind, &str)> {
+        match self {
+            Action::SetSelector { board, .. } => Some((DeviceKind::SelectorBoard, board)),
+            Action::SetManualSwitch { board, .. } => Some((DeviceKind::LightingBoard, board)),
+            Action::Close(name) | Action::Open(name) => Some((DeviceKind::Breaker, name)),
+            Action::SetIlluminance(_) => None,
+        }
+    }
+
+    /// The same operation on another device (no change for one without a device).
+    pub fn with_device(&self, device: String) -> Action {
+        match self {
+            Action::SetSelector { remote, .. } => Action::SetSelector {
+                board: device,
+                remote: *remote,
+            },
+            Action::SetManualSwitch { on, .. } => Action::SetManualSwitch {
+                board: device,
+                on: *on,
+            },
+            Action::Close(_) => Action::Close(device),
+            Action::Open(_) => Action::Open(device),
+            Action::SetIlluminance(lux) => Action::SetIlluminance(*lux),
+        }
+    }
+}
+
+/// Finds the device a person means among `names`: the exact name; else the one name equal
+/// to it in any case; else the one name whose `_`-separated words begin or end with its
+/// words (`QF1` in `RH2_QF1`, `P9` in `RDRT_P9`, `RH11` in `RH11_QF1`), any case. Several
+/// such names are an [`PlantError::AmbiguousDevice`] listing them, none an
+/// [`PlantError::UnknownDevice`].
+pub(crate) fn resolve_device(
+    kind: DeviceKind,
+    names: &[String],
+    given: &str,
+) -> Result<String, PlantError> {
+    if names.iter().any(|name| name == given) {
+        return Ok(given.to_owned());
+    }
+    let unique = |matches: Vec<&String>| -> Result<Option<String>, PlantError> {
+        match matches.as_slice() {
+            [] => Ok(None),
+            [one] => Ok(Some((*one).clone())),
+            _ => Err(PlantError::AmbiguousDevice {
+                kind: kind.label(),
+                name: given.to_owned(),
+                candidates: matches.into_iter().cloned().collect(),
+            }),
+        }
+    };
+    let same_case_blind = names
+        .iter()
+        .filter(|name| name.eq_ignore_ascii_case(given))
+        .collect();
+    if let Some(name) = unique(same_case_blind)? {
+        return Ok(name);
+    }
+    let words = |text: &str| -> Vec<String> {
+        text.split('_')
+            .map(str::to_ascii_uppercase)
+            .collect::<Vec<_>>()
+    };
+    let wanted = words(given);
+    let by_words = names
+        .iter()
+        .filter(|name| {
+            let name = words(name);
+            !given.is_empty()
+                && wanted.len() < name.len()
+                && (name.starts_with(&wanted) || name.ends_with(&wanted))
+        })
+        .collect();
+    unique(by_words)?.ok_or_else(|| PlantError::UnknownDevice {
+        kind: kind.label(),
+        name: given.to_owned(),
+    })
+}

@@ -40,7 +40,10 @@
 //!   ([`VsetinPlant::safety_log`]), so scenario tests can assert "never both sources
 //!   closed" against whatever the PLC program did.
 //! - **Faults and hand operations** are values ([`Fault`], [`Action`]) with a text form
-//!   (`supply-loss T1`, `stuck-open RDA_KM2`), for tests, the CLI and the HMI.
+//!   (`supply-loss T1`, `stuck-open RDA_KM2`), for tests, the CLI and the HMI. A device
+//!   may be named by a unique short form of its name (`module-pulled p9` for `RDRT_P9`,
+//!   [`VsetinPlant::resolve_device`]); [`operation_syntax`] and
+//!   [`VsetinPlant::device_names`] tell which names each fault and operation takes.
 //! - **Deterministic**: no wall clock, no randomness. The sun is a closed-form model.
 //! - **No panics** on any input: unknown names, wrong types and time going backwards are
 //!   [`PlantError`]s.
@@ -213,8 +216,10 @@ pub use crate::core::{
     ValueKind,
 };
 pub use crate::devices::{GeneratorConfig, GeneratorState};
-pub use crate::fault::{Action, Fault};
-pub use crate::station::{lighting_boards, Module, StationConfig, VsetinPlant};
+pub use crate::fault::{operation_syntax, Action, DeviceKind, Fault, OperationSyntax};
+pub use crate::station::{
+    lighting_boards, Module, StationConfig, SwitchingDevice, Transfer, VsetinPlant,
+};
 pub use crate::topology::{
     BusState, LinkState, SafetyEvent, SafetyKind, SourceState, TopologySnapshot,
 };

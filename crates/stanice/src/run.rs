@@ -13,6 +13,7 @@ use std::time::Duration;
 use anyhow::Context as _;
 use chrono::{DateTime, Utc};
 use clap::Args;
+use plant::SwitchingDevice;
 use station::config::Project;
 use station::runtime::{Pacing, Runtime, RuntimeOptions, StoreChoice};
 
@@ -265,16 +266,105 @@ fn print_banner(runtime: &Runtime, store: &str, speed: f64, demo: bool) {
     }
 }
 
-const HELP: &str = "\
-faults:      supply-loss TNS_USTI|TNS_VALMEZ|UTILITY|T1|T2, generator-fail-to-start,
-             stuck-closed NAME, stuck-open NAME, breaker-tripped NAME, lamp-failure BOARD,
-             fuse-blown NAME, surge-arrester NAME, emergency-off RH2|RZZ|RDA, door-open NAME,
-             supply-unit-fault NAME, network-switch-fault NAME, module-pulled MODULE,
-             communication-lost MODULE;  `clear FAULT` or `clear all` removes them
-operations:  selector BOARD local|remote, manual-switch BOARD on|off, close NAME, open NAME,
-             illuminance LUX|auto
-links:       link-cut NODE/LINK, link-restore NODE/LINK; hmi-link-cut, hmi-link-restore
-other:       status, help";
+/// Console words that are neither faults nor hand operations of the plant.
+const CONSOLE_HELP: &str = "\
+other:           status (nodes, links, breakers, transfer, faults), help";
+
+/// Lines longer than this are wrapped in help and status (a terminal's 100 columns).
+const WIDTH: usize = 100;
+
+/// `items` joined by `separator` after `head`, wrapped at [`WIDTH`] with continuation
+/// lines indented under the first item.
+fn wrapped(head: &str, items: &[String], separator: &str) -> String {
+    let indent = " ".repeat(head.chars().count());
+    let mut out = head.to_owned();
+    let mut line_length = out.chars().count();
+    for (i, item) in items.iter().enumerate() {
+        let piece = if i + 1 < items.len() {
+            format!("{item}{separator}")
+        } else {
+            item.clone()
+        };
+        let length = piece.chars().count();
+        if i > 0 && line_length + length > WIDTH {
+            out.truncate(out.trim_end().len());
+            out.push('\n');
+            out.push_str(&indent);
+            line_length = indent.len();
+        }
+        out.push_str(&piece);
+        line_length += length;
+    }
+    out
+}
+
+/// The console's help: every fault and hand operation of the plant with the device names
+/// it takes (from the plant itself), the links of the running nodes, the console's own words.
+async fn help_text(runtime: &Runtime) -> String {
+    let syntax = plant::operation_syntax();
+    let names: Option<Vec<Vec<String>>> = runtime
+        .with_simulation(move |sim| {
+            sim.plant().map(|plant| {
+                syntax
+                    .iter()
+                    .map(|s| {
+                        s.device
+                            .map(|kind| plant.device_names(kind))
+                            .unwrap_or_default()
+                    })
+                    .collect()
+            })
+        })
+        .await
+        .ok()
+        .flatten();
+    let mut out = Vec::new();
+    match names {
+        Some(names) => {
+            for fault in [true, false] {
+                out.push(if fault {
+                    "faults (each stays until `clear FAULT` or `clear all`):".to_owned()
+                } else {
+                    "hand operations:".to_owned()
+                });
+                for (syntax, names) in syntax.iter().zip(&names).filter(|(s, _)| s.fault == fault) {
+                    out.push(format!("  {}", syntax.usage));
+                    if let Some(kind) = syntax.device {
+                        let placeholder = syntax.usage.split_whitespace().nth(1).unwrap_or("NAME");
+                        out.push(wrapped(
+                            &format!("      {placeholder} ({kind}): "),
+                            names,
+                            " ",
+                        ));
+                    }
+                }
+            }
+            out.push(
+                "  NAME, BOARD and MODULE may be shortened to their first or last `_`-separated \
+                 words,\n  in any case, when only one device fits."
+                    .to_owned(),
+            );
+        }
+        None => out.push(
+            "(this project has no plant simulation: no faults or hand operations)".to_owned(),
+        ),
+    }
+    let links: Vec<String> = runtime
+        .nodes()
+        .iter()
+        .flat_map(|node| {
+            node.links
+                .iter()
+                .map(move |link| format!("{}/{}", node.points.name(), link.name()))
+        })
+        .collect();
+    out.push("links:           link-cut NODE/LINK, link-restore NODE/LINK; hmi-link-cut, hmi-link-restore".to_owned());
+    if !links.is_empty() {
+        out.push(wrapped("      NODE/LINK: ", &links, " "));
+    }
+    out.push(CONSOLE_HELP.to_owned());
+    out.join("\n")
+}
 
 /// Standard input's lines, read on a thread of their own.
 ///
@@ -307,8 +397,8 @@ async fn console(runtime: &Runtime, hmi: Option<&hmi::Hmi>) {
         let line = line.trim();
         match line {
             "" => {}
-            "help" => println!("{HELP}"),
-            "status" => print_status(runtime),
+            "help" => println!("{}", help_text(runtime).await),
+            "status" => print_status(runtime).await,
             "hmi-link-cut" | "hmi-link-restore" => match hmi {
                 Some(hmi) => {
                     hmi.station.set_link(line == "hmi-link-restore");
@@ -326,7 +416,7 @@ async fn console(runtime: &Runtime, hmi: Option<&hmi::Hmi>) {
     std::future::pending::<()>().await;
 }
 
-fn print_status(runtime: &Runtime) {
+async fn print_status(runtime: &Runtime) {
     let clock = runtime.clock();
     println!(
         "simulated time {} ({} s since start)",
@@ -360,4 +450,43 @@ fn print_status(runtime: &Runtime) {
             }
         );
     }
+    print_plant_status(runtime).await;
+}
+
+/// The plant's part of `status`: active faults, the supply transfer, every breaker, the
+/// contactors that are closed or jammed.
+async fn print_plant_status(runtime: &Runtime) {
+    let report = runtime
+        .with_simulation(|sim| {
+            sim.plant().map(|plant| {
+                (
+                    plant.active_faults(),
+                    plant.transfer(),
+                    plant.switching_devices(),
+                )
+            })
+        })
+        .await
+        .ok()
+        .flatten();
+    let Some((faults, transfer, devices)) = report else {
+        return;
+    };
+    let faults: Vec<String> = faults.iter().map(ToString::to_string).collect();
+    if faults.is_empty() {
+        println!("  faults:    none");
+    } else {
+        println!("{}", wrapped("  faults:    ", &faults, ", "));
+    }
+    println!("  transfer:  {transfer}");
+    let (contactors, breakers): (Vec<&SwitchingDevice>, Vec<&SwitchingDevice>) =
+        devices.iter().partition(|d| d.contactor);
+    let breakers: Vec<String> = breakers.iter().map(ToString::to_string).collect();
+    println!("{}", wrapped("  breakers:  ", &breakers, ", "));
+    let (shown, others): (Vec<&SwitchingDevice>, Vec<&SwitchingDevice>) = contactors
+        .into_iter()
+        .partition(|d| d.closed || d.stuck.is_some());
+    let mut shown: Vec<String> = shown.iter().map(ToString::to_string).collect();
+    shown.push(format!("{} other(s) open", others.len()));
+    println!("{}", wrapped("  contactors: ", &shown, ", "));
 }

@@ -1071,3 +1071,55 @@ fn the_test_tool_checks_its_redundancy_options() {
     assert!(output.status.success(), "{text}");
     assert!(text.contains("redundancy groups-by-address"), "{text}");
 }
+
+/// Types `line` on the station's console.
+fn type_line(station: &mut Background, line: &str) {
+    use std::io::Write as _;
+    let stdin = station.0.stdin.as_mut().unwrap();
+    writeln!(stdin, "{line}").unwrap();
+    stdin.flush().unwrap();
+}
+
+/// The console of `stanice run` as a newcomer meets it (issue 11): `help` names the devices
+/// each fault and operation takes, a unique short name is enough, an ambiguous one lists
+/// its candidates, and `status` shows the breakers and the supply transfer.
+#[test]
+fn the_console_names_the_devices_and_accepts_unique_short_names() {
+    let port = free_port_range(23);
+    let mut run = stanice();
+    run.stdin(Stdio::piped()).arg("run").arg(vsetin()).args([
+        "--port-base",
+        &port.to_string(),
+        "--store",
+        "none",
+    ]);
+    let (mut station, lines) = start_watching(run, "Ctrl-C stops");
+
+    type_line(&mut station, "help");
+    wait_for_line(&lines, "stuck-open NAME");
+    let breakers = wait_for_line(&lines, "NAME (breaker):");
+    assert!(breakers.contains("RH11_QF1"), "{breakers}");
+    wait_for_line(&lines, "MODULE (module):");
+    wait_for_line(&lines, "NODE/LINK: RDRT/RH");
+
+    type_line(&mut station, "close QF1");
+    let refused = wait_for_line(&lines, "error: `QF1` could be");
+    assert!(refused.contains("RH11_QF1, RH2_QF1, RZZ_QF1"), "{refused}");
+
+    type_line(&mut station, "stuck-open rh2_fa1.1");
+    wait_for_line(&lines, "ok: stuck-open rh2_fa1.1");
+    type_line(&mut station, "module-pulled P9");
+    wait_for_line(&lines, "ok: module-pulled P9");
+    type_line(&mut station, "emergency-off RZS1");
+    wait_for_line(&lines, "error: no board with emergency off named `RZS1`");
+
+    type_line(&mut station, "status");
+    let faults = wait_for_line(&lines, "faults:");
+    assert!(
+        faults.contains("stuck-open RH2_FA1.1") && faults.contains("module-pulled RDRT_P9"),
+        "{faults}"
+    );
+    wait_for_line(&lines, "transfer:  RZS on");
+    wait_for_line(&lines, "RH2_FA1.1 open (stuck)");
+    wait_for_line(&lines, "contactors:");
+}

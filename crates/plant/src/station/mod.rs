@@ -2,11 +2,12 @@
 //! RZS1, the diesel generator set, 12 lighting towers (ROV) and the OŘ-area lighting.
 
 use std::collections::{BTreeMap, BTreeSet};
+use std::fmt;
 use std::time::Duration;
 
 use crate::core::{Plant, PlantError, Reading, SignalInfo, SimTime, Value, ValueKind};
 use crate::devices::{earliest, Breaker, Delayed, Generator, GeneratorConfig, GeneratorState};
-use crate::fault::{Action, Fault};
+use crate::fault::{resolve_device, Action, DeviceKind, Fault};
 use crate::sun::{Sky, SunConfig};
 use crate::topology::{Network, SafetyEvent, SafetyKind, TopologySnapshot};
 
@@ -219,6 +220,78 @@ impl Module {
     /// Its signals carry valid values.
     pub fn valid(&self) -> bool {
         self.present && self.linked
+    }
+}
+
+/// A breaker or contactor and its position ([`VsetinPlant::switching_devices`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct SwitchingDevice {
+    /// Device name (`RH2_QF1`, `RDA_KM1`).
+    pub name: String,
+    /// A contactor (else a breaker).
+    pub contactor: bool,
+    /// Main contacts closed.
+    pub closed: bool,
+    /// Jammed in this position by a fault (`Some(true)`: stuck closed).
+    pub stuck: Option<bool>,
+    /// Tripped by its protection (a fault).
+    pub tripped: bool,
+}
+
+impl fmt::Display for SwitchingDevice {
+    /// `RH2_QF1 closed`, `RDA_KM2 open (stuck)`, `RH2_FA1.1 open (tripped)`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let position = if self.closed { "closed" } else { "open" };
+        write!(f, "{} {position}", self.name)?;
+        if self.stuck.is_some() {
+            f.write_str(" (stuck)")?;
+        }
+        if self.tripped {
+            f.write_str(" (tripped)")?;
+        }
+        Ok(())
+    }
+}
+
+/// The RZS supply transfer at one instant ([`VsetinPlant::transfer`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub struct Transfer {
+    /// `RDA_KM1` (RZS from the mains through RH1.1) closed.
+    pub mains_closed: bool,
+    /// `RDA_KM2` (RZS from the diesel set) closed.
+    pub generator_closed: bool,
+    /// The RZS busbar is energised.
+    pub board_live: bool,
+    /// The diesel set.
+    pub generator: GeneratorState,
+}
+
+impl fmt::Display for Transfer {
+    /// `RZS on the mains (RDA_KM1 closed, RDA_KM2 open), generator stopped`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let feed = match (self.mains_closed, self.generator_closed) {
+            (true, false) => "on the mains",
+            (false, true) => "on the generator",
+            (true, true) => "on the mains AND the generator",
+            (false, false) => "on neither source",
+        };
+        let position = |closed: bool| if closed { "closed" } else { "open" };
+        let generator = match self.generator {
+            GeneratorState::Stopped => "stopped",
+            GeneratorState::Cranking { .. } => "cranking",
+            GeneratorState::Running { .. } => "running",
+            GeneratorState::CoolDown { .. } => "cooling down",
+            GeneratorState::Failed => "FAILED to start",
+        };
+        write!(
+            f,
+            "RZS {feed} (RDA_KM1 {}, RDA_KM2 {}), busbar {}, generator {generator}",
+            position(self.mains_closed),
+            position(self.generator_closed),
+            if self.board_live { "live" } else { "dead" },
+        )
     }
 }
 
@@ -668,18 +741,85 @@ impl VsetinPlant {
         &self.cfg
     }
 
+    /// Every device name of a kind, sorted: what a fault or hand operation of that kind
+    /// accepts ([`crate::operation_syntax`] tells which kind each takes).
+    pub fn device_names(&self, kind: DeviceKind) -> Vec<String> {
+        let contacts = |wanted: ContactKind| -> Vec<String> {
+            self.contacts
+                .iter()
+                .filter(|c| c.kind == wanted)
+                .map(|c| c.name.clone())
+                .collect()
+        };
+        let breakers = || self.breakers.iter().map(|b| b.name.clone());
+        let lights = || self.lights.iter().map(|l| l.name.clone());
+        let estop_boards = || {
+            self.boards
+                .iter()
+                .filter(|b| b.has_estop)
+                .map(|b| b.name.clone())
+        };
+        let mut names: Vec<String> = match kind {
+            DeviceKind::Supply => self.supplies.keys().cloned().collect(),
+            DeviceKind::SwitchingDevice => breakers()
+                .chain(self.contactors.iter().map(|c| c.name.clone()))
+                .collect(),
+            DeviceKind::Breaker => breakers().collect(),
+            DeviceKind::LightingBoard => lights().collect(),
+            DeviceKind::Fuse => contacts(ContactKind::Fuse),
+            DeviceKind::SurgeArrester => contacts(ContactKind::Arrester),
+            DeviceKind::EmergencyOffBoard => estop_boards().collect(),
+            DeviceKind::Door => contacts(ContactKind::Door),
+            DeviceKind::SupplyUnit => contacts(ContactKind::SupplyUnit),
+            DeviceKind::NetworkSwitch => contacts(ContactKind::NetSwitch),
+            DeviceKind::Module => self.modules.iter().map(|m| m.name.clone()).collect(),
+            DeviceKind::SelectorBoard => estop_boards().chain(lights()).collect(),
+        };
+        names.sort();
+        names.dedup();
+        names
+    }
+
+    /// The full name of the device of `kind` that `given` means: the name itself, or a
+    /// unique short form of it (`QF1`-style last words, `RH11`-style first words, any
+    /// case). Several fitting devices are an [`PlantError::AmbiguousDevice`] naming them.
+    pub fn resolve_device(&self, kind: DeviceKind, given: &str) -> Result<String, PlantError> {
+        resolve_device(kind, &self.device_names(kind), given)
+    }
+
+    /// The fault with its device's full name ([`VsetinPlant::resolve_device`]).
+    pub fn resolve_fault(&self, fault: &Fault) -> Result<Fault, PlantError> {
+        match (fault.device_kind(), fault.device()) {
+            (Some(kind), Some(device)) => Ok(fault.with_device(self.resolve_device(kind, device)?)),
+            _ => Ok(fault.clone()),
+        }
+    }
+
+    /// The hand operation with its device's full name ([`VsetinPlant::resolve_device`]).
+    pub fn resolve_action(&self, action: &Action) -> Result<Action, PlantError> {
+        match action.device() {
+            Some((kind, device)) => Ok(action.with_device(self.resolve_device(kind, device)?)),
+            None => Ok(action.clone()),
+        }
+    }
+
     /// Injects a fault at the current time. Injecting an active fault again is a no-op.
+    /// The device may be given by a unique short name ([`VsetinPlant::resolve_device`]);
+    /// the fault is kept under the full name.
     pub fn inject(&mut self, fault: Fault) -> Result<(), PlantError> {
+        let fault = self.resolve_fault(&fault)?;
         self.apply_fault(&fault, true)?;
         self.faults.insert(fault);
         self.settle();
         Ok(())
     }
 
-    /// Clears a fault at the current time (clearing an inactive fault is a no-op).
+    /// Clears a fault at the current time (clearing an inactive fault is a no-op). The
+    /// device may be given by a unique short name, as to [`VsetinPlant::inject`].
     pub fn clear(&mut self, fault: &Fault) -> Result<(), PlantError> {
-        self.apply_fault(fault, false)?;
-        self.faults.remove(fault);
+        let fault = self.resolve_fault(fault)?;
+        self.apply_fault(&fault, false)?;
+        self.faults.remove(&fault);
         self.settle();
         Ok(())
     }
@@ -804,8 +944,10 @@ impl VsetinPlant {
         Ok(())
     }
 
-    /// Performs a hand operation at the current time.
+    /// Performs a hand operation at the current time. The device may be given by a unique
+    /// short name, as to [`VsetinPlant::inject`].
     pub fn operate(&mut self, action: Action) -> Result<(), PlantError> {
+        let action = self.resolve_action(&action)?;
         let unknown = |kind: &'static str, name: &str| PlantError::UnknownDevice {
             kind,
             name: name.to_string(),
@@ -931,6 +1073,41 @@ impl VsetinPlant {
     /// The diesel generator's state.
     pub fn generator_state(&self) -> GeneratorState {
         self.gen.state
+    }
+
+    /// Every breaker and contactor with its position, in build order (breakers first).
+    pub fn switching_devices(&self) -> Vec<SwitchingDevice> {
+        let breakers = self.breakers.iter().map(|b| SwitchingDevice {
+            name: b.name.clone(),
+            contactor: false,
+            closed: b.dev.closed(),
+            stuck: b.dev.stuck(),
+            tripped: b.tripped,
+        });
+        let contactors = self.contactors.iter().map(|c| SwitchingDevice {
+            name: c.name.clone(),
+            contactor: true,
+            closed: c.dev.value(),
+            stuck: c.dev.stuck(),
+            tripped: false,
+        });
+        breakers.chain(contactors).collect()
+    }
+
+    /// The state of the RZS supply transfer (board RDA): which contactor feeds RZS and
+    /// what the diesel set does.
+    pub fn transfer(&self) -> Transfer {
+        let closed = |name: &str| {
+            self.contactors
+                .iter()
+                .any(|c| c.name == name && c.dev.value())
+        };
+        Transfer {
+            mains_closed: closed("RDA_KM1"),
+            generator_closed: closed("RDA_KM2"),
+            board_live: self.bus_live("RZS").unwrap_or(false),
+            generator: self.gen.state,
+        }
     }
 
     /// Every I/O module with its status.

@@ -2,7 +2,9 @@
 
 use std::collections::BTreeSet;
 
-use plant::{Direction, Fault, Plant, PlantError, Value, ValueKind, VsetinPlant};
+use plant::{
+    Action, DeviceKind, Direction, Fault, Plant, PlantError, Value, ValueKind, VsetinPlant,
+};
 
 use crate::{get, set};
 
@@ -245,4 +247,98 @@ fn crate_docs_list_every_signal() {
     assert!(table.contains(&count), "{count}");
     let md = plant::signal_table_markdown(p.signals());
     assert_eq!(md.lines().count(), actual.len() + 2);
+}
+
+/// Every operation that names a device has devices to name, and each of its names
+/// resolves to itself.
+#[test]
+fn every_operation_lists_the_names_it_takes() {
+    let p = VsetinPlant::new();
+    for syntax in plant::operation_syntax() {
+        let Some(kind) = syntax.device else { continue };
+        let names = p.device_names(kind);
+        assert!(!names.is_empty(), "{} takes no name", syntax.keyword);
+        for name in &names {
+            assert_eq!(p.resolve_device(kind, name).as_ref(), Ok(name));
+        }
+    }
+    assert!(p
+        .device_names(DeviceKind::Breaker)
+        .contains(&"RH2_QF1".to_owned()));
+    assert!(p
+        .device_names(DeviceKind::SwitchingDevice)
+        .contains(&"RDA_KM2".to_owned()));
+}
+
+/// A newcomer types `close QF1` or `module-pulled p9`: a unique short name (first or last
+/// words of the full name, any case) is accepted; an ambiguous one lists the candidates.
+#[test]
+fn short_device_names_resolve_when_unique() {
+    let mut p = VsetinPlant::new();
+    assert_eq!(
+        p.operate(Action::Close("QF1".into())),
+        Err(PlantError::AmbiguousDevice {
+            kind: "breaker",
+            name: "QF1".into(),
+            candidates: vec!["RH11_QF1".into(), "RH2_QF1".into(), "RZZ_QF1".into()],
+        })
+    );
+    let message = p
+        .operate(Action::Close("QF1".into()))
+        .unwrap_err()
+        .to_string();
+    assert!(message.contains("RH2_QF1, RZZ_QF1"), "{message}");
+
+    p.inject(Fault::ModulePulled("p9".into())).unwrap();
+    p.inject(Fault::BreakerTripped("RH11".into())).unwrap();
+    p.inject(Fault::EmergencyOff("rzz".into())).unwrap();
+    assert_eq!(
+        p.active_faults(),
+        vec![
+            Fault::BreakerTripped("RH11_QF1".into()),
+            Fault::EmergencyOff("RZZ".into()),
+            Fault::ModulePulled("RDRT_P9".into()),
+        ]
+    );
+    p.clear(&Fault::ModulePulled("RDRT_p9".into())).unwrap();
+    p.clear(&Fault::BreakerTripped("rh11_qf1".into())).unwrap();
+    assert_eq!(p.active_faults(), vec![Fault::EmergencyOff("RZZ".into())]);
+
+    // RH2's QF1 by its door pushbutton, in local, by the unique `RH2_QF1`.
+    p.operate(Action::SetSelector {
+        board: "rh2".into(),
+        remote: false,
+    })
+    .unwrap();
+    p.operate(Action::Open("rh2_qf1".into())).unwrap();
+    p.advance(std::time::Duration::from_secs(1)).unwrap();
+    let qf1 = p
+        .switching_devices()
+        .into_iter()
+        .find(|d| d.name == "RH2_QF1")
+        .unwrap();
+    assert!(!qf1.closed, "{qf1}");
+    assert_eq!(qf1.to_string(), "RH2_QF1 open");
+
+    assert!(matches!(
+        p.inject(Fault::StuckOpen("KM9".into())),
+        Err(PlantError::UnknownDevice { .. })
+    ));
+    assert!(matches!(
+        p.inject(Fault::StuckOpen("KM2".into())),
+        Err(PlantError::AmbiguousDevice { ref candidates, .. })
+            if candidates.contains(&"RDA_KM2".to_owned()) && candidates.contains(&"OR_KM2".to_owned())
+    ));
+}
+
+/// The transfer as the console's `status` shows it.
+#[test]
+fn transfer_state_reads_the_rda_contactors_and_the_generator() {
+    let p = VsetinPlant::new();
+    let transfer = p.transfer();
+    assert!(!transfer.mains_closed && !transfer.generator_closed);
+    assert_eq!(
+        transfer.to_string(),
+        "RZS on neither source (RDA_KM1 open, RDA_KM2 open), busbar dead, generator stopped"
+    );
 }
