@@ -51,6 +51,22 @@ pub struct ControlConfig {
     /// reported as "refused by local mode".
     #[serde(default)]
     pub local_point: Option<String>,
+    /// The control authority the control needs: refused by the HMI itself (and audited)
+    /// unless this point has this state, e.g. board controls only while the station's
+    /// "HMI local" point says the authority is with this HMI (railway spec 9.2).
+    #[serde(default)]
+    pub authority: Option<AuthorityConfig>,
+}
+
+/// Which single point says that the HMI holds the control authority.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AuthorityConfig {
+    /// A single point of `points.csv`.
+    pub point: String,
+    /// The state the point has while the authority is with this HMI (default TRUE).
+    #[serde(default = "yes")]
+    pub state: bool,
 }
 
 /// An alarm on a single point.
@@ -151,13 +167,17 @@ impl HmiConfig {
             trends: raw.trend.into_iter().map(|t| t.point).collect(),
             points,
         };
-        config.check()?;
+        config.check(&text)?;
         Ok(config)
     }
 
-    fn check(&self) -> Result<(), HmiError> {
+    /// Checks the references; an error names `file:line:col` of the entry at fault.
+    fn check(&self, text: &str) -> Result<(), HmiError> {
         let file = self.folder.join("hmi.toml");
-        let bad = |message: String| HmiError::Config(format!("{}: {message}", file.display()));
+        let bad_at = |table: &str, index: usize, key: &str, message: String| {
+            let (line, column) = locate(text, table, index, key);
+            HmiError::Config(format!("{}:{line}:{column}: {message}", file.display()))
+        };
         let names: HashSet<&str> = self.points.iter().map(|p| p.name.as_str()).collect();
         let commands: HashSet<&str> = self
             .points
@@ -166,69 +186,99 @@ impl HmiConfig {
             .map(|p| p.name.as_str())
             .collect();
         let mut ids = HashSet::new();
-        for screen in &self.screens {
+        for (index, screen) in self.screens.iter().enumerate() {
+            let bad = |key: &str, message: String| bad_at("screen", index, key, message);
             if screen.id.is_empty()
                 || !screen
                     .id
                     .chars()
                     .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
             {
-                return Err(bad(format!("screen id `{}` is not URL-safe", screen.id)));
+                return Err(bad(
+                    "id",
+                    format!("screen id `{}` is not URL-safe", screen.id),
+                ));
             }
             if !ids.insert(screen.id.as_str()) {
-                return Err(bad(format!("duplicate screen id `{}`", screen.id)));
+                return Err(bad("id", format!("duplicate screen id `{}`", screen.id)));
             }
             if !self.folder.join(&screen.file).is_file() {
-                return Err(bad(format!(
-                    "screen `{}`: file {} not found",
-                    screen.id,
-                    screen.file.display()
-                )));
+                return Err(bad(
+                    "file",
+                    format!(
+                        "screen `{}`: file {} not found",
+                        screen.id,
+                        screen.file.display()
+                    ),
+                ));
             }
         }
-        for control in &self.controls {
-            if !commands.contains(control.command.as_str()) {
-                return Err(bad(format!(
-                    "control `{}` is no command of points.csv",
-                    control.command
-                )));
-            }
-            if control.level > 9 {
-                return Err(bad(format!("control `{}`: level above 9", control.command)));
-            }
-            if let Some(local) = &control.local_point {
-                if !names.contains(local.as_str()) {
-                    return Err(bad(format!(
-                        "control `{}`: no point `{local}`",
-                        control.command
-                    )));
-                }
-            }
-        }
-        for alarm in &self.alarms {
-            let single = self.points.iter().any(|p| {
-                p.name == alarm.point
+        let single = |name: &str| {
+            self.points.iter().any(|p| {
+                p.name == name
                     && matches!(
                         p.type_id,
                         TypeId::M_SP_NA_1 | TypeId::M_SP_TA_1 | TypeId::M_SP_TB_1
                     )
-            });
-            if !single {
-                return Err(bad(format!(
-                    "alarm on `{}`: no single point of that name",
-                    alarm.point
-                )));
+            })
+        };
+        for (index, control) in self.controls.iter().enumerate() {
+            let bad = |key: &str, message: String| bad_at("control", index, key, message);
+            if !commands.contains(control.command.as_str()) {
+                return Err(bad(
+                    "command",
+                    format!("control `{}` is no command of points.csv", control.command),
+                ));
             }
-            if !(1..=4).contains(&alarm.priority) {
-                return Err(bad(format!(
-                    "alarm on `{}`: priority is 1..=4",
-                    alarm.point
-                )));
+            if control.level > 9 {
+                return Err(bad(
+                    "level",
+                    format!("control `{}`: level above 9", control.command),
+                ));
+            }
+            if let Some(local) = &control.local_point {
+                if !names.contains(local.as_str()) {
+                    return Err(bad(
+                        "local_point",
+                        format!("control `{}`: no point `{local}`", control.command),
+                    ));
+                }
+            }
+            if let Some(authority) = &control.authority {
+                if !single(&authority.point) {
+                    return Err(bad(
+                        "authority",
+                        format!(
+                            "control `{}`: authority point `{}` is no single point",
+                            control.command, authority.point
+                        ),
+                    ));
+                }
             }
         }
-        for trend in &self.trends {
+        for (index, alarm) in self.alarms.iter().enumerate() {
+            let bad = |key: &str, message: String| bad_at("alarm", index, key, message);
+            if !single(&alarm.point) {
+                return Err(bad(
+                    "point",
+                    format!("alarm on `{}`: no single point of that name", alarm.point),
+                ));
+            }
+            if !(1..=4).contains(&alarm.priority) {
+                return Err(bad(
+                    "priority",
+                    format!("alarm on `{}`: priority is 1..=4", alarm.point),
+                ));
+            }
+        }
+        for (index, trend) in self.trends.iter().enumerate() {
             if !names.contains(trend.as_str()) {
-                return Err(bad(format!("trend of `{trend}`: no such point")));
+                return Err(bad_at(
+                    "trend",
+                    index,
+                    "point",
+                    format!("trend of `{trend}`: no such point"),
+                ));
             }
         }
         Ok(())
@@ -246,6 +296,7 @@ impl HmiConfig {
                 select: false,
                 confirm: None,
                 local_point: None,
+                authority: None,
             })
     }
 }
@@ -288,4 +339,42 @@ fn line_col(text: &str, offset: usize) -> (usize, usize) {
     let line = before.matches('\n').count() + 1;
     let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
     (line, column)
+}
+
+/// Where the `key` of the `index`-th `[[table]]` of a TOML text is: (line, column) of its
+/// value, or of the table's header when the key is not written (a default). The parsed
+/// configuration keeps no spans; the tables of `hmi.toml` are flat, so this finds them.
+fn locate(text: &str, table: &str, index: usize, key: &str) -> (usize, usize) {
+    let header = format!("[[{table}]]");
+    let mut seen = 0;
+    let mut found: Option<usize> = None;
+    for (number, line) in text.lines().enumerate() {
+        let trimmed = line.trim();
+        if trimmed.starts_with('[') {
+            if found.is_some() {
+                break;
+            }
+            if trimmed == header {
+                if seen == index {
+                    found = Some(number);
+                }
+                seen += 1;
+            }
+            continue;
+        }
+        if found.is_none() {
+            continue;
+        }
+        let Some(rest) = trimmed.strip_prefix(key) else {
+            continue;
+        };
+        if let Some(value) = rest.trim_start().strip_prefix('=') {
+            let value_at = line.len() - value.trim_start().len();
+            return (
+                number + 1,
+                line.get(..value_at).map_or(1, |p| p.chars().count() + 1),
+            );
+        }
+    }
+    found.map_or((1, 1), |number| (number + 1, 1))
 }

@@ -13,6 +13,7 @@
 //!   recording into the HMI's own event store.
 //! - [`alarms`]: raised/cleared alarms, acknowledgement, shelving.
 //! - [`web`]: the axum router: pages, JSON API, WebSocket.
+//! - [`tls`]: HTTPS with the HMI's own certificate.
 #![cfg_attr(
     not(test),
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
@@ -23,12 +24,14 @@ pub mod alarms;
 pub mod auth;
 pub mod config;
 pub mod link;
+pub mod tls;
 pub mod users;
 pub mod web;
 
 use std::net::SocketAddr;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::{Arc, RwLock};
+use std::time::Duration;
 
 use ::station::pointdb::TimeZonePolicy;
 use ::station::runtime::Recorder;
@@ -47,6 +50,9 @@ pub enum HmiError {
     /// The event store could not be opened.
     #[error("event store: {0}")]
     Store(#[from] ::station::store::StoreError),
+    /// The TLS certificate or key.
+    #[error("TLS: {0}")]
+    Tls(String),
     /// The listening socket.
     #[error("cannot listen on {address}: {source}")]
     Listen {
@@ -79,6 +85,50 @@ pub struct HmiOptions {
     pub local_address: Option<std::net::IpAddr>,
 }
 
+/// How the HMI serves its browsers, beyond [`HmiOptions`].
+#[derive(Debug, Clone)]
+#[non_exhaustive]
+pub struct ServeConfig {
+    /// Serve HTTPS with this certificate and key (cookies are then `Secure`).
+    pub tls: Option<tls::TlsFiles>,
+    /// A session ends after this long without a request; its WebSockets close then.
+    pub session_idle: Duration,
+    /// How often the users file is checked for changes (`stanice user remove`,
+    /// `passwd`): a removed or changed user's sessions end.
+    pub users_poll: Duration,
+}
+
+impl Default for ServeConfig {
+    fn default() -> Self {
+        ServeConfig {
+            tls: None,
+            session_idle: auth::SESSION_IDLE,
+            users_poll: Duration::from_secs(1),
+        }
+    }
+}
+
+/// Text from outside (user names, paths, header values) made safe for one log line:
+/// control characters are escaped, so a CR/LF in a user name cannot forge a line.
+#[derive(Debug, Clone, Copy)]
+pub struct LogText<'a>(pub &'a str);
+
+impl std::fmt::Display for LogText<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        use std::fmt::Write as _;
+        for c in self.0.chars() {
+            if c.is_control() || c == '\\' {
+                for escaped in c.escape_default() {
+                    f.write_char(escaped)?;
+                }
+            } else {
+                f.write_char(c)?;
+            }
+        }
+        Ok(())
+    }
+}
+
 /// A running HMI.
 #[derive(Debug)]
 pub struct Hmi {
@@ -86,6 +136,8 @@ pub struct Hmi {
     pub address: SocketAddr,
     /// The station link.
     pub station: Arc<link::Station>,
+    /// The password verifications (their figures).
+    pub verifier: Arc<auth::Verifier>,
     shutdown: tokio::sync::watch::Sender<bool>,
     recorder: Recorder,
 }
@@ -94,7 +146,16 @@ impl Hmi {
     /// Loads the folder and users, opens the store, connects to the station and starts
     /// serving on the current tokio runtime.
     pub async fn start(options: HmiOptions) -> Result<Hmi, HmiError> {
+        Hmi::start_with(options, ServeConfig::default()).await
+    }
+
+    /// [`Hmi::start`] with the serving options of `serve`.
+    pub async fn start_with(options: HmiOptions, serve: ServeConfig) -> Result<Hmi, HmiError> {
         let config = config::HmiConfig::load(&options.screens)?;
+        let tls_config = match &serve.tls {
+            Some(files) => Some(files.server_config()?),
+            None => None,
+        };
         let users = users::Users::load(&options.users)?;
         let store: Option<Arc<dyn EventStore>> = match &options.store {
             Some(url) => Some(Arc::from(open_store(url).await?)),
@@ -112,12 +173,16 @@ impl Hmi {
             options.zone,
             options.local_address,
         );
+        let verifier = Arc::new(auth::Verifier::default());
         let state = web::AppState {
             station: Arc::clone(&link),
             users: Arc::new(RwLock::new(users)),
-            sessions: Arc::default(),
+            sessions: Arc::new(auth::Sessions::new(serve.session_idle)),
             limiter: Arc::default(),
+            verifier: Arc::clone(&verifier),
             store,
+            audit_node: format!("CA{}", options.common_address.get()),
+            secure_cookies: tls_config.is_some(),
         };
         let listener = tokio::net::TcpListener::bind(options.listen)
             .await
@@ -129,22 +194,53 @@ impl Hmi {
             address: options.listen,
             source,
         })?;
-        let (shutdown, mut stop) = tokio::sync::watch::channel(false);
-        let app = web::router(state).into_make_service_with_connect_info::<SocketAddr>();
-        tokio::spawn(async move {
-            let served = axum::serve(listener, app)
-                .with_graceful_shutdown(async move {
-                    let _ = stop.changed().await;
-                })
-                .await;
-            if let Err(error) = served {
-                tracing::error!(%error, "HMI server ended");
+        let (shutdown, stop) = tokio::sync::watch::channel(false);
+        tokio::spawn(end_idle_sessions(Arc::clone(&state.sessions), stop.clone()));
+        tokio::spawn(follow_users_file(
+            options.users.clone(),
+            Arc::clone(&state.users),
+            Arc::clone(&state.sessions),
+            serve.users_poll,
+            stop.clone(),
+        ));
+        let app = web::router(state).into_make_service_with_connect_info::<tls::Peer>();
+        let mut stopped = stop;
+        let until_stopped = async move {
+            let _ = stopped.wait_for(|stop| *stop).await;
+        };
+        match tls_config {
+            Some(tls_config) => {
+                let listener = tls::TlsListener::spawn(listener, tls_config).map_err(|source| {
+                    HmiError::Listen {
+                        address: options.listen,
+                        source,
+                    }
+                })?;
+                tokio::spawn(async move {
+                    let served = axum::serve(listener, app)
+                        .with_graceful_shutdown(until_stopped)
+                        .await;
+                    if let Err(error) = served {
+                        tracing::error!(%error, "HMI server ended");
+                    }
+                });
             }
-        });
-        tracing::info!(%address, "HMI listening");
+            None => {
+                tokio::spawn(async move {
+                    let served = axum::serve(listener, app)
+                        .with_graceful_shutdown(until_stopped)
+                        .await;
+                    if let Err(error) = served {
+                        tracing::error!(%error, "HMI server ended");
+                    }
+                });
+            }
+        }
+        tracing::info!(%address, tls = serve.tls.is_some(), "HMI listening");
         Ok(Hmi {
             address,
             station: link,
+            verifier,
             shutdown,
             recorder,
         })
@@ -155,5 +251,86 @@ impl Hmi {
         let _ = self.shutdown.send(true);
         self.station.set_link(false);
         self.recorder.flush().await;
+    }
+}
+
+/// Ends idle sessions (closing their WebSockets) about once a second.
+async fn end_idle_sessions(
+    sessions: Arc<auth::Sessions>,
+    mut stop: tokio::sync::watch::Receiver<bool>,
+) {
+    let mut tick = tokio::time::interval(Duration::from_secs(1));
+    tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    loop {
+        tokio::select! {
+            _ = tick.tick() => {
+                let ended = sessions.sweep();
+                if ended > 0 {
+                    tracing::info!(ended, "idle sessions ended");
+                }
+            }
+            _ = stop.wait_for(|stop| *stop) => return,
+        }
+    }
+}
+
+/// The users file is read at most this large (a users file is a few kilobytes).
+const MAX_USERS_FILE: u64 = 4 * 1024 * 1024;
+
+fn read_users_file(path: &Path) -> Option<Vec<u8>> {
+    use std::io::Read as _;
+    let file = std::fs::File::open(path).ok()?;
+    let mut bytes = Vec::new();
+    file.take(MAX_USERS_FILE).read_to_end(&mut bytes).ok()?;
+    Some(bytes)
+}
+
+/// Reloads the users file when its content changes (the `stanice user` commands rewrite
+/// it while the HMI runs) and ends the sessions of every user removed or changed, so
+/// that a removed user or a changed password takes effect at once.
+async fn follow_users_file(
+    path: PathBuf,
+    users: Arc<RwLock<users::Users>>,
+    sessions: Arc<auth::Sessions>,
+    every: Duration,
+    mut stop: tokio::sync::watch::Receiver<bool>,
+) {
+    let mut known = read_users_file(&path);
+    let mut tick = tokio::time::interval(every.max(Duration::from_millis(10)));
+    tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    loop {
+        tokio::select! {
+            _ = tick.tick() => {}
+            _ = stop.wait_for(|stop| *stop) => return,
+        }
+        let current = read_users_file(&path);
+        if current == known {
+            continue;
+        }
+        known = current;
+        let load_path = path.clone();
+        // Loading hashes a decoy password (argon2): keep it off the async workers.
+        let loaded = tokio::task::spawn_blocking(move || users::Users::load(&load_path)).await;
+        let fresh = match loaded {
+            Ok(Ok(fresh)) => fresh,
+            Ok(Err(error)) => {
+                tracing::warn!(error = %LogText(&error.to_string()), "users file not reloaded; the previous users stay");
+                continue;
+            }
+            Err(_) => continue,
+        };
+        let changed: Vec<String> = {
+            let old = users.read().unwrap_or_else(|p| p.into_inner());
+            old.names()
+                .filter(|name| old.record(name) != fresh.record(name))
+                .map(str::to_owned)
+                .collect()
+        };
+        *users.write().unwrap_or_else(|p| p.into_inner()) = fresh;
+        for name in &changed {
+            sessions.remove_user(name);
+            tracing::info!(user = %LogText(name), "user removed or changed: sessions ended");
+        }
+        tracing::info!(file = %LogText(&path.display().to_string()), "users file reloaded");
     }
 }

@@ -53,7 +53,8 @@ fn hash(password: &str) -> Result<String, HmiError> {
         .map_err(|e| HmiError::Users(format!("hashing: {e}")))
 }
 
-fn valid_name(name: &str) -> bool {
+/// Whether a name can be a user's: 1-64 ASCII letters, digits, '.', '-', '_'.
+pub fn valid_name(name: &str) -> bool {
     !name.is_empty()
         && name.len() <= 64
         && name
@@ -91,6 +92,16 @@ impl Users {
     /// The names and levels.
     pub fn list(&self) -> impl Iterator<Item = (&str, u8)> {
         self.users.iter().map(|(n, u)| (n.as_str(), u.level))
+    }
+
+    /// The names.
+    pub fn names(&self) -> impl Iterator<Item = &str> {
+        self.users.keys().map(String::as_str)
+    }
+
+    /// A user's record.
+    pub fn record(&self, name: &str) -> Option<&UserRecord> {
+        self.users.get(name)
     }
 
     /// The level of a user whose password is right; `None` otherwise.

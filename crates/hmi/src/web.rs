@@ -2,13 +2,16 @@
 //!
 //! Every `/api` route but login checks the session cookie; every POST checks the CSRF
 //! header; bodies are capped at [`MAX_BODY`]; refusals (wrong password, lockout, forged
-//! or missing CSRF token, unknown point, level too low) are answered with a JSON error
-//! and logged with the client's address.
+//! or missing CSRF token, unknown point, level too low, control authority elsewhere) are
+//! answered with a JSON error and logged with the client's address, any text the client
+//! chose escaped ([`LogText`]). Every response, errors included, carries the security
+//! headers of [`harden`]; an error without a JSON body gets one.
 
 use std::net::SocketAddr;
 use std::sync::{Arc, RwLock};
 
-use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
+use axum::body::Body;
+use axum::extract::ws::{CloseFrame, Message, WebSocket, WebSocketUpgrade};
 use axum::extract::{ConnectInfo, DefaultBodyLimit, Path, Query, State};
 use axum::http::{header, HeaderMap, HeaderValue, StatusCode};
 use axum::response::{IntoResponse, Redirect, Response};
@@ -18,12 +21,17 @@ use chrono::{DateTime, Utc};
 use serde::Deserialize;
 use serde_json::{json, Value};
 use station::store::{
-    CommandOutcome, CommandQuery, Cursor, EventQuery, EventStore, Order, PointFilter, TimeBasis,
+    Actor, CommandOutcome, CommandPhase, CommandQuery, CommandRecord, Cursor, EventQuery,
+    EventStore, Order, PointFilter, PointValue, TimeBasis,
 };
 
-use crate::auth::{constant_time_eq, LoginLimiter, Session, Sessions};
+use crate::auth::{
+    constant_time_eq, LoginLimiter, LoginRefusal, Session, Sessions, SocketRefusal, Verifier,
+};
 use crate::link::{ControlOutcome, Station};
+use crate::tls::Peer;
 use crate::users::Users;
+use crate::LogText;
 
 mod files {
     include!(concat!(env!("OUT_DIR"), "/web_files.rs"));
@@ -34,6 +42,13 @@ pub const MAX_BODY: usize = 16 * 1024;
 /// Largest WebSocket message accepted from a browser (it sends none that matter).
 pub const MAX_WS_MESSAGE: usize = 4 * 1024;
 const COOKIE: &str = "stanice_session";
+/// The detail of the write-ahead audit record of a command, written (and committed)
+/// before the command goes to the station; the outcome follows as a second record.
+pub const SENT_DETAIL: &str = "sent to the station; outcome pending";
+/// The Content-Security-Policy of every response: nothing but the HMI's own files.
+const CSP: &str = "default-src 'self'; img-src 'self' data:; style-src 'self' 'unsafe-inline'; \
+                   connect-src 'self'; object-src 'none'; base-uri 'none'; \
+                   frame-ancestors 'none'; form-action 'self'";
 
 /// What the handlers share.
 #[derive(Clone)]
@@ -46,8 +61,14 @@ pub struct AppState {
     pub sessions: Arc<Sessions>,
     /// Login rate limit.
     pub limiter: Arc<LoginLimiter>,
+    /// The bound on password verifications running at once.
+    pub verifier: Arc<Verifier>,
     /// The HMI's event store, if any.
     pub store: Option<Arc<dyn EventStore>>,
+    /// The node the HMI's audit records name (the station's common address).
+    pub audit_node: String,
+    /// Cookies only over HTTPS (the HMI serves TLS itself).
+    pub secure_cookies: bool,
 }
 
 /// The router.
@@ -72,8 +93,55 @@ pub fn router(state: AppState) -> Router {
         .route("/api/trends", get(trends))
         .route("/api/live", get(live))
         .fallback(not_found)
+        // Inner to outer: the body limit applies to the handlers; `harden` sees every
+        // response, the fallback's and the extractors' rejections included.
         .layer(DefaultBodyLimit::max(MAX_BODY))
+        .layer(axum::middleware::map_response(harden))
         .with_state(state)
+}
+
+/// The security headers of every response, and a JSON body for every error that has
+/// none (axum's own rejections, such as 405, are plain text).
+pub async fn harden(response: Response) -> Response {
+    let status = response.status();
+    let json = response
+        .headers()
+        .get(header::CONTENT_TYPE)
+        .and_then(|v| v.to_str().ok())
+        .is_some_and(|v| v.starts_with("application/json"));
+    let mut response = if (status.is_client_error() || status.is_server_error()) && !json {
+        let message = status
+            .canonical_reason()
+            .unwrap_or("error")
+            .to_ascii_lowercase();
+        let (mut parts, _) = response.into_parts();
+        parts.headers.remove(header::CONTENT_LENGTH);
+        parts.headers.insert(
+            header::CONTENT_TYPE,
+            HeaderValue::from_static("application/json"),
+        );
+        Response::from_parts(parts, Body::from(json!({"error": message}).to_string()))
+    } else {
+        response
+    };
+    let headers = response.headers_mut();
+    headers.insert(
+        header::X_CONTENT_TYPE_OPTIONS,
+        HeaderValue::from_static("nosniff"),
+    );
+    headers.insert(
+        header::CONTENT_SECURITY_POLICY,
+        HeaderValue::from_static(CSP),
+    );
+    headers.insert(header::X_FRAME_OPTIONS, HeaderValue::from_static("DENY"));
+    headers.insert(
+        header::REFERRER_POLICY,
+        HeaderValue::from_static("no-referrer"),
+    );
+    if !headers.contains_key(header::CACHE_CONTROL) {
+        headers.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-store"));
+    }
+    response
 }
 
 /// An API error: status and message.
@@ -101,6 +169,12 @@ fn cookie_token(headers: &HeaderMap) -> Option<String> {
         .map(|(_, value)| value.to_owned())
 }
 
+fn session_cookie(secure: bool, token: &str, end: bool) -> String {
+    let secure = if secure { "; Secure" } else { "" };
+    let age = if end { "; Max-Age=0" } else { "" };
+    format!("{COOKIE}={token}; HttpOnly; SameSite=Strict; Path=/{secure}{age}")
+}
+
 fn session(state: &AppState, headers: &HeaderMap) -> Result<Session, ApiError> {
     cookie_token(headers)
         .and_then(|token| state.sessions.get(&token))
@@ -119,30 +193,26 @@ fn session_for_change(
         .and_then(|v| v.to_str().ok())
         .unwrap_or("");
     if !constant_time_eq(sent, &session.csrf) {
-        tracing::warn!(%peer, user = %session.user, "request refused: missing or forged CSRF token");
+        tracing::warn!(%peer, user = %LogText(&session.user), "request refused: missing or forged CSRF token");
         return Err(error(StatusCode::FORBIDDEN, "missing or wrong CSRF token"));
     }
     Ok(session)
 }
 
 fn file(name: &str) -> Option<Response> {
-    files::FILES.iter().find(|(n, _, _)| *n == name).map(|(_, mime, bytes)| {
-        (
-            [
-                (header::CONTENT_TYPE, HeaderValue::from_static(mime)),
-                (header::CACHE_CONTROL, HeaderValue::from_static("no-cache")),
-                (
-                    header::CONTENT_SECURITY_POLICY,
-                    HeaderValue::from_static(
-                        "default-src 'self'; img-src 'self' data:; style-src 'self' 'unsafe-inline'; connect-src 'self'",
-                    ),
-                ),
-                (header::X_FRAME_OPTIONS, HeaderValue::from_static("DENY")),
-            ],
-            *bytes,
-        )
-            .into_response()
-    })
+    files::FILES
+        .iter()
+        .find(|(n, _, _)| *n == name)
+        .map(|(_, mime, bytes)| {
+            (
+                [
+                    (header::CONTENT_TYPE, HeaderValue::from_static(mime)),
+                    (header::CACHE_CONTROL, HeaderValue::from_static("no-cache")),
+                ],
+                *bytes,
+            )
+                .into_response()
+        })
 }
 
 async fn index(State(state): State<AppState>, headers: HeaderMap) -> Response {
@@ -177,49 +247,70 @@ struct LoginRequest {
 
 async fn login(
     State(state): State<AppState>,
-    ConnectInfo(peer): ConnectInfo<SocketAddr>,
+    ConnectInfo(Peer(peer)): ConnectInfo<Peer>,
     body: Result<Json<LoginRequest>, axum::extract::rejection::JsonRejection>,
 ) -> Result<Response, ApiError> {
     let Json(request) = body.map_err(|e| error(e.status(), format!("bad login request: {e}")))?;
-    let address_key = format!("addr:{}", peer.ip());
-    let user_key = format!("user:{}", request.username);
-    for key in [&address_key, &user_key] {
-        if let Err(wait) = state.limiter.check(key) {
-            tracing::warn!(%peer, user = %request.username, "login refused: too many failures");
+    let name = LogText(&request.username);
+    // Checked and counted in one step, before any verification.
+    let attempt = match state.limiter.begin(peer.ip(), &request.username) {
+        Ok(attempt) => attempt,
+        Err(LoginRefusal::TooManyFailures(wait)) => {
+            tracing::warn!(%peer, user = %name, "login refused: too many failures from this address");
+            let seconds = wait.as_secs().max(1);
             return Ok((
                 StatusCode::TOO_MANY_REQUESTS,
+                [(header::RETRY_AFTER, HeaderValue::from(seconds))],
                 Json(json!({"error": "too many failed logins; try again later",
-                            "retry_after_s": wait.as_secs().max(1)})),
+                            "retry_after_s": seconds})),
             )
                 .into_response());
         }
+    };
+    if !attempt.delay.is_zero() {
+        // The name has failed often: slowed down, but its user is not locked out.
+        tokio::time::sleep(attempt.delay).await;
+    }
+    let wrong = || error(StatusCode::UNAUTHORIZED, "wrong user name or password");
+    if !crate::users::valid_name(&request.username) {
+        // No such user can exist: nothing to verify and nothing to learn from the timing.
+        attempt.failed();
+        tracing::warn!(%peer, user = %name, "login failed: impossible user name");
+        return Err(wrong());
     }
     let users = Arc::clone(&state.users);
     let (username, password) = (request.username.clone(), request.password);
-    // argon2 costs tens of milliseconds: keep it off the async workers.
-    let level = tokio::task::spawn_blocking(move || {
-        users
-            .read()
-            .unwrap_or_else(|p| p.into_inner())
-            .verify(&username, &password)
-    })
-    .await
-    .ok()
-    .flatten();
-    let Some(level) = level else {
-        state.limiter.fail(&address_key);
-        state.limiter.fail(&user_key);
-        tracing::warn!(%peer, user = %request.username, "login failed: wrong user name or password");
-        return Err(error(
-            StatusCode::UNAUTHORIZED,
-            "wrong user name or password",
-        ));
+    let verified = state
+        .verifier
+        .run(move || {
+            users
+                .read()
+                .unwrap_or_else(|p| p.into_inner())
+                .verify(&username, &password)
+        })
+        .await;
+    let level = match verified {
+        Ok(level) => level,
+        Err(busy) => {
+            attempt.abandoned();
+            tracing::warn!(%peer, user = %name, "login refused: verifier busy");
+            return Ok((
+                StatusCode::SERVICE_UNAVAILABLE,
+                [(header::RETRY_AFTER, HeaderValue::from_static("1"))],
+                Json(json!({"error": busy.to_string(), "retry_after_s": 1})),
+            )
+                .into_response());
+        }
     };
-    state.limiter.succeed(&address_key);
-    state.limiter.succeed(&user_key);
+    let Some(level) = level else {
+        attempt.failed();
+        tracing::warn!(%peer, user = %name, "login failed: wrong user name or password");
+        return Err(wrong());
+    };
+    attempt.succeeded();
     let (token, session) = state.sessions.create(&request.username, level);
-    tracing::info!(%peer, user = %session.user, level, "logged in");
-    let cookie = format!("{COOKIE}={token}; HttpOnly; SameSite=Strict; Path=/");
+    tracing::info!(%peer, user = %name, level, "logged in");
+    let cookie = session_cookie(state.secure_cookies, &token, false);
     Ok((
         [(
             header::SET_COOKIE,
@@ -233,20 +324,20 @@ async fn login(
 
 async fn logout(
     State(state): State<AppState>,
-    ConnectInfo(peer): ConnectInfo<SocketAddr>,
+    ConnectInfo(Peer(peer)): ConnectInfo<Peer>,
     headers: HeaderMap,
 ) -> Result<Response, ApiError> {
     let session = session_for_change(&state, &headers, peer)?;
     if let Some(token) = cookie_token(&headers) {
         state.sessions.remove(&token);
     }
-    tracing::info!(%peer, user = %session.user, "logged out");
+    tracing::info!(%peer, user = %LogText(&session.user), "logged out");
+    let cookie = session_cookie(state.secure_cookies, "", true);
     Ok((
         [(
             header::SET_COOKIE,
-            HeaderValue::from_static(
-                "stanice_session=; HttpOnly; SameSite=Strict; Path=/; Max-Age=0",
-            ),
+            HeaderValue::from_str(&cookie)
+                .map_err(|_| error(StatusCode::INTERNAL_SERVER_ERROR, "cookie"))?,
         )],
         Json(json!({})),
     )
@@ -357,7 +448,7 @@ struct CommandRequest {
 
 async fn command(
     State(state): State<AppState>,
-    ConnectInfo(peer): ConnectInfo<SocketAddr>,
+    ConnectInfo(Peer(peer)): ConnectInfo<Peer>,
     headers: HeaderMap,
     body: Result<Json<CommandRequest>, axum::extract::rejection::JsonRejection>,
 ) -> Result<Response, ApiError> {
@@ -369,7 +460,7 @@ async fn command(
         .iter()
         .find(|p| p.name == request.command && p.type_id.is_command())
     else {
-        tracing::warn!(%peer, user = %session.user, command = %request.command, "unknown command refused");
+        tracing::warn!(%peer, user = %LogText(&session.user), command = %LogText(&request.command), "unknown command refused");
         return Err(error(
             StatusCode::NOT_FOUND,
             format!("no command `{}`", request.command),
@@ -405,7 +496,63 @@ async fn command(
         )
             .into_response());
     }
+    if let Some(authority) = &control.authority {
+        let point = state.station.point(&authority.point);
+        let held = point
+            .as_ref()
+            .is_some_and(|p| !p.invalid && p.value == json!(authority.state));
+        if !held {
+            let now = match &point {
+                Some(p) if !p.invalid => p.value.to_string(),
+                _ => "unknown (invalid)".to_owned(),
+            };
+            let detail = format!(
+                "the control authority is not with this HMI ({} is {now}, {} needed)",
+                authority.point, authority.state
+            );
+            tracing::warn!(%peer, user = %LogText(&session.user), command = %row.name, "control refused: no control authority");
+            state.station.audit(
+                &session.user,
+                &row.name,
+                row.ioa,
+                value,
+                ControlOutcome::Refused,
+                &detail,
+            );
+            state.station.recorder().flush().await;
+            return Ok((
+                StatusCode::CONFLICT,
+                Json(json!({"outcome": "refused-authority", "detail": detail})),
+            )
+                .into_response());
+        }
+    }
+    // Write-ahead: the attempt is committed to the store before the command leaves, so
+    // a command the station carried out is in the audit even if the HMI dies meanwhile.
+    if let Some(store) = &state.store {
+        let sent = CommandRecord {
+            id: None,
+            time: Utc::now(),
+            actor: Actor::User(session.user.clone()),
+            node: state.audit_node.clone(),
+            point: row.name.clone(),
+            ioa: Some(row.ioa),
+            value: PointValue::Float(value),
+            phase: CommandPhase::Execute,
+            outcome: CommandOutcome::Failed,
+            detail: SENT_DETAIL.to_owned(),
+        };
+        if let Err(e) = store.append_command(&sent).await {
+            tracing::error!(error = %e, command = %row.name, "command not sent: its audit record cannot be written");
+            return Err(error(
+                StatusCode::SERVICE_UNAVAILABLE,
+                "the audit record cannot be written; the command was not sent",
+            ));
+        }
+    }
     let (outcome, detail) = state.station.operate(&session.user, &row.name, value).await;
+    // The outcome's record is committed before the user hears of it.
+    state.station.recorder().flush().await;
     Ok(Json(json!({"outcome": outcome, "detail": detail})).into_response())
 }
 
@@ -510,7 +657,12 @@ async fn events(
                 c.time.timestamp_millis(),
                 json!({"id": format!("c{id}"), "time": c.time, "kind": "command", "point": c.point,
                        "ioa": c.ioa, "value": crate_value(&c.value), "user": c.actor.name(),
-                       "outcome": outcome_word(c.outcome), "detail": c.detail}),
+                       "outcome": if c.outcome == CommandOutcome::Failed && c.detail == SENT_DETAIL {
+                           "sent"
+                       } else {
+                           outcome_word(c.outcome)
+                       },
+                       "detail": c.detail}),
                 false,
                 Cursor::new(c.time.timestamp_millis(), id),
             ));
@@ -573,7 +725,7 @@ fn crate_value(value: &station::store::PointValue) -> Value {
 /// Level 0 is read-only: it sees everything and changes nothing, alarms included.
 fn read_only_refused(session: &Session, peer: SocketAddr) -> Result<(), ApiError> {
     if session.level == 0 {
-        tracing::warn!(%peer, user = %session.user, "read-only user refused an alarm change");
+        tracing::warn!(%peer, user = %LogText(&session.user), "read-only user refused an alarm change");
         return Err(error(
             StatusCode::FORBIDDEN,
             "read-only users cannot change alarms",
@@ -592,7 +744,7 @@ async fn alarms(
 
 async fn acknowledge(
     State(state): State<AppState>,
-    ConnectInfo(peer): ConnectInfo<SocketAddr>,
+    ConnectInfo(Peer(peer)): ConnectInfo<Peer>,
     headers: HeaderMap,
     Path(id): Path<usize>,
 ) -> Result<Json<Value>, ApiError> {
@@ -613,7 +765,7 @@ struct ShelveRequest {
 
 async fn shelve(
     State(state): State<AppState>,
-    ConnectInfo(peer): ConnectInfo<SocketAddr>,
+    ConnectInfo(Peer(peer)): ConnectInfo<Peer>,
     headers: HeaderMap,
     Path(id): Path<usize>,
     body: Result<Json<ShelveRequest>, axum::extract::rejection::JsonRejection>,
@@ -708,18 +860,58 @@ async fn trend(
     ))
 }
 
+/// Whether a WebSocket upgrade comes from a page of this HMI. Browsers always send
+/// `Origin` with a WebSocket (a page elsewhere cannot hide it, and the session cookie
+/// would otherwise ride along: cross-site WebSocket hijacking); clients that are no
+/// browser send none and carry no ambient cookie, so they are let through.
+fn same_origin(headers: &HeaderMap) -> bool {
+    let Some(origin) = headers.get(header::ORIGIN) else {
+        return true;
+    };
+    let host = headers.get(header::HOST).and_then(|v| v.to_str().ok());
+    let authority = origin.to_str().ok().and_then(|origin| {
+        origin
+            .strip_prefix("https://")
+            .or_else(|| origin.strip_prefix("http://"))
+    });
+    matches!((authority, host), (Some(a), Some(h)) if a.eq_ignore_ascii_case(h))
+}
+
 async fn live(
     State(state): State<AppState>,
+    ConnectInfo(Peer(peer)): ConnectInfo<Peer>,
     headers: HeaderMap,
     upgrade: WebSocketUpgrade,
 ) -> Result<Response, ApiError> {
-    session(&state, &headers)?;
+    if !same_origin(&headers) {
+        let origin = headers
+            .get(header::ORIGIN)
+            .map(|v| String::from_utf8_lossy(v.as_bytes()).into_owned())
+            .unwrap_or_default();
+        tracing::warn!(%peer, origin = %LogText(&origin), "WebSocket refused: foreign origin");
+        return Err(error(StatusCode::FORBIDDEN, "foreign origin"));
+    }
+    let session = session(&state, &headers)?;
+    let token = cookie_token(&headers).unwrap_or_default();
+    let ended = state.sessions.open_socket(&token).map_err(|refusal| {
+        tracing::warn!(%peer, user = %LogText(&session.user), %refusal, "WebSocket refused");
+        match refusal {
+            SocketRefusal::NoSession => error(StatusCode::UNAUTHORIZED, refusal.to_string()),
+            SocketRefusal::TooMany => error(StatusCode::TOO_MANY_REQUESTS, refusal.to_string()),
+        }
+    })?;
     Ok(upgrade
         .max_message_size(MAX_WS_MESSAGE)
-        .on_upgrade(move |socket| stream(socket, state)))
+        .on_upgrade(move |socket| stream(socket, state, ended)))
 }
 
-async fn stream(mut socket: WebSocket, state: AppState) {
+/// Feeds one browser until it goes away or its session ends (`ended` then reports an
+/// error: the session's sender is gone).
+async fn stream(
+    mut socket: WebSocket,
+    state: AppState,
+    mut ended: tokio::sync::watch::Receiver<()>,
+) {
     // Subscribe before the snapshot, so nothing falls between them.
     let mut updates = state.station.subscribe();
     let snapshot = json!({
@@ -753,6 +945,11 @@ async fn stream(mut socket: WebSocket, state: AppState) {
                 }
                 Err(_) => return,
             },
+            _ = ended.changed() => {
+                let close = CloseFrame { code: 4001, reason: "session ended".into() };
+                let _ = socket.send(Message::Close(Some(close))).await;
+                return;
+            }
             incoming = socket.recv() => match incoming {
                 Some(Ok(Message::Close(_))) | None | Some(Err(_)) => return,
                 Some(Ok(_)) => {}

@@ -8,7 +8,7 @@ use std::time::Duration;
 
 use anyhow::Context as _;
 use clap::{Args, Subcommand};
-use hmi::{Hmi, HmiOptions};
+use hmi::{Hmi, HmiOptions, ServeConfig};
 use iec60870::asdu::CommonAddress;
 use station::pointdb::TimeZonePolicy;
 
@@ -36,6 +36,13 @@ pub(crate) struct HmiArgs {
     /// The time zone of the station's time tags (IANA name, or UTC).
     #[arg(long, default_value = "Europe/Prague")]
     time_zone: TimeZonePolicy,
+    /// Serve HTTPS with this certificate chain (PEM); needs --tls-key. Cookies are then
+    /// Secure. Behind a reverse proxy that terminates TLS, leave it out (docs/HMI.md).
+    #[arg(long, requires = "tls_key")]
+    tls_cert: Option<PathBuf>,
+    /// The private key (PEM) of --tls-cert.
+    #[arg(long, requires = "tls_cert")]
+    tls_key: Option<PathBuf>,
     /// Connect to the station from this local address.
     #[arg(long)]
     local_address: Option<std::net::IpAddr>,
@@ -50,20 +57,31 @@ pub(crate) async fn run(args: HmiArgs) -> anyhow::Result<ExitCode> {
         .users
         .clone()
         .unwrap_or_else(|| args.screens.join("users.toml"));
-    let hmi = Hmi::start(HmiOptions {
-        screens: args.screens.clone(),
-        users: users.clone(),
-        connect: args.connect.clone(),
-        common_address: CommonAddress::new(args.ca),
-        listen: args.listen,
-        store: (args.store != "none").then(|| args.store.clone()),
-        zone: args.time_zone,
-        local_address: args.local_address,
-    })
+    let mut serve = ServeConfig::default();
+    if let (Some(certificate), Some(key)) = (&args.tls_cert, &args.tls_key) {
+        serve.tls = Some(hmi::tls::TlsFiles {
+            certificate: certificate.clone(),
+            key: key.clone(),
+        });
+    }
+    let scheme = if serve.tls.is_some() { "https" } else { "http" };
+    let hmi = Hmi::start_with(
+        HmiOptions {
+            screens: args.screens.clone(),
+            users: users.clone(),
+            connect: args.connect.clone(),
+            common_address: CommonAddress::new(args.ca),
+            listen: args.listen,
+            store: (args.store != "none").then(|| args.store.clone()),
+            zone: args.time_zone,
+            local_address: args.local_address,
+        },
+        serve,
+    )
     .await
     .context("the HMI does not start")?;
     println!(
-        "Stanice HMI on http://{} for the station at {} (CA {})",
+        "Stanice HMI on {scheme}://{} for the station at {} (CA {})",
         hmi.address,
         args.connect.join(","),
         args.ca
