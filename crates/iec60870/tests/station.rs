@@ -15,6 +15,8 @@
 #[path = "station/common.rs"]
 mod common;
 
+#[path = "station/availability.rs"]
+mod availability;
 #[path = "station/client.rs"]
 mod client;
 #[path = "station/command_age.rs"]

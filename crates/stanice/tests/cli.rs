@@ -1123,3 +1123,154 @@ fn the_console_names_the_devices_and_accepts_unique_short_names() {
     wait_for_line(&lines, "RH2_FA1.1 open (stuck)");
     wait_for_line(&lines, "contactors:");
 }
+
+/// Sends commands through the running Vsetín station and kills it (SIGKILL) the moment
+/// the last one's positive confirmation arrives; returns how many were confirmed.
+fn command_then_kill(port: u16, station: &mut Background, commands: usize) -> usize {
+    use iec60870::asdu::{Cause, CommandQualifier, CommonAddress, Element, Ioa, TypeId};
+    use iec60870::cs104::client::{spawn_client, ClientConfig, ClientEvent};
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .unwrap();
+    runtime.block_on(async {
+        let mut config = ClientConfig::new(format!("127.0.0.1:{port}"), CommonAddress::new(1));
+        config.reconnect = false;
+        let (client, mut events) = spawn_client(config);
+        tokio::time::timeout(Duration::from_secs(20), async {
+            while let Some(event) = events.recv().await {
+                if event == ClientEvent::Started {
+                    return;
+                }
+            }
+        })
+        .await
+        .expect("RDRT starts data transfer");
+        let mut confirmed = 0;
+        for index in 0..commands {
+            // RH2's QF1, through RDRT and RH1.1: open, close, open, ...
+            let ioa = if index % 2 == 0 { 2021 } else { 2022 };
+            let request = {
+                let client = client.clone();
+                tokio::spawn(async move {
+                    client
+                        .command(
+                            TypeId::C_SC_NA_1,
+                            Ioa::try_new(ioa).unwrap(),
+                            Element::SingleCommand {
+                                on: true,
+                                qualifier: CommandQualifier::EXECUTE,
+                            },
+                            None,
+                        )
+                        .await
+                })
+            };
+            let positive = tokio::time::timeout(Duration::from_secs(20), async {
+                while let Some(event) = events.recv().await {
+                    if let ClientEvent::Asdu(asdu) = event {
+                        if asdu.type_id == TypeId::C_SC_NA_1
+                            && asdu.cot.cause == Cause::ACTIVATION_CON
+                            && asdu.objects[0].ioa.get() == ioa
+                        {
+                            return !asdu.cot.negative;
+                        }
+                    }
+                }
+                false
+            })
+            .await
+            .expect("a confirmation");
+            assert!(positive, "command {index} refused");
+            confirmed += 1;
+            if index + 1 == commands {
+                // At once: no time for a lazy writer to catch up.
+                station.0.kill().unwrap();
+                break;
+            }
+            request.await.unwrap().unwrap();
+        }
+        confirmed
+    })
+}
+
+#[test]
+fn a_positively_confirmed_command_is_in_the_audit_even_after_kill_9() {
+    let dir = fresh_dir("kill-9");
+    let project = copy_vsetin(&dir, "proj");
+    let port = free_port_range(23);
+    let mut run = stanice();
+    run.stdin(Stdio::piped())
+        .arg("run")
+        .arg(&project)
+        .args(["--port-base", &port.to_string()]);
+    let mut station = start_until(run, "Ctrl-C stops");
+    let confirmed = command_then_kill(port, &mut station, 4);
+    let _ = station.0.wait();
+
+    let mut audit = stanice();
+    audit.arg("events").arg(&project).arg("--commands");
+    let text = assert_success(&run_bounded(audit, 30));
+    // Each level audits before it confirms: RDRT (which dispatch heard), and below it
+    // RH1.1 and RH2, which confirmed to the level above first.
+    for node in ["RDRT", "RH1.1", "RH2"] {
+        let executed = text
+            .lines()
+            .filter(|line| line.contains(&format!(",{node},")) && line.contains(",Executed,"))
+            .count();
+        assert_eq!(executed, confirmed, "{node}:\n{text}");
+    }
+}
+
+#[test]
+fn idle_clients_do_not_lock_dispatch_out_of_the_station() {
+    use iec60870::asdu::CommonAddress;
+    use iec60870::cs104::client::{spawn_client, ClientConfig, ClientEvent};
+    let port = free_port_range(23);
+    let mut run = stanice();
+    run.stdin(Stdio::piped()).arg("run").arg(vsetin()).args([
+        "--port-base",
+        &port.to_string(),
+        "--store",
+        "none",
+    ]);
+    let _station = start_until(run, "Ctrl-C stops");
+    // 70 clients that connect and never start data transfer (they held all 64 slots).
+    let idle: Vec<std::net::TcpStream> = (0..70)
+        .filter_map(|_| std::net::TcpStream::connect(("127.0.0.1", port)).ok())
+        .collect();
+    assert!(!idle.is_empty());
+    // The ED dispatch centre (127.0.0.3, a named redundancy group of RDRT) still gets in
+    // and is served a general interrogation.
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .unwrap();
+    let answers = runtime.block_on(async {
+        let mut config = ClientConfig::new(format!("127.0.0.1:{port}"), CommonAddress::new(1));
+        config.local_address = Some("127.0.0.3".parse().unwrap());
+        config.interrogate_on_start = true;
+        config.reconnect = false;
+        let (_client, mut events) = spawn_client(config);
+        tokio::time::timeout(Duration::from_secs(20), async {
+            let mut objects = 0;
+            while let Some(event) = events.recv().await {
+                match event {
+                    ClientEvent::Asdu(asdu) if asdu.cot.cause.value() == 20 => {
+                        objects += asdu.objects.len();
+                    }
+                    ClientEvent::Asdu(asdu) if asdu.cot.cause.value() == 10 => return objects,
+                    ClientEvent::Disconnected { reason } => panic!("ED lost: {reason}"),
+                    _ => {}
+                }
+            }
+            objects
+        })
+        .await
+        .expect("the interrogation ends")
+    });
+    assert!(answers > 400, "{answers} objects interrogated");
+    drop(idle);
+}

@@ -1,11 +1,19 @@
 //! The IEC 104 controlling station (client).
 //!
 //! [`spawn_client`] starts a task that connects (trying each configured address in turn,
-//! with exponential back-off between rounds), completes the TLS handshake if configured,
+//! with exponential back-off between rounds; a connection that ends before
+//! [`ClientConfig::healthy_after`] does not reset the back-off, so a server that accepts
+//! and closes at once is not hammered), completes the TLS handshake if configured,
 //! starts data transfer, optionally sends a general interrogation and a clock
 //! synchronisation, and then hands every received ASDU to the application as a
 //! [`ClientEvent`]. A [`ClientHandle`] sends requests; commands resolve when their
 //! confirmation (and, where the standard has one, their termination) arrives, or time out.
+//!
+//! A started connection that receives nothing for [`ClientConfig::standby_probe`] sends a
+//! test command (C_TS_TA_1): a station answers it only on the started connection of a
+//! redundancy group, so no answer means another controlling station has taken the data
+//! over (or the station is stuck), and the client says so, drops the connection and
+//! connects again, rather than show stale values as live.
 //!
 //! ```text
 //! ClientHandle ──mpsc──> client task ── Session ── TCP/TLS ── server
@@ -28,6 +36,7 @@ use crate::asdu::{
     Asdu, AsduParams, Cause, CommonAddress, Cot, Element, InformationObject, Ioa, TypeId,
 };
 use crate::cs104::config::ApciConfig;
+use crate::cs104::repeated_warning::RepeatedWarning;
 use crate::cs104::session::{Role, Session, SessionEvent, SessionState};
 use crate::time::Cp56Time2a;
 
@@ -63,6 +72,12 @@ pub struct ClientConfig {
     pub reconnect_delay: Duration,
     /// Back-off ceiling.
     pub reconnect_delay_max: Duration,
+    /// How long a connection must have lasted for its loss to count as a loss rather than
+    /// a refusal: only then is the back-off reset and the next attempt made at once.
+    pub healthy_after: Duration,
+    /// Probe a started connection that has received nothing for this long (see the
+    /// module documentation); `None` never probes.
+    pub standby_probe: Option<Duration>,
     /// How long a request waits for its confirmation, and an interrogation again for its
     /// termination.
     pub command_timeout: Duration,
@@ -94,6 +109,8 @@ impl ClientConfig {
             reconnect: true,
             reconnect_delay: Duration::from_millis(500),
             reconnect_delay_max: Duration::from_secs(30),
+            healthy_after: Duration::from_secs(10),
+            standby_probe: Some(Duration::from_secs(30)),
             command_timeout: Duration::from_secs(10),
             termination_timeout: Duration::from_secs(2),
             event_capacity: 10_000,
@@ -443,8 +460,10 @@ async fn run(
 ) {
     let mut delay = config.reconnect_delay;
     let mut start = config.start_on_connect;
+    let mut failures = RepeatedWarning::default();
     loop {
-        let mut connected_once = false;
+        // Whether a connection of this round lasted long enough to reset the back-off.
+        let mut healthy = false;
         let mut last_failure = None;
         for address in &config.addresses {
             let attempt = connect(&config, address);
@@ -464,8 +483,7 @@ async fn run(
             };
             match attempt {
                 Ok((stream, peer)) => {
-                    connected_once = true;
-                    delay = config.reconnect_delay;
+                    let connected_at = tokio::time::Instant::now();
                     if events.send(ClientEvent::Connected { peer }).await.is_err() {
                         return;
                     }
@@ -488,7 +506,14 @@ async fn run(
                         DriveEnd::Closed => return,
                         DriveEnd::Lost(reason) => reason,
                     };
-                    tracing::info!(%peer, %reason, "disconnected");
+                    if connected_at.elapsed() >= config.healthy_after {
+                        healthy = true;
+                        delay = config.reconnect_delay;
+                        failures = RepeatedWarning::default();
+                        tracing::info!(%peer, %reason, "disconnected");
+                    } else if let Some(repeats) = failures.due(tokio::time::Instant::now()) {
+                        tracing::warn!(%peer, %reason, repeats, retry_in_ms = delay.as_millis(), "connection ended at once");
+                    }
                     if events
                         .send(ClientEvent::Disconnected { reason })
                         .await
@@ -501,7 +526,9 @@ async fn run(
                     }
                 }
                 Err(reason) => {
-                    tracing::warn!(%address, %reason, "connection failed");
+                    if let Some(repeats) = failures.due(tokio::time::Instant::now()) {
+                        tracing::warn!(%address, %reason, repeats, retry_in_ms = delay.as_millis(), "connection failed");
+                    }
                     last_failure = Some(reason);
                 }
             }
@@ -514,7 +541,7 @@ async fn run(
             }
             return;
         }
-        if !connected_once {
+        if !healthy {
             // Requests made while nobody is connected fail at once rather than hang.
             let wait = tokio::time::sleep(delay);
             tokio::pin!(wait);
@@ -617,6 +644,10 @@ where
     let mut output = Vec::with_capacity(16 * 1024);
     let mut started = false;
     let mut closing: Option<oneshot::Sender<()>> = None;
+    // When the last I frame arrived, and the deadline of an unanswered standby probe.
+    let mut last_received = tokio::time::Instant::now();
+    let mut probe_deadline: Option<tokio::time::Instant> = None;
+    let mut probe_counter: u16 = 0;
     // Events the application has not taken yet. The task never waits for the
     // application inside the loop (a command awaited while events pile up would never
     // complete, nor time out); it stops reading the socket instead once this backlog is
@@ -628,9 +659,21 @@ where
         while let Some(event) = session.poll_event() {
             match event {
                 SessionEvent::Asdu(raw) => {
+                    last_received = tokio::time::Instant::now();
                     let event = match Asdu::decode(&raw, &config.asdu) {
                         Ok(asdu) => {
                             tracing::debug!(%asdu, "received");
+                            if probe_deadline.is_some()
+                                && asdu.type_id == TypeId::C_TS_TA_1
+                                && !pending
+                                    .iter()
+                                    .any(|request| request.type_id == TypeId::C_TS_TA_1)
+                            {
+                                // The answer to our own probe: the connection carries data.
+                                probe_deadline = None;
+                                continue;
+                            }
+                            probe_deadline = None;
                             let mut finished = Vec::new();
                             for (index, request) in pending.iter_mut().enumerate() {
                                 if request.offer(
@@ -726,12 +769,53 @@ where
         if matches!(session.state(), SessionState::Closed(_)) {
             continue;
         }
+        let instant = tokio::time::Instant::now();
+        if let Some(deadline) = probe_deadline {
+            if deadline <= instant {
+                break DriveEnd::Lost(format!(
+                    "no answer to the standby probe within {:.1} s: another controlling station has taken the data over, or the station stopped answering",
+                    config.command_timeout.as_secs_f64()
+                ));
+            }
+        }
+        // Probe a quiet started connection (see the module documentation).
+        let probe_due = match (config.standby_probe, started, probe_deadline) {
+            (Some(interval), true, None) => Some(last_received + interval),
+            _ => None,
+        };
+        if probe_due.is_some_and(|due| due <= instant) {
+            probe_counter = probe_counter.wrapping_add(1);
+            let mut asdu = Asdu::new(
+                TypeId::C_TS_TA_1,
+                Cot::new(Cause::ACTIVATION),
+                config.common_address,
+            );
+            asdu.cot.originator = config.originator;
+            asdu.objects.push(InformationObject {
+                ioa: Ioa::default(),
+                element: Element::TestWithTime {
+                    counter: probe_counter,
+                },
+                time: Some(crate::asdu::TimeTag::Cp56(
+                    crate::cs104::server::time_tag_now(crate::time::TimeZonePolicy::Utc),
+                )),
+            });
+            tracing::debug!("nothing received for a while: standby probe");
+            queue(&mut outgoing, &asdu, &config.asdu);
+            probe_deadline = Some(instant + config.command_timeout);
+            continue;
+        }
         let protocol_deadline = session.poll_timeout().map(tokio::time::Instant::from_std);
         let request_deadline = pending.iter().map(|request| request.deadline).min();
-        let deadline = match (protocol_deadline, request_deadline) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        };
+        let deadline = [
+            protocol_deadline,
+            request_deadline,
+            probe_due,
+            probe_deadline,
+        ]
+        .into_iter()
+        .flatten()
+        .min();
         while let Some(event) = backlog.pop_front() {
             match events.try_send(event) {
                 Ok(()) => {}

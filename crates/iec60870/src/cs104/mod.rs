@@ -2,6 +2,7 @@
 
 pub mod client;
 pub mod config;
+mod repeated_warning;
 pub mod server;
 pub mod session;
 pub mod tls;

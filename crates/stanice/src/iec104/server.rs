@@ -59,6 +59,19 @@ pub(crate) struct ServerArgs {
     /// future (the maximum command delay); not checked unless given.
     #[arg(long, value_name = "SECONDS")]
     max_command_age: Option<f64>,
+    /// Connections from one client address at once (no limit unless given).
+    #[arg(long, value_name = "N")]
+    max_per_address: Option<usize>,
+    /// Connections in one redundancy group at once, with `--mode groups-by-address`.
+    #[arg(long, value_name = "N")]
+    max_per_group: Option<usize>,
+    /// Slots kept for each `--group` that names addresses: other clients never take them.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    reserve_per_group: usize,
+    /// Close a connection that has not started data transfer (STARTDT) within this many
+    /// seconds, unless a `--group` names its address (a standby may wait).
+    #[arg(long, value_name = "SECONDS")]
+    start_timeout: Option<f64>,
     /// The zone of time tags: `UTC` or a zone name such as `Europe/Prague` (SU set in
     /// summer time).
     #[arg(long, default_value = "UTC")]
@@ -188,6 +201,16 @@ pub(crate) async fn run(args: ServerArgs) -> anyhow::Result<ExitCode> {
     let mut config = ServerConfig::new(args.listen, CommonAddress::new(args.ca));
     config.apci = args.link.apci()?;
     config.max_connections = args.max_connections;
+    config.max_connections_per_address = args.max_per_address;
+    config.max_connections_per_group = args.max_per_group;
+    config.reserved_per_group = args.reserve_per_group;
+    config.start_timeout = args
+        .start_timeout
+        .map(|seconds| {
+            Duration::try_from_secs_f64(seconds)
+                .map_err(|_| anyhow::anyhow!("--start-timeout {seconds}: not a duration"))
+        })
+        .transpose()?;
     config.redundancy = redundancy_mode(&args.mode, &args.groups)?;
     config.time_zone = args.time_zone;
     config.max_command_age = args

@@ -109,7 +109,7 @@ impl StationHandler for NodeHandler {
                 "accepted only from {} (this client is in `{group_name}`)",
                 routed.from_groups.join(", ")
             );
-            return server::ready(this.finish(CommandOutcome::Refused, detail));
+            return Box::pin(this.finish(CommandOutcome::Refused, detail));
         }
         let blocked_by = group.and_then(|g| g.refuse_commands_when);
         let sim_node = self.sim_node;
@@ -121,11 +121,11 @@ impl StationHandler for NodeHandler {
                         let detail = format!(
                             "commands from `{group_name}` are blocked while {variable} is TRUE"
                         );
-                        return this.finish(CommandOutcome::RefusedLocalMode, detail);
+                        return this.finish(CommandOutcome::RefusedLocalMode, detail).await;
                     }
                     None => {
                         let detail = format!("command authority {variable} cannot be read");
-                        return this.finish(CommandOutcome::Refused, detail);
+                        return this.finish(CommandOutcome::Refused, detail).await;
                     }
                 }
             }
@@ -147,7 +147,7 @@ impl StationHandler for NodeHandler {
                     forward(handler_links.get(&link), &link, ioa, &command).await
                 }
             };
-            match (this.finish(outcome, detail), termination) {
+            match (this.finish(outcome, detail).await, termination) {
                 (server::CommandOutcome::Executed, Some(termination)) => {
                     server::CommandOutcome::Confirmed(termination)
                 }
@@ -166,8 +166,9 @@ impl StationHandler for NodeHandler {
             command: command.clone(),
             name,
         };
-        // The reason (the age of a stale command, ...) is the audit record's detail.
-        let _ = recorded.finish(CommandOutcome::Refused, refusal.to_string());
+        // The reason (the age of a stale command, ...) is the audit record's detail; a
+        // refusal need not wait for its commit (nothing was done).
+        recorded.record(CommandOutcome::Refused, refusal.to_string());
     }
 
     fn now(&self) -> chrono::DateTime<chrono::Utc> {
@@ -245,17 +246,37 @@ struct Recorded {
 }
 
 impl Recorded {
-    fn finish(self, outcome: CommandOutcome, detail: String) -> server::CommandOutcome {
+    /// Audits the command and returns the server's outcome once the audit record is
+    /// committed: a positive confirmation never leaves for a command a crash would then
+    /// lose from the audit (write-ahead).
+    async fn finish(self, outcome: CommandOutcome, detail: String) -> server::CommandOutcome {
         let handler_outcome = if outcome == CommandOutcome::Executed {
             server::CommandOutcome::Executed
         } else {
             server::CommandOutcome::Refused
         };
+        let points = Arc::clone(&self.points);
+        let record = self.audit_record(outcome, detail);
+        if !points.recorder().command_committed(record).await {
+            tracing::error!(node = %points.name(), "the command's audit record could not be stored");
+        }
+        handler_outcome
+    }
+
+    /// Audits the command without waiting for the commit.
+    fn record(self, outcome: CommandOutcome, detail: String) {
+        let points = Arc::clone(&self.points);
+        points
+            .recorder()
+            .command(self.audit_record(outcome, detail));
+    }
+
+    fn audit_record(self, outcome: CommandOutcome, detail: String) -> CommandRecord {
         tracing::info!(
             node = %self.points.name(), command = %self.name, peer = %self.command.peer,
             select = self.command.select, ?outcome, %detail, "command"
         );
-        self.points.recorder().command(CommandRecord {
+        CommandRecord {
             id: None,
             time: self.points.clock().now(),
             actor: Actor::Remote(self.command.peer.to_string()),
@@ -270,8 +291,7 @@ impl Recorded {
             },
             outcome,
             detail,
-        });
-        handler_outcome
+        }
     }
 }
 

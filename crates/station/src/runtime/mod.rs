@@ -98,6 +98,28 @@ pub enum StoreChoice {
     Disabled,
 }
 
+/// How a node's server shares its connection slots (64 in all).
+#[derive(Debug, Clone, Copy)]
+pub struct ServerSlots {
+    /// Connections from one client address at once.
+    pub per_address: usize,
+    /// Connections in one redundancy group at once.
+    pub per_group: usize,
+    /// Slots kept for each redundancy group that names its clients.
+    pub reserved_per_group: usize,
+    /// A client no group names must start data transfer within this time.
+    pub start_timeout: Duration,
+}
+
+/// The slots of every node's server: a control centre's main and standby connection
+/// (and a few tools) from one address, and a group's reserve for them.
+pub const NODE_SERVER_SLOTS: ServerSlots = ServerSlots {
+    per_address: 8,
+    per_group: 32,
+    reserved_per_group: 2,
+    start_timeout: Duration::from_secs(30),
+};
+
 /// How to run a project.
 #[derive(Debug, Clone)]
 pub struct RuntimeOptions {
@@ -360,6 +382,12 @@ impl Runtime {
                     let mut server = ServerConfig::new(address, config.common_address);
                     server.allowed_clients = server_config.allowed_clients.clone();
                     server.redundancy = server_config.redundancy.clone();
+                    // Slots for the controlling stations they are meant for: idle clients
+                    // cannot hold every connection (iec60870::cs104::server, admission).
+                    server.max_connections_per_address = Some(NODE_SERVER_SLOTS.per_address);
+                    server.max_connections_per_group = Some(NODE_SERVER_SLOTS.per_group);
+                    server.reserved_per_group = NODE_SERVER_SLOTS.reserved_per_group;
+                    server.start_timeout = Some(NODE_SERVER_SLOTS.start_timeout);
                     server.max_command_age = server_config.max_command_age;
                     server.time_zone = zone;
                     if let Some(tls) = &server_config.tls {

@@ -1,6 +1,8 @@
 //! The path from the nodes to the event store: a channel and one writer task that appends
 //! events in batches (one transaction per batch) so that a burst of changes costs one
-//! commit, not one per event.
+//! commit, not one per event. A command's record can be awaited until it is committed
+//! ([`Recorder::command_committed`]): a positive confirmation leaves only once its audit
+//! record would survive a crash of the process (write-ahead).
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
@@ -14,7 +16,8 @@ const BATCH: usize = 1024;
 
 enum Record {
     Event(EventRecord),
-    Command(CommandRecord),
+    /// A command, and who waits for its commit (told whether it was stored).
+    Command(CommandRecord, Option<oneshot::Sender<bool>>),
     Flush(oneshot::Sender<()>),
 }
 
@@ -74,8 +77,26 @@ impl Recorder {
     pub fn command(&self, record: CommandRecord) {
         self.counters.commands.fetch_add(1, Ordering::Relaxed);
         if let Some(sender) = &self.sender {
-            let _ = sender.send(Record::Command(record));
+            let _ = sender.send(Record::Command(record, None));
         }
+    }
+
+    /// Records a command and waits until its record (and every event recorded before it)
+    /// is committed to the store; returns whether it was stored (`true` without a store:
+    /// there is nothing to wait for).
+    pub async fn command_committed(&self, record: CommandRecord) -> bool {
+        self.counters.commands.fetch_add(1, Ordering::Relaxed);
+        let Some(sender) = &self.sender else {
+            return true;
+        };
+        let (committed, wait) = oneshot::channel();
+        if sender
+            .send(Record::Command(record, Some(committed)))
+            .is_err()
+        {
+            return false;
+        }
+        wait.await.unwrap_or(false)
     }
 
     /// Waits until everything recorded before this call is in the store.
@@ -108,11 +129,18 @@ async fn write_loop(
         for record in buffer.drain(..) {
             match record {
                 Record::Event(event) => events.push(event),
-                Record::Command(command) => {
+                Record::Command(command, committed) => {
                     write_events(&*store, &mut events, &counters).await;
-                    if let Err(error) = store.append_command(&command).await {
-                        counters.failed.fetch_add(1, Ordering::Relaxed);
-                        tracing::error!(%error, point = %command.point, "command record lost");
+                    let stored = match store.append_command(&command).await {
+                        Ok(_) => true,
+                        Err(error) => {
+                            counters.failed.fetch_add(1, Ordering::Relaxed);
+                            tracing::error!(%error, point = %command.point, "command record lost");
+                            false
+                        }
+                    };
+                    if let Some(committed) = committed {
+                        let _ = committed.send(stored);
                     }
                 }
                 Record::Flush(done) => {

@@ -157,6 +157,9 @@ struct Connection {
     terminating: Vec<Terminating>,
     /// Terminations waiting for the events queued before them, oldest first.
     terminations: VecDeque<Termination>,
+    /// When a connection that has not started data transfer by then is closed (see
+    /// `admission`); cleared by the first STARTDT.
+    start_deadline: Option<tokio::time::Instant>,
     /// Malformed ASDUs received so far (see [`MAX_MALFORMED_ASDUS`]).
     malformed_asdus: u32,
 }
@@ -165,6 +168,7 @@ pub(super) async fn run<S>(
     shared: Arc<Shared>,
     id: u64,
     group: Arc<Group>,
+    slot: &super::admission::Slot,
     peer: SocketAddr,
     stream: S,
     shutdown: watch::Receiver<bool>,
@@ -176,7 +180,14 @@ pub(super) async fn run<S>(
         tracing::info!(group = %group.config.name, "client connected");
         shared.handler.connection_changed(peer, true, false);
         let now = tokio::time::Instant::now().into_std();
+        // A named group's standby may wait for its STARTDT as long as it likes.
+        let start_deadline = shared
+            .config
+            .start_timeout
+            .filter(|_| !slot.is_named())
+            .map(|timeout| tokio::time::Instant::now() + timeout);
         let mut connection = Connection {
+            start_deadline,
             session: Session::new(shared.config.apci.clone(), Role::ControlledStation, now),
             shared: Arc::clone(&shared),
             id,
@@ -230,7 +241,10 @@ impl Connection {
             while let Some(event) = self.session.poll_event() {
                 match event {
                     SessionEvent::Asdu(asdu) => self.handle_asdu(now, asdu),
-                    SessionEvent::Started => self.activate(),
+                    SessionEvent::Started => {
+                        self.start_deadline = None;
+                        self.activate();
+                    }
                     SessionEvent::Stopped => self.release_group(),
                     // At once: a STOPDT con or a close may follow in the same batch, and
                     // what the client acknowledged must not go back to the group's queue.
@@ -259,10 +273,25 @@ impl Connection {
                 }
                 output.clear();
             }
+            if let Some(start_deadline) = self.start_deadline {
+                if start_deadline <= tokio::time::Instant::now() {
+                    return format!(
+                        "no STARTDT within {:.1} s of connecting: the slot is given back",
+                        self.shared
+                            .config
+                            .start_timeout
+                            .unwrap_or_default()
+                            .as_secs_f64()
+                    );
+                }
+            }
             let deadline = self
                 .session
                 .poll_timeout()
-                .map(tokio::time::Instant::from_std);
+                .map(tokio::time::Instant::from_std)
+                .into_iter()
+                .chain(self.start_deadline)
+                .min();
             let active = self.active;
             tokio::select! {
                 read = reader.read(&mut input) => match read {

@@ -35,6 +35,7 @@
 //! time) follow [`ServerConfig::time_zone`] on the station's clock; the default is UTC on
 //! the host's clock.
 
+mod admission;
 mod connection;
 pub mod group;
 pub mod handler;
@@ -42,7 +43,7 @@ pub mod image;
 
 use std::collections::HashMap;
 use std::net::{IpAddr, SocketAddr};
-use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, RwLock};
 use std::time::Duration;
 
@@ -83,6 +84,17 @@ pub struct ServerConfig {
     pub allowed_clients: Vec<IpAddr>,
     /// Connections served at once; further clients are refused.
     pub max_connections: usize,
+    /// Connections from one client address at once (`None`: no limit of its own).
+    pub max_connections_per_address: Option<usize>,
+    /// Connections in one redundancy group at once, with groups by address (`None`: no
+    /// limit of its own).
+    pub max_connections_per_group: Option<usize>,
+    /// Slots of [`max_connections`](Self::max_connections) kept for each redundancy
+    /// group that names its clients' addresses: other clients never take them.
+    pub reserved_per_group: usize,
+    /// A connection from a client no redundancy group names is closed when it has not
+    /// started data transfer (STARTDT) within this time (`None`: never).
+    pub start_timeout: Option<Duration>,
     /// Events each redundancy group buffers.
     pub event_buffer_capacity: usize,
     /// What a full event buffer does.
@@ -117,6 +129,10 @@ impl ServerConfig {
             redundancy: RedundancyMode::SingleGroup,
             allowed_clients: Vec::new(),
             max_connections: 64,
+            max_connections_per_address: None,
+            max_connections_per_group: None,
+            reserved_per_group: 0,
+            start_timeout: None,
             event_buffer_capacity: 100_000,
             overflow_policy: OverflowPolicy::DropOldest,
             select_timeout: Duration::from_secs(10),
@@ -184,7 +200,10 @@ pub(crate) struct Shared {
     pub(crate) handler: Arc<dyn StationHandler>,
     pub(crate) selections: Mutex<HashMap<u32, Selection>>,
     next_connection_id: AtomicU64,
-    open_connections: AtomicUsize,
+    slots: admission::Slots,
+    /// Refusals are logged at most once a minute for each kind (a flood must not fill the
+    /// log).
+    refusal_warnings: Mutex<HashMap<&'static str, crate::cs104::repeated_warning::RepeatedWarning>>,
     accepted: AtomicU64,
     refused: AtomicU64,
 }
@@ -245,6 +264,24 @@ impl Shared {
             .find(|group| group.accepts(ip))
             .or_else(|| groups.iter().find(|group| group.is_catch_all()))
             .cloned()
+    }
+
+    /// Counts and logs (rate-limited) a refused connection.
+    fn refuse(&self, peer: SocketAddr, kind: &'static str, why: &str) {
+        self.refused.fetch_add(1, Ordering::Relaxed);
+        let due = self
+            .refusal_warnings
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+            .entry(kind)
+            .or_default()
+            .due(tokio::time::Instant::now());
+        match due {
+            Some(repeats) => {
+                tracing::warn!(%peer, repeats, "connection refused: {why}")
+            }
+            None => tracing::debug!(%peer, "connection refused: {why}"),
+        }
     }
 
     /// Forgets a connection's own group when the connection ends.
@@ -363,7 +400,8 @@ pub async fn spawn_server(
         handler,
         selections: Mutex::new(HashMap::new()),
         next_connection_id: AtomicU64::new(1),
-        open_connections: AtomicUsize::new(0),
+        slots: admission::Slots::default(),
+        refusal_warnings: Mutex::new(HashMap::new()),
         accepted: AtomicU64::new(0),
         refused: AtomicU64::new(0),
     });
@@ -402,25 +440,23 @@ async fn accept_loop(
         let ip = peer.ip().to_canonical();
         let allowed = &shared.config.allowed_clients;
         if !allowed.is_empty() && !allowed.contains(&ip) {
-            shared.refused.fetch_add(1, Ordering::Relaxed);
-            tracing::warn!(%peer, "connection refused: client not in the allow-list");
+            shared.refuse(peer, "allow-list", "client not in the allow-list");
             continue;
         }
-        let open = shared.open_connections.load(Ordering::Relaxed);
-        if open >= shared.config.max_connections {
-            shared.refused.fetch_add(1, Ordering::Relaxed);
-            tracing::warn!(%peer, open, "connection refused: connection limit reached");
-            continue;
-        }
+        let slot = match shared.slots.admit(&shared.config, ip) {
+            Ok(slot) => slot,
+            Err(refusal) => {
+                shared.refuse(peer, refusal.kind(), &refusal.to_string());
+                continue;
+            }
+        };
         let id = shared.next_connection_id.fetch_add(1, Ordering::Relaxed);
         let Some(group) = shared.group_for(ip, id) else {
-            shared.refused.fetch_add(1, Ordering::Relaxed);
-            tracing::warn!(%peer, "connection refused: no redundancy group takes this client");
+            shared.refuse(peer, "no-group", "no redundancy group takes this client");
             continue;
         };
         let _ = stream.set_nodelay(true);
         shared.accepted.fetch_add(1, Ordering::Relaxed);
-        shared.open_connections.fetch_add(1, Ordering::Relaxed);
         let shared = Arc::clone(&shared);
         let shutdown = shutdown.clone();
         let tls = tls.clone();
@@ -428,7 +464,16 @@ async fn accept_loop(
             match tls {
                 None => {
                     let group = Arc::clone(&group);
-                    connection::run(Arc::clone(&shared), id, group, peer, stream, shutdown).await
+                    connection::run(
+                        Arc::clone(&shared),
+                        id,
+                        group,
+                        &slot,
+                        peer,
+                        stream,
+                        shutdown,
+                    )
+                    .await
                 }
                 Some(acceptor) => {
                     let handshake =
@@ -436,8 +481,16 @@ async fn accept_loop(
                     match handshake {
                         Ok(Ok(stream)) => {
                             let group = Arc::clone(&group);
-                            connection::run(Arc::clone(&shared), id, group, peer, stream, shutdown)
-                                .await
+                            connection::run(
+                                Arc::clone(&shared),
+                                id,
+                                group,
+                                &slot,
+                                peer,
+                                stream,
+                                shutdown,
+                            )
+                            .await
                         }
                         Ok(Err(error)) => tracing::warn!(%peer, %error, "TLS handshake failed"),
                         Err(_) => tracing::warn!(%peer, "TLS handshake timed out"),
@@ -445,7 +498,7 @@ async fn accept_loop(
                 }
             }
             shared.release_connection_group(&group);
-            shared.open_connections.fetch_sub(1, Ordering::Relaxed);
+            drop(slot);
         });
     }
     tracing::info!("IEC 104 server stopped accepting");
@@ -539,7 +592,7 @@ impl ServerHandle {
     /// Statistics: connections and event buffers.
     pub fn stats(&self) -> ServerStats {
         ServerStats {
-            connections: self.shared.open_connections.load(Ordering::Relaxed),
+            connections: self.shared.slots.open(),
             accepted: self.shared.accepted.load(Ordering::Relaxed),
             refused: self.shared.refused.load(Ordering::Relaxed),
             groups: self
