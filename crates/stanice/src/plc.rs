@@ -52,9 +52,18 @@ fn load(files: &[PathBuf]) -> anyhow::Result<Vec<(String, String)>> {
     files
         .iter()
         .map(|f| {
-            let text = std::fs::read_to_string(f)
-                .with_context(|| format!("cannot read {}", f.display()))?;
-            Ok((f.display().to_string(), text))
+            let bytes = std::fs::read(f).with_context(|| format!("cannot read {}", f.display()))?;
+            // Shown as every other diagnostic, `file:line:col: error: ...`, for editors.
+            let text = plc::syntax::decode(&bytes).map_err(|error| {
+                eprintln!(
+                    "{}:{}:{}: error: {error}",
+                    f.display(),
+                    error.line,
+                    error.col
+                );
+                anyhow::anyhow!("{} is not UTF-8 text", f.display())
+            })?;
+            Ok((f.display().to_string(), text.to_owned()))
         })
         .collect()
 }

@@ -65,12 +65,11 @@ pub(crate) async fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
 /// Loads a project, printing every configuration error as `file:line:col: error: ...`.
 pub(crate) fn load_project(folder: &Path) -> anyhow::Result<Project> {
     Project::load(folder).map_err(|errors| {
-        for error in errors.errors() {
-            eprintln!("{error}");
-        }
+        // One line per error, then `file: ... and N more error(s)` where some were left out.
+        eprintln!("{errors}");
         anyhow::anyhow!(
             "{} error(s) in the project {}",
-            errors.errors().len(),
+            errors.total(),
             folder.display()
         )
     })

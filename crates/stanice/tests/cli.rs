@@ -543,6 +543,39 @@ fn plc_check_reports_file_line_col_and_fails() {
         text.contains(&format!("{}:3:", broken.display())) && text.contains("error:"),
         "{text}"
     );
+
+    // Windows editors start UTF-8 files with a byte-order mark: accepted. Latin-1 text
+    // is refused at its first invalid byte (line 2, after `(* caf`).
+    let with_bom = write_source(
+        "bom.st",
+        "\u{FEFF}PROGRAM P\nVAR x : INT; END_VAR\nx := x + 1;\nEND_PROGRAM\n",
+    );
+    let mut command = stanice();
+    command.args(["plc", "check"]).arg(&with_bom);
+    let output = run_bounded(command, 20);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stdout)
+    );
+    let latin1 = write_source("latin1.st", "");
+    std::fs::write(
+        &latin1,
+        b"PROGRAM P\nVAR x : INT; (* caf\xE9 *) END_VAR\nEND_PROGRAM\n",
+    )
+    .unwrap();
+    let mut command = stanice();
+    command.args(["plc", "check"]).arg(&latin1);
+    let output = run_bounded(command, 20);
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains(&format!(
+            "{}:2:20: error: not UTF-8 text: byte 0xE9",
+            latin1.display()
+        )),
+        "{stderr}"
+    );
 }
 
 fn vsetin() -> PathBuf {

@@ -5,9 +5,12 @@
 //! [`ConfigErrors`] with *all* problems found. Each [`ConfigError`] names the file, the
 //! 1-based line and column (in characters) of the offending value, its key path such as
 //! `node[2].point[5].ioa` (array indices are 0-based, in file order) and a message; its
-//! `Display` is `file:line:col: error: key: message`. Syntax errors are reported alone
-//! (nothing else can be checked); a type error (a string where a number belongs, an unknown
-//! key, a missing required key) stops before the semantic checks, which then all run.
+//! `Display` is `file:line:col: error: key: message`. Only the first syntax error is
+//! reported, alone (what a recovering parser finds after it mostly follows from it, and
+//! nothing else can be checked); a type error (a string where a number belongs, an unknown
+//! key, a missing required key) stops before the semantic checks, which then all run. At
+//! most [`MAX_ERRORS_PER_FILE`] problems are kept per file, the rest counted
+//! ([`ConfigErrors::omitted`]).
 //!
 //! # Format
 //!
@@ -137,14 +140,21 @@
 //! (a textual check, case-insensitive; the PLC compiler checks the rest); a status point
 //! naming no point of the node, a status point that is not a single point or has a
 //! `source`, a point without `source` that no link names; unknown time zones; `retention_days = 0`; unparsable IP
-//! and socket addresses; unsupported store URLs.
+//! and socket addresses; unsupported store URLs. ST sources must be UTF-8 (a leading
+//! byte-order mark is accepted); a file that is not is reported at its first invalid byte.
+//!
+//! With the `runtime` feature (the default) each node's ST sources are also compiled as
+//! the runtime will compile them: compile errors are reported at their place in the ST
+//! file, and every PLC variable the node names (point `source` and `invalid_when`,
+//! command `target` and `remote_enable`, `io` `variable`, `refuse_commands_when`) must
+//! exist, or is reported at its value in station.toml.
 //!
 //! Positions come from the spans of `toml`'s own parse tree ([`toml::de::DeTable`]): the
 //! semantic checks look a key path up in it, and a serde error's byte span is mapped back
 //! to the innermost key path containing it.
 //!
-//! Problems without a position (`station.toml` missing, not UTF-8) carry line and column 0
-//! and are shown as `file: error: message`.
+//! Problems without a position (`station.toml` missing or unreadable) carry line and
+//! column 0 and are shown as `file: error: message`.
 
 use std::collections::{HashMap, HashSet};
 use std::fmt;
@@ -459,9 +469,8 @@ impl Project {
                 format!("cannot read: {e}"),
             ))
         })?;
-        let text = String::from_utf8(bytes).map_err(|e| {
-            ConfigErrors::single(ConfigError::unpositioned(&file, format!("not UTF-8: {e}")))
-        })?;
+        let text = String::from_utf8(bytes)
+            .map_err(|e| ConfigErrors::single(not_utf8(&file, e.as_bytes())))?;
         Project::parse(folder, &file, &text)
     }
 
@@ -474,13 +483,14 @@ impl Project {
             text,
             tree,
             errors: Vec::new(),
+            omitted: Vec::new(),
         };
-        if !syntax.is_empty() {
-            for error in syntax {
-                let span = error.span().unwrap_or(0..0);
-                ctx.push_at(span, String::new(), error.message().to_owned());
-            }
-            return Err(ConfigErrors(ctx.errors));
+        // Only the first syntax error: the parser's recovery after it is a guess, and one
+        // unclosed `[` made it report every later line (17,161 errors for the Vsetín file).
+        if let Some(error) = syntax.first() {
+            let span = error.span().unwrap_or(0..0);
+            ctx.push_at(span, String::new(), error.message().to_owned());
+            return Err(ctx.into_errors());
         }
         let raw: RawProject = match toml::from_str(text) {
             Ok(raw) => raw,
@@ -488,14 +498,14 @@ impl Project {
                 let span = error.span().unwrap_or(0..0);
                 let key = ctx.key_at(span.start);
                 ctx.push_at(span, key, error.message().to_owned());
-                return Err(ConfigErrors(ctx.errors));
+                return Err(ctx.into_errors());
             }
         };
         let project = ctx.check(folder, raw);
         if ctx.errors.is_empty() {
             Ok(project)
         } else {
-            Err(ConfigErrors(ctx.errors))
+            Err(ctx.into_errors())
         }
     }
 
@@ -596,34 +606,82 @@ impl fmt::Display for ConfigError {
 
 impl std::error::Error for ConfigError {}
 
-/// All problems found in a project (at least one), in the order found.
+/// A UTF-8 byte-order mark (Windows editors write one); accepted at the start of an ST
+/// source, as the PLC compiler accepts it.
+const BYTE_ORDER_MARK: &[u8] = b"\xEF\xBB\xBF";
+
+/// The problem with a file that is not UTF-8, at its first invalid byte (line and column
+/// in characters, as an editor shows them; after a byte-order mark). The PLC crate has
+/// the same rule (`plc::syntax::decode`), but the loader also builds without it.
+fn not_utf8(file: &Path, bytes: &[u8]) -> ConfigError {
+    let body = bytes.strip_prefix(BYTE_ORDER_MARK).unwrap_or(bytes);
+    let valid = std::str::from_utf8(body)
+        .err()
+        .map_or(body.len(), |e| e.valid_up_to());
+    let before = std::str::from_utf8(body.get(..valid).unwrap_or_default()).unwrap_or("");
+    let (line, column) = line_col(before, before.len());
+    let byte = body.get(valid).copied().unwrap_or(0);
+    ConfigError {
+        file: file.to_path_buf(),
+        line,
+        column,
+        key: String::new(),
+        message: format!("not UTF-8 text: byte 0x{byte:02X} (save the file as UTF-8)"),
+    }
+}
+
+/// Problems kept per file; later ones are only counted ([`ConfigErrors::omitted`]): past
+/// the first few, a list of problems buries the ones that matter.
+pub const MAX_ERRORS_PER_FILE: usize = 10;
+
+/// All problems found in a project (at least one), in the order found: at most
+/// [`MAX_ERRORS_PER_FILE`] per file, the rest counted.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-pub struct ConfigErrors(Vec<ConfigError>);
+pub struct ConfigErrors {
+    errors: Vec<ConfigError>,
+    omitted: Vec<(PathBuf, usize)>,
+}
 
 impl ConfigErrors {
     fn single(error: ConfigError) -> ConfigErrors {
-        ConfigErrors(vec![error])
+        ConfigErrors {
+            errors: vec![error],
+            omitted: Vec::new(),
+        }
     }
 
-    /// The problems.
+    /// The problems kept.
     pub fn errors(&self) -> &[ConfigError] {
-        &self.0
+        &self.errors
     }
 
-    /// The problems, by value.
+    /// The problems kept, by value.
     pub fn into_errors(self) -> Vec<ConfigError> {
-        self.0
+        self.errors
+    }
+
+    /// Per file, how many problems were found beyond the [`MAX_ERRORS_PER_FILE`] kept.
+    pub fn omitted(&self) -> &[(PathBuf, usize)] {
+        &self.omitted
+    }
+
+    /// Every problem found, kept or omitted.
+    pub fn total(&self) -> usize {
+        self.errors.len() + self.omitted.iter().map(|(_, n)| n).sum::<usize>()
     }
 }
 
 impl fmt::Display for ConfigErrors {
-    /// One problem per line.
+    /// One problem per line, then `file: ... and N more error(s)` per file with more.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        for (i, error) in self.0.iter().enumerate() {
+        for (i, error) in self.errors.iter().enumerate() {
             if i > 0 {
                 f.write_str("\n")?;
             }
             write!(f, "{error}")?;
+        }
+        for (file, count) in &self.omitted {
+            write!(f, "\n{}: ... and {count} more error(s)", file.display())?;
         }
         Ok(())
     }
@@ -843,6 +901,8 @@ struct Ctx<'a> {
     text: &'a str,
     tree: Spanned<DeTable<'a>>,
     errors: Vec<ConfigError>,
+    /// Problems past [`MAX_ERRORS_PER_FILE`], per file.
+    omitted: Vec<(PathBuf, usize)>,
 }
 
 /// 1-based line and column (in characters) of a byte offset.
@@ -868,13 +928,32 @@ fn table_get<'t, 'i>(table: &'t DeTable<'i>, key: &str) -> Option<&'t Spanned<De
 impl Ctx<'_> {
     fn push_at(&mut self, span: Range<usize>, key: String, message: String) {
         let (line, column) = line_col(self.text, span.start);
-        self.errors.push(ConfigError {
+        self.push(ConfigError {
             file: self.file.clone(),
             line,
             column,
             key,
             message,
         });
+    }
+
+    /// Keeps `error` unless its file has [`MAX_ERRORS_PER_FILE`] already; then counts it.
+    fn push(&mut self, error: ConfigError) {
+        let kept = self.errors.iter().filter(|e| e.file == error.file).count();
+        if kept < MAX_ERRORS_PER_FILE {
+            self.errors.push(error);
+        } else if let Some((_, count)) = self.omitted.iter_mut().find(|(f, _)| *f == error.file) {
+            *count += 1;
+        } else {
+            self.omitted.push((error.file, 1));
+        }
+    }
+
+    fn into_errors(self) -> ConfigErrors {
+        ConfigErrors {
+            errors: self.errors,
+            omitted: self.omitted,
+        }
     }
 
     /// The span of the value at `path`, or of its deepest present ancestor.
@@ -1217,19 +1296,24 @@ impl Ctx<'_> {
 
         // sources
         let mut sources = Vec::new();
-        let mut texts = Vec::new();
+        // (file name as diagnostics show it, text) of each source read
+        let mut files: Vec<(String, String)> = Vec::new();
         for (s, source) in raw.sources.iter().enumerate() {
             let path = node(&[K("sources"), I(s)]);
             let resolved = self.existing_file(folder, source, &path);
             if resolved.is_file() {
                 match std::fs::read(&resolved) {
-                    Ok(bytes) => texts.push(String::from_utf8_lossy(&bytes).into_owned()),
+                    Ok(bytes) => match String::from_utf8(bytes) {
+                        Ok(text) => files.push((resolved.display().to_string(), text)),
+                        Err(e) => self.push(not_utf8(&resolved, e.as_bytes())),
+                    },
                     Err(e) => self.err(&path, format!("cannot read `{}`: {e}", resolved.display())),
                 }
             }
             sources.push(resolved);
         }
-        let all_sources_read = texts.len() == raw.sources.len();
+        let all_sources_read = files.len() == raw.sources.len();
+        let texts: Vec<&str> = files.iter().map(|(_, text)| text.as_str()).collect();
 
         // server
         let server = raw.server.as_ref().map(|s| {
@@ -1690,6 +1774,11 @@ impl Ctx<'_> {
             });
         }
 
+        #[cfg(feature = "runtime")]
+        if all_sources_read && !files.is_empty() {
+            self.check_plc_variables(n, raw, &files);
+        }
+
         NodeConfig {
             name: raw.name.clone(),
             description: raw.description.clone(),
@@ -1724,6 +1813,91 @@ impl Ctx<'_> {
                         .collect(),
                 })
                 .collect(),
+        }
+    }
+
+    /// Compiles the node's ST sources as the runtime will and looks up every PLC variable
+    /// the node names (point sources and `invalid_when`, command targets and
+    /// `remote_enable`, I/O variables, `refuse_commands_when`): a typo is then reported at
+    /// its value in station.toml, not as a start-up failure without a place. Compile errors
+    /// are reported at their place in the ST file.
+    #[cfg(feature = "runtime")]
+    fn check_plc_variables(&mut self, n: usize, raw: &RawNode, files: &[(String, String)]) {
+        let (sources, result) = plc::build(files);
+        let compiled = match result {
+            Ok(compiled) => compiled,
+            Err(diagnostics) => {
+                for diagnostic in diagnostics.iter().filter(|d| d.is_error()) {
+                    let at = sources.line_col(diagnostic.primary);
+                    let file = sources
+                        .file(diagnostic.primary.file)
+                        .map(|f| PathBuf::from(&f.name))
+                        .unwrap_or_default();
+                    self.push(ConfigError {
+                        file,
+                        line: at.line,
+                        column: at.col,
+                        key: String::new(),
+                        message: diagnostic.message.clone(),
+                    });
+                }
+                return;
+            }
+        };
+        let plc = match plc::Plc::try_new(compiled, sources) {
+            Ok(plc) => plc,
+            Err(error) => {
+                self.err(
+                    &[K("node"), I(n), K("sources")],
+                    format!("the PLC does not start: {error}"),
+                );
+                return;
+            }
+        };
+        let is_variable = |text: &str| matches!(parse_link_ref(text), Ok(None));
+        let mut named: Vec<(Vec<Seg>, &str)> = Vec::new();
+        for (p, point) in raw.point.iter().enumerate() {
+            if let Some(source) = point.source.as_deref().filter(|s| is_variable(s)) {
+                named.push((vec![K("point"), I(p), K("source")], source));
+            }
+            if let Some(variable) = &point.invalid_when {
+                named.push((vec![K("point"), I(p), K("invalid_when")], variable));
+            }
+        }
+        for (c, command) in raw.command.iter().enumerate() {
+            if is_variable(&command.target) {
+                named.push((vec![K("command"), I(c), K("target")], &command.target));
+            }
+            if let Some(variable) = &command.remote_enable {
+                named.push((vec![K("command"), I(c), K("remote_enable")], variable));
+            }
+        }
+        for (i, io) in raw.io.iter().enumerate() {
+            named.push((vec![K("io"), I(i), K("variable")], &io.variable));
+        }
+        let groups = raw
+            .server
+            .as_ref()
+            .and_then(|s| s.redundancy_groups.as_ref());
+        for (g, group) in groups.into_iter().flatten().enumerate() {
+            if let Some(variable) = &group.refuse_commands_when {
+                named.push((
+                    vec![
+                        K("server"),
+                        K("redundancy_groups"),
+                        I(g),
+                        K("refuse_commands_when"),
+                    ],
+                    variable,
+                ));
+            }
+        }
+        for (rest, variable) in named {
+            if let Err(error) = plc.leaf(variable) {
+                let mut path = vec![K("node"), I(n)];
+                path.extend(rest);
+                self.err(&path, format!("{error} in the node's PLC program"));
+            }
         }
     }
 

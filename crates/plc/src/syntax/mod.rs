@@ -6,7 +6,7 @@ pub mod parser;
 pub mod source;
 
 pub use ast::*;
-pub use source::{FileId, LineCol, SourceFile, SourceMap, Span};
+pub use source::{decode, FileId, LineCol, NotUtf8, SourceFile, SourceMap, Span};
 
 use crate::diagnostics::Diagnostic;
 

@@ -2,6 +2,44 @@
 
 use std::ops::Range;
 
+/// The UTF-8 byte-order mark, accepted (and dropped) at the start of a source file.
+pub const BYTE_ORDER_MARK: char = '\u{FEFF}';
+
+/// A source file that is not UTF-8 text, with the position of its first invalid byte.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[error("not UTF-8 text: byte 0x{byte:02X} (save the file as UTF-8)")]
+pub struct NotUtf8 {
+    /// Byte offset of the first invalid byte in the file.
+    pub offset: usize,
+    /// Its 1-based line.
+    pub line: usize,
+    /// Its 1-based column, counting the valid characters before it on its line.
+    pub col: usize,
+    /// The invalid byte.
+    pub byte: u8,
+}
+
+/// The text of a source file's bytes, without a leading byte-order mark; or where the
+/// bytes stop being UTF-8 (line and column as an editor shows them).
+pub fn decode(bytes: &[u8]) -> Result<&str, NotUtf8> {
+    let bom = BYTE_ORDER_MARK.len_utf8();
+    let (skipped, body) = match bytes.strip_prefix("\u{FEFF}".as_bytes()) {
+        Some(rest) => (bom, rest),
+        None => (0, bytes),
+    };
+    std::str::from_utf8(body).map_err(|error| {
+        let valid = error.valid_up_to();
+        let before = std::str::from_utf8(body.get(..valid).unwrap_or_default()).unwrap_or("");
+        let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+        NotUtf8 {
+            offset: skipped + valid,
+            line: before.matches('\n').count() + 1,
+            col: before.get(line_start..).unwrap_or("").chars().count() + 1,
+            byte: body.get(valid).copied().unwrap_or(0),
+        }
+    })
+}
+
 /// Index of a file in a [`SourceMap`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
 pub struct FileId(pub u32);
@@ -68,9 +106,13 @@ impl SourceMap {
         Self::default()
     }
 
-    /// Adds a file and returns its id.
+    /// Adds a file and returns its id. A leading UTF-8 byte-order mark (which Windows
+    /// editors write) is dropped, so that it is neither lexed nor counted in columns.
     pub fn add(&mut self, name: impl Into<String>, text: impl Into<String>) -> FileId {
-        let text = text.into();
+        let mut text = text.into();
+        if text.starts_with(BYTE_ORDER_MARK) {
+            text.drain(..BYTE_ORDER_MARK.len_utf8());
+        }
         let mut line_starts = vec![0];
         line_starts.extend(text.match_indices('\n').map(|(i, _)| i + 1));
         let id = FileId(u32::try_from(self.files.len()).unwrap_or(u32::MAX));
@@ -124,5 +166,40 @@ impl SourceMap {
         self.file(span.file)
             .and_then(|f| f.text.get(span.start as usize..span.end as usize))
             .unwrap_or("")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn decode_finds_the_first_invalid_byte_and_drops_a_byte_order_mark() {
+        assert_eq!(decode(b"\xEF\xBB\xBFPROGRAM P"), Ok("PROGRAM P"));
+        assert_eq!(decode("x := 'ž';".as_bytes()), Ok("x := 'ž';"));
+        let error = decode(b"A\n  ok := '\xC5\xBE\xE9';\n").unwrap_err();
+        assert_eq!(
+            error,
+            NotUtf8 {
+                offset: 13,
+                line: 2,
+                col: 11,
+                byte: 0xE9
+            }
+        );
+        assert_eq!(
+            error.to_string(),
+            "not UTF-8 text: byte 0xE9 (save the file as UTF-8)"
+        );
+        // after a byte-order mark the column is what an editor shows
+        let error = decode(b"\xEF\xBB\xBFab\xFF").unwrap_err();
+        assert_eq!((error.offset, error.line, error.col), (5, 1, 3));
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_not_part_of_the_text() {
+        let mut map = SourceMap::new();
+        let id = map.add("a.st", "\u{FEFF}PROGRAM P");
+        assert_eq!(map.file(id).map(|f| f.text.as_str()), Some("PROGRAM P"));
     }
 }

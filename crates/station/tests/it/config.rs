@@ -64,7 +64,7 @@ fn expect_only(
 
 const PLC: (&str, &str) = (
     "plc/main.st",
-    "PROGRAM Main\nVAR_INPUT A : BOOL; END_VAR\nEND_PROGRAM\n",
+    "PROGRAM Main\nVAR_INPUT A : BOOL; END_VAR\nVAR X : REAL; END_VAR\nEND_PROGRAM\n",
 );
 
 #[test]
@@ -1310,5 +1310,228 @@ target = "Main.A"
         7,
         "node[0].command[0].ioa",
         "also the address of point `P`",
+    );
+}
+
+// ---------------------------------------------------------------------------------------
+// how many errors, PLC variables, encodings (issue 11)
+
+/// One unclosed `[` made the recovering parser report every later line (17,161 errors
+/// for the Vsetín project): only the first syntax error is reported.
+#[test]
+fn one_unclosed_bracket_is_one_error() {
+    let mut toml = String::from(
+        "[station]\nname = \"X\"\ntime_zone = \"UTC\"\n[[node]]\nname = \"A\"\ncommon_address = 1\nsources = [\"plc/main.st\"\n",
+    );
+    for p in 0..50 {
+        toml.push_str(&format!(
+            "[[node.point]]\nname = \"P{p}\"\ntype = \"M_SP_NA_1\"\nioa = {}\nsource = \"Main.A\"\n",
+            p + 1
+        ));
+    }
+    let errors = errors(&toml, &[PLC]);
+    assert_eq!(errors.len(), 1, "{errors:#?}");
+    expect(&errors, 8, 1, "", "missing comma");
+
+    let vsetin = std::fs::read_to_string(example_folder().join("station.toml")).unwrap();
+    let (line, _) = vsetin
+        .lines()
+        .enumerate()
+        .find(|(_, l)| l.starts_with("sources = [") && l.ends_with(']'))
+        .unwrap();
+    let broken: Vec<String> = vsetin
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if i == line {
+                l.trim_end_matches(']').to_owned()
+            } else {
+                l.to_owned()
+            }
+        })
+        .collect();
+    let file = example_folder().join("station.toml");
+    let errors = Project::parse(&example_folder(), &file, &broken.join("\n")).unwrap_err();
+    assert_eq!(errors.errors().len(), 1, "{errors}");
+    assert_eq!(errors.total(), 1);
+}
+
+/// Past ten problems in one file, the rest are counted, not listed.
+#[test]
+fn at_most_ten_errors_per_file_then_a_count() {
+    let mut toml = String::from("[station]\nname = \"X\"\ntime_zone = \"UTC\"\n[[node]]\nname = \"A\"\ncommon_address = 1\n");
+    for p in 0..15 {
+        toml.push_str(&format!(
+            "[[node.point]]\nname = \"P{p}\"\ntype = \"M_SP_NA_1\"\nioa = 7\nsource = \"M.A\"\n"
+        ));
+    }
+    let dir = folder(&toml, &[]);
+    let errors = Project::load(dir.path()).unwrap_err();
+    assert_eq!(errors.errors().len(), 10);
+    assert_eq!(errors.total(), 14);
+    let file = dir.path().join("station.toml");
+    assert_eq!(errors.omitted(), [(file.clone(), 4)]);
+    // the first ten, in file order: point[1] is the first duplicate
+    expect(
+        errors.errors(),
+        15,
+        7,
+        "node[0].point[1].ioa",
+        "IOA 7 is also used",
+    );
+    assert!(
+        errors
+            .to_string()
+            .ends_with(&format!("\n{}: ... and 4 more error(s)", file.display())),
+        "{errors}"
+    );
+}
+
+/// A variable the node's PLC does not have is reported at its value in station.toml,
+/// wherever the project names one (it used to stop the runtime without a place).
+#[test]
+fn unknown_plc_variables_are_reported_at_their_value() {
+    let toml = r#"[station]
+name = "X"
+time_zone = "UTC"
+[[node]]
+name = "A"
+common_address = 1
+sources = ["plc/main.st"]
+[node.server]
+port_offset = 0
+redundancy_groups = [{ name = "all", refuse_commands_when = "Main.Blocked" }]
+[[node.io]]
+signal = "RH2_QF1_Zapnut"
+variable = "Main.Feedback"
+[[node.point]]
+name = "P"
+type = "M_SP_NA_1"
+ioa = 1
+source = "Main.Typo"
+invalid_when = "Main.Bad"
+[[node.point]]
+name = "Fine"
+type = "M_SP_NA_1"
+ioa = 2
+source = "main.a"
+[[node.command]]
+name = "C"
+type = "C_SC_NA_1"
+ioa = 3
+target = "Main.Cmd"
+remote_enable = "Other.A"
+"#;
+    let errors = errors(toml, &[PLC]);
+    expect(
+        &errors,
+        10,
+        61,
+        "node[0].server.redundancy_groups[0].refuse_commands_when",
+        "no variable 'Main.Blocked'",
+    );
+    expect(
+        &errors,
+        13,
+        12,
+        "node[0].io[0].variable",
+        "no variable 'Main.Feedback'",
+    );
+    expect(
+        &errors,
+        18,
+        10,
+        "node[0].point[0].source",
+        "no variable 'Main.Typo' in the node's PLC program",
+    );
+    expect(
+        &errors,
+        19,
+        16,
+        "node[0].point[0].invalid_when",
+        "no variable 'Main.Bad'",
+    );
+    expect(
+        &errors,
+        29,
+        10,
+        "node[0].command[0].target",
+        "no variable 'Main.Cmd'",
+    );
+    expect(
+        &errors,
+        30,
+        17,
+        "node[0].command[0].remote_enable",
+        "no variable 'Other.A'",
+    );
+    assert_eq!(errors.len(), 6, "{errors:#?}");
+}
+
+/// The ST sources are compiled at load: their errors are reported at their place.
+#[test]
+fn st_compile_errors_are_reported_in_the_st_file() {
+    let toml = "[station]\nname = \"X\"\ntime_zone = \"UTC\"\n[[node]]\nname = \"A\"\ncommon_address = 1\nsources = [\"plc/main.st\"]\n";
+    let dir = folder(
+        toml,
+        &[(
+            "plc/main.st",
+            "PROGRAM Main\nVAR A : BOOL; END_VAR\nA := nope;\nEND_PROGRAM\n",
+        )],
+    );
+    let errors = Project::load(dir.path()).unwrap_err().into_errors();
+    assert_eq!(errors.len(), 1, "{errors:#?}");
+    assert_eq!(errors[0].file, dir.path().join("plc/main.st"));
+    assert_eq!((errors[0].line, errors[0].column), (3, 6), "{errors:#?}");
+    assert!(errors[0].message.contains("nope"), "{errors:#?}");
+}
+
+/// An ST file in Latin-1 is refused at its first invalid byte; a UTF-8 byte-order mark
+/// (Windows editors write one) is accepted.
+#[test]
+fn st_sources_must_be_utf8_and_may_start_with_a_byte_order_mark() {
+    let toml = r#"[station]
+name = "X"
+time_zone = "UTC"
+[[node]]
+name = "A"
+common_address = 1
+sources = ["plc/main.st"]
+[[node.task]]
+name = "t"
+interval_ms = 10
+programs = ["Main"]
+[[node.point]]
+name = "P"
+type = "M_SP_NA_1"
+ioa = 1
+source = "Main.A"
+"#;
+    let dir = folder(toml, &[]);
+    let st = dir.path().join("plc/main.st");
+    std::fs::create_dir_all(st.parent().unwrap()).unwrap();
+    std::fs::write(
+        &st,
+        b"\xEF\xBB\xBFPROGRAM Main\nVAR A : BOOL; END_VAR\nEND_PROGRAM\n",
+    )
+    .unwrap();
+    Project::load(dir.path()).unwrap_or_else(|errors| panic!("{errors}"));
+
+    std::fs::write(
+        &st,
+        b"PROGRAM Main\nVAR A : BOOL; (* caf\xE9 *) END_VAR\nEND_PROGRAM\n",
+    )
+    .unwrap();
+    let errors = Project::load(dir.path()).unwrap_err().into_errors();
+    assert_eq!(errors.len(), 1, "{errors:#?}");
+    let error = &errors[0];
+    assert_eq!(error.file, st);
+    assert_eq!((error.line, error.column), (2, 21));
+    assert_eq!(
+        error.to_string(),
+        format!(
+            "{}:2:21: error: not UTF-8 text: byte 0xE9 (save the file as UTF-8)",
+            st.display()
+        )
     );
 }
