@@ -378,3 +378,50 @@ fn locate(text: &str, table: &str, index: usize, key: &str) -> (usize, usize) {
     }
     found.map_or((1, 1), |number| (number + 1, 1))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn folder(toml: &str) -> tempfile::TempDir {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("points.csv"),
+            "ioa,type,name,description\n1,M_SP_NA_1,Local,x\n2,C_SC_NA_1,Open,x\n",
+        )
+        .unwrap();
+        std::fs::write(dir.path().join("hmi.toml"), toml).unwrap();
+        dir
+    }
+
+    fn error_of(toml: &str) -> String {
+        let dir = folder(toml);
+        let error = HmiConfig::load(dir.path()).unwrap_err().to_string();
+        let file = dir.path().join("hmi.toml").display().to_string();
+        error.strip_prefix(&file).unwrap().to_owned()
+    }
+
+    #[test]
+    fn errors_name_file_line_and_column() {
+        // Broken TOML.
+        assert!(
+            error_of("title = \"x\"\n[[control]\n").starts_with(":2:"),
+            "{}",
+            error_of("title = \"x\"\n[[control]\n")
+        );
+        // A wrong reference: the line and column of the value at fault.
+        let toml = "title = \"x\"\n\n[[control]]\ncommand = \"Open\"\nlevel = 1\n\n[[control]]\ncommand = \"Nothing\"\nlevel = 1\n";
+        assert!(error_of(toml).starts_with(":8:11: "), "{}", error_of(toml));
+        let toml = "title = \"x\"\n[[control]]\ncommand = \"Open\"\nlevel = 1\n  authority = { point = \"Open\" }\n";
+        assert!(error_of(toml).starts_with(":5:15: "), "{}", error_of(toml));
+        let toml = "title = \"x\"\n[[alarm]]\npoint = \"Local\"\ntext = \"t\"\npriority = 7\n";
+        assert!(error_of(toml).starts_with(":5:12: "), "{}", error_of(toml));
+        // Authority on a single point is accepted.
+        let dir = folder("title = \"x\"\n[[control]]\ncommand = \"Open\"\nlevel = 1\nauthority = { point = \"Local\", state = true }\n");
+        let config = HmiConfig::load(dir.path()).unwrap();
+        assert_eq!(
+            config.control("Open").authority.unwrap().point,
+            "Local".to_owned()
+        );
+    }
+}

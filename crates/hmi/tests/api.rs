@@ -25,8 +25,9 @@ fn vsetin() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/vsetin")
 }
 
-/// A screens folder for the test: the top node's points, three users, one screen.
-fn screens(project: &Project, dir: &Path) {
+/// A screens folder for the test: the top node's points, three users, one screen, and
+/// `extra` appended to hmi.toml.
+fn screens(project: &Project, dir: &Path, extra: &str) {
     let top = project.top_node().unwrap();
     let mut csv = String::from("ioa,type,name,description\n");
     for p in &top.points {
@@ -65,7 +66,9 @@ point = "RH2_P1_FV1_Prepetova_ochrana"
 priority = 3
 text = "RH2 surge arrester"
 acknowledge = true
-"#,
+"#
+        .to_owned()
+            + extra,
     )
     .unwrap();
     std::fs::write(
@@ -85,6 +88,10 @@ struct Setup {
 }
 
 async fn setup() -> Setup {
+    setup_with("").await
+}
+
+async fn setup_with(extra_toml: &str) -> Setup {
     let project = Project::load(&vsetin()).unwrap();
     let base = loop {
         let port = std::net::TcpListener::bind("127.0.0.1:0")
@@ -100,7 +107,7 @@ async fn setup() -> Setup {
     };
     let project = project.with_port_base(base);
     let dir = tempfile::tempdir().unwrap();
-    screens(&project, dir.path());
+    screens(&project, dir.path(), extra_toml);
     let runtime = Runtime::start(
         project,
         RuntimeOptions {
@@ -649,6 +656,95 @@ async fn live_updates_alarms_and_every_value_invalid_on_link_loss() {
         operator.point("RH2_V1_FA1_Zapnut").await["invalid"] == json!(false)
     })
     .await;
+    s.hmi.shutdown().await;
+    s.runtime.shutdown().await;
+}
+
+/// Railway spec 9.2: board controls work only while the control authority is with this
+/// HMI (RDRT's "HMI local" point, set by command 2001 from the HMI's link). The HMI
+/// refuses them itself otherwise, audits the refusal and says why; a command it sends is
+/// in the store (write-ahead, then its outcome) before the user hears the outcome.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn board_controls_need_the_control_authority_and_are_audited_before_the_outcome() {
+    let s = setup_with(
+        r#"
+[[control]]
+command = "RZZ_VypnoutQF1"
+level = 5
+select = true
+authority = { point = "RDRT_SP21_HMI_Mistne" }
+"#,
+    )
+    .await;
+    let operator = Client::login(s.hmi.address, "operator", "operator-pass").await;
+    until("the authority point", async || {
+        operator.point("RDRT_SP21_HMI_Mistne").await["invalid"] == json!(false)
+    })
+    .await;
+    assert_eq!(
+        operator.point("RDRT_SP21_HMI_Mistne").await["value"],
+        json!(false),
+        "the station starts with the authority remote"
+    );
+    let refused = operator
+        .post(
+            "/api/command",
+            json!({"command": "RZZ_VypnoutQF1", "value": true}),
+        )
+        .await;
+    assert_eq!(refused.status, 409, "{}", refused.body);
+    assert_eq!(refused.json()["outcome"], "refused-authority");
+    let events = operator.get("/api/events?kind=command").await.json();
+    let refusal = events["items"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["point"] == "RZZ_VypnoutQF1")
+        .unwrap_or_else(|| panic!("refusal not audited: {events}"));
+    assert_eq!(refusal["outcome"], "refused");
+    assert_eq!(refusal["user"], "operator");
+    assert!(refusal["detail"]
+        .as_str()
+        .unwrap()
+        .contains("control authority"));
+
+    // The authority taken to this HMI (command 2001 from the HMI's link).
+    let taken = operator
+        .post(
+            "/api/command",
+            json!({"command": "RDRT_HMI_Mistne", "value": true}),
+        )
+        .await;
+    assert_eq!(taken.json()["outcome"], "executed", "{}", taken.body);
+    for _ in 0..50 {
+        s.runtime.advance(Duration::from_millis(100)).await.unwrap();
+        if operator.point("RDRT_SP21_HMI_Mistne").await["value"] == json!(true) {
+            break;
+        }
+    }
+    assert_eq!(
+        operator.point("RDRT_SP21_HMI_Mistne").await["value"],
+        json!(true)
+    );
+    let executed = operator
+        .post(
+            "/api/command",
+            json!({"command": "RZZ_VypnoutQF1", "value": true}),
+        )
+        .await;
+    assert_eq!(executed.json()["outcome"], "executed", "{}", executed.body);
+    // No flush here: the positive outcome was only reported once both records were in.
+    let events = operator
+        .get("/api/events?kind=command&point=RZZ_VypnoutQF1")
+        .await
+        .json();
+    let outcomes: Vec<&str> = events["items"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["outcome"].as_str().unwrap())
+        .collect();
+    assert_eq!(outcomes, ["executed", "sent", "refused"], "{events}");
     s.hmi.shutdown().await;
     s.runtime.shutdown().await;
 }

@@ -447,7 +447,8 @@ async fn every_response_has_security_headers_and_errors_are_json() {
     let viewer = Client::login(address, "viewer", "viewer-pass").await;
     let huge = login_body("viewer", &"x".repeat(100_000));
     let cookie = [("Cookie", viewer.cookie.as_str())];
-    let cases: Vec<(&str, &str, &[(&str, &str)], &str, u16)> = vec![
+    type Case<'a> = (&'a str, &'a str, &'a [(&'a str, &'a str)], &'a str, u16);
+    let cases: Vec<Case> = vec![
         ("GET", "/login", &[], "", 200),
         ("GET", "/static/app.js", &[], "", 200),
         ("GET", "/", &[], "", 303),

@@ -320,6 +320,10 @@ const HMI = (window.HMI = {
         return "refused: the device is in local mode";
       case "refused-permission":
         return "refused: your permission level does not allow this control";
+      case "refused-authority":
+        return "refused: the control authority is not with this HMI (take it on the supply screen)";
+      case "sent":
+        return "sent to the station (outcome recorded separately)";
       case "timed-out":
         return "timed out: the station did not confirm in time";
       case "no-link":

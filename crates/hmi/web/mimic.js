@@ -24,15 +24,35 @@
   let showing = null;
 
   // ------------------------------------------------------------------ loading a screen
-  /** Drops anything that could run code: the files are configuration, not programs. */
+  /**
+   * Drops anything that could run code: the files are configuration, not programs.
+   * Runs on the parsed, inert document (DOMParser: no scripts run, nothing loads), before
+   * any node is imported into the page.
+   */
+  const ACTIVE = "script, foreignObject, iframe, object, embed, handler, listener";
+  // SMIL can rewrite an attribute after sanitising: <set attributeName="href" to="javascript:…">.
+  const ANIMATION = "set, animate, animateTransform, animateMotion, animateColor, discard";
+  function dangerousUrl(value) {
+    // Browsers ignore control characters and spaces inside a scheme ("java\tscript:").
+    const compact = value.replace(/[\u0000-\u0020\u007f-\u009f]/g, "").toLowerCase();
+    return /^(javascript|vbscript|data):/.test(compact) || compact.includes("javascript:");
+  }
   function sanitise(svg) {
-    for (const bad of svg.querySelectorAll("script, foreignObject, iframe, object, embed")) bad.remove();
-    for (const element of svg.querySelectorAll("*")) {
+    for (const bad of svg.querySelectorAll(ACTIVE)) bad.remove();
+    for (const animation of svg.querySelectorAll(ANIMATION)) {
+      const target = (animation.getAttribute("attributeName") || "").trim().toLowerCase();
+      const values = ["to", "from", "values", "by"].map((a) => animation.getAttribute(a) || "");
+      if (target === "href" || target.endsWith(":href") || target.startsWith("on") || values.some(dangerousUrl)) {
+        animation.remove();
+      }
+    }
+    for (const element of [svg, ...svg.querySelectorAll("*")]) {
       for (const attribute of [...element.attributes]) {
         const name = attribute.name.toLowerCase();
         const value = attribute.value.trim().toLowerCase();
         if (name.startsWith("on")) element.removeAttribute(attribute.name);
-        else if ((name === "href" || name === "xlink:href") && !value.startsWith("#")) element.removeAttribute(attribute.name);
+        else if ((name === "href" || name.endsWith(":href")) && !value.startsWith("#")) element.removeAttribute(attribute.name);
+        else if (dangerousUrl(attribute.value)) element.removeAttribute(attribute.name);
       }
     }
     return svg;
@@ -65,7 +85,8 @@
       box.replaceChildren(HMI.el("p", { class: "muted", text: `Screen ${id} is not valid SVG.` }));
       return;
     }
-    svgRoot = sanitise(document.importNode(root, true));
+    // Sanitised while still inert, then imported: no unsanitised node enters the page.
+    svgRoot = document.importNode(sanitise(root), true);
     svgRoot.removeAttribute("width");
     svgRoot.removeAttribute("height");
     svgRoot.setAttribute("data-screen", id);
