@@ -11,6 +11,7 @@
 
 mod demo;
 mod events;
+mod examples;
 mod hmi;
 mod iec104;
 mod interrupt;
@@ -18,7 +19,7 @@ mod plc;
 mod points;
 mod run;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory as _, FromArgMatches as _, Parser, Subcommand};
 use tracing_subscriber::EnvFilter;
 
 #[derive(Parser)]
@@ -59,7 +60,9 @@ enum Command {
 }
 
 fn main() -> std::process::ExitCode {
-    let cli = Cli::parse();
+    // Parsed through the command with every subcommand's Examples section added.
+    let matches = examples::with_examples(Cli::command()).get_matches();
+    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|error| error.exit());
     let filter = cli.log.clone().map(EnvFilter::new).unwrap_or_else(|| {
         EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new("warn"))
     });

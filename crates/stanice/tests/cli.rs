@@ -1307,3 +1307,51 @@ fn idle_clients_do_not_lock_dispatch_out_of_the_station() {
     assert!(answers > 400, "{answers} objects interrogated");
     drop(idle);
 }
+
+/// The `--help` of `stanice` and of every subcommand (found by walking the Commands lists
+/// of the help texts themselves) ends with an Examples section (issue 11).
+#[test]
+fn every_help_has_examples() {
+    fn visit(path: &[String], visited: &mut Vec<String>) {
+        let mut command = stanice();
+        command.args(path).arg("--help");
+        let text = assert_success(&run_bounded(command, 20));
+        assert!(
+            text.contains("\nExamples:\n  stanice "),
+            "`stanice {} --help` has no examples:\n{text}",
+            path.join(" ")
+        );
+        visited.push(path.join(" "));
+        let Some((_, commands)) = text.split_once("\nCommands:\n") else {
+            return;
+        };
+        for line in commands.lines().take_while(|l| !l.trim().is_empty()) {
+            let name = line.split_whitespace().next().unwrap();
+            if name != "help" {
+                let mut sub = path.to_vec();
+                sub.push(name.to_owned());
+                visit(&sub, visited);
+            }
+        }
+    }
+    let mut visited = Vec::new();
+    visit(&[], &mut visited);
+    for expected in [
+        "iec104 client",
+        "run",
+        "demo",
+        "user add",
+        "plc run",
+        "events",
+    ] {
+        assert!(visited.iter().any(|v| v == expected), "{visited:?}");
+    }
+
+    // The analyser's quality notation is explained where it is used.
+    let mut client = stanice();
+    client.args(["iec104", "client", "--help"]);
+    let text = assert_success(&run_bounded(client, 20));
+    assert!(text.contains("[iv nt sb bl]"), "{text}");
+    assert!(text.contains("NT not topical"), "{text}");
+    assert!(text.contains("UPPER CASE = set"), "{text}");
+}

@@ -1,0 +1,225 @@
+//! The Examples section of every `--help`, kept in one table.
+//!
+//! One table rather than an attribute on each argument struct: some of those structs live
+//! in modules owned by other areas (the HMI, the test tool's server), and a table lets a
+//! test check that every subcommand has examples and that every example parses.
+
+use clap::Command;
+
+/// The quality notation of the test tool's analyser lines, explained where it is used.
+pub(crate) const QUALITY_LEGEND: &str = "\
+Quality: each value is followed by its flags, [iv nt sb bl] ([iv nt sb bl ov] for measured
+values); lower case = clear, UPPER CASE = set, e.g. [IV nt sb bl] is an invalid value.
+  IV invalid       the value cannot be trusted (source failed, module pulled, link lost)
+  NT not topical   not updated within its expected time (e.g. after a restart)
+  SB substituted   entered by an operator or a substitution, not measured
+  BL blocked       blocked for transmission; the value is the last one before blocking
+  OV overflow      a measured value beyond its range";
+
+/// (subcommand path, examples); the path is the words after `stanice`, "" for the top.
+const EXAMPLES: &[(&str, &str)] = &[
+    (
+        "",
+        "  stanice demo                                   # the Vsetín railway station, HMI included
+  stanice run examples/vsetin --speed 60         # a project, one simulated minute per second
+  stanice iec104 client 127.0.0.1:2404 --ca 1 --gi
+  stanice help run                               # the help of one subcommand",
+    ),
+    (
+        "iec104",
+        "  stanice iec104 server --points points.csv --simulate
+  stanice iec104 client 127.0.0.1:2404 --ca 1 --gi
+  stanice iec104 command 127.0.0.1:2404 --ca 1 --ioa 2021 --type C_SC_NA_1 --value 1
+  stanice iec104 decode 68 04 07 00 00 00",
+    ),
+    (
+        "iec104 server",
+        "  stanice iec104 server --points points.csv      # CSV header: ioa,type,value[,name]
+  stanice iec104 server --points points.csv --listen 0.0.0.0:2404 --ca 7 --simulate
+  stanice iec104 server --points points.csv --mode groups-by-address --group scada=10.0.0.5,10.0.0.6",
+    ),
+    (
+        "iec104 client",
+        "  stanice iec104 client 127.0.0.1:2404 --ca 1 --gi          # analyser lines until Ctrl-C
+  stanice iec104 client 127.0.0.1:2404 --gi --exit-after-gi --json
+  stanice iec104 client 10.0.0.1:2404,10.0.0.2:2404 --clock-sync --duration 60",
+    ),
+    (
+        "iec104 command",
+        "  stanice iec104 command 127.0.0.1:2404 --ca 1 --ioa 2021 --type C_SC_NA_1 --value 1
+  stanice iec104 command 127.0.0.1:2404 --ca 1 --ioa 2100 --type C_DC_NA_1 --value ON --select
+  stanice iec104 command 127.0.0.1:2404 --ca 1 --ioa 3000 --type C_SE_NC_1 --value 12.5
+The exit code is 0 on a positive confirmation and termination, non-zero otherwise.",
+    ),
+    (
+        "iec104 decode",
+        "  stanice iec104 decode 68 04 07 00 00 00         # STARTDT act
+  stanice iec104 decode 680E0000000001010300010001000001
+  stanice iec104 decode --asdu 01 01 03 00 01 00 01 00 00 01",
+    ),
+    (
+        "demo",
+        "  stanice demo                                   # web HMI on http://127.0.0.1:8080/
+  stanice demo --speed 60 --store none           # fast, without writing events
+  stanice demo --start 2025-01-15T16:00:00Z      # at dusk: the lighting switches on
+While it runs, type `help` for the faults and hand operations of the console.",
+    ),
+    (
+        "run",
+        "  stanice run examples/vsetin
+  stanice run examples/vsetin --node RH2 --port-base 12404   # one node, other ports
+  stanice run examples/vsetin --speed 60 --duration 30 --store none
+While it runs, type `help` for the faults and hand operations of the console.",
+    ),
+    (
+        "points",
+        "  stanice points examples/vsetin                 # what the top node serves to dispatch
+  stanice points examples/vsetin --node RH2",
+    ),
+    (
+        "events",
+        "  stanice events examples/vsetin --since 10m
+  stanice events examples/vsetin --point 'RH2_*' --node RDRT --since 2h
+  stanice events examples/vsetin --commands --limit 20",
+    ),
+    (
+        "hmi",
+        "  stanice hmi --connect 127.0.0.1:2404 --ca 1 --screens examples/vsetin/hmi
+  stanice hmi --connect 127.0.0.1:2404 --screens examples/vsetin/hmi --listen 0.0.0.0:8080 --store none",
+    ),
+    (
+        "user",
+        "  stanice user add alice --level 5 --project examples/vsetin    # password on stdin
+  stanice user list --project examples/vsetin",
+    ),
+    (
+        "user add",
+        "  stanice user add alice --level 5 --project examples/vsetin    # password on stdin
+  stanice user add bob --level 0 --users users.toml             # read-only",
+    ),
+    (
+        "user remove",
+        "  stanice user remove alice --project examples/vsetin",
+    ),
+    (
+        "user passwd",
+        "  stanice user passwd alice --project examples/vsetin            # new password on stdin
+  stanice user passwd alice --level 7 --users users.toml",
+    ),
+    (
+        "user list",
+        "  stanice user list --project examples/vsetin
+  stanice user list --users users.toml",
+    ),
+    (
+        "plc",
+        "  stanice plc check examples/vsetin/plc/rh2_logic.st
+  stanice plc run counter.st --program Main --cycles 10",
+    ),
+    (
+        "plc check",
+        "  stanice plc check examples/vsetin/plc/rh2_logic.st
+  stanice plc check lib.st main.st               # several files form one program",
+    ),
+    (
+        "plc run",
+        "  stanice plc run counter.st --program Main --cycles 10 --cycle-ms 100
+  stanice plc run logic.st --program Main --set Main.Start=TRUE --set Main.Limit=5",
+    ),
+];
+
+/// The `after_help` of the subcommand at `path`: its examples, and for the client the
+/// quality legend.
+fn after_help(path: &str, examples: &str) -> String {
+    let mut text = format!("Examples:\n{examples}");
+    if path == "iec104 client" {
+        text.push_str("\n\n");
+        text.push_str(QUALITY_LEGEND);
+    }
+    text
+}
+
+/// `command` with the Examples section of every subcommand that has one in the table.
+pub(crate) fn with_examples(command: Command) -> Command {
+    let mut command = command;
+    for (path, examples) in EXAMPLES {
+        let text = after_help(path, examples);
+        command = apply(
+            command,
+            path.split_whitespace().collect::<Vec<_>>().as_slice(),
+            text,
+        );
+    }
+    command
+}
+
+fn apply(command: Command, path: &[&str], text: String) -> Command {
+    match path.split_first() {
+        None => command.after_help(text),
+        Some((first, rest)) => {
+            let rest: Vec<&str> = rest.to_vec();
+            command.mut_subcommand(*first, move |sub| apply(sub, &rest, text))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
+
+    use clap::CommandFactory as _;
+
+    use super::*;
+    use crate::Cli;
+
+    /// Every subcommand path of `command`, "" for itself, leaving out clap's `help`.
+    fn paths(command: &Command, prefix: &str, out: &mut Vec<String>) {
+        out.push(prefix.to_owned());
+        for sub in command.get_subcommands() {
+            if sub.get_name() == "help" {
+                continue;
+            }
+            let path = format!("{prefix} {}", sub.get_name());
+            paths(sub, path.trim(), out);
+        }
+    }
+
+    #[test]
+    fn every_subcommand_has_examples_and_no_example_names_an_unknown_one() {
+        let mut all = Vec::new();
+        paths(&Cli::command(), "", &mut all);
+        for path in &all {
+            assert!(
+                EXAMPLES.iter().any(|(p, _)| p == path),
+                "`stanice {path}` has no examples"
+            );
+        }
+        for (path, _) in EXAMPLES {
+            assert!(all.iter().any(|p| p == path), "no subcommand `{path}`");
+        }
+    }
+
+    /// Each example line is a command line the parser accepts.
+    #[test]
+    fn every_example_parses() {
+        for (path, examples) in EXAMPLES {
+            for line in examples.lines().filter(|l| l.starts_with("  stanice ")) {
+                let words: Vec<String> = line
+                    .split(" #")
+                    .next()
+                    .unwrap()
+                    .split_whitespace()
+                    .map(|w| w.trim_matches('\'').to_owned())
+                    .collect();
+                let parsed = with_examples(Cli::command()).try_get_matches_from(&words);
+                if let Err(error) = parsed {
+                    // `stanice help run` prints help by design
+                    assert!(
+                        words.get(1).map(String::as_str) == Some("help"),
+                        "`{line}` (examples of `{path}`): {error}"
+                    );
+                }
+            }
+        }
+    }
+}
