@@ -601,6 +601,11 @@ async fn run(station: Arc<Station>, mut control: mpsc::UnboundedReceiver<LinkCon
         config.reconnect_delay = Duration::from_millis(300);
         config.reconnect_delay_max = Duration::from_secs(5);
         config.command_timeout = Duration::from_secs(5);
+        // An operator must not watch stale values as live: if another controlling
+        // station's STARTDT took the data (spoofed from our address, or a second HMI in
+        // our redundancy group), notice within seconds, show the link down and take the
+        // data back.
+        config.standby_probe = Some(Duration::from_secs(10));
         let (client, mut events) = spawn_client(config);
         *station.client.lock().unwrap_or_else(|p| p.into_inner()) = Some(client.clone());
         loop {

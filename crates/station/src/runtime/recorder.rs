@@ -3,6 +3,11 @@
 //! commit, not one per event. A command's record can be awaited until it is committed
 //! ([`Recorder::command_committed`]): a positive confirmation leaves only once its audit
 //! record would survive a crash of the process (write-ahead).
+//!
+//! The channel is bounded ([`CHANNEL_CAPACITY`]): a store that cannot keep up (a
+//! PostgreSQL server gone away) must not grow the process without limit. Events that do
+//! not fit are dropped, counted and reported (a warning at most once a minute); commands
+//! are never dropped: they wait for room.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
@@ -14,6 +19,9 @@ use crate::store::{CommandRecord, EventRecord, EventStore};
 /// Events taken from the channel per transaction at most.
 const BATCH: usize = 1024;
 
+/// Records waiting for the store at most: a minute of a busy station's changes.
+pub const CHANNEL_CAPACITY: usize = 65_536;
+
 enum Record {
     Event(EventRecord),
     /// A command, and who waits for its commit (told whether it was stored).
@@ -24,7 +32,7 @@ enum Record {
 /// Hands records to the store writer; cheap to clone. Without a store it counts and drops.
 #[derive(Clone)]
 pub struct Recorder {
-    sender: Option<mpsc::UnboundedSender<Record>>,
+    sender: Option<mpsc::Sender<Record>>,
     counters: Arc<Counters>,
 }
 
@@ -34,6 +42,10 @@ struct Counters {
     events: AtomicU64,
     commands: AtomicU64,
     failed: AtomicU64,
+    /// Events dropped because the channel was full.
+    overflowed: AtomicU64,
+    /// When the overflow was last reported.
+    overflow_warning: std::sync::Mutex<Option<std::time::Instant>>,
 }
 
 impl std::fmt::Debug for Recorder {
@@ -56,7 +68,12 @@ impl Recorder {
 
     /// A recorder writing to `store` from a task on the current tokio runtime.
     pub fn spawn(store: Arc<dyn EventStore>) -> Recorder {
-        let (sender, receiver) = mpsc::unbounded_channel();
+        Recorder::spawn_with_capacity(store, CHANNEL_CAPACITY)
+    }
+
+    /// As [`Recorder::spawn`], with a channel of `capacity` records.
+    pub fn spawn_with_capacity(store: Arc<dyn EventStore>, capacity: usize) -> Recorder {
+        let (sender, receiver) = mpsc::channel(capacity.max(1));
         let counters = Arc::new(Counters::default());
         tokio::spawn(write_loop(store, receiver, Arc::clone(&counters)));
         Recorder {
@@ -65,19 +82,56 @@ impl Recorder {
         }
     }
 
-    /// Records a value change.
+    /// Records a value change; when the channel is full the event is dropped and
+    /// counted (see the module documentation).
     pub fn event(&self, record: EventRecord) {
         self.counters.events.fetch_add(1, Ordering::Relaxed);
         if let Some(sender) = &self.sender {
-            let _ = sender.send(Record::Event(record));
+            if let Err(mpsc::error::TrySendError::Full(_)) = sender.try_send(Record::Event(record)) {
+                self.overflow();
+            }
         }
     }
 
-    /// Records a command.
+    fn overflow(&self) {
+        let dropped = self.counters.overflowed.fetch_add(1, Ordering::Relaxed) + 1;
+        let mut last = self
+            .counters
+            .overflow_warning
+            .lock()
+            .unwrap_or_else(|poison| poison.into_inner());
+        let now = std::time::Instant::now();
+        if last.is_none_or(|at| now.duration_since(at) >= std::time::Duration::from_secs(60)) {
+            *last = Some(now);
+            tracing::warn!(
+                dropped,
+                capacity = CHANNEL_CAPACITY,
+                "the event store does not keep up: events are being dropped"
+            );
+        }
+    }
+
+    /// Records a command without waiting for its commit. A command is never dropped:
+    /// when the channel is full it waits for room on a task of its own (the caller may be
+    /// the simulation thread, which must not block).
     pub fn command(&self, record: CommandRecord) {
         self.counters.commands.fetch_add(1, Ordering::Relaxed);
         if let Some(sender) = &self.sender {
-            let _ = sender.send(Record::Command(record, None));
+            if let Err(mpsc::error::TrySendError::Full(record)) =
+                sender.try_send(Record::Command(record, None))
+            {
+                let sender = sender.clone();
+                match tokio::runtime::Handle::try_current() {
+                    Ok(runtime) => {
+                        runtime.spawn(async move {
+                            let _ = sender.send(record).await;
+                        });
+                    }
+                    Err(_) => {
+                        let _ = sender.blocking_send(record);
+                    }
+                }
+            }
         }
     }
 
@@ -92,6 +146,7 @@ impl Recorder {
         let (committed, wait) = oneshot::channel();
         if sender
             .send(Record::Command(record, Some(committed)))
+            .await
             .is_err()
         {
             return false;
@@ -103,7 +158,7 @@ impl Recorder {
     pub async fn flush(&self) {
         let Some(sender) = &self.sender else { return };
         let (done, wait) = oneshot::channel();
-        if sender.send(Record::Flush(done)).is_ok() {
+        if sender.send(Record::Flush(done)).await.is_ok() {
             let _ = wait.await;
         }
     }
@@ -116,11 +171,16 @@ impl Recorder {
             self.counters.failed.load(Ordering::Relaxed),
         )
     }
+
+    /// Events dropped because the store did not keep up.
+    pub fn overflowed(&self) -> u64 {
+        self.counters.overflowed.load(Ordering::Relaxed)
+    }
 }
 
 async fn write_loop(
     store: Arc<dyn EventStore>,
-    mut receiver: mpsc::UnboundedReceiver<Record>,
+    mut receiver: mpsc::Receiver<Record>,
     counters: Arc<Counters>,
 ) {
     let mut buffer = Vec::with_capacity(BATCH);

@@ -53,6 +53,9 @@ pub enum StoreError {
     /// The store's worker thread is gone (the store is shutting down).
     #[error("the store is closed")]
     Closed,
+    /// The connection pool failed (other than a database error or its closing).
+    #[error("connection pool: {0}")]
+    Pool(String),
 }
 
 /// The error with the server's message: `tokio_postgres::Error` displays only "db error"

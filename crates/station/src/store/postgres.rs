@@ -3,17 +3,16 @@
 //! A small pool of connections (four by default) rather than one connection behind a
 //! mutex: appends need a transaction, which holds its connection for the whole batch, and
 //! an HMI paging through 60 days of history must not stall the event writer nor the other
-//! way round. The pool is a semaphore over idle clients; a client whose connection broke
-//! is dropped and replaced on the next checkout, so the store survives a server restart.
+//! way round. The pool is deadpool-postgres: a connection whose server went away is
+//! recycled on the next checkout, so the store survives a server restart, and each
+//! connection caches the statements prepared on it.
 
 use chrono::{DateTime, Utc};
-use std::collections::HashMap;
+use deadpool_postgres::{Manager, ManagerConfig, Object, Pool, RecyclingMethod};
 use std::str::FromStr;
-use std::sync::Mutex;
 use std::time::Duration;
-use tokio::sync::{Semaphore, SemaphorePermit};
 use tokio_postgres::types::ToSql;
-use tokio_postgres::{Client, NoTls, Row, Statement};
+use tokio_postgres::{Client, NoTls, Row};
 
 use super::model::{
     check_command, check_event, from_ms, quality_to_bits, to_ms, CommandRecord, EventRecord,
@@ -100,86 +99,13 @@ impl PostgresConfig {
     }
 }
 
-/// A pooled connection with the statements prepared on it so far.
-struct Conn {
-    client: Client,
-    prepared: HashMap<&'static str, Statement>,
-}
-
-impl Conn {
-    /// The statement for `sql`, prepared once per connection (saves a round trip on every
-    /// later use).
-    async fn prepared(&mut self, sql: &'static str) -> Result<Statement, StoreError> {
-        if let Some(stmt) = self.prepared.get(sql) {
-            return Ok(stmt.clone());
-        }
-        let stmt = self.client.prepare(sql).await?;
-        self.prepared.insert(sql, stmt.clone());
-        Ok(stmt)
-    }
-}
-
-/// The pool: idle connections and a semaphore limiting how many are in use.
-struct Pool {
-    config: tokio_postgres::Config,
-    idle: Mutex<Vec<Conn>>,
-    permits: Semaphore,
-}
-
-/// A connection checked out of the pool.
-struct Lease<'a> {
-    conn: Conn,
-    _permit: SemaphorePermit<'a>,
-}
-
-impl Pool {
-    async fn connect(&self) -> Result<Conn, StoreError> {
-        let (client, connection) = self.config.connect(NoTls).await?;
-        tokio::spawn(async move {
-            if let Err(e) = connection.await {
-                tracing::warn!(error = %e, "PostgreSQL connection closed");
-            }
-        });
-        Ok(Conn {
-            client,
-            prepared: HashMap::new(),
-        })
-    }
-
-    async fn checkout(&self) -> Result<Lease<'_>, StoreError> {
-        let permit = self
-            .permits
-            .acquire()
-            .await
-            .map_err(|_| StoreError::Closed)?;
-        let idle = loop {
-            let next = match self.idle.lock() {
-                Ok(mut idle) => idle.pop(),
-                Err(_) => None,
-            };
-            match next {
-                Some(c) if c.client.is_closed() => continue,
-                other => break other,
-            }
-        };
-        let conn = match idle {
-            Some(c) => c,
-            None => self.connect().await?,
-        };
-        Ok(Lease {
-            conn,
-            _permit: permit,
-        })
-    }
-
-    fn give_back(&self, lease: Lease<'_>) {
-        if lease.conn.client.is_closed() {
-            return;
-        }
-        if let Ok(mut idle) = self.idle.lock() {
-            idle.push(lease.conn);
-        }
-    }
+/// A connection checked out of the pool; it goes back when dropped.
+async fn checkout(pool: &Pool) -> Result<Object, StoreError> {
+    pool.get().await.map_err(|error| match error {
+        deadpool_postgres::PoolError::Backend(error) => StoreError::Postgres(error),
+        deadpool_postgres::PoolError::Closed => StoreError::Closed,
+        other => StoreError::Pool(other.to_string()),
+    })
 }
 
 /// The PostgreSQL event store. Open it with [`PostgresStore::connect`] or through
@@ -247,15 +173,22 @@ impl PostgresStore {
     /// Connects (one connection at once, so a wrong address or password fails here) and
     /// migrates the schema.
     pub async fn connect(config: PostgresConfig) -> Result<PostgresStore, StoreError> {
-        let pool = Pool {
-            config: config.connection,
-            idle: Mutex::new(Vec::new()),
-            permits: Semaphore::new(config.pool_size.max(1)),
-        };
-        let mut lease = pool.checkout().await?;
-        let migrated = migrate(&mut lease.conn.client).await;
-        pool.give_back(lease);
-        migrated?;
+        let manager = Manager::from_config(
+            config.connection,
+            NoTls,
+            ManagerConfig {
+                // A cheap check that the connection is still open; a broken one is
+                // replaced, so the store survives a server restart.
+                recycling_method: RecyclingMethod::Fast,
+            },
+        );
+        let pool = Pool::builder(manager)
+            .max_size(config.pool_size.max(1))
+            .build()
+            .map_err(|error| StoreError::Pool(error.to_string()))?;
+        let mut connection = checkout(&pool).await?;
+        migrate(&mut connection).await?;
+        drop(connection);
         Ok(PostgresStore {
             pool,
             url: config.redacted_url,
@@ -362,11 +295,10 @@ impl<'a> EventColumns<'a> {
     }
 }
 
-async fn insert_one(conn: &mut Conn, e: &EventRecord) -> Result<RecordId, StoreError> {
+async fn insert_one(conn: &mut Object, e: &EventRecord) -> Result<RecordId, StoreError> {
     let c = EventColumns::of(e);
-    let stmt = conn.prepared(INSERT_ONE).await?;
+    let stmt = conn.prepare_cached(INSERT_ONE).await?;
     let row = conn
-        .client
         .query_one(
             &stmt,
             &[
@@ -390,10 +322,10 @@ async fn insert_one(conn: &mut Conn, e: &EventRecord) -> Result<RecordId, StoreE
     Ok(row.try_get(0)?)
 }
 
-async fn insert_many(conn: &mut Conn, events: &[EventRecord]) -> Result<Vec<RecordId>, StoreError> {
-    let stmt = conn.prepared(INSERT_MANY).await?;
-    let next_ids = conn.prepared(NEXT_IDS).await?;
-    let tx = conn.client.transaction().await?;
+async fn insert_many(conn: &mut Object, events: &[EventRecord]) -> Result<Vec<RecordId>, StoreError> {
+    let stmt = conn.prepare_cached(INSERT_MANY).await?;
+    let next_ids = conn.prepare_cached(NEXT_IDS).await?;
+    let tx = conn.transaction().await?;
     // Ids come from the identity sequence first, so they are known, increasing and in the
     // order of `events` (RETURNING makes no promise about order).
     let n = i64::try_from(events.len()).unwrap_or(i64::MAX);
@@ -447,11 +379,10 @@ async fn insert_many(conn: &mut Conn, events: &[EventRecord]) -> Result<Vec<Reco
     Ok(ids)
 }
 
-async fn insert_command(conn: &mut Conn, c: &CommandRecord) -> Result<RecordId, StoreError> {
+async fn insert_command(conn: &mut Object, c: &CommandRecord) -> Result<RecordId, StoreError> {
     let (kind, int, float, text) = c.value.to_columns();
-    let stmt = conn.prepared(INSERT_COMMAND).await?;
+    let stmt = conn.prepare_cached(INSERT_COMMAND).await?;
     let row = conn
-        .client
         .query_one(
             &stmt,
             &[
@@ -476,10 +407,8 @@ async fn insert_command(conn: &mut Conn, c: &CommandRecord) -> Result<RecordId, 
 
 impl PostgresStore {
     async fn query_rows(&self, sql: &str, params: &[Param]) -> Result<Vec<Row>, StoreError> {
-        let lease = self.pool.checkout().await?;
-        let rows = lease.conn.client.query(sql, &sql_params(params)).await;
-        self.pool.give_back(lease);
-        Ok(rows?)
+        let connection = checkout(&self.pool).await?;
+        Ok(connection.query(sql, &sql_params(params)).await?)
     }
 }
 
@@ -494,23 +423,19 @@ impl EventStore for PostgresStore {
                 return Ok(Vec::new());
             }
             events.iter().try_for_each(check_event)?;
-            let mut lease = self.pool.checkout().await?;
-            let result = match events {
-                [one] => insert_one(&mut lease.conn, one).await.map(|id| vec![id]),
-                _ => insert_many(&mut lease.conn, events).await,
-            };
-            self.pool.give_back(lease);
-            result
+            let mut connection = checkout(&self.pool).await?;
+            match events {
+                [one] => insert_one(&mut connection, one).await.map(|id| vec![id]),
+                _ => insert_many(&mut connection, events).await,
+            }
         })
     }
 
     fn append_command<'a>(&'a self, command: &'a CommandRecord) -> StoreFuture<'a, RecordId> {
         Box::pin(async move {
             check_command(command)?;
-            let mut lease = self.pool.checkout().await?;
-            let result = insert_command(&mut lease.conn, command).await;
-            self.pool.give_back(lease);
-            result
+            let mut connection = checkout(&self.pool).await?;
+            insert_command(&mut connection, command).await
         })
     }
 
@@ -552,14 +477,10 @@ impl EventStore for PostgresStore {
                      (SELECT id FROM {table} WHERE {col} < $1::int8 LIMIT $2::int8)"
                 );
                 loop {
-                    let lease = self.pool.checkout().await?;
-                    let n = lease
-                        .conn
-                        .client
+                    let n = checkout(&self.pool)
+                        .await?
                         .execute(&sql, &[&cutoff, &PURGE_CHUNK])
-                        .await;
-                    self.pool.give_back(lease);
-                    let n = n?;
+                        .await?;
                     total += n;
                     if n < PURGE_CHUNK.unsigned_abs() {
                         break;
@@ -568,14 +489,10 @@ impl EventStore for PostgresStore {
             }
             // Refresh the planner's statistics with each (hourly) retention pass, as the
             // SQLite backend does, rather than waiting for autovacuum after a bulk load.
-            let lease = self.pool.checkout().await?;
-            let analysed = lease
-                .conn
-                .client
+            checkout(&self.pool)
+                .await?
                 .batch_execute("ANALYZE events, commands")
-                .await;
-            self.pool.give_back(lease);
-            analysed?;
+                .await?;
             Ok(total)
         })
     }

@@ -12,6 +12,7 @@
 mod config;
 mod fixture;
 mod pointdb;
+mod recorder;
 mod retention;
 mod runtime_store;
 mod specific;
