@@ -471,6 +471,11 @@ impl Station {
                         ControlOutcome::TimedOut,
                         format!("no {what} from the station"),
                     ),
+                    // A value the command's type cannot carry: nothing was sent.
+                    Err(ClientError::Encode(why)) => (
+                        ControlOutcome::Refused,
+                        format!("value refused, nothing sent: {why}"),
+                    ),
                     Err(error) => (ControlOutcome::NoLink, error.to_string()),
                 }
             }
@@ -524,12 +529,23 @@ async fn send(
     select: bool,
 ) -> Result<(bool, u8), ClientError> {
     let ioa = Ioa::try_new(row.ioa).map_err(|e| ClientError::Encode(e.to_string()))?;
+    let (type_id, element) = command_element(row.type_id, value, select)?;
+    let outcome = client.command(type_id, ioa, element, None).await?;
+    Ok((outcome.positive, outcome.cause.value()))
+}
+
+/// The command an operator's value makes for a command point of type `base` (its
+/// untagged form: the HMI stamps no time tags).
+fn command_element(
+    base: TypeId,
+    value: f64,
+    select: bool,
+) -> Result<(TypeId, Element), ClientError> {
     let qualifier =
         CommandQualifier::new(0, select).map_err(|e| ClientError::Encode(e.to_string()))?;
     let set_qualifier =
         SetpointQualifier::new(0, select).map_err(|e| ClientError::Encode(e.to_string()))?;
-    let base = row.type_id;
-    let (type_id, element) = match base {
+    Ok(match base {
         TypeId::C_SC_NA_1 | TypeId::C_SC_TA_1 => (
             TypeId::C_SC_NA_1,
             Element::SingleCommand {
@@ -548,37 +564,66 @@ async fn send(
                 qualifier,
             },
         ),
-        TypeId::C_SE_NB_1 | TypeId::C_SE_TB_1 => (
-            TypeId::C_SE_NB_1,
-            Element::SetpointScaled {
-                value: value
-                    .round()
-                    .clamp(f64::from(i16::MIN), f64::from(i16::MAX)) as i16,
-                qualifier: set_qualifier,
-            },
-        ),
-        TypeId::C_SE_NC_1 | TypeId::C_SE_TC_1 => (
-            TypeId::C_SE_NC_1,
-            Element::SetpointFloat {
-                value: value as f32,
-                qualifier: set_qualifier,
-            },
-        ),
-        TypeId::C_SE_NA_1 | TypeId::C_SE_TA_1 => (
-            TypeId::C_SE_NA_1,
-            Element::SetpointNormalized {
-                raw: (value.clamp(-1.0, 1.0) * 32767.0).round() as i16,
-                qualifier: set_qualifier,
-            },
-        ),
+        // A set-point outside what its type can carry is refused, never clamped: the
+        // audit must hold the value that was sent, and 99999 silently becoming 32767 is a
+        // different command.
+        TypeId::C_SE_NB_1 | TypeId::C_SE_TB_1 => {
+            let range = f64::from(i16::MIN)..=f64::from(i16::MAX);
+            if value.fract() != 0.0 || !range.contains(&value) {
+                return Err(ClientError::Encode(format!(
+                    "{value} is not a whole number in -32768..=32767 (a scaled set-point)"
+                )));
+            }
+            (
+                TypeId::C_SE_NB_1,
+                Element::SetpointScaled {
+                    // Checked above: whole and in range, so the cast is exact.
+                    #[allow(clippy::cast_possible_truncation)]
+                    value: value as i16,
+                    qualifier: set_qualifier,
+                },
+            )
+        }
+        TypeId::C_SE_NC_1 | TypeId::C_SE_TC_1 => {
+            #[allow(clippy::cast_possible_truncation)]
+            let single = value as f32;
+            if !single.is_finite() {
+                return Err(ClientError::Encode(format!(
+                    "{value} does not fit a short floating-point set-point"
+                )));
+            }
+            (
+                TypeId::C_SE_NC_1,
+                Element::SetpointFloat {
+                    value: single,
+                    qualifier: set_qualifier,
+                },
+            )
+        }
+        TypeId::C_SE_NA_1 | TypeId::C_SE_TA_1 => {
+            // The codec's scaling (raw / 32768), as everywhere else in the project.
+            let largest = f64::from(Element::normalized_value(i16::MAX));
+            if !(-1.0..=largest).contains(&value) {
+                return Err(ClientError::Encode(format!(
+                    "{value} is outside -1.0..={largest} (a normalized set-point)"
+                )));
+            }
+            #[allow(clippy::cast_possible_truncation)]
+            let raw = Element::normalized_raw(value as f32);
+            (
+                TypeId::C_SE_NA_1,
+                Element::SetpointNormalized {
+                    raw,
+                    qualifier: set_qualifier,
+                },
+            )
+        }
         other => {
             return Err(ClientError::Encode(format!(
                 "{other} is not operated from the HMI"
             )))
         }
-    };
-    let outcome = client.command(type_id, ioa, element, None).await?;
-    Ok((outcome.positive, outcome.cause.value()))
+    })
 }
 
 async fn run(station: Arc<Station>, mut control: mpsc::UnboundedReceiver<LinkControl>) {
@@ -641,4 +686,46 @@ pub fn time_of(tag: Option<&TimeTag>, zone: TimeZonePolicy) -> Option<DateTime<U
     tag.and_then(TimeTag::as_cp56)
         .and_then(|t| zone.from_cp56(t))
         .map(|s| s.time)
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::panic)]
+mod tests {
+    use super::*;
+
+    fn scaled(value: f64) -> Result<i16, ClientError> {
+        match command_element(TypeId::C_SE_NB_1, value, false)?.1 {
+            Element::SetpointScaled { value, .. } => Ok(value),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    fn normalized(value: f64) -> Result<i16, ClientError> {
+        match command_element(TypeId::C_SE_NA_1, value, false)?.1 {
+            Element::SetpointNormalized { raw, .. } => Ok(raw),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn set_points_outside_their_type_are_refused_not_clamped() {
+        assert_eq!(scaled(1440.0).unwrap(), 1440);
+        assert_eq!(scaled(-5.0).unwrap(), -5);
+        for refused in [99_999.0, 32_768.0, -32_769.0, 2.5, f64::NAN] {
+            assert!(scaled(refused).is_err(), "{refused} was sent");
+        }
+        assert!(command_element(TypeId::C_SE_NC_1, 1e300, false).is_err());
+    }
+
+    #[test]
+    fn normalized_set_points_scale_as_the_codec_does() {
+        // raw / 32768 everywhere: -1.0 is -32768 (not -32767), 0.5 is 16384.
+        assert_eq!(normalized(-1.0).unwrap(), -32768);
+        assert_eq!(normalized(0.5).unwrap(), 16384);
+        assert_eq!(
+            normalized(f64::from(Element::normalized_value(i16::MAX))).unwrap(),
+            i16::MAX
+        );
+        assert!(normalized(1.0).is_err());
+    }
 }
