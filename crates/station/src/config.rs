@@ -101,6 +101,8 @@
 //!                                      # reset to FALSE after this time
 //! from_groups = ["hmi"]                # optional: only clients of these redundancy groups
 //! max_age_ms = 5000                    # optional: this command's own maximum command delay
+//! range = [0, 1439]                    # optional, set-points: values outside are refused
+//!                                      # (negative ACT_CON, audited), never clamped
 //! feedback = "RH2_QF1_Position"        # optional, commands on a PLC variable: the point of
 //!                                      # this node that returns the command's effect; its
 //!                                      # first change after an execute is sent as return
@@ -386,7 +388,7 @@ pub struct PointConfig {
 }
 
 /// A command, `[[node.command]]`.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct CommandConfig {
     /// Unique per node.
     pub name: String,
@@ -414,6 +416,9 @@ pub struct CommandConfig {
     /// The point that returns the command's effect, and how long an execute waits for it
     /// before it is terminated without (`feedback`, `feedback_timeout_ms`).
     pub feedback: Option<Feedback>,
+    /// The values a set-point may take (`range`, inclusive; in engineering units: the
+    /// scaled value, the normalized fraction, the float).
+    pub range: Option<std::ops::RangeInclusive<f64>>,
     /// Free text.
     pub description: String,
 }
@@ -838,6 +843,7 @@ struct RawCommand {
     remote_enable: Option<String>,
     pulse_ms: Option<i64>,
     max_age_ms: Option<i64>,
+    range: Option<[f64; 2]>,
     feedback: Option<String>,
     feedback_timeout_ms: Option<i64>,
     #[serde(default)]
@@ -1724,6 +1730,29 @@ impl Ctx<'_> {
             let max_age = command
                 .max_age_ms
                 .and_then(|ms| self.duration_ms(ms, &at("max_age_ms"), "max_age_ms"));
+            let range = command.range.and_then(|[low, high]| {
+                let setpoint = matches!(
+                    type_id,
+                    TypeId::C_SE_NA_1
+                        | TypeId::C_SE_NB_1
+                        | TypeId::C_SE_NC_1
+                        | TypeId::C_SE_TA_1
+                        | TypeId::C_SE_TB_1
+                        | TypeId::C_SE_TC_1
+                );
+                if !setpoint {
+                    self.err(
+                        &at("range"),
+                        format!("range applies to set-points, not {type_id}"),
+                    );
+                    None
+                } else if !(low.is_finite() && high.is_finite() && low <= high) {
+                    self.err(&at("range"), format!("range [{low}, {high}] is empty"));
+                    None
+                } else {
+                    Some(low..=high)
+                }
+            });
             let feedback = match &command.feedback {
                 None => {
                     if command.feedback_timeout_ms.is_some() {
@@ -1762,6 +1791,7 @@ impl Ctx<'_> {
             commands.push(CommandConfig {
                 max_age,
                 feedback,
+                range,
                 name: command.name.clone(),
                 type_id,
                 ioa: address,
@@ -2202,6 +2232,7 @@ impl Ctx<'_> {
                         from_groups: Vec::new(),
                         max_age: command.max_age,
                         feedback: None,
+                        range: command.range.clone(),
                         description: command.description.clone(),
                     });
                 }

@@ -334,10 +334,10 @@ LIGHTING_COMMANDS = [
     (55, "W_Cas", "C_SC_NA_1", "LightingBoard.Vstupy.W_Cas", "enable time-window mode", {}),
     (56, "W_SetTime", "C_SC_NA_1", "LightingBoard.Vstupy.W_SetTime",
      "take over the four window times (strobe)", {"pulse_ms": 1000}),
-    (61, "W_Cas1Zap", "C_SE_NB_1", "LightingBoard.Cas1Zap_min", "window 1 on, minutes after midnight", {}),
-    (62, "W_Cas1Vyp", "C_SE_NB_1", "LightingBoard.Cas1Vyp_min", "window 1 off, minutes after midnight", {}),
-    (63, "W_Cas2Zap", "C_SE_NB_1", "LightingBoard.Cas2Zap_min", "window 2 on, minutes after midnight", {}),
-    (64, "W_Cas2Vyp", "C_SE_NB_1", "LightingBoard.Cas2Vyp_min", "window 2 off, minutes after midnight", {}),
+    (61, "W_Cas1Zap", "C_SE_NB_1", "LightingBoard.Cas1Zap_min", "window 1 on, minutes after midnight", {"range": [0, 1439]}),
+    (62, "W_Cas1Vyp", "C_SE_NB_1", "LightingBoard.Cas1Vyp_min", "window 1 off, minutes after midnight", {"range": [0, 1439]}),
+    (63, "W_Cas2Zap", "C_SE_NB_1", "LightingBoard.Cas2Zap_min", "window 2 on, minutes after midnight", {"range": [0, 1439]}),
+    (64, "W_Cas2Vyp", "C_SE_NB_1", "LightingBoard.Cas2Vyp_min", "window 2 off, minutes after midnight", {"range": [0, 1439]}),
 ]
 
 for k, board in enumerate(LIGHTING, start=1):

@@ -57,6 +57,8 @@ pub(crate) struct RoutedCommand {
     pub from_groups: Vec<String>,
     /// The point returning its effect (commands on a PLC variable).
     pub feedback: Option<crate::config::Feedback>,
+    /// The values a set-point may take.
+    pub range: Option<std::ops::RangeInclusive<f64>>,
 }
 
 /// The [`StationHandler`] of a node's server.
@@ -110,6 +112,16 @@ impl StationHandler for NodeHandler {
                 routed.from_groups.join(", ")
             );
             return Box::pin(this.finish(CommandOutcome::Refused, detail));
+        }
+        if let (Some(range), Some(value)) = (&routed.range, setpoint_value(&command.element)) {
+            if !range.contains(&value) {
+                let detail = format!(
+                    "value {value} outside the range {}..={} of the project",
+                    range.start(),
+                    range.end()
+                );
+                return Box::pin(this.finish(CommandOutcome::Refused, detail));
+            }
         }
         let blocked_by = group.and_then(|g| g.refuse_commands_when);
         let sim_node = self.sim_node;
@@ -487,12 +499,24 @@ fn plc_value(element: &Element) -> Option<(Val, Option<u8>)> {
             RegulatingStepState::Lower => (Val::Int(-1), Some(qualifier.qualifier())),
             _ => return None,
         },
-        Element::SetpointNormalized { raw, .. } => (Val::Real(f64::from(*raw) / 32768.0), None),
+        Element::SetpointNormalized { raw, .. } => {
+            (Val::Real(f64::from(Element::normalized_value(*raw))), None)
+        }
         Element::SetpointScaled { value, .. } => (Val::Int(i64::from(*value)), None),
         Element::SetpointFloat { value, .. } => (Val::Real(f64::from(*value)), None),
         Element::BitstringCommand { bits } => (Val::Int(i64::from(*bits)), None),
         _ => return None,
     })
+}
+
+/// A set-point's value in engineering units (as the project's `range` is written).
+fn setpoint_value(element: &Element) -> Option<f64> {
+    match element {
+        Element::SetpointNormalized { raw, .. } => Some(f64::from(Element::normalized_value(*raw))),
+        Element::SetpointScaled { value, .. } => Some(f64::from(*value)),
+        Element::SetpointFloat { value, .. } => Some(f64::from(*value)),
+        _ => None,
+    }
 }
 
 /// The audited value of a command.
@@ -505,7 +529,9 @@ fn command_value(element: &Element) -> PointValue {
             RegulatingStepState::Lower => -1,
             _ => 0,
         }),
-        Element::SetpointNormalized { raw, .. } => PointValue::Float(f64::from(*raw) / 32768.0),
+        Element::SetpointNormalized { raw, .. } => {
+            PointValue::Float(f64::from(Element::normalized_value(*raw)))
+        }
         Element::SetpointScaled { value, .. } => PointValue::Int(i64::from(*value)),
         Element::SetpointFloat { value, .. } => PointValue::Float(f64::from(*value)),
         Element::BitstringCommand { bits } => PointValue::Bits(*bits),

@@ -354,6 +354,7 @@ impl Runtime {
                             route,
                             from_groups: command.from_groups.clone(),
                             feedback: command.feedback.clone(),
+                            range: command.range.clone(),
                         },
                     )
                 })

@@ -1535,3 +1535,53 @@ source = "Main.A"
         )
     );
 }
+
+#[test]
+fn a_range_belongs_to_a_set_point_and_is_not_empty() {
+    let project = |kind: &str, range: &str| {
+        format!(
+            r#"[station]
+name = "Test"
+time_zone = "Europe/Prague"
+
+[[node]]
+name = "A"
+common_address = 1
+sources = ["plc/main.st"]
+[node.server]
+port_offset = 3
+[[node.task]]
+name = "fast"
+interval_ms = 50
+programs = ["main"]
+[[node.command]]
+name = "C"
+type = "{kind}"
+ioa = 2
+target = "Main.A"
+range = {range}
+"#
+        )
+    };
+    expect_only(
+        &project("C_SC_NA_1", "[0, 1]"),
+        &[PLC],
+        20,
+        9,
+        "node[0].command[0].range",
+        "range applies to set-points, not C_SC_NA_1",
+    );
+    expect_only(
+        &project("C_SE_NB_1", "[10, -10]"),
+        &[PLC],
+        20,
+        9,
+        "node[0].command[0].range",
+        "range [10, -10] is empty",
+    );
+    let loaded = load(&project("C_SE_TB_1", "[0, 1439]"), &[PLC]).unwrap();
+    assert_eq!(
+        loaded.node("A").unwrap().commands[0].range,
+        Some(0.0..=1439.0)
+    );
+}

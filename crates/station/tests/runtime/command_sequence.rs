@@ -31,6 +31,7 @@ VAR
     Horn : BOOL;
     QF1 : BOOL;
     QF2 : BOOL;
+    WindowMinutes : INT;
     Operate1 : TON;
     Operate2 : TON;
 END_VAR
@@ -105,6 +106,12 @@ name = "Horn_Set"
 type = "C_SC_NA_1"
 ioa = 202
 target = "Board.Horn"
+[[node.command]]
+name = "Window_On"
+type = "C_SE_NB_1"
+ioa = 203
+target = "Board.WindowMinutes"
+range = [0, 1439]
 "#;
 
 /// The project in a temporary folder, on free ports.
@@ -365,5 +372,66 @@ async fn stale_and_future_time_tagged_commands_are_refused_on_the_node_clock_and
         assert!(detail.starts_with(expected), "{detail}");
     }
     assert!(commands.iter().all(|c| c.point == "Horn_Set"));
+    runtime.shutdown().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn set_points_outside_the_project_range_are_refused_and_audited() {
+    let (_dir, project) = project();
+    let board_address = project
+        .node("BOARD")
+        .unwrap()
+        .server_address(&project.station)
+        .unwrap();
+    let runtime = start(project, StoreChoice::Url("sqlite::memory:".into())).await;
+    let board = Wire::connect(board_address, 21).await;
+    let mut outcomes = Vec::new();
+    for value in [-5, 0, 1439, 1440, 1441, 32767] {
+        let outcome = board
+            .client
+            .command(
+                TypeId::C_SE_NB_1,
+                Ioa::try_new(203).unwrap(),
+                Element::SetpointScaled {
+                    value,
+                    qualifier: iec60870::asdu::SetpointQualifier::EXECUTE,
+                },
+                None,
+            )
+            .await
+            .unwrap();
+        outcomes.push((value, outcome.positive));
+    }
+    assert_eq!(
+        outcomes,
+        [
+            (-5, false),
+            (0, true),
+            (1439, true),
+            (1440, false),
+            (1441, false),
+            (32767, false)
+        ]
+    );
+    runtime.recorder().flush().await;
+    let audit = runtime
+        .store()
+        .unwrap()
+        .query_commands(&CommandQuery::default().with_node("BOARD"))
+        .await
+        .unwrap()
+        .items;
+    let refused: Vec<String> = audit
+        .iter()
+        .filter(|c| c.outcome == CommandOutcome::Refused)
+        .map(|c| c.detail.clone())
+        .collect();
+    assert_eq!(refused.len(), 4, "{refused:?}");
+    assert!(
+        refused
+            .iter()
+            .any(|d| d == "value 32767 outside the range 0..=1439 of the project"),
+        "{refused:?}"
+    );
     runtime.shutdown().await;
 }
