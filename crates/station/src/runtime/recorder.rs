@@ -87,7 +87,8 @@ impl Recorder {
     pub fn event(&self, record: EventRecord) {
         self.counters.events.fetch_add(1, Ordering::Relaxed);
         if let Some(sender) = &self.sender {
-            if let Err(mpsc::error::TrySendError::Full(_)) = sender.try_send(Record::Event(record)) {
+            if let Err(mpsc::error::TrySendError::Full(_)) = sender.try_send(Record::Event(record))
+            {
                 self.overflow();
             }
         }

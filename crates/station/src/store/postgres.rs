@@ -322,7 +322,10 @@ async fn insert_one(conn: &mut Object, e: &EventRecord) -> Result<RecordId, Stor
     Ok(row.try_get(0)?)
 }
 
-async fn insert_many(conn: &mut Object, events: &[EventRecord]) -> Result<Vec<RecordId>, StoreError> {
+async fn insert_many(
+    conn: &mut Object,
+    events: &[EventRecord],
+) -> Result<Vec<RecordId>, StoreError> {
     let stmt = conn.prepare_cached(INSERT_MANY).await?;
     let next_ids = conn.prepare_cached(NEXT_IDS).await?;
     let tx = conn.transaction().await?;

@@ -64,7 +64,11 @@ async fn a_stalled_store_drops_counted_events_but_keeps_every_command() {
     }
     // The channel holds 16 and the stalled writer what it took before stalling (at most
     // what the channel held then): the rest was dropped and counted.
-    assert!(recorder.overflowed() >= 1000 - 2 * 16, "{}", recorder.overflowed());
+    assert!(
+        recorder.overflowed() >= 1000 - 2 * 16,
+        "{}",
+        recorder.overflowed()
+    );
     let command = CommandRecord {
         id: None,
         time: crate::suite::at_ms(5),
