@@ -26,7 +26,8 @@ fn vsetin() -> PathBuf {
 }
 
 /// A screens folder for the test: the top node's points, three users, one screen, and
-/// `extra` appended to hmi.toml.
+/// `extra` appended to hmi.toml. QF1 of RH2 needs the control authority, as in Vsetín's
+/// own hmi.toml; the authority command itself is left at the default level 5.
 fn screens(project: &Project, dir: &Path, extra: &str) {
     let top = project.top_node().unwrap();
     let mut csv = String::from("ioa,type,name,description\n");
@@ -56,11 +57,13 @@ command = "RH2_VypnoutQF1"
 level = 5
 select = true
 local_point = "RH2_P1_SA1_Mistne"
+authority = { point = "RDRT_SP21_HMI_Mistne" }
 [[control]]
 command = "RH2_ZapnoutQF1"
 level = 5
 select = true
 local_point = "RH2_P1_SA1_Mistne"
+authority = { point = "RDRT_SP21_HMI_Mistne" }
 [[alarm]]
 point = "RH2_P1_FV1_Prepetova_ochrana"
 priority = 3
@@ -282,6 +285,56 @@ async fn until(what: &str, mut check: impl AsyncFnMut() -> bool) {
     panic!("timed out waiting until {what}");
 }
 
+/// Takes the control authority to this HMI (command 2001 from the HMI's link) and waits
+/// until the station reports it (RDRT's "HMI local" point TRUE).
+async fn take_authority(s: &Setup, operator: &Client) {
+    let taken = operator
+        .post(
+            "/api/command",
+            json!({"command": "RDRT_HMI_Mistne", "value": true}),
+        )
+        .await;
+    assert_eq!(taken.json()["outcome"], "executed", "{}", taken.body);
+    for _ in 0..50 {
+        s.runtime.advance(Duration::from_millis(100)).await.unwrap();
+        if operator.point("RDRT_SP21_HMI_Mistne").await["value"] == json!(true) {
+            return;
+        }
+    }
+    panic!("the station never reported the authority with this HMI");
+}
+
+/// Issue 11: in Vsetín's own hmi.toml every board control (the functional elements of the
+/// board views RH2, RZZ and RZS/RDA, spec 9.2) needs the authority with this HMI; the
+/// authority command itself and the lighting boards' settings (the dispatch's own inputs,
+/// spec 4.2) do not.
+#[test]
+fn vsetin_board_controls_need_the_control_authority() {
+    let config = hmi::config::HmiConfig::load(&vsetin().join("hmi")).unwrap();
+    let commands: Vec<&str> = config
+        .points
+        .iter()
+        .filter(|p| p.type_id.is_command())
+        .map(|p| p.name.as_str())
+        .collect();
+    let board = |name: &str| ["RH2_", "RZZ_", "RDA_"].iter().any(|b| name.starts_with(b));
+    assert_eq!(
+        commands.iter().filter(|c| board(c)).count(),
+        5,
+        "QF1 open/close of RH2 and RZZ, the RDA test run: {commands:?}"
+    );
+    for command in commands {
+        let authority = config.control(command).authority;
+        if board(command) {
+            let authority = authority.unwrap_or_else(|| panic!("{command} needs the authority"));
+            assert_eq!(authority.point, "RDRT_SP21_HMI_Mistne", "{command}");
+            assert!(authority.state, "{command}: TRUE is HMI-local");
+        } else {
+            assert_eq!(authority, None, "{command} needs no authority");
+        }
+    }
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn operator_controls_viewer_is_refused_and_both_are_audited() {
     let s = setup().await;
@@ -299,6 +352,9 @@ async fn operator_controls_viewer_is_refused_and_both_are_audited() {
         .unwrap();
     assert_eq!(open["select"], json!(true));
     assert_eq!(open["allowed"], json!(true));
+
+    // A board control needs the control authority with this HMI (railway spec 9.2).
+    take_authority(&s, &operator).await;
 
     // Operator: select-before-operate through RDRT -> RH1.1 -> RH2, QF1 opens.
     let reply = operator
@@ -709,23 +765,7 @@ authority = { point = "RDRT_SP21_HMI_Mistne" }
         .contains("control authority"));
 
     // The authority taken to this HMI (command 2001 from the HMI's link).
-    let taken = operator
-        .post(
-            "/api/command",
-            json!({"command": "RDRT_HMI_Mistne", "value": true}),
-        )
-        .await;
-    assert_eq!(taken.json()["outcome"], "executed", "{}", taken.body);
-    for _ in 0..50 {
-        s.runtime.advance(Duration::from_millis(100)).await.unwrap();
-        if operator.point("RDRT_SP21_HMI_Mistne").await["value"] == json!(true) {
-            break;
-        }
-    }
-    assert_eq!(
-        operator.point("RDRT_SP21_HMI_Mistne").await["value"],
-        json!(true)
-    );
+    take_authority(&s, &operator).await;
     let executed = operator
         .post(
             "/api/command",

@@ -385,7 +385,7 @@ def rda():
     svg.open("g", id="test-run")
     svg.el("rect", x=640, y=420, width=520, height=200, rx=6, class_="frame")
     svg.text(655, 442, "Generator test run (RDA_ProvozDA)", "title")
-    svg.text(655, 468, "Runs RZS from the generator until ended; needs SA1 in remote.", "label small")
+    svg.text(655, 468, "Runs RZS from the generator until ended; needs SA1 in remote and HMI authority local.", "label small")
     button(svg, 655, 485, 200, "Start test run", "RDA_ProvozDA", 1, "RDA_NaDA")
     button(svg, 875, 485, 200, "End test run", "RDA_ProvozDA", 0, "RDA_NaDA")
     svg.text(655, 545, "Selector SA1:", "label")
@@ -581,18 +581,21 @@ SCREENS = [("supply", "Supply", "supply.svg"), ("topology", "Topology", "topolog
            ("rda", "RZS / RDA", "rda.svg"), ("lighting", "Lighting", "lighting.svg")]
 
 
+def toml_value(value):
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, dict):
+        return "{ " + ", ".join(f"{k} = {toml_value(v)}" for k, v in value.items()) + " }"
+    return '"' + str(value).replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
 def toml_table(name, **fields):
     lines = [f"[[{name}]]"]
     for key, value in fields.items():
-        if value is None:
-            continue
-        if isinstance(value, bool):
-            text = "true" if value else "false"
-        elif isinstance(value, int):
-            text = str(value)
-        else:
-            text = '"' + str(value).replace("\\", "\\\\").replace('"', '\\"') + '"'
-        lines.append(f"{key} = {text}")
+        if value is not None:
+            lines.append(f"{key} = {toml_value(value)}")
     return "\n".join(lines) + "\n"
 
 
@@ -649,19 +652,27 @@ def hmi_toml():
         out.append(toml_table("screen", id=sid, title=title, file=file))
 
     out.append("# ---------------------------------------------------------------- controls\n"
-               "# The control authority (spec 7.4): the station takes it only from this HMI's link.")
+               "# The control authority (spec 7.4): the station takes it only from this HMI's link.\n"
+               "# It needs no authority itself: it is how this HMI takes the authority back.")
     out.append(toml_table("control", command=use("RDRT_HMI_Mistne"), level=7,
                           confirm="Change the control authority between this HMI (local) and the remote dispatch?"))
+    out.append("# The board views' functional elements (QF1 of RH2 and RZZ, the RDA test run) work only\n"
+               "# while the control authority is with this HMI (spec 9.2): SP 21 \"HMI local\" TRUE.\n"
+               "# The HMI refuses them itself otherwise (refused-authority) and audits the refusal.")
+    # The station itself gates only the dispatch (ED) link by SP 21 (spec 7.5), not the HMI's.
+    authority = {"point": use("RDRT_SP21_HMI_Mistne"), "state": True}
     for board in ["RH2", "RZZ"]:
         out.append(f"# {board}: feeder breaker QF1 (spec 5.1, 5.2), select-before-operate; refused with SA1 in local.")
         for cmd, verb in [("VypnoutQF1", "Open"), ("ZapnoutQF1", "Close")]:
             out.append(toml_table("control", command=use(f"{board}_{cmd}"), level=5, select=True,
                                   confirm=f"{verb} feeder breaker QF1 of {board}?",
-                                  local_point=use(f"{board}_P1_SA1_Mistne")))
+                                  local_point=use(f"{board}_P1_SA1_Mistne"), authority=authority))
     out.append(toml_table("control", command=use("RDA_ProvozDA"), level=5,
                           confirm="Test run: supply RZS from the diesel generator (or end the test run)?",
-                          local_point=use("RDA_SA1_Mistne")))
-    out.append("# Lighting boards: level 3; refused while the board is under local (cabinet) control.")
+                          local_point=use("RDA_SA1_Mistne"), authority=authority))
+    out.append("# Lighting boards: level 3; refused while the board is under local (cabinet) control.\n"
+               "# No authority: their settings are the dispatch's own inputs (spec 4.2, \"in (DDTS)\"),\n"
+               "# and spec 9.2 restricts only the board views' breakers to HMI-local authority.")
     for board in LIGHTING:
         for cmd, confirm in [("W_Rucne", f"Manual mode of lighting board {board} (1) or back to automatic (0)?"),
                              ("W_ZapRucne", f"Switch the lighting of {board} manually?"),
