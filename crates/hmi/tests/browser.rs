@@ -5,11 +5,14 @@
 //! address of the station's HMI link.
 //!
 //! What a person would do and see: log in (and fail with a wrong password), watch a breaker
-//! change when the plant trips it, operate QF1 of RH2 through the control dialog and read
+//! change when the plant trips it, be refused QF1 of RH2 while the control authority is
+//! with the dispatch (told in words, nothing sent), see it taken to this HMI by a user of
+//! level 7 at another desk, operate QF1 through the control dialog and read
 //! the outcome, find that command in the event list under the user's name and page back
 //! through the history, zoom a trend, acknowledge and shelve a priority-1 alarm (badge and
 //! sound), watch every value turn invalid and blink when the station link is cut (and when
-//! the browser's own live connection drops, until it reconnects); as the read-only user,
+//! the browser's own live connection drops, until it reconnects), open a malicious mimic
+//! and find that nothing of it runs or stays in the page; as the read-only user,
 //! see the controls disabled, be refused by the server and get no alarm buttons; and be
 //! told to wait after guessing passwords. One station and one browser for all of it, in
 //! about ten seconds.
@@ -199,7 +202,13 @@ struct Site {
 }
 
 impl Site {
+    /// The site with the Vsetín screens as they are.
     async fn start(start: DateTime<Utc>, speed: f64) -> Site {
+        Site::start_with(start, speed, vsetin().join("hmi")).await
+    }
+
+    /// The site serving the screens folder `screens` (points.csv of Vsetín's top node).
+    async fn start_with(start: DateTime<Utc>, speed: f64, screens: PathBuf) -> Site {
         let folder = vsetin();
         let project = Project::load(&folder)
             .unwrap_or_else(|e| panic!("{:?}", e.errors()))
@@ -222,7 +231,6 @@ impl Site {
             .and_then(|node| node.server.as_ref())
             .unwrap()
             .local_addr();
-        let screens = folder.join("hmi");
         let hmi = Hmi::start(HmiOptions {
             screens: screens.clone(),
             users: screens.join("users.toml"),
@@ -266,6 +274,58 @@ impl Site {
             runtime.shutdown().await;
         }
     }
+}
+
+/// A mimic written to do harm, as a careless or hostile drawing tool might: script
+/// elements, event handlers, `javascript:`/`data:` links, and SMIL that would rewrite a
+/// link into `javascript:` after the sanitiser looked (docs/HMI.md, "SVG bindings"). Each
+/// payload records itself in `window.pwned` (and some call `alert`). A harmless binding,
+/// a screen link and a harmless animation must survive.
+const MALICIOUS_SVG: &str = r##"<svg xmlns="http://www.w3.org/2000/svg" xmlns:xlink="http://www.w3.org/1999/xlink"
+     width="600" height="300" viewBox="0 0 600 300"
+     onload="(window.pwned = window.pwned || []).push('svg onload'); alert('onload')">
+  <script>(window.pwned = window.pwned || []).push('script')</script>
+  <a id="evil-set"><set attributeName="href" to="javascript:(window.pwned = window.pwned || []).push('set href'); alert('set')"/>
+    <text x="10" y="30" class="label">set href</text></a>
+  <a id="evil-animate" href="#screen/malicious"><animate attributeName="href" values="javascript:(window.pwned = window.pwned || []).push('animate href')" dur="0.1s" fill="freeze"/>
+    <text x="10" y="60" class="label">animate href</text></a>
+  <a id="evil-xlink" xlink:href="javascript:(window.pwned = window.pwned || []).push('xlink href')"><text x="10" y="90" class="label">xlink href</text></a>
+  <a id="evil-data" href="data:text/html,&lt;script&gt;alert('data')&lt;/script&gt;"><text x="10" y="120" class="label">data URL</text></a>
+  <a id="evil-spaced" href=" java&#9;script:(window.pwned = window.pwned || []).push('spaced')"><text x="10" y="150" class="label">spaced scheme</text></a>
+  <rect id="evil-on" x="200" y="10" width="60" height="30" class="box"
+        onclick="(window.pwned = window.pwned || []).push('onclick')" onmouseover="(window.pwned = window.pwned || []).push('onmouseover')">
+    <set attributeName="onclick" to="(window.pwned = window.pwned || []).push('set onclick')"/>
+    <animate attributeName="ONMOUSEOVER" values="(window.pwned = window.pwned || []).push('animate on')" dur="0.1s" fill="freeze"/>
+  </rect>
+  <animateTransform id="evil-transform" attributeName="xlink:href" type="translate" values="javascript:alert('transform')" dur="0.1s"/>
+  <image id="evil-image" x="300" y="10" width="10" height="10" href="no-such-image.png" onerror="(window.pwned = window.pwned || []).push('onerror')"/>
+  <foreignObject x="0" y="0" width="10" height="10"><iframe xmlns="http://www.w3.org/1999/xhtml" src="javascript:alert('iframe')"></iframe></foreignObject>
+  <rect id="good-breaker" x="200" y="100" width="30" height="30" class="breaker" data-point="RH2_V1_FA1_Zapnut"/>
+  <text id="good-text" x="250" y="120" class="value" data-text="RDRT_SP21_HMI_Mistne" data-on="LOCAL" data-off="REMOTE"></text>
+  <a id="good-link" href="#screen/rh2"><text x="200" y="180" class="label">to RH2</text></a>
+  <rect id="good-animation" x="400" y="100" width="30" height="30" class="box">
+    <animate attributeName="opacity" values="1;0.5;1" dur="0.2s" repeatCount="indefinite"/>
+  </rect>
+</svg>
+"##;
+
+/// A copy of the Vsetín screens folder with one more screen, `malicious`.
+fn screens_with_malicious_mimic() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    let source = vsetin().join("hmi");
+    for entry in std::fs::read_dir(&source).unwrap() {
+        let entry = entry.unwrap();
+        if entry.file_type().unwrap().is_file() {
+            std::fs::copy(entry.path(), dir.path().join(entry.file_name())).unwrap();
+        }
+    }
+    let mut toml = std::fs::read_to_string(dir.path().join("hmi.toml")).unwrap();
+    toml.push_str(
+        "\n[[screen]]\nid = \"malicious\"\ntitle = \"Malicious\"\nfile = \"malicious.svg\"\n",
+    );
+    std::fs::write(dir.path().join("hmi.toml"), toml).unwrap();
+    std::fs::write(dir.path().join("malicious.svg"), MALICIOUS_SVG).unwrap();
+    dir
 }
 
 // ---------------------------------------------------------------------------- helpers
@@ -379,7 +439,8 @@ async fn operator_and_viewer_in_a_real_browser() {
         return;
     };
     let started = Instant::now();
-    let site = Site::start(Utc::now(), 1.0).await;
+    let screens = screens_with_malicious_mimic();
+    let site = Site::start_with(Utc::now(), 1.0, screens.path().to_path_buf()).await;
     let driver = Driver::start(&driver, chromium);
     let client = driver.session(1280, 800).await;
     let url = site.url.clone();
@@ -436,6 +497,125 @@ async fn operator_and_viewer_in_a_real_browser() {
             && hover[1].as_str().unwrap().contains("IOA 282"),
         "{hover}"
     );
+
+    // --- The control authority is REMOTE (dispatch; the station starts so): a board
+    // control is refused by the HMI itself, told in words, audited, and nothing is sent.
+    let qf1_now = r#"document.querySelector('#mimic rect.breaker[data-point="RH2_P1_KHU3_Napeti_na_pripojeni"]').getAttribute('data-value')"#;
+    let authority_text =
+        r#"document.querySelector('#mimic text[data-text="RDRT_SP21_HMI_Mistne"]').textContent"#;
+    until(
+        &client,
+        &format!("{qf1_now} === 'on' && {authority_text} === 'Control authority: REMOTE dispatch'"),
+        "QF1 closed and the authority shown as remote",
+    )
+    .await;
+    click(&client, r#"[data-command="RH2_VypnoutQF1"] rect"#).await;
+    until(&client, "document.getElementById('control-dialog').open && document.getElementById('control-dialog').dataset.step === 'value'", "the control dialog").await;
+    click(&client, "#control-next").await;
+    until(
+        &client,
+        "document.getElementById('control-dialog').dataset.step === 'confirm'",
+        "the confirmation step",
+    )
+    .await;
+    click(&client, "#control-execute").await;
+    until(
+        &client,
+        "document.getElementById('control-outcome').dataset.outcome !== 'pending'",
+        "the refusal",
+    )
+    .await;
+    let outcome = js(&client, "[document.getElementById('control-outcome').dataset.outcome, document.getElementById('control-outcome').textContent, document.getElementById('control-detail').textContent]").await;
+    assert_eq!(outcome[0], json!("refused-authority"), "outcome: {outcome}");
+    assert!(
+        outcome[1]
+            .as_str()
+            .unwrap()
+            .contains("refused: the control authority is not with this HMI"),
+        "the refusal in words: {outcome}"
+    );
+    assert!(
+        outcome[2]
+            .as_str()
+            .unwrap()
+            .contains("RDRT_SP21_HMI_Mistne"),
+        "the detail names the authority point: {outcome}"
+    );
+    // Nothing changed: the HMI sent nothing (the audit has the refusal and no `sent`
+    // record, which precedes every command that leaves), and QF1 is still closed.
+    let audit = client
+        .execute_async(
+            "const done = arguments[arguments.length - 1]; \
+             HMI.api('/api/events?kind=command&point=RH2_VypnoutQF1').then(r => done(r.items.map(e => [e.outcome, e.user, e.detail])));",
+            Vec::new(),
+        )
+        .await
+        .unwrap();
+    assert_eq!(audit.as_array().unwrap().len(), 1, "{audit}");
+    assert_eq!(audit[0][0], json!("refused"), "{audit}");
+    assert_eq!(audit[0][1], json!("operator"), "{audit}");
+    assert!(
+        audit[0][2].as_str().unwrap().contains("control authority"),
+        "{audit}"
+    );
+    assert_eq!(js(&client, qf1_now).await, json!("on"), "QF1 still closed");
+    click(&client, "#control-step-result button").await;
+    until(
+        &client,
+        "!document.getElementById('control-dialog').open",
+        "the dialog closed",
+    )
+    .await;
+
+    // --- The authority is taken to this HMI through the supply screen, by a user allowed
+    // to (level 7; the operator's 5 is not: asserted below) at another desk. The
+    // operator's board view follows live.
+    let leader = driver.session(1280, 800).await;
+    log_in_ready(&leader, &url, "admin", "admin-vsetin").await;
+    show_screen(&leader, "supply").await;
+    click(
+        &leader,
+        r#"[data-command="RDRT_HMI_Mistne"][data-command-value="1"] rect"#,
+    )
+    .await;
+    until(
+        &leader,
+        "document.getElementById('control-dialog').open && document.getElementById('control-dialog').dataset.step === 'value'",
+        "the authority dialog",
+    )
+    .await;
+    click(&leader, "#control-next").await;
+    until(
+        &leader,
+        "document.getElementById('control-dialog').dataset.step === 'confirm'",
+        "the authority confirmation",
+    )
+    .await;
+    click(&leader, "#control-execute").await;
+    until(
+        &leader,
+        "document.getElementById('control-outcome').dataset.outcome === 'executed'",
+        "the authority switched",
+    )
+    .await;
+    until(
+        &leader,
+        r#"document.querySelector('#mimic rect.authority').getAttribute('data-value') === 'on'"#,
+        "the authority shown as local on the supply screen",
+    )
+    .await;
+    assert_eq!(
+        js(&leader, "HMI.errors").await,
+        json!([]),
+        "script errors in the authority holder's page"
+    );
+    leader.close().await.unwrap();
+    until(
+        &client,
+        &format!("{authority_text} === 'Control authority: LOCAL (this HMI)'"),
+        "the operator's board view showing the authority local",
+    )
+    .await;
 
     // --- Operate QF1 (open) through the dialog: value, confirmation, outcome in words.
     let qf1 = r#"document.querySelector('#mimic rect.breaker[data-point="RH2_P1_KHU3_Napeti_na_pripojeni"]')"#;
@@ -765,6 +945,85 @@ async fn operator_and_viewer_in_a_real_browser() {
         "the WebSocket reconnected with valid values",
     )
     .await;
+
+    // --- A malicious mimic: nothing in it runs, the dangerous nodes and attributes are
+    // gone from the page, its harmless binding and screen link work.
+    show_screen(&client, "malicious").await;
+    let mimic = "document.querySelector('#mimic svg[data-screen=\"malicious\"]')";
+    // The SVG's own timeline: the payload animations (0.1 s, from time 0) would have run.
+    until(
+        &client,
+        &format!("{mimic}.getCurrentTime() > 0.5"),
+        "the malicious mimic's animations past their end",
+    )
+    .await;
+    for target in [
+        "#evil-set text",
+        "#evil-animate text",
+        "#evil-xlink text",
+        "#evil-data text",
+        "#evil-spaced text",
+        "#evil-on",
+    ] {
+        click(&client, &format!("#mimic {target}")).await;
+    }
+    // Tasks run in order: once this link's navigation is done, any a payload link queued
+    // before it would have run too.
+    click(&client, "#mimic #good-link text").await;
+    until(
+        &client,
+        r#"document.querySelector('#mimic svg[data-screen="rh2"]')"#,
+        "the mimic's screen link followed to RH2",
+    )
+    .await;
+    assert!(client.get_alert_text().await.is_err(), "no alert opened");
+    assert_eq!(
+        js(&client, "window.pwned === undefined ? null : window.pwned").await,
+        Value::Null,
+        "a payload of the malicious mimic ran"
+    );
+    show_screen(&client, "malicious").await;
+    let dom = js(
+        &client,
+        &format!(
+            "(() => {{ const svg = {mimic}; const all = [svg, ...svg.querySelectorAll('*')]; \
+             const attributes = all.flatMap(e => [...e.attributes]); return {{ \
+               elements: [...svg.querySelectorAll('script, foreignObject, iframe, set, animate, animateTransform')].map(e => e.id || e.parentNode.id + '>' + e.localName), \
+               handlers: attributes.filter(a => a.name.toLowerCase().startsWith('on')).map(a => a.name), \
+               links: attributes.filter(a => /href$/i.test(a.name)).map(a => a.value), \
+               urls: attributes.filter(a => /javascript|data:/i.test(a.value)).map(a => a.name + '=' + a.value), \
+               breaker: [svg.querySelector('#good-breaker').getAttribute('data-value'), HMI.valueWord(HMI.points.get('RH2_V1_FA1_Zapnut')), svg.querySelector('#good-breaker').hasAttribute('data-invalid')], \
+               text: svg.querySelector('#good-text').textContent }}; }})()"
+        ),
+    )
+    .await;
+    assert_eq!(
+        dom["elements"],
+        json!(["good-animation>animate"]),
+        "only the harmless animation is left: {dom}"
+    );
+    assert_eq!(
+        dom["handlers"],
+        json!([]),
+        "no event handler attribute: {dom}"
+    );
+    assert_eq!(
+        dom["links"],
+        json!(["#screen/malicious", "#screen/rh2"]),
+        "only the screen links are left: {dom}"
+    );
+    assert_eq!(dom["urls"], json!([]), "no javascript: or data: URL: {dom}");
+    assert!(
+        dom["breaker"][0] == dom["breaker"][1]
+            && (dom["breaker"][0] == json!("on") || dom["breaker"][0] == json!("off"))
+            && dom["breaker"][2] == json!(false),
+        "the harmless binding shows FA1: {dom}"
+    );
+    assert_eq!(
+        dom["text"],
+        json!("LOCAL"),
+        "the harmless text binding: {dom}"
+    );
 
     // --- The read-only user: controls disabled, and the server refuses them anyway.
     assert_eq!(
