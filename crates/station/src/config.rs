@@ -119,6 +119,9 @@
 //! interrogate_on_start = true          # default true
 //! clock_sync = true                    # default true: this node is the lower one's time source
 //! status_point = "COMM_RH2"            # optional: a point of this node showing the link state
+//! tls = { certificate = "tls/rh11.pem", private_key = "tls/rh11.key", trust_anchors = "tls/ca.pem" }
+//!                                      # optional, required when the lower node's server has
+//!                                      # tls: mutual authentication on the link
 //! republish = { ioa_offset = 1000 }    # optional, links to project nodes: every point and
 //!                                      # command of the lower node (its republished ones
 //!                                      # too) appears here, same name, IOA + ioa_offset
@@ -279,16 +282,8 @@ pub struct RedundancyGroup {
     pub status_point: Option<String>,
 }
 
-/// TLS certificate, key and trust anchors (PEM files).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct TlsFiles {
-    /// The server's certificate chain.
-    pub certificate: PathBuf,
-    /// The server's private key.
-    pub private_key: PathBuf,
-    /// CA certificates that client certificates must chain to.
-    pub trust_anchors: PathBuf,
-}
+/// TLS certificate, key and trust anchors (PEM files) of one end of a link.
+pub use iec60870::cs104::tls::TlsFiles;
 
 /// A PLC task, `[[node.task]]`.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -462,6 +457,10 @@ pub struct LinkConfig {
     pub status_point: Option<String>,
     /// Every point and command of the lower node republished here, IOA + this offset.
     pub republish: Option<u32>,
+    /// TLS with mutual authentication (IEC 62351-3): this node's certificate and key, and
+    /// the authorities the lower node's certificate must chain to. Required exactly when
+    /// the lower node's server requires TLS.
+    pub tls: Option<TlsFiles>,
 }
 
 impl Project {
@@ -865,6 +864,7 @@ struct RawLink {
     clock_sync: bool,
     status_point: Option<String>,
     republish: Option<RawRepublish>,
+    tls: Option<RawTls>,
 }
 
 #[derive(Deserialize)]
@@ -1167,7 +1167,7 @@ impl Ctx<'_> {
             }
             nodes.push(built);
         }
-        self.check_links(&raw, &mut nodes);
+        self.check_links(folder, &raw, &mut nodes);
         Project {
             folder: folder.to_path_buf(),
             station,
@@ -1281,6 +1281,20 @@ impl Ctx<'_> {
         out
     }
 
+    /// The TLS files at `path` (`[..., "tls"]`), each checked to exist.
+    fn tls_files(&mut self, folder: &Path, raw: &RawTls, path: &[Seg]) -> TlsFiles {
+        let mut at = |key: &'static str, relative: &str| {
+            let mut key_path = path.to_vec();
+            key_path.push(K(key));
+            self.existing_file(folder, relative, &key_path)
+        };
+        TlsFiles {
+            certificate: at("certificate", &raw.certificate),
+            private_key: at("private_key", &raw.private_key),
+            trust_anchors: at("trust_anchors", &raw.trust_anchors),
+        }
+    }
+
     fn existing_file(&mut self, folder: &Path, relative: &str, path: &[Seg]) -> PathBuf {
         let resolved = resolve(folder, relative);
         if !resolved.is_file() {
@@ -1371,23 +1385,10 @@ impl Ctx<'_> {
                     out
                 }
             };
-            let tls = s.tls.as_ref().map(|t| TlsFiles {
-                certificate: self.existing_file(
-                    folder,
-                    &t.certificate,
-                    &node(&[K("server"), K("tls"), K("certificate")]),
-                ),
-                private_key: self.existing_file(
-                    folder,
-                    &t.private_key,
-                    &node(&[K("server"), K("tls"), K("private_key")]),
-                ),
-                trust_anchors: self.existing_file(
-                    folder,
-                    &t.trust_anchors,
-                    &node(&[K("server"), K("tls"), K("trust_anchors")]),
-                ),
-            });
+            let tls = s
+                .tls
+                .as_ref()
+                .map(|t| self.tls_files(folder, t, &node(&[K("server"), K("tls")])));
             let group_configs = redundancy_groups
                 .iter()
                 .map(|g| {
@@ -1932,7 +1933,7 @@ impl Ctx<'_> {
     }
 
     /// Builds every node's links (they need all nodes) and checks the link graph.
-    fn check_links(&mut self, raw: &RawProject, nodes: &mut [NodeConfig]) {
+    fn check_links(&mut self, folder: &Path, raw: &RawProject, nodes: &mut [NodeConfig]) {
         let index: HashMap<&str, usize> = raw
             .node
             .iter()
@@ -1978,6 +1979,22 @@ impl Ctx<'_> {
                                     &at("node"),
                                     format!("node `{name}` has no [node.server]"),
                                 );
+                            }
+                            let lower_tls = raw
+                                .node
+                                .get(t)
+                                .and_then(|t| t.server.as_ref())
+                                .is_some_and(|server| server.tls.is_some());
+                            match (lower_tls, link.tls.is_some()) {
+                                (true, false) => self.err(
+                                    &at("node"),
+                                    format!(
+                                        "node `{name}`'s server requires TLS: give the link tls"
+                                    ),
+                                ),
+                                (false, true) => self
+                                    .err(&at("tls"), format!("node `{name}`'s server has no tls")),
+                                _ => {}
                             }
                             if let Some(e) = edges.get_mut(n) {
                                 e.push((t, l));
@@ -2061,8 +2078,12 @@ impl Ctx<'_> {
                         self.err(&path, message);
                     }
                 }
+                let tls = link.tls.as_ref().map(|tls| {
+                    self.tls_files(folder, tls, &[K("node"), I(n), K("link"), I(l), K("tls")])
+                });
                 if let (Some(target), Some(list)) = (target, built.get_mut(n)) {
                     list.push(LinkConfig {
+                        tls,
                         name: link.name.clone(),
                         target,
                         common_address: common,

@@ -29,7 +29,6 @@ use std::time::Duration;
 use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt};
 use tokio::net::TcpStream;
 use tokio::sync::{mpsc, oneshot};
-use tokio_rustls::rustls::pki_types::ServerName;
 use tracing::Instrument;
 
 use crate::asdu::{
@@ -90,7 +89,7 @@ pub struct ClientConfig {
     /// keep working meanwhile.
     pub event_capacity: usize,
     /// TLS (IEC 62351-3): client configuration and the server's name in its certificate.
-    pub tls: Option<(Arc<tokio_rustls::rustls::ClientConfig>, ServerName<'static>)>,
+    pub tls: Option<crate::cs104::tls::ClientTls>,
 }
 
 impl ClientConfig {

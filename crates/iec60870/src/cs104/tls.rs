@@ -25,6 +25,14 @@ pub enum TlsError {
         /// The cause.
         source: std::io::Error,
     },
+    /// A file could not be written.
+    #[error("cannot write {path}: {source}")]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
     /// A PEM file holds nothing usable.
     #[error("{what} not found in {path}")]
     Missing {
@@ -134,6 +142,13 @@ pub fn server_config(pem: &TlsPem) -> Result<Arc<rustls::ServerConfig>, TlsError
     Ok(Arc::new(config))
 }
 
+/// What a client needs for TLS: its configuration and the name the server's certificate
+/// must carry.
+pub type ClientTls = (
+    Arc<rustls::ClientConfig>,
+    tokio_rustls::rustls::pki_types::ServerName<'static>,
+);
+
 /// A client configuration that presents its certificate and verifies the server's.
 pub fn client_config(pem: &TlsPem) -> Result<Arc<rustls::ClientConfig>, TlsError> {
     let config = rustls::ClientConfig::builder_with_provider(provider())
@@ -153,4 +168,127 @@ pub fn server_name(
     tokio_rustls::rustls::pki_types::ServerName::try_from(host.to_owned()).map_err(|error| {
         TlsError::Verifier(format!("'{host}' is not a valid server name: {error}"))
     })
+}
+
+/// A throwaway certificate authority, for a demo or a test: a self-signed CA that issues
+/// certificates for hosts. Never for production: the keys live in memory and in whatever
+/// files the caller writes.
+#[cfg(feature = "self-signed")]
+pub mod self_signed {
+    use std::path::Path;
+
+    use rcgen::{
+        BasicConstraints, CertificateParams, DnType, ExtendedKeyUsagePurpose, IsCa, Issuer,
+        KeyPair, KeyUsagePurpose,
+    };
+
+    use super::{TlsError, TlsFiles, TlsPem};
+
+    /// What a certificate may be used for.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+    pub enum Usage {
+        /// A server's certificate.
+        Server,
+        /// A client's certificate.
+        Client,
+        /// Both: a station that serves the nodes above it and is a client of those below.
+        ServerAndClient,
+    }
+
+    /// A self-signed certificate authority.
+    pub struct Authority {
+        pem: String,
+        issuer: Issuer<'static, KeyPair>,
+    }
+
+    impl std::fmt::Debug for Authority {
+        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            f.debug_struct("Authority").finish_non_exhaustive()
+        }
+    }
+
+    fn failed(error: rcgen::Error) -> TlsError {
+        TlsError::Verifier(format!("cannot make a certificate: {error}"))
+    }
+
+    impl Authority {
+        /// A new authority with a fresh key.
+        pub fn new(name: &str) -> Result<Authority, TlsError> {
+            let mut params = CertificateParams::new(Vec::<String>::new()).map_err(failed)?;
+            params.distinguished_name.push(DnType::CommonName, name);
+            params.is_ca = IsCa::Ca(BasicConstraints::Unconstrained);
+            params.key_usages = vec![
+                KeyUsagePurpose::KeyCertSign,
+                KeyUsagePurpose::CrlSign,
+                KeyUsagePurpose::DigitalSignature,
+            ];
+            let key = KeyPair::generate().map_err(failed)?;
+            let certificate = params.self_signed(&key).map_err(failed)?;
+            Ok(Authority {
+                pem: certificate.pem(),
+                issuer: Issuer::new(params, key),
+            })
+        }
+
+        /// The authority's certificate (what peers trust), PEM encoded.
+        pub fn certificate_pem(&self) -> &str {
+            &self.pem
+        }
+
+        /// A certificate for `names` (DNS names or IP addresses; the first is also the
+        /// common name) with its key, and this authority as the trust anchor.
+        pub fn issue(&self, names: &[&str], usage: Usage) -> Result<TlsPem, TlsError> {
+            let names: Vec<String> = names.iter().map(|name| (*name).to_owned()).collect();
+            let mut params = CertificateParams::new(names.clone()).map_err(failed)?;
+            if let Some(first) = names.first() {
+                params
+                    .distinguished_name
+                    .push(DnType::CommonName, first.clone());
+            }
+            params.extended_key_usages = match usage {
+                Usage::Server => vec![ExtendedKeyUsagePurpose::ServerAuth],
+                Usage::Client => vec![ExtendedKeyUsagePurpose::ClientAuth],
+                Usage::ServerAndClient => vec![
+                    ExtendedKeyUsagePurpose::ServerAuth,
+                    ExtendedKeyUsagePurpose::ClientAuth,
+                ],
+            };
+            params.use_authority_key_identifier_extension = true;
+            let key = KeyPair::generate().map_err(failed)?;
+            let certificate = params.signed_by(&key, &self.issuer).map_err(failed)?;
+            Ok(TlsPem {
+                certificate: certificate.pem().into_bytes(),
+                private_key: key.serialize_pem().into_bytes(),
+                trust_anchors: self.pem.clone().into_bytes(),
+            })
+        }
+    }
+
+    /// Writes PEM material as `STEM.pem`, `STEM.key` and `STEM-ca.pem` in `folder` (the
+    /// key readable by the owner only) and returns their paths.
+    pub fn write(pem: &TlsPem, folder: &Path, stem: &str) -> Result<TlsFiles, TlsError> {
+        let files = TlsFiles {
+            certificate: folder.join(format!("{stem}.pem")),
+            private_key: folder.join(format!("{stem}.key")),
+            trust_anchors: folder.join(format!("{stem}-ca.pem")),
+        };
+        let write = |path: &Path, bytes: &[u8]| {
+            std::fs::write(path, bytes).map_err(|source| TlsError::Write {
+                path: path.to_owned(),
+                source,
+            })
+        };
+        write(&files.certificate, &pem.certificate)?;
+        write(&files.private_key, &pem.private_key)?;
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let _ = std::fs::set_permissions(
+                &files.private_key,
+                std::fs::Permissions::from_mode(0o600),
+            );
+        }
+        write(&files.trust_anchors, &pem.trust_anchors)?;
+        Ok(files)
+    }
 }

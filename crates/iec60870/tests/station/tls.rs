@@ -6,64 +6,14 @@ use std::time::Duration;
 use iec60870::asdu::{Cause, TypeId};
 use iec60870::cs104::client::{spawn_client, ClientConfig, ClientEvent};
 use iec60870::cs104::server::ServerHandle;
+use iec60870::cs104::tls::self_signed::{Authority, Usage};
 use iec60870::cs104::tls::{
-    client_config as tls_client_config, server_config as tls_server_config, server_name, TlsPem,
-};
-use rcgen::{
-    BasicConstraints, CertificateParams, DnType, ExtendedKeyUsagePurpose, IsCa, Issuer, KeyPair,
-    KeyUsagePurpose,
+    client_config as tls_client_config, server_config as tls_server_config, server_name,
 };
 use tokio_rustls::rustls;
 
 use crate::common::*;
 use crate::interrogation::mixed_image;
-
-struct Authority {
-    pem: String,
-    issuer: Issuer<'static, KeyPair>,
-}
-
-impl Authority {
-    fn new(name: &str) -> Authority {
-        let mut params = CertificateParams::new(Vec::<String>::new()).unwrap();
-        params.distinguished_name.push(DnType::CommonName, name);
-        params.is_ca = IsCa::Ca(BasicConstraints::Unconstrained);
-        params.key_usages = vec![
-            KeyUsagePurpose::KeyCertSign,
-            KeyUsagePurpose::CrlSign,
-            KeyUsagePurpose::DigitalSignature,
-        ];
-        let key = KeyPair::generate().unwrap();
-        let certificate = params.self_signed(&key).unwrap();
-        Authority {
-            pem: certificate.pem(),
-            issuer: Issuer::new(params, key),
-        }
-    }
-
-    /// A leaf certificate and its key, PEM encoded.
-    fn issue(&self, names: &[&str], usage: ExtendedKeyUsagePurpose) -> (String, String) {
-        let names: Vec<String> = names.iter().map(|name| name.to_string()).collect();
-        let mut params = CertificateParams::new(names.clone()).unwrap();
-        params
-            .distinguished_name
-            .push(DnType::CommonName, names[0].clone());
-        params.extended_key_usages = vec![usage];
-        params.use_authority_key_identifier_extension = true;
-        let key = KeyPair::generate().unwrap();
-        let certificate = params.signed_by(&key, &self.issuer).unwrap();
-        (certificate.pem(), key.serialize_pem())
-    }
-
-    fn pem_for(&self, names: &[&str], usage: ExtendedKeyUsagePurpose) -> TlsPem {
-        let (certificate, key) = self.issue(names, usage);
-        TlsPem {
-            certificate: certificate.into_bytes(),
-            private_key: key.into_bytes(),
-            trust_anchors: self.pem.clone().into_bytes(),
-        }
-    }
-}
 
 struct Pki {
     ca: Authority,
@@ -71,11 +21,10 @@ struct Pki {
 }
 
 async fn tls_server() -> Pki {
-    let ca = Authority::new("Stanice test CA");
-    let server_pem = ca.pem_for(
-        &["localhost", "127.0.0.1"],
-        ExtendedKeyUsagePurpose::ServerAuth,
-    );
+    let ca = Authority::new("Stanice test CA").unwrap();
+    let server_pem = ca
+        .issue(&["localhost", "127.0.0.1"], Usage::Server)
+        .unwrap();
     let mut config = server_config();
     config.tls = Some(tls_server_config(&server_pem).unwrap());
     let server = start_server(config, mixed_image(), Recorder::accepting()).await;
@@ -105,10 +54,10 @@ async fn refused_client(config: ClientConfig) -> Vec<ClientEvent> {
 async fn tls_client_interrogates_a_tls_server() {
     init_logs();
     let pki = tls_server().await;
-    let client_pem = pki.ca.pem_for(
-        &["controlling-station"],
-        ExtendedKeyUsagePurpose::ClientAuth,
-    );
+    let client_pem = pki
+        .ca
+        .issue(&["controlling-station"], Usage::Client)
+        .unwrap();
     let config = tls_client(&pki.server, tls_client_config(&client_pem).unwrap());
     let mut client = Client::start(config).await;
     let outcome = within(WAIT, "GI over TLS", client.handle.interrogate(20))
@@ -134,13 +83,12 @@ fn scaled_float(value: f32) -> iec60870::asdu::Element {
 async fn tls_refuses_a_client_certificate_from_another_authority() {
     init_logs();
     let pki = tls_server().await;
-    let rogue = Authority::new("Rogue CA");
+    let rogue = Authority::new("Rogue CA").unwrap();
     // The client trusts the right CA for the server, but its own certificate is rogue.
-    let mut client_pem = rogue.pem_for(
-        &["controlling-station"],
-        ExtendedKeyUsagePurpose::ClientAuth,
-    );
-    client_pem.trust_anchors = pki.ca.pem.clone().into_bytes();
+    let mut client_pem = rogue
+        .issue(&["controlling-station"], Usage::Client)
+        .unwrap();
+    client_pem.trust_anchors = pki.ca.certificate_pem().as_bytes().to_vec();
     let config = tls_client(&pki.server, tls_client_config(&client_pem).unwrap());
     let events = refused_client(config).await;
     assert!(!events.contains(&ClientEvent::Started), "{events:?}");
@@ -156,7 +104,7 @@ async fn tls_refuses_a_client_without_certificate() {
     init_logs();
     let pki = tls_server().await;
     let mut roots = rustls::RootCertStore::empty();
-    for certificate in rustls_pemfile::certs(&mut pki.ca.pem.as_bytes()) {
+    for certificate in rustls_pemfile::certs(&mut pki.ca.certificate_pem().as_bytes()) {
         roots.add(certificate.unwrap()).unwrap();
     }
     let provider = Arc::new(rustls::crypto::ring::default_provider());
@@ -185,11 +133,10 @@ async fn tls_refuses_a_client_without_certificate() {
 async fn tls_client_refuses_a_server_it_does_not_trust() {
     init_logs();
     let pki = tls_server().await;
-    let other = Authority::new("Other CA");
-    let client_pem = other.pem_for(
-        &["controlling-station"],
-        ExtendedKeyUsagePurpose::ClientAuth,
-    );
+    let other = Authority::new("Other CA").unwrap();
+    let client_pem = other
+        .issue(&["controlling-station"], Usage::Client)
+        .unwrap();
     let config = tls_client(&pki.server, tls_client_config(&client_pem).unwrap());
     let events = refused_client(config).await;
     assert!(!events.contains(&ClientEvent::Started), "{events:?}");
@@ -200,11 +147,8 @@ async fn requests_during_a_stalled_tls_handshake_fail_at_once() {
     init_logs();
     // A TCP server that never answers the ClientHello.
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let ca = Authority::new("Stanice test CA");
-    let client_pem = ca.pem_for(
-        &["controlling-station"],
-        ExtendedKeyUsagePurpose::ClientAuth,
-    );
+    let ca = Authority::new("Stanice test CA").unwrap();
+    let client_pem = ca.issue(&["controlling-station"], Usage::Client).unwrap();
     let mut config = client_config(listener.local_addr().unwrap());
     config.apci.t0 = Duration::from_secs(30);
     config.tls = Some((

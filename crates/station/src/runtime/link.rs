@@ -42,6 +42,9 @@ pub(crate) struct LinkSpec {
     pub status_point: Option<String>,
     /// Remote IOA -> the local points it feeds.
     pub points: HashMap<u32, Vec<PointId>>,
+    /// TLS with mutual authentication: the client configuration and the name the lower
+    /// node's certificate must carry.
+    pub tls: Option<iec60870::cs104::tls::ClientTls>,
     /// The lower node's clock when it runs in this process: both read the one simulated
     /// clock, so it is set directly. (A C_CS_NA_1 would arrive late by the network delay
     /// times the simulation speed, and skew the lower clock by that much.)
@@ -221,6 +224,7 @@ async fn run(
         config.reconnect = true;
         config.reconnect_delay = Duration::from_millis(200);
         config.reconnect_delay_max = Duration::from_secs(5);
+        config.tls = spec.tls.clone();
         let (client, mut events) = spawn_client(config);
         *handle
             .client

@@ -391,13 +391,8 @@ impl Runtime {
                     server.start_timeout = Some(NODE_SERVER_SLOTS.start_timeout);
                     server.max_command_age = server_config.max_command_age;
                     server.time_zone = zone;
-                    if let Some(tls) = &server_config.tls {
+                    if let Some(files) = &server_config.tls {
                         // Already resolved against the project folder by the configuration.
-                        let files = iec60870::cs104::tls::TlsFiles {
-                            certificate: tls.certificate.clone(),
-                            private_key: tls.private_key.clone(),
-                            trust_anchors: tls.trust_anchors.clone(),
-                        };
                         let tls = files
                             .load()
                             .and_then(|pem| iec60870::cs104::tls::server_config(&pem))
@@ -477,7 +472,27 @@ impl Runtime {
                         }
                     }
                 }
+                let tls = match &link.tls {
+                    None => None,
+                    Some(files) => {
+                        let setup = |error: iec60870::cs104::tls::TlsError| {
+                            RuntimeError::Setup(format!(
+                                "node `{}`: link `{}`: TLS: {error}",
+                                config.name, link.name
+                            ))
+                        };
+                        let client = files
+                            .load()
+                            .and_then(|pem| iec60870::cs104::tls::client_config(&pem))
+                            .map_err(setup)?;
+                        // The lower node's certificate names the address it is reached at.
+                        let name = iec60870::cs104::tls::server_name(&address.ip().to_string())
+                            .map_err(setup)?;
+                        Some((client, name))
+                    }
+                };
                 let spec = LinkSpec {
+                    tls,
                     name: link.name.clone(),
                     address,
                     common_address: link.common_address,

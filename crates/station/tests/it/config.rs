@@ -1585,3 +1585,50 @@ range = {range}
         Some(0.0..=1439.0)
     );
 }
+
+#[test]
+fn a_link_uses_tls_exactly_when_the_lower_server_requires_it() {
+    let project = |server_tls: &str, link_tls: &str| {
+        format!(
+            r#"[station]
+name = "Test"
+time_zone = "Europe/Prague"
+
+[[node]]
+name = "TOP"
+common_address = 1
+[[node.link]]
+name = "LOW"
+node = "LOW"
+{link_tls}
+[[node]]
+name = "LOW"
+common_address = 2
+[node.server]
+port_offset = 1
+{server_tls}
+"#
+        )
+    };
+    let tls = r#"tls = { certificate = "a.pem", private_key = "a.key", trust_anchors = "ca.pem" }"#;
+    let files = [("a.pem", "x"), ("a.key", "x"), ("ca.pem", "x")];
+    expect_only(
+        &project(tls, ""),
+        &files,
+        10,
+        8,
+        "node[0].link[0].node",
+        "node `LOW`'s server requires TLS: give the link tls",
+    );
+    expect_only(
+        &project("", tls),
+        &files,
+        11,
+        7,
+        "node[0].link[0].tls",
+        "node `LOW`'s server has no tls",
+    );
+    let loaded = load(&project(tls, tls), &files).unwrap();
+    let link = &loaded.node("TOP").unwrap().links[0];
+    assert!(link.tls.as_ref().unwrap().trust_anchors.ends_with("ca.pem"));
+}

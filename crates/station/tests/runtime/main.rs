@@ -16,3 +16,4 @@ mod hierarchy;
 mod lighting;
 mod power;
 mod time;
+mod tls;
