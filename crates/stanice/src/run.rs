@@ -56,6 +56,24 @@ pub(crate) struct RunOptions {
     /// The web HMI's port instead (0: any free port).
     #[arg(long)]
     hmi_port: Option<u16>,
+    /// Serve the web HMI over HTTPS with this certificate chain (PEM, the server's
+    /// certificate first); needs --hmi-tls-key and implies --hmi. Cookies are then Secure.
+    #[arg(long, value_name = "FILE", requires = "hmi_tls_key")]
+    hmi_tls_cert: Option<PathBuf>,
+    /// The private key (PEM: PKCS#8, PKCS#1 or SEC1) of --hmi-tls-cert.
+    #[arg(long, value_name = "FILE", requires = "hmi_tls_cert")]
+    hmi_tls_key: Option<PathBuf>,
+}
+
+/// The web HMI that `run` (with `--hmi`) or `demo` serves next to the station.
+struct HmiPlan {
+    /// Asked for (`--hmi`, or its certificate): an HMI that cannot start is an error. The
+    /// demo serves one by default and, as before, runs the station without it then.
+    required: bool,
+    /// The event store is in memory (`--store none`).
+    memory_store: bool,
+    port: Option<u16>,
+    tls: Option<hmi::tls::TlsFiles>,
 }
 
 pub(crate) async fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
@@ -83,6 +101,25 @@ pub(crate) async fn run_project(
     // From the start: a Ctrl-C while the station starts stops it once started, cleanly.
     let mut interrupt = Interrupt::listen();
     let mut project = load_project(folder)?;
+    let tls = match (&options.hmi_tls_cert, &options.hmi_tls_key) {
+        (Some(certificate), Some(key)) => Some(hmi::tls::TlsFiles {
+            certificate: certificate.clone(),
+            key: key.clone(),
+        }),
+        // clap requires both or neither.
+        _ => None,
+    };
+    let plan = (options.hmi || demo || tls.is_some()).then(|| HmiPlan {
+        required: options.hmi || tls.is_some(),
+        memory_store: options.store.as_deref() == Some("none"),
+        port: options.hmi_port,
+        tls,
+    });
+    if let Some(plan) = plan.as_ref().filter(|plan| plan.required) {
+        // A broken hmi.toml (or certificate) fails the command before the station starts,
+        // with the file:line:col of the mistake, rather than a station without its HMI.
+        check_hmi(&project.folder, plan)?;
+    }
     if let Some(base) = options.port_base {
         project = project.with_port_base(base);
     }
@@ -113,15 +150,15 @@ pub(crate) async fn run_project(
     .await
     .context("the station does not start")?;
     print_banner(&runtime, &store_shown, options.speed, demo);
-    let hmi = if options.hmi || demo {
-        start_hmi(
-            &runtime,
-            options.store.as_deref() == Some("none"),
-            options.hmi_port,
-        )
-        .await
-    } else {
-        None
+    let hmi = match &plan {
+        Some(plan) => match start_hmi(&runtime, plan).await {
+            Ok(hmi) => hmi,
+            Err(error) => {
+                runtime.shutdown().await;
+                return Err(error);
+            }
+        },
+        None => None,
     };
     println!("Type a fault or operation here (`help` lists them); Ctrl-C stops.");
     let stop = async {
@@ -153,25 +190,55 @@ pub(crate) fn users_file(project: &Path) -> PathBuf {
     hmi_folder(project).join("users.toml")
 }
 
+/// Checks the project's web HMI files (hmi.toml, points.csv, the screens, the TLS
+/// certificate and key) as the HMI will load them.
+fn check_hmi(project: &Path, plan: &HmiPlan) -> anyhow::Result<()> {
+    let screens = hmi_folder(project);
+    if !screens.join("hmi.toml").is_file() {
+        anyhow::bail!("no web HMI to serve: {} has no hmi.toml", screens.display());
+    }
+    hmi::config::HmiConfig::load(&screens).context("the web HMI does not start")?;
+    if let Some(tls) = &plan.tls {
+        tls.server_config().context("the web HMI does not start")?;
+    }
+    Ok(())
+}
+
 /// Starts the project's web HMI (`PROJECT/hmi/`) against its top node, when the project
 /// has one. It connects from 127.0.0.2, the address the Vsetín project gives its HMI
-/// link (HMI-local mode, spec 7.4).
-async fn start_hmi(runtime: &Runtime, memory_store: bool, port: Option<u16>) -> Option<hmi::Hmi> {
+/// link (HMI-local mode, spec 7.4). Without an HMI to serve, or when it does not start,
+/// the station runs on unless the plan requires the HMI (then the error is returned).
+async fn start_hmi(runtime: &Runtime, plan: &HmiPlan) -> anyhow::Result<Option<hmi::Hmi>> {
     let project = runtime.project();
     let screens = hmi_folder(&project.folder);
+    let not_started = |why: String| {
+        if plan.required {
+            Err(anyhow::anyhow!("the web HMI does not start: {why}"))
+        } else {
+            println!("  HMI      not started: {why}");
+            Ok(None)
+        }
+    };
     if !screens.join("hmi.toml").is_file() {
+        if plan.required {
+            anyhow::bail!("no web HMI to serve: {} has no hmi.toml", screens.display());
+        }
         println!("  (no web HMI: {} has no hmi.toml)", screens.display());
-        return None;
+        return Ok(None);
     }
-    let (top, server) = project.top_node().and_then(|config| {
+    let Some((top, server)) = project.top_node().and_then(|config| {
         runtime
             .node(&config.name)
             .and_then(|node| node.server.as_ref())
             .map(|server| (config, server))
-    })?;
+    }) else {
+        return not_started("the project's top node does not run here (--node)".to_owned());
+    };
     let offset = i32::from(project.station.port_base) - 2404;
-    let port = port.unwrap_or_else(|| u16::try_from(8080 + offset).unwrap_or(0));
-    let store = if memory_store {
+    let port = plan
+        .port
+        .unwrap_or_else(|| u16::try_from(8080 + offset).unwrap_or(0));
+    let store = if plan.memory_store {
         "sqlite::memory:".to_owned()
     } else {
         format!(
@@ -179,31 +246,33 @@ async fn start_hmi(runtime: &Runtime, memory_store: bool, port: Option<u16>) -> 
             project.folder.join("hmi-events.sqlite").display()
         )
     };
-    let started = hmi::Hmi::start(hmi::HmiOptions {
-        screens: screens.clone(),
-        users: users_file(&project.folder),
-        connect: vec![server.local_addr().to_string()],
-        common_address: top.common_address,
-        listen: std::net::SocketAddr::from(([127, 0, 0, 1], port)),
-        store: Some(store),
-        zone: station::pointdb::TimeZonePolicy::Zone(project.station.time_zone),
-        local_address: Some(std::net::IpAddr::from([127, 0, 0, 2])),
-    })
+    let mut serve = hmi::ServeConfig::default();
+    serve.tls = plan.tls.clone();
+    let scheme = if serve.tls.is_some() { "https" } else { "http" };
+    let started = hmi::Hmi::start_with(
+        hmi::HmiOptions {
+            screens: screens.clone(),
+            users: users_file(&project.folder),
+            connect: vec![server.local_addr().to_string()],
+            common_address: top.common_address,
+            listen: std::net::SocketAddr::from(([127, 0, 0, 1], port)),
+            store: Some(store),
+            zone: station::pointdb::TimeZonePolicy::Zone(project.station.time_zone),
+            local_address: Some(std::net::IpAddr::from([127, 0, 0, 2])),
+        },
+        serve,
+    )
     .await;
-    // The station runs whatever becomes of its HMI.
     let hmi = match started {
         Ok(hmi) => hmi,
-        Err(error) => {
-            println!("  HMI      not started: {error}");
-            return None;
-        }
+        Err(error) => return not_started(error.to_string()),
     };
     println!(
-        "  HMI      http://{}/  (users in {}: the demo's are operator / operator-vsetin, admin / admin-vsetin, viewer / viewer-vsetin)",
+        "  HMI      {scheme}://{}/  (users in {}: the demo's are operator / operator-vsetin, admin / admin-vsetin, viewer / viewer-vsetin)",
         hmi.address,
         users_file(&project.folder).display()
     );
-    Some(hmi)
+    Ok(Some(hmi))
 }
 
 fn print_banner(runtime: &Runtime, store: &str, speed: f64, demo: bool) {

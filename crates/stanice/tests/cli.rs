@@ -802,6 +802,109 @@ fn ctrl_c_stops_the_station_and_flushes_the_store() {
     );
 }
 
+/// `run --hmi` with a broken hmi.toml fails at once, naming the file, line and column of
+/// the mistake, instead of running the station without its HMI (exit 0).
+#[test]
+fn run_with_a_broken_hmi_toml_fails_with_file_line_and_column() {
+    let dir = fresh_dir("broken-hmi");
+    let project = copy_vsetin(&dir, "proj");
+    let file = project.join("hmi/hmi.toml");
+    let text = std::fs::read_to_string(&file).unwrap();
+    // A command that points.csv does not have, and a syntax error, each on its own.
+    let line = 1 + text
+        .lines()
+        .position(|l| l == "command = \"RH2_VypnoutQF1\"")
+        .unwrap();
+    let cases = [
+        (
+            text.replacen("\"RH2_VypnoutQF1\"", "\"RH2_NoSuchCommand\"", 1),
+            format!("hmi.toml:{line}:11: control `RH2_NoSuchCommand` is no command of points.csv"),
+        ),
+        (
+            text.replacen(
+                "command = \"RH2_VypnoutQF1\"",
+                "command = RH2_VypnoutQF1",
+                1,
+            ),
+            format!("hmi.toml:{line}:11: "),
+        ),
+    ];
+    let port = free_port_range(23);
+    for (broken, expected) in cases {
+        std::fs::write(&file, broken).unwrap();
+        let mut run = stanice();
+        run.arg("run")
+            .arg(&project)
+            .args(["--port-base", &port.to_string(), "--store", "none"])
+            .args(["--hmi", "--hmi-port", "0", "--duration", "1"]);
+        let output = run_bounded(run, 30);
+        let stdout = String::from_utf8_lossy(&output.stdout);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(!output.status.success(), "{stdout}\n{stderr}");
+        assert!(stderr.contains(&expected), "{expected}:\n{stderr}");
+        assert!(
+            !stdout.contains("Ctrl-C stops"),
+            "the station must not run without its HMI: {stdout}"
+        );
+    }
+}
+
+/// `run --hmi-tls-cert --hmi-tls-key` serves the HMI over HTTPS with that certificate
+/// (the options imply --hmi).
+#[test]
+fn run_serves_the_hmi_over_https() {
+    use std::io::Write as _;
+    use tokio_rustls::rustls;
+
+    let dir = fresh_dir("https");
+    let project = copy_vsetin(&dir, "proj");
+    let key = rcgen::KeyPair::generate().unwrap();
+    let certificate = rcgen::CertificateParams::new(vec!["localhost".to_owned()])
+        .unwrap()
+        .self_signed(&key)
+        .unwrap();
+    let (cert_path, key_path) = (dir.join("hmi.crt"), dir.join("hmi.key"));
+    std::fs::write(&cert_path, certificate.pem()).unwrap();
+    std::fs::write(&key_path, key.serialize_pem()).unwrap();
+    let port = free_port_range(23);
+    let hmi_port = free_port();
+    let mut run = stanice();
+    run.arg("run")
+        .arg(&project)
+        .args(["--port-base", &port.to_string(), "--store", "none"])
+        .args(["--hmi-port", &hmi_port.to_string()])
+        .arg("--hmi-tls-cert")
+        .arg(&cert_path)
+        .arg("--hmi-tls-key")
+        .arg(&key_path);
+    let _station = start_until(run, &format!("HMI      https://127.0.0.1:{hmi_port}/"));
+
+    let mut roots = rustls::RootCertStore::empty();
+    roots.add(certificate.der().clone()).unwrap();
+    let config = rustls::ClientConfig::builder_with_provider(std::sync::Arc::new(
+        rustls::crypto::ring::default_provider(),
+    ))
+    .with_safe_default_protocol_versions()
+    .unwrap()
+    .with_root_certificates(roots)
+    .with_no_client_auth();
+    let name = rustls::pki_types::ServerName::try_from("localhost").unwrap();
+    let connection = rustls::ClientConnection::new(std::sync::Arc::new(config), name).unwrap();
+    let tcp = std::net::TcpStream::connect(("127.0.0.1", hmi_port)).unwrap();
+    // A bound on every read: a server that never answers fails the test, not hangs it.
+    tcp.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
+    let mut tls = rustls::StreamOwned::new(connection, tcp);
+    tls.write_all(b"GET /login HTTP/1.1\r\nHost: localhost\r\nConnection: close\r\n\r\n")
+        .unwrap();
+    let mut reply = Vec::new();
+    // The server closes after the reply (Connection: close); some close without a TLS
+    // close_notify, which is an error here after the whole reply has arrived.
+    let _ = tls.read_to_end(&mut reply);
+    let reply = String::from_utf8_lossy(&reply);
+    assert!(reply.starts_with("HTTP/1.1 200"), "{reply}");
+    assert!(reply.contains("login-form"), "the login page: {reply}");
+}
+
 /// Runs `command` with `input` on its standard input.
 fn run_with_input(mut command: Command, input: &str) -> Output {
     let mut child = command
