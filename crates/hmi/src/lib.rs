@@ -34,7 +34,7 @@ use std::sync::{Arc, RwLock};
 use std::time::Duration;
 
 use ::station::pointdb::TimeZonePolicy;
-use ::station::runtime::Recorder;
+use ::station::store::Recorder;
 use ::station::store::{open_store, EventStore};
 use iec60870::asdu::CommonAddress;
 

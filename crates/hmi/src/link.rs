@@ -19,7 +19,7 @@ use iec60870::cs104::client::{spawn_client, ClientConfig, ClientError, ClientEve
 use serde::Serialize;
 use serde_json::{json, Value};
 use station::pointdb::TimeZonePolicy;
-use station::runtime::Recorder;
+use station::store::Recorder;
 use station::store::{
     Actor, CommandOutcome, CommandPhase, CommandRecord, EventCause, EventRecord, PointValue,
     Quality, SourceTime,

@@ -17,9 +17,9 @@
 #![cfg_attr(not(test), deny(clippy::indexing_slicing))]
 
 pub mod config;
-#[cfg(feature = "runtime")]
+#[cfg(feature = "store")]
 pub mod pointdb;
 #[cfg(feature = "runtime")]
 pub mod runtime;
-#[cfg(feature = "runtime")]
+#[cfg(feature = "store")]
 pub mod store;

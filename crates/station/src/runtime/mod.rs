@@ -18,7 +18,6 @@
 //!   status points, time source).
 //! - `command`: the server hooks — commands routed to a PLC variable (refused in local
 //!   mode) or down a link, each audited; clock synchronisation passed down.
-//! - [`recorder`]: the batching writer into the event store.
 //!
 //! [`Runtime::start`] brings a project (or some of its nodes) up: store, point databases,
 //! PLCs (compiled on the simulation thread, errors with file:line:col), one server per
@@ -29,7 +28,6 @@ pub mod clock;
 mod command;
 pub mod link;
 pub mod node;
-pub mod recorder;
 pub mod simulation;
 
 use std::collections::HashMap;
@@ -53,7 +51,7 @@ use crate::store::{
 pub use clock::{NodeClock, Pacing, SimClock};
 pub use link::LinkHandle;
 pub use node::NodePoints;
-pub use recorder::Recorder;
+pub use crate::store::Recorder;
 pub use simulation::{CommandRefusal, OutputChange, Simulation};
 
 use command::{NodeHandler, Route, RoutedCommand};

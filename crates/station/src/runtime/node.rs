@@ -20,7 +20,7 @@ use crate::pointdb::{Point, PointChange, PointDb, PointDbError, PointKey, TimeZo
 use crate::store::{EventCause, PointValue, Quality, SourceTime};
 
 use super::clock::NodeClock;
-use super::recorder::Recorder;
+use crate::store::Recorder;
 
 /// One node's points, server and recorder.
 #[derive(Debug)]

@@ -14,7 +14,10 @@
 //! - **PostgreSQL** (`postgres://...`), the production backend, through `tokio-postgres`
 //!   with a small pool of connections.
 //!
-//! Open one with [`open_store`]; keep history bounded with [`spawn_retention`].
+//! Open one with [`open_store`]; keep history bounded with [`spawn_retention`]; feed it
+//! through a [`Recorder`] (batched, bounded, commands awaitable until committed). This
+//! module and the point database are the crate's `store` feature: what a controlling
+//! station such as the HMI links, without the soft PLC and the plant.
 //!
 //! # Schema
 //!
@@ -44,6 +47,7 @@ mod error;
 mod model;
 mod postgres;
 mod query;
+mod recorder;
 mod retention;
 mod sqlite;
 
@@ -61,6 +65,7 @@ pub use query::{
     CommandQuery, Cursor, EventQuery, Order, Page, PointFilter, TimeBasis, DEFAULT_PAGE_SIZE,
     MAX_PAGE_SIZE,
 };
+pub use recorder::{Recorder, CHANNEL_CAPACITY};
 pub use retention::{spawn_retention, Retention, RetentionHandle};
 pub use sqlite::SqliteStore;
 

@@ -4,7 +4,7 @@
 use std::sync::Arc;
 
 use chrono::{DateTime, Utc};
-use station::runtime::Recorder;
+use station::store::Recorder;
 use station::store::{
     open_store, Backend, CommandQuery, CommandRecord, EventQuery, EventRecord, EventStore, Page,
     PointValue, RecordId, StoreFuture, StoreStats,
