@@ -101,6 +101,10 @@ pub(crate) async fn run_project(
     // From the start: a Ctrl-C while the station starts stops it once started, cleanly.
     let mut interrupt = Interrupt::listen();
     let mut project = load_project(folder)?;
+    if demo {
+        // The demo's links between controllers go over mutually authenticated TLS.
+        project = crate::demo::secure_links(project)?;
+    }
     let tls = match (&options.hmi_tls_cert, &options.hmi_tls_key) {
         (Some(certificate), Some(key)) => Some(hmi::tls::TlsFiles {
             certificate: certificate.clone(),

@@ -380,6 +380,72 @@ fn demo_serves_the_station_to_dispatch() {
         );
     }
     assert_eq!(interrogated.len(), 416);
+    // Every value is valid: the links below RDRT, on TLS, are all up.
+    let invalid: Vec<String> = String::from_utf8_lossy(&output.stdout)
+        .lines()
+        .filter_map(|line| serde_json::from_str::<Value>(line).ok())
+        .filter(|line| line["cot"] == "inrogen")
+        .filter(|line| {
+            line["quality"]
+                .as_array()
+                .is_some_and(|flags| flags.iter().any(|flag| flag == "IV"))
+        })
+        .map(|line| line.to_string())
+        .collect();
+    assert!(invalid.is_empty(), "{invalid:?}");
+
+    // RH1.1's server (below RDRT) speaks TLS with mutual authentication only.
+    let mut plain = stanice();
+    plain.args([
+        "iec104",
+        "client",
+        &format!("127.0.0.1:{}", port + 1),
+        "--json",
+        "--no-reconnect",
+    ]);
+    let output = run_bounded(plain, 20);
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(output.status.code(), Some(1), "{text}");
+    assert!(text.contains("the peer speaks TLS"), "{text}");
+
+    // A reader that goes away (`| head -1`) ends the client quietly, without a panic.
+    let mut client = stanice()
+        .args([
+            "iec104",
+            "client",
+            &format!("127.0.0.1:{port}"),
+            "--gi",
+            "--json",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = String::new();
+    BufReader::new(client.stdout.take().unwrap())
+        .read_line(&mut first)
+        .unwrap();
+    assert!(first.contains("connected"), "{first}");
+    let deadline = Instant::now() + Duration::from_secs(20);
+    let status = loop {
+        if let Some(status) = client.try_wait().unwrap() {
+            break status;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "the client goes on writing to a closed pipe"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let mut stderr = String::new();
+    client
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut stderr)
+        .unwrap();
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(status.success(), "{status}");
 }
 
 /// A base port whose next `count` ports are free.

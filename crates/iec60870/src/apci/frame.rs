@@ -223,13 +223,22 @@ const fn seq_from_octets(lo: u8, hi: u8) -> SeqNum {
     SeqNum::new(((hi as u16) << 7) | ((lo as u16) >> 1))
 }
 
+/// A TLS record (alert 0x15, handshake 0x16) where an APDU belongs: the peer speaks TLS
+/// (IEC 62351-3) and this side does not, a mistake worth naming.
+fn tls_hint(byte: u8) -> &'static str {
+    match byte {
+        0x15 | 0x16 => ": the peer speaks TLS (configure TLS on this side)",
+        _ => "",
+    }
+}
+
 /// Why bytes could not be framed or a control field decoded. Over TCP there is no
 /// resynchronisation: each of these is fatal for the connection.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, thiserror::Error)]
 #[non_exhaustive]
 pub enum FrameError {
     /// The first byte of an APDU is not 0x68.
-    #[error("invalid start byte 0x{0:02X} (expected 0x68)")]
+    #[error("invalid start byte 0x{0:02X} (expected 0x68){hint}", hint = tls_hint(*.0))]
     InvalidStartByte(u8),
     /// The length byte is below 4 (no room for the control field).
     #[error("APDU length {0} is below the minimum of 4")]

@@ -86,12 +86,14 @@ pub(crate) async fn run(args: ClientArgs) -> anyhow::Result<ExitCode> {
             if asdu.type_id == iec60870::asdu::TypeId::C_IC_NA_1
                 && asdu.cot.cause == iec60870::asdu::Cause::ACTIVATION_TERMINATION);
         let lost = matches!(event, ClientEvent::Disconnected { .. });
-        if args.json {
-            for line in render::json_lines(&event) {
-                println!("{line}");
-            }
+        let lines = if args.json {
+            render::json_lines(&event)
         } else {
-            println!("{}", render::analyser_text(&event));
+            vec![render::analyser_text(&event)]
+        };
+        if !print_lines(&lines) {
+            // The reader went away (`| head`): stop quietly, as command-line tools do.
+            break;
         }
         if args.exit_after_gi && gi_terminated {
             break;
@@ -103,6 +105,13 @@ pub(crate) async fn run(args: ClientArgs) -> anyhow::Result<ExitCode> {
     }
     client.close().await;
     Ok(exit)
+}
+
+/// Writes lines to standard output; false once it is closed (a broken pipe).
+fn print_lines(lines: &[String]) -> bool {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    lines.iter().all(|line| writeln!(out, "{line}").is_ok()) && out.flush().is_ok()
 }
 
 async fn sleep_until(deadline: Option<tokio::time::Instant>) {
