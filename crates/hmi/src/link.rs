@@ -63,6 +63,8 @@ pub enum ControlOutcome {
     RefusedLocal,
     /// The user's level is too low (decided by the HMI).
     RefusedPermission,
+    /// The control authority is elsewhere (decided by the HMI).
+    RefusedAuthority,
     /// No confirmation in time.
     TimedOut,
     /// No link to the station.
@@ -76,6 +78,7 @@ impl ControlOutcome {
             ControlOutcome::Refused => CommandOutcome::Refused,
             ControlOutcome::RefusedLocal => CommandOutcome::RefusedLocalMode,
             ControlOutcome::RefusedPermission => CommandOutcome::RefusedPermission,
+            ControlOutcome::RefusedAuthority => CommandOutcome::RefusedAuthority,
             ControlOutcome::TimedOut => CommandOutcome::TimedOut,
             ControlOutcome::NoLink => CommandOutcome::Failed,
         }

@@ -516,13 +516,13 @@ async fn command(
                 &row.name,
                 row.ioa,
                 value,
-                ControlOutcome::Refused,
+                ControlOutcome::RefusedAuthority,
                 &detail,
             );
             state.station.recorder().flush().await;
             return Ok((
                 StatusCode::CONFLICT,
-                Json(json!({"outcome": "refused-authority", "detail": detail})),
+                Json(json!({"outcome": ControlOutcome::RefusedAuthority, "detail": detail})),
             )
                 .into_response());
         }
@@ -707,6 +707,7 @@ fn outcome_word(outcome: CommandOutcome) -> &'static str {
         CommandOutcome::Refused => "refused",
         CommandOutcome::Failed => "no-link",
         CommandOutcome::TimedOut => "timed-out",
+        CommandOutcome::RefusedAuthority => "refused-authority",
     }
 }
 

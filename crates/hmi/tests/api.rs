@@ -757,7 +757,7 @@ authority = { point = "RDRT_SP21_HMI_Mistne" }
         .iter()
         .find(|e| e["point"] == "RZZ_VypnoutQF1")
         .unwrap_or_else(|| panic!("refusal not audited: {events}"));
-    assert_eq!(refusal["outcome"], "refused");
+    assert_eq!(refusal["outcome"], "refused-authority");
     assert_eq!(refusal["user"], "operator");
     assert!(refusal["detail"]
         .as_str()
@@ -784,7 +784,11 @@ authority = { point = "RDRT_SP21_HMI_Mistne" }
         .iter()
         .map(|e| e["outcome"].as_str().unwrap())
         .collect();
-    assert_eq!(outcomes, ["executed", "sent", "refused"], "{events}");
+    assert_eq!(
+        outcomes,
+        ["executed", "sent", "refused-authority"],
+        "{events}"
+    );
     s.hmi.shutdown().await;
     s.runtime.shutdown().await;
 }

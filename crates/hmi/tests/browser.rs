@@ -552,7 +552,7 @@ async fn operator_and_viewer_in_a_real_browser() {
         .await
         .unwrap();
     assert_eq!(audit.as_array().unwrap().len(), 1, "{audit}");
-    assert_eq!(audit[0][0], json!("refused"), "{audit}");
+    assert_eq!(audit[0][0], json!("refused-authority"), "{audit}");
     assert_eq!(audit[0][1], json!("operator"), "{audit}");
     assert!(
         audit[0][2].as_str().unwrap().contains("control authority"),

@@ -4,6 +4,7 @@
 //!
 //! ```text
 //! cargo bench -p station --bench latency [-- --samples N]
+//! STANICE_BENCH_STORE=sqlite:/tmp/bench.sqlite cargo bench -p station --bench latency
 //! ```
 //!
 //! The whole station runs in this process on the real-time clock (x1), every level a real
@@ -127,7 +128,12 @@ async fn run(samples: usize) {
         project,
         RuntimeOptions {
             pacing: Pacing::RealTime { speed: 1.0 },
-            store: StoreChoice::Disabled,
+            // With STANICE_BENCH_STORE (e.g. sqlite:/tmp/bench.sqlite) every level records
+            // and commits each command's audit before its confirmation leaves
+            // (write-ahead): the confirmation latency then includes three commits.
+            store: std::env::var("STANICE_BENCH_STORE")
+                .map(StoreChoice::Url)
+                .unwrap_or(StoreChoice::Disabled),
             ..RuntimeOptions::default()
         },
     )

@@ -48,10 +48,10 @@ use crate::store::{
     open_store, spawn_retention, EventStore, Retention, RetentionHandle, StoreError,
 };
 
+pub use crate::store::Recorder;
 pub use clock::{NodeClock, Pacing, SimClock};
 pub use link::LinkHandle;
 pub use node::NodePoints;
-pub use crate::store::Recorder;
 pub use simulation::{CommandRefusal, OutputChange, Simulation};
 
 use command::{NodeHandler, Route, RoutedCommand};

@@ -335,17 +335,21 @@ pub enum CommandOutcome {
     Failed,
     /// No confirmation arrived in time.
     TimedOut,
+    /// Refused because the control authority is elsewhere (the HMI's board controls while
+    /// dispatch holds it, railway spec 9.2).
+    RefusedAuthority,
 }
 
 impl CommandOutcome {
     /// Every outcome, in code order.
-    pub const ALL: [CommandOutcome; 6] = [
+    pub const ALL: [CommandOutcome; 7] = [
         CommandOutcome::Executed,
         CommandOutcome::RefusedLocalMode,
         CommandOutcome::RefusedPermission,
         CommandOutcome::Refused,
         CommandOutcome::Failed,
         CommandOutcome::TimedOut,
+        CommandOutcome::RefusedAuthority,
     ];
 
     /// The stable stored code.
@@ -357,6 +361,7 @@ impl CommandOutcome {
             CommandOutcome::Refused => 4,
             CommandOutcome::Failed => 5,
             CommandOutcome::TimedOut => 6,
+            CommandOutcome::RefusedAuthority => 7,
         }
     }
 
