@@ -208,6 +208,21 @@ pub trait Plant {
     }
     /// Drives a PLC output (coil, command). Takes effect at the current time.
     fn set_output(&mut self, name: &str, value: Value) -> Result<(), PlantError>;
+    /// The plant's I/O modules and their state (a pulled or silent module makes its
+    /// signals invalid).
+    fn modules(&self) -> &[Module];
+    /// Carries out one line of the plant's console language: a fault (stays until
+    /// cleared), `clear FAULT`, `clear all`, or a hand operation. The plant owns its
+    /// language: the runtime and the CLI only pass the line on.
+    fn console(&mut self, line: &str) -> Result<(), PlantError>;
+    /// The console language: every fault and hand operation with the names it takes now.
+    fn console_operations(&self) -> Vec<ConsoleOperation>;
+    /// The state worth a glance, for the console's `status`.
+    fn status(&self) -> Vec<StatusLine>;
+    /// The plant as `Any`, for tests and tools that know which plant they run.
+    fn as_any(&self) -> &dyn std::any::Any;
+    /// The plant as `Any`, mutable.
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any;
     /// All inputs with their availability.
     fn inputs(&self) -> BTreeMap<String, Reading> {
         self.signals()
@@ -244,6 +259,28 @@ pub trait Plant {
     }
 }
 
+/// One operation of a plant's console language.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ConsoleOperation {
+    /// How it is written (`supply-loss SOURCE`).
+    pub usage: &'static str,
+    /// A fault (stays until cleared) rather than a hand operation.
+    pub fault: bool,
+    /// What the placeholder of `usage` names (`breaker`, `I/O module`), if anything.
+    pub names_kind: Option<String>,
+    /// The names it takes now.
+    pub names: Vec<String>,
+}
+
+/// One line of a plant's status: a label and its items (`breakers`: `RH2_QF1 closed`...).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct StatusLine {
+    /// What the line is about.
+    pub label: &'static str,
+    /// Its items.
+    pub items: Vec<String>,
+}
+
 /// Renders signal descriptions as a Markdown table (`name | dir | type | unit | module |
 /// meaning`), e.g. for `stanice` to list a plant's I/O.
 pub fn signal_table_markdown(signals: &[SignalInfo]) -> String {
@@ -261,4 +298,23 @@ pub fn signal_table_markdown(signals: &[SignalInfo]) -> String {
         ));
     }
     out
+}
+
+/// An I/O module (a LOGO!, a PLC's I/O, a DI card) and its status.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Module {
+    /// Module name (`RH2_LOGO`, `ROV05_PLC`, `RDRT_P9`...).
+    pub name: String,
+    /// Plugged in and working. A pulled module's outputs de-energise.
+    pub present: bool,
+    /// Its communication works. Without it the field keeps running on the last
+    /// outputs, but no valid value reaches the PLC.
+    pub linked: bool,
+}
+
+impl Module {
+    /// Its signals carry valid values.
+    pub fn valid(&self) -> bool {
+        self.present && self.linked
+    }
 }

@@ -1,7 +1,13 @@
 //! Plant simulations: the physical equipment and field devices a PLC is wired to, without
 //! any control logic.
 //!
-//! The first plant is the Vsetín railway station (`shared/spec/railway-station.md` §2, §4,
+//! Every plant implements [`Plant`]: its named I/O, its I/O modules and their faults, and
+//! its own console language for fault injection and hand operations, described by the
+//! plant ([`Plant::console_operations`], [`Plant::status`]). The runtime finds a plant by
+//! the project's `plant = "..."` key in [`registry`] and knows no plant by name; adding
+//! one (the lab models, the ball sorter, a lift) is a module here and a registry entry.
+//!
+//! The first plant, [`vsetin`], is the Vsetín railway station (`shared/spec/railway-station.md` §2, §4,
 //! §5, §6): its 6 kV feeds, transformers, distribution boards, diesel generator set,
 //! lighting towers and their contacts, relays and meters. The transfer logic (RDA), the
 //! breaker command logic (RH2/RZZ) and the lighting function block are *not* here: they
@@ -206,20 +212,18 @@
 
 mod core;
 mod devices;
-mod fault;
-mod station;
+pub mod registry;
 pub mod sun;
 mod topology;
+pub mod vsetin;
 
 pub use crate::core::{
-    signal_table_markdown, Direction, Plant, PlantError, Reading, SignalInfo, SimTime, Value,
-    ValueKind,
+    signal_table_markdown, ConsoleOperation, Direction, Module, Plant, PlantError, Reading,
+    SignalInfo, SimTime, StatusLine, Value, ValueKind,
 };
 pub use crate::devices::{GeneratorConfig, GeneratorState};
-pub use crate::fault::{operation_syntax, Action, DeviceKind, Fault, OperationSyntax};
-pub use crate::station::{
-    lighting_boards, Module, StationConfig, SwitchingDevice, Transfer, VsetinPlant,
-};
 pub use crate::topology::{
     BusState, LinkState, SafetyEvent, SafetyKind, SourceState, TopologySnapshot,
 };
+pub use crate::vsetin::fault::{operation_syntax, Action, DeviceKind, Fault, OperationSyntax};
+pub use crate::vsetin::{lighting_boards, StationConfig, SwitchingDevice, Transfer, VsetinPlant};

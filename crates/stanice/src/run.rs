@@ -13,7 +13,6 @@ use std::time::Duration;
 use anyhow::Context as _;
 use chrono::{DateTime, Utc};
 use clap::Args;
-use plant::SwitchingDevice;
 use station::config::Project;
 use station::runtime::{Pacing, Runtime, RuntimeOptions, StoreChoice};
 
@@ -373,39 +372,28 @@ fn wrapped(head: &str, items: &[String], separator: &str) -> String {
 /// The console's help: every fault and hand operation of the plant with the device names
 /// it takes (from the plant itself), the links of the running nodes, the console's own words.
 async fn help_text(runtime: &Runtime) -> String {
-    let syntax = plant::operation_syntax();
-    let names: Option<Vec<Vec<String>>> = runtime
-        .with_simulation(move |sim| {
-            sim.plant().map(|plant| {
-                syntax
-                    .iter()
-                    .map(|s| {
-                        s.device
-                            .map(|kind| plant.device_names(kind))
-                            .unwrap_or_default()
-                    })
-                    .collect()
-            })
-        })
+    let operations = runtime
+        .with_simulation(|sim| sim.plant().map(|plant| plant.console_operations()))
         .await
         .ok()
         .flatten();
     let mut out = Vec::new();
-    match names {
-        Some(names) => {
+    match operations {
+        Some(operations) => {
             for fault in [true, false] {
                 out.push(if fault {
                     "faults (each stays until `clear FAULT` or `clear all`):".to_owned()
                 } else {
                     "hand operations:".to_owned()
                 });
-                for (syntax, names) in syntax.iter().zip(&names).filter(|(s, _)| s.fault == fault) {
-                    out.push(format!("  {}", syntax.usage));
-                    if let Some(kind) = syntax.device {
-                        let placeholder = syntax.usage.split_whitespace().nth(1).unwrap_or("NAME");
+                for operation in operations.iter().filter(|o| o.fault == fault) {
+                    out.push(format!("  {}", operation.usage));
+                    if let Some(kind) = &operation.names_kind {
+                        let placeholder =
+                            operation.usage.split_whitespace().nth(1).unwrap_or("NAME");
                         out.push(wrapped(
                             &format!("      {placeholder} ({kind}): "),
-                            names,
+                            &operation.names,
                             " ",
                         ));
                     }
@@ -525,40 +513,15 @@ async fn print_status(runtime: &Runtime) {
     print_plant_status(runtime).await;
 }
 
-/// The plant's part of `status`: active faults, the supply transfer, every breaker, the
-/// contactors that are closed or jammed.
+/// The plant's part of `status`, as the plant reports it.
 async fn print_plant_status(runtime: &Runtime) {
-    let report = runtime
-        .with_simulation(|sim| {
-            sim.plant().map(|plant| {
-                (
-                    plant.active_faults(),
-                    plant.transfer(),
-                    plant.switching_devices(),
-                )
-            })
-        })
+    let lines = runtime
+        .with_simulation(|sim| sim.plant().map(|plant| plant.status()))
         .await
         .ok()
         .flatten();
-    let Some((faults, transfer, devices)) = report else {
-        return;
-    };
-    let faults: Vec<String> = faults.iter().map(ToString::to_string).collect();
-    if faults.is_empty() {
-        println!("  faults:    none");
-    } else {
-        println!("{}", wrapped("  faults:    ", &faults, ", "));
+    for line in lines.unwrap_or_default() {
+        let label = format!("  {:<10} ", format!("{}:", line.label));
+        println!("{}", wrapped(&label, &line.items, ", "));
     }
-    println!("  transfer:  {transfer}");
-    let (contactors, breakers): (Vec<&SwitchingDevice>, Vec<&SwitchingDevice>) =
-        devices.iter().partition(|d| d.contactor);
-    let breakers: Vec<String> = breakers.iter().map(ToString::to_string).collect();
-    println!("{}", wrapped("  breakers:  ", &breakers, ", "));
-    let (shown, others): (Vec<&SwitchingDevice>, Vec<&SwitchingDevice>) = contactors
-        .into_iter()
-        .partition(|d| d.closed || d.stuck.is_some());
-    let mut shown: Vec<String> = shown.iter().map(ToString::to_string).collect();
-    shown.push(format!("{} other(s) open", others.len()));
-    println!("{}", wrapped("  contactors: ", &shown, ", "));
 }

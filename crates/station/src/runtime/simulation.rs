@@ -23,9 +23,8 @@ use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
 
 use iec60870::asdu::TypeId;
-use plant::{
-    Action, Direction, Fault, Plant, PlantError, StationConfig, Value, ValueKind, VsetinPlant,
-};
+use plant::registry::{PlantStart, PLANTS};
+use plant::{Direction, Plant, Value, ValueKind};
 use plc::check::{Lane, Ty};
 use plc::task::{ClockReading, Leaf, TaskConfig as PlcTask};
 use plc::vm::Val;
@@ -152,7 +151,7 @@ pub struct Simulation {
     clock: Arc<SimClock>,
     now: Duration,
     stepped: bool,
-    plant: Option<VsetinPlant>,
+    plant: Option<Box<dyn Plant + Send>>,
     nodes: Vec<SimNode>,
     pulses: Vec<Pulse>,
     observers: Vec<mpsc::Sender<OutputChange>>,
@@ -166,25 +165,24 @@ impl Simulation {
         nodes: &[(usize, Arc<NodePoints>)],
         clock: Arc<SimClock>,
     ) -> Result<Simulation, RuntimeError> {
+        let start = PlantStart {
+            unix_secs: clock.start().timestamp(),
+        };
         let plant = match project.station.plant.as_deref() {
             None => None,
-            Some("vsetin") => {
-                let mut config = StationConfig::default();
-                config.start_unix_secs = clock.start().timestamp();
-                Some(VsetinPlant::with_config(config))
-            }
-            Some(other) => {
-                return Err(RuntimeError::Setup(format!(
-                    "unknown plant `{other}` (known: vsetin)"
-                )))
-            }
+            Some(name) => Some(plant::registry::open(name, start).ok_or_else(|| {
+                RuntimeError::Setup(format!(
+                    "unknown plant `{name}` (known: {})",
+                    PLANTS.join(", ")
+                ))
+            })?),
         };
         let mut built = Vec::new();
         for (index, points) in nodes {
             let Some(config) = project.nodes.get(*index) else {
                 continue;
             };
-            built.push(build_node(config, Arc::clone(points), plant.as_ref())?);
+            built.push(build_node(config, Arc::clone(points), plant.as_deref())?);
         }
         Ok(Simulation {
             clock,
@@ -202,9 +200,9 @@ impl Simulation {
         self.now
     }
 
-    /// The plant, if the project has one.
-    pub fn plant(&mut self) -> Option<&mut VsetinPlant> {
-        self.plant.as_mut()
+    /// The plant, if the project has one (`as_any_mut` reaches the plant's own type).
+    pub fn plant(&mut self) -> Option<&mut (dyn Plant + Send + 'static)> {
+        self.plant.as_deref_mut()
     }
 
     /// The PLC of a node, if it has one (monitoring, writing and forcing variables).
@@ -231,28 +229,13 @@ impl Simulation {
         receiver
     }
 
-    /// Injects a fault or performs a hand operation given in text form: a plant fault
-    /// (`supply-loss T1`, `module-pulled RH2_LOGO`; prefix `clear ` to clear it, `clear
-    /// all` for every fault) or an action (`selector RH2 local`, `manual-switch ROV01 on`,
-    /// `close FA1`, `open FA1`, `illuminance 5`, `illuminance auto`).
+    /// Passes one line of the plant's console language (faults, `clear ...`, hand
+    /// operations: [`Plant::console`]) to the plant.
     pub fn operate(&mut self, text: &str) -> Result<(), String> {
         let Some(plant) = self.plant.as_mut() else {
             return Err("the project has no plant simulation".into());
         };
-        let text = text.trim();
-        let result: Result<(), PlantError> = if text == "clear all" {
-            plant.clear_all();
-            Ok(())
-        } else if let Some(rest) = text.strip_prefix("clear ") {
-            let fault: Fault = rest.parse().map_err(|e: PlantError| e.to_string())?;
-            plant.clear(&fault)
-        } else if let Some(action) = parse_action(text) {
-            action.and_then(|action| plant.operate(action))
-        } else {
-            let fault: Fault = text.parse().map_err(|e: PlantError| e.to_string())?;
-            plant.inject(fault)
-        };
-        result.map_err(|e| e.to_string())
+        plant.console(text).map_err(|error| error.to_string())
     }
 
     /// The earliest time something is due after `self.now` (or at it, before the first
@@ -335,7 +318,7 @@ impl Simulation {
             ..
         } = self;
         for node in nodes.iter_mut() {
-            node.cycle(now, plant.as_mut(), observers);
+            node.cycle(now, plant.as_deref_mut(), observers);
         }
         for node in nodes.iter() {
             let utc = node.points.clock().at(now);
@@ -399,7 +382,7 @@ impl SimNode {
     fn cycle(
         &mut self,
         now: Duration,
-        plant: Option<&mut VsetinPlant>,
+        plant: Option<&mut (dyn Plant + Send + 'static)>,
         observers: &[mpsc::Sender<OutputChange>],
     ) {
         let Some(plc) = self.plc.as_mut() else { return };
@@ -574,52 +557,10 @@ fn point_value(type_id: TypeId, ty: &Ty, v: &Val) -> Option<PointValue> {
     })
 }
 
-fn parse_action(text: &str) -> Option<Result<Action, PlantError>> {
-    let words: Vec<&str> = text.split_whitespace().collect();
-    let bad = || PlantError::BadFault(text.to_owned());
-    Some(match words.as_slice() {
-        ["selector", board, position] => match *position {
-            "remote" => Ok(Action::SetSelector {
-                board: (*board).to_owned(),
-                remote: true,
-            }),
-            "local" => Ok(Action::SetSelector {
-                board: (*board).to_owned(),
-                remote: false,
-            }),
-            _ => Err(bad()),
-        },
-        ["manual-switch", board, position] => match *position {
-            "on" => Ok(Action::SetManualSwitch {
-                board: (*board).to_owned(),
-                on: true,
-            }),
-            "off" => Ok(Action::SetManualSwitch {
-                board: (*board).to_owned(),
-                on: false,
-            }),
-            _ => Err(bad()),
-        },
-        ["close", name] => Ok(Action::Close((*name).to_owned())),
-        ["open", name] => Ok(Action::Open((*name).to_owned())),
-        ["illuminance", "auto"] => Ok(Action::SetIlluminance(None)),
-        ["illuminance", lux] => match lux.parse::<f64>() {
-            Ok(x) if x.is_finite() && x >= 0.0 => Ok(Action::SetIlluminance(Some(x))),
-            _ => Err(bad()),
-        },
-        [first, ..]
-            if ["selector", "manual-switch", "close", "open", "illuminance"].contains(first) =>
-        {
-            Err(bad())
-        }
-        _ => return None,
-    })
-}
-
 fn build_node(
     config: &NodeConfig,
     points: Arc<NodePoints>,
-    plant: Option<&VsetinPlant>,
+    plant: Option<&(dyn Plant + Send + 'static)>,
 ) -> Result<SimNode, RuntimeError> {
     let node = &config.name;
     let setup = |message: String| RuntimeError::Setup(format!("node `{node}`: {message}"));

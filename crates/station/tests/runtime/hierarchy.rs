@@ -80,10 +80,7 @@ async fn a_command_opens_the_feeder_and_the_change_comes_back_up() {
     )
     .await;
     let feeder_closed = runtime
-        .with_simulation(|sim| {
-            use plant::Plant;
-            sim.plant().unwrap().bool("RH2_QF1_Zapnut").unwrap()
-        })
+        .with_simulation(|sim| sim.plant().unwrap().bool("RH2_QF1_Zapnut").unwrap())
         .await
         .unwrap();
     assert!(!feeder_closed);
@@ -142,10 +139,7 @@ async fn a_board_in_local_mode_refuses_remote_commands() {
     assert!(!dispatch.single_command(2021, true, false).await);
     runtime.advance(Duration::from_secs(2)).await.unwrap();
     let feeder_closed = runtime
-        .with_simulation(|sim| {
-            use plant::Plant;
-            sim.plant().unwrap().bool("RH2_QF1_Zapnut").unwrap()
-        })
+        .with_simulation(|sim| sim.plant().unwrap().bool("RH2_QF1_Zapnut").unwrap())
         .await
         .unwrap();
     assert!(feeder_closed, "QF1 must stay closed");

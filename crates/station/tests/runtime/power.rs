@@ -88,7 +88,13 @@ async fn mains_loss_transfers_to_the_generator_and_back_without_joining_sources(
     runtime.advance(Duration::from_secs(120)).await.unwrap();
     let (violations, safety, running) = runtime
         .with_simulation(|sim| {
-            let plant = sim.plant().unwrap();
+            // The Vsetín plant's own safety record.
+            let plant = sim
+                .plant()
+                .unwrap()
+                .as_any()
+                .downcast_ref::<plant::VsetinPlant>()
+                .unwrap();
             (
                 plant.source_violations(),
                 plant.safety_log().len(),

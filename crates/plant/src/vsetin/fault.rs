@@ -357,6 +357,54 @@ pub fn operation_syntax() -> &'static [OperationSyntax] {
     SYNTAX
 }
 
+impl Action {
+    /// A hand operation written as the console writes it (`selector RH2 local`,
+    /// `manual-switch ROV01 on`, `close FA1`, `open FA1`, `illuminance 5`, `illuminance
+    /// auto`); `None` when the line is no operation (it may be a fault).
+    pub fn parse(text: &str) -> Option<Result<Action, PlantError>> {
+        let words: Vec<&str> = text.split_whitespace().collect();
+        let bad = || PlantError::BadFault(text.to_owned());
+        Some(match words.as_slice() {
+            ["selector", board, position] => match *position {
+                "remote" => Ok(Action::SetSelector {
+                    board: (*board).to_owned(),
+                    remote: true,
+                }),
+                "local" => Ok(Action::SetSelector {
+                    board: (*board).to_owned(),
+                    remote: false,
+                }),
+                _ => Err(bad()),
+            },
+            ["manual-switch", board, position] => match *position {
+                "on" => Ok(Action::SetManualSwitch {
+                    board: (*board).to_owned(),
+                    on: true,
+                }),
+                "off" => Ok(Action::SetManualSwitch {
+                    board: (*board).to_owned(),
+                    on: false,
+                }),
+                _ => Err(bad()),
+            },
+            ["close", name] => Ok(Action::Close((*name).to_owned())),
+            ["open", name] => Ok(Action::Open((*name).to_owned())),
+            ["illuminance", "auto"] => Ok(Action::SetIlluminance(None)),
+            ["illuminance", lux] => match lux.parse::<f64>() {
+                Ok(x) if x.is_finite() && x >= 0.0 => Ok(Action::SetIlluminance(Some(x))),
+                _ => Err(bad()),
+            },
+            [first, ..]
+                if ["selector", "manual-switch", "close", "open", "illuminance"]
+                    .contains(first) =>
+            {
+                Err(bad())
+            }
+            _ => return None,
+        })
+    }
+}
+
 impl Fault {
     /// The kind of device [`Fault::device`] names.
     pub fn device_kind(&self) -> Option<DeviceKind> {

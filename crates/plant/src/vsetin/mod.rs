@@ -5,13 +5,17 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::fmt;
 use std::time::Duration;
 
-use crate::core::{Plant, PlantError, Reading, SignalInfo, SimTime, Value, ValueKind};
+use crate::core::{
+    ConsoleOperation, Module, Plant, PlantError, Reading, SignalInfo, SimTime, StatusLine, Value,
+    ValueKind,
+};
 use crate::devices::{earliest, Breaker, Delayed, Generator, GeneratorConfig, GeneratorState};
-use crate::fault::{resolve_device, Action, DeviceKind, Fault};
 use crate::sun::{Sky, SunConfig};
 use crate::topology::{Network, SafetyEvent, SafetyKind, TopologySnapshot};
+use fault::{resolve_device, Action, DeviceKind, Fault};
 
 mod build;
+pub mod fault;
 
 const NANOS: i128 = 1_000_000_000;
 /// Safety records kept; later ones are counted in [`VsetinPlant::safety_dropped`].
@@ -202,25 +206,6 @@ enum Sig {
 struct Out {
     value: bool,
     module: usize,
-}
-
-/// An I/O module (a LOGO!, a PLC's I/O, a DI card) and its status.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Module {
-    /// Module name (`RH2_LOGO`, `ROV05_PLC`, `RDRT_P9`...).
-    pub name: String,
-    /// Plugged in and working. A pulled module's outputs de-energise.
-    pub present: bool,
-    /// Its communication works. Without it the field keeps running on the last
-    /// outputs, but no valid value reaches the PLC.
-    pub linked: bool,
-}
-
-impl Module {
-    /// Its signals carry valid values.
-    pub fn valid(&self) -> bool {
-        self.present && self.linked
-    }
 }
 
 /// A breaker or contactor and its position ([`VsetinPlant::switching_devices`]).
@@ -1109,11 +1094,6 @@ impl VsetinPlant {
             generator: self.gen.state,
         }
     }
-
-    /// Every I/O module with its status.
-    pub fn modules(&self) -> &[Module] {
-        &self.modules
-    }
 }
 
 impl Default for VsetinPlant {
@@ -1213,5 +1193,87 @@ impl Plant for VsetinPlant {
         }
         self.settle();
         Ok(())
+    }
+
+    fn modules(&self) -> &[Module] {
+        &self.modules
+    }
+
+    fn console(&mut self, line: &str) -> Result<(), PlantError> {
+        let line = line.trim();
+        if line == "clear all" {
+            self.clear_all();
+            return Ok(());
+        }
+        if let Some(rest) = line.strip_prefix("clear ") {
+            let fault: Fault = rest.parse()?;
+            return self.clear(&fault);
+        }
+        if let Some(action) = Action::parse(line) {
+            return self.operate(action?);
+        }
+        let fault: Fault = line.parse()?;
+        self.inject(fault)
+    }
+
+    fn console_operations(&self) -> Vec<ConsoleOperation> {
+        fault::operation_syntax()
+            .iter()
+            .map(|syntax| ConsoleOperation {
+                usage: syntax.usage,
+                fault: syntax.fault,
+                names_kind: syntax.device.map(|kind| kind.to_string()),
+                names: syntax
+                    .device
+                    .map(|kind| self.device_names(kind))
+                    .unwrap_or_default(),
+            })
+            .collect()
+    }
+
+    fn status(&self) -> Vec<StatusLine> {
+        let faults: Vec<String> = self
+            .active_faults()
+            .iter()
+            .map(ToString::to_string)
+            .collect();
+        let devices = self.switching_devices();
+        let (contactors, breakers): (Vec<&SwitchingDevice>, Vec<&SwitchingDevice>) =
+            devices.iter().partition(|d| d.contactor);
+        let (shown, others): (Vec<&SwitchingDevice>, Vec<&SwitchingDevice>) = contactors
+            .into_iter()
+            .partition(|d| d.closed || d.stuck.is_some());
+        let mut contactors: Vec<String> = shown.iter().map(ToString::to_string).collect();
+        contactors.push(format!("{} other(s) open", others.len()));
+        vec![
+            StatusLine {
+                label: "faults",
+                items: if faults.is_empty() {
+                    vec!["none".to_owned()]
+                } else {
+                    faults
+                },
+            },
+            StatusLine {
+                label: "transfer",
+                items: vec![self.transfer().to_string()],
+            },
+            StatusLine {
+                label: "breakers",
+                items: breakers.iter().map(ToString::to_string).collect(),
+            },
+            StatusLine {
+                label: "contactors",
+                items: contactors,
+            },
+        ]
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
     }
 }

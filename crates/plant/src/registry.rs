@@ -1,0 +1,47 @@
+//! The plants a project can name (`plant = "..."` in `station.toml`), found by name so
+//! that the runtime, the CLI and the HMI never name a plant themselves: adding a plant (a
+//! lab model, the ball sorter, a lift) is one entry here.
+
+use crate::core::Plant;
+
+/// Where a plant starts: the simulated clock's start as Unix seconds (the sun, the
+/// calendar and the weekly programs of the plant follow it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PlantStart {
+    /// Unix seconds of simulated time zero.
+    pub unix_secs: i64,
+}
+
+/// The plants by name.
+pub const PLANTS: &[&str] = &["vsetin"];
+
+/// A new plant of the given name, or `None` for a name [`PLANTS`] does not hold.
+pub fn open(name: &str, start: PlantStart) -> Option<Box<dyn Plant + Send>> {
+    match name {
+        "vsetin" => {
+            let config = crate::vsetin::StationConfig {
+                start_unix_secs: start.unix_secs,
+                ..crate::vsetin::StationConfig::default()
+            };
+            Some(Box::new(crate::vsetin::VsetinPlant::with_config(config)))
+        }
+        _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_listed_plant_opens_and_others_do_not() {
+        for name in PLANTS {
+            let plant = open(name, PlantStart { unix_secs: 0 });
+            assert!(
+                plant.is_some_and(|plant| !plant.signals().is_empty()),
+                "{name}"
+            );
+        }
+        assert!(open("nonexistent", PlantStart { unix_secs: 0 }).is_none());
+    }
+}
