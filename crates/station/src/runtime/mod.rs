@@ -13,7 +13,8 @@
 //!   synchronisation ([`NodeClock`]).
 //! - [`simulation`]: the thread that owns the plant and every node's soft PLC, steps
 //!   them on the simulated clock and feeds PLC-sourced points.
-//! - [`node`]: a node's point database with its server and recorder ([`NodePoints`]).
+//! - [`node`]: a node's point database with its sinks and recorder ([`NodePoints`]).
+//! - [`sink`]: where a node's changes go upward (its IEC 104 server; an IEC 101 slave or MQTT later).
 //! - [`link`]: the IEC 104 client links to lower nodes (concentration, invalidation,
 //!   status points, time source).
 //! - `command`: the server hooks — commands routed to a PLC variable (refused in local
@@ -29,6 +30,7 @@ mod command;
 pub mod link;
 pub mod node;
 pub mod simulation;
+pub mod sink;
 
 use std::collections::HashMap;
 use std::sync::{mpsc, Arc};
@@ -53,6 +55,7 @@ pub use clock::{NodeClock, Pacing, SimClock};
 pub use link::LinkHandle;
 pub use node::NodePoints;
 pub use simulation::{CommandRefusal, OutputChange, Simulation};
+pub use sink::{Iec104Sink, PointSink};
 
 use command::{NodeHandler, Route, RoutedCommand};
 use link::LinkSpec;
@@ -420,7 +423,10 @@ impl Runtime {
                             node: config.name.clone(),
                             source,
                         })?;
-                    points.attach_server(handle.clone());
+                    points.attach_sink(Arc::new(sink::Iec104Sink {
+                        server: handle.clone(),
+                        zone,
+                    }));
                     // No controlling station is connected yet.
                     let origin = config.name.clone();
                     points.change_with(&origin, |db, now| {

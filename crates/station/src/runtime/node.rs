@@ -11,15 +11,15 @@
 //! the server is the command told, so that its termination follows it.
 
 use std::collections::HashMap;
-use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
+use std::sync::{Arc, Mutex, MutexGuard};
 
 use chrono::{DateTime, Utc};
-use iec60870::cs104::server::ServerHandle;
 
 use crate::pointdb::{Point, PointChange, PointDb, PointDbError, PointKey, TimeZonePolicy};
 use crate::store::{EventCause, PointValue, Quality, SourceTime};
 
 use super::clock::NodeClock;
+use super::sink::PointSink;
 use crate::store::Recorder;
 
 /// One node's points, server and recorder.
@@ -27,7 +27,8 @@ use crate::store::Recorder;
 pub struct NodePoints {
     name: String,
     db: Mutex<PointDb>,
-    server: OnceLock<ServerHandle>,
+    /// The protocols serving the points upward (see [`super::sink`]).
+    sinks: std::sync::RwLock<Vec<Arc<dyn PointSink>>>,
     zone: TimeZonePolicy,
     recorder: Recorder,
     clock: Arc<NodeClock>,
@@ -47,7 +48,7 @@ impl NodePoints {
         Arc::new(NodePoints {
             name: name.to_owned(),
             db: Mutex::new(db),
-            server: OnceLock::new(),
+            sinks: std::sync::RwLock::new(Vec::new()),
             zone,
             recorder,
             clock,
@@ -98,13 +99,12 @@ impl NodePoints {
         self.zone
     }
 
-    /// The node's IEC 104 server, once started.
-    pub fn server(&self) -> Option<&ServerHandle> {
-        self.server.get()
-    }
-
-    pub(crate) fn attach_server(&self, server: ServerHandle) {
-        let _ = self.server.set(server);
+    /// Adds a sink: from now on it gets every change of the node's points, in order.
+    pub fn attach_sink(&self, sink: Arc<dyn PointSink>) {
+        self.sinks
+            .write()
+            .unwrap_or_else(|poison| poison.into_inner())
+            .push(sink);
     }
 
     pub(crate) fn recorder(&self) -> &Recorder {
@@ -186,9 +186,14 @@ impl NodePoints {
             };
             &returned
         };
-        if let Some(server) = self.server.get() {
-            if let Err(error) = change.publish(server, self.zone) {
-                tracing::warn!(node = %self.name, point = %change.name, %error, "not published");
+        for sink in self
+            .sinks
+            .read()
+            .unwrap_or_else(|poison| poison.into_inner())
+            .iter()
+        {
+            if let Err(error) = sink.publish(change) {
+                tracing::warn!(node = %self.name, point = %change.name, sink = %sink.describe(), %error, "not published");
             }
         }
         self.recorder
