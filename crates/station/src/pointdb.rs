@@ -18,7 +18,7 @@
 //!   saturates to `32767`, the largest raw value), a short float as the nearest `f32`.
 //!   "Unchanged" therefore means "unchanged on the wire", and element round trips are
 //!   exact.
-//! - **Invalidation.** [`PointDb::invalidate_where`] and [`PointDb::invalidate_source_prefix`]
+//! - **Invalidation.** [`PointDb::invalidate_where`] and [`PointDb::invalidate_link`]
 //!   set IV on the affected points (keeping their last value), as the TC700 does for the
 //!   points of a failed I/O module (spec §7.2) and as a concentrator does for the points of
 //!   a lower link that went down. The next good update clears IV again and is reported.
@@ -48,6 +48,7 @@ use iec60870::asdu::{
 };
 use iec60870::cs104::server::{ImageError, MonitorPoint, ProcessImage, ServerError, ServerHandle};
 
+pub use crate::config::PointSource;
 use crate::store::{EventCause, EventRecord, PointValue, Quality, SourceTime};
 
 /// How a point is transmitted upward.
@@ -77,8 +78,9 @@ pub struct PointSpec {
     /// Deadband for measured values (normalized, scaled, float), in the value's unit
     /// (a fraction for normalized values); `None` reports every change.
     pub deadband: Option<f64>,
-    /// Opaque source key: a PLC variable path, `link:RH2/281`, ...
-    pub source: String,
+    /// Where the value comes from (a PLC variable, a point over a link, a status), typed
+    /// as the project says it: invalidation on a link's loss picks its points by it.
+    pub source: PointSource,
     /// Free description.
     pub description: String,
 }
@@ -568,7 +570,7 @@ pub struct PointDb {
     points: Vec<Point>,
     by_name: HashMap<String, usize>,
     by_ioa: HashMap<u32, usize>,
-    by_source: HashMap<String, Vec<usize>>,
+    by_source: HashMap<PointSource, Vec<usize>>,
 }
 
 impl PointDb {
@@ -678,7 +680,7 @@ impl PointDb {
     }
 
     /// The points fed by a source key (usually one).
-    pub fn by_source<'s>(&'s self, source: &str) -> impl Iterator<Item = &'s Point> + 's {
+    pub fn by_source<'s>(&'s self, source: &PointSource) -> impl Iterator<Item = &'s Point> + 's {
         self.by_source
             .get(source)
             .into_iter()
@@ -784,14 +786,13 @@ impl PointDb {
         changes
     }
 
-    /// [`invalidate_where`](Self::invalidate_where) for the points whose source key starts
-    /// with `prefix` (e.g. `link:RH2/` when the link to RH2 goes down).
-    pub fn invalidate_source_prefix(
-        &mut self,
-        prefix: &str,
-        now: DateTime<Utc>,
-    ) -> Vec<PointChange> {
-        self.invalidate_where(|spec| spec.source.starts_with(prefix), now)
+    /// [`invalidate_where`](Self::invalidate_where) for the points received over the
+    /// client link `link` (when it goes down). Its status point is not one of them.
+    pub fn invalidate_link(&mut self, link: &str, now: DateTime<Utc>) -> Vec<PointChange> {
+        self.invalidate_where(
+            |spec| matches!(&spec.source, PointSource::Link { link: name, .. } if name == link),
+            now,
+        )
     }
 
     /// Sets a communication-status single point from a link state: TRUE when the link is

@@ -291,9 +291,8 @@ async fn run(
 
 /// Invalidates the link's points and reports the link as failed.
 fn set_down(spec: &LinkSpec, node: &NodePoints, origin: &str) {
-    let prefix = format!("{origin}/");
     node.change_with(origin, |db, now| {
-        let mut changes = db.invalidate_source_prefix(&prefix, now);
+        let mut changes = db.invalidate_link(&spec.name, now);
         if let Some(point) = &spec.status_point {
             changes.extend(
                 db.set_link_status(point.as_str(), false, now)

@@ -208,12 +208,7 @@ pub fn point_specs(node: &NodeConfig) -> Vec<PointSpec> {
                 .filter(|g| (1..=16).contains(*g))
                 .fold(0u16, |bits, g| bits | (1 << (g - 1))),
             deadband: point.deadband,
-            source: match &point.source {
-                PointSource::Variable(path) => path.clone(),
-                PointSource::Link { link, ioa } => format!("link:{link}/{ioa}"),
-                PointSource::LinkStatus(link) => format!("status:{link}"),
-                PointSource::ClientStatus(group) => format!("clients:{group}"),
-            },
+            source: point.source.clone(),
             description: point.description.clone(),
         })
         .collect()

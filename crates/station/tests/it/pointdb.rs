@@ -8,7 +8,8 @@ use chrono::{DateTime, TimeZone, Utc};
 use iec60870::asdu::{Element, Ioa, TimeTag, TypeId};
 use proptest::prelude::*;
 use station::pointdb::{
-    from_element, PointChange, PointDb, PointDbError, PointSpec, TimeZonePolicy, Transmission,
+    from_element, PointChange, PointDb, PointDbError, PointSource, PointSpec, TimeZonePolicy,
+    Transmission,
 };
 use station::store::{quality_from_bits, EventCause, PointValue, Quality, SourceTime};
 
@@ -24,7 +25,7 @@ fn spec(name: &str, type_id: TypeId, n: u32) -> PointSpec {
         transmission: Transmission::Spontaneous,
         groups: 1,
         deadband: None,
-        source: format!("plc:{name}"),
+        source: PointSource::Variable(format!("plc:{name}")),
         description: String::new(),
     }
 }
@@ -118,14 +119,17 @@ fn lookups_by_name_ioa_source_and_id() {
     let id = db.id("nc").unwrap();
     assert_eq!(db.get(id).unwrap().spec.name, "nc");
     assert_eq!(
-        db.by_source("plc:bo")
+        db.by_source(&PointSource::Variable("plc:bo".into()))
             .map(|p| p.spec.name.as_str())
             .collect::<Vec<_>>(),
         ["bo"]
     );
     assert!(db.get("nope").is_none());
     assert!(db.get(ioa(99)).is_none());
-    assert_eq!(db.by_source("nope").count(), 0);
+    assert_eq!(
+        db.by_source(&PointSource::Variable("nope".into())).count(),
+        0
+    );
     // Initially IV with the type's zero.
     let p = db.get("sp").unwrap();
     assert!(!p.has_value());
@@ -358,18 +362,24 @@ fn bulk_invalidation_of_a_link_and_recovery() {
     let mut specs = Vec::new();
     for n in 281..=284 {
         let mut s = spec(&format!("RH2_{n}"), TypeId::M_SP_TB_1, n);
-        s.source = format!("link:RH2/{n}");
+        s.source = PointSource::Link {
+            link: "RH2".into(),
+            ioa: ioa(n),
+        };
         specs.push(s);
     }
     let mut other = spec("RZS_1", TypeId::M_SP_TB_1, 400);
-    other.source = "link:RZS/1".into();
+    other.source = PointSource::Link {
+        link: "RZS".into(),
+        ioa: ioa(1),
+    };
     specs.push(other);
     let mut db = PointDb::new("RDRT", specs).unwrap();
     for n in 281..=283 {
         good(&mut db, &format!("RH2_{n}"), PointValue::Bool(n % 2 == 0)).unwrap();
     }
     good(&mut db, "RZS_1", PointValue::Bool(true)).unwrap();
-    let changes = db.invalidate_source_prefix("link:RH2/", t(10));
+    let changes = db.invalidate_link("RH2", t(10));
     // 284 never had a value: it is IV already.
     let names: Vec<_> = changes.iter().map(|c| c.name.as_str()).collect();
     assert_eq!(names, ["RH2_281", "RH2_282", "RH2_283"]);
@@ -387,7 +397,7 @@ fn bulk_invalidation_of_a_link_and_recovery() {
     assert_eq!(changes[1].value, PointValue::Bool(true)); // last value kept
     assert!(!db.get("RZS_1").unwrap().quality.invalid);
     // Twice: nothing new.
-    assert!(db.invalidate_source_prefix("link:RH2/", t(11)).is_empty());
+    assert!(db.invalidate_link("RH2", t(11)).is_empty());
     // Recovery: the same value with good quality is reported; a later repeat is not.
     let back = good(&mut db, "RH2_282", PointValue::Bool(true))
         .unwrap()
