@@ -1197,23 +1197,14 @@ impl Ctx<'_> {
             );
         }
         let store_text = raw.store.as_deref().unwrap_or("sqlite:events.sqlite");
-        let store = if store_text == "sqlite::memory:"
-            || store_text.starts_with("postgres://")
-            || store_text.starts_with("postgresql://")
-        {
-            store_text.to_owned()
-        } else if let Some(path) = store_text
-            .strip_prefix("sqlite://")
-            .or_else(|| store_text.strip_prefix("sqlite:"))
-            .filter(|p| !p.is_empty())
-        {
-            format!("sqlite:{}", resolve(folder, path).display())
-        } else {
-            self.err(
-                &[K("station"), K("store")],
-                format!("`{store_text}` is not sqlite:PATH, sqlite::memory: or postgres://..."),
-            );
-            store_text.to_owned()
+        // One parser for every store address (crate::store_url); a relative SQLite path
+        // is the project folder's.
+        let store = match crate::store_url::StoreUrl::parse(store_text) {
+            Ok(url) => url.resolved_in(folder).to_string(),
+            Err(error) => {
+                self.err(&[K("station"), K("store")], error.to_string());
+                store_text.to_owned()
+            }
         };
         let bind = match raw.bind.as_deref().map(parse_ip) {
             None => IpAddr::V4(Ipv4Addr::LOCALHOST),

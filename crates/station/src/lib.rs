@@ -23,3 +23,4 @@ pub mod pointdb;
 pub mod runtime;
 #[cfg(feature = "store")]
 pub mod store;
+pub mod store_url;

@@ -133,50 +133,25 @@ pub trait EventStore: Send + Sync {
 ///   PostgreSQL database (it must exist; the tables are created in the connection's
 ///   `search_path` schema).
 pub async fn open_store(url: &str) -> Result<Box<dyn EventStore>, StoreError> {
-    let url = url.trim();
-    if let Some(rest) = url.strip_prefix("sqlite:") {
-        let path = rest.strip_prefix("//").unwrap_or(rest);
-        if path.is_empty() {
-            return Err(StoreError::BadUrl {
-                url: url.to_owned(),
-                reason: "no database path after sqlite:".to_owned(),
-            });
-        }
-        let store = if path == ":memory:" {
-            SqliteStore::open_in_memory().await?
-        } else {
-            SqliteStore::open(path).await?
-        };
-        Ok(Box::new(store))
-    } else if url.starts_with("postgres://") || url.starts_with("postgresql://") {
-        let config = PostgresConfig::from_url(url)?;
-        Ok(Box::new(PostgresStore::connect(config).await?))
-    } else {
-        let reason = match url.split_once(':') {
-            Some((scheme, _)) if !scheme.is_empty() => format!("unknown scheme {scheme:?}"),
-            _ => "no scheme".to_owned(),
-        };
-        Err(StoreError::BadUrl {
-            url: redact(url),
-            reason,
-        })
-    }
+    let url = crate::store_url::StoreUrl::parse(url).map_err(|error| StoreError::BadUrl {
+        url: error.text,
+        reason: error.reason,
+    })?;
+    open_store_at(&url).await
 }
 
-/// The URL with the password part of `user:password@` replaced by `***`.
-pub(crate) fn redact(url: &str) -> String {
-    let Some((scheme, rest)) = url.split_once("://") else {
-        return url.to_owned();
-    };
-    let (authority, tail) = match rest.find('/') {
-        Some(i) => rest.split_at(i),
-        None => (rest, ""),
-    };
-    match authority.rsplit_once('@') {
-        Some((userinfo, host)) => match userinfo.split_once(':') {
-            Some((user, _)) => format!("{scheme}://{user}:***@{host}{tail}"),
-            None => url.to_owned(),
-        },
-        None => url.to_owned(),
-    }
+/// Opens (and migrates) the store at a parsed address.
+pub async fn open_store_at(
+    url: &crate::store_url::StoreUrl,
+) -> Result<Box<dyn EventStore>, StoreError> {
+    use crate::store_url::StoreUrl;
+    Ok(match url {
+        StoreUrl::SqliteMemory => Box::new(SqliteStore::open_in_memory().await?),
+        StoreUrl::SqliteFile(path) => Box::new(SqliteStore::open(path).await?),
+        StoreUrl::Postgres(url) => {
+            Box::new(PostgresStore::connect(PostgresConfig::from_url(url)?).await?)
+        }
+    })
 }
+
+pub(crate) use crate::store_url::redact;
