@@ -1,0 +1,303 @@
+//! The checks of a project: the station, each node, the links between them.
+
+mod links;
+mod node;
+
+use super::*;
+
+// ---------------------------------------------------------------------------------------
+// Checks
+
+pub(in crate::config) fn parse_ip(text: &str) -> Result<IpAddr, String> {
+    text.trim()
+        .parse()
+        .map_err(|_| format!("`{text}` is not an IP address"))
+}
+
+pub(in crate::config) fn common_address(value: i64) -> Result<CommonAddress, String> {
+    match u16::try_from(value) {
+        Ok(v) if (1..=65534).contains(&v) => Ok(CommonAddress::new(v)),
+        _ => Err(format!(
+            "common address {value} is outside 1..=65534 (0 is unused, 65535 is broadcast)"
+        )),
+    }
+}
+
+pub(in crate::config) fn ioa(value: i64) -> Result<Ioa, String> {
+    u32::try_from(value)
+        .ok()
+        .filter(|v| *v >= 1)
+        .and_then(|v| Ioa::try_new(v).ok())
+        .ok_or_else(|| format!("IOA {value} is outside 1..=16777215"))
+}
+
+/// Splits `link:NAME/IOA`; `Ok(None)` for a variable path.
+/// An IOA moved by a republishing offset, if still an IOA.
+pub(in crate::config) fn shifted(ioa: Ioa, offset: u32) -> Option<Ioa> {
+    ioa.get()
+        .checked_add(offset)
+        .and_then(|i| Ioa::try_new(i).ok())
+}
+
+pub(in crate::config) fn parse_link_ref(text: &str) -> Result<Option<(String, Ioa)>, String> {
+    let Some(rest) = text.strip_prefix("link:") else {
+        if text.trim().is_empty() {
+            return Err("empty variable path".to_owned());
+        }
+        return Ok(None);
+    };
+    let malformed = || format!("`{text}` is not of the form link:LINK/IOA");
+    let (name, number) = rest.rsplit_once('/').ok_or_else(malformed)?;
+    if name.is_empty() {
+        return Err(malformed());
+    }
+    let number: i64 = number.trim().parse().map_err(|_| malformed())?;
+    Ok(Some((name.to_owned(), ioa(number)?)))
+}
+
+pub(in crate::config) fn resolve(folder: &Path, relative: &str) -> PathBuf {
+    folder.join(relative)
+}
+
+/// Whether `text` declares `PROGRAM name` (case-insensitive, name optionally quoted).
+pub(in crate::config) fn declares_program(text: &str, name: &str) -> bool {
+    let words: Vec<&str> = text
+        .split(|c: char| !(c.is_alphanumeric() || c == '_'))
+        .filter(|w| !w.is_empty())
+        .collect();
+    words
+        .windows(2)
+        .any(|w| matches!(w, [a, b] if a.eq_ignore_ascii_case("program") && b.eq_ignore_ascii_case(name)))
+}
+
+pub(in crate::config) fn is_measurement(type_id: TypeId) -> bool {
+    type_id.mnemonic().starts_with("M_ME_")
+}
+
+impl Ctx<'_> {
+    pub(in crate::config) fn check(&mut self, folder: &Path, raw: RawProject) -> Project {
+        let station = self.check_station(folder, &raw.station);
+        let mut nodes = Vec::new();
+        let mut seen_names: HashMap<String, usize> = HashMap::new();
+        let mut seen_ports: HashMap<u16, String> = HashMap::new();
+        for (n, node) in raw.node.iter().enumerate() {
+            if node.name.trim().is_empty() {
+                self.err(&[K("node"), I(n), K("name")], "node name is empty");
+            } else if let Some(first) = seen_names.get(&node.name) {
+                self.err(
+                    &[K("node"), I(n), K("name")],
+                    format!("duplicate node name `{}` (also node[{first}])", node.name),
+                );
+            } else {
+                seen_names.insert(node.name.clone(), n);
+            }
+            let built = self.check_node(folder, n, node);
+            if let Some(server) = &built.server {
+                let path = [K("node"), I(n), K("server"), K("port_offset")];
+                if let Some(other) = seen_ports.get(&server.port_offset) {
+                    self.err(
+                        &path,
+                        format!(
+                            "port_offset {} is also used by node `{other}`",
+                            server.port_offset
+                        ),
+                    );
+                } else {
+                    seen_ports.insert(server.port_offset, built.name.clone());
+                }
+                if station.port_base.checked_add(server.port_offset).is_none() {
+                    self.err(
+                        &path,
+                        format!(
+                            "port_base {} + port_offset {} is past 65535",
+                            station.port_base, server.port_offset
+                        ),
+                    );
+                }
+            }
+            nodes.push(built);
+        }
+        self.check_links(folder, &raw, &mut nodes);
+        Project {
+            folder: folder.to_path_buf(),
+            station,
+            nodes,
+        }
+    }
+
+    pub(in crate::config) fn check_station(
+        &mut self,
+        folder: &Path,
+        raw: &RawStation,
+    ) -> StationSettings {
+        let time_zone = match raw.time_zone.parse::<chrono_tz::Tz>() {
+            Ok(tz) => tz,
+            Err(_) => {
+                self.err(
+                    &[K("station"), K("time_zone")],
+                    format!(
+                        "unknown time zone `{}` (an IANA name such as Europe/Prague)",
+                        raw.time_zone
+                    ),
+                );
+                chrono_tz::UTC
+            }
+        };
+        let retention_days = raw.retention_days.unwrap_or(60);
+        if retention_days == 0 {
+            self.err(
+                &[K("station"), K("retention_days")],
+                "retention_days must be at least 1",
+            );
+        }
+        let store_text = raw.store.as_deref().unwrap_or("sqlite:events.sqlite");
+        // One parser for every store address (crate::store_url); a relative SQLite path
+        // is the project folder's.
+        let store = match crate::store_url::StoreUrl::parse(store_text) {
+            Ok(url) => url.resolved_in(folder).to_string(),
+            Err(error) => {
+                self.err(&[K("station"), K("store")], error.to_string());
+                store_text.to_owned()
+            }
+        };
+        let bind = match raw.bind.as_deref().map(parse_ip) {
+            None => IpAddr::V4(Ipv4Addr::LOCALHOST),
+            Some(Ok(ip)) => ip,
+            Some(Err(message)) => {
+                self.err(&[K("station"), K("bind")], message);
+                IpAddr::V4(Ipv4Addr::LOCALHOST)
+            }
+        };
+        StationSettings {
+            name: raw.name.clone(),
+            time_zone,
+            store,
+            retention_days,
+            port_base: raw.port_base.unwrap_or(2404),
+            bind,
+            plant: raw.plant.clone(),
+        }
+    }
+
+    pub(in crate::config) fn point_source(
+        &mut self,
+        node: &str,
+        links: &[RawLink],
+        source: &str,
+        path: &[Seg],
+    ) -> PointSource {
+        match parse_link_ref(source) {
+            Ok(None) => PointSource::Variable(source.to_owned()),
+            Ok(Some((link, ioa))) => {
+                if !links.iter().any(|l| l.name == link) {
+                    self.err(path, format!("node `{node}` has no link `{link}`"));
+                }
+                PointSource::Link { link, ioa }
+            }
+            Err(message) => {
+                self.err(path, message);
+                PointSource::Variable(source.to_owned())
+            }
+        }
+    }
+
+    /// A duration in milliseconds of at most a day; an error at `path` otherwise.
+    pub(in crate::config) fn duration_ms(
+        &mut self,
+        ms: i64,
+        path: &[Seg],
+        key: &str,
+    ) -> Option<Duration> {
+        if (1..=86_400_000).contains(&ms) {
+            Some(Duration::from_millis(ms.unsigned_abs()))
+        } else {
+            self.err(path, format!("{key} {ms} is outside 1..=86400000"));
+            None
+        }
+    }
+
+    pub(in crate::config) fn ips(&mut self, texts: &[String], path: &[Seg]) -> Vec<IpAddr> {
+        let mut out = Vec::new();
+        for (i, text) in texts.iter().enumerate() {
+            match parse_ip(text) {
+                Ok(ip) => out.push(ip),
+                Err(message) => {
+                    let mut p = path.to_vec();
+                    p.push(I(i));
+                    self.err(&p, message);
+                }
+            }
+        }
+        out
+    }
+
+    /// The TLS files at `path` (`[..., "tls"]`), each checked to exist.
+    pub(in crate::config) fn tls_files(
+        &mut self,
+        folder: &Path,
+        raw: &RawTls,
+        path: &[Seg],
+    ) -> TlsFiles {
+        let mut at = |key: &'static str, relative: &str| {
+            let mut key_path = path.to_vec();
+            key_path.push(K(key));
+            self.existing_file(folder, relative, &key_path)
+        };
+        TlsFiles {
+            certificate: at("certificate", &raw.certificate),
+            private_key: at("private_key", &raw.private_key),
+            trust_anchors: at("trust_anchors", &raw.trust_anchors),
+        }
+    }
+
+    pub(in crate::config) fn existing_file(
+        &mut self,
+        folder: &Path,
+        relative: &str,
+        path: &[Seg],
+    ) -> PathBuf {
+        let resolved = resolve(folder, relative);
+        if !resolved.is_file() {
+            self.err(path, format!("file `{}` not found", resolved.display()));
+        }
+        resolved
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn line_col_counts_characters() {
+        let text = "a = 1\nname = \"Vsetín\" x";
+        let offset = text.find('x').unwrap();
+        assert_eq!(line_col(text, offset), (2, 17));
+        assert_eq!(line_col(text, 0), (1, 1));
+        assert_eq!(line_col(text, 10_000), (2, 18));
+    }
+
+    #[test]
+    fn link_refs() {
+        assert_eq!(parse_link_ref("A.B"), Ok(None));
+        assert_eq!(
+            parse_link_ref("link:RH2/281"),
+            Ok(Some(("RH2".to_owned(), Ioa::from(281u16))))
+        );
+        assert!(parse_link_ref("link:RH2").is_err());
+        assert!(parse_link_ref("link:/5").is_err());
+        assert!(parse_link_ref("link:X/0").is_err());
+        assert!(parse_link_ref("").is_err());
+    }
+
+    #[test]
+    fn program_declarations() {
+        assert!(declares_program(
+            "PROGRAM RH2Logic\nEND_PROGRAM",
+            "rh2logic"
+        ));
+        assert!(declares_program("program \"Main\" VAR END_VAR", "Main"));
+        assert!(!declares_program("END_PROGRAM RH2Logic", "RH2Logic"));
+        assert!(!declares_program("FUNCTION_BLOCK RH2Logic", "RH2Logic"));
+    }
+}

@@ -1,0 +1,644 @@
+//! The checks of one node: server, tasks, I/O, points, commands, PLC variables.
+
+use super::*;
+
+impl Ctx<'_> {
+    pub(in crate::config) fn check_node(
+        &mut self,
+        folder: &Path,
+        n: usize,
+        raw: &RawNode,
+    ) -> NodeConfig {
+        let node = |rest: &[Seg]| -> Vec<Seg> {
+            let mut p = vec![K("node"), I(n)];
+            p.extend_from_slice(rest);
+            p
+        };
+        let common = common_address(raw.common_address).unwrap_or_else(|message| {
+            self.err(&node(&[K("common_address")]), message);
+            CommonAddress::new(0)
+        });
+
+        // sources
+        let mut sources = Vec::new();
+        // (file name as diagnostics show it, text) of each source read
+        let mut files: Vec<(String, String)> = Vec::new();
+        for (s, source) in raw.sources.iter().enumerate() {
+            let path = node(&[K("sources"), I(s)]);
+            let resolved = self.existing_file(folder, source, &path);
+            if resolved.is_file() {
+                match std::fs::read(&resolved) {
+                    Ok(bytes) => match String::from_utf8(bytes) {
+                        Ok(text) => files.push((resolved.display().to_string(), text)),
+                        Err(e) => self.push(not_utf8(&resolved, e.as_bytes())),
+                    },
+                    Err(e) => self.err(&path, format!("cannot read `{}`: {e}", resolved.display())),
+                }
+            }
+            sources.push(resolved);
+        }
+        let all_sources_read = files.len() == raw.sources.len();
+        let texts: Vec<&str> = files.iter().map(|(_, text)| text.as_str()).collect();
+
+        // server
+        let server = raw.server.as_ref().map(|s| {
+            let port_offset = u16::try_from(s.port_offset).unwrap_or_else(|_| {
+                self.err(
+                    &node(&[K("server"), K("port_offset")]),
+                    format!("port_offset {} is outside 0..=65535", s.port_offset),
+                );
+                0
+            });
+            let allowed_clients = self.ips(
+                &s.allowed_clients,
+                &node(&[K("server"), K("allowed_clients")]),
+            );
+            let redundancy_groups = match &s.redundancy_groups {
+                None => vec![RedundancyGroup {
+                    name: "default".to_owned(),
+                    clients: Vec::new(),
+                    refuse_commands_when: None,
+                    status_point: None,
+                }],
+                Some(groups) => {
+                    let mut out = Vec::new();
+                    if groups.is_empty() {
+                        self.err(
+                            &node(&[K("server"), K("redundancy_groups")]),
+                            "at least one redundancy group is needed",
+                        );
+                    }
+                    let mut names = HashSet::new();
+                    for (g, group) in groups.iter().enumerate() {
+                        if !names.insert(group.name.clone()) {
+                            self.err(
+                                &node(&[K("server"), K("redundancy_groups"), I(g), K("name")]),
+                                format!("duplicate redundancy group `{}`", group.name),
+                            );
+                        }
+                        let clients = self.ips(
+                            &group.clients,
+                            &node(&[K("server"), K("redundancy_groups"), I(g), K("clients")]),
+                        );
+                        out.push(RedundancyGroup {
+                            name: group.name.clone(),
+                            clients,
+                            refuse_commands_when: group.refuse_commands_when.clone(),
+                            status_point: group.status_point.clone(),
+                        });
+                    }
+                    out
+                }
+            };
+            let tls = s
+                .tls
+                .as_ref()
+                .map(|t| self.tls_files(folder, t, &node(&[K("server"), K("tls")])));
+            let group_configs = redundancy_groups
+                .iter()
+                .map(|g| {
+                    iec60870::cs104::server::RedundancyGroupConfig::new(
+                        g.name.clone(),
+                        g.clients.clone(),
+                    )
+                })
+                .collect();
+            let mode_name = s.redundancy.as_deref().unwrap_or("groups-by-address");
+            let redundancy =
+                iec60870::cs104::server::RedundancyMode::from_name(mode_name, group_configs)
+                    .unwrap_or_else(|| {
+                        self.err(
+                            &node(&[K("server"), K("redundancy")]),
+                            format!(
+                                "unknown redundancy mode `{mode_name}` (one of {})",
+                                iec60870::cs104::server::RedundancyMode::NAMES.join(", ")
+                            ),
+                        );
+                        iec60870::cs104::server::RedundancyMode::SingleGroup
+                    });
+            let max_command_age = s.max_command_age_ms.and_then(|ms| {
+                self.duration_ms(
+                    ms,
+                    &node(&[K("server"), K("max_command_age_ms")]),
+                    "max_command_age_ms",
+                )
+            });
+            ServerConfig {
+                port_offset,
+                allowed_clients,
+                redundancy_groups,
+                tls,
+                redundancy,
+                max_command_age,
+            }
+        });
+
+        // tasks
+        let mut tasks = Vec::new();
+        let mut task_names = HashSet::new();
+        for (t, task) in raw.task.iter().enumerate() {
+            if !task_names.insert(task.name.clone()) {
+                self.err(
+                    &node(&[K("task"), I(t), K("name")]),
+                    format!("duplicate task name `{}`", task.name),
+                );
+            }
+            if task.interval_ms == 0 {
+                self.err(
+                    &node(&[K("task"), I(t), K("interval_ms")]),
+                    "interval_ms must be at least 1",
+                );
+            }
+            if task.watchdog_ms == Some(0) {
+                self.err(
+                    &node(&[K("task"), I(t), K("watchdog_ms")]),
+                    "watchdog_ms must be at least 1",
+                );
+            }
+            if all_sources_read {
+                for (p, program) in task.programs.iter().enumerate() {
+                    if !texts.iter().any(|text| declares_program(text, program)) {
+                        self.err(
+                            &node(&[K("task"), I(t), K("programs"), I(p)]),
+                            format!("no PROGRAM `{program}` is declared in the node's sources"),
+                        );
+                    }
+                }
+            }
+            tasks.push(TaskConfig {
+                name: task.name.clone(),
+                interval: Duration::from_millis(task.interval_ms),
+                priority: task.priority,
+                programs: task.programs.clone(),
+                watchdog: task.watchdog_ms.map(Duration::from_millis),
+            });
+        }
+
+        let io = raw
+            .io
+            .iter()
+            .map(|b| IoBinding {
+                signal: b.signal.clone(),
+                variable: b.variable.clone(),
+            })
+            .collect();
+
+        // points
+        let mut points = Vec::new();
+        let mut point_names = HashSet::new();
+        let mut point_ioas: HashMap<Ioa, String> = HashMap::new();
+        for (p, point) in raw.point.iter().enumerate() {
+            let at = |key: &'static str| node(&[K("point"), I(p), K(key)]);
+            if !point_names.insert(point.name.clone()) {
+                self.err(
+                    &at("name"),
+                    format!("duplicate point name `{}`", point.name),
+                );
+            }
+            let type_id = match point.type_id.parse::<TypeId>() {
+                Ok(t) if t.is_monitor() && t != TypeId::M_EI_NA_1 => t,
+                Ok(t) => {
+                    self.err(
+                        &at("type"),
+                        format!("{t} is not a monitor-direction process type"),
+                    );
+                    TypeId::M_SP_NA_1
+                }
+                Err(_) => {
+                    self.err(&at("type"), format!("unknown type `{}`", point.type_id));
+                    TypeId::M_SP_NA_1
+                }
+            };
+            let address = match ioa(point.ioa) {
+                Ok(a) => {
+                    if let Some(other) = point_ioas.get(&a) {
+                        self.err(
+                            &at("ioa"),
+                            format!("IOA {a} is also used by point `{other}`"),
+                        );
+                    } else {
+                        point_ioas.insert(a, point.name.clone());
+                    }
+                    a
+                }
+                Err(message) => {
+                    self.err(&at("ioa"), message);
+                    Ioa::IRRELEVANT
+                }
+            };
+            let status_of = raw
+                .link
+                .iter()
+                .find(|l| l.status_point.as_deref() == Some(point.name.as_str()));
+            let group_of = raw
+                .server
+                .as_ref()
+                .and_then(|s| s.redundancy_groups.as_ref())
+                .and_then(|groups| {
+                    groups
+                        .iter()
+                        .find(|g| g.status_point.as_deref() == Some(point.name.as_str()))
+                });
+            if let (None, None, Some(group)) = (&point.source, status_of, group_of) {
+                if !matches!(type_id, TypeId::M_SP_NA_1 | TypeId::M_SP_TB_1) {
+                    self.err(
+                        &at("type"),
+                        format!(
+                            "the status point of redundancy group `{}` must be M_SP_NA_1 or M_SP_TB_1",
+                            group.name
+                        ),
+                    );
+                }
+            }
+            let source = match (&point.source, status_of) {
+                (None, None) if group_of.is_some() => {
+                    PointSource::ClientStatus(group_of.map(|g| g.name.clone()).unwrap_or_default())
+                }
+                (None, Some(link)) => {
+                    if !matches!(type_id, TypeId::M_SP_NA_1 | TypeId::M_SP_TB_1) {
+                        self.err(
+                            &at("type"),
+                            format!(
+                                "the status point of link `{}` must be M_SP_NA_1 or M_SP_TB_1",
+                                link.name
+                            ),
+                        );
+                    }
+                    PointSource::LinkStatus(link.name.clone())
+                }
+                (None, None) => {
+                    self.err(
+                        &node(&[K("point"), I(p)]),
+                        "missing source (only the status point of a link or a redundancy group has none)",
+                    );
+                    PointSource::Variable(String::new())
+                }
+                (Some(_), Some(link)) => {
+                    self.err(
+                        &at("source"),
+                        format!("the status point of link `{}` takes no source", link.name),
+                    );
+                    PointSource::LinkStatus(link.name.clone())
+                }
+                (Some(source), None) => {
+                    self.point_source(&raw.name, &raw.link, source, &at("source"))
+                }
+            };
+            let transmission = match (point.transmission, point.cycle_ms) {
+                (RawTransmission::Cyclic, Some(ms)) if ms > 0 => Transmission::Cyclic {
+                    period: Duration::from_millis(ms),
+                },
+                (RawTransmission::Cyclic, Some(_)) => {
+                    self.err(&at("cycle_ms"), "cycle_ms must be at least 1");
+                    Transmission::Spontaneous
+                }
+                (RawTransmission::Cyclic, None) => {
+                    self.err(&at("transmission"), "cyclic transmission needs cycle_ms");
+                    Transmission::Spontaneous
+                }
+                (_, Some(_)) => {
+                    self.err(
+                        &at("cycle_ms"),
+                        "cycle_ms is only allowed with transmission = \"cyclic\"",
+                    );
+                    Transmission::Spontaneous
+                }
+                (RawTransmission::Spontaneous, None) => Transmission::Spontaneous,
+                (RawTransmission::InterrogationOnly, None) => Transmission::InterrogationOnly,
+            };
+            let mut groups = Vec::new();
+            for (g, group) in point.groups.iter().enumerate() {
+                match u8::try_from(*group) {
+                    Ok(v) if (1..=16).contains(&v) => groups.push(v),
+                    _ => self.err(
+                        &node(&[K("point"), I(p), K("groups"), I(g)]),
+                        format!("interrogation group {group} is outside 1..=16"),
+                    ),
+                }
+            }
+            if let Some(deadband) = point.deadband {
+                if !is_measurement(type_id) {
+                    self.err(
+                        &at("deadband"),
+                        format!("a deadband needs a measurement type (M_ME_*), not {type_id}"),
+                    );
+                } else if !(deadband >= 0.0 && deadband.is_finite()) {
+                    self.err(&at("deadband"), "deadband must be a finite value >= 0");
+                }
+            }
+            points.push(PointConfig {
+                name: point.name.clone(),
+                type_id,
+                ioa: address,
+                source,
+                transmission,
+                groups,
+                deadband: point.deadband,
+                invalid_when: point.invalid_when.clone(),
+                description: point.description.clone(),
+            });
+        }
+
+        // commands
+        let mut commands = Vec::new();
+        let mut command_names = HashSet::new();
+        let mut command_ioas: HashMap<Ioa, String> = HashMap::new();
+        for (c, command) in raw.command.iter().enumerate() {
+            let at = |key: &'static str| node(&[K("command"), I(c), K(key)]);
+            if !command_names.insert(command.name.clone()) {
+                self.err(
+                    &at("name"),
+                    format!("duplicate command name `{}`", command.name),
+                );
+            }
+            let type_id = match command.type_id.parse::<TypeId>() {
+                Ok(t) if t.is_command() => t,
+                Ok(t) => {
+                    self.err(&at("type"), format!("{t} is not a command type"));
+                    TypeId::C_SC_NA_1
+                }
+                Err(_) => {
+                    self.err(&at("type"), format!("unknown type `{}`", command.type_id));
+                    TypeId::C_SC_NA_1
+                }
+            };
+            let address = match ioa(command.ioa) {
+                Ok(a) => {
+                    if let Some(other) = command_ioas.get(&a) {
+                        self.err(
+                            &at("ioa"),
+                            format!("IOA {a} is also used by command `{other}`"),
+                        );
+                    } else if let Some(point) = point_ioas.get(&a) {
+                        // Many controlling stations (lib60870, most SCADA) keep one
+                        // information object per address: a command and a point on one
+                        // IOA would clash there.
+                        self.err(
+                            &at("ioa"),
+                            format!("IOA {a} is also the address of point `{point}`"),
+                        );
+                    } else {
+                        command_ioas.insert(a, command.name.clone());
+                    }
+                    a
+                }
+                Err(message) => {
+                    self.err(&at("ioa"), message);
+                    Ioa::IRRELEVANT
+                }
+            };
+            let target = match parse_link_ref(&command.target) {
+                Ok(None) => CommandTarget::Variable(command.target.clone()),
+                Ok(Some((link, ioa))) => {
+                    if !raw.link.iter().any(|l| l.name == link) {
+                        self.err(
+                            &at("target"),
+                            format!("node `{}` has no link `{link}`", raw.name),
+                        );
+                    }
+                    CommandTarget::Link { link, ioa }
+                }
+                Err(message) => {
+                    self.err(&at("target"), message);
+                    CommandTarget::Variable(command.target.clone())
+                }
+            };
+            for (g, group) in command.from_groups.iter().enumerate() {
+                let known = server.as_ref().is_some_and(|s: &ServerConfig| {
+                    s.redundancy_groups.iter().any(|r| &r.name == group)
+                });
+                if !known {
+                    self.err(
+                        &[K("node"), I(n), K("command"), I(c), K("from_groups"), I(g)],
+                        format!("node `{}` has no redundancy group `{group}`", raw.name),
+                    );
+                }
+            }
+            let pulse = match command.pulse_ms {
+                None => None,
+                Some(ms) if (1..=3_600_000).contains(&ms) => {
+                    if matches!(target, CommandTarget::Link { .. }) {
+                        self.err(
+                            &at("pulse_ms"),
+                            "a forwarded command is pulsed by the node that executes it",
+                        );
+                    }
+                    Some(Duration::from_millis(ms.unsigned_abs()))
+                }
+                Some(ms) => {
+                    self.err(
+                        &at("pulse_ms"),
+                        format!("pulse_ms {ms} is outside 1..=3600000"),
+                    );
+                    None
+                }
+            };
+            let max_age = command
+                .max_age_ms
+                .and_then(|ms| self.duration_ms(ms, &at("max_age_ms"), "max_age_ms"));
+            let range = command.range.and_then(|[low, high]| {
+                let setpoint = matches!(
+                    type_id,
+                    TypeId::C_SE_NA_1
+                        | TypeId::C_SE_NB_1
+                        | TypeId::C_SE_NC_1
+                        | TypeId::C_SE_TA_1
+                        | TypeId::C_SE_TB_1
+                        | TypeId::C_SE_TC_1
+                );
+                if !setpoint {
+                    self.err(
+                        &at("range"),
+                        format!("range applies to set-points, not {type_id}"),
+                    );
+                    None
+                } else if !(low.is_finite() && high.is_finite() && low <= high) {
+                    self.err(&at("range"), format!("range [{low}, {high}] is empty"));
+                    None
+                } else {
+                    Some(low..=high)
+                }
+            });
+            let feedback = match &command.feedback {
+                None => {
+                    if command.feedback_timeout_ms.is_some() {
+                        self.err(
+                            &at("feedback_timeout_ms"),
+                            "feedback_timeout_ms needs feedback",
+                        );
+                    }
+                    None
+                }
+                Some(point) => {
+                    if !point_names.contains(point) {
+                        self.err(
+                            &at("feedback"),
+                            format!("node `{}` has no point `{point}`", raw.name),
+                        );
+                    }
+                    if matches!(target, CommandTarget::Link { .. }) {
+                        self.err(
+                            &at("feedback"),
+                            "a forwarded command's return information comes from the node that executes it",
+                        );
+                    }
+                    let timeout = match command.feedback_timeout_ms {
+                        None => DEFAULT_FEEDBACK_TIMEOUT,
+                        Some(ms) => self
+                            .duration_ms(ms, &at("feedback_timeout_ms"), "feedback_timeout_ms")
+                            .unwrap_or(DEFAULT_FEEDBACK_TIMEOUT),
+                    };
+                    Some(Feedback {
+                        point: point.clone(),
+                        timeout,
+                    })
+                }
+            };
+            commands.push(CommandConfig {
+                max_age,
+                feedback,
+                range,
+                name: command.name.clone(),
+                type_id,
+                ioa: address,
+                target,
+                select_required: command.select_required,
+                remote_enable: command.remote_enable.clone(),
+                pulse,
+                from_groups: command.from_groups.clone(),
+                description: command.description.clone(),
+            });
+        }
+
+        #[cfg(feature = "runtime")]
+        if all_sources_read && !files.is_empty() {
+            self.check_plc_variables(n, raw, &files);
+        }
+
+        NodeConfig {
+            name: raw.name.clone(),
+            description: raw.description.clone(),
+            common_address: common,
+            sources,
+            server,
+            tasks,
+            io,
+            points,
+            commands,
+            links: Vec::new(),
+            initial_values: raw
+                .set
+                .iter()
+                .map(|(path, value)| (path.clone(), value.clone()))
+                .collect(),
+            tables: raw
+                .table
+                .iter()
+                .enumerate()
+                .map(|(t, table)| TableConfig {
+                    file: self.existing_file(
+                        folder,
+                        &table.file,
+                        &[K("node"), I(n), K("table"), I(t), K("file")],
+                    ),
+                    index: table.index.clone(),
+                    columns: table
+                        .columns
+                        .iter()
+                        .map(|(column, path)| (column.clone(), path.clone()))
+                        .collect(),
+                })
+                .collect(),
+        }
+    }
+
+    /// Compiles the node's ST sources as the runtime will and looks up every PLC variable
+    /// the node names (point sources and `invalid_when`, command targets and
+    /// `remote_enable`, I/O variables, `refuse_commands_when`): a typo is then reported at
+    /// its value in station.toml, not as a start-up failure without a place. Compile errors
+    /// are reported at their place in the ST file.
+    #[cfg(feature = "runtime")]
+    pub(in crate::config) fn check_plc_variables(
+        &mut self,
+        n: usize,
+        raw: &RawNode,
+        files: &[(String, String)],
+    ) {
+        let (sources, result) = plc::build(files);
+        let compiled = match result {
+            Ok(compiled) => compiled,
+            Err(diagnostics) => {
+                for diagnostic in diagnostics.iter().filter(|d| d.is_error()) {
+                    let at = sources.line_col(diagnostic.primary);
+                    let file = sources
+                        .file(diagnostic.primary.file)
+                        .map(|f| PathBuf::from(&f.name))
+                        .unwrap_or_default();
+                    self.push(ConfigError {
+                        file,
+                        line: at.line,
+                        column: at.col,
+                        key: String::new(),
+                        message: diagnostic.message.clone(),
+                    });
+                }
+                return;
+            }
+        };
+        let plc = match plc::Plc::try_new(compiled, sources) {
+            Ok(plc) => plc,
+            Err(error) => {
+                self.err(
+                    &[K("node"), I(n), K("sources")],
+                    format!("the PLC does not start: {error}"),
+                );
+                return;
+            }
+        };
+        let is_variable = |text: &str| matches!(parse_link_ref(text), Ok(None));
+        let mut named: Vec<(Vec<Seg>, &str)> = Vec::new();
+        for (p, point) in raw.point.iter().enumerate() {
+            if let Some(source) = point.source.as_deref().filter(|s| is_variable(s)) {
+                named.push((vec![K("point"), I(p), K("source")], source));
+            }
+            if let Some(variable) = &point.invalid_when {
+                named.push((vec![K("point"), I(p), K("invalid_when")], variable));
+            }
+        }
+        for (c, command) in raw.command.iter().enumerate() {
+            if is_variable(&command.target) {
+                named.push((vec![K("command"), I(c), K("target")], &command.target));
+            }
+            if let Some(variable) = &command.remote_enable {
+                named.push((vec![K("command"), I(c), K("remote_enable")], variable));
+            }
+        }
+        for (i, io) in raw.io.iter().enumerate() {
+            named.push((vec![K("io"), I(i), K("variable")], &io.variable));
+        }
+        let groups = raw
+            .server
+            .as_ref()
+            .and_then(|s| s.redundancy_groups.as_ref());
+        for (g, group) in groups.into_iter().flatten().enumerate() {
+            if let Some(variable) = &group.refuse_commands_when {
+                named.push((
+                    vec![
+                        K("server"),
+                        K("redundancy_groups"),
+                        I(g),
+                        K("refuse_commands_when"),
+                    ],
+                    variable,
+                ));
+            }
+        }
+        for (rest, variable) in named {
+            if let Err(error) = plc.leaf(variable) {
+                let mut path = vec![K("node"), I(n)];
+                path.extend(rest);
+                self.err(&path, format!("{error} in the node's PLC program"));
+            }
+        }
+    }
+}

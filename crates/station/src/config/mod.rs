@@ -1,0 +1,585 @@
+//! The project folder: `station.toml`, the ST sources it names, and every problem found in
+//! them with `file:line:col`.
+//!
+//! [`Project::load`] reads `FOLDER/station.toml`, checks it and returns the typed model, or
+//! [`ConfigErrors`] with *all* problems found. Each [`ConfigError`] names the file, the
+//! 1-based line and column (in characters) of the offending value, its key path such as
+//! `node[2].point[5].ioa` (array indices are 0-based, in file order) and a message; its
+//! `Display` is `file:line:col: error: key: message`. Only the first syntax error is
+//! reported, alone (what a recovering parser finds after it mostly follows from it, and
+//! nothing else can be checked); a type error (a string where a number belongs, an unknown
+//! key, a missing required key) stops before the semantic checks, which then all run. At
+//! most [`MAX_ERRORS_PER_FILE`] problems are kept per file, the rest counted
+//! ([`ConfigErrors::omitted`]).
+//!
+//! # Format
+//!
+//! ```toml
+//! [station]
+//! name = "Vsetín"
+//! time_zone = "Europe/Prague"          # IANA name
+//! store = "sqlite:events.sqlite"       # default; relative paths resolve against the project
+//!                                      # folder; "sqlite::memory:" and postgres://... allowed
+//! retention_days = 60                  # default 60, >= 1
+//! port_base = 2404                     # default 2404; a node's server port = port_base + port_offset
+//! bind = "127.0.0.1"                   # default; the address every node's server listens on
+//! plant = "vsetin"                     # optional: which plant simulation drives the I/O
+//!
+//! [[node]]
+//! name = "RH1.1"                       # unique
+//! description = "main board concentrator (S7-1500)"   # optional
+//! common_address = 11                  # 1..=65534
+//! sources = ["plc/rh2_logic.st"]       # ST files relative to the project; must exist
+//!
+//! [node.server]                        # optional: the node's IEC 104 server
+//! port_offset = 7                      # unique among the nodes
+//! allowed_clients = ["127.0.0.1"]      # default: any
+//! redundancy_groups = [ { name = "dispatch-A", clients = ["127.0.0.1"] } ]
+//!                                      # default: one catch-all group "default";
+//!                                      # a group without clients is a catch-all;
+//!                                      # refuse_commands_when = "BOOL variable": the
+//!                                      # group's commands are refused while it is TRUE;
+//!                                      # status_point = "COMM_HMI": a point TRUE while no
+//!                                      # client of the group is connected
+//! tls = { certificate = "tls/rh11.pem", private_key = "tls/rh11.key", trust_anchors = "tls/ca.pem" }
+//!                                      # optional; the files must exist
+//! redundancy = "groups-by-address"     # default; how clients share data: "single-group"
+//!                                      # (one started connection for all clients),
+//!                                      # "connection-is-group" (each connection its own
+//!                                      # buffer: independent masters), "groups-by-address"
+//!                                      # (the redundancy_groups); in the first two the
+//!                                      # groups only classify clients for authority and
+//!                                      # status points
+//! max_command_age_ms = 10000           # optional: time-tagged commands older (or further
+//!                                      # in the future) than this are refused
+//!
+//! [[node.task]]
+//! name = "fast"
+//! interval_ms = 50                     # >= 1
+//! priority = 1                         # 0..=255, default 0
+//! programs = ["RH2Logic"]              # PROGRAM names declared in the node's sources
+//! watchdog_ms = 200                    # optional
+//!
+//! [node.set]                           # optional: PLC values written after the cold start
+//! "LightingBoard.Zpozdeni" = "T#2s"    # variable path = IEC literal
+//!
+//! [[node.table]]                       # optional: a CSV file loaded into PLC arrays
+//! file = "calendar/vsetin-weekly.csv"  # header row; `#` lines are comments
+//! index = "week"                       # the column with each row's array index
+//! columns = { off_utc = "LightingBoard.Osvetleni.sunrise_data" }   # cell -> path[index];
+//!                                      # HH:MM[:SS] cells become TOD#HH:MM:SS literals
+//!
+//! [[node.io]]                          # plant signal <-> PLC variable; the pseudo-signal
+//! signal = "RH2_P1_SA1_Dalkove"         # "module-fault:MODULE" is TRUE while that I/O
+//!                                      # module is pulled or unreachable
+//! variable = "RH2Logic.SA1_Dalkove"
+//!
+//! [[node.point]]
+//! name = "RH2_V1_FA1_Zapnut"           # unique per node
+//! type = "M_SP_TB_1"                   # a monitor-direction type (1..=40)
+//! ioa = 281                            # 1..=16_777_215, unique per node among points
+//! source = "RH2Logic.FA1_Zapnut"       # a PLC variable path, or "link:LINK/IOA": the point
+//!                                      # IOA of the node behind the link LINK of this node;
+//!                                      # omitted for a link's status_point (M_SP_NA_1 or
+//!                                      # M_SP_TB_1, TRUE = link down)
+//! transmission = "spontaneous"         # spontaneous (default) | cyclic | interrogation-only
+//! cycle_ms = 1000                      # required with (and only with) cyclic
+//! groups = [1, 3]                      # interrogation groups 1..=16; default none
+//! deadband = 0.5                       # measurements (M_ME_*) only; absolute, >= 0
+//! invalid_when = "RDRTIO.PoruchaModul9" # optional BOOL variable: TRUE sends the point IV
+//! description = "breaker FA1 closed"   # optional
+//!
+//! [[node.command]]
+//! name = "RH2_VypnoutQF1"              # unique per node
+//! type = "C_SC_NA_1"                   # a command type (45..=64)
+//! ioa = 2021                           # unique per node among commands
+//! target = "RH2Logic.Cmd_VypnoutQF1"   # a PLC variable, or "link:LINK/IOA" to forward it down
+//! select_required = false              # default false
+//! remote_enable = "RH2Logic.SA1_Dalkove"   # optional BOOL variable; FALSE (local mode):
+//!                                          # remote commands are refused
+//! pulse_ms = 500                       # optional, single/double commands on a variable:
+//!                                      # reset to FALSE after this time
+//! from_groups = ["hmi"]                # optional: only clients of these redundancy groups
+//! max_age_ms = 5000                    # optional: this command's own maximum command delay
+//! range = [0, 1439]                    # optional, set-points: values outside are refused
+//!                                      # (negative ACT_CON, audited), never clamped
+//! feedback = "RH2_QF1_Position"        # optional, commands on a PLC variable: the point of
+//!                                      # this node that returns the command's effect; its
+//!                                      # first change after an execute is sent as return
+//!                                      # information (cause 11) between ACT_CON and ACT_TERM
+//! feedback_timeout_ms = 5000           # default 5000: ACT_TERM without return information
+//!                                      # after this long (wall-clock time)
+//! description = "open QF1"             # optional
+//!
+//! [[node.link]]                        # IEC 104 client link to a lower node
+//! name = "RH2"                         # unique per node
+//! node = "RH2"                         # a node of this project with a [node.server], or:
+//! # address = "192.0.2.10:2404"        # exactly one of node/address
+//! common_address = 21                  # default: the target node's (required with address)
+//! interrogate_on_start = true          # default true
+//! clock_sync = true                    # default true: this node is the lower one's time source
+//! status_point = "COMM_RH2"            # optional: a point of this node showing the link state
+//! tls = { certificate = "tls/rh11.pem", private_key = "tls/rh11.key", trust_anchors = "tls/ca.pem" }
+//!                                      # optional, required when the lower node's server has
+//!                                      # tls: mutual authentication on the link
+//! republish = { ioa_offset = 1000 }    # optional, links to project nodes: every point and
+//!                                      # command of the lower node (its republished ones
+//!                                      # too) appears here, same name, IOA + ioa_offset
+//!                                      # (default 0), as a concentrator maps a whole
+//!                                      # outstation; explicit points may stand beside them
+//! ```
+//!
+//! # Checks
+//!
+//! Besides syntax and types: duplicate node, task, point, command and link names; duplicate
+//! IOAs within a node (a command may not share an IOA with a point either: most
+//! controlling stations keep one information object per address); IOA 0 or above 16 777 215; common
+//! address 0 or 65535; point types that are not monitor types and command types that are
+//! not commands; `link:` sources and targets that are malformed, name no link of the node,
+//! or (for a link to a project node) an IOA the lower node does not serve as a point
+//! (sources) or command (targets); links naming an unknown node, the node itself, a node
+//! without a server, or both/neither of `node` and `address`; cycles in the link graph; two
+//! servers with the same `port_offset` or a port past 65535; `cyclic` without `cycle_ms`;
+//! a deadband on a non-measurement type; interrogation groups outside 1..=16; missing ST
+//! sources and TLS files; task programs not declared as `PROGRAM` in the node's sources
+//! (a textual check, case-insensitive; the PLC compiler checks the rest); a status point
+//! naming no point of the node, a status point that is not a single point or has a
+//! `source`, a point without `source` that no link names; unknown time zones; `retention_days = 0`; unparsable IP
+//! and socket addresses; unsupported store URLs. ST sources must be UTF-8 (a leading
+//! byte-order mark is accepted); a file that is not is reported at its first invalid byte.
+//!
+//! With the `runtime` feature (the default) each node's ST sources are also compiled as
+//! the runtime will compile them: compile errors are reported at their place in the ST
+//! file, and every PLC variable the node names (point `source` and `invalid_when`,
+//! command `target` and `remote_enable`, `io` `variable`, `refuse_commands_when`) must
+//! exist, or is reported at its value in station.toml.
+//!
+//! Positions come from the spans of `toml`'s own parse tree ([`toml::de::DeTable`]): the
+//! semantic checks look a key path up in it, and a serde error's byte span is mapped back
+//! to the innermost key path containing it.
+//!
+//! Problems without a position (`station.toml` missing or unreadable) carry line and
+//! column 0 and are shown as `file: error: message`.
+
+//!
+//! # Layout
+//!
+//! The model (what a loaded project is) is here; `raw` holds the file as serde reads it,
+//! `spans` the key paths and their positions, `error` the problems, and `check` turns the
+//! raw file into the model: the station and the order of things in `check`, one node in
+//! `check::node`, the links between nodes in `check::links`.
+use std::collections::{HashMap, HashSet};
+use std::fmt;
+use std::net::{IpAddr, Ipv4Addr, SocketAddr};
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use iec60870::asdu::{CommonAddress, Ioa, TypeId};
+use serde::Deserialize;
+use toml::de::{DeTable, DeValue};
+use toml::Spanned;
+
+/// The name of the project file inside a project folder.
+pub const PROJECT_FILE: &str = "station.toml";
+
+/// A loaded and checked project.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Project {
+    /// The project folder (as given to [`Project::load`]).
+    pub folder: PathBuf,
+    /// The `[station]` table.
+    pub station: StationSettings,
+    /// The `[[node]]` tables, in file order.
+    pub nodes: Vec<NodeConfig>,
+}
+
+/// Station-wide settings, the `[station]` table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StationSettings {
+    /// The station's name.
+    pub name: String,
+    /// The local time zone (PLC clocks, DST).
+    pub time_zone: chrono_tz::Tz,
+    /// The event store URL, with a relative SQLite path resolved against the project folder.
+    pub store: String,
+    /// How long events are kept, in days (>= 1).
+    pub retention_days: u32,
+    /// The port of a node's server is `port_base + port_offset`.
+    pub port_base: u16,
+    /// The address the nodes' servers listen on.
+    pub bind: IpAddr,
+    /// The plant simulation that drives the I/O, if any.
+    pub plant: Option<String>,
+}
+
+/// A node (controller), one `[[node]]` table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NodeConfig {
+    /// Unique name.
+    pub name: String,
+    /// Free text.
+    pub description: String,
+    /// The node's common address of ASDU (1..=65534).
+    pub common_address: CommonAddress,
+    /// ST source files, resolved against the project folder.
+    pub sources: Vec<PathBuf>,
+    /// The node's IEC 104 server, if it has one.
+    pub server: Option<ServerConfig>,
+    /// PLC tasks.
+    pub tasks: Vec<TaskConfig>,
+    /// Plant signal <-> PLC variable bindings.
+    pub io: Vec<IoBinding>,
+    /// Monitor-direction data points the node serves.
+    pub points: Vec<PointConfig>,
+    /// Commands the node accepts.
+    pub commands: Vec<CommandConfig>,
+    /// IEC 104 client links to lower nodes.
+    pub links: Vec<LinkConfig>,
+    /// Values written into the PLC after its cold start (variable path -> IEC literal):
+    /// parameters such as a board's switch-on delay.
+    pub initial_values: Vec<(String, String)>,
+    /// Data tables loaded into PLC arrays after the cold start.
+    pub tables: Vec<TableConfig>,
+}
+
+/// A CSV file loaded into PLC arrays, `[[node.table]]`: the lighting calendar is data, not
+/// code (spec 4.4).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct TableConfig {
+    /// The CSV file (a header row; lines starting with `#` are comments).
+    pub file: PathBuf,
+    /// The column holding each row's array index.
+    pub index: String,
+    /// Column name -> array variable path; cell `v` of row `i` goes to `path[i]`.
+    pub columns: Vec<(String, String)>,
+}
+
+/// A node's IEC 104 server, `[node.server]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ServerConfig {
+    /// Added to the station's `port_base`.
+    pub port_offset: u16,
+    /// Clients allowed to connect; empty means any.
+    pub allowed_clients: Vec<IpAddr>,
+    /// Redundancy groups (at least one).
+    pub redundancy_groups: Vec<RedundancyGroup>,
+    /// TLS files, resolved against the project folder.
+    pub tls: Option<TlsFiles>,
+    /// How clients form redundancy groups (`redundancy`); `GroupsByAddress` carries the
+    /// groups' addresses.
+    pub redundancy: iec60870::cs104::server::RedundancyMode,
+    /// The maximum command delay of time-tagged commands (`max_command_age_ms`).
+    pub max_command_age: Option<Duration>,
+}
+
+/// A redundancy group of a server: the connections of its clients share one event buffer.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RedundancyGroup {
+    /// The group's name.
+    pub name: String,
+    /// Client addresses of the group; empty means a catch-all group.
+    pub clients: Vec<IpAddr>,
+    /// A BOOL variable of the node: while TRUE, commands from this group's clients are
+    /// refused (the TC700's per-link command permission, e.g. dispatch commands blocked
+    /// while the local HMI has control, spec 7.5).
+    pub refuse_commands_when: Option<String>,
+    /// A single point of the node: TRUE while no client of this group is connected (the
+    /// TC700's link-failure points 38-41 of its upper links, spec 7.3).
+    pub status_point: Option<String>,
+}
+
+/// TLS certificate, key and trust anchors (PEM files) of one end of a link.
+pub use iec60870::cs104::tls::TlsFiles;
+
+/// A PLC task, `[[node.task]]`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct TaskConfig {
+    /// Unique per node.
+    pub name: String,
+    /// Cycle interval (> 0).
+    pub interval: Duration,
+    /// Priority, 0 highest.
+    pub priority: u8,
+    /// PROGRAM type names run by the task, in order.
+    pub programs: Vec<String>,
+    /// Watchdog time, if any.
+    pub watchdog: Option<Duration>,
+}
+
+/// A plant signal bound to a PLC variable, `[[node.io]]`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct IoBinding {
+    /// The plant signal's name.
+    pub signal: String,
+    /// The PLC variable path, e.g. `RH2Logic.SA1_Dalkove`.
+    pub variable: String,
+}
+
+/// Where a point's value comes from.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub enum PointSource {
+    /// A PLC variable path of the node.
+    Variable(String),
+    /// Point `ioa` received over the node's client link `link`.
+    Link {
+        /// The link's name.
+        link: String,
+        /// The IOA on the lower node.
+        ioa: Ioa,
+    },
+    /// The state of the node's client link with this name (TRUE = link down), for a point
+    /// named by the link's `status_point`; such a point has no `source`.
+    LinkStatus(String),
+    /// Whether a controlling station of the server's redundancy group with this name is
+    /// connected (TRUE = none is), for a point named by the group's `status_point`.
+    ClientStatus(String),
+}
+
+/// Where a command goes.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub enum CommandTarget {
+    /// A PLC variable path of the node, written when the command arrives.
+    Variable(String),
+    /// Forwarded down the node's client link `link` as command `ioa`.
+    Link {
+        /// The link's name.
+        link: String,
+        /// The IOA on the lower node.
+        ioa: Ioa,
+    },
+}
+
+/// How a point is transmitted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Transmission {
+    /// On every change (COT 3), the default.
+    #[default]
+    Spontaneous,
+    /// Periodically (COT 1).
+    Cyclic {
+        /// The period.
+        period: Duration,
+    },
+    /// Only in interrogation responses.
+    InterrogationOnly,
+}
+
+/// A monitor-direction data point, `[[node.point]]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointConfig {
+    /// Unique per node.
+    pub name: String,
+    /// A monitor type ([`TypeId::is_monitor`]).
+    pub type_id: TypeId,
+    /// Unique per node among points.
+    pub ioa: Ioa,
+    /// Where the value comes from.
+    pub source: PointSource,
+    /// How it is sent.
+    pub transmission: Transmission,
+    /// Interrogation groups 1..=16.
+    pub groups: Vec<u8>,
+    /// Absolute deadband (measurements only).
+    pub deadband: Option<f64>,
+    /// A BOOL PLC variable: while TRUE the point is sent invalid (IV), as the TC700 does
+    /// for the points of a faulty I/O module (spec 7.2).
+    pub invalid_when: Option<String>,
+    /// Free text.
+    pub description: String,
+}
+
+/// A command, `[[node.command]]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CommandConfig {
+    /// Unique per node.
+    pub name: String,
+    /// A command type ([`TypeId::is_command`]).
+    pub type_id: TypeId,
+    /// Unique per node among commands.
+    pub ioa: Ioa,
+    /// Where it goes.
+    pub target: CommandTarget,
+    /// Whether select-before-operate is required.
+    pub select_required: bool,
+    /// A BOOL variable; while FALSE (local mode) remote commands are refused.
+    pub remote_enable: Option<String>,
+    /// For single and double commands on a PLC variable: the value is held this long and
+    /// then reset (FALSE), like a relay output pulse. Without it the value persists
+    /// until the next command. A command's QU (short/long pulse, persistent) is honoured
+    /// as well: QU 1 and 2 pulse for this time (500 ms when not set), QU 3 persists.
+    pub pulse: Option<Duration>,
+    /// Only clients of these redundancy groups may send it (empty: any client), as the
+    /// TC700 accepts its HMI-local command only over the HMI link (spec 7.4).
+    pub from_groups: Vec<String>,
+    /// Its own maximum command delay for time-tagged commands (`max_age_ms`), instead of
+    /// the server's.
+    pub max_age: Option<Duration>,
+    /// The point that returns the command's effect, and how long an execute waits for it
+    /// before it is terminated without (`feedback`, `feedback_timeout_ms`).
+    pub feedback: Option<Feedback>,
+    /// The values a set-point may take (`range`, inclusive; in engineering units: the
+    /// scaled value, the normalized fraction, the float).
+    pub range: Option<std::ops::RangeInclusive<f64>>,
+    /// Free text.
+    pub description: String,
+}
+
+/// The return information of a command: a point of the node and the wait for it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Feedback {
+    /// The point's name.
+    pub point: String,
+    /// How long an execute waits for the point to change.
+    pub timeout: Duration,
+}
+
+/// How long an execute waits for its return information when the project sets no
+/// `feedback_timeout_ms`.
+pub const DEFAULT_FEEDBACK_TIMEOUT: Duration = Duration::from_secs(5);
+
+/// The other end of a client link.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum LinkTarget {
+    /// A node of this project (its address follows from its server's port).
+    Node(String),
+    /// An explicit address.
+    Address(SocketAddr),
+}
+
+/// An IEC 104 client link to a lower node, `[[node.link]]`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LinkConfig {
+    /// Unique per node; `link:NAME/IOA` sources refer to it.
+    pub name: String,
+    /// Whom it connects to.
+    pub target: LinkTarget,
+    /// The lower node's common address.
+    pub common_address: CommonAddress,
+    /// Send a general interrogation after connecting.
+    pub interrogate_on_start: bool,
+    /// Synchronise the lower node's clock (this node is its time source).
+    pub clock_sync: bool,
+    /// A point of this node showing the link's state.
+    pub status_point: Option<String>,
+    /// Every point and command of the lower node republished here, IOA + this offset.
+    pub republish: Option<u32>,
+    /// TLS with mutual authentication (IEC 62351-3): this node's certificate and key, and
+    /// the authorities the lower node's certificate must chain to. Required exactly when
+    /// the lower node's server requires TLS.
+    pub tls: Option<TlsFiles>,
+}
+
+impl Project {
+    /// Reads and checks `folder/station.toml` and the files it names.
+    pub fn load(folder: &Path) -> Result<Project, ConfigErrors> {
+        let file = folder.join(PROJECT_FILE);
+        let bytes = std::fs::read(&file).map_err(|e| {
+            ConfigErrors::single(ConfigError::unpositioned(
+                &file,
+                format!("cannot read: {e}"),
+            ))
+        })?;
+        let text = String::from_utf8(bytes)
+            .map_err(|e| ConfigErrors::single(not_utf8(&file, e.as_bytes())))?;
+        Project::parse(folder, &file, &text)
+    }
+
+    /// Checks `text` as the project file `file` of `folder` (files it names are resolved
+    /// against `folder`). [`Project::load`] reads the file and calls this; also useful for editors that check unsaved text.
+    pub fn parse(folder: &Path, file: &Path, text: &str) -> Result<Project, ConfigErrors> {
+        let (tree, syntax) = DeTable::parse_recoverable(text);
+        let mut ctx = Ctx {
+            file: file.to_path_buf(),
+            text,
+            tree,
+            errors: Vec::new(),
+            omitted: Vec::new(),
+        };
+        // Only the first syntax error: the parser's recovery after it is a guess, and one
+        // unclosed `[` made it report every later line (17,161 errors for the Vsetín file).
+        if let Some(error) = syntax.first() {
+            let span = error.span().unwrap_or(0..0);
+            ctx.push_at(span, String::new(), error.message().to_owned());
+            return Err(ctx.into_errors());
+        }
+        let raw: RawProject = match toml::from_str(text) {
+            Ok(raw) => raw,
+            Err(error) => {
+                let span = error.span().unwrap_or(0..0);
+                let key = ctx.key_at(span.start);
+                ctx.push_at(span, key, error.message().to_owned());
+                return Err(ctx.into_errors());
+            }
+        };
+        let project = ctx.check(folder, raw);
+        if ctx.errors.is_empty() {
+            Ok(project)
+        } else {
+            Err(ctx.into_errors())
+        }
+    }
+
+    /// The node called `name`.
+    pub fn node(&self, name: &str) -> Option<&NodeConfig> {
+        self.nodes.iter().find(|n| n.name == name)
+    }
+
+    /// The top node: the first node with a server that no other node links to (the one
+    /// serving the dispatch systems).
+    pub fn top_node(&self) -> Option<&NodeConfig> {
+        self.nodes.iter().find(|candidate| {
+            candidate.server.is_some()
+                && !self.nodes.iter().any(|other| {
+                    other.links.iter().any(
+                        |link| matches!(&link.target, LinkTarget::Node(target) if *target == candidate.name),
+                    )
+                })
+        })
+    }
+
+    /// The project with another port base (the CLI's `--port-base`).
+    pub fn with_port_base(mut self, port_base: u16) -> Project {
+        self.station.port_base = port_base;
+        self
+    }
+
+    /// The address a link connects to: the target node's server address or the explicit
+    /// address. `None` when the target node has no server or its port passes 65535.
+    pub fn link_address(&self, link: &LinkConfig) -> Option<SocketAddr> {
+        match &link.target {
+            LinkTarget::Address(address) => Some(*address),
+            LinkTarget::Node(name) => self.node(name)?.server_address(&self.station),
+        }
+    }
+}
+
+impl NodeConfig {
+    /// The node's server address, `bind:port_base+port_offset`; `None` without a server or
+    /// when the port passes 65535.
+    pub fn server_address(&self, station: &StationSettings) -> Option<SocketAddr> {
+        let server = self.server.as_ref()?;
+        let port = station.port_base.checked_add(server.port_offset)?;
+        Some(SocketAddr::new(station.bind, port))
+    }
+
+    /// The point called `name`.
+    pub fn point(&self, name: &str) -> Option<&PointConfig> {
+        self.points.iter().find(|p| p.name == name)
+    }
+
+    /// The link called `name`.
+    pub fn link(&self, name: &str) -> Option<&LinkConfig> {
+        self.links.iter().find(|l| l.name == name)
+    }
+}
+
+mod check;
+mod error;
+mod raw;
+mod spans;
+
+use error::*;
+pub use error::{ConfigError, ConfigErrors, MAX_ERRORS_PER_FILE};
+use raw::*;
+use spans::*;

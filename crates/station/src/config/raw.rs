@@ -1,0 +1,186 @@
+//! The project file as serde reads it, before any check.
+
+use super::*;
+
+// ---------------------------------------------------------------------------------------
+// Raw (serde) model
+
+pub(in crate::config) fn yes() -> bool {
+    true
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(in crate::config) struct RawProject {
+    pub(in crate::config) station: RawStation,
+    #[serde(default)]
+    pub(in crate::config) node: Vec<RawNode>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(in crate::config) struct RawStation {
+    pub(in crate::config) name: String,
+    pub(in crate::config) time_zone: String,
+    pub(in crate::config) store: Option<String>,
+    pub(in crate::config) retention_days: Option<u32>,
+    pub(in crate::config) port_base: Option<u16>,
+    pub(in crate::config) bind: Option<String>,
+    pub(in crate::config) plant: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(in crate::config) struct RawNode {
+    pub(in crate::config) name: String,
+    #[serde(default)]
+    pub(in crate::config) description: String,
+    pub(in crate::config) common_address: i64,
+    #[serde(default)]
+    pub(in crate::config) sources: Vec<String>,
+    pub(in crate::config) server: Option<RawServer>,
+    #[serde(default)]
+    pub(in crate::config) task: Vec<RawTask>,
+    #[serde(default)]
+    pub(in crate::config) io: Vec<RawIo>,
+    #[serde(default)]
+    pub(in crate::config) point: Vec<RawPoint>,
+    #[serde(default)]
+    pub(in crate::config) command: Vec<RawCommand>,
+    #[serde(default)]
+    pub(in crate::config) link: Vec<RawLink>,
+    #[serde(default)]
+    pub(in crate::config) set: std::collections::BTreeMap<String, String>,
+    #[serde(default)]
+    pub(in crate::config) table: Vec<RawTable>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(in crate::config) struct RawTable {
+    pub(in crate::config) file: String,
+    pub(in crate::config) index: String,
+    pub(in crate::config) columns: std::collections::BTreeMap<String, String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(in crate::config) struct RawServer {
+    pub(in crate::config) port_offset: i64,
+    #[serde(default)]
+    pub(in crate::config) allowed_clients: Vec<String>,
+    pub(in crate::config) redundancy_groups: Option<Vec<RawGroup>>,
+    pub(in crate::config) tls: Option<RawTls>,
+    pub(in crate::config) redundancy: Option<String>,
+    pub(in crate::config) max_command_age_ms: Option<i64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(in crate::config) struct RawGroup {
+    pub(in crate::config) name: String,
+    #[serde(default)]
+    pub(in crate::config) clients: Vec<String>,
+    pub(in crate::config) refuse_commands_when: Option<String>,
+    pub(in crate::config) status_point: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(in crate::config) struct RawTls {
+    pub(in crate::config) certificate: String,
+    pub(in crate::config) private_key: String,
+    pub(in crate::config) trust_anchors: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(in crate::config) struct RawTask {
+    pub(in crate::config) name: String,
+    pub(in crate::config) interval_ms: u64,
+    #[serde(default)]
+    pub(in crate::config) priority: u8,
+    #[serde(default)]
+    pub(in crate::config) programs: Vec<String>,
+    pub(in crate::config) watchdog_ms: Option<u64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(in crate::config) struct RawIo {
+    pub(in crate::config) signal: String,
+    pub(in crate::config) variable: String,
+}
+
+#[derive(Deserialize, Default, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub(in crate::config) enum RawTransmission {
+    #[default]
+    Spontaneous,
+    Cyclic,
+    InterrogationOnly,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(in crate::config) struct RawPoint {
+    pub(in crate::config) name: String,
+    #[serde(rename = "type")]
+    pub(in crate::config) type_id: String,
+    pub(in crate::config) ioa: i64,
+    pub(in crate::config) source: Option<String>,
+    #[serde(default)]
+    pub(in crate::config) transmission: RawTransmission,
+    pub(in crate::config) cycle_ms: Option<u64>,
+    #[serde(default)]
+    pub(in crate::config) groups: Vec<i64>,
+    pub(in crate::config) deadband: Option<f64>,
+    pub(in crate::config) invalid_when: Option<String>,
+    #[serde(default)]
+    pub(in crate::config) description: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(in crate::config) struct RawCommand {
+    pub(in crate::config) name: String,
+    #[serde(rename = "type")]
+    pub(in crate::config) type_id: String,
+    pub(in crate::config) ioa: i64,
+    pub(in crate::config) target: String,
+    #[serde(default)]
+    pub(in crate::config) select_required: bool,
+    pub(in crate::config) remote_enable: Option<String>,
+    pub(in crate::config) pulse_ms: Option<i64>,
+    pub(in crate::config) max_age_ms: Option<i64>,
+    pub(in crate::config) range: Option<[f64; 2]>,
+    pub(in crate::config) feedback: Option<String>,
+    pub(in crate::config) feedback_timeout_ms: Option<i64>,
+    #[serde(default)]
+    pub(in crate::config) from_groups: Vec<String>,
+    #[serde(default)]
+    pub(in crate::config) description: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(in crate::config) struct RawLink {
+    pub(in crate::config) name: String,
+    pub(in crate::config) node: Option<String>,
+    pub(in crate::config) address: Option<String>,
+    pub(in crate::config) common_address: Option<i64>,
+    #[serde(default = "yes")]
+    pub(in crate::config) interrogate_on_start: bool,
+    #[serde(default = "yes")]
+    pub(in crate::config) clock_sync: bool,
+    pub(in crate::config) status_point: Option<String>,
+    pub(in crate::config) republish: Option<RawRepublish>,
+    pub(in crate::config) tls: Option<RawTls>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(in crate::config) struct RawRepublish {
+    #[serde(default)]
+    pub(in crate::config) ioa_offset: i64,
+}
