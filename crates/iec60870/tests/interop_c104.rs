@@ -515,7 +515,7 @@ fn our_image() -> ProcessImage {
 }
 
 /// Attempts of the c104 client against our outstation.
-const ATTEMPTS: usize = 2;
+const ATTEMPTS: usize = 3;
 
 /// Runs c104's controlling station against our outstation: GI, nine commands (one must be
 /// refused), then 50 spontaneous events.
@@ -596,8 +596,9 @@ async fn c104_client_reads_and_commands_our_outstation() {
         })
     };
     // c104's own client is known to lose its STARTDT or misreport a result now and then
-    // (tests/peer/README.md), most under load: one retry of the peer. A fault of ours
-    // fails both attempts.
+    // (tests/peer/README.md), most under load: its python thread can miss an answer that
+    // is on the wire (seen: ACT_CON and ACT_TERM captured, c104 timing out after 120 s).
+    // Up to three runs of the peer, each failure printed; a fault of ours fails them all.
     let mut output = run_c104_client(port).await;
     for attempt in 2..=ATTEMPTS {
         if output.status.success() {
