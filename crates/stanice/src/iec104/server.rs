@@ -145,6 +145,16 @@ impl StationHandler for CommandLogger {
     }
 }
 
+/// An optional option in seconds as a duration.
+fn seconds_option(option: &str, seconds: Option<f64>) -> anyhow::Result<Option<Duration>> {
+    seconds
+        .map(|seconds| {
+            Duration::try_from_secs_f64(seconds)
+                .map_err(|_| anyhow::anyhow!("{option} {seconds}: not a duration"))
+        })
+        .transpose()
+}
+
 /// The redundancy mode of `--mode` with the groups of `--group`.
 fn redundancy_mode(mode: &str, groups: &[String]) -> anyhow::Result<RedundancyMode> {
     let groups = groups
@@ -204,22 +214,10 @@ pub(crate) async fn run(args: ServerArgs) -> anyhow::Result<ExitCode> {
     config.max_connections_per_address = args.max_per_address;
     config.max_connections_per_group = args.max_per_group;
     config.reserved_per_group = args.reserve_per_group;
-    config.start_timeout = args
-        .start_timeout
-        .map(|seconds| {
-            Duration::try_from_secs_f64(seconds)
-                .map_err(|_| anyhow::anyhow!("--start-timeout {seconds}: not a duration"))
-        })
-        .transpose()?;
+    config.start_timeout = seconds_option("--start-timeout", args.start_timeout)?;
     config.redundancy = redundancy_mode(&args.mode, &args.groups)?;
     config.time_zone = args.time_zone;
-    config.max_command_age = args
-        .max_command_age
-        .map(|seconds| {
-            Duration::try_from_secs_f64(seconds)
-                .map_err(|_| anyhow::anyhow!("--max-command-age {seconds}: not a duration"))
-        })
-        .transpose()?;
+    config.max_command_age = seconds_option("--max-command-age", args.max_command_age)?;
     if let Some(pem) = args.link.tls()? {
         config.tls = Some(iec60870::cs104::tls::server_config(&pem)?);
     }
