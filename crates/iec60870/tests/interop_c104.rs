@@ -567,31 +567,28 @@ async fn c104_client_reads_and_commands_our_outstation() {
     )
     .await
     .unwrap();
-    // Spontaneous events while the c104 client listens: 50 float updates.
-    // Spontaneous events for each c104 client that starts: 50 float updates.
-    let producer = {
-        let server = server.clone();
+    // Spontaneous events for each run of the c104 client: 50 float updates once that run's
+    // connection has started. One producer per run, started with it: a shared producer
+    // keyed on the number of accepted connections fired early when c104 reconnected
+    // within a run, and left the retry with no events at all.
+    let produce = |server: iec60870::cs104::server::ServerHandle| {
+        let before = server.stats().accepted;
         tokio::spawn(async move {
-            for attempt in 1..=ATTEMPTS as u64 {
-                // Wait until this attempt's c104 client has started data transfer.
-                for _ in 0..400 {
-                    let stats = server.stats();
-                    if stats.accepted >= attempt
-                        && stats.groups.iter().any(|group| group.has_active)
-                    {
-                        break;
-                    }
-                    tokio::time::sleep(Duration::from_millis(50)).await;
+            for _ in 0..400 {
+                let stats = server.stats();
+                if stats.accepted > before && stats.groups.iter().any(|group| group.has_active) {
+                    break;
                 }
-                tokio::time::sleep(Duration::from_millis(1500)).await;
-                for index in 0..50u32 {
-                    let element = Element::Float {
-                        value: index as f32,
-                        quality: Quality::default(),
-                    };
-                    server.update(ioa(500 + index % 5), element, None).unwrap();
-                    tokio::time::sleep(Duration::from_millis(10)).await;
-                }
+                tokio::time::sleep(Duration::from_millis(50)).await;
+            }
+            tokio::time::sleep(Duration::from_millis(1500)).await;
+            for index in 0..50u32 {
+                let element = Element::Float {
+                    value: index as f32,
+                    quality: Quality::default(),
+                };
+                server.update(ioa(500 + index % 5), element, None).unwrap();
+                tokio::time::sleep(Duration::from_millis(10)).await;
             }
         })
     };
@@ -599,6 +596,7 @@ async fn c104_client_reads_and_commands_our_outstation() {
     // (tests/peer/README.md), most under load: its python thread can miss an answer that
     // is on the wire (seen: ACT_CON and ACT_TERM captured, c104 timing out after 120 s).
     // Up to three runs of the peer, each failure printed; a fault of ours fails them all.
+    let mut producer = produce(server.clone());
     let mut output = run_c104_client(port).await;
     for attempt in 2..=ATTEMPTS {
         if output.status.success() {
@@ -609,6 +607,8 @@ async fn c104_client_reads_and_commands_our_outstation() {
             attempt - 1,
             String::from_utf8_lossy(&output.stdout)
         );
+        producer.abort();
+        producer = produce(server.clone());
         output = run_c104_client(port).await;
     }
     producer.abort();
