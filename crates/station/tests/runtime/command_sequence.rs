@@ -14,7 +14,7 @@ use station::config::Project;
 use station::runtime::{Runtime, StoreChoice};
 use station::store::{CommandOutcome, CommandQuery};
 
-use crate::harness::{eventually, free_port_base, links_up, start, start_at};
+use crate::harness::{eventually, free_port_base, links_up, project_folder, start, start_at};
 
 const QF1_CLOSED: u32 = 100;
 const QF2_CLOSED: u32 = 101;
@@ -116,10 +116,7 @@ range = [0, 1439]
 
 /// The project in a temporary folder, on free ports.
 fn project() -> (tempfile::TempDir, Project) {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("station.toml"), STATION_TOML).unwrap();
-    std::fs::create_dir_all(dir.path().join("plc")).unwrap();
-    std::fs::write(dir.path().join("plc/board.st"), BOARD_ST).unwrap();
+    let dir = project_folder(&[("station.toml", STATION_TOML), ("plc/board.st", BOARD_ST)]);
     let project = Project::load(dir.path()).unwrap_or_else(|errors| panic!("{errors}"));
     let project = project.with_port_base(free_port_base(2));
     (dir, project)

@@ -43,6 +43,18 @@ pub(crate) fn default_start() -> DateTime<Utc> {
     Utc.with_ymd_and_hms(2025, 1, 15, 10, 0, 0).unwrap()
 }
 
+/// A project folder in a temporary directory with the given files (`station.toml`, ST
+/// sources, ...), their folders made as needed.
+pub(crate) fn project_folder(files: &[(&str, &str)]) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    for (path, text) in files {
+        let path = dir.path().join(path);
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(path, text).unwrap();
+    }
+    dir
+}
+
 /// Loads the Vsetín project on free ports.
 pub(crate) fn vsetin_project() -> Project {
     let project = Project::load(&vsetin_folder()).unwrap_or_else(|errors| panic!("{errors}"));

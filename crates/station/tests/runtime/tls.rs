@@ -10,7 +10,7 @@ use iec60870::cs104::tls::self_signed::{write, Authority, Usage};
 use station::config::Project;
 use station::runtime::StoreChoice;
 
-use crate::harness::{eventually, free_port_base, links_up, start};
+use crate::harness::{eventually, free_port_base, links_up, project_folder, start};
 
 const BOARD_ST: &str = "PROGRAM Board\nVAR Lamp : BOOL := TRUE; END_VAR\nEND_PROGRAM\n";
 
@@ -54,11 +54,8 @@ source = "Board.Lamp"
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn nodes_talk_over_mutually_authenticated_tls_and_refuse_plain_clients() {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::create_dir_all(dir.path().join("plc")).unwrap();
+    let dir = project_folder(&[("station.toml", STATION_TOML), ("plc/board.st", BOARD_ST)]);
     std::fs::create_dir_all(dir.path().join("tls")).unwrap();
-    std::fs::write(dir.path().join("plc/board.st"), BOARD_ST).unwrap();
-    std::fs::write(dir.path().join("station.toml"), STATION_TOML).unwrap();
     let authority = Authority::new("test station CA").unwrap();
     for node in ["top", "board"] {
         let pem = authority
