@@ -368,14 +368,21 @@ async fn until(client: &Client, expression: &str, what: &str) -> Duration {
     }
 }
 
+/// Clicks the element `css` selects. An element replaced between finding and clicking
+/// (a list re-rendered by a live update) is found again, as a person would, until [`WAIT`].
 async fn click(client: &Client, css: &str) {
-    client
-        .find(Locator::Css(css))
-        .await
-        .unwrap_or_else(|e| panic!("no element `{css}`: {e}"))
-        .click()
-        .await
-        .unwrap_or_else(|e| panic!("cannot click `{css}`: {e}"));
+    let started = Instant::now();
+    loop {
+        let element = client
+            .find(Locator::Css(css))
+            .await
+            .unwrap_or_else(|e| panic!("no element `{css}`: {e}"));
+        match element.click().await {
+            Ok(()) => return,
+            Err(e) if e.is_stale_element_reference() && started.elapsed() < WAIT => {}
+            Err(e) => panic!("cannot click `{css}`: {e}"),
+        }
+    }
 }
 
 /// Logs in through the login page's form.
@@ -871,6 +878,34 @@ async fn operator_and_viewer_in_a_real_browser() {
         "the alarm acknowledged and the sound off",
     )
     .await;
+    // The operator picks 4 h; another alarm arriving meanwhile neither replaces the row nor
+    // resets the choice.
+    js(
+        &client,
+        &format!(
+            "(window.pickedRow = {alarm_row}, {alarm_row}.querySelector('select').value = '240')"
+        ),
+    )
+    .await;
+    let alarms_before = js(&client, "HMI.alarms.size").await;
+    site.operate("lamp-failure ROV03").await;
+    until(
+        &client,
+        &format!("HMI.alarms.size > {alarms_before} && document.querySelectorAll('#alarm-table tbody tr').length > 1"),
+        "another alarm listed",
+    )
+    .await;
+    assert_eq!(
+        js(
+            &client,
+            &format!(
+                "[window.pickedRow === {alarm_row}, {alarm_row}.querySelector('select').value]"
+            )
+        )
+        .await,
+        json!([true, "240"]),
+        "the row being used was rebuilt by an unrelated alarm"
+    );
     click(
         &client,
         r#"#alarm-table tr[data-point="RH2_P1_KHVRH2_Havarijni_vypnuti"] button.shelve"#,
@@ -882,7 +917,21 @@ async fn operator_and_viewer_in_a_real_browser() {
         "the alarm shelved",
     )
     .await;
+    let shelved_for_minutes = js(
+        &client,
+        &format!(
+            "(Date.parse(HMI.alarms.get(Number({alarm_row}.dataset.id)).shelved_until) - HMI.now()) / 60000"
+        ),
+    )
+    .await
+    .as_f64()
+    .unwrap();
+    assert!(
+        (230.0..=241.0).contains(&shelved_for_minutes),
+        "shelved for {shelved_for_minutes} min, not the 4 h picked"
+    );
     site.operate("clear emergency-off RH2").await;
+    site.operate("clear lamp-failure ROV03").await;
 
     // --- The station link is cut: every bound value turns invalid and blinks.
     show_screen(&client, "supply").await;

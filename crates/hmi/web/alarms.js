@@ -131,10 +131,46 @@
     );
   }
 
+  // Rows are kept by alarm id and rebuilt only when what they show changed. Rebuilding the
+  // whole table on every update lost the operator's work: a shelve time picked in a row's
+  // list went back to 15 min, and a click that began on a button as another alarm arrived
+  // ended on its replacement and did nothing.
+  const rowsById = new Map();
+
+  /** Everything a row shows; equal signatures need no new row. */
+  function signature(alarm) {
+    return JSON.stringify([
+      alarm.priority, when(alarm.raised), alarm.text, alarm.point, stateWords(alarm),
+      unacknowledged(alarm), shelved(alarm), HMI.session ? HMI.session.level : null,
+    ]);
+  }
+
   function render() {
-    const rows = visible().sort(compare);
-    document.querySelector("#alarm-table tbody").replaceChildren(...rows.map(row));
-    document.getElementById("alarm-empty").hidden = rows.length > 0;
+    const alarms = visible().sort(compare);
+    const tbody = document.querySelector("#alarm-table tbody");
+    const wanted = new Set(alarms.map((alarm) => alarm.id));
+    for (const [id, kept] of rowsById) {
+      if (!wanted.has(id)) {
+        kept.element.remove();
+        rowsById.delete(id);
+      }
+    }
+    alarms.forEach((alarm, index) => {
+      const sig = signature(alarm);
+      let kept = rowsById.get(alarm.id);
+      if (!kept || kept.sig !== sig) {
+        const element = row(alarm);
+        const oldSelect = kept && kept.element.querySelector("select");
+        const newSelect = element.querySelector("select");
+        if (oldSelect && newSelect) newSelect.value = oldSelect.value;
+        if (kept) kept.element.replaceWith(element);
+        kept = { sig, element };
+        rowsById.set(alarm.id, kept);
+      }
+      // Move only rows out of place, so a row being used stays put in the DOM.
+      if (tbody.children[index] !== kept.element) tbody.insertBefore(kept.element, tbody.children[index] || null);
+    });
+    document.getElementById("alarm-empty").hidden = alarms.length > 0;
     for (const th of document.querySelectorAll("#alarm-table th[data-sort]")) {
       if (th.dataset.sort === sortKey) th.dataset.dir = sortDir;
       else delete th.dataset.dir;
