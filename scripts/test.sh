@@ -13,6 +13,8 @@ cargo fmt --all -- --check
 
 echo "== lints"
 cargo clippy --workspace --all-targets --locked -- -D warnings
+# The protocol cores build without tokio (for serial adapters, other runtimes, fuzzers).
+cargo clippy -p iec60870 --no-default-features --locked -- -D warnings
 
 echo "== tests (unit, property, state machine, interoperability with c104, tshark)"
 # The interoperability tests refuse to skip when STANICE_REQUIRE_PEERS=1.

@@ -36,4 +36,5 @@
 pub mod apci;
 pub mod asdu;
 pub mod cs104;
+pub mod outstation;
 pub mod time;

@@ -4,7 +4,9 @@
     clippy::unwrap_used,
     clippy::panic,
     clippy::indexing_slicing,
-    missing_docs
+    missing_docs,
+    // Tests and benchmarks measure and wait on the wall clock; the cores do not.
+    clippy::disallowed_methods
 )]
 
 use iec60870::asdu::*;

@@ -15,7 +15,9 @@
     clippy::unwrap_used,
     clippy::expect_used,
     clippy::panic,
-    clippy::indexing_slicing
+    clippy::indexing_slicing,
+    // Tests and benchmarks measure and wait on the wall clock; the cores do not.
+    clippy::disallowed_methods
 )]
 
 #[path = "../../../tests/peer/harness.rs"]

@@ -9,7 +9,9 @@
     clippy::expect_used,
     clippy::panic,
     clippy::indexing_slicing,
-    missing_docs
+    missing_docs,
+    // Tests and benchmarks measure and wait on the wall clock; the cores do not.
+    clippy::disallowed_methods
 )]
 
 #[path = "station/common.rs"]

@@ -1,10 +1,14 @@
 //! IEC 104 stations.
 
+#[cfg(feature = "tokio")]
 pub mod client;
 pub mod config;
+#[cfg(feature = "tokio")]
 mod repeated_warning;
+#[cfg(feature = "tokio")]
 pub mod server;
 pub mod session;
+#[cfg(feature = "tokio")]
 pub mod tls;
 
 pub use config::{ApciConfig, ConfigError, ConfigWarning};

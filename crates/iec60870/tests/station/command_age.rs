@@ -3,7 +3,6 @@
 //! application with its age; measured on the station's clock with the tag read in the
 //! server's time zone (SU tells the repeated autumn hour apart).
 
-use std::net::SocketAddr;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -55,7 +54,7 @@ impl StationHandler for ClockedStation {
         self.now.lock().unwrap().expect("the test sets the clock")
     }
 
-    fn handle_clock_sync(&self, _time: Cp56Time2a, _peer: SocketAddr) -> bool {
+    fn handle_clock_sync(&self, _time: Cp56Time2a, _peer: &iec60870::outstation::Peer) -> bool {
         true
     }
 }

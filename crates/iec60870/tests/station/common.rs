@@ -223,12 +223,12 @@ impl StationHandler for Recorder {
         future
     }
 
-    fn handle_clock_sync(&self, time: Cp56Time2a, _peer: SocketAddr) -> bool {
+    fn handle_clock_sync(&self, time: Cp56Time2a, _peer: &iec60870::outstation::Peer) -> bool {
         self.clock_syncs.lock().unwrap().push(time);
         self.accept_clock_sync
     }
 
-    fn handle_reset_process(&self, qualifier: u8, _peer: SocketAddr) -> bool {
+    fn handle_reset_process(&self, qualifier: u8, _peer: &iec60870::outstation::Peer) -> bool {
         self.resets.lock().unwrap().push(qualifier);
         qualifier == 1
     }

@@ -12,6 +12,7 @@ use std::time::Duration;
 
 use clap::Args;
 use iec60870::asdu::{Cause, CommonAddress};
+use iec60870::outstation::Peer;
 use iec60870::cs104::server::{
     ready, spawn_server, Command, CommandFuture, CommandOutcome, CommandRefusal,
     RedundancyGroupConfig, RedundancyMode, ServerConfig, ServerHandle, StationHandler,
@@ -130,12 +131,12 @@ impl StationHandler for CommandLogger {
         self.log(command, &format_args!("REFUSED: {refusal}"));
     }
 
-    fn handle_clock_sync(&self, time: iec60870::time::Cp56Time2a, peer: SocketAddr) -> bool {
+    fn handle_clock_sync(&self, time: iec60870::time::Cp56Time2a, peer: &Peer) -> bool {
         println!("clock synchronisation from {peer}: {time}");
         true
     }
 
-    fn connection_changed(&self, peer: SocketAddr, connected: bool, started: bool) {
+    fn connection_changed(&self, peer: &Peer, connected: bool, started: bool) {
         let what = match (connected, started) {
             (true, false) => "connected",
             (true, true) => "started data transfer",

@@ -15,12 +15,12 @@
 //! the lower node's termination arrived, after the data that came before it.
 
 use std::collections::HashMap;
-use std::net::SocketAddr;
 use std::sync::{mpsc, Arc};
 use std::time::Duration;
 
 use iec60870::asdu::{DoublePointState, Element, RegulatingStepState, TimeTag};
 use iec60870::cs104::server::{self, CommandFuture, StationHandler, TerminationFuture};
+use iec60870::outstation::Peer;
 use iec60870::time::Cp56Time2a;
 use plc::vm::Val;
 use tokio::sync::oneshot;
@@ -82,11 +82,11 @@ pub(crate) struct NodeHandler {
 impl NodeHandler {
     /// The redundancy group a client belongs to, chosen as the server chooses it: the
     /// first group naming its address, else the first catch-all group.
-    fn group_of(&self, peer: SocketAddr) -> Option<&crate::config::RedundancyGroup> {
-        let ip = peer.ip().to_canonical();
+    fn group_of(&self, peer: &Peer) -> Option<&crate::config::RedundancyGroup> {
+        let ip = peer.ip();
         self.groups
             .iter()
-            .find(|g| g.clients.contains(&ip))
+            .find(|g| ip.is_some_and(|ip| g.clients.contains(&ip)))
             .or_else(|| self.groups.iter().find(|g| g.clients.is_empty()))
     }
 }
@@ -104,7 +104,7 @@ impl StationHandler for NodeHandler {
             command: command.clone(),
             name: routed.name.clone(),
         };
-        let group = self.group_of(command.peer).cloned();
+        let group = self.group_of(&command.peer).cloned();
         let group_name = group.as_ref().map(|g| g.name.clone()).unwrap_or_default();
         if !routed.from_groups.is_empty() && !routed.from_groups.contains(&group_name) {
             let detail = format!(
@@ -187,7 +187,7 @@ impl StationHandler for NodeHandler {
         self.points.clock().now()
     }
 
-    fn handle_clock_sync(&self, time: Cp56Time2a, peer: SocketAddr) -> bool {
+    fn handle_clock_sync(&self, time: Cp56Time2a, peer: &Peer) -> bool {
         let Some(source) = self.points.zone().from_cp56(&time) else {
             tracing::warn!(node = %self.points.name(), %peer, "clock synchronisation with an impossible date refused");
             return false;
@@ -216,7 +216,7 @@ impl StationHandler for NodeHandler {
         true
     }
 
-    fn connection_changed(&self, peer: SocketAddr, connected: bool, started: bool) {
+    fn connection_changed(&self, peer: &Peer, connected: bool, started: bool) {
         tracing::info!(node = %self.points.name(), %peer, connected, started, "controlling station");
         if started {
             return;

@@ -1,35 +1,21 @@
 //! The IEC 104 controlled station (server).
 //!
-//! # Shape
+//! A tokio adapter around the transport-free [`outstation`](crate::outstation) core:
 //!
 //! ```text
-//!  accept loop ──(allow-list, connection cap, redundancy group, TLS)──> connection tasks
-//!                                                                       │  own a Session
-//!  ServerHandle::update ──> ProcessImage (current values) ──> GI / read │  and a socket
-//!                      └──> every Group's event buffer ──> the group's started connection
+//!  accept loop ──(allow-list, admission slots, redundancy group, TLS)──> connection tasks
+//!                                                      │ Session (APCI) + LinkCore
+//!  ServerHandle::update ──> Outstation: ProcessImage, every group's event buffer
 //! ```
 //!
-//! - [`image`]: the process image, answering interrogation and read.
-//! - [`group`]: redundancy groups ([`RedundancyMode`]: one group, a group per
-//!   connection, or groups by client address); one started connection per group, one
-//!   bounded event buffer per group that keeps events while nobody is started and survives
-//!   switch-over.
-//! - [`handler`]: the application's hooks (commands, refusals, the station's clock, clock
-//!   sync, reset, parameters).
-//! - `connection`: one task per TCP (or TLS) connection, driving a sans-IO
-//!   [`Session`](super::session::Session) and answering requests.
+//! - `admission`: connection slots per address and per redundancy group.
+//! - `connection`: one task per TCP (or TLS) connection, driving the sans-IO APCI
+//!   [`Session`](super::session::Session) and the outstation's
+//!   [`LinkCore`](crate::outstation::LinkCore) (answers, interrogation, commands and their
+//!   sequence, the group's events).
 //!
-//! # Commands
-//!
-//! A command is checked here first (known address, type, double-command state,
-//! select-before-operate, the maximum command delay of a time-tagged command measured on
-//! [`StationHandler::now`]); what fails gets its negative confirmation and goes to
-//! [`StationHandler::command_refused`]. The rest go to
-//! [`StationHandler::handle_command`], and the connection keeps the standard's sequence
-//! whatever the application does: ACT_CON, then the return information (cause 11) queued
-//! since the command arrived, then ACT_TERM after every event queued before the
-//! application terminated the command ([`CommandOutcome`]). Each event of a group carries
-//! a sequence number for this.
+//! The process image, redundancy groups, command checks and the application's hooks are
+//! the outstation's, re-exported here: see [`crate::outstation`].
 //!
 //! Time tags read or stamped by the server (commands' ages, points updated without a
 //! time) follow [`ServerConfig::time_zone`] on the station's clock; the default is UTC on
@@ -37,33 +23,27 @@
 
 mod admission;
 mod connection;
-pub mod group;
-pub mod handler;
-pub mod image;
 
 use std::collections::HashMap;
 use std::net::{IpAddr, SocketAddr};
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Arc, Mutex, RwLock};
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use tokio::net::TcpListener;
 use tokio::sync::watch;
 
-use crate::asdu::{
-    AsduParams, Cause, CommonAddress, Element, InformationObject, Ioa, TimeTag, TypeId,
-};
+use crate::asdu::{AsduParams, Cause, CommonAddress, Element, Ioa, TimeTag};
 use crate::cs104::config::ApciConfig;
+use crate::outstation::{Outstation, OutstationConfig, OutstationError, Peer};
 use crate::time::{Cp56Time2a, TimeZonePolicy};
 
-pub use group::{GroupStats, OverflowPolicy, RedundancyGroupConfig, RedundancyMode};
-pub use handler::{
-    ready, Command, CommandFuture, CommandOutcome, CommandRefusal, ReadOnlyStation, StationHandler,
-    TerminationFuture,
+pub use crate::outstation::{group, handler, image};
+pub use crate::outstation::{
+    ready, Command, CommandFuture, CommandOutcome, CommandPoint, CommandRefusal, GroupStats,
+    ImageError, MonitorPoint, OverflowPolicy, ProcessImage, ReadOnlyStation, RedundancyGroupConfig,
+    RedundancyMode, StationHandler, TerminationFuture,
 };
-pub use image::{CommandPoint, ImageError, MonitorPoint, ProcessImage};
-
-use group::{Group, QueuedEvent};
 
 /// Configuration of a server.
 #[derive(Debug, Clone)]
@@ -145,6 +125,22 @@ impl ServerConfig {
     }
 }
 
+impl ServerConfig {
+    /// What the outstation behind the server does (everything but the transport).
+    pub fn outstation_config(&self) -> OutstationConfig {
+        let mut config = OutstationConfig::new(self.common_address, self.asdu);
+        config.redundancy = self.redundancy.clone();
+        config.event_buffer_capacity = self.event_buffer_capacity;
+        config.overflow_policy = self.overflow_policy;
+        config.select_timeout = self.select_timeout;
+        config.max_command_age = self.max_command_age;
+        config.accept_request_as_activation = self.accept_request_as_activation;
+        config.send_end_of_initialisation = self.send_end_of_initialisation;
+        config.time_zone = self.time_zone;
+        config
+    }
+}
+
 /// Why a server could not start or a request to it failed.
 #[derive(Debug, thiserror::Error)]
 pub enum ServerError {
@@ -164,6 +160,15 @@ pub enum ServerError {
     Image(#[from] ImageError),
 }
 
+impl From<OutstationError> for ServerError {
+    fn from(error: OutstationError) -> Self {
+        match error {
+            OutstationError::Config(why) => ServerError::Config(why),
+            OutstationError::Image(error) => ServerError::Image(error),
+        }
+    }
+}
+
 /// Statistics of a running server.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ServerStats {
@@ -177,28 +182,10 @@ pub struct ServerStats {
     pub groups: Vec<GroupStats>,
 }
 
-/// A selection waiting for its execute.
-#[derive(Debug, Clone)]
-pub(crate) struct Selection {
-    connection: u64,
-    originator: u8,
-    type_id: TypeId,
-    element: Element,
-    deadline: tokio::time::Instant,
-}
-
 /// State shared by the accept loop, the connections and the handle.
 pub(crate) struct Shared {
     pub(crate) config: ServerConfig,
-    pub(crate) image: RwLock<ProcessImage>,
-    /// The redundancy groups: fixed at start (one group, or the configured groups by
-    /// address), or one per open connection.
-    pub(crate) groups: RwLock<Vec<Arc<Group>>>,
-    /// Whether the end of initialisation still has to go to the first connection's own
-    /// group (a group per connection: no group exists at start to queue it in).
-    end_of_initialisation_pending: std::sync::atomic::AtomicBool,
-    pub(crate) handler: Arc<dyn StationHandler>,
-    pub(crate) selections: Mutex<HashMap<u32, Selection>>,
+    pub(crate) outstation: Arc<Outstation>,
     next_connection_id: AtomicU64,
     slots: admission::Slots,
     /// Refusals are logged at most once a minute for each kind (a flood must not fill the
@@ -209,63 +196,6 @@ pub(crate) struct Shared {
 }
 
 impl Shared {
-    pub(crate) fn read_image(&self) -> std::sync::RwLockReadGuard<'_, ProcessImage> {
-        self.image
-            .read()
-            .unwrap_or_else(|poisoned| poisoned.into_inner())
-    }
-
-    fn write_image(&self) -> std::sync::RwLockWriteGuard<'_, ProcessImage> {
-        self.image
-            .write()
-            .unwrap_or_else(|poisoned| poisoned.into_inner())
-    }
-
-    pub(crate) fn lock_selections(&self) -> std::sync::MutexGuard<'_, HashMap<u32, Selection>> {
-        self.selections
-            .lock()
-            .unwrap_or_else(|poisoned| poisoned.into_inner())
-    }
-
-    fn read_groups(&self) -> std::sync::RwLockReadGuard<'_, Vec<Arc<Group>>> {
-        self.groups
-            .read()
-            .unwrap_or_else(|poisoned| poisoned.into_inner())
-    }
-
-    fn write_groups(&self) -> std::sync::RwLockWriteGuard<'_, Vec<Arc<Group>>> {
-        self.groups
-            .write()
-            .unwrap_or_else(|poisoned| poisoned.into_inner())
-    }
-
-    /// The group a new connection belongs to: in a group per connection a new group of
-    /// its own; otherwise the first group naming its address, else the first catch-all
-    /// group.
-    fn group_for(&self, ip: IpAddr, connection: u64) -> Option<Arc<Group>> {
-        if self.config.redundancy == RedundancyMode::ConnectionIsGroup {
-            let group = Arc::new(Group::new(
-                RedundancyGroupConfig::new(format!("connection-{connection}"), vec![ip]),
-                self.config.event_buffer_capacity,
-                self.config.overflow_policy,
-            ));
-            if self
-                .end_of_initialisation_pending
-                .swap(false, Ordering::Relaxed)
-            {
-                group.push(end_of_initialisation());
-            }
-            self.write_groups().push(Arc::clone(&group));
-            return Some(group);
-        }
-        let groups = self.read_groups();
-        groups
-            .iter()
-            .find(|group| group.accepts(ip))
-            .or_else(|| groups.iter().find(|group| group.is_catch_all()))
-            .cloned()
-    }
-
     /// Counts and logs (rate-limited) a refused connection.
     fn refuse(&self, peer: SocketAddr, kind: &'static str, why: &str) {
         self.refused.fetch_add(1, Ordering::Relaxed);
@@ -283,42 +213,13 @@ impl Shared {
             None => tracing::debug!(%peer, "connection refused: {why}"),
         }
     }
-
-    /// Forgets a connection's own group when the connection ends.
-    fn release_connection_group(&self, group: &Arc<Group>) {
-        if self.config.redundancy == RedundancyMode::ConnectionIsGroup {
-            self.write_groups()
-                .retain(|other| !Arc::ptr_eq(other, group));
-        }
-    }
-
-    /// The station's time as a time tag in the server's zone.
-    pub(crate) fn now_time_tag(&self) -> Cp56Time2a {
-        self.config.time_zone.to_cp56(self.handler.now())
-    }
 }
 
 /// The host's time as a CP56Time2a in the given zone. Outside the years the tag can hold
 /// (2000..=2099) the tag says 2000-01-01 00:00 with IV set rather than lie.
+#[allow(clippy::disallowed_methods)] // the adapter's helper for tools: the host's clock
 pub fn time_tag_now(zone: TimeZonePolicy) -> Cp56Time2a {
     zone.to_cp56(chrono::Utc::now())
-}
-
-/// The end of initialisation (M_EI_NA_1, cause 4) a server sends after its start.
-fn end_of_initialisation() -> QueuedEvent {
-    QueuedEvent {
-        type_id: TypeId::M_EI_NA_1,
-        cause: Cause::INITIALISED,
-        object: InformationObject {
-            ioa: Ioa::default(),
-            element: Element::EndOfInitialisation {
-                cause: 0,
-                after_parameter_change: false,
-            },
-            time: None,
-        },
-        seq: 0,
-    }
 }
 
 /// A handle to a running server: update points, read statistics, shut down.
@@ -350,32 +251,7 @@ pub async fn spawn_server(
         .apci
         .validate()
         .map_err(|error| ServerError::Config(error.to_string()))?;
-    let groups: Vec<Arc<Group>> = match &config.redundancy {
-        RedundancyMode::SingleGroup => vec![RedundancyGroupConfig::catch_all("default")],
-        RedundancyMode::ConnectionIsGroup => Vec::new(),
-        RedundancyMode::GroupsByAddress(groups) if groups.is_empty() => {
-            return Err(ServerError::Config(
-                "redundancy groups by client address need at least one group".to_owned(),
-            ))
-        }
-        RedundancyMode::GroupsByAddress(groups) => groups.clone(),
-    }
-    .into_iter()
-    .map(|group| {
-        Arc::new(Group::new(
-            group,
-            config.event_buffer_capacity,
-            config.overflow_policy,
-        ))
-    })
-    .collect();
-    if config.send_end_of_initialisation {
-        for group in &groups {
-            group.push(end_of_initialisation());
-        }
-    }
-    let end_of_initialisation_pending =
-        config.send_end_of_initialisation && config.redundancy == RedundancyMode::ConnectionIsGroup;
+    let outstation = Arc::new(Outstation::new(config.outstation_config(), image, handler)?);
     let listener =
         TcpListener::bind(config.listen)
             .await
@@ -392,13 +268,7 @@ pub async fn spawn_server(
     let (shutdown_tx, shutdown_rx) = watch::channel(false);
     let shared = Arc::new(Shared {
         config,
-        image: RwLock::new(image),
-        groups: RwLock::new(groups),
-        end_of_initialisation_pending: std::sync::atomic::AtomicBool::new(
-            end_of_initialisation_pending,
-        ),
-        handler,
-        selections: Mutex::new(HashMap::new()),
+        outstation,
         next_connection_id: AtomicU64::new(1),
         slots: admission::Slots::default(),
         refusal_warnings: Mutex::new(HashMap::new()),
@@ -451,10 +321,10 @@ async fn accept_loop(
             }
         };
         let id = shared.next_connection_id.fetch_add(1, Ordering::Relaxed);
-        let Some(group) = shared.group_for(ip, id) else {
+        if !shared.outstation.takes(&Peer::Tcp(peer)) {
             shared.refuse(peer, "no-group", "no redundancy group takes this client");
             continue;
-        };
+        }
         let _ = stream.set_nodelay(true);
         shared.accepted.fetch_add(1, Ordering::Relaxed);
         let shared = Arc::clone(&shared);
@@ -462,42 +332,19 @@ async fn accept_loop(
         let tls = tls.clone();
         tokio::spawn(async move {
             match tls {
-                None => {
-                    let group = Arc::clone(&group);
-                    connection::run(
-                        Arc::clone(&shared),
-                        id,
-                        group,
-                        &slot,
-                        peer,
-                        stream,
-                        shutdown,
-                    )
-                    .await
-                }
+                None => connection::run(shared, id, &slot, peer, stream, shutdown).await,
                 Some(acceptor) => {
                     let handshake =
                         tokio::time::timeout(shared.config.apci.t1, acceptor.accept(stream)).await;
                     match handshake {
                         Ok(Ok(stream)) => {
-                            let group = Arc::clone(&group);
-                            connection::run(
-                                Arc::clone(&shared),
-                                id,
-                                group,
-                                &slot,
-                                peer,
-                                stream,
-                                shutdown,
-                            )
-                            .await
+                            connection::run(shared, id, &slot, peer, stream, shutdown).await
                         }
                         Ok(Err(error)) => tracing::warn!(%peer, %error, "TLS handshake failed"),
                         Err(_) => tracing::warn!(%peer, "TLS handshake timed out"),
                     }
                 }
             }
-            shared.release_connection_group(&group);
             drop(slot);
         });
     }
@@ -518,7 +365,7 @@ impl ServerHandle {
         element: Element,
         time: Option<Cp56Time2a>,
     ) -> Result<(), ServerError> {
-        self.update_with_cause(ioa, element, time, Cause::SPONTANEOUS)
+        Ok(self.shared.outstation.update(ioa, element, time)?)
     }
 
     /// As [`update`](Self::update), with another cause: 1 periodic, 11 return information
@@ -530,47 +377,10 @@ impl ServerHandle {
         time: Option<Cp56Time2a>,
         cause: Cause,
     ) -> Result<(), ServerError> {
-        let type_id = self
+        Ok(self
             .shared
-            .read_image()
-            .monitor(ioa)
-            .map(|point| point.event_type)
-            .ok_or(ImageError::UnknownPoint(ioa))?;
-        let time = match type_id.time_tag() {
-            crate::asdu::TimeTagKind::Cp56 => Some(TimeTag::Cp56(
-                time.unwrap_or_else(|| self.shared.now_time_tag()),
-            )),
-            crate::asdu::TimeTagKind::Cp24 => {
-                let full = time.unwrap_or_else(|| self.shared.now_time_tag());
-                Some(TimeTag::Cp24(
-                    match crate::time::Cp24Time2a::new(full.minute(), full.millisecond()) {
-                        Ok(short) => short.with_invalid(full.is_invalid()),
-                        Err(_) => {
-                            crate::time::Cp24Time2a::from_naive(chrono::NaiveDateTime::default())
-                                .with_invalid(true)
-                        }
-                    },
-                ))
-            }
-            crate::asdu::TimeTagKind::None => None,
-        };
-        // Queue while still holding the image's lock: concurrent updates of one point
-        // then reach the clients in the order the image took them, so the last event a
-        // client gets agrees with what interrogation and read report. (No code path takes
-        // the image's lock while holding a group's, so this nesting cannot deadlock.)
-        let mut image = self.shared.write_image();
-        image.set(ioa, element.clone(), time)?;
-        let object = InformationObject { ioa, element, time };
-        for group in self.shared.read_groups().iter() {
-            group.push(QueuedEvent {
-                type_id,
-                cause,
-                object: object.clone(),
-                seq: 0,
-            });
-        }
-        drop(image);
-        Ok(())
+            .outstation
+            .update_with_cause(ioa, element, time, cause)?)
     }
 
     /// Sets a point's value without sending it: interrogation and read will show it.
@@ -580,13 +390,17 @@ impl ServerHandle {
         element: Element,
         time: Option<TimeTag>,
     ) -> Result<(), ServerError> {
-        self.shared.write_image().set(ioa, element, time)?;
-        Ok(())
+        Ok(self.shared.outstation.set(ioa, element, time)?)
     }
 
     /// The current value of a monitor point.
     pub fn get(&self, ioa: Ioa) -> Option<MonitorPoint> {
-        self.shared.read_image().monitor(ioa).cloned()
+        self.shared.outstation.get(ioa)
+    }
+
+    /// The outstation behind the server (shared with other links of the same station).
+    pub fn outstation(&self) -> &Arc<Outstation> {
+        &self.shared.outstation
     }
 
     /// Statistics: connections and event buffers.
@@ -595,12 +409,7 @@ impl ServerHandle {
             connections: self.shared.slots.open(),
             accepted: self.shared.accepted.load(Ordering::Relaxed),
             refused: self.shared.refused.load(Ordering::Relaxed),
-            groups: self
-                .shared
-                .read_groups()
-                .iter()
-                .map(|group| group.stats())
-                .collect(),
+            groups: self.shared.outstation.group_stats(),
         }
     }
 

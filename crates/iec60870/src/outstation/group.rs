@@ -7,10 +7,12 @@
 //! acknowledged are put back at the front, so a switch-over loses nothing.
 
 use std::collections::VecDeque;
-use std::net::{IpAddr, SocketAddr};
+use std::future::Future;
+use std::net::IpAddr;
 use std::sync::Mutex;
+use std::task::{Poll, Waker};
 
-use tokio::sync::Notify;
+use super::Peer;
 
 use crate::asdu::{Cause, InformationObject, TypeId};
 
@@ -139,21 +141,26 @@ pub(crate) struct GroupState {
     pub(crate) events: VecDeque<QueuedEvent>,
     pub(crate) active: Option<u64>,
     /// The peer of the active connection (named in the take-over warning).
-    pub(crate) active_peer: Option<SocketAddr>,
+    pub(crate) active_peer: Option<Peer>,
     /// The sequence number the next queued event gets.
     pub(crate) next_seq: u64,
+    /// Counts changes the group's links wait for: an event queued, the group taken over.
+    version: u64,
+    /// Links waiting for the next change (see [`Group::changed`]).
+    waiting: Vec<Waker>,
     dropped: u64,
     overflowing: bool,
 }
 
 /// One redundancy group, shared by its connections.
+///
+/// Links wait for the group's changes through [`Group::version`] and [`Group::changed`]
+/// rather than a runtime's notification primitive, so the core needs no async runtime
+/// (a tokio `Notify` would tie it to tokio).
 #[derive(Debug)]
 pub(crate) struct Group {
     pub(crate) config: RedundancyGroupConfig,
     pub(crate) state: Mutex<GroupState>,
-    /// Wakes the group's connections when something was queued or the group changed
-    /// hands (`notify_waiters`: connections register before looking at the queue).
-    pub(crate) notify: Notify,
     capacity: usize,
     policy: OverflowPolicy,
 }
@@ -173,10 +180,11 @@ impl Group {
                 active: None,
                 active_peer: None,
                 next_seq: 0,
+                version: 0,
+                waiting: Vec::new(),
                 dropped: 0,
                 overflowing: false,
             }),
-            notify: Notify::new(),
             capacity: capacity.max(1),
             policy,
         }
@@ -219,11 +227,39 @@ impl Group {
             }
             state.events.push_back(event);
         }
+        Self::wake_all(state);
+    }
+
+    /// Marks a change of the group (an event queued, the group taken over or given up)
+    /// and wakes every link waiting for one. Every link waits: waking only one could wake
+    /// a link that has just lost the group to another and leave the new one asleep.
+    pub(crate) fn wake_all(mut state: std::sync::MutexGuard<'_, GroupState>) {
+        state.version = state.version.wrapping_add(1);
+        let waiting = std::mem::take(&mut state.waiting);
         drop(state);
-        // Every connection of the group registers for this before it looks at the queue,
-        // so waking all of them loses nothing; waking one (notify_one) could wake a
-        // connection that has just lost the group to another and leave the new one asleep.
-        self.notify.notify_waiters();
+        for waker in waiting {
+            waker.wake();
+        }
+    }
+
+    /// The group's change counter. A link reads it before it looks at the group and then
+    /// waits with [`changed`](Self::changed): a change in between is not missed.
+    pub(crate) fn version(&self) -> u64 {
+        self.lock().version
+    }
+
+    /// Resolves once the group changed since `seen` (a [`version`](Self::version)).
+    pub(crate) fn changed(&self, seen: u64) -> impl Future<Output = ()> + '_ {
+        std::future::poll_fn(move |context| {
+            let mut state = self.lock();
+            if state.version != seen {
+                return Poll::Ready(());
+            }
+            if !state.waiting.iter().any(|w| w.will_wake(context.waker())) {
+                state.waiting.push(context.waker().clone());
+            }
+            Poll::Pending
+        })
     }
 
     pub(crate) fn stats(&self) -> GroupStats {

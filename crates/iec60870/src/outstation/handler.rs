@@ -7,7 +7,6 @@
 
 use std::fmt;
 use std::future::Future;
-use std::net::SocketAddr;
 use std::pin::Pin;
 use std::time::Duration;
 
@@ -15,6 +14,8 @@ use chrono::{DateTime, Utc};
 
 use crate::asdu::{CommonAddress, Element, Ioa, TimeTag, TypeId};
 use crate::time::Cp56Time2a;
+
+use super::Peer;
 
 /// A command received by the server, already checked against the process image (known
 /// address, matching type, select-before-operate rules).
@@ -34,8 +35,8 @@ pub struct Command {
     pub originator: u8,
     /// Whether this is the select step of a select-before-operate.
     pub select: bool,
-    /// The remote address of the connection that sent it.
-    pub peer: SocketAddr,
+    /// The controlling station that sent it (its TCP address, or its serial line).
+    pub peer: Peer,
 }
 
 /// What became of a command.
@@ -172,33 +173,34 @@ pub trait StationHandler: Send + Sync + 'static {
     /// The station's clock: what the age of a time-tagged command is measured against and
     /// what the time tags the server stamps itself say. The default reads the host's
     /// clock; a station on a simulated or synchronised clock returns that.
+    #[allow(clippy::disallowed_methods)] // the application's clock: the host's by default
     fn now(&self) -> DateTime<Utc> {
         Utc::now()
     }
 
     /// A clock synchronisation arrived; return whether the station accepts the time.
     /// The default accepts it (and does nothing with it).
-    fn handle_clock_sync(&self, time: Cp56Time2a, peer: SocketAddr) -> bool {
+    fn handle_clock_sync(&self, time: Cp56Time2a, peer: &Peer) -> bool {
         let _ = (time, peer);
         true
     }
 
     /// A reset-process command (C_RP_NA_1) arrived with its qualifier; return whether it
     /// is accepted. The default refuses it.
-    fn handle_reset_process(&self, qualifier: u8, peer: SocketAddr) -> bool {
+    fn handle_reset_process(&self, qualifier: u8, peer: &Peer) -> bool {
         let _ = (qualifier, peer);
         false
     }
 
     /// A parameter command (P_ME_*, P_AC_NA_1) arrived; return whether it is accepted.
     /// The default refuses it.
-    fn handle_parameter(&self, ioa: Ioa, element: &Element, peer: SocketAddr) -> bool {
+    fn handle_parameter(&self, ioa: Ioa, element: &Element, peer: &Peer) -> bool {
         let _ = (ioa, element, peer);
         false
     }
 
     /// A client connected (`started = false`) or started data transfer (`started = true`).
-    fn connection_changed(&self, peer: SocketAddr, connected: bool, started: bool) {
+    fn connection_changed(&self, peer: &Peer, connected: bool, started: bool) {
         let _ = (peer, connected, started);
     }
 }

@@ -59,7 +59,7 @@ pub struct CommandPoint {
     pub select_required: bool,
     /// The largest age of a time-tagged command to this point (the interoperability
     /// list's maximum command delay); `None` takes the server's
-    /// [`ServerConfig::max_command_age`](super::ServerConfig::max_command_age).
+    /// [`OutstationConfig::max_command_age`](super::OutstationConfig::max_command_age).
     pub max_age: Option<std::time::Duration>,
 }
 
