@@ -12,6 +12,7 @@
 //! - [`link`]: the IEC 104 link to the station, point table, controls with select-before-operate,
 //!   recording into the HMI's own event store.
 //! - [`alarms`]: raised/cleared alarms, acknowledgement, shelving.
+//! - [`live`]: the messages of the live WebSocket (the browser's `HMI.receive`).
 //! - [`web`]: the axum router: pages, JSON API, WebSocket.
 //! - [`tls`]: HTTPS with the HMI's own certificate.
 #![cfg_attr(
@@ -24,6 +25,7 @@ pub mod alarms;
 pub mod auth;
 pub mod config;
 pub mod link;
+pub mod live;
 pub mod tls;
 pub mod users;
 pub mod web;
