@@ -10,22 +10,35 @@
 //!   common address, IOA) are [`asdu::AsduParams`], so IEC 101 reuses the codec.
 //! - [`apci`]: IEC 104 framing. I, S and U control fields, 15-bit sequence numbers and a
 //!   deframer that cuts APDUs out of a TCP byte stream.
-//! - [`cs104`]: IEC 104 stations.
+//! - [`outstation`]: the controlled station without a transport, sans-IO: the process
+//!   image, redundancy groups with their event buffers, interrogation, read, clock sync,
+//!   commands with their checks and their sequence (ACT_CON, return information,
+//!   ACT_TERM). [`outstation::LinkCore`] is one link's part; a link layer (IEC 104's APCI
+//!   session, the FT1.2 link layer of IEC 101) plugs in through
+//!   [`outstation::LinkLayer`]. A fuzz target and `tests/outstation.rs` drive it with no
+//!   socket at all.
+//! - [`cs104`]: IEC 104.
 //!   - `session`: the sans-IO APCI state machine of one connection: STARTDT/STOPDT/TESTFR,
 //!     k/w windows, t1/t2/t3 timers. It takes bytes and `Instant`s and hands out bytes,
 //!     events and its next deadline; it never reads a clock or a socket.
-//!   - `server` and `client`: tokio drivers around sessions. The server owns a process
-//!     image (the current value of every point), redundancy groups with their event
-//!     buffers, and answers interrogation, read, clock sync and commands. The client
-//!     connects with back-off, starts data transfer and awaits command confirmations.
-//!   - `tls`: rustls configuration for mutual authentication (IEC 62351-3).
+//!   - `server` and `client` (feature `tokio`, on by default): tokio adapters. The server
+//!     accepts TCP/TLS connections and drives a `Session` and an outstation `LinkCore`
+//!     for each; the client connects with back-off, starts data transfer and awaits
+//!     command confirmations.
+//!   - `tls` (feature `tokio`): rustls configuration for mutual authentication
+//!     (IEC 62351-3).
+//!
+//! The cores read no clock: `clippy.toml` bans `Instant::now`, `SystemTime::now` and
+//! chrono's `now` in this crate; the adapters use tokio's clock, the outstation the
+//! station's ([`outstation::StationHandler::now`]).
 //!
 //! # Data flow
 //!
 //! ```text
 //! TCP bytes -> apci::Deframer -> cs104::Session (sequence numbers, windows, timers)
-//!           -> ASDU bytes -> asdu::Asdu::decode -> server/client logic -> user
-//! user -> server/client logic -> asdu::Asdu::encode -> Session::send_asdu -> TCP bytes
+//!           -> ASDU bytes -> outstation::LinkCore (or the client) -> the application
+//! application -> Outstation::update -> group buffers -> LinkCore::fill
+//!           -> Session::send_asdu -> TCP bytes
 //! ```
 #![cfg_attr(
     not(test),
