@@ -462,6 +462,12 @@ async fn every_response_has_security_headers_and_errors_are_json() {
         ("POST", "/api/login", &[], "{not json", 400),
         ("POST", "/api/logout", &cookie, "{}", 403),
         ("GET", "/api/live", &cookie, "", 400),
+        // The API's own JSON, and its refusals from extractors and from handlers.
+        ("GET", "/api/points", &cookie, "", 200),
+        ("GET", "/api/alarms", &cookie, "", 200),
+        ("POST", "/api/command", &[], "{}", 401),
+        ("GET", "/api/screens/nothing", &cookie, "", 404),
+        ("POST", "/api/alarms/0/acknowledge", &cookie, "{}", 403),
     ];
     for (method, path, headers, body, status) in cases {
         let reply = http(address, method, path, headers, body).await;
@@ -474,6 +480,22 @@ async fn every_response_has_security_headers_and_errors_are_json() {
         }
         assert_eq!(reply.header("x-content-type-options"), Some("nosniff"));
         assert_eq!(reply.header("x-frame-options"), Some("DENY"));
+        assert!(
+            reply
+                .header("content-security-policy")
+                .is_some_and(|csp| csp.starts_with("default-src 'self'")
+                    && csp.contains("frame-ancestors 'none'")),
+            "{method} {path}: {reply:?}"
+        );
+        if path.starts_with("/api/") && status == 200 {
+            assert!(
+                reply
+                    .header("content-type")
+                    .is_some_and(|t| t.starts_with("application/json")),
+                "{method} {path}: an API response is JSON: {reply:?}"
+            );
+            assert_eq!(reply.header("cache-control"), Some("no-store"));
+        }
         if status >= 400 {
             assert!(
                 reply
