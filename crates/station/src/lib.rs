@@ -7,9 +7,13 @@
 //! | module        | what it does                                                      |
 //! |---------------|-------------------------------------------------------------------|
 //! | [`config`]    | the project folder: `station.toml`, nodes, points, links, tables, errors with file:line:col |
-//! | [`pointdb`]   | per-node typed values with quality and source time, report by exception |
 //! | [`runtime`]   | runs a project: simulated clock, plant and PLCs, servers, links (concentration, commands down the hierarchy), recording |
-//! | [`store`]     | the event and command-audit store (SQLite, PostgreSQL), retention |
+//!
+//! The point database, the event store and store addresses are the crate [`store`]'s,
+//! re-exported here under their old paths ([`pointdb`], [`store`], [`store_url`]). The
+//! feature `store` turns on its backends, recorder and retention (what a controlling station
+//! such as the HMI needs, without the soft PLC and the plant); `runtime` (the default)
+//! brings the PLC and the plant as well.
 #![cfg_attr(
     not(test),
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
@@ -17,10 +21,7 @@
 #![cfg_attr(not(test), deny(clippy::indexing_slicing))]
 
 pub mod config;
-#[cfg(feature = "store")]
-pub mod pointdb;
 #[cfg(feature = "runtime")]
 pub mod runtime;
-#[cfg(feature = "store")]
-pub mod store;
-pub mod store_url;
+
+pub use ::store::{self, pointdb, url as store_url};

@@ -316,25 +316,9 @@ pub struct IoBinding {
     pub variable: String,
 }
 
-/// Where a point's value comes from.
-#[derive(Debug, Clone, PartialEq, Eq, Hash)]
-pub enum PointSource {
-    /// A PLC variable path of the node.
-    Variable(String),
-    /// Point `ioa` received over the node's client link `link`.
-    Link {
-        /// The link's name.
-        link: String,
-        /// The IOA on the lower node.
-        ioa: Ioa,
-    },
-    /// The state of the node's client link with this name (TRUE = link down), for a point
-    /// named by the link's `status_point`; such a point has no `source`.
-    LinkStatus(String),
-    /// Whether a controlling station of the server's redundancy group with this name is
-    /// connected (TRUE = none is), for a point named by the group's `status_point`.
-    ClientStatus(String),
-}
+/// Where a point's value comes from (the point database's type, so a source stays one
+/// type from the project to the database).
+pub use crate::pointdb::PointSource;
 
 /// Where a command goes.
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]

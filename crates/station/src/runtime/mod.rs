@@ -516,10 +516,7 @@ impl Runtime {
             let node_clock = NodeClock::new(Arc::clone(&clock), project.station.time_zone);
             spawn_retention(
                 Arc::clone(store),
-                Retention {
-                    max_age: Duration::from_secs(days * 86_400),
-                    ..Retention::default()
-                },
+                Retention::new(Duration::from_secs(days * 86_400)),
                 move || node_clock.now(),
             )
         });

@@ -1,7 +1,5 @@
-//! Integration tests of the event store: one suite run against both backends (SQLite on a
-//! temp file, PostgreSQL on the server named by `STANICE_TEST_POSTGRES_URL`, which
-//! `scripts/with-postgres.sh` provides), plus backend-specific and retention tests; and the
-//! project-folder tests of `station::config`.
+//! The project-folder tests of `station::config`, and the runtime recording into either
+//! event store backend (the store's own tests are the crate `store`'s).
 #![allow(
     clippy::unwrap_used,
     clippy::expect_used,
@@ -10,57 +8,7 @@
 )]
 
 mod config;
-mod fixture;
-mod pointdb;
-mod recorder;
-mod retention;
+/// The store tests' throwaway PostgreSQL helpers, one file for both crates.
+#[path = "../../../store/tests/it/pg.rs"]
+mod pg;
 mod runtime_store;
-mod specific;
-mod suite;
-
-/// Generates, for every suite function, a test on SQLite and one on PostgreSQL.
-macro_rules! on_both_backends {
-    ($($name:ident),* $(,)?) => {
-        mod sqlite {
-            $(
-                #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-                async fn $name() {
-                    let fx = crate::fixture::sqlite().await;
-                    crate::suite::$name(fx.store.clone()).await;
-                    fx.finish().await;
-                }
-            )*
-        }
-        mod postgres {
-            $(
-                #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-                async fn $name() {
-                    let Some(fx) = crate::fixture::postgres(stringify!($name)).await else {
-                        return;
-                    };
-                    crate::suite::$name(fx.store.clone()).await;
-                    fx.finish().await;
-                }
-            )*
-        }
-    };
-}
-
-on_both_backends!(
-    round_trip_every_value_cause_and_quality,
-    ids_increase_in_batch_order,
-    empty_batch_is_a_no_op,
-    filters_time_range_by_source_and_received,
-    filters_point_exact_and_prefix,
-    filters_node_cause_and_invalid,
-    ordering_by_event_time,
-    pagination_with_equal_timestamps,
-    pagination_while_appending,
-    command_audit_round_trip_and_queries,
-    command_pagination,
-    purge_by_age,
-    stats_count_rows,
-    batch_of_100k_events,
-    concurrent_writers,
-    bad_input_is_refused_cleanly,
-);

@@ -97,12 +97,12 @@ async fn runtime_records_into_sqlite() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn runtime_records_into_postgresql() {
-    let Some(url) = crate::fixture::postgres_url("runtime_records_into_postgresql") else {
+    let Some(url) = crate::pg::postgres_url("runtime_records_into_postgresql") else {
         return;
     };
-    let (schema, store_url) = crate::fixture::postgres_schema(&url, "runtime").await;
+    let (schema, store_url) = crate::pg::postgres_schema(&url, "runtime").await;
     board_records_a_command_and_its_effects(store_url).await;
-    if let Ok(admin) = crate::fixture::admin(&url).await {
+    if let Ok(admin) = crate::pg::admin(&url).await {
         let _ = admin
             .batch_execute(&format!("DROP SCHEMA IF EXISTS {schema} CASCADE"))
             .await;

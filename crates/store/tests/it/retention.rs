@@ -4,7 +4,7 @@ use chrono::{DateTime, Duration as Days, Utc};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use station::store::{open_store, spawn_retention, EventStore, PointValue, Retention};
+use store::{open_store, spawn_retention, EventStore, PointValue, Retention};
 
 use crate::suite::{ev, t0};
 

@@ -14,20 +14,20 @@ use std::time::Duration;
 use tokio_postgres::types::ToSql;
 use tokio_postgres::{Client, NoTls, Row};
 
-use super::model::{
+use crate::model::{
     check_command, check_event, from_ms, quality_to_bits, to_ms, CommandRecord, EventRecord,
     RawCommand, RawEvent, RecordId,
 };
-use super::query::{
+use crate::query::{
     command_cursor, command_sql, event_cursor, event_sql, into_page, Dialect, Param,
 };
-use super::{
+use crate::{
     redact, Backend, CommandQuery, EventQuery, EventStore, Page, StoreError, StoreFuture,
     StoreStats,
 };
 
 /// The migrations, in version order.
-const MIGRATIONS: &[(i64, &str)] = &[(1, include_str!("../../migrations/postgres/0001_init.sql"))];
+const MIGRATIONS: &[(i64, &str)] = &[(1, include_str!("../migrations/postgres/0001_init.sql"))];
 
 /// Advisory lock taken while migrating, so two processes never migrate at once.
 const MIGRATION_LOCK: i64 = 0x5354_414E_4943_4531; // "STANICE1"
@@ -109,7 +109,7 @@ async fn checkout(pool: &Pool) -> Result<Object, StoreError> {
 }
 
 /// The PostgreSQL event store. Open it with [`PostgresStore::connect`] or through
-/// [`super::open_store`].
+/// [`crate::open_store`].
 pub struct PostgresStore {
     pool: Pool,
     url: String,

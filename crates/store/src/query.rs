@@ -8,10 +8,10 @@ use chrono::{DateTime, Utc};
 use std::fmt;
 use std::str::FromStr;
 
-use super::model::{
+use crate::model::{
     to_ms, Actor, CommandOutcome, CommandRecord, EventCause, EventRecord, RecordId,
 };
-use super::StoreError;
+use crate::StoreError;
 
 /// The largest page a query may ask for.
 pub const MAX_PAGE_SIZE: usize = 10_000;
@@ -33,7 +33,7 @@ pub enum Order {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
 pub enum TimeBasis {
     /// The event time: the source time stamp when present and valid, otherwise the
-    /// received time (see [`super::EventRecord::event_time`]).
+    /// received time (see [`crate::EventRecord::event_time`]).
     #[default]
     Source,
     /// The time this station received the event.

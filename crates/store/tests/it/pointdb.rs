@@ -7,11 +7,11 @@ use std::time::Duration;
 use chrono::{DateTime, TimeZone, Utc};
 use iec60870::asdu::{Element, Ioa, TimeTag, TypeId};
 use proptest::prelude::*;
-use station::pointdb::{
+use store::pointdb::{
     from_element, PointChange, PointDb, PointDbError, PointSource, PointSpec, TimeZonePolicy,
     Transmission,
 };
-use station::store::{quality_from_bits, EventCause, PointValue, Quality, SourceTime};
+use store::{quality_from_bits, EventCause, PointValue, Quality, SourceTime};
 
 fn ioa(n: u32) -> Ioa {
     Ioa::try_new(n).unwrap()

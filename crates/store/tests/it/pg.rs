@@ -1,42 +1,8 @@
-//! Fresh stores for each test.
+//! The throwaway PostgreSQL server of the tests (`scripts/with-postgres.sh`): its URL, a
+//! plain client, and a fresh schema per test. Shared with the station's runtime tests,
+//! which include this file (`#[path]`) to record into the same kind of server.
 
 use std::sync::atomic::{AtomicU32, Ordering};
-use std::sync::Arc;
-
-use station::store::{open_store, EventStore};
-
-/// A store under test and what must live as long as it.
-pub(crate) struct Fixture {
-    pub(crate) store: Arc<dyn EventStore>,
-    _dir: Option<tempfile::TempDir>,
-    pg_schema: Option<(String, String)>,
-}
-
-impl Fixture {
-    /// Cleans up what outlives the process (PostgreSQL schemas).
-    pub(crate) async fn finish(self) {
-        if let Some((url, schema)) = &self.pg_schema {
-            drop(self.store);
-            if let Ok(client) = admin(url).await {
-                let _ = client
-                    .batch_execute(&format!("DROP SCHEMA IF EXISTS {schema} CASCADE"))
-                    .await;
-            }
-        }
-    }
-}
-
-/// A SQLite store on a fresh file (WAL, writer and reader threads).
-pub(crate) async fn sqlite() -> Fixture {
-    let dir = tempfile::tempdir().unwrap();
-    let url = format!("sqlite:{}", dir.path().join("events.db").display());
-    let store = open_store(&url).await.unwrap();
-    Fixture {
-        store: Arc::from(store),
-        _dir: Some(dir),
-        pg_schema: None,
-    }
-}
 
 /// The server of the PostgreSQL tests, or `None` (with a SKIPPED note) when there is
 /// none. With `STANICE_REQUIRE_PEERS=1` a missing server fails the test instead.
@@ -85,16 +51,4 @@ pub(crate) async fn postgres_schema(url: &str, test: &str) -> (String, String) {
     let sep = if url.contains('?') { '&' } else { '?' };
     let store_url = format!("{url}{sep}options=-c%20search_path%3D{schema}");
     (schema, store_url)
-}
-
-/// A PostgreSQL store in a fresh schema, or `None` when the tests skip.
-pub(crate) async fn postgres(test: &str) -> Option<Fixture> {
-    let url = postgres_url(test)?;
-    let (schema, store_url) = postgres_schema(&url, test).await;
-    let store = open_store(&store_url).await.unwrap();
-    Some(Fixture {
-        store: Arc::from(store),
-        _dir: None,
-        pg_schema: Some((url, schema)),
-    })
 }

@@ -13,19 +13,19 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use tokio::sync::oneshot;
 
-use super::model::{
+use crate::model::{
     check_command, check_event, from_ms, quality_to_bits, to_ms, CommandRecord, EventRecord,
     RawCommand, RawEvent, RecordId,
 };
-use super::query::{
+use crate::query::{
     command_cursor, command_sql, event_cursor, event_sql, into_page, Dialect, Param,
 };
-use super::{
+use crate::{
     Backend, CommandQuery, EventQuery, EventStore, Page, StoreError, StoreFuture, StoreStats,
 };
 
 /// The migrations, in version order.
-const MIGRATIONS: &[(i64, &str)] = &[(1, include_str!("../../migrations/sqlite/0001_init.sql"))];
+const MIGRATIONS: &[(i64, &str)] = &[(1, include_str!("../migrations/sqlite/0001_init.sql"))];
 
 /// How long a connection waits for a lock held by another process before failing.
 const BUSY_TIMEOUT: Duration = Duration::from_secs(5);
@@ -84,7 +84,7 @@ impl Worker {
 }
 
 /// The SQLite event store. Open it with [`SqliteStore::open`] or through
-/// [`super::open_store`].
+/// [`crate::open_store`].
 pub struct SqliteStore {
     writer: Worker,
     readers: Worker,

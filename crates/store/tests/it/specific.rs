@@ -1,8 +1,8 @@
 //! Backend-specific behaviour: URLs, persistence across reopen, migrations.
 
-use station::store::{open_store, Backend, EventQuery, PointValue, SqliteStore, StoreError};
+use store::{open_store, Backend, EventQuery, PointValue, SqliteStore, StoreError};
 
-use crate::fixture::{admin, postgres_schema, postgres_url};
+use crate::pg::{admin, postgres_schema, postgres_url};
 use crate::suite::ev;
 
 #[tokio::test]
@@ -109,7 +109,7 @@ async fn sqlite_file_persists_across_reopen() {
 async fn sqlite_ids_are_never_reused_after_a_purge() {
     let dir = tempfile::tempdir().unwrap();
     let store = SqliteStore::open(dir.path().join("e.db")).await.unwrap();
-    use station::store::EventStore;
+    use store::EventStore;
     let a = store
         .append_events(&[ev("A", PointValue::Int(1), 1)])
         .await

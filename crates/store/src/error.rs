@@ -42,9 +42,11 @@ pub enum StoreError {
         source: Box<StoreError>,
     },
     /// The SQLite backend failed.
+    #[cfg(feature = "database")]
     #[error("sqlite: {0}")]
     Sqlite(#[from] rusqlite::Error),
     /// The PostgreSQL backend failed.
+    #[cfg(feature = "database")]
     #[error("postgres: {}", postgres_message(.0))]
     Postgres(#[from] tokio_postgres::Error),
     /// A worker thread of the SQLite backend could not be started.
@@ -58,6 +60,7 @@ pub enum StoreError {
     Pool(String),
 }
 
+#[cfg(feature = "database")]
 /// The error with the server's message: `tokio_postgres::Error` displays only "db error"
 /// and keeps the server's words (and connection failures' causes) in its source.
 fn postgres_message(e: &tokio_postgres::Error) -> String {

@@ -8,7 +8,7 @@
 use chrono::{DateTime, Utc};
 use std::fmt;
 
-use super::StoreError;
+use crate::StoreError;
 
 /// Identifier of a stored row, assigned by the store in increasing order of insertion.
 pub type RecordId = i64;
@@ -237,7 +237,7 @@ impl EventRecord {
         }
     }
 
-    /// The time the event is filed under for [`super::TimeBasis::Source`]: the source time
+    /// The time the event is filed under for [`crate::TimeBasis::Source`]: the source time
     /// when present and valid, otherwise the received time.
     pub fn event_time(&self) -> DateTime<Utc> {
         match self.source_time {

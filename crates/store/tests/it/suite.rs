@@ -4,7 +4,7 @@ use chrono::{DateTime, Duration, TimeZone, Utc};
 use std::collections::HashSet;
 use std::sync::Arc;
 
-use station::store::{
+use store::{
     quality_from_bits, Actor, CommandOutcome, CommandPhase, CommandQuery, CommandRecord, Cursor,
     EventCause, EventQuery, EventRecord, EventStore, Order, Page, PointValue, Quality, SourceTime,
     StoreError, TimeBasis, MAX_PAGE_SIZE,

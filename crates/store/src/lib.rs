@@ -1,4 +1,40 @@
-//! The event and command-audit store.
+//! The Stanice event store: a node's point database, the record of every value change and
+//! command, and the backends that keep them (SQLite, PostgreSQL).
+//!
+//! It is its own crate so that a controlling station such as the HMI, or a tool, can keep
+//! points and record events without linking the soft PLC, its compiler and Cranelift.
+//!
+//! # What it owns
+//!
+//! | module        | what it does                                                         |
+//! |---------------|----------------------------------------------------------------------|
+//! | [`pointdb`]   | a node's points: typed values with quality and source time, report by exception |
+//! | `model`       | the records: [`EventRecord`], [`CommandRecord`], [`PointValue`] and their codes |
+//! | `query`       | filters, ordering and keyset pages: [`EventQuery`], [`CommandQuery`], [`Page`] |
+//! | [`url`]       | store addresses: [`url::StoreUrl`] (`sqlite:PATH`, `sqlite::memory:`, `postgres://...`) |
+//! | `sqlite`, `postgres` | the backends, differing only in how they reach their database |
+//! | `recorder`    | [`Recorder`]: the bounded channel and batching writer in front of a store |
+//! | `retention`   | [`spawn_retention`]: the periodic purge of old history |
+//!
+//! The backends, the recorder and retention are the feature `database` (on by default);
+//! without it the crate is the point database, the record and query types and store
+//! addresses, which is what the project loader needs.
+//!
+//! # Data flow
+//!
+//! ```text
+//!  value in (PLC, I/O, link) --> PointDb::update --> PointChange (report by exception)
+//!                                                        | to_event_record
+//!  command audit (CommandRecord) -----------------+      v
+//!                                                 +--> Recorder: bounded channel
+//!                                                      (full: events dropped and counted,
+//!                                                       commands wait for room)
+//!                                                        | write task: one transaction per burst
+//!                                                        v
+//!                      EventStore (SqliteStore | PostgresStore) --> query_events / query_commands
+//!                                                        ^              (HMI event list, CLI)
+//!                      spawn_retention: purge_older_than every interval
+//! ```
 //!
 //! Every value change of every point ([`EventRecord`]) and every command with who issued it
 //! and what became of it ([`CommandRecord`]) goes into an [`EventStore`]. The railway
@@ -15,14 +51,12 @@
 //!   with a small pool of connections.
 //!
 //! Open one with [`open_store`]; keep history bounded with [`spawn_retention`]; feed it
-//! through a [`Recorder`] (batched, bounded, commands awaitable until committed). This
-//! module and the point database are the crate's `store` feature: what a controlling
-//! station such as the HMI links, without the soft PLC and the plant.
+//! through a [`Recorder`] (batched, bounded, commands awaitable until committed).
 //!
 //! # Schema
 //!
 //! Tables `events` and `commands`, versioned by `schema_version`; the migrations are SQL
-//! files under `migrations/sqlite/` and `migrations/postgres/`, applied at open. Times are
+//! files under `migrations/`, applied at open. Times are
 //! milliseconds since the Unix epoch (UTC) in 64-bit integers; values are split into
 //! `value_kind` plus `value_int`/`value_float`/`value_text`; enums are stored as the stable
 //! codes of [`EventCause::code`], [`CommandOutcome::code`] and [`CommandPhase::code`].
@@ -31,8 +65,8 @@
 //! # Example
 //!
 //! ```
-//! # async fn demo() -> Result<(), station::store::StoreError> {
-//! use station::store::{open_store, EventQuery, EventRecord, PointValue};
+//! # async fn demo() -> Result<(), store::StoreError> {
+//! use store::{open_store, EventQuery, EventRecord, PointValue};
 //! let store = open_store("sqlite::memory:").await?;
 //! let now = chrono::Utc::now();
 //! store
@@ -42,14 +76,25 @@
 //! assert_eq!(page.items.len(), 1);
 //! # Ok(()) }
 //! ```
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+#![cfg_attr(not(test), deny(clippy::indexing_slicing))]
 
 mod error;
 mod model;
+pub mod pointdb;
+#[cfg(feature = "database")]
 mod postgres;
 mod query;
+#[cfg(feature = "database")]
 mod recorder;
+#[cfg(feature = "database")]
 mod retention;
+#[cfg(feature = "database")]
 mod sqlite;
+pub mod url;
 
 use chrono::{DateTime, Utc};
 use std::future::Future;
@@ -60,13 +105,17 @@ pub use model::{
     quality_from_bits, quality_to_bits, Actor, CommandOutcome, CommandPhase, CommandRecord,
     EventCause, EventRecord, PointValue, Quality, RecordId, SourceTime,
 };
+#[cfg(feature = "database")]
 pub use postgres::{PostgresConfig, PostgresStore};
 pub use query::{
     CommandQuery, Cursor, EventQuery, Order, Page, PointFilter, TimeBasis, DEFAULT_PAGE_SIZE,
     MAX_PAGE_SIZE,
 };
+#[cfg(feature = "database")]
 pub use recorder::{Recorder, CHANNEL_CAPACITY};
+#[cfg(feature = "database")]
 pub use retention::{spawn_retention, Retention, RetentionHandle};
+#[cfg(feature = "database")]
 pub use sqlite::SqliteStore;
 
 /// A boxed future, so that [`EventStore`] can be used as `dyn EventStore`.
@@ -132,8 +181,9 @@ pub trait EventStore: Send + Sync {
 /// - `postgres://USER[:PASSWORD]@HOST[:PORT]/DB[?options]` or `postgresql://...`: a
 ///   PostgreSQL database (it must exist; the tables are created in the connection's
 ///   `search_path` schema).
+#[cfg(feature = "database")]
 pub async fn open_store(url: &str) -> Result<Box<dyn EventStore>, StoreError> {
-    let url = crate::store_url::StoreUrl::parse(url).map_err(|error| StoreError::BadUrl {
+    let url = crate::url::StoreUrl::parse(url).map_err(|error| StoreError::BadUrl {
         url: error.text,
         reason: error.reason,
     })?;
@@ -141,10 +191,11 @@ pub async fn open_store(url: &str) -> Result<Box<dyn EventStore>, StoreError> {
 }
 
 /// Opens (and migrates) the store at a parsed address.
+#[cfg(feature = "database")]
 pub async fn open_store_at(
-    url: &crate::store_url::StoreUrl,
+    url: &crate::url::StoreUrl,
 ) -> Result<Box<dyn EventStore>, StoreError> {
-    use crate::store_url::StoreUrl;
+    use crate::url::StoreUrl;
     Ok(match url {
         StoreUrl::SqliteMemory => Box::new(SqliteStore::open_in_memory().await?),
         StoreUrl::SqliteFile(path) => Box::new(SqliteStore::open(path).await?),
@@ -154,4 +205,5 @@ pub async fn open_store_at(
     })
 }
 
-pub(crate) use crate::store_url::redact;
+#[cfg(feature = "database")]
+pub(crate) use crate::url::redact;

@@ -48,8 +48,27 @@ use iec60870::asdu::{
 };
 use iec60870::cs104::server::{ImageError, MonitorPoint, ProcessImage, ServerError, ServerHandle};
 
-pub use crate::config::PointSource;
-use crate::store::{EventCause, EventRecord, PointValue, Quality, SourceTime};
+use crate::{EventCause, EventRecord, PointValue, Quality, SourceTime};
+
+/// Where a point's value comes from.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub enum PointSource {
+    /// A PLC variable path of the node.
+    Variable(String),
+    /// Point `ioa` received over the node's client link `link`.
+    Link {
+        /// The link's name.
+        link: String,
+        /// The IOA on the lower node.
+        ioa: Ioa,
+    },
+    /// The state of the node's client link with this name (TRUE = link down), for a point
+    /// named by the link's `status_point`; such a point has no `source`.
+    LinkStatus(String),
+    /// Whether a controlling station of the server's redundancy group with this name is
+    /// connected (TRUE = none is), for a point named by the group's `status_point`.
+    ClientStatus(String),
+}
 
 /// How a point is transmitted upward.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -5,7 +5,7 @@ use std::sync::Arc;
 use std::time::Duration;
 use tokio::task::JoinHandle;
 
-use super::EventStore;
+use crate::EventStore;
 
 /// How long history is kept and how often the purge runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -4,8 +4,8 @@
 use std::sync::Arc;
 
 use chrono::{DateTime, Utc};
-use station::store::Recorder;
-use station::store::{
+use store::Recorder;
+use store::{
     open_store, Backend, CommandQuery, CommandRecord, EventQuery, EventRecord, EventStore, Page,
     PointValue, RecordId, StoreFuture, StoreStats,
 };
@@ -72,13 +72,13 @@ async fn a_stalled_store_drops_counted_events_but_keeps_every_command() {
     let command = CommandRecord {
         id: None,
         time: crate::suite::at_ms(5),
-        actor: station::store::Actor::Remote("127.0.0.1:1".into()),
+        actor: store::Actor::Remote("127.0.0.1:1".into()),
         node: "RDRT".into(),
         point: "QF1".into(),
         ioa: Some(2021),
         value: PointValue::Bool(true),
-        phase: station::store::CommandPhase::Execute,
-        outcome: station::store::CommandOutcome::Executed,
+        phase: store::CommandPhase::Execute,
+        outcome: store::CommandOutcome::Executed,
         detail: String::new(),
     };
     recorder.command(command.clone());

@@ -14,7 +14,7 @@ use std::sync::Arc;
 
 use tokio::sync::{mpsc, oneshot};
 
-use super::{CommandRecord, EventRecord, EventStore};
+use crate::{CommandRecord, EventRecord, EventStore};
 
 /// Events taken from the channel per transaction at most.
 const BATCH: usize = 1024;
