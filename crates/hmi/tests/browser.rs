@@ -306,6 +306,11 @@ const MALICIOUS_SVG: &str = r##"<svg xmlns="http://www.w3.org/2000/svg" xmlns:xl
   <rect id="good-animation" x="400" y="100" width="30" height="30" class="box">
     <animate attributeName="opacity" values="1;0.5;1" dur="0.2s" repeatCount="indefinite"/>
   </rect>
+  <rect id="lab-level" x="500" y="150" width="20" height="100" class="box" data-level="RH2_V1_FA1.1" data-min="0" data-max="1"/>
+  <rect id="lab-car" x="530" y="240" width="10" height="10" class="box" data-position="RH2_V1_FA1.1" data-min="0" data-max="1" data-dy="-100"/>
+  <line id="lab-valve" x1="560" y1="200" x2="590" y2="200" class="label" data-rotate="RH2_V1_FA1.1" data-min="0" data-max="1" data-angle-max="90" data-cx="560" data-cy="200"/>
+  <text id="lab-tripped" x="500" y="280" class="label" data-visible="RH2_V1_FA1.1" data-visible-when="off">FA1.1 open</text>
+  <rect id="lab-meter" x="470" y="150" width="20" height="100" class="box" data-level="RZZ_U" data-max="500"/>
 </svg>
 "##;
 
@@ -1072,6 +1077,58 @@ async fn operator_and_viewer_in_a_real_browser() {
         dom["text"],
         json!("LOCAL"),
         "the harmless text binding: {dom}"
+    );
+
+    // --- Level, position, rotation and visibility bindings follow live values: FA1.1,
+    // tripped (0) since the start, recloses (1) when its trip is cleared.
+    let lab = |id: &str| format!("document.querySelector('#mimic #{id}')");
+    let (level, car, valve, tripped) = (
+        lab("lab-level"),
+        lab("lab-car"),
+        lab("lab-valve"),
+        lab("lab-tripped"),
+    );
+    until(
+        &client,
+        &format!(
+            "HMI.points.get('RH2_V1_FA1.1').value === false \
+             && {level}.getAttribute('y') === '250' && {level}.getAttribute('height') === '0' \
+             && {car}.getAttribute('transform') === 'translate(0 0)' \
+             && {valve}.getAttribute('transform') === 'rotate(0 560 200)' \
+             && {tripped}.getAttribute('visibility') === 'visible'"
+        ),
+        "the level, position, rotation and visibility bindings at FA1.1 open",
+    )
+    .await;
+    site.operate("clear breaker-tripped RH2_FA1.1").await;
+    until(
+        &client,
+        &format!(
+            "HMI.points.get('RH2_V1_FA1.1').value === true \
+             && {level}.getAttribute('y') === '150' && {level}.getAttribute('height') === '100' \
+             && {car}.getAttribute('transform') === 'translate(0 -100)' \
+             && {valve}.getAttribute('transform') === 'rotate(90 560 200)' \
+             && {tripped}.getAttribute('visibility') === 'hidden'"
+        ),
+        "the level, position, rotation and visibility bindings following FA1.1 closed",
+    )
+    .await;
+    // A measurement on a range: RZZ's busbar voltage fills its bar to its share of 0..500 V.
+    let meter = js(
+        &client,
+        &format!(
+            "(() => {{ const e = {}; return [HMI.points.get('RZZ_U').value, \
+             Number(e.getAttribute('y')), Number(e.getAttribute('height'))]; }})()",
+            lab("lab-meter")
+        ),
+    )
+    .await;
+    let volts = meter[0].as_f64().unwrap_or_else(|| panic!("RZZ_U: {meter}"));
+    let height = 100.0 * (volts / 500.0).clamp(0.0, 1.0);
+    assert!(
+        (meter[2].as_f64().unwrap() - height).abs() < 1e-6
+            && (meter[1].as_f64().unwrap() - (250.0 - height)).abs() < 1e-6,
+        "the meter's level follows RZZ_U: {meter}"
     );
 
     // --- The read-only user: controls disabled, and the server refuses them anyway.

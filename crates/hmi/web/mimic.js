@@ -1,15 +1,34 @@
 // Stanice web HMI — mimic screens and the control dialog.
 //
 // A screen is an SVG file served by /api/screens/ID, put inline into the page. Its
-// elements are bound to points by attributes (docs/HMI.md, "SVG bindings"):
+// elements are bound to points by attributes (docs/HMI.md, "SVG bindings"). Each kind of
+// binding is one entry of BINDINGS below: the attribute that names the point, the other
+// attributes it reads, and how it applies a value; a new kind is a new entry.
 //
-//   data-point="NAME"       data-value = on/off (single), off/on/between/faulty (double) or the number
-//   data-energised="NAME"   class "energised" while the single point is TRUE
-//   data-text="NAME"        the text becomes the value (data-unit, data-digits; data-on/data-off
-//                           for single points, data-map="0:start;1:mains" for numbers)
+//   data-point="NAME"       value: data-value = on/off (single), off/on/between/faulty
+//                           (double) or the number; the stylesheet colours by it
+//   data-energised="NAME"   state class: class "energised" while the single point is TRUE
+//   data-text="NAME"        text: the text becomes the value (data-unit, data-digits; data-on/
+//                           data-off for single points, data-map="0:start;1:mains" for numbers)
+//   data-visible="NAME"     visibility: shown while the point is on (TRUE, double point on,
+//                           a number other than 0), or while its value word is
+//                           data-visible-when ("off", "between", "4", ...); shown while unknown
+//   data-level="NAME"       level: a <rect> filled to the value's share of data-min..data-max
+//                           (default 0..100), from the bottom (data-level-from="bottom", "top",
+//                           "left" or "right"): tank levels, bar graphs
+//   data-position="NAME"    position: moved by the value's share of data-min..data-max along
+//                           the vector data-dx, data-dy (user units, default 0 0): lift cars,
+//                           gates, conveyor loads
+//   data-rotate="NAME"      rotation: turned to data-angle-min..data-angle-max degrees (default
+//                           0..360) for data-min..data-max, about data-cx, data-cy (default
+//                           the element's centre): valves, dials, fans
 //   data-command="NAME"     a click opens the control dialog (data-command-value: the value sent;
 //                           data-command-format="minutes": a setpoint entered as hh:mm)
 //   data-link-status        shows the station link (data-value up/down; a <text> says so)
+//
+// Level, position and rotation read a number: TRUE is 1, FALSE 0, a double point 0..3; the
+// share is clamped to 0..1; an unknown value leaves the drawing where it was. Position and
+// rotation compose on one element (moved, then turned in place) with its own transform.
 //
 // Every bound element gets data-invalid="true" while any of its points is invalid, the
 // station link is down or the live connection is closed: the stylesheet makes it blink.
@@ -114,16 +133,15 @@
 
   function index() {
     bound = new Map();
-    const add = (name, element) => {
-      if (!name) return;
-      if (!bound.has(name)) bound.set(name, []);
-      const list = bound.get(name);
-      if (!list.includes(element)) list.push(element);
-    };
-    for (const element of svgRoot.querySelectorAll("[data-point], [data-energised], [data-text]")) {
-      add(element.getAttribute("data-point"), element);
-      add(element.getAttribute("data-energised"), element);
-      add(element.getAttribute("data-text"), element);
+    geometry = new WeakMap();
+    for (const element of svgRoot.querySelectorAll(BOUND)) {
+      for (const binding of BINDINGS) {
+        const name = element.getAttribute(binding.attribute);
+        if (!name) continue;
+        if (!bound.has(name)) bound.set(name, []);
+        const list = bound.get(name);
+        if (!list.includes(element)) list.push(element);
+      }
     }
     linkElements = [...svgRoot.querySelectorAll("[data-link-status]")];
     commandElements = [...svgRoot.querySelectorAll("[data-command]")];
@@ -139,6 +157,177 @@
         element.setAttribute("aria-label", allowed ? label : `${label} (needs level ${control.level})`);
       }
     }
+  }
+
+  // ------------------------------------------------------------------ bindings
+  /** A point's value as a number: TRUE 1, FALSE 0, a double point 0..3; null if unknown. */
+  function numberOf(point) {
+    if (!point || point.value === null || point.value === undefined) return null;
+    if (typeof point.value === "boolean") return point.value ? 1 : 0;
+    const value = Number(point.value);
+    return Number.isFinite(value) ? value : null;
+  }
+
+  function attributeNumber(element, name, fallback) {
+    const text = element.getAttribute(name);
+    if (text === null || text.trim() === "") return fallback;
+    const value = Number(text);
+    return Number.isFinite(value) ? value : fallback;
+  }
+
+  /** The value's share of data-min..data-max, clamped to 0..1; null if unknown. */
+  function share(element, point) {
+    const value = numberOf(point);
+    if (value === null) return null;
+    const min = attributeNumber(element, "data-min", 0);
+    const max = attributeNumber(element, "data-max", 100);
+    if (max === min) return value >= max ? 1 : 0;
+    return Math.min(1, Math.max(0, (value - min) / (max - min)));
+  }
+
+  function setValueWord(element, point) {
+    const word = HMI.valueWord(point);
+    if (word === "") element.removeAttribute("data-value");
+    else element.setAttribute("data-value", word);
+  }
+
+  // The drawing as the file has it, per element, taken when the element first moves.
+  let geometry = new WeakMap(); // element -> {transform, x, y, width, height, cx, cy, translate, rotate}
+  function drawn(element) {
+    let g = geometry.get(element);
+    if (!g) {
+      const number = (name) => attributeNumber(element, name, 0);
+      g = {
+        transform: element.getAttribute("transform") || "",
+        x: number("x"),
+        y: number("y"),
+        width: number("width"),
+        height: number("height"),
+        translate: null,
+        rotate: null,
+      };
+      let box = { x: 0, y: 0, width: 0, height: 0 };
+      try {
+        box = element.getBBox();
+      } catch (error) {
+        /* not rendered: the centre defaults to 0 0 */
+      }
+      g.cx = attributeNumber(element, "data-cx", box.x + box.width / 2);
+      g.cy = attributeNumber(element, "data-cy", box.y + box.height / 2);
+      geometry.set(element, g);
+    }
+    return g;
+  }
+
+  /** The element's own transform with the moves of its position and rotation bindings. */
+  function place(element, g) {
+    const parts = [];
+    if (g.translate) parts.push(`translate(${g.translate[0]} ${g.translate[1]})`);
+    if (g.transform) parts.push(g.transform);
+    if (g.rotate !== null) parts.push(`rotate(${g.rotate} ${g.cx} ${g.cy})`);
+    if (parts.length) element.setAttribute("transform", parts.join(" "));
+    else element.removeAttribute("transform");
+  }
+
+  /**
+   * The kinds of binding. `attribute` names the point; `reads` lists the other attributes
+   * the kind reads (documentation, and what a screen author may set); `apply(element,
+   * point)` shows the point's current value (null/undefined if unknown). An element may
+   * carry several kinds; it is invalid while any of its points is.
+   */
+  const BINDINGS = [
+    {
+      kind: "value",
+      attribute: "data-point",
+      reads: [],
+      apply: setValueWord,
+    },
+    {
+      kind: "text",
+      attribute: "data-text",
+      reads: ["data-unit", "data-digits", "data-on", "data-off", "data-map"],
+      apply(element, point) {
+        element.textContent = textOf(element, point);
+        if (!element.hasAttribute("data-point")) setValueWord(element, point);
+      },
+    },
+    {
+      kind: "state class",
+      attribute: "data-energised",
+      reads: [],
+      apply(element, point) {
+        element.classList.toggle("energised", Boolean(point && point.value === true));
+      },
+    },
+    {
+      kind: "visibility",
+      attribute: "data-visible",
+      reads: ["data-visible-when"],
+      apply(element, point) {
+        const when = element.getAttribute("data-visible-when");
+        const value = numberOf(point);
+        let shown = true; // unknown: shown, and blinking as invalid
+        if (value !== null) shown = when !== null ? HMI.valueWord(point) === when.trim() : isOn(point, value);
+        element.setAttribute("visibility", shown ? "visible" : "hidden");
+        element.setAttribute("data-shown", String(shown));
+      },
+    },
+    {
+      kind: "level",
+      attribute: "data-level",
+      reads: ["data-min", "data-max", "data-level-from"],
+      apply(element, point) {
+        const fraction = share(element, point);
+        if (fraction === null) return;
+        const g = drawn(element);
+        const from = (element.getAttribute("data-level-from") || "bottom").trim();
+        if (from === "left" || from === "right") {
+          const width = g.width * fraction;
+          element.setAttribute("x", String(from === "left" ? g.x : g.x + g.width - width));
+          element.setAttribute("width", String(width));
+        } else {
+          const height = g.height * fraction;
+          element.setAttribute("y", String(from === "top" ? g.y : g.y + g.height - height));
+          element.setAttribute("height", String(height));
+        }
+        element.setAttribute("data-share", String(fraction));
+      },
+    },
+    {
+      kind: "position",
+      attribute: "data-position",
+      reads: ["data-min", "data-max", "data-dx", "data-dy"],
+      apply(element, point) {
+        const fraction = share(element, point);
+        if (fraction === null) return;
+        const g = drawn(element);
+        g.translate = [attributeNumber(element, "data-dx", 0) * fraction, attributeNumber(element, "data-dy", 0) * fraction];
+        place(element, g);
+        element.setAttribute("data-share", String(fraction));
+      },
+    },
+    {
+      kind: "rotation",
+      attribute: "data-rotate",
+      reads: ["data-min", "data-max", "data-angle-min", "data-angle-max", "data-cx", "data-cy"],
+      apply(element, point) {
+        const fraction = share(element, point);
+        if (fraction === null) return;
+        const g = drawn(element);
+        const from = attributeNumber(element, "data-angle-min", 0);
+        const to = attributeNumber(element, "data-angle-max", 360);
+        g.rotate = from + (to - from) * fraction;
+        place(element, g);
+        element.setAttribute("data-share", String(fraction));
+      },
+    },
+  ];
+  const BOUND = BINDINGS.map((binding) => `[${binding.attribute}]`).join(", ");
+
+  /** "On" for visibility: TRUE, a double point on (2), any other number but 0. */
+  function isOn(point, value) {
+    if (point.type && point.type.startsWith("M_DP")) return value === 2;
+    return value !== 0;
   }
 
   // ------------------------------------------------------------------ showing values
@@ -166,29 +355,11 @@
   /** Recomputes one element from every point it names. */
   function refresh(element) {
     let invalid = false;
-    const pointName = element.getAttribute("data-point");
-    if (pointName !== null) {
-      const point = HMI.points.get(pointName);
-      const word = HMI.valueWord(point);
-      if (word === "") element.removeAttribute("data-value");
-      else element.setAttribute("data-value", word);
-      invalid = invalid || HMI.isInvalid(point);
-    }
-    const energisedName = element.getAttribute("data-energised");
-    if (energisedName !== null) {
-      const point = HMI.points.get(energisedName);
-      element.classList.toggle("energised", Boolean(point && point.value === true));
-      invalid = invalid || HMI.isInvalid(point);
-    }
-    const textName = element.getAttribute("data-text");
-    if (textName !== null) {
-      const point = HMI.points.get(textName);
-      element.textContent = textOf(element, point);
-      if (pointName === null) {
-        const word = HMI.valueWord(point);
-        if (word === "") element.removeAttribute("data-value");
-        else element.setAttribute("data-value", word);
-      }
+    for (const binding of BINDINGS) {
+      const name = element.getAttribute(binding.attribute);
+      if (name === null) continue;
+      const point = HMI.points.get(name);
+      binding.apply(element, point);
       invalid = invalid || HMI.isInvalid(point);
     }
     if (invalid) element.setAttribute("data-invalid", "true");
@@ -409,12 +580,12 @@
   // quality and time tag.
   let info = null;
   function pointInfo(event) {
-    const element = event.target.closest && event.target.closest("[data-point], [data-text], [data-energised]");
+    const element = event.target.closest && event.target.closest(BOUND);
     if (!element || !svgRoot || !svgRoot.contains(element)) {
       if (info) info.hidden = true;
       return;
     }
-    const name = element.getAttribute("data-point") || element.getAttribute("data-text") || element.getAttribute("data-energised");
+    const name = BINDINGS.map((binding) => element.getAttribute(binding.attribute)).find(Boolean);
     const point = HMI.points.get(name);
     if (!info) {
       info = HMI.el("div", { id: "point-info", role: "tooltip" });
