@@ -17,14 +17,17 @@
 //!   session, the FT1.2 link layer of IEC 101) plugs in through
 //!   [`outstation::LinkLayer`]. A fuzz target and `tests/outstation.rs` drive it with no
 //!   socket at all.
+//! - [`controlling`]: the controlling station's part without a transport: open requests
+//!   and how received ASDUs finish them (confirmation, termination, timeouts), what it
+//!   sends when data transfer starts (clock sync, interrogation).
 //! - [`cs104`]: IEC 104.
 //!   - `session`: the sans-IO APCI state machine of one connection: STARTDT/STOPDT/TESTFR,
 //!     k/w windows, t1/t2/t3 timers. It takes bytes and `Instant`s and hands out bytes,
 //!     events and its next deadline; it never reads a clock or a socket.
 //!   - `server` and `client` (feature `tokio`, on by default): tokio adapters. The server
 //!     accepts TCP/TLS connections and drives a `Session` and an outstation `LinkCore`
-//!     for each; the client connects with back-off, starts data transfer and awaits
-//!     command confirmations.
+//!     for each; the client connects with back-off, drives a `Session` and the
+//!     controlling core's `OpenRequests`, and probes a quiet standby connection.
 //!   - `tls` (feature `tokio`): rustls configuration for mutual authentication
 //!     (IEC 62351-3).
 //!
@@ -48,6 +51,7 @@
 
 pub mod apci;
 pub mod asdu;
+pub mod controlling;
 pub mod cs104;
 pub mod outstation;
 pub mod time;

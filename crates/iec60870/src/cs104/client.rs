@@ -34,6 +34,7 @@ use tracing::Instrument;
 use crate::asdu::{
     Asdu, AsduParams, Cause, CommonAddress, Cot, Element, InformationObject, Ioa, TypeId,
 };
+use crate::controlling::{start_requests, Expired, OpenRequests};
 use crate::cs104::config::ApciConfig;
 use crate::cs104::repeated_warning::RepeatedWarning;
 use crate::cs104::session::{Role, Session, SessionEvent, SessionState};
@@ -168,18 +169,7 @@ pub enum ClientError {
     Stopped,
 }
 
-/// The confirmation a request received.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RequestOutcome {
-    /// The server confirmed positively (P/N = 0).
-    pub positive: bool,
-    /// The cause of the confirmation (7 actcon, 9 deactcon, or 44..47 for refusals).
-    pub cause: Cause,
-    /// An activation termination arrived (commands, interrogations).
-    pub terminated: bool,
-    /// Every ASDU of the exchange as received (confirmation, termination), in order.
-    pub responses: Vec<Asdu>,
-}
+pub use crate::controlling::RequestOutcome;
 
 enum Request {
     Exchange {
@@ -350,107 +340,8 @@ impl ClientHandle {
     }
 }
 
-/// An open request: what it matches and where its answer goes.
-struct Pending {
-    type_id: TypeId,
-    ioa: Ioa,
-    expects_termination: bool,
-    /// The termination may not come: the standard leaves ACT_TERM of a command to the
-    /// station (c104 sends none after a direct execute). Interrogations must terminate.
-    termination_optional: bool,
-    is_read: bool,
-    responses: Vec<Asdu>,
-    confirmation: Option<(bool, Cause)>,
-    deadline: tokio::time::Instant,
-    reply: Option<oneshot::Sender<Result<RequestOutcome, ClientError>>>,
-}
-
-impl Pending {
-    fn finish(&mut self, result: Result<RequestOutcome, ClientError>) {
-        if let Some(reply) = self.reply.take() {
-            let _ = reply.send(result);
-        }
-    }
-
-    fn outcome(&self, terminated: bool) -> RequestOutcome {
-        let (positive, cause) = self.confirmation.unwrap_or((false, Cause::ACTIVATION_CON));
-        RequestOutcome {
-            positive,
-            cause,
-            terminated,
-            responses: self.responses.clone(),
-        }
-    }
-
-    /// Offers a received ASDU; returns whether the request is now finished.
-    fn offer(&mut self, asdu: &Asdu, timeout: Duration, termination_timeout: Duration) -> bool {
-        let Some(first) = asdu.objects.first() else {
-            return false;
-        };
-        if self.is_read {
-            if first.ioa != self.ioa {
-                return false;
-            }
-            if asdu.cot.cause == Cause::REQUEST && !asdu.cot.negative {
-                self.responses.push(asdu.clone());
-                self.confirmation = Some((true, Cause::REQUEST));
-                return true;
-            }
-            if asdu.type_id == self.type_id && asdu.cot.negative {
-                self.responses.push(asdu.clone());
-                self.confirmation = Some((false, asdu.cot.cause));
-                return true;
-            }
-            return false;
-        }
-        if asdu.type_id != self.type_id || first.ioa != self.ioa {
-            return false;
-        }
-        let cause = asdu.cot.cause;
-        let is_confirmation = cause == Cause::ACTIVATION_CON
-            || cause == Cause::DEACTIVATION_CON
-            || (44..=47).contains(&cause.value());
-        if is_confirmation && self.confirmation.is_none() {
-            self.responses.push(asdu.clone());
-            let positive = !asdu.cot.negative;
-            self.confirmation = Some((positive, cause));
-            if !positive || !self.expects_termination {
-                return true;
-            }
-            // The termination has its own time allowance.
-            let allowance = if self.termination_optional {
-                termination_timeout
-            } else {
-                timeout
-            };
-            self.deadline = tokio::time::Instant::now() + allowance;
-            return false;
-        }
-        if cause == Cause::ACTIVATION_TERMINATION {
-            self.responses.push(asdu.clone());
-            if self.confirmation.is_none() {
-                // Termination without confirmation: some stations skip ACT_CON.
-                self.confirmation = Some((true, Cause::ACTIVATION_TERMINATION));
-            }
-            return true;
-        }
-        false
-    }
-}
-
-fn expects_termination(asdu: &Asdu) -> bool {
-    match asdu.type_id {
-        TypeId::C_IC_NA_1 | TypeId::C_CI_NA_1 => asdu.cot.cause == Cause::ACTIVATION,
-        type_id if type_id.is_command() => {
-            asdu.cot.cause == Cause::ACTIVATION
-                && !asdu
-                    .objects
-                    .first()
-                    .is_some_and(|object| object.element.is_select())
-        }
-        _ => false,
-    }
-}
+/// Where the answer to an open request goes.
+type Reply = oneshot::Sender<Result<RequestOutcome, ClientError>>;
 
 async fn run(
     config: ClientConfig,
@@ -637,7 +528,8 @@ where
             return DriveEnd::Lost(format!("cannot start data transfer: {error}"));
         }
     }
-    let mut pending: Vec<Pending> = Vec::new();
+    let mut pending: OpenRequests<Reply> =
+        OpenRequests::new(config.command_timeout, config.termination_timeout);
     let mut outgoing: VecDeque<Vec<u8>> = VecDeque::new();
     let mut input = vec![0u8; 16 * 1024];
     let mut output = Vec::with_capacity(16 * 1024);
@@ -664,35 +556,15 @@ where
                             tracing::debug!(%asdu, "received");
                             if probe_deadline.is_some()
                                 && asdu.type_id == TypeId::C_TS_TA_1
-                                && !pending
-                                    .iter()
-                                    .any(|request| request.type_id == TypeId::C_TS_TA_1)
+                                && !pending.any_of_type(TypeId::C_TS_TA_1)
                             {
                                 // The answer to our own probe: the connection carries data.
                                 probe_deadline = None;
                                 continue;
                             }
                             probe_deadline = None;
-                            let mut finished = Vec::new();
-                            for (index, request) in pending.iter_mut().enumerate() {
-                                if request.offer(
-                                    &asdu,
-                                    config.command_timeout,
-                                    config.termination_timeout,
-                                ) {
-                                    finished.push(index);
-                                    break;
-                                }
-                            }
-                            for index in finished.into_iter().rev() {
-                                let mut request = pending.swap_remove(index);
-                                let outcome = request.outcome(
-                                    request.expects_termination
-                                        && request
-                                            .confirmation
-                                            .is_some_and(|(positive, _)| positive),
-                                );
-                                request.finish(Ok(outcome));
+                            if let Some((reply, outcome)) = pending.offer(now, &asdu) {
+                                let _ = reply.send(Ok(outcome));
                             }
                             ClientEvent::Asdu(asdu)
                         }
@@ -709,34 +581,15 @@ where
                 SessionEvent::Started => {
                     started = true;
                     backlog.push_back(ClientEvent::Started);
-                    if config.clock_sync_on_start {
-                        let time =
-                            crate::cs104::server::time_tag_now(crate::time::TimeZonePolicy::Utc);
-                        let mut asdu = Asdu::new(
-                            TypeId::C_CS_NA_1,
-                            Cot::new(Cause::ACTIVATION),
-                            config.common_address,
-                        );
-                        asdu.cot.originator = config.originator;
-                        asdu.objects.push(InformationObject {
-                            ioa: Ioa::default(),
-                            element: Element::ClockSync { time },
-                            time: None,
-                        });
-                        queue(&mut outgoing, &asdu, &config.asdu);
-                    }
-                    if config.interrogate_on_start {
-                        let mut asdu = Asdu::new(
-                            TypeId::C_IC_NA_1,
-                            Cot::new(Cause::ACTIVATION),
-                            config.common_address,
-                        );
-                        asdu.cot.originator = config.originator;
-                        asdu.objects.push(InformationObject {
-                            ioa: Ioa::default(),
-                            element: Element::Interrogation { qualifier: 20 },
-                            time: None,
-                        });
+                    let clock = config.clock_sync_on_start.then(|| {
+                        crate::cs104::server::time_tag_now(crate::time::TimeZonePolicy::Utc)
+                    });
+                    for asdu in start_requests(
+                        config.common_address,
+                        config.originator,
+                        clock,
+                        config.interrogate_on_start,
+                    ) {
                         queue(&mut outgoing, &asdu, &config.asdu);
                     }
                 }
@@ -805,7 +658,7 @@ where
             continue;
         }
         let protocol_deadline = session.poll_timeout().map(tokio::time::Instant::from_std);
-        let request_deadline = pending.iter().map(|request| request.deadline).min();
+        let request_deadline = pending.next_deadline().map(tokio::time::Instant::from_std);
         let deadline = [
             protocol_deadline,
             request_deadline,
@@ -849,23 +702,11 @@ where
             () = sleep_until(deadline) => {
                 let now = tokio::time::Instant::now();
                 session.handle_timeout(now.into_std());
-                let mut index = 0;
-                while index < pending.len() {
-                    if pending.get(index).is_some_and(|request| request.deadline <= now) {
-                        let mut request = pending.swap_remove(index);
-                        let confirmed = request.confirmation.is_some_and(|(positive, _)| positive);
-                        if confirmed && request.termination_optional {
-                            // Confirmed, and the station sends no termination: done.
-                            let outcome = request.outcome(false);
-                            request.finish(Ok(outcome));
-                            continue;
-                        }
-                        let waited_for = if request.confirmation.is_some() { "the activation termination" } else { "the confirmation" };
-                        tracing::warn!(type_id = %request.type_id, ioa = %request.ioa, waited_for, "request timed out");
-                        request.finish(Err(ClientError::Timeout(waited_for)));
-                    } else {
-                        index += 1;
-                    }
+                for (reply, end) in pending.expire(now.into_std()) {
+                    let _ = reply.send(match end {
+                        Expired::Done(outcome) => Ok(outcome),
+                        Expired::TimedOut(waited_for) => Err(ClientError::Timeout(waited_for)),
+                    });
                 }
             }
             request = requests.recv() => match request {
@@ -889,7 +730,7 @@ where
                         continue;
                     }
                     let ioa = asdu.objects.first().map(|object| object.ioa).unwrap_or_default();
-                    if pending.iter().any(|request| request.type_id == asdu.type_id && request.ioa == ioa) {
+                    if pending.is_open(asdu.type_id, ioa) {
                         let _ = reply.send(Err(ClientError::Busy));
                         continue;
                     }
@@ -899,17 +740,7 @@ where
                         continue;
                     }
                     outgoing.push_back(bytes);
-                    pending.push(Pending {
-                        type_id: asdu.type_id,
-                        ioa,
-                        expects_termination: expects_termination(&asdu),
-                        termination_optional: asdu.type_id.is_command(),
-                        is_read: asdu.type_id == TypeId::C_RD_NA_1,
-                        responses: Vec::new(),
-                        confirmation: None,
-                        deadline: tokio::time::Instant::now() + config.command_timeout,
-                        reply: Some(reply),
-                    });
+                    pending.open(tokio::time::Instant::now().into_std(), &asdu, reply);
                 }
             },
         }
@@ -948,9 +779,9 @@ where
     end(pending, result)
 }
 
-fn end(mut pending: Vec<Pending>, result: DriveEnd) -> DriveEnd {
-    for request in &mut pending {
-        request.finish(Err(ClientError::Disconnected));
+fn end(mut pending: OpenRequests<Reply>, result: DriveEnd) -> DriveEnd {
+    for reply in pending.drain() {
+        let _ = reply.send(Err(ClientError::Disconnected));
     }
     result
 }
