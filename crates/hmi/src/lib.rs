@@ -15,6 +15,30 @@
 //! - [`live`]: the messages of the live WebSocket (the browser's `HMI.receive`).
 //! - [`web`]: the axum router: pages, JSON API, WebSocket.
 //! - [`tls`]: HTTPS with the HMI's own certificate.
+//!
+//! # Screens
+//!
+//! A mimic is an SVG file of the screens folder; `web/mimic.js` binds its elements to
+//! points by attributes, each kind of binding one entry of its `BINDINGS` table (the file's
+//! header comment has the details):
+//!
+//! | attribute | the element | reads also |
+//! |---|---|---|
+//! | `data-point="P"` | `data-value` = on/off, off/on/between/faulty or the number (colour by CSS) | |
+//! | `data-text="P"` | its text is the value | `data-unit`, `data-digits`, `data-on`, `data-off`, `data-map` |
+//! | `data-energised="P"` | class `energised` while P is TRUE | |
+//! | `data-visible="P"` | shown while P is on, or while its value word is `data-visible-when` | `data-visible-when` |
+//! | `data-level="P"` | a `<rect>` filled to P's share of `data-min..data-max` (default 0..100) | `data-min`, `data-max`, `data-level-from` (bottom, top, left, right) |
+//! | `data-position="P"` | moved by P's share along (`data-dx`, `data-dy`) | `data-min`, `data-max`, `data-dx`, `data-dy` |
+//! | `data-rotate="P"` | turned to `data-angle-min..data-angle-max` degrees (default 0..360) | `data-min`, `data-max`, `data-angle-min`, `data-angle-max`, `data-cx`, `data-cy` |
+//! | `data-command="C"` | a click opens the control dialog for C | `data-command-value`, `data-command-format`, `data-label` |
+//! | `data-link-status` | shows the station link | |
+//!
+//! Level, position and rotation read TRUE as 1 and FALSE as 0, and clamp the share to
+//! 0..1: a lab tank, a lift car or a conveyor needs no code of its own. Every bound
+//! element blinks (`data-invalid`) while a point of it is invalid or the link is down.
+//! The browser drops scripts, event handlers and foreign links from every SVG before it
+//! enters the page; `data-*` attributes pass.
 #![cfg_attr(
     not(test),
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)

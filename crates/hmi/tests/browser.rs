@@ -1123,7 +1123,9 @@ async fn operator_and_viewer_in_a_real_browser() {
         ),
     )
     .await;
-    let volts = meter[0].as_f64().unwrap_or_else(|| panic!("RZZ_U: {meter}"));
+    let volts = meter[0]
+        .as_f64()
+        .unwrap_or_else(|| panic!("RZZ_U: {meter}"));
     let height = 100.0 * (volts / 500.0).clamp(0.0, 1.0);
     assert!(
         (meter[2].as_f64().unwrap() - height).abs() < 1e-6

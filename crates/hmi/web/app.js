@@ -9,6 +9,19 @@
 //     messages; reconnects with a growing back-off. While it is closed, or while the
 //     station link is down, every value counts as invalid (and blinks on the mimics).
 //   - navigation: #screen/ID for a mimic, #events, #alarms, #trends.
+//
+// Live messages (HMI.receive): the server's side is one Rust enum, hmi::live::LiveMessage
+// (crates/hmi/src/live.rs), whose doc comment gives each message's fields. In short, each
+// frame is one JSON object named by "type":
+//   snapshot  {link: {up, address}, points: [Point], alarms: [Alarm]}: replaces everything;
+//             first on every socket, again when this browser fell behind
+//   point     {name, ioa, iec_type, description, value, invalid, quality, time}: one point
+//             ("type" names the message, so the point's IEC type travels as iec_type)
+//   link      {up, address}: the station link
+//   alarm     {id, point, text, priority, raised, cleared, acknowledged, shelved_until,
+//             active, needs_acknowledgement}: one alarm changed
+//   command   {user, command, value, outcome}: someone's control and its outcome
+// A new message is a new variant there and a new case here.
 "use strict";
 
 const HMI = (window.HMI = {
