@@ -611,6 +611,49 @@ async fn bad_input_is_refused_cleanly() {
     s.runtime.shutdown().await;
 }
 
+/// A live message has exactly the fields its `type` has in `hmi::live::LiveMessage` (the
+/// wire format app.js reads).
+fn assert_live_message(message: &Value) {
+    let fields: &[&str] = match message["type"].as_str() {
+        Some("snapshot") => &["alarms", "link", "points", "type"],
+        Some("point") => &[
+            "description",
+            "iec_type",
+            "invalid",
+            "ioa",
+            "name",
+            "quality",
+            "time",
+            "type",
+            "value",
+        ],
+        Some("link") => &["address", "type", "up"],
+        Some("alarm") => &[
+            "acknowledged",
+            "active",
+            "cleared",
+            "id",
+            "needs_acknowledgement",
+            "point",
+            "priority",
+            "raised",
+            "shelved_until",
+            "text",
+            "type",
+        ],
+        Some("command") => &["command", "outcome", "type", "user", "value"],
+        _ => panic!("a live message of no known type: {message}"),
+    };
+    let mut keys: Vec<&str> = message
+        .as_object()
+        .unwrap()
+        .keys()
+        .map(String::as_str)
+        .collect();
+    keys.sort_unstable();
+    assert_eq!(keys, fields, "{message}");
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn live_updates_alarms_and_every_value_invalid_on_link_loss() {
     let s = setup().await;
@@ -635,7 +678,9 @@ async fn live_updates_alarms_and_every_value_invalid_on_link_loss() {
             .unwrap()
             .unwrap()
             .unwrap();
-        serde_json::from_str(message.to_text().unwrap()).unwrap()
+        let message: Value = serde_json::from_str(message.to_text().unwrap()).unwrap();
+        assert_live_message(&message);
+        message
     };
     let snapshot = next().await;
     assert_eq!(snapshot["type"], "snapshot");
