@@ -12,6 +12,7 @@
 //! | `model`       | the records: [`EventRecord`], [`CommandRecord`], [`PointValue`] and their codes |
 //! | `query`       | filters, ordering and keyset pages: [`EventQuery`], [`CommandQuery`], [`Page`] |
 //! | [`url`]       | store addresses: [`url::StoreUrl`] (`sqlite:PATH`, `sqlite::memory:`, `postgres://...`) |
+//! | `sql`         | what both backends share: the migrations, the queries' SQL, purge, stats, row mapping, and the `EventStore` behaviour itself |
 //! | `sqlite`, `postgres` | the backends, differing only in how they reach their database |
 //! | `recorder`    | [`Recorder`]: the bounded channel and batching writer in front of a store |
 //! | `retention`   | [`spawn_retention`]: the periodic purge of old history |
@@ -55,8 +56,9 @@
 //!
 //! # Schema
 //!
-//! Tables `events` and `commands`, versioned by `schema_version`; the migrations are SQL
-//! files under `migrations/`, applied at open. Times are
+//! Tables `events` and `commands`, versioned by `schema_version`; the migrations are one
+//! list for both backends (SQL files under `migrations/`, column types filled in per
+//! backend), applied at open. Times are
 //! milliseconds since the Unix epoch (UTC) in 64-bit integers; values are split into
 //! `value_kind` plus `value_int`/`value_float`/`value_text`; enums are stored as the stable
 //! codes of [`EventCause::code`], [`CommandOutcome::code`] and [`CommandPhase::code`].
@@ -92,6 +94,8 @@ mod query;
 mod recorder;
 #[cfg(feature = "database")]
 mod retention;
+#[cfg(feature = "database")]
+mod sql;
 #[cfg(feature = "database")]
 mod sqlite;
 pub mod url;
@@ -192,9 +196,7 @@ pub async fn open_store(url: &str) -> Result<Box<dyn EventStore>, StoreError> {
 
 /// Opens (and migrates) the store at a parsed address.
 #[cfg(feature = "database")]
-pub async fn open_store_at(
-    url: &crate::url::StoreUrl,
-) -> Result<Box<dyn EventStore>, StoreError> {
+pub async fn open_store_at(url: &crate::url::StoreUrl) -> Result<Box<dyn EventStore>, StoreError> {
     use crate::url::StoreUrl;
     Ok(match url {
         StoreUrl::SqliteMemory => Box::new(SqliteStore::open_in_memory().await?),

@@ -8,8 +8,6 @@
 use chrono::{DateTime, Utc};
 use std::fmt;
 
-use crate::StoreError;
-
 /// Identifier of a stored row, assigned by the store in increasing order of insertion.
 pub type RecordId = i64;
 
@@ -41,53 +39,6 @@ impl PointValue {
             PointValue::Bits(_) => 5,
             PointValue::Text(_) => 6,
         }
-    }
-
-    /// Splits the value into the `(value_kind, value_int, value_float, value_text)` columns.
-    pub(crate) fn to_columns(&self) -> (i16, Option<i64>, Option<f64>, Option<&str>) {
-        let kind = self.kind_code();
-        match self {
-            PointValue::Bool(b) => (kind, Some(i64::from(*b)), None, None),
-            PointValue::DoublePoint(d) => (kind, Some(i64::from(*d)), None, None),
-            PointValue::Int(i) => (kind, Some(*i), None, None),
-            // NaN is kept as a NULL float (SQLite turns NaN into NULL anyway).
-            PointValue::Float(f) => (kind, None, (!f.is_nan()).then_some(*f), None),
-            PointValue::Bits(b) => (kind, Some(i64::from(*b)), None, None),
-            PointValue::Text(t) => (kind, None, None, Some(t.as_str())),
-        }
-    }
-
-    /// Rebuilds a value from its columns; a row that does not fit is [`StoreError::Corrupt`].
-    pub(crate) fn from_columns(
-        kind: i16,
-        int: Option<i64>,
-        float: Option<f64>,
-        text: Option<String>,
-    ) -> Result<PointValue, StoreError> {
-        let need_int = || {
-            int.ok_or_else(|| StoreError::Corrupt(format!("value kind {kind} without an integer")))
-        };
-        let out_of_range =
-            |v: i64| StoreError::Corrupt(format!("value {v} out of range for value kind {kind}"));
-        Ok(match kind {
-            1 => match need_int()? {
-                0 => PointValue::Bool(false),
-                1 => PointValue::Bool(true),
-                v => return Err(out_of_range(v)),
-            },
-            2 => {
-                let v = need_int()?;
-                PointValue::DoublePoint(u8::try_from(v).map_err(|_| out_of_range(v))?)
-            }
-            3 => PointValue::Int(need_int()?),
-            4 => PointValue::Float(float.unwrap_or(f64::NAN)),
-            5 => {
-                let v = need_int()?;
-                PointValue::Bits(u32::try_from(v).map_err(|_| out_of_range(v))?)
-            }
-            6 => PointValue::Text(text.unwrap_or_default()),
-            other => return Err(StoreError::Corrupt(format!("unknown value kind {other}"))),
-        })
     }
 }
 
@@ -266,21 +217,6 @@ impl Actor {
             Actor::User(n) | Actor::Remote(n) => n,
         }
     }
-
-    pub(crate) fn kind_code(&self) -> i16 {
-        match self {
-            Actor::User(_) => 1,
-            Actor::Remote(_) => 2,
-        }
-    }
-
-    pub(crate) fn from_columns(kind: i16, name: String) -> Result<Actor, StoreError> {
-        match kind {
-            1 => Ok(Actor::User(name)),
-            2 => Ok(Actor::Remote(name)),
-            other => Err(StoreError::Corrupt(format!("unknown actor kind {other}"))),
-        }
-    }
 }
 
 impl fmt::Display for Actor {
@@ -394,152 +330,4 @@ pub struct CommandRecord {
     pub outcome: CommandOutcome,
     /// Free text: the reason of a refusal, the device's answer, anything for the auditor.
     pub detail: String,
-}
-
-/// Converts a time to stored milliseconds since the Unix epoch (finer parts are dropped).
-pub(crate) fn to_ms(t: DateTime<Utc>) -> i64 {
-    t.timestamp_millis()
-}
-
-/// Converts stored milliseconds back to a time.
-pub(crate) fn from_ms(ms: i64) -> Result<DateTime<Utc>, StoreError> {
-    DateTime::from_timestamp_millis(ms)
-        .ok_or_else(|| StoreError::Corrupt(format!("time {ms} ms out of range")))
-}
-
-/// Checks what both backends must refuse alike: empty names, NUL characters (PostgreSQL
-/// text cannot hold them), double-point values above 3.
-fn check_text(what: &str, s: &str, may_be_empty: bool) -> Result<(), StoreError> {
-    if !may_be_empty && s.is_empty() {
-        return Err(StoreError::InvalidRecord(format!("empty {what}")));
-    }
-    if s.contains('\0') {
-        return Err(StoreError::InvalidRecord(format!(
-            "{what} {s:?} contains a NUL character"
-        )));
-    }
-    Ok(())
-}
-
-fn check_value(v: &PointValue) -> Result<(), StoreError> {
-    match v {
-        PointValue::DoublePoint(d) if *d > 3 => Err(StoreError::InvalidRecord(format!(
-            "double-point value {d} out of range 0..=3"
-        ))),
-        PointValue::Text(t) => check_text("text value", t, true),
-        _ => Ok(()),
-    }
-}
-
-/// Refuses an event no backend can store faithfully.
-pub(crate) fn check_event(e: &EventRecord) -> Result<(), StoreError> {
-    check_text("node name", &e.node, false)?;
-    check_text("point name", &e.point, false)?;
-    check_text("origin", &e.origin, true)?;
-    check_value(&e.value)
-}
-
-/// Refuses a command record no backend can store faithfully.
-pub(crate) fn check_command(c: &CommandRecord) -> Result<(), StoreError> {
-    check_text("actor", c.actor.name(), false)?;
-    check_text("node name", &c.node, false)?;
-    check_text("point name", &c.point, false)?;
-    check_text("detail", &c.detail, true)?;
-    check_value(&c.value)
-}
-
-/// An event row as read from either backend, before decoding.
-pub(crate) struct RawEvent {
-    pub(crate) id: i64,
-    pub(crate) node: String,
-    pub(crate) point: String,
-    pub(crate) ioa: Option<i64>,
-    pub(crate) value_kind: i16,
-    pub(crate) value_int: Option<i64>,
-    pub(crate) value_float: Option<f64>,
-    pub(crate) value_text: Option<String>,
-    pub(crate) quality: i16,
-    pub(crate) source_ms: Option<i64>,
-    pub(crate) source_invalid: bool,
-    pub(crate) received_ms: i64,
-    pub(crate) cause: i16,
-    pub(crate) origin: String,
-}
-
-fn ioa_from(v: Option<i64>) -> Result<Option<u32>, StoreError> {
-    v.map(|i| u32::try_from(i).map_err(|_| StoreError::Corrupt(format!("IOA {i} out of range"))))
-        .transpose()
-}
-
-impl RawEvent {
-    pub(crate) fn decode(self) -> Result<EventRecord, StoreError> {
-        Ok(EventRecord {
-            id: Some(self.id),
-            node: self.node,
-            point: self.point,
-            ioa: ioa_from(self.ioa)?,
-            value: PointValue::from_columns(
-                self.value_kind,
-                self.value_int,
-                self.value_float,
-                self.value_text,
-            )?,
-            quality: quality_from_bits(u8::try_from(self.quality & 0xFF).unwrap_or(0)),
-            source_time: self
-                .source_ms
-                .map(|ms| {
-                    Ok::<_, StoreError>(SourceTime {
-                        time: from_ms(ms)?,
-                        invalid: self.source_invalid,
-                    })
-                })
-                .transpose()?,
-            received_time: from_ms(self.received_ms)?,
-            cause: EventCause::from_code(self.cause)
-                .ok_or_else(|| StoreError::Corrupt(format!("unknown cause {}", self.cause)))?,
-            origin: self.origin,
-        })
-    }
-}
-
-/// A command row as read from either backend, before decoding.
-pub(crate) struct RawCommand {
-    pub(crate) id: i64,
-    pub(crate) time_ms: i64,
-    pub(crate) actor_kind: i16,
-    pub(crate) actor: String,
-    pub(crate) node: String,
-    pub(crate) point: String,
-    pub(crate) ioa: Option<i64>,
-    pub(crate) value_kind: i16,
-    pub(crate) value_int: Option<i64>,
-    pub(crate) value_float: Option<f64>,
-    pub(crate) value_text: Option<String>,
-    pub(crate) phase: i16,
-    pub(crate) outcome: i16,
-    pub(crate) detail: String,
-}
-
-impl RawCommand {
-    pub(crate) fn decode(self) -> Result<CommandRecord, StoreError> {
-        Ok(CommandRecord {
-            id: Some(self.id),
-            time: from_ms(self.time_ms)?,
-            actor: Actor::from_columns(self.actor_kind, self.actor)?,
-            node: self.node,
-            point: self.point,
-            ioa: ioa_from(self.ioa)?,
-            value: PointValue::from_columns(
-                self.value_kind,
-                self.value_int,
-                self.value_float,
-                self.value_text,
-            )?,
-            phase: CommandPhase::from_code(self.phase)
-                .ok_or_else(|| StoreError::Corrupt(format!("unknown phase {}", self.phase)))?,
-            outcome: CommandOutcome::from_code(self.outcome)
-                .ok_or_else(|| StoreError::Corrupt(format!("unknown outcome {}", self.outcome)))?,
-            detail: self.detail,
-        })
-    }
 }

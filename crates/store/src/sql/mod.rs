@@ -1,0 +1,233 @@
+//! What SQLite and PostgreSQL share: the schema and its migrations ([`schema`]), the
+//! queries' SQL ([`select`]), the mapping of records to columns and back ([`row`]), and the
+//! whole [`EventStore`] behaviour on top of a few primitives each backend implements
+//! ([`Database`]): run a statement, read rows, append a batch of events.
+//!
+//! ```text
+//!  EventStore (here, once) --SQL text + Param list--> Database (sqlite.rs | postgres.rs)
+//!        ^                                                  | rows, as Columns
+//!        +------------- row::event_from_row & co. <---------+
+//! ```
+
+pub(crate) mod row;
+pub(crate) mod schema;
+mod select;
+
+use chrono::{DateTime, Utc};
+
+use crate::{
+    Backend, CommandQuery, CommandRecord, EventQuery, EventRecord, EventStore, Page, RecordId,
+    StoreError, StoreFuture, StoreStats,
+};
+use row::{
+    check_command, check_event, command_from_row, command_params, event_from_row, id_from_row,
+    stats_from_row, to_ms, Decode, COMMAND_INSERT, STATS,
+};
+use select::{command_cursor, command_sql, event_cursor, event_sql, into_page};
+
+/// Rows one purge statement deletes, so appends interleave with a large purge.
+const PURGE_CHUNK: i64 = 10_000;
+
+/// A bound SQL parameter, typed so that PostgreSQL's placeholders can say their type.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum Param {
+    /// An integer of any width, or a typed NULL.
+    Int(Option<i64>),
+    /// A floating-point number, or a typed NULL.
+    Real(Option<f64>),
+    /// A text, or a typed NULL.
+    Text(Option<String>),
+    /// A boolean.
+    Bool(bool),
+}
+
+impl Param {
+    pub(crate) fn int(i: i64) -> Param {
+        Param::Int(Some(i))
+    }
+
+    pub(crate) fn text(t: impl Into<String>) -> Param {
+        Param::Text(Some(t.into()))
+    }
+
+    /// PostgreSQL's name of the type.
+    fn pg_type(&self) -> &'static str {
+        match self {
+            Param::Int(_) => "int8",
+            Param::Real(_) => "float8",
+            Param::Text(_) => "text",
+            Param::Bool(_) => "bool",
+        }
+    }
+
+    /// The placeholder of parameter number `n` (from 1): `?n` or `$n::type`.
+    pub(crate) fn placeholder(&self, backend: Backend, n: usize) -> String {
+        match backend {
+            Backend::Sqlite => format!("?{n}"),
+            Backend::Postgres => format!("${n}::{}", self.pg_type()),
+        }
+    }
+
+    /// The placeholder of parameter `n` standing for an array of such values
+    /// (PostgreSQL's `unnest` of a batch).
+    pub(crate) fn array_placeholder(&self, n: usize) -> String {
+        format!("${n}::{}[]", self.pg_type())
+    }
+}
+
+/// `INSERT INTO table (columns) VALUES (...) RETURNING id` for one row.
+pub(crate) fn insert(backend: Backend, table: &str, columns: &str, row: Vec<Param>) -> Statement {
+    let values: Vec<String> = row
+        .iter()
+        .enumerate()
+        .map(|(i, p)| p.placeholder(backend, i + 1))
+        .collect();
+    Statement {
+        access: Access::Write,
+        sql: format!(
+            "INSERT INTO {table} ({columns}) VALUES ({}) RETURNING id",
+            values.join(", ")
+        ),
+        params: row,
+    }
+}
+
+/// Which connection a statement needs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Access {
+    /// A query: any connection (a reader).
+    Read,
+    /// A write: the writer (SQLite), any connection (PostgreSQL).
+    Write,
+}
+
+/// A statement to run: its SQL, its parameters, and the connection it needs.
+#[derive(Debug)]
+pub(crate) struct Statement {
+    pub(crate) access: Access,
+    pub(crate) sql: String,
+    pub(crate) params: Vec<Param>,
+}
+
+/// What a backend does itself; [`EventStore`] is built on it once for both.
+pub(crate) trait Database: Send + Sync {
+    /// The database behind it.
+    const BACKEND: Backend;
+
+    /// Runs a statement and decodes each row it returns with `each`.
+    fn rows<T: Send + 'static>(&self, run: Statement, each: Decode<T>) -> StoreFuture<'_, Vec<T>>;
+
+    /// Runs a writing statement; returns how many rows it changed.
+    fn execute(&self, sql: String, params: Vec<Param>) -> StoreFuture<'_, u64>;
+
+    /// Appends checked, non-empty `events` in one transaction; ids in their order.
+    fn insert_events<'a>(&'a self, events: &'a [EventRecord]) -> StoreFuture<'a, Vec<RecordId>>;
+
+    /// Refreshes the query planner's statistics.
+    fn analyze(&self) -> StoreFuture<'_, ()>;
+}
+
+/// The one row a statement must return.
+async fn one<D: Database, T: Send + 'static>(
+    db: &D,
+    run: Statement,
+    decode: Decode<T>,
+) -> Result<T, StoreError> {
+    db.rows(run, decode)
+        .await?
+        .into_iter()
+        .next()
+        .ok_or_else(|| StoreError::Corrupt("a statement returned no row".to_owned()))
+}
+
+impl<D: Database> EventStore for D {
+    fn backend(&self) -> Backend {
+        D::BACKEND
+    }
+
+    fn append_events<'a>(&'a self, events: &'a [EventRecord]) -> StoreFuture<'a, Vec<RecordId>> {
+        Box::pin(async move {
+            if events.is_empty() {
+                return Ok(Vec::new());
+            }
+            events.iter().try_for_each(check_event)?;
+            self.insert_events(events).await
+        })
+    }
+
+    fn append_command<'a>(&'a self, command: &'a CommandRecord) -> StoreFuture<'a, RecordId> {
+        Box::pin(async move {
+            check_command(command)?;
+            let run = insert(
+                D::BACKEND,
+                "commands",
+                COMMAND_INSERT,
+                command_params(command),
+            );
+            one(self, run, id_from_row).await
+        })
+    }
+
+    fn query_events<'a>(&'a self, query: &'a EventQuery) -> StoreFuture<'a, Page<EventRecord>> {
+        Box::pin(async move {
+            let items = self
+                .rows(event_sql(query, D::BACKEND)?, event_from_row)
+                .await?;
+            let basis = query.time_basis;
+            Ok(into_page(items, query.limit, |e| event_cursor(e, basis)))
+        })
+    }
+
+    fn query_commands<'a>(
+        &'a self,
+        query: &'a CommandQuery,
+    ) -> StoreFuture<'a, Page<CommandRecord>> {
+        Box::pin(async move {
+            let items = self
+                .rows(command_sql(query, D::BACKEND)?, command_from_row)
+                .await?;
+            Ok(into_page(items, query.limit, command_cursor))
+        })
+    }
+
+    fn purge_older_than(&self, cutoff: DateTime<Utc>) -> StoreFuture<'_, u64> {
+        Box::pin(async move {
+            let (cutoff, limit) = (Param::int(to_ms(cutoff)), Param::int(PURGE_CHUNK));
+            let bounds = (
+                cutoff.placeholder(D::BACKEND, 1),
+                limit.placeholder(D::BACKEND, 2),
+            );
+            let params = vec![cutoff, limit];
+            let mut total = 0u64;
+            for (table, col) in [("events", "received_ms"), ("commands", "time_ms")] {
+                let sql = format!(
+                    "DELETE FROM {table} WHERE id IN \
+                     (SELECT id FROM {table} WHERE {col} < {} LIMIT {})",
+                    bounds.0, bounds.1
+                );
+                loop {
+                    let n = self.execute(sql.clone(), params.clone()).await?;
+                    total += n;
+                    if n < PURGE_CHUNK.unsigned_abs() {
+                        break;
+                    }
+                }
+            }
+            // Refresh the planner's statistics with each (hourly) retention pass: they
+            // decide between the point index and the time index for prefix filters.
+            self.analyze().await?;
+            Ok(total)
+        })
+    }
+
+    fn stats(&self) -> StoreFuture<'_, StoreStats> {
+        Box::pin(async move {
+            let run = Statement {
+                access: Access::Read,
+                sql: STATS.to_owned(),
+                params: Vec::new(),
+            };
+            one(self, run, stats_from_row).await
+        })
+    }
+}

@@ -1,0 +1,283 @@
+//! Records to columns and back: the one mapping both backends use.
+//!
+//! A record is written as a list of [`Param`]s in the order of [`EVENT_INSERT`] or
+//! [`COMMAND_INSERT`] and read back from a row of [`EVENT_COLUMNS`] or [`COMMAND_COLUMNS`]
+//! through [`Columns`], which each driver implements in a few lines.
+
+use chrono::{DateTime, Utc};
+
+use super::Param;
+use crate::model::{
+    quality_from_bits, quality_to_bits, Actor, CommandOutcome, CommandPhase, CommandRecord,
+    EventCause, EventRecord, PointValue, RecordId, SourceTime,
+};
+use crate::{StoreError, StoreStats};
+
+/// Converts a time to stored milliseconds since the Unix epoch (finer parts are dropped).
+pub(crate) fn to_ms(t: DateTime<Utc>) -> i64 {
+    t.timestamp_millis()
+}
+
+/// Converts stored milliseconds back to a time.
+pub(crate) fn from_ms(ms: i64) -> Result<DateTime<Utc>, StoreError> {
+    DateTime::from_timestamp_millis(ms)
+        .ok_or_else(|| StoreError::Corrupt(format!("time {ms} ms out of range")))
+}
+
+/// The columns of a result row, as a driver reads them.
+pub(crate) trait Columns {
+    /// An integer column of any width (a boolean as 0 or 1); NULL is `None`.
+    fn int(&self, i: usize) -> Result<Option<i64>, StoreError>;
+    /// A floating-point column; NULL is `None`.
+    fn real(&self, i: usize) -> Result<Option<f64>, StoreError>;
+    /// A text column; NULL is `None`.
+    fn text(&self, i: usize) -> Result<Option<String>, StoreError>;
+
+    /// An integer column that is never NULL.
+    fn need_int(&self, i: usize) -> Result<i64, StoreError> {
+        self.int(i)?
+            .ok_or_else(|| StoreError::Corrupt(format!("column {i} is NULL")))
+    }
+    /// A stored enum code or flag set (a small integer, never NULL).
+    fn code(&self, i: usize) -> Result<i16, StoreError> {
+        let v = self.need_int(i)?;
+        i16::try_from(v).map_err(|_| StoreError::Corrupt(format!("code {v} out of range")))
+    }
+    /// A text column that is never NULL.
+    fn need_text(&self, i: usize) -> Result<String, StoreError> {
+        self.text(i)?
+            .ok_or_else(|| StoreError::Corrupt(format!("column {i} is NULL")))
+    }
+}
+
+/// Reads a row with this function (a record, an id, the stats).
+pub(crate) type Decode<T> = fn(&dyn Columns) -> Result<T, StoreError>;
+
+/// The columns an event is written to, in the order of [`event_params`].
+pub(crate) const EVENT_INSERT: &str = "node, point, ioa, value_kind, value_int, value_float, \
+     value_text, quality, source_ms, source_invalid, received_ms, event_ms, cause, origin";
+
+/// The columns a command record is written to, in the order of [`command_params`].
+pub(crate) const COMMAND_INSERT: &str = "time_ms, actor_kind, actor, node, point, ioa, \
+     value_kind, value_int, value_float, value_text, phase, outcome, detail";
+
+/// The columns every event query selects, in the order [`event_from_row`] reads them.
+pub(crate) const EVENT_COLUMNS: &str = "id, node, point, ioa, value_kind, value_int, value_float, \
+     value_text, quality, source_ms, source_invalid, received_ms, cause, origin";
+
+/// The columns every command query selects, in the order [`command_from_row`] reads them.
+pub(crate) const COMMAND_COLUMNS: &str = "id, time_ms, actor_kind, actor, node, point, ioa, \
+     value_kind, value_int, value_float, value_text, phase, outcome, detail";
+
+/// What the stats read: row counts and the received-time span, one row.
+pub(crate) const STATS: &str = "SELECT (SELECT count(*) FROM events), \
+     (SELECT min(received_ms) FROM events), (SELECT max(received_ms) FROM events), \
+     (SELECT count(*) FROM commands)";
+
+/// An event as the parameters of one row of [`EVENT_INSERT`].
+pub(crate) fn event_params(e: &EventRecord) -> Vec<Param> {
+    let mut row = vec![
+        Param::text(&e.node),
+        Param::text(&e.point),
+        Param::Int(e.ioa.map(i64::from)),
+    ];
+    row.extend(value_params(&e.value));
+    row.extend([
+        Param::int(i64::from(quality_to_bits(e.quality))),
+        Param::Int(e.source_time.map(|s| to_ms(s.time))),
+        Param::Bool(e.source_time.is_some_and(|s| s.invalid)),
+        Param::int(to_ms(e.received_time)),
+        Param::int(to_ms(e.event_time())),
+        Param::int(i64::from(e.cause.code())),
+        Param::text(&e.origin),
+    ]);
+    row
+}
+
+/// A command record as the parameters of one row of [`COMMAND_INSERT`].
+pub(crate) fn command_params(c: &CommandRecord) -> Vec<Param> {
+    let mut row = vec![
+        Param::int(to_ms(c.time)),
+        Param::int(i64::from(actor_kind(&c.actor))),
+        Param::text(c.actor.name()),
+        Param::text(&c.node),
+        Param::text(&c.point),
+        Param::Int(c.ioa.map(i64::from)),
+    ];
+    row.extend(value_params(&c.value));
+    row.extend([
+        Param::int(i64::from(c.phase.code())),
+        Param::int(i64::from(c.outcome.code())),
+        Param::text(&c.detail),
+    ]);
+    row
+}
+
+/// An event from a row of [`EVENT_COLUMNS`].
+pub(crate) fn event_from_row(r: &dyn Columns) -> Result<EventRecord, StoreError> {
+    let quality = r.code(8)?;
+    let source_invalid = r.need_int(10)? != 0;
+    let cause = r.code(12)?;
+    Ok(EventRecord {
+        id: Some(r.need_int(0)?),
+        node: r.need_text(1)?,
+        point: r.need_text(2)?,
+        ioa: ioa_from(r.int(3)?)?,
+        value: value_from(r, 4)?,
+        quality: quality_from_bits(u8::try_from(quality & 0xFF).unwrap_or(0)),
+        source_time: r
+            .int(9)?
+            .map(|ms| {
+                Ok::<_, StoreError>(SourceTime {
+                    time: from_ms(ms)?,
+                    invalid: source_invalid,
+                })
+            })
+            .transpose()?,
+        received_time: from_ms(r.need_int(11)?)?,
+        cause: EventCause::from_code(cause)
+            .ok_or_else(|| StoreError::Corrupt(format!("unknown cause {cause}")))?,
+        origin: r.need_text(13)?,
+    })
+}
+
+/// A command record from a row of [`COMMAND_COLUMNS`].
+pub(crate) fn command_from_row(r: &dyn Columns) -> Result<CommandRecord, StoreError> {
+    let phase = r.code(11)?;
+    let outcome = r.code(12)?;
+    Ok(CommandRecord {
+        id: Some(r.need_int(0)?),
+        time: from_ms(r.need_int(1)?)?,
+        actor: actor_from(r.code(2)?, r.need_text(3)?)?,
+        node: r.need_text(4)?,
+        point: r.need_text(5)?,
+        ioa: ioa_from(r.int(6)?)?,
+        value: value_from(r, 7)?,
+        phase: CommandPhase::from_code(phase)
+            .ok_or_else(|| StoreError::Corrupt(format!("unknown phase {phase}")))?,
+        outcome: CommandOutcome::from_code(outcome)
+            .ok_or_else(|| StoreError::Corrupt(format!("unknown outcome {outcome}")))?,
+        detail: r.need_text(13)?,
+    })
+}
+
+/// The id an `INSERT ... RETURNING id` hands back.
+pub(crate) fn id_from_row(r: &dyn Columns) -> Result<RecordId, StoreError> {
+    r.need_int(0)
+}
+
+/// The stats from the row of [`STATS`].
+pub(crate) fn stats_from_row(r: &dyn Columns) -> Result<StoreStats, StoreError> {
+    Ok(StoreStats {
+        events: u64::try_from(r.need_int(0)?).unwrap_or(0),
+        oldest_event: r.int(1)?.map(from_ms).transpose()?,
+        newest_event: r.int(2)?.map(from_ms).transpose()?,
+        commands: u64::try_from(r.need_int(3)?).unwrap_or(0),
+    })
+}
+
+/// The value as the `(value_kind, value_int, value_float, value_text)` columns.
+fn value_params(value: &PointValue) -> [Param; 4] {
+    let kind = Param::int(i64::from(value.kind_code()));
+    let (int, float, text) = match value {
+        PointValue::Bool(b) => (Some(i64::from(*b)), None, None),
+        PointValue::DoublePoint(d) => (Some(i64::from(*d)), None, None),
+        PointValue::Int(i) => (Some(*i), None, None),
+        // NaN is kept as a NULL float (SQLite turns NaN into NULL anyway).
+        PointValue::Float(f) => (None, (!f.is_nan()).then_some(*f), None),
+        PointValue::Bits(b) => (Some(i64::from(*b)), None, None),
+        PointValue::Text(t) => (None, None, Some(t.clone())),
+    };
+    [kind, Param::Int(int), Param::Real(float), Param::Text(text)]
+}
+
+/// The value from its four columns starting at `first`; a row that does not fit is
+/// [`StoreError::Corrupt`].
+fn value_from(r: &dyn Columns, first: usize) -> Result<PointValue, StoreError> {
+    let kind = r.code(first)?;
+    let int = r.int(first + 1)?;
+    let need_int =
+        || int.ok_or_else(|| StoreError::Corrupt(format!("value kind {kind} without an integer")));
+    let out_of_range =
+        |v: i64| StoreError::Corrupt(format!("value {v} out of range for value kind {kind}"));
+    Ok(match kind {
+        1 => match need_int()? {
+            0 => PointValue::Bool(false),
+            1 => PointValue::Bool(true),
+            v => return Err(out_of_range(v)),
+        },
+        2 => {
+            let v = need_int()?;
+            PointValue::DoublePoint(u8::try_from(v).map_err(|_| out_of_range(v))?)
+        }
+        3 => PointValue::Int(need_int()?),
+        4 => PointValue::Float(r.real(first + 2)?.unwrap_or(f64::NAN)),
+        5 => {
+            let v = need_int()?;
+            PointValue::Bits(u32::try_from(v).map_err(|_| out_of_range(v))?)
+        }
+        6 => PointValue::Text(r.text(first + 3)?.unwrap_or_default()),
+        other => return Err(StoreError::Corrupt(format!("unknown value kind {other}"))),
+    })
+}
+
+fn actor_kind(actor: &Actor) -> i16 {
+    match actor {
+        Actor::User(_) => 1,
+        Actor::Remote(_) => 2,
+    }
+}
+
+fn actor_from(kind: i16, name: String) -> Result<Actor, StoreError> {
+    match kind {
+        1 => Ok(Actor::User(name)),
+        2 => Ok(Actor::Remote(name)),
+        other => Err(StoreError::Corrupt(format!("unknown actor kind {other}"))),
+    }
+}
+
+fn ioa_from(v: Option<i64>) -> Result<Option<u32>, StoreError> {
+    v.map(|i| u32::try_from(i).map_err(|_| StoreError::Corrupt(format!("IOA {i} out of range"))))
+        .transpose()
+}
+
+/// Checks what both backends must refuse alike: empty names, NUL characters (PostgreSQL
+/// text cannot hold them), double-point values above 3.
+fn check_text(what: &str, s: &str, may_be_empty: bool) -> Result<(), StoreError> {
+    if !may_be_empty && s.is_empty() {
+        return Err(StoreError::InvalidRecord(format!("empty {what}")));
+    }
+    if s.contains('\0') {
+        return Err(StoreError::InvalidRecord(format!(
+            "{what} {s:?} contains a NUL character"
+        )));
+    }
+    Ok(())
+}
+
+fn check_value(v: &PointValue) -> Result<(), StoreError> {
+    match v {
+        PointValue::DoublePoint(d) if *d > 3 => Err(StoreError::InvalidRecord(format!(
+            "double-point value {d} out of range 0..=3"
+        ))),
+        PointValue::Text(t) => check_text("text value", t, true),
+        _ => Ok(()),
+    }
+}
+
+/// Refuses an event no backend can store faithfully.
+pub(crate) fn check_event(e: &EventRecord) -> Result<(), StoreError> {
+    check_text("node name", &e.node, false)?;
+    check_text("point name", &e.point, false)?;
+    check_text("origin", &e.origin, true)?;
+    check_value(&e.value)
+}
+
+/// Refuses a command record no backend can store faithfully.
+pub(crate) fn check_command(c: &CommandRecord) -> Result<(), StoreError> {
+    check_text("actor", c.actor.name(), false)?;
+    check_text("node name", &c.node, false)?;
+    check_text("point name", &c.point, false)?;
+    check_text("detail", &c.detail, true)?;
+    check_value(&c.value)
+}

@@ -1,0 +1,202 @@
+//! The `SELECT`s of the queries: filters, keyset pagination and pages, in either dialect.
+
+use chrono::{DateTime, Utc};
+
+use super::row::{to_ms, COMMAND_COLUMNS, EVENT_COLUMNS};
+use super::{Access, Param, Statement};
+use crate::query::{Cursor, Order, PointFilter, TimeBasis, MAX_PAGE_SIZE};
+use crate::{Backend, CommandQuery, CommandRecord, EventQuery, EventRecord, Page, StoreError};
+
+/// A `SELECT` under construction: a WHERE clause with its parameters.
+struct SelectBuilder {
+    backend: Backend,
+    conds: Vec<String>,
+    params: Vec<Param>,
+}
+
+impl SelectBuilder {
+    fn new(backend: Backend) -> Self {
+        SelectBuilder {
+            backend,
+            conds: Vec::new(),
+            params: Vec::new(),
+        }
+    }
+
+    /// Adds a parameter and returns its placeholder.
+    fn bind(&mut self, p: Param) -> String {
+        let placeholder = p.placeholder(self.backend, self.params.len() + 1);
+        self.params.push(p);
+        placeholder
+    }
+
+    fn cond(&mut self, c: String) {
+        self.conds.push(c);
+    }
+
+    fn time_range(&mut self, col: &str, from: Option<DateTime<Utc>>, to: Option<DateTime<Utc>>) {
+        if let Some(from) = from {
+            let p = self.bind(Param::int(to_ms(from)));
+            self.cond(format!("{col} >= {p}"));
+        }
+        if let Some(to) = to {
+            let p = self.bind(Param::int(to_ms(to)));
+            self.cond(format!("{col} < {p}"));
+        }
+    }
+
+    fn point(&mut self, filter: &Option<PointFilter>) {
+        match filter {
+            None => {}
+            Some(PointFilter::Exact(name)) => {
+                let p = self.bind(Param::text(name));
+                self.cond(format!("point = {p}"));
+            }
+            Some(PointFilter::Prefix(prefix)) if prefix.is_empty() => {}
+            Some(PointFilter::Prefix(prefix)) => {
+                // A byte-wise range: every name starting with `prefix` sorts at or after it
+                // and before `prefix` + U+10FFFF (the largest scalar value), under SQLite's
+                // BINARY and PostgreSQL's "C" collation alike, so the point index serves it.
+                let lo = self.bind(Param::text(prefix));
+                let hi = self.bind(Param::text(format!("{prefix}\u{10FFFF}")));
+                self.cond(format!("point >= {lo} AND point < {hi}"));
+            }
+        }
+    }
+
+    fn text_eq(&mut self, col: &str, value: &Option<String>) {
+        if let Some(v) = value {
+            let p = self.bind(Param::text(v));
+            self.cond(format!("{col} = {p}"));
+        }
+    }
+
+    fn codes_in(&mut self, col: &str, codes: &[i16]) {
+        if codes.is_empty() {
+            return;
+        }
+        let list: Vec<String> = codes
+            .iter()
+            .map(|c| self.bind(Param::int(i64::from(*c))))
+            .collect();
+        self.cond(format!("{col} IN ({})", list.join(", ")));
+    }
+
+    fn keyset(&mut self, col: &str, order: Order, after: Option<Cursor>) -> &'static str {
+        let (cmp, dir) = match order {
+            Order::NewestFirst => ("<", "DESC"),
+            Order::OldestFirst => (">", "ASC"),
+        };
+        if let Some(c) = after {
+            let t = self.bind(Param::int(c.time_ms));
+            let id = self.bind(Param::int(c.id));
+            // The redundant plain bound lets an index on (name, time, id) use the range
+            // after an equality on its first column (PostgreSQL uses a row comparison only
+            // on leading index columns).
+            let t2 = self.bind(Param::int(c.time_ms));
+            self.cond(format!(
+                "{col} {cmp}= {t2} AND ({col}, id) {cmp} ({t}, {id})"
+            ));
+        }
+        dir
+    }
+
+    fn finish(
+        mut self,
+        columns: &str,
+        table: &str,
+        time_col: &str,
+        dir: &str,
+        limit: usize,
+    ) -> Statement {
+        // One row more than asked tells whether another page follows.
+        let lim = self.bind(Param::int(
+            i64::try_from(limit).unwrap_or(i64::MAX).saturating_add(1),
+        ));
+        let mut sql = format!("SELECT {columns} FROM {table}");
+        if !self.conds.is_empty() {
+            sql.push_str(" WHERE ");
+            sql.push_str(&self.conds.join(" AND "));
+        }
+        sql.push_str(&format!(" ORDER BY {time_col} {dir}, id {dir} LIMIT {lim}"));
+        Statement {
+            access: Access::Read,
+            sql,
+            params: self.params,
+        }
+    }
+}
+
+fn check_limit(limit: usize) -> Result<(), StoreError> {
+    if limit == 0 || limit > MAX_PAGE_SIZE {
+        return Err(StoreError::InvalidQuery(format!(
+            "page size {limit} out of range 1..={MAX_PAGE_SIZE}"
+        )));
+    }
+    Ok(())
+}
+
+/// The SQL and parameters of an event query.
+pub(crate) fn event_sql(q: &EventQuery, backend: Backend) -> Result<Statement, StoreError> {
+    check_limit(q.limit)?;
+    let mut b = SelectBuilder::new(backend);
+    let time_col = match q.time_basis {
+        TimeBasis::Source => "event_ms",
+        TimeBasis::Received => "received_ms",
+    };
+    b.time_range(time_col, q.from, q.to);
+    b.point(&q.point);
+    b.text_eq("node", &q.node);
+    let causes: Vec<i16> = q.causes.iter().map(|c| c.code()).collect();
+    b.codes_in("cause", &causes);
+    if q.invalid_only {
+        // Written exactly as the partial index's predicate so the planner matches them.
+        b.cond("(quality & 1) <> 0".to_owned());
+    }
+    let dir = b.keyset(time_col, q.order, q.after);
+    Ok(b.finish(EVENT_COLUMNS, "events", time_col, dir, q.limit))
+}
+
+/// The SQL and parameters of a command query.
+pub(crate) fn command_sql(q: &CommandQuery, backend: Backend) -> Result<Statement, StoreError> {
+    check_limit(q.limit)?;
+    let mut b = SelectBuilder::new(backend);
+    b.time_range("time_ms", q.from, q.to);
+    b.text_eq("actor", &q.actor);
+    b.point(&q.point);
+    b.text_eq("node", &q.node);
+    let outcomes: Vec<i16> = q.outcomes.iter().map(|c| c.code()).collect();
+    b.codes_in("outcome", &outcomes);
+    let dir = b.keyset("time_ms", q.order, q.after);
+    Ok(b.finish(COMMAND_COLUMNS, "commands", "time_ms", dir, q.limit))
+}
+
+/// Cuts the extra row off a query result and computes the next cursor.
+pub(crate) fn into_page<T>(
+    mut items: Vec<T>,
+    limit: usize,
+    key: impl Fn(&T) -> Option<Cursor>,
+) -> Page<T> {
+    let more = items.len() > limit;
+    items.truncate(limit);
+    let next = if more {
+        items.last().and_then(key)
+    } else {
+        None
+    };
+    Page { items, next }
+}
+
+/// The cursor after an event, by the query's time basis.
+pub(crate) fn event_cursor(e: &EventRecord, basis: TimeBasis) -> Option<Cursor> {
+    let t = match basis {
+        TimeBasis::Source => e.event_time(),
+        TimeBasis::Received => e.received_time,
+    };
+    e.id.map(|id| Cursor::new(to_ms(t), id))
+}
+
+/// The cursor after a command record.
+pub(crate) fn command_cursor(c: &CommandRecord) -> Option<Cursor> {
+    c.id.map(|id| Cursor::new(to_ms(c.time), id))
+}
