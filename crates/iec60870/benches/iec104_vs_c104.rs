@@ -126,8 +126,8 @@ fn serve(args: &[String]) {
             CommonAddress::new(1),
         );
         config.max_connections = max_connections;
-        config.event_buffer_capacity = events as usize + 16;
-        config.send_end_of_initialisation = false;
+        config.outstation.event_buffer_capacity = events as usize + 16;
+        config.outstation.send_end_of_initialisation = false;
         let server = spawn_server(config, image, handler).await.expect("server");
         println!("{{\"event\":\"ready\"}}");
         if events > 0 {

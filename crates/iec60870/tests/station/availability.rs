@@ -73,7 +73,7 @@ async fn guarded_server() -> ServerHandle {
     config.max_connections_per_address = Some(2);
     config.reserved_per_group = 2;
     config.start_timeout = Some(Duration::from_millis(500));
-    config.redundancy = RedundancyMode::GroupsByAddress(vec![
+    config.outstation.redundancy = RedundancyMode::GroupsByAddress(vec![
         RedundancyGroupConfig::new("dispatch", vec![localhost(10)]),
         RedundancyGroupConfig::catch_all("others"),
     ]);
@@ -138,7 +138,7 @@ async fn idle_clients_cannot_take_the_slots_of_a_configured_control_centre() {
 async fn a_client_put_on_standby_by_another_start_notices_and_takes_its_connection_back() {
     init_logs();
     let mut config = server_config();
-    config.redundancy = RedundancyMode::SingleGroup;
+    config.outstation.redundancy = RedundancyMode::SingleGroup;
     let server = start_server(config, image(), Arc::new(ReadOnlyStation)).await;
     let mut client_config = client_config(server.local_addr());
     client_config.reconnect = true;

@@ -76,8 +76,8 @@ async fn fixture(zone: TimeZonePolicy) -> Fixture {
     point.max_age = Some(POINT_LIMIT);
     image.add_command(point).unwrap();
     let mut config: ServerConfig = server_config();
-    config.max_command_age = Some(SERVER_LIMIT);
-    config.time_zone = zone;
+    config.outstation.max_command_age = Some(SERVER_LIMIT);
+    config.outstation.time_zone = zone;
     let server = start_server(config, image, station.clone()).await;
     let mut peer = RawPeer::connect(server.local_addr()).await;
     peer.start().await;

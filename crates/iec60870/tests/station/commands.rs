@@ -339,7 +339,7 @@ async fn undefined_type_identification_is_refused_with_cause_44() {
 async fn request_cause_is_accepted_as_activation_when_configured() {
     init_logs();
     let mut config = server_config();
-    config.accept_request_as_activation = true;
+    config.outstation.accept_request_as_activation = true;
     let (server, handler) = command_server(config).await;
     let mut client = Client::connect(server.local_addr()).await;
     let asdu = request(
@@ -448,7 +448,7 @@ async fn select_before_operate() {
 async fn a_selection_expires_after_the_select_timeout() {
     init_logs();
     let mut config = server_config();
-    config.select_timeout = Duration::from_millis(300);
+    config.outstation.select_timeout = Duration::from_millis(300);
     let (server, _) = command_server(config).await;
     let client = Client::connect(server.local_addr()).await;
     let select = client

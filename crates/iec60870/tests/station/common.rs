@@ -119,7 +119,7 @@ pub(crate) async fn expect_close_logged(peer: SocketAddr, reason: &str) {
 /// A server configuration for tests: loopback, port 0, no end of initialisation.
 pub(crate) fn server_config() -> ServerConfig {
     let mut config = ServerConfig::new("127.0.0.1:0".parse().unwrap(), ca());
-    config.send_end_of_initialisation = false;
+    config.outstation.send_end_of_initialisation = false;
     config
 }
 

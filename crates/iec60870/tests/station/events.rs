@@ -165,8 +165,8 @@ async fn a_connected_but_stopped_client_does_not_drain_the_buffer() {
 async fn overflow_drop_oldest_keeps_the_newest_and_counts_the_dropped() {
     init_logs();
     let mut config = server_config();
-    config.event_buffer_capacity = 10;
-    config.overflow_policy = OverflowPolicy::DropOldest;
+    config.outstation.event_buffer_capacity = 10;
+    config.outstation.overflow_policy = OverflowPolicy::DropOldest;
     let server = start_server(config, event_image(), Arc::new(ReadOnlyStation)).await;
     for value in 0..25 {
         server.update(ioa(2), scaled(value), None).unwrap();
@@ -194,8 +194,8 @@ async fn overflow_drop_oldest_keeps_the_newest_and_counts_the_dropped() {
 async fn overflow_drop_newest_keeps_the_oldest() {
     init_logs();
     let mut config = server_config();
-    config.event_buffer_capacity = 10;
-    config.overflow_policy = OverflowPolicy::DropNewest;
+    config.outstation.event_buffer_capacity = 10;
+    config.outstation.overflow_policy = OverflowPolicy::DropNewest;
     let server = start_server(config, event_image(), Arc::new(ReadOnlyStation)).await;
     for value in 0..25 {
         server.update(ioa(2), scaled(value), None).unwrap();
@@ -215,7 +215,7 @@ async fn overflow_drop_newest_keeps_the_oldest() {
 async fn end_of_initialisation_goes_to_the_first_started_connection() {
     init_logs();
     let mut config = server_config();
-    config.send_end_of_initialisation = true;
+    config.outstation.send_end_of_initialisation = true;
     let server = start_server(config, event_image(), Arc::new(ReadOnlyStation)).await;
     let mut client = Client::connect(server.local_addr()).await;
     let asdu = client.next_asdu().await;

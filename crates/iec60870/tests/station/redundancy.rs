@@ -170,7 +170,7 @@ async fn groups_chosen_by_client_address_each_get_every_event() {
     init_logs();
     let mut config = server_config();
     config.listen = "0.0.0.0:0".parse().unwrap();
-    config.redundancy = RedundancyMode::GroupsByAddress(vec![
+    config.outstation.redundancy = RedundancyMode::GroupsByAddress(vec![
         RedundancyGroupConfig::new("one", vec![localhost(1)]),
         RedundancyGroupConfig::new("two", vec![localhost(2)]),
     ]);

@@ -19,7 +19,7 @@ const QUIET: Duration = Duration::from_millis(300);
 async fn server(mode: RedundancyMode) -> ServerHandle {
     let mut config = server_config();
     config.listen = "0.0.0.0:0".parse().unwrap();
-    config.redundancy = mode;
+    config.outstation.redundancy = mode;
     start_server(config, image(), Arc::new(ReadOnlyStation)).await
 }
 
@@ -171,7 +171,7 @@ async fn groups_by_address_take_over_only_within_a_group() {
 #[tokio::test]
 async fn groups_by_address_without_groups_is_a_configuration_error() {
     let mut config = server_config();
-    config.redundancy = RedundancyMode::GroupsByAddress(Vec::new());
+    config.outstation.redundancy = RedundancyMode::GroupsByAddress(Vec::new());
     let error = iec60870::cs104::server::spawn_server(config, image(), Arc::new(ReadOnlyStation))
         .await
         .unwrap_err();

@@ -30,7 +30,7 @@ fn image() -> ProcessImage {
 async fn fast_server() -> ServerHandle {
     let mut config = server_config();
     config.apci = fast_apci();
-    config.redundancy = RedundancyMode::GroupsByAddress(vec![
+    config.outstation.redundancy = RedundancyMode::GroupsByAddress(vec![
         RedundancyGroupConfig::new("operator", vec![IpAddr::from([127, 0, 0, 1])]),
         RedundancyGroupConfig::catch_all("others"),
     ]);

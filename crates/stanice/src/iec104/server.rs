@@ -12,11 +12,11 @@ use std::time::Duration;
 
 use clap::Args;
 use iec60870::asdu::{Cause, CommonAddress};
-use iec60870::outstation::Peer;
 use iec60870::cs104::server::{
     ready, spawn_server, Command, CommandFuture, CommandOutcome, CommandRefusal,
     RedundancyGroupConfig, RedundancyMode, ServerConfig, ServerHandle, StationHandler,
 };
+use iec60870::outstation::Peer;
 
 use super::points_file::{self, PointList};
 use super::LinkOptions;
@@ -216,9 +216,9 @@ pub(crate) async fn run(args: ServerArgs) -> anyhow::Result<ExitCode> {
     config.max_connections_per_group = args.max_per_group;
     config.reserved_per_group = args.reserve_per_group;
     config.start_timeout = seconds_option("--start-timeout", args.start_timeout)?;
-    config.redundancy = redundancy_mode(&args.mode, &args.groups)?;
-    config.time_zone = args.time_zone;
-    config.max_command_age = seconds_option("--max-command-age", args.max_command_age)?;
+    config.outstation.redundancy = redundancy_mode(&args.mode, &args.groups)?;
+    config.outstation.time_zone = args.time_zone;
+    config.outstation.max_command_age = seconds_option("--max-command-age", args.max_command_age)?;
     if let Some(pem) = args.link.tls()? {
         config.tls = Some(iec60870::cs104::tls::server_config(&pem)?);
     }
@@ -227,7 +227,7 @@ pub(crate) async fn run(args: ServerArgs) -> anyhow::Result<ExitCode> {
         "{} monitor points, {} command points, redundancy {}",
         points.monitor.len(),
         points.commands.len(),
-        config.redundancy.name(),
+        config.outstation.redundancy.name(),
     );
     let mut interrupt = crate::interrupt::Interrupt::listen();
     let server = serve_points(config, points).await?;

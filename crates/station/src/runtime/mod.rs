@@ -378,15 +378,15 @@ impl Runtime {
                 (Some(server_config), Some(address)) => {
                     let mut server = ServerConfig::new(address, config.common_address);
                     server.allowed_clients = server_config.allowed_clients.clone();
-                    server.redundancy = server_config.redundancy.clone();
+                    server.outstation.redundancy = server_config.redundancy.clone();
                     // Slots for the controlling stations they are meant for: idle clients
                     // cannot hold every connection (iec60870::cs104::server, admission).
                     server.max_connections_per_address = Some(NODE_SERVER_SLOTS.per_address);
                     server.max_connections_per_group = Some(NODE_SERVER_SLOTS.per_group);
                     server.reserved_per_group = NODE_SERVER_SLOTS.reserved_per_group;
                     server.start_timeout = Some(NODE_SERVER_SLOTS.start_timeout);
-                    server.max_command_age = server_config.max_command_age;
-                    server.time_zone = zone;
+                    server.outstation.max_command_age = server_config.max_command_age;
+                    server.outstation.time_zone = zone;
                     if let Some(files) = &server_config.tls {
                         // Already resolved against the project folder by the configuration.
                         let tls = files

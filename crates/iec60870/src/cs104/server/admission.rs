@@ -112,7 +112,7 @@ impl Slots {
 
     /// Takes a slot for a client, or says why not.
     pub(crate) fn admit(&self, config: &ServerConfig, ip: IpAddr) -> Result<Slot, SlotRefusal> {
-        let groups: &[super::RedundancyGroupConfig] = match &config.redundancy {
+        let groups: &[super::RedundancyGroupConfig] = match &config.outstation.redundancy {
             RedundancyMode::GroupsByAddress(groups) => groups,
             _ => &[],
         };
@@ -190,7 +190,7 @@ mod tests {
         config.max_connections = 4;
         config.max_connections_per_address = Some(2);
         config.reserved_per_group = 1;
-        config.redundancy = RedundancyMode::GroupsByAddress(vec![
+        config.outstation.redundancy = RedundancyMode::GroupsByAddress(vec![
             RedundancyGroupConfig::new("dispatch", vec![ip(10)]),
             RedundancyGroupConfig::new("hmi", vec![ip(20)]),
             RedundancyGroupConfig::catch_all("others"),

@@ -18,7 +18,7 @@
 //! the outstation's, re-exported here: see [`crate::outstation`].
 //!
 //! Time tags read or stamped by the server (commands' ages, points updated without a
-//! time) follow [`ServerConfig::time_zone`] on the station's clock; the default is UTC on
+//! time) follow [`OutstationConfig::time_zone`] on the station's clock; the default is UTC on
 //! the host's clock.
 
 mod admission;
@@ -45,21 +45,14 @@ pub use crate::outstation::{
     RedundancyMode, StationHandler, TerminationFuture,
 };
 
-/// Configuration of a server.
+/// Configuration of a server: the transport's settings, and the outstation's.
 #[derive(Debug, Clone)]
 #[non_exhaustive]
 pub struct ServerConfig {
     /// Address to listen on (port 2404 by standard).
     pub listen: SocketAddr,
-    /// The station's common address.
-    pub common_address: CommonAddress,
     /// APCI parameters (k, w, t1, t2, t3).
     pub apci: ApciConfig,
-    /// ASDU field sizes (IEC 104: COT 2, CA 2, IOA 3 octets, 249 octets at most).
-    pub asdu: AsduParams,
-    /// How clients form redundancy groups (one group, a group per connection, or groups
-    /// by client address).
-    pub redundancy: RedundancyMode,
     /// Clients allowed to connect; empty allows every client.
     pub allowed_clients: Vec<IpAddr>,
     /// Connections served at once; further clients are refused.
@@ -75,27 +68,11 @@ pub struct ServerConfig {
     /// A connection from a client no redundancy group names is closed when it has not
     /// started data transfer (STARTDT) within this time (`None`: never).
     pub start_timeout: Option<Duration>,
-    /// Events each redundancy group buffers.
-    pub event_buffer_capacity: usize,
-    /// What a full event buffer does.
-    pub overflow_policy: OverflowPolicy,
-    /// How long a selection (select-before-operate) waits for its execute.
-    pub select_timeout: Duration,
-    /// The largest age of a time-tagged command (the interoperability list's maximum
-    /// command delay), measured on [`StationHandler::now`] with the time tag read in
-    /// [`ServerConfig::time_zone`]: an older command, or one further in the future, gets a
-    /// negative confirmation. A command point may set its own. `None`: not checked.
-    pub max_command_age: Option<Duration>,
-    /// Accept commands with cause 5 (request) as activation, as some gateways do
-    /// (spec IEC-A3). Off by default: such commands get a negative confirmation with
-    /// cause 45.
-    pub accept_request_as_activation: bool,
-    /// Send an end of initialisation (M_EI_NA_1) to the first started connection.
-    pub send_end_of_initialisation: bool,
-    /// The zone of every time tag the server reads or stamps itself.
-    pub time_zone: TimeZonePolicy,
     /// TLS (IEC 62351-3): when set, every connection must complete a TLS handshake.
     pub tls: Option<Arc<tokio_rustls::rustls::ServerConfig>>,
+    /// What the station does whatever its transport: common address, ASDU field sizes
+    /// (IEC 104's), redundancy groups and their buffers, command checks, time zone.
+    pub outstation: OutstationConfig,
 }
 
 impl ServerConfig {
@@ -103,41 +80,16 @@ impl ServerConfig {
     pub fn new(listen: SocketAddr, common_address: CommonAddress) -> Self {
         Self {
             listen,
-            common_address,
             apci: ApciConfig::default(),
-            asdu: AsduParams::IEC104,
-            redundancy: RedundancyMode::SingleGroup,
             allowed_clients: Vec::new(),
             max_connections: 64,
             max_connections_per_address: None,
             max_connections_per_group: None,
             reserved_per_group: 0,
             start_timeout: None,
-            event_buffer_capacity: 100_000,
-            overflow_policy: OverflowPolicy::DropOldest,
-            select_timeout: Duration::from_secs(10),
-            max_command_age: None,
-            accept_request_as_activation: false,
-            send_end_of_initialisation: true,
-            time_zone: TimeZonePolicy::Utc,
             tls: None,
+            outstation: OutstationConfig::new(common_address, AsduParams::IEC104),
         }
-    }
-}
-
-impl ServerConfig {
-    /// What the outstation behind the server does (everything but the transport).
-    pub fn outstation_config(&self) -> OutstationConfig {
-        let mut config = OutstationConfig::new(self.common_address, self.asdu);
-        config.redundancy = self.redundancy.clone();
-        config.event_buffer_capacity = self.event_buffer_capacity;
-        config.overflow_policy = self.overflow_policy;
-        config.select_timeout = self.select_timeout;
-        config.max_command_age = self.max_command_age;
-        config.accept_request_as_activation = self.accept_request_as_activation;
-        config.send_end_of_initialisation = self.send_end_of_initialisation;
-        config.time_zone = self.time_zone;
-        config
     }
 }
 
@@ -251,7 +203,7 @@ pub async fn spawn_server(
         .apci
         .validate()
         .map_err(|error| ServerError::Config(error.to_string()))?;
-    let outstation = Arc::new(Outstation::new(config.outstation_config(), image, handler)?);
+    let outstation = Arc::new(Outstation::new(config.outstation.clone(), image, handler)?);
     let listener =
         TcpListener::bind(config.listen)
             .await
@@ -275,7 +227,7 @@ pub async fn spawn_server(
         accepted: AtomicU64::new(0),
         refused: AtomicU64::new(0),
     });
-    tracing::info!(%local_addr, common_address = %shared.config.common_address, "IEC 104 server listening");
+    tracing::info!(%local_addr, common_address = %shared.config.outstation.common_address, "IEC 104 server listening");
     tokio::spawn(accept_loop(listener, Arc::clone(&shared), shutdown_rx));
     Ok(ServerHandle {
         shared,
