@@ -20,17 +20,24 @@ fn mime(name: &str) -> &'static str {
 fn main() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("web");
     println!("cargo:rerun-if-changed={}", dir.display());
-    let mut names: Vec<String> = std::fs::read_dir(&dir)
-        .map(|entries| {
-            entries
-                .filter_map(Result::ok)
-                .filter(|e| e.path().is_file())
-                .filter_map(|e| e.file_name().into_string().ok())
-                .filter(|n| !n.starts_with('.'))
-                .collect()
-        })
-        .unwrap_or_default();
+    // A build that cannot read web/ fails: an HMI built without its pages would answer
+    // every page with 404 (seen once, from a build in a since-removed worktree).
+    let entries = std::fs::read_dir(&dir)
+        .unwrap_or_else(|error| panic!("cannot read {}: {error}", dir.display()));
+    let mut names: Vec<String> = entries
+        .filter_map(Result::ok)
+        .filter(|e| e.path().is_file())
+        .filter_map(|e| e.file_name().into_string().ok())
+        .filter(|n| !n.starts_with('.'))
+        .collect();
     names.sort();
+    for required in ["index.html", "login.html", "app.js"] {
+        assert!(
+            names.iter().any(|name| name == required),
+            "{} has no {required}",
+            dir.display()
+        );
+    }
     let mut out = String::from("/// The embedded files of `web/`: (name, content type, bytes).\npub(crate) static FILES: &[(&str, &str, &[u8])] = &[\n");
     for name in &names {
         println!("cargo:rerun-if-changed={}", dir.join(name).display());
@@ -45,6 +52,6 @@ fn main() {
     let target =
         Path::new(&std::env::var("OUT_DIR").unwrap_or_else(|_| ".".into())).join("web_files.rs");
     if let Err(error) = std::fs::write(&target, out) {
-        println!("cargo:warning=cannot write {}: {error}", target.display());
+        panic!("cannot write {}: {error}", target.display());
     }
 }

@@ -28,6 +28,7 @@ use tokio::sync::{broadcast, mpsc};
 
 use crate::alarms::{Alarm, Alarms};
 use crate::config::{HmiConfig, PointRow};
+use crate::live::{LinkState, LiveMessage};
 
 /// A point as the browsers see it.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -248,11 +249,6 @@ impl Station {
         self.live.subscribe()
     }
 
-    /// The link state message.
-    pub fn link_json(&self) -> Value {
-        json!({"up": self.is_up(), "address": self.addresses.join(",")})
-    }
-
     /// The alarm list.
     pub fn alarms(&self) -> Vec<Alarm> {
         self.alarms
@@ -296,23 +292,17 @@ impl Station {
         });
     }
 
+    /// Sends a live message to every browser.
+    fn broadcast(&self, message: LiveMessage) {
+        let _ = self.live.send(message.to_text());
+    }
+
     fn broadcast_alarm(&self, alarm: &Alarm) {
-        let mut message = serde_json::to_value(alarm).unwrap_or(Value::Null);
-        if let Value::Object(map) = &mut message {
-            map.insert("type".into(), json!("alarm"));
-        }
-        let _ = self.live.send(message.to_string());
+        self.broadcast(LiveMessage::Alarm(alarm.clone()));
     }
 
     fn broadcast_point(&self, point: &PointView) {
-        let mut message = serde_json::to_value(point).unwrap_or(Value::Null);
-        if let Value::Object(map) = &mut message {
-            // `type` names the message; the point's IEC type travels as `iec_type`.
-            if let Some(iec) = map.insert("type".into(), json!("point")) {
-                map.insert("iec_type".into(), iec);
-            }
-        }
-        let _ = self.live.send(message.to_string());
+        self.broadcast(LiveMessage::Point(point.clone().into()));
     }
 
     fn set_up(&self, up: bool) {
@@ -320,9 +310,7 @@ impl Station {
             return;
         }
         tracing::info!(up, "station link");
-        let _ = self.live.send(
-            json!({"type": "link", "up": up, "address": self.addresses.join(",")}).to_string(),
-        );
+        self.broadcast(LiveMessage::Link(LinkState::of(self)));
         if up {
             return;
         }
@@ -511,11 +499,12 @@ impl Station {
             outcome: outcome.audit(),
             detail: detail.to_owned(),
         });
-        let _ = self.live.send(
-            json!({"type": "command", "user": user, "command": command, "value": value,
-                   "outcome": outcome})
-            .to_string(),
-        );
+        self.broadcast(LiveMessage::Command {
+            user: user.to_owned(),
+            command: command.to_owned(),
+            value,
+            outcome,
+        });
     }
 
     /// The recorder of the HMI's store.

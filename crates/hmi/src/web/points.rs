@@ -21,7 +21,7 @@ pub(super) fn routes() -> Router<AppState> {
 }
 
 async fn points(State(state): State<AppState>, _: LoggedIn) -> Json<Value> {
-    Json(json!({"link": state.station.link_json(), "points": state.station.points()}))
+    Json(json!({"link": crate::live::LinkState::of(&state.station), "points": state.station.points()}))
 }
 
 async fn controls(State(state): State<AppState>, user: LoggedIn) -> Json<Value> {
