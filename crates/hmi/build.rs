@@ -17,13 +17,13 @@ fn mime(name: &str) -> &'static str {
     }
 }
 
-fn main() {
+fn main() -> Result<(), String> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("web");
     println!("cargo:rerun-if-changed={}", dir.display());
     // A build that cannot read web/ fails: an HMI built without its pages would answer
     // every page with 404 (seen once, from a build in a since-removed worktree).
     let entries = std::fs::read_dir(&dir)
-        .unwrap_or_else(|error| panic!("cannot read {}: {error}", dir.display()));
+        .map_err(|error| format!("cannot read {}: {error}", dir.display()))?;
     let mut names: Vec<String> = entries
         .filter_map(Result::ok)
         .filter(|e| e.path().is_file())
@@ -32,11 +32,9 @@ fn main() {
         .collect();
     names.sort();
     for required in ["index.html", "login.html", "app.js"] {
-        assert!(
-            names.iter().any(|name| name == required),
-            "{} has no {required}",
-            dir.display()
-        );
+        if !names.iter().any(|name| name == required) {
+            return Err(format!("{} has no {required}", dir.display()));
+        }
     }
     let mut out = String::from("/// The embedded files of `web/`: (name, content type, bytes).\npub(crate) static FILES: &[(&str, &str, &[u8])] = &[\n");
     for name in &names {
@@ -51,7 +49,6 @@ fn main() {
     out.push_str("];\n");
     let target =
         Path::new(&std::env::var("OUT_DIR").unwrap_or_else(|_| ".".into())).join("web_files.rs");
-    if let Err(error) = std::fs::write(&target, out) {
-        panic!("cannot write {}: {error}", target.display());
-    }
+    std::fs::write(&target, out)
+        .map_err(|error| format!("cannot write {}: {error}", target.display()))
 }
