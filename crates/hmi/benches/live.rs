@@ -28,7 +28,7 @@ use iec60870::cs104::server::{
     spawn_server, MonitorPoint, ProcessImage, ReadOnlyStation, ServerConfig,
 };
 use serde_json::{json, Value};
-use station::pointdb::TimeZonePolicy;
+use store::pointdb::TimeZonePolicy;
 
 const POINTS: u32 = 10_000;
 

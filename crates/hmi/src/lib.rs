@@ -59,9 +59,9 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, RwLock};
 use std::time::Duration;
 
-use ::station::pointdb::TimeZonePolicy;
-use ::station::store::Recorder;
-use ::station::store::{open_store, EventStore};
+use ::store::pointdb::TimeZonePolicy;
+use ::store::Recorder;
+use ::store::{open_store, EventStore};
 use iec60870::asdu::CommonAddress;
 
 /// Why the HMI could not start or a request failed.
@@ -75,7 +75,7 @@ pub enum HmiError {
     Users(String),
     /// The event store could not be opened.
     #[error("event store: {0}")]
-    Store(#[from] ::station::store::StoreError),
+    Store(#[from] ::store::StoreError),
     /// The TLS certificate or key.
     #[error("TLS: {0}")]
     Tls(String),

@@ -18,9 +18,9 @@ use iec60870::asdu::{
 use iec60870::cs104::client::{spawn_client, ClientConfig, ClientError, ClientEvent, ClientHandle};
 use serde::Serialize;
 use serde_json::{json, Value};
-use station::pointdb::TimeZonePolicy;
-use station::store::Recorder;
-use station::store::{
+use store::pointdb::TimeZonePolicy;
+use store::Recorder;
+use store::{
     Actor, CommandOutcome, CommandPhase, CommandRecord, EventCause, EventRecord, PointValue,
     Quality, SourceTime,
 };
@@ -346,7 +346,7 @@ impl Station {
             let Some(&index) = self.by_ioa.get(&object.ioa.get()) else {
                 continue;
             };
-            let Ok((value, quality, source)) = station::pointdb::from_element(
+            let Ok((value, quality, source)) = store::pointdb::from_element(
                 asdu.type_id,
                 &object.element,
                 object.time.as_ref(),

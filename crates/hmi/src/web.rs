@@ -38,7 +38,7 @@ use axum::http::{header, HeaderValue};
 use axum::response::Response;
 use axum::Router;
 use serde_json::json;
-use station::store::EventStore;
+use store::EventStore;
 
 pub use error::AppError;
 pub use extract::{LoggedIn, Operator, SameOrigin, Writer};

@@ -76,7 +76,7 @@ pub enum AppError {
     BadValue(&'static str),
     /// 400: the event store refused the query.
     #[error("{0}")]
-    Store(#[from] station::store::StoreError),
+    Store(#[from] store::StoreError),
     /// 429, with `Retry-After` and `retry_after_s`: too many failed logins from this
     /// address; it must wait this many seconds.
     #[error("too many failed logins; try again later")]

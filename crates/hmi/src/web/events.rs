@@ -8,7 +8,7 @@ use axum::{Json, Router};
 use chrono::{DateTime, Utc};
 use serde::Deserialize;
 use serde_json::{json, Value};
-use station::store::{
+use store::{
     CommandOutcome, CommandQuery, Cursor, EventQuery, Order, PointFilter, TimeBasis,
 };
 
@@ -163,8 +163,8 @@ fn outcome_word(outcome: CommandOutcome) -> &'static str {
     }
 }
 
-fn crate_value(value: &station::store::PointValue) -> Value {
-    use station::store::PointValue;
+fn crate_value(value: &store::PointValue) -> Value {
+    use store::PointValue;
     match value {
         PointValue::Bool(b) => json!(b),
         PointValue::DoublePoint(d) => json!(d),

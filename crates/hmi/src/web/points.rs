@@ -7,7 +7,7 @@ use axum::{Json, Router};
 use chrono::Utc;
 use serde::Deserialize;
 use serde_json::{json, Value};
-use station::store::{Actor, CommandOutcome, CommandPhase, CommandRecord, PointValue};
+use store::{Actor, CommandOutcome, CommandPhase, CommandRecord, PointValue};
 
 use super::{AppError, AppState, LoggedIn, Writer, SENT_DETAIL};
 use crate::link::ControlOutcome;
@@ -21,7 +21,9 @@ pub(super) fn routes() -> Router<AppState> {
 }
 
 async fn points(State(state): State<AppState>, _: LoggedIn) -> Json<Value> {
-    Json(json!({"link": crate::live::LinkState::of(&state.station), "points": state.station.points()}))
+    Json(
+        json!({"link": crate::live::LinkState::of(&state.station), "points": state.station.points()}),
+    )
 }
 
 async fn controls(State(state): State<AppState>, user: LoggedIn) -> Json<Value> {

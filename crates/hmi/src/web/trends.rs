@@ -7,7 +7,7 @@ use axum::{Json, Router};
 use chrono::{DateTime, Utc};
 use serde::Deserialize;
 use serde_json::{json, Value};
-use station::store::{EventQuery, Order};
+use store::{EventQuery, Order};
 
 use super::{AppError, AppState, LoggedIn};
 
@@ -64,9 +64,9 @@ async fn trend(
             .await?;
         for e in &page.items {
             let value = match &e.value {
-                station::store::PointValue::Float(f) => *f,
-                station::store::PointValue::Int(i) => *i as f64,
-                station::store::PointValue::Bool(b) => f64::from(u8::from(*b)),
+                store::PointValue::Float(f) => *f,
+                store::PointValue::Int(i) => *i as f64,
+                store::PointValue::Bool(b) => f64::from(u8::from(*b)),
                 _ => continue,
             };
             samples.push(json!([
