@@ -43,7 +43,7 @@ const SKIPPED: &[(&str, &str)] = &[
         "a benchmark: a release build and minutes of measurement",
     ),
     (
-        "cargo bench -p station --bench store",
+        "cargo bench -p store --bench store",
         "a benchmark: a release build and minutes of measurement",
     ),
     (

@@ -2,7 +2,7 @@
 //! latency, SQLite and PostgreSQL side by side.
 //!
 //! ```text
-//! bash scripts/with-postgres.sh cargo bench -p station --bench store
+//! bash scripts/with-postgres.sh cargo bench -p store --bench store
 //! ```
 //!
 //! Without `STANICE_TEST_POSTGRES_URL` only SQLite runs. SQLite runs on a temp file (WAL,
@@ -13,7 +13,7 @@
 use chrono::{Duration, TimeZone, Utc};
 use std::time::Instant;
 
-use station::store::{open_store, EventQuery, EventRecord, EventStore, PointValue};
+use store::{open_store, EventQuery, EventRecord, EventStore, PointValue};
 
 const SINGLE: usize = 2_000;
 const BATCH: usize = 500;
