@@ -15,7 +15,9 @@ use std::sync::Arc;
 use std::task::{Context, Waker};
 use std::time::{Duration, Instant};
 
-use iec60870::asdu::{AsduParams, CommonAddress, Element, Ioa, Quality, TypeId};
+use iec60870::asdu::{
+    AsduHeader, AsduParams, Cause, CommonAddress, Element, Ioa, Quality, TypeId,
+};
 use iec60870::outstation::{
     ready, Command, CommandFuture, CommandOutcome, CommandPoint, LinkCore, LinkLayer,
     MonitorPoint, Outstation, OutstationConfig, Peer, ProcessImage, RedundancyMode,
@@ -37,7 +39,7 @@ impl LinkLayer for Link {
     fn send_asdu(&mut self, _now: Instant, asdu: &[u8]) -> bool {
         assert!(self.unconfirmed.len() < WINDOW, "the core overfilled the window");
         assert!(
-            iec60870::asdu::Asdu::decode(asdu, &PARAMS).is_ok(),
+            well_formed(asdu),
             "the core sent an ASDU that does not decode: {asdu:02X?}"
         );
         self.unconfirmed.push_back(asdu.to_vec());
@@ -51,6 +53,25 @@ impl LinkLayer for Link {
         self.unconfirmed.clear();
         count
     }
+}
+
+/// An ASDU that decodes, or a negative mirror of a request the station cannot serve
+/// (cause 44..47: unknown type, cause, common address or object address): the standard's
+/// answer is the request sent back, which may be as undecodable as the request was.
+fn well_formed(asdu: &[u8]) -> bool {
+    let Ok(header) = AsduHeader::decode(asdu, &PARAMS) else {
+        return false;
+    };
+    let cause = header.cot.cause;
+    let mirror = header.cot.negative
+        && [
+            Cause::UNKNOWN_TYPE,
+            Cause::UNKNOWN_CAUSE,
+            Cause::UNKNOWN_COMMON_ADDRESS,
+            Cause::UNKNOWN_OBJECT_ADDRESS,
+        ]
+        .contains(&cause);
+    mirror || iec60870::asdu::Asdu::decode(asdu, &PARAMS).is_ok()
 }
 
 struct Executes;
