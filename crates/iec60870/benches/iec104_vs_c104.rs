@@ -471,7 +471,8 @@ async fn run(sizes: Sizes, only: Option<String>) {
             time(theirs_full),
             false,
         );
-
+    }
+    if wanted("events") {
         println!("(b) spontaneous events, {} M_ME_NC_1 updates", sizes.events);
         let mut rates = [None, None];
         for (slot, peer) in [Peer::Ours, Peer::C104].into_iter().enumerate() {
