@@ -75,19 +75,22 @@ impl Param {
     }
 }
 
-/// `INSERT INTO table (columns) VALUES (...) RETURNING id` for one row.
-pub(crate) fn insert(backend: Backend, table: &str, columns: &str, row: Vec<Param>) -> Statement {
+/// `INSERT INTO table (columns) VALUES (...)` for rows like `row` (the parameters'
+/// types give PostgreSQL's placeholders).
+pub(crate) fn insert_sql(backend: Backend, table: &str, columns: &str, row: &[Param]) -> String {
     let values: Vec<String> = row
         .iter()
         .enumerate()
         .map(|(i, p)| p.placeholder(backend, i + 1))
         .collect();
+    format!("INSERT INTO {table} ({columns}) VALUES ({})", values.join(", "))
+}
+
+/// `INSERT INTO table (columns) VALUES (...) RETURNING id` for one row.
+pub(crate) fn insert(backend: Backend, table: &str, columns: &str, row: Vec<Param>) -> Statement {
     Statement {
         access: Access::Write,
-        sql: format!(
-            "INSERT INTO {table} ({columns}) VALUES ({}) RETURNING id",
-            values.join(", ")
-        ),
+        sql: format!("{} RETURNING id", insert_sql(backend, table, columns, &row)),
         params: row,
     }
 }
