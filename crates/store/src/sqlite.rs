@@ -235,7 +235,12 @@ fn insert_events(
         // One statement for the batch, and the row id from the connection rather than
         // RETURNING: per row, formatting the SQL, looking it up in the statement cache
         // and stepping a RETURNING row halved the batch throughput.
-        let sql = insert_sql(Backend::Sqlite, "events", EVENT_INSERT, &event_params(first));
+        let sql = insert_sql(
+            Backend::Sqlite,
+            "events",
+            EVENT_INSERT,
+            &event_params(first),
+        );
         let mut stmt = tx.prepare_cached(&sql)?;
         for e in events {
             stmt.execute(params_from_iter(&event_params(e)))?;

@@ -8,9 +8,7 @@ use axum::{Json, Router};
 use chrono::{DateTime, Utc};
 use serde::Deserialize;
 use serde_json::{json, Value};
-use store::{
-    CommandOutcome, CommandQuery, Cursor, EventQuery, Order, PointFilter, TimeBasis,
-};
+use store::{CommandOutcome, CommandQuery, Cursor, EventQuery, Order, PointFilter, TimeBasis};
 
 use super::{AppError, AppState, LoggedIn, SENT_DETAIL};
 

@@ -83,7 +83,10 @@ pub(crate) fn insert_sql(backend: Backend, table: &str, columns: &str, row: &[Pa
         .enumerate()
         .map(|(i, p)| p.placeholder(backend, i + 1))
         .collect();
-    format!("INSERT INTO {table} ({columns}) VALUES ({})", values.join(", "))
+    format!(
+        "INSERT INTO {table} ({columns}) VALUES ({})",
+        values.join(", ")
+    )
 }
 
 /// `INSERT INTO table (columns) VALUES (...) RETURNING id` for one row.
