@@ -13,6 +13,7 @@
 //! | `params` | [`AsduParams`]: the field sizes of a link (COT, common address, IOA) and its maximum ASDU length |
 //! | `frame` | [`AsduHeader`] (decodable for unknown types), [`Asdu`] decode/encode/display, [`mirror_with_cause`], [`object_len`] |
 //! | `pack` | [`pack_objects`]: fills ASDUs up to the length and object limits, with SQ = 1 for runs of consecutive addresses |
+//! | [`text`] | values as people type them (`ON`, `0.5`, `0x1F`, `HIGHER`) read into elements of a given type, for point lists and tools |
 //!
 //! # Wire format
 //!
@@ -78,6 +79,7 @@ mod frame;
 mod object;
 mod pack;
 mod params;
+pub mod text;
 mod type_id;
 
 pub use address::{CommonAddress, Ioa};

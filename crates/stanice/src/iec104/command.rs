@@ -13,7 +13,7 @@ use iec60870::cs104::client::{
 };
 
 use super::render;
-use super::value::parse_command;
+use iec60870::asdu::text::parse_command;
 use super::LinkOptions;
 
 /// Arguments of `stanice iec104 command`.

@@ -14,7 +14,6 @@ pub(crate) mod points_file;
 mod render;
 mod server;
 pub(crate) mod simulate;
-mod value;
 
 use std::process::ExitCode;
 

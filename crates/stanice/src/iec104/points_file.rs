@@ -19,7 +19,7 @@ use anyhow::{bail, Context};
 use iec60870::asdu::{Ioa, TypeId};
 use iec60870::cs104::server::{CommandPoint, MonitorPoint, ProcessImage};
 
-use super::value::parse_element;
+use iec60870::asdu::text::parse_monitor;
 
 /// One point of the file.
 #[derive(Debug, Clone)]
@@ -88,7 +88,7 @@ pub(crate) fn parse(text: &str) -> anyhow::Result<PointList> {
         })?;
         let name = field(name_column).to_owned();
         if type_id.is_monitor() {
-            let element = parse_element(type_id, field(value_column))
+            let element = parse_monitor(type_id, field(value_column))
                 .map_err(|error| anyhow::anyhow!("{line}: {error}"))?;
             let groups = parse_groups(field(groups_column))
                 .map_err(|error| anyhow::anyhow!("{line}: {error}"))?;

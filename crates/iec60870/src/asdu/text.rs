@@ -1,12 +1,26 @@
-//! Values typed by people (point files, `--value`) turned into information elements.
+//! Values as people type them (point lists, a test tool's `--value`, a gateway's mapping
+//! file) turned into information elements of a given type: one reading of `ON`, `0.5`,
+//! `0x1F` or `HIGHER` for every tool, IEC 104 and IEC 101 alike.
 
-use anyhow::{bail, Context};
-use iec60870::asdu::{
+use super::{
     BinaryCounterReading, CommandQualifier, DoublePointState, Element, Quality,
     RegulatingStepState, SetpointQualifier, StepPosition, TypeId,
 };
 
-fn parse_bool(text: &str) -> anyhow::Result<bool> {
+/// A value that does not fit the type it was given for; says what was expected.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct ValueError(String);
+
+macro_rules! bail {
+    ($($arg:tt)*) => {
+        return Err(ValueError(format!($($arg)*)))
+    };
+}
+
+type Result<T> = std::result::Result<T, ValueError>;
+
+fn parse_bool(text: &str) -> Result<bool> {
     match text.trim().to_ascii_lowercase().as_str() {
         "1" | "on" | "true" => Ok(true),
         "0" | "off" | "false" | "" => Ok(false),
@@ -14,7 +28,7 @@ fn parse_bool(text: &str) -> anyhow::Result<bool> {
     }
 }
 
-fn parse_double(text: &str) -> anyhow::Result<DoublePointState> {
+fn parse_double(text: &str) -> Result<DoublePointState> {
     Ok(match text.trim().to_ascii_lowercase().as_str() {
         "0" | "intermediate" => DoublePointState::Intermediate,
         "1" | "off" | "open" | "" => DoublePointState::Off,
@@ -24,42 +38,43 @@ fn parse_double(text: &str) -> anyhow::Result<DoublePointState> {
     })
 }
 
-fn parse_u32(text: &str) -> anyhow::Result<u32> {
+fn parse_u32(text: &str) -> Result<u32> {
     let text = text.trim();
     let parsed = match text.strip_prefix("0x").or_else(|| text.strip_prefix("0X")) {
         Some(hex) => u32::from_str_radix(hex, 16),
         None if text.is_empty() => Ok(0),
         None => text.parse(),
     };
-    parsed.with_context(|| format!("'{text}' is not a 32-bit number"))
+    parsed.map_err(|_| ValueError(format!("'{text}' is not a 32-bit number")))
 }
 
-fn parse_number<T: std::str::FromStr + Default>(text: &str, what: &str) -> anyhow::Result<T> {
+fn parse_number<T: std::str::FromStr + Default>(text: &str, what: &str) -> Result<T> {
     let text = text.trim();
     if text.is_empty() {
         return Ok(T::default());
     }
     text.parse()
-        .map_err(|_| anyhow::anyhow!("'{text}' is not a valid {what}"))
+        .map_err(|_| ValueError(format!("'{text}' is not a valid {what}")))
 }
 
 /// A normalized value: a fraction with a decimal point (`0.335114`) or a raw integer
 /// (`10981`), as gateways that put engineering integers in the field do (spec IEC-A4).
-fn parse_normalized(text: &str) -> anyhow::Result<i16> {
+fn parse_normalized(text: &str) -> Result<i16> {
     let text = text.trim();
     if text.contains('.') || text.contains('e') {
-        let fraction: f64 = parse_number(text, "normalized value")?;
+        let fraction: f32 = parse_number(text, "normalized value")?;
         if !(-1.0..1.0).contains(&fraction) {
             bail!("normalized fraction {fraction} is outside -1 .. 1");
         }
-        Ok((fraction * 32768.0).round().clamp(-32768.0, 32767.0) as i16)
+        Ok(Element::normalized_raw(fraction))
     } else {
         parse_number(text, "normalized raw value (-32768..32767)")
     }
 }
 
-/// The initial value of a monitor point of the given type.
-pub(crate) fn parse_element(type_id: TypeId, text: &str) -> anyhow::Result<Element> {
+/// A monitor point's value of the given type (good quality; a time-tagged type reads as
+/// its untagged twin).
+pub fn parse_monitor(type_id: TypeId, text: &str) -> Result<Element> {
     let quality = Quality::default();
     let base = type_id.without_time().unwrap_or(type_id);
     Ok(match base {
@@ -75,7 +90,7 @@ pub(crate) fn parse_element(type_id: TypeId, text: &str) -> anyhow::Result<Eleme
             let value: i8 = parse_number(text, "step position (-64..63)")?;
             Element::StepPosition {
                 position: StepPosition::new(value, false)
-                    .map_err(|error| anyhow::anyhow!("{error}"))?,
+                    .map_err(|error| ValueError(error.to_string()))?,
                 quality,
             }
         }
@@ -100,7 +115,7 @@ pub(crate) fn parse_element(type_id: TypeId, text: &str) -> anyhow::Result<Eleme
         }
         TypeId::M_IT_NA_1 => Element::IntegratedTotal(
             BinaryCounterReading::new(parse_number(text, "counter value")?, 0)
-                .map_err(|error| anyhow::anyhow!("{error}"))?,
+                .map_err(|error| ValueError(error.to_string()))?,
         ),
         TypeId::M_PS_NA_1 => {
             let bits = parse_u32(text)?;
@@ -110,24 +125,20 @@ pub(crate) fn parse_element(type_id: TypeId, text: &str) -> anyhow::Result<Eleme
                 quality,
             }
         }
-        other => bail!("{other} points cannot be given in a point file"),
+        other => bail!("{other} values cannot be given as text"),
     })
 }
 
-/// A command element of the given type.
-pub(crate) fn parse_command(
-    type_id: TypeId,
-    text: &str,
-    select: bool,
-    qualifier: u8,
-) -> anyhow::Result<Element> {
+/// A command element of the given type, select or execute, with the qualifier QU (0..31;
+/// for set-points QL 0..127).
+pub fn parse_command(type_id: TypeId, text: &str, select: bool, qualifier: u8) -> Result<Element> {
     let command_qualifier = || {
         CommandQualifier::new(qualifier, select)
-            .map_err(|error| anyhow::anyhow!("--qualifier: {error}"))
+            .map_err(|error| ValueError(format!("qualifier: {error}")))
     };
     let setpoint_qualifier = || {
         SetpointQualifier::new(qualifier, select)
-            .map_err(|error| anyhow::anyhow!("--qualifier: {error}"))
+            .map_err(|error| ValueError(format!("qualifier: {error}")))
     };
     Ok(match type_id {
         TypeId::C_SC_NA_1 | TypeId::C_SC_TA_1 => Element::SingleCommand {
@@ -209,5 +220,34 @@ mod tests {
         assert!(parse_command(TypeId::C_SC_NA_1, "1", true, 32).is_err());
         assert!(parse_command(TypeId::M_SP_NA_1, "1", false, 0).is_err());
         assert!(parse_command(TypeId::C_SE_NC_1, "nan", false, 0).is_err());
+    }
+
+    proptest::proptest! {
+        /// Any text, any type: a value or an error, never a panic.
+        #[test]
+        fn any_text_is_read_or_refused(text in ".{0,24}", type_byte in 0u8..=255, select: bool, qualifier in 0u8..=255) {
+            if let Some(type_id) = TypeId::from_u8(type_byte) {
+                let _ = parse_monitor(type_id, &text);
+                let _ = parse_command(type_id, &text, select, qualifier);
+            }
+        }
+
+        /// A normalized value written as its fraction reads back to the same raw value.
+        #[test]
+        fn normalized_fraction_round_trips(raw: i16) {
+            let text = format!("{:.9}", Element::normalized_value(raw));
+            proptest::prop_assert_eq!(parse_normalized(&text).unwrap(), raw);
+        }
+
+        /// Scaled values and 32-bit strings in decimal and hexadecimal read back exactly.
+        #[test]
+        fn integers_round_trip(value: i16, bits: u32) {
+            proptest::prop_assert_eq!(
+                parse_monitor(TypeId::M_ME_NB_1, &value.to_string()).unwrap(),
+                Element::Scaled { value, quality: Quality::default() }
+            );
+            proptest::prop_assert_eq!(parse_u32(&format!("0x{bits:X}")).unwrap(), bits);
+            proptest::prop_assert_eq!(parse_u32(&bits.to_string()).unwrap(), bits);
+        }
     }
 }
