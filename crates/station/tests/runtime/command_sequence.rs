@@ -272,9 +272,15 @@ async fn acknowledgement_return_information_termination_on_the_board_and_through
         ["ACT_CON", &return_information(QF2_CLOSED), "ACT_TERM"]
     );
     // No feedback point: confirmed and terminated; the value comes as a spontaneous
-    // change of its own, whenever the scan makes it.
+    // change of its own (cause 3), whenever the scan makes it: before the confirmation,
+    // between, or after (seen once under load, first), never as return information.
     let answers = top.command(&runtime, HORN_SET, true, false, HORN).await;
-    assert_eq!(answers[..2], ["ACT_CON", "ACT_TERM"]);
+    let sequence: Vec<&str> = answers
+        .iter()
+        .map(String::as_str)
+        .filter(|answer| answer.starts_with("ACT_"))
+        .collect();
+    assert_eq!(sequence, ["ACT_CON", "ACT_TERM"], "{answers:?}");
     assert!(!answers.contains(&return_information(HORN)), "{answers:?}");
 
     // The breaker is already where the command wants it: no return information, the
