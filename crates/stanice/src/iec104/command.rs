@@ -7,13 +7,13 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use clap::Args;
+use iec60870::asdu::text::parse_command;
 use iec60870::asdu::{CommonAddress, Ioa, TypeId};
 use iec60870::cs104::client::{
     spawn_client, ClientConfig, ClientError, ClientEvent, RequestOutcome,
 };
 
 use super::render;
-use iec60870::asdu::text::parse_command;
 use super::LinkOptions;
 
 /// Arguments of `stanice iec104 command`.

@@ -16,10 +16,9 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use anyhow::{bail, Context};
+use iec60870::asdu::text::parse_monitor;
 use iec60870::asdu::{Ioa, TypeId};
 use iec60870::cs104::server::{CommandPoint, MonitorPoint, ProcessImage};
-
-use iec60870::asdu::text::parse_monitor;
 
 /// One point of the file.
 #[derive(Debug, Clone)]
