@@ -47,6 +47,8 @@ use station::runtime::{Pacing, Runtime, RuntimeOptions, StoreChoice};
 
 /// How long any one thing may take to appear in the browser.
 const WAIT: Duration = Duration::from_secs(10);
+/// How long chromedriver may take to listen (a cold start on a busy machine is slow).
+const DRIVER_START: Duration = Duration::from_secs(60);
 
 fn repository_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -123,23 +125,50 @@ struct Driver {
 
 impl Driver {
     fn start(driver: &Path, chromium: Option<PathBuf>) -> Driver {
-        let port = free_port();
-        let child = Command::new(driver)
-            .arg(format!("--port={port}"))
-            .arg("--allowed-ips=127.0.0.1")
-            .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .unwrap();
-        let deadline = Instant::now() + WAIT;
-        while TcpStream::connect(("127.0.0.1", port)).is_err() {
-            assert!(
-                Instant::now() < deadline,
-                "chromedriver does not listen on {port}"
-            );
-            std::thread::sleep(Duration::from_millis(50));
+        // chromedriver may lose its port to another process between our pick and its bind
+        // (it then exits), or start slowly on a busy machine: a new port, three times.
+        let mut failures = Vec::new();
+        for attempt in 1..=3 {
+            let port = free_port();
+            let mut child = Command::new(driver)
+                .arg(format!("--port={port}"))
+                .arg("--allowed-ips=127.0.0.1")
+                .stdin(Stdio::null())
+                .stdout(Stdio::null())
+                .stderr(Stdio::null())
+                .spawn()
+                .unwrap();
+            let deadline = Instant::now() + DRIVER_START;
+            let listening = loop {
+                if TcpStream::connect(("127.0.0.1", port)).is_ok() {
+                    break true;
+                }
+                if let Ok(Some(status)) = child.try_wait() {
+                    failures.push(format!(
+                        "attempt {attempt}: exited ({status}) on port {port}"
+                    ));
+                    break false;
+                }
+                if Instant::now() >= deadline {
+                    let _ = child.kill();
+                    let _ = child.wait();
+                    failures.push(format!(
+                        "attempt {attempt}: not listening on {port} within {DRIVER_START:?}"
+                    ));
+                    break false;
+                }
+                std::thread::sleep(Duration::from_millis(50));
+            };
+            if !listening {
+                eprintln!("chromedriver: {}", failures.last().unwrap());
+                continue;
+            }
+            return Driver::with(child, port, chromium);
         }
+        panic!("chromedriver did not start: {failures:?}");
+    }
+
+    fn with(child: Child, port: u16, chromium: Option<PathBuf>) -> Driver {
         Driver {
             child,
             url: format!("http://127.0.0.1:{port}"),
