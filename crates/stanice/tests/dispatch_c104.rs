@@ -105,7 +105,25 @@ struct Demo {
 }
 
 impl Demo {
-    fn start(port_base: u16) -> Demo {
+    /// Starts the demo on a free port range; a range another process took between the
+    /// pick and the demo's bind ("Address already in use") is picked again, three times.
+    fn start_on_free_ports() -> (Demo, u16) {
+        let mut refused = Vec::new();
+        for _ in 0..3 {
+            let port = free_port_range(23);
+            match Demo::start(port) {
+                Ok(demo) => return (demo, port),
+                Err(tail) if tail.contains("Address already in use") => {
+                    eprintln!("demo: ports from {port} taken meanwhile; another range");
+                    refused.push(port);
+                }
+                Err(tail) => panic!("the demo never said 'Ctrl-C stops':\n{tail}"),
+            }
+        }
+        panic!("the demo found no free port range (tried {refused:?})");
+    }
+
+    fn start(port_base: u16) -> Result<Demo, String> {
         let mut child = Command::new(env!("CARGO_BIN_EXE_stanice"))
             .args(["demo", "--port-base", &port_base.to_string()])
             .args(["--store", "none", "--start", DEMO_START])
@@ -126,7 +144,7 @@ impl Demo {
                 }
             });
         }
-        let demo = Demo { child, output };
+        let mut demo = Demo { child, output };
         let deadline = Instant::now() + Duration::from_secs(30);
         while Instant::now() < deadline {
             if demo
@@ -134,11 +152,16 @@ impl Demo {
                 .iter()
                 .any(|line| line.contains("Ctrl-C stops"))
             {
-                return demo;
+                return Ok(demo);
+            }
+            if let Ok(Some(_)) = demo.child.try_wait() {
+                // Exited: let the pipes drain its last words.
+                std::thread::sleep(Duration::from_millis(200));
+                return Err(demo.tail());
             }
             std::thread::sleep(Duration::from_millis(50));
         }
-        panic!("the demo never said 'Ctrl-C stops':\n{}", demo.tail());
+        Err(demo.tail())
     }
 
     fn lines(&self) -> Vec<String> {
@@ -290,9 +313,8 @@ fn c104_dispatch_reads_the_station_and_operates_it() {
     }
     let started = Instant::now();
     let monitor = monitor_ioas();
-    let port = free_port_range(23);
+    let (demo, port) = Demo::start_on_free_ports();
     let capture = Capture::start("dispatch", port);
-    let demo = Demo::start(port);
 
     let mut command = Command::new("python3");
     command
