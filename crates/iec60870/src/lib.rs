@@ -20,6 +20,9 @@
 //! - [`controlling`]: the controlling station's part without a transport: open requests
 //!   and how received ASDUs finish them (confirmation, termination, timeouts), what it
 //!   sends when data transfer starts (clock sync, interrogation).
+//! - [`ft12`]: the FT1.2 link layer of IEC 101 and 103 over serial lines, sans-IO:
+//!   frames and a resynchronising deframer, the unbalanced primary polling many
+//!   secondaries and the secondary, and a simulated line on a virtual clock.
 //! - [`cs104`]: IEC 104.
 //!   - `session`: the sans-IO APCI state machine of one connection: STARTDT/STOPDT/TESTFR,
 //!     k/w windows, t1/t2/t3 timers. It takes bytes and `Instant`s and hands out bytes,
@@ -53,5 +56,6 @@ pub mod apci;
 pub mod asdu;
 pub mod controlling;
 pub mod cs104;
+pub mod ft12;
 pub mod outstation;
 pub mod time;

@@ -1,0 +1,53 @@
+//! The FT1.2 link layer of IEC 60870-5-101 and -103 (IEC 60870-5-1/-2), sans-IO.
+//!
+//! # Layout
+//!
+//! | Module | Content |
+//! |---|---|
+//! | `frame` | [`Frame`] (fixed `10 C A CS 16`, variable `68 L L 68 C A ASDU CS 16`, single character `E5`), the [`Control`] field with its function codes, [`AddressSize`] |
+//! | `deframer` | [`Deframer`]: frames out of a serial byte stream, resynchronising after noise and broken frames |
+//! | `line` | [`LineSettings`]: baud rate and character format (8E1), transmit and idle (33 bit) times |
+//! | `primary` | [`Primary`]: the unbalanced master of one line and many secondaries (start-up, FCB, class 1/2 polling, ACD, DFC, repeats, broadcast, failed stations) |
+//! | `secondary` | [`Secondary`]: the unbalanced slave (repeat detection by FCB, ACD/DFC from its [`SecondaryApplication`]) |
+//! | `simulated` | [`SimulatedLine`]: a primary and secondaries on a virtual clock with the line's timing and injected faults, for tests and benchmarks |
+//!
+//! # Data flow
+//!
+//! ```text
+//! serial/pty/TCP bytes -> Primary::handle_bytes -> Deframer -> answer to the request
+//!     -> PrimaryEvent::Exchange { answer: UserData(asdu) } -> application (103 master)
+//! application -> Primary::send / broadcast / request -> Primary::poll_transmit -> bytes
+//! clock -> Primary::handle_timeout at Primary::next_deadline -> repeat or failed
+//!
+//! bytes -> Deframer -> Secondary::handle(frame, application) -> answer frame -> bytes
+//! ```
+//!
+//! Nothing here reads a clock or a port: the tokio adapters of the serial, pseudo-
+//! terminal and TCP transports live with the tools that use them, and the same cores
+//! run under [`SimulatedLine`], the fuzzers and the scenario tests.
+//!
+//! # Timing
+//!
+//! The primary times its frames as the line would: a request occupies
+//! [`LineSettings::transmit_time`], the answer is awaited for
+//! [`PrimaryConfig::response_timeout`] after that, and 33 bit times of quiet
+//! ([`LineSettings::idle_time`]) separate frames and follow every error.
+
+mod deframer;
+mod frame;
+mod line;
+mod primary;
+mod secondary;
+mod simulated;
+
+pub use deframer::{DeframeError, Deframer};
+pub use frame::{
+    checksum, AddressSize, Control, EncodeError, Frame, PrimaryFunction, SecondaryFunction, END,
+    MAX_FRAME_LEN, MAX_LENGTH_FIELD, SINGLE_CHARACTER, START_FIXED, START_VARIABLE,
+};
+pub use line::{LineSettings, Parity};
+pub use primary::{
+    Answer, LineError, LinkState, Primary, PrimaryConfig, PrimaryError, PrimaryEvent, StationStats,
+};
+pub use secondary::{Secondary, SecondaryApplication, SecondaryConfig, SecondaryStats};
+pub use simulated::{Fault, SimulatedLine};
