@@ -9,6 +9,8 @@
 //! | `line` | [`LineSettings`]: baud rate and character format (8E1), transmit and idle (33 bit) times |
 //! | `primary` | [`Primary`]: the unbalanced master of one line and many secondaries (start-up, FCB, class 1/2 polling, ACD, DFC, repeats, broadcast, failed stations) |
 //! | `secondary` | [`Secondary`]: the unbalanced slave (repeat detection by FCB, ACD/DFC from its [`SecondaryApplication`]) |
+//! | `endpoint` | [`LineEndpoint`]: either end of a line as an adapter drives it (bytes and time in, bytes out); [`SecondaryStation`] = secondary + application, answering after the idle time |
+//! | [`io`] (feature `tokio`) | serial ports, pseudo-terminals and TCP as [`io::Transport`], and [`io::drive`], the loop around an endpoint |
 //! | `simulated` | [`SimulatedLine`]: a primary and secondaries on a virtual clock with the line's timing and injected faults, for tests and benchmarks |
 //!
 //! # Data flow
@@ -22,9 +24,8 @@
 //! bytes -> Deframer -> Secondary::handle(frame, application) -> answer frame -> bytes
 //! ```
 //!
-//! Nothing here reads a clock or a port: the tokio adapters of the serial, pseudo-
-//! terminal and TCP transports live with the tools that use them, and the same cores
-//! run under [`SimulatedLine`], the fuzzers and the scenario tests.
+//! Nothing but [`io`] reads a clock or a port: the same cores run under the tokio loop
+//! of [`io::drive`], under [`SimulatedLine`], the fuzzers and the scenario tests.
 //!
 //! # Timing
 //!
@@ -34,13 +35,17 @@
 //! ([`LineSettings::idle_time`]) separate frames and follow every error.
 
 mod deframer;
+mod endpoint;
 mod frame;
+#[cfg(feature = "tokio")]
+pub mod io;
 mod line;
 mod primary;
 mod secondary;
 mod simulated;
 
 pub use deframer::{DeframeError, Deframer};
+pub use endpoint::{LineEndpoint, SecondaryStation, TimedApplication};
 pub use frame::{
     checksum, AddressSize, Control, EncodeError, Frame, PrimaryFunction, SecondaryFunction, END,
     MAX_FRAME_LEN, MAX_LENGTH_FIELD, SINGLE_CHARACTER, START_FIXED, START_VARIABLE,

@@ -1,0 +1,151 @@
+//! One end of a line as the I/O adapter sees it: bytes and time in, bytes out.
+
+use std::time::Instant;
+
+use super::deframer::{DeframeError, Deframer};
+use super::frame::Frame;
+use super::line::LineSettings;
+use super::primary::Primary;
+use super::secondary::{Secondary, SecondaryApplication};
+
+/// A sans-IO endpoint of a serial line, driven by an adapter (tokio over a serial port,
+/// a pseudo-terminal or TCP; the simulated line; a fuzzer).
+pub trait LineEndpoint {
+    /// Octets received.
+    fn handle_bytes(&mut self, now: Instant, bytes: &[u8]);
+    /// The line has been quiet for longer than a frame may pause.
+    fn handle_line_pause(&mut self, now: Instant);
+    /// The clock reached [`LineEndpoint::next_deadline`].
+    fn handle_timeout(&mut self, now: Instant);
+    /// Octets to write now.
+    fn poll_transmit(&mut self, now: Instant) -> Option<Vec<u8>>;
+    /// When to call [`LineEndpoint::handle_timeout`] and [`LineEndpoint::poll_transmit`]
+    /// again without new octets.
+    fn next_deadline(&self) -> Option<Instant>;
+    /// The line's settings, for the pause detection of the adapter.
+    fn line(&self) -> LineSettings;
+}
+
+impl LineEndpoint for Primary {
+    fn handle_bytes(&mut self, now: Instant, bytes: &[u8]) {
+        Primary::handle_bytes(self, now, bytes);
+    }
+    fn handle_line_pause(&mut self, now: Instant) {
+        Primary::handle_line_pause(self, now);
+    }
+    fn handle_timeout(&mut self, now: Instant) {
+        Primary::handle_timeout(self, now);
+    }
+    fn poll_transmit(&mut self, now: Instant) -> Option<Vec<u8>> {
+        Primary::poll_transmit(self, now)
+    }
+    fn next_deadline(&self) -> Option<Instant> {
+        Primary::next_deadline(self)
+    }
+    fn line(&self) -> LineSettings {
+        self.config().line
+    }
+}
+
+/// An application behind a secondary that also keeps time (cyclic data, time tags).
+pub trait TimedApplication: SecondaryApplication {
+    /// The clock advanced to `now`.
+    fn handle_timeout(&mut self, now: Instant);
+    /// When the application next wants [`TimedApplication::handle_timeout`].
+    fn next_deadline(&self) -> Option<Instant>;
+}
+
+/// A secondary station with its application as a line endpoint: it answers each
+/// frame addressed to it once the line has been idle for 33 bit times.
+pub struct SecondaryStation<A> {
+    line: LineSettings,
+    deframer: Deframer,
+    secondary: Secondary,
+    app: A,
+    answer: Option<(Instant, Vec<u8>)>,
+    frame_errors: u64,
+    last_error: Option<DeframeError>,
+}
+
+impl<A: TimedApplication> SecondaryStation<A> {
+    /// A station on a line.
+    pub fn new(line: LineSettings, secondary: Secondary, app: A) -> SecondaryStation<A> {
+        SecondaryStation {
+            deframer: Deframer::new(secondary.config().address_size),
+            line,
+            secondary,
+            app,
+            answer: None,
+            frame_errors: 0,
+            last_error: None,
+        }
+    }
+
+    /// The application.
+    pub fn app(&mut self) -> &mut A {
+        &mut self.app
+    }
+
+    /// The link layer.
+    pub fn secondary(&self) -> &Secondary {
+        &self.secondary
+    }
+
+    /// Broken frames seen, and the last one's error.
+    pub fn frame_errors(&self) -> (u64, Option<&DeframeError>) {
+        (self.frame_errors, self.last_error.as_ref())
+    }
+
+    fn handle_frame(&mut self, now: Instant, frame: &Frame) {
+        if let Some(answer) = self.secondary.handle(frame, &mut self.app) {
+            if let Ok(bytes) = answer.to_bytes(self.secondary.config().address_size) {
+                self.answer = Some((now + self.line.idle_time(), bytes));
+            }
+        }
+    }
+}
+
+impl<A: TimedApplication> LineEndpoint for SecondaryStation<A> {
+    fn handle_bytes(&mut self, now: Instant, bytes: &[u8]) {
+        self.deframer.push(bytes);
+        while let Some(next) = self.deframer.next_frame() {
+            match next {
+                Ok(frame) => self.handle_frame(now, &frame),
+                Err(error) => {
+                    self.frame_errors += 1;
+                    self.last_error = Some(error);
+                }
+            }
+        }
+    }
+
+    fn handle_line_pause(&mut self, _now: Instant) {
+        if let Some(error) = self.deframer.abandon_partial() {
+            self.frame_errors += 1;
+            self.last_error = Some(error);
+        }
+    }
+
+    fn handle_timeout(&mut self, now: Instant) {
+        self.app.handle_timeout(now);
+    }
+
+    fn poll_transmit(&mut self, now: Instant) -> Option<Vec<u8>> {
+        match &self.answer {
+            Some((at, _)) if *at <= now => self.answer.take().map(|(_, bytes)| bytes),
+            _ => None,
+        }
+    }
+
+    fn next_deadline(&self) -> Option<Instant> {
+        let answer = self.answer.as_ref().map(|(at, _)| *at);
+        match (answer, self.app.next_deadline()) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
+    fn line(&self) -> LineSettings {
+        self.line
+    }
+}
