@@ -23,6 +23,9 @@
 //! - [`ft12`]: the FT1.2 link layer of IEC 101 and 103 over serial lines, sans-IO:
 //!   frames and a resynchronising deframer, the unbalanced primary polling many
 //!   secondaries and the secondary, and a simulated line on a virtual clock.
+//! - [`iec101`]: IEC 101 over FT1.2: the outstation core behind an unbalanced
+//!   secondary ([`iec101::Slave`]) and a master polling outstations
+//!   ([`iec101::Master`]).
 //! - [`cs104`]: IEC 104.
 //!   - `session`: the sans-IO APCI state machine of one connection: STARTDT/STOPDT/TESTFR,
 //!     k/w windows, t1/t2/t3 timers. It takes bytes and `Instant`s and hands out bytes,
@@ -57,5 +60,6 @@ pub mod asdu;
 pub mod controlling;
 pub mod cs104;
 pub mod ft12;
+pub mod iec101;
 pub mod outstation;
 pub mod time;

@@ -1,5 +1,6 @@
 //! One end of a line as the I/O adapter sees it: bytes and time in, bytes out.
 
+use std::task::{Context, Poll};
 use std::time::Instant;
 
 use super::deframer::{DeframeError, Deframer};
@@ -24,6 +25,12 @@ pub trait LineEndpoint {
     fn next_deadline(&self) -> Option<Instant>;
     /// The line's settings, for the pause detection of the adapter.
     fn line(&self) -> LineSettings;
+    /// Ready when something outside the line wants the endpoint's attention (an
+    /// application's event, a command's outcome); the adapter then runs another turn.
+    /// Registers the context's waker otherwise. Never ready by default.
+    fn poll_wake(&mut self, _context: &mut Context<'_>) -> Poll<()> {
+        Poll::Pending
+    }
 }
 
 impl LineEndpoint for Primary {
@@ -53,6 +60,10 @@ pub trait TimedApplication: SecondaryApplication {
     fn handle_timeout(&mut self, now: Instant);
     /// When the application next wants [`TimedApplication::handle_timeout`].
     fn next_deadline(&self) -> Option<Instant>;
+    /// As [`LineEndpoint::poll_wake`]: ready when the application has news.
+    fn poll_wake(&mut self, _context: &mut Context<'_>) -> Poll<()> {
+        Poll::Pending
+    }
 }
 
 /// A secondary station with its application as a line endpoint: it answers each
@@ -147,5 +158,9 @@ impl<A: TimedApplication> LineEndpoint for SecondaryStation<A> {
 
     fn line(&self) -> LineSettings {
         self.line
+    }
+
+    fn poll_wake(&mut self, context: &mut Context<'_>) -> Poll<()> {
+        self.app.poll_wake(context)
     }
 }

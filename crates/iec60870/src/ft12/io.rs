@@ -228,6 +228,7 @@ pub async fn drive<E: LineEndpoint>(
                     pause_at = None;
                 }
             }
+            () = std::future::poll_fn(|context| endpoint.poll_wake(context)) => {}
             action = actions.recv(), if actions_open => {
                 match action {
                     Some(action) => action(endpoint),

@@ -17,6 +17,7 @@
 //! [`Session`]: crate::cs104::Session
 
 use std::collections::VecDeque;
+use std::future::Future as _;
 use std::sync::Arc;
 use std::task::{Context, Poll};
 use std::time::{Duration, Instant};
@@ -44,6 +45,14 @@ impl GroupChanges {
     /// Resolves once the group changed since `seen` (a [`version`](Self::version)).
     pub fn changed(&self, seen: u64) -> impl std::future::Future<Output = ()> + '_ {
         self.0.changed(seen)
+    }
+
+    /// [`changed`](Self::changed) for a caller that polls by hand (a line endpoint's
+    /// wake-up): ready once the group changed since `seen`, otherwise registers the
+    /// context's waker with the group.
+    pub fn poll_changed(&self, seen: u64, context: &mut Context<'_>) -> Poll<()> {
+        let changed = std::pin::pin!(self.0.changed(seen));
+        changed.poll(context)
     }
 }
 
