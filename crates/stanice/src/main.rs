@@ -3,6 +3,8 @@
 //! One binary, one subcommand per capability:
 //! - `stanice iec104 ...`: the IEC 60870-5-104 test tool (outstation, client, single
 //!   commands, frame decoder), what CPTT and QTester104 do for commissioning engineers.
+//! - `stanice iec101 ...`: the IEC 101 master and slave over serial lines,
+//!   pseudo-terminals or TCP.
 //! - `stanice run PROJECT`: runs a station project (nodes, PLCs, plant, links, store);
 //!   `stanice demo` runs the Vsetín railway station.
 //! - `stanice points` / `stanice events`: a node's data points; the event store.
@@ -13,11 +15,13 @@ mod demo;
 mod events;
 mod examples;
 mod hmi;
+mod iec101;
 mod iec104;
 mod interrupt;
 mod plc;
 mod points;
 mod run;
+mod serial_line;
 
 use clap::{CommandFactory as _, FromArgMatches as _, Parser, Subcommand};
 use tracing_subscriber::EnvFilter;
@@ -41,6 +45,10 @@ enum Command {
     /// IEC 60870-5-104 test tool: outstation, client, commands, decoder.
     #[command(subcommand)]
     Iec104(iec104::Iec104Command),
+    /// IEC 60870-5-101 test tool over a serial line, a pseudo-terminal or TCP: master
+    /// and slave.
+    #[command(subcommand)]
+    Iec101(iec101::Iec101Command),
     /// Run the railway-station demo (examples/vsetin).
     Demo(demo::DemoArgs),
     /// Run a station project: every node, or those named with --node.
@@ -84,6 +92,7 @@ fn main() -> std::process::ExitCode {
     let result = runtime.block_on(async {
         match cli.command {
             Command::Iec104(command) => iec104::run(command).await,
+            Command::Iec101(command) => iec101::run(command).await,
             Command::Demo(args) => demo::run(args).await,
             Command::Run(args) => run::run(args).await,
             Command::Points(args) => points::run(args),

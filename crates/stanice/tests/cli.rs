@@ -83,7 +83,12 @@ impl Drop for Background {
 }
 
 /// Starts a process and waits until a stdout line contains `marker`.
-fn start_until(mut command: Command, marker: &str) -> Background {
+fn start_until(command: Command, marker: &str) -> Background {
+    start_until_line(command, marker).0
+}
+
+/// Starts a process and waits until a stdout line contains `marker`; returns the line.
+fn start_until_line(mut command: Command, marker: &str) -> (Background, String) {
     let mut child = command
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
@@ -105,7 +110,7 @@ fn start_until(mut command: Command, marker: &str) -> Background {
             if line.contains(marker) {
                 // Keep draining so the child never blocks on a full pipe.
                 std::thread::spawn(move || for _ in receiver {});
-                return Background(child);
+                return (Background(child), line);
             }
             seen.push(line);
         }
@@ -152,6 +157,84 @@ fn outstation(port: u16, extra: &[&str]) -> Background {
         .arg(points)
         .args(extra);
     start_until(command, "IEC 104 outstation on")
+}
+
+/// `stanice iec101 slave` on a new pseudo-terminal and `stanice iec101 master` on its
+/// other end, as two processes: the interrogation in JSON, then a command's echo.
+#[test]
+fn iec101_master_reads_a_slave_over_a_pseudo_terminal() {
+    let points = write_points(POINTS);
+    let mut slave = stanice();
+    slave
+        .args([
+            "iec101",
+            "slave",
+            "--pty",
+            "--address",
+            "3",
+            "--ca",
+            "7",
+            "--ioa-size",
+            "3",
+            "--points",
+        ])
+        .arg(&points);
+    let (_slave, line) = start_until_line(slave, "pty: ");
+    let path = line.trim_start_matches("pty: ").trim().to_owned();
+    let mut master = stanice();
+    master.args([
+        "iec101",
+        "master",
+        "--serial",
+        &path,
+        "--baud",
+        "19200",
+        "--address",
+        "3",
+        "--ca",
+        "7",
+        "--ioa-size",
+        "3",
+        "--gi",
+        "--exit-after-gi",
+        "--json",
+    ]);
+    let output = run_bounded(master, 60);
+    let stdout = assert_success(&output);
+    let objects: Vec<Value> = stdout
+        .lines()
+        .map(|line| serde_json::from_str(line).unwrap())
+        .collect();
+    assert!(objects
+        .iter()
+        .any(|object| object["event"] == "link_up" && object["address"] == 3));
+    let interrogated: Vec<&Value> = objects
+        .iter()
+        .filter(|object| object["cot"] == "inrogen")
+        .collect();
+    let ioas: std::collections::BTreeSet<u64> = interrogated
+        .iter()
+        .map(|object| object["ioa"].as_u64().unwrap())
+        .collect();
+    // Integrated totals answer counter interrogation only (C_CI_NA_1), not this one.
+    assert_eq!(
+        ioas,
+        [281, 282, 1100, 2000, 5000].into_iter().collect(),
+        "{stdout}"
+    );
+    let breaker = interrogated
+        .iter()
+        .find(|object| object["ioa"] == 2000)
+        .unwrap();
+    assert_eq!(breaker["value"], 2, "DPI 2 ON");
+    let voltage = interrogated
+        .iter()
+        .find(|object| object["ioa"] == 1100)
+        .unwrap();
+    assert!((voltage["value"].as_f64().unwrap() - 0.335114).abs() < 1e-4);
+    assert!(objects
+        .iter()
+        .any(|object| object["type"] == "C_IC_NA_1" && object["cot"] == "actterm"));
 }
 
 #[test]

@@ -11,8 +11,8 @@ mod client;
 mod command;
 mod decode;
 pub(crate) mod points_file;
-mod render;
-mod server;
+pub(crate) mod render;
+pub(crate) mod server;
 pub(crate) mod simulate;
 
 use std::process::ExitCode;

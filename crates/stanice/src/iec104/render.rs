@@ -12,7 +12,7 @@ use iec60870::asdu::{Asdu, Element, InformationObject, Quality, TimeTag};
 use iec60870::cs104::client::ClientEvent;
 use serde_json::{json, Value};
 
-fn receipt_time() -> String {
+pub(crate) fn receipt_time() -> String {
     chrono::Local::now().format("%H:%M:%S%.3f").to_string()
 }
 

@@ -16,7 +16,7 @@ use iec60870::cs104::server::{
     ready, spawn_server, Command, CommandFuture, CommandOutcome, CommandRefusal,
     RedundancyGroupConfig, RedundancyMode, ServerConfig, ServerHandle, StationHandler,
 };
-use iec60870::outstation::Peer;
+use iec60870::outstation::{Outstation, Peer};
 
 use super::points_file::{self, PointList};
 use super::LinkOptions;
@@ -81,11 +81,28 @@ pub(crate) struct ServerArgs {
     link: LinkOptions,
 }
 
-/// Logs commands and makes a monitor point at the same address follow them.
-struct CommandLogger {
-    server: OnceLock<ServerHandle>,
+/// Logs commands and makes a monitor point at the same address follow them (the IEC
+/// 104 server's and the IEC 101 slave's application).
+pub(crate) struct CommandLogger {
+    server: OnceLock<Arc<Outstation>>,
     /// Command point names by address.
     names: std::collections::HashMap<u32, String>,
+}
+
+impl CommandLogger {
+    /// A logger for the command points of a point list; [`CommandLogger::serve`] gives
+    /// it the outstation once it exists.
+    pub(crate) fn new(names: std::collections::HashMap<u32, String>) -> Self {
+        Self {
+            server: OnceLock::new(),
+            names,
+        }
+    }
+
+    /// The outstation whose points follow the commands.
+    pub(crate) fn serve(&self, outstation: Arc<Outstation>) {
+        let _ = self.server.set(outstation);
+    }
 }
 
 impl CommandLogger {
@@ -193,17 +210,14 @@ pub(crate) async fn serve_points(
     config: ServerConfig,
     points: PointList,
 ) -> anyhow::Result<ServerHandle> {
-    let handler = Arc::new(CommandLogger {
-        server: OnceLock::new(),
-        names: points.command_names.clone(),
-    });
+    let handler = Arc::new(CommandLogger::new(points.command_names.clone()));
     let server = spawn_server(
         config,
         points.image,
         Arc::clone(&handler) as Arc<dyn StationHandler>,
     )
     .await?;
-    let _ = handler.server.set(server.clone());
+    handler.serve(Arc::clone(server.outstation()));
     Ok(server)
 }
 
@@ -238,7 +252,11 @@ pub(crate) async fn run(args: ServerArgs) -> anyhow::Result<ExitCode> {
     );
     if args.simulate {
         let interval = Duration::from_secs_f64(args.simulate_interval.clamp(0.001, 3600.0));
-        tokio::spawn(super::simulate::run(server.clone(), monitor_rows, interval));
+        tokio::spawn(super::simulate::run(
+            Arc::clone(server.outstation()),
+            monitor_rows,
+            interval,
+        ));
     }
     let stop = async {
         match args.duration {

@@ -7,13 +7,15 @@
 use std::time::Duration;
 
 use iec60870::asdu::{BinaryCounterReading, DoublePointState, Element, StepPosition};
-use iec60870::cs104::server::ServerHandle;
+use std::sync::Arc;
+
+use iec60870::outstation::Outstation;
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 
 use super::points_file::PointRow;
 
-pub(crate) async fn run(server: ServerHandle, points: Vec<PointRow>, interval: Duration) {
+pub(crate) async fn run(server: Arc<Outstation>, points: Vec<PointRow>, interval: Duration) {
     if points.is_empty() {
         return;
     }

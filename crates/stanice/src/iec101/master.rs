@@ -1,0 +1,177 @@
+//! `stanice iec101 master`: poll outstations, print every ASDU.
+
+use std::ops::ControlFlow;
+use std::process::ExitCode;
+use std::time::Duration;
+
+use clap::Args;
+use iec60870::asdu::{Asdu, Cause, CommonAddress, TypeId};
+use iec60870::cs104::client::ClientEvent;
+use iec60870::ft12::io::drive;
+use iec60870::ft12::{Primary, PrimaryConfig, PrimaryEvent};
+use iec60870::iec101::{Master, MasterEvent, StartUp};
+use tokio::sync::mpsc;
+
+use super::FieldSizes;
+use crate::iec104::render;
+use crate::serial_line::{millis, LineArgs};
+
+/// Arguments of `stanice iec101 master`.
+#[derive(Args, Debug)]
+pub(crate) struct MasterArgs {
+    #[command(flatten)]
+    line: LineArgs,
+    /// Link addresses of the outstations on the line, separated by commas.
+    #[arg(long, default_value = "1", value_delimiter = ',')]
+    address: Vec<u16>,
+    /// Common address of the stations (for interrogation and clock sync).
+    #[arg(long, default_value_t = 1)]
+    ca: u16,
+    /// Send a general interrogation when an outstation's link comes up.
+    #[arg(long)]
+    gi: bool,
+    /// Send a clock synchronisation (UTC) when an outstation's link comes up.
+    #[arg(long)]
+    clock_sync: bool,
+    /// Stop after this many seconds (runs until Ctrl-C otherwise).
+    #[arg(long)]
+    duration: Option<f64>,
+    /// One JSON object per information object instead of analyser lines.
+    #[arg(long)]
+    json: bool,
+    /// Stop when the general interrogation has terminated (with --gi), at every station.
+    #[arg(long, requires = "gi")]
+    exit_after_gi: bool,
+    /// Milliseconds to wait for an answer after a request has left the line.
+    #[arg(long, default_value_t = 500)]
+    timeout: u64,
+    /// Repeats of an unanswered request.
+    #[arg(long, default_value_t = 2)]
+    retries: u8,
+    /// Milliseconds between two class 2 polls of an outstation.
+    #[arg(long, default_value_t = 100)]
+    poll_interval: u64,
+    /// Also print the link layer: every request and answer, timeouts, line errors.
+    #[arg(long)]
+    verbose: bool,
+    #[command(flatten)]
+    sizes: FieldSizes,
+}
+
+pub(crate) async fn run(args: MasterArgs) -> anyhow::Result<ExitCode> {
+    let transport = args.line.transport()?;
+    let params = args.sizes.params()?;
+    let config = PrimaryConfig {
+        address_size: args.sizes.address_size(),
+        line: args.line.settings()?,
+        response_timeout: millis(args.timeout, 5..=60_000, "--timeout")?,
+        retries: args.retries,
+        poll_interval: millis(args.poll_interval, 0..=3_600_000, "--poll-interval")?,
+        ..PrimaryConfig::default()
+    };
+    let primary = Primary::new(config, tokio::time::Instant::now().into_std());
+    let mut master = Master::new(
+        primary,
+        params,
+        StartUp {
+            clock_sync: args.clock_sync,
+            interrogate: args.gi,
+            originator: 0,
+        },
+        Box::new(|| chrono::Utc::now().naive_utc()),
+    );
+    for address in &args.address {
+        master.add_station(*address, CommonAddress::new(args.ca))?;
+    }
+    let line = args.line.open(&transport).await?;
+    if !args.json {
+        println!(
+            "IEC 101 master on {} ({}), outstations {:?}",
+            line.peer, transport, args.address
+        );
+    }
+    let mut interrupt = crate::interrupt::Interrupt::listen();
+    let (_keep, mut actions) = mpsc::unbounded_channel();
+    let mut interrogated = std::collections::HashSet::new();
+    let stations = args.address.len();
+    let run = drive(line.stream, &mut master, &mut actions, |master| {
+        while let Some(event) = master.poll_event() {
+            let lines = match &event {
+                MasterEvent::Asdu { address, asdu } => {
+                    let client_event = match Asdu::decode(asdu, master.params()) {
+                        Ok(asdu) => {
+                            if asdu.type_id == TypeId::C_IC_NA_1
+                                && asdu.cot.cause == Cause::ACTIVATION_TERMINATION
+                            {
+                                interrogated.insert(*address);
+                            }
+                            ClientEvent::Asdu(asdu)
+                        }
+                        Err(error) => ClientEvent::Undecodable {
+                            error: error.to_string(),
+                            raw: asdu.clone(),
+                        },
+                    };
+                    if args.json {
+                        render::json_lines(&client_event)
+                    } else {
+                        vec![render::analyser_text(&client_event)]
+                    }
+                }
+                MasterEvent::Link(event) => link_lines(event, args.json, args.verbose),
+            };
+            if !print_lines(&lines) {
+                return ControlFlow::Break(());
+            }
+        }
+        if args.exit_after_gi && interrogated.len() == stations {
+            return ControlFlow::Break(());
+        }
+        ControlFlow::Continue(())
+    });
+    let deadline = args
+        .duration
+        .map(|seconds| Duration::from_secs_f64(seconds.clamp(0.0, 1e9)));
+    tokio::select! {
+        result = run => { result?; }
+        () = sleep(deadline) => {}
+        () = interrupt.recv() => {}
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// How a link-layer event is shown: link up and down always, the rest with --verbose.
+fn link_lines(event: &PrimaryEvent, json: bool, verbose: bool) -> Vec<String> {
+    let (name, address) = match event {
+        PrimaryEvent::LinkUp { address } => ("link_up", *address),
+        PrimaryEvent::LinkDown { address } => ("link_down", *address),
+        PrimaryEvent::Undelivered { address, .. } => ("undelivered", *address),
+        _ if verbose && !json => {
+            return vec![format!("{} link: {event:?}", render::receipt_time())]
+        }
+        _ => return Vec::new(),
+    };
+    if json {
+        vec![serde_json::json!({"event": name, "address": address}).to_string()]
+    } else {
+        vec![format!(
+            "{} link {address}: {}",
+            render::receipt_time(),
+            name.replace('_', " ")
+        )]
+    }
+}
+
+/// Writes lines to standard output; false once it is closed (a broken pipe).
+fn print_lines(lines: &[String]) -> bool {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    lines.iter().all(|line| writeln!(out, "{line}").is_ok()) && out.flush().is_ok()
+}
+
+async fn sleep(duration: Option<Duration>) {
+    match duration {
+        Some(duration) => tokio::time::sleep(duration).await,
+        None => std::future::pending().await,
+    }
+}

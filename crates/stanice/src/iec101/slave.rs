@@ -1,0 +1,150 @@
+//! `stanice iec101 slave`: an outstation on a serial line serving a CSV point list.
+
+use std::ops::ControlFlow;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::time::Duration;
+
+use clap::Args;
+use iec60870::asdu::CommonAddress;
+use iec60870::ft12::io::{drive, DriveEnd, LineListener, Transport};
+use iec60870::ft12::{Secondary, SecondaryConfig, SecondaryStation};
+use iec60870::iec101::Slave;
+use iec60870::outstation::{Outstation, OutstationConfig, Peer, StationHandler};
+use tokio::sync::mpsc;
+
+use super::FieldSizes;
+use crate::iec104::points_file;
+use crate::iec104::server::CommandLogger;
+use crate::serial_line::LineArgs;
+
+/// Arguments of `stanice iec101 slave`.
+#[derive(Args, Debug)]
+pub(crate) struct SlaveArgs {
+    #[command(flatten)]
+    line: LineArgs,
+    /// This outstation's link address.
+    #[arg(long, default_value_t = 1)]
+    address: u16,
+    /// The station's common address.
+    #[arg(long, default_value_t = 1)]
+    ca: u16,
+    /// CSV point list (header `ioa,type,value`), as for `stanice iec104 server`.
+    #[arg(long)]
+    points: PathBuf,
+    /// Change values over time and send them spontaneously.
+    #[arg(long)]
+    simulate: bool,
+    /// Seconds between simulated changes.
+    #[arg(long, default_value_t = 1.0)]
+    simulate_interval: f64,
+    /// Stop after this many seconds (runs until Ctrl-C otherwise).
+    #[arg(long)]
+    duration: Option<f64>,
+    /// Answer "ACK" and "no data" with the single character E5 where allowed.
+    #[arg(long)]
+    single_char: bool,
+    /// The zone of time tags: `UTC` or a zone name such as `Europe/Prague`.
+    #[arg(long, default_value = "UTC")]
+    time_zone: iec60870::time::TimeZonePolicy,
+    #[command(flatten)]
+    sizes: FieldSizes,
+}
+
+pub(crate) async fn run(args: SlaveArgs) -> anyhow::Result<ExitCode> {
+    let transport = args.line.transport()?;
+    let settings = args.line.settings()?;
+    let points = points_file::load(&args.points)?;
+    let mut config = OutstationConfig::new(CommonAddress::new(args.ca), args.sizes.params()?);
+    config.time_zone = args.time_zone;
+    let handler = Arc::new(CommandLogger::new(points.command_names.clone()));
+    let summary = format!(
+        "{} monitor points, {} command points",
+        points.monitor.len(),
+        points.commands.len()
+    );
+    let monitor_rows = points.monitor.clone();
+    let outstation = Arc::new(Outstation::new(
+        config,
+        points.image,
+        Arc::clone(&handler) as Arc<dyn StationHandler>,
+    )?);
+    handler.serve(Arc::clone(&outstation));
+    if args.simulate {
+        let interval = Duration::from_secs_f64(args.simulate_interval.clamp(0.001, 3600.0));
+        tokio::spawn(crate::iec104::simulate::run(
+            Arc::clone(&outstation),
+            monitor_rows,
+            interval,
+        ));
+    }
+    let secondary = SecondaryConfig {
+        address_size: args.sizes.address_size(),
+        address: args.address,
+        single_character: args.single_char,
+        class1_on_class2_request: false,
+    };
+    let serve = async {
+        // A TCP listener takes one master after the other; any other line is served once.
+        let listener = match &transport {
+            Transport::Listen(address) => Some(LineListener::bind(address).await?),
+            _ => None,
+        };
+        if let Some(listener) = &listener {
+            println!("waiting for a master on tcp {}", listener.local_addr()?);
+        }
+        let mut id = 0;
+        loop {
+            let line = match &listener {
+                Some(listener) => listener.accept().await?,
+                None => args.line.open(&transport).await?,
+            };
+            id += 1;
+            println!(
+                "IEC 101 outstation at link address {} (common address {}) on {}, {summary}",
+                args.address, args.ca, line.peer
+            );
+            let peer = Peer::Serial {
+                port: line.peer.as_str().into(),
+                link_address: args.address,
+            };
+            let Some(slave) = Slave::new(
+                &outstation,
+                id,
+                peer,
+                tokio::time::Instant::now().into_std(),
+            ) else {
+                anyhow::bail!("the outstation takes no link");
+            };
+            let mut station = SecondaryStation::new(settings, Secondary::new(secondary), slave);
+            let (_keep, mut actions) = mpsc::unbounded_channel();
+            let end = drive(line.stream, &mut station, &mut actions, |_| {
+                ControlFlow::Continue(())
+            })
+            .await;
+            match end {
+                Ok(DriveEnd::Closed) => println!("master on {} went away", line.peer),
+                Ok(DriveEnd::Stopped) => {}
+                Err(error) => println!("line {} failed: {error}", line.peer),
+            }
+            if listener.is_none() {
+                return Ok::<(), anyhow::Error>(());
+            }
+        }
+    };
+    let mut interrupt = crate::interrupt::Interrupt::listen();
+    let stop = async {
+        match args.duration {
+            Some(seconds) => {
+                tokio::time::sleep(Duration::from_secs_f64(seconds.clamp(0.0, 1e9))).await
+            }
+            None => interrupt.recv().await,
+        }
+    };
+    tokio::select! {
+        result = serve => result?,
+        () = stop => {}
+    }
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,99 @@
+//! Where an IEC 101/103 tool's line is: a serial port, a new pseudo-terminal or TCP,
+//! as the same options for every serial-line command.
+
+use std::time::Duration;
+
+use anyhow::{bail, Context as _};
+use clap::Args;
+use iec60870::ft12::io::{OpenLine, Transport};
+use iec60870::ft12::{LineSettings, Parity};
+
+/// The line options shared by `stanice iec101` and `stanice iec103`.
+#[derive(Args, Clone, Debug)]
+pub(crate) struct LineArgs {
+    /// A serial port device, e.g. /dev/ttyUSB0.
+    #[arg(long, value_name = "DEV", conflicts_with_all = ["pty", "tcp", "listen"])]
+    pub(crate) serial: Option<String>,
+    /// Open a new pseudo-terminal pair and print the path of its other end (for a peer
+    /// to open as a serial port).
+    #[arg(long, conflicts_with_all = ["tcp", "listen"])]
+    pub(crate) pty: bool,
+    /// Connect over TCP to HOST:PORT (a terminal server, a gateway, another tool).
+    #[arg(long, value_name = "HOST:PORT", conflicts_with = "listen")]
+    pub(crate) tcp: Option<String>,
+    /// Listen on ADDR:PORT for a TCP peer.
+    #[arg(long, value_name = "ADDR:PORT")]
+    pub(crate) listen: Option<String>,
+    /// Line speed in baud (1200-115200).
+    #[arg(long, default_value_t = 9600)]
+    pub(crate) baud: u32,
+    /// Parity: even (FT1.2), odd or none.
+    #[arg(long, default_value = "even")]
+    pub(crate) parity: Parity,
+    /// Stop bits, 1 or 2.
+    #[arg(long, default_value_t = 1)]
+    pub(crate) stop_bits: u8,
+}
+
+impl LineArgs {
+    /// Speed and character format.
+    pub(crate) fn settings(&self) -> anyhow::Result<LineSettings> {
+        let settings = LineSettings {
+            baud: self.baud,
+            parity: self.parity,
+            stop_bits: self.stop_bits,
+        };
+        settings.validate().map_err(anyhow::Error::msg)?;
+        Ok(settings)
+    }
+
+    /// The transport the options name.
+    pub(crate) fn transport(&self) -> anyhow::Result<Transport> {
+        let line = self.settings()?;
+        Ok(match (&self.serial, self.pty, &self.tcp, &self.listen) {
+            (Some(path), false, None, None) => Transport::Serial {
+                path: path.clone(),
+                line,
+            },
+            (None, true, None, None) => Transport::Pty,
+            (None, false, Some(address), None) => Transport::Connect(address.clone()),
+            (None, false, None, Some(address)) => Transport::Listen(address.clone()),
+            (None, false, None, None) => {
+                bail!("name the line: --serial DEV, --pty, --tcp HOST:PORT or --listen ADDR:PORT")
+            }
+            _ => bail!("name one line only: --serial, --pty, --tcp or --listen"),
+        })
+    }
+
+    /// Opens the line; a pseudo-terminal's path is printed first, on a line of its own,
+    /// so that a script can start the peer on it.
+    pub(crate) async fn open(&self, transport: &Transport) -> anyhow::Result<OpenLine> {
+        if let Transport::Listen(address) = transport {
+            eprintln!("waiting for a TCP peer on {address}");
+        }
+        let line = transport
+            .open()
+            .await
+            .with_context(|| format!("cannot open the line ({transport})"))?;
+        if let Some(path) = &line.pty_path {
+            println!("pty: {path}");
+        }
+        Ok(line)
+    }
+}
+
+/// A time in milliseconds from an option, checked against a range.
+pub(crate) fn millis(
+    value: u64,
+    range: std::ops::RangeInclusive<u64>,
+    name: &str,
+) -> anyhow::Result<Duration> {
+    if !range.contains(&value) {
+        bail!(
+            "{name} must be within {}..={} ms",
+            range.start(),
+            range.end()
+        );
+    }
+    Ok(Duration::from_millis(value))
+}
