@@ -45,14 +45,26 @@ pub(crate) fn peers_available() -> bool {
     false
 }
 
-/// A tshark capture of one port, checked by the IEC 104 dissector when stopped.
+/// A tshark capture of one port, checked by a dissector when stopped.
 pub(crate) struct Capture {
     file: PathBuf,
     port: u16,
+    /// `None`: IEC 104 (`check_capture.py`); otherwise the FT1.2 protocol carried over
+    /// TCP (`iec60870_101`, `iec60870_5_103`, checked by `check_capture_ft12.py`).
+    ft12_protocol: Option<&'static str>,
     stopped: bool,
 }
 
 impl Capture {
+    /// Starts capturing IEC 101 or 103 (`protocol`: tshark's dissector name) carried over
+    /// TCP on `port`.
+    #[allow(dead_code)] // not every including test captures serial protocols
+    pub(crate) fn start_ft12(label: &str, port: u16, protocol: &'static str) -> Capture {
+        let mut capture = Capture::start(label, port);
+        capture.ft12_protocol = Some(protocol);
+        capture
+    }
+
     /// Starts capturing `port` on loopback; `label` names the capture file.
     pub(crate) fn start(label: &str, port: u16) -> Capture {
         let file = std::env::temp_dir().join(format!(
@@ -69,6 +81,7 @@ impl Capture {
         Capture {
             file,
             port,
+            ft12_protocol: None,
             stopped: false,
         }
     }
@@ -85,8 +98,14 @@ impl Capture {
             .status()
             .unwrap();
         assert!(status.success(), "tshark capture did not stop cleanly");
-        let output = Command::new("python3")
-            .arg(peer_script("check_capture.py"))
+        let mut check = Command::new("python3");
+        match self.ft12_protocol {
+            None => check.arg(peer_script("check_capture.py")),
+            Some(protocol) => check
+                .arg(peer_script("check_capture_ft12.py"))
+                .args(["--protocol", protocol]),
+        };
+        let output = check
             .arg(&self.file)
             .arg(self.port.to_string())
             .arg("--json")
