@@ -19,9 +19,10 @@ use iec60870::asdu::{
 };
 use iec60870::ft12::io::{drive, EndpointAction, Transport};
 use iec60870::ft12::{
-    LineSettings, Primary, PrimaryConfig, Secondary, SecondaryConfig, SecondaryStation,
+    Balanced, BalancedConfig, LineSettings, Primary, PrimaryConfig, Secondary, SecondaryConfig,
+    SecondaryStation,
 };
-use iec60870::iec101::{Master, MasterEvent, Slave, StartUp};
+use iec60870::iec101::{BalancedSlave, Master, MasterEvent, Slave, StartUp};
 use iec60870::outstation::{
     ready, Command, CommandFuture, CommandOutcome, CommandPoint, MonitorPoint, Outstation,
     OutstationConfig, Peer, ProcessImage, StationHandler,
@@ -96,6 +97,23 @@ fn command(select: bool) -> Vec<u8> {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn master_and_slave_over_a_pseudo_terminal() {
+    master_and_slave(false).await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn balanced_master_and_slave_over_a_pseudo_terminal() {
+    master_and_slave(true).await;
+}
+
+fn balanced_config(dir: bool) -> BalancedConfig {
+    BalancedConfig {
+        line: LineSettings::new(9600),
+        response_timeout: Duration::from_millis(300),
+        ..BalancedConfig::new(3, dir)
+    }
+}
+
+async fn master_and_slave(balanced: bool) {
     let (outstation, handler) = outstation();
     let slave_line = Transport::Pty.open().await.expect("a pty pair");
     let path = slave_line.pty_path.clone().unwrap();
@@ -103,50 +121,59 @@ async fn master_and_slave_over_a_pseudo_terminal() {
     let slave_outstation = outstation.clone();
     let slave = tokio::spawn(async move {
         let now = tokio::time::Instant::now().into_std();
-        let slave = Slave::new(
-            &slave_outstation,
-            1,
-            Peer::Serial {
-                port: "pty".into(),
-                link_address: 3,
-            },
-            now,
-        )
-        .unwrap();
+        let peer = Peer::Serial {
+            port: "pty".into(),
+            link_address: 3,
+        };
+        if balanced {
+            let (_keep, mut actions) = mpsc::unbounded_channel();
+            let link = Balanced::new(balanced_config(false), now);
+            let mut station = BalancedSlave::new(&slave_outstation, 1, peer, link).unwrap();
+            let _ = drive(slave_line.stream, &mut station, &mut actions, |_| {
+                ControlFlow::Continue(())
+            })
+            .await;
+            return;
+        }
+        let (_keep, mut actions) = mpsc::unbounded_channel();
+        let slave = Slave::new(&slave_outstation, 1, peer, now).unwrap();
         let mut station =
             SecondaryStation::new(line, Secondary::new(SecondaryConfig::new(3)), slave);
-        let (_keep, mut actions) = mpsc::unbounded_channel();
         let _ = drive(slave_line.stream, &mut station, &mut actions, |_| {
             ControlFlow::Continue(())
         })
         .await;
     });
 
-    let primary = Primary::new(
-        PrimaryConfig {
-            line,
-            response_timeout: Duration::from_millis(300),
-            poll_interval: Duration::from_millis(50),
-            ..PrimaryConfig::default()
-        },
-        tokio::time::Instant::now().into_std(),
-    );
-    let mut master = Master::new(
-        primary,
-        PARAMS,
-        StartUp {
-            clock_sync: true,
-            interrogate: true,
-            originator: 0,
-        },
-        Box::new(|| {
-            chrono::NaiveDate::from_ymd_opt(2026, 11, 24)
-                .unwrap()
-                .and_hms_opt(1, 2, 3)
-                .unwrap()
-        }),
-    );
-    master.add_station(3, CommonAddress::new(7)).unwrap();
+    let start_up = StartUp {
+        clock_sync: true,
+        interrogate: true,
+        originator: 0,
+    };
+    let clock: iec60870::iec101::Clock = Box::new(|| {
+        chrono::NaiveDate::from_ymd_opt(2026, 11, 24)
+            .unwrap()
+            .and_hms_opt(1, 2, 3)
+            .unwrap()
+    });
+    let now = tokio::time::Instant::now().into_std();
+    let mut master = if balanced {
+        let link = Balanced::new(balanced_config(true), now);
+        Master::balanced(link, 3, CommonAddress::new(7), PARAMS, start_up, clock)
+    } else {
+        let primary = Primary::new(
+            PrimaryConfig {
+                line,
+                response_timeout: Duration::from_millis(300),
+                poll_interval: Duration::from_millis(50),
+                ..PrimaryConfig::default()
+            },
+            now,
+        );
+        let mut master = Master::new(primary, PARAMS, start_up, clock);
+        master.add_station(3, CommonAddress::new(7)).unwrap();
+        master
+    };
     let master_line = Transport::Serial { path, line }.open().await.unwrap();
     let (actions_tx, mut actions) = mpsc::unbounded_channel::<EndpointAction<Master>>();
     let mut received: Vec<Asdu> = Vec::new();

@@ -163,42 +163,39 @@ fn outstation(port: u16, extra: &[&str]) -> Background {
 /// other end, as two processes: the interrogation in JSON, then a command's echo.
 #[test]
 fn iec101_master_reads_a_slave_over_a_pseudo_terminal() {
+    iec101_master_reads_a_slave(&["--ioa-size", "3"]);
+}
+
+/// The same on a balanced point-to-point link without link address.
+#[test]
+fn iec101_balanced_master_reads_a_slave_over_a_pseudo_terminal() {
+    iec101_master_reads_a_slave(&["--ioa-size", "3", "--balanced", "--link-address-size", "0"]);
+}
+
+fn iec101_master_reads_a_slave(line_options: &[&str]) {
     let points = write_points(POINTS);
     let mut slave = stanice();
     slave
-        .args([
-            "iec101",
-            "slave",
-            "--pty",
-            "--address",
-            "3",
-            "--ca",
-            "7",
-            "--ioa-size",
-            "3",
-            "--points",
-        ])
+        .args(["iec101", "slave", "--pty", "--address", "3", "--ca", "7"])
+        .args(line_options)
+        .arg("--points")
         .arg(&points);
     let (_slave, line) = start_until_line(slave, "pty: ");
     let path = line.trim_start_matches("pty: ").trim().to_owned();
     let mut master = stanice();
-    master.args([
-        "iec101",
-        "master",
-        "--serial",
-        &path,
-        "--baud",
-        "19200",
-        "--address",
-        "3",
-        "--ca",
-        "7",
-        "--ioa-size",
-        "3",
-        "--gi",
-        "--exit-after-gi",
-        "--json",
-    ]);
+    master
+        .args([
+            "iec101",
+            "master",
+            "--serial",
+            &path,
+            "--address",
+            "3",
+            "--ca",
+            "7",
+        ])
+        .args(line_options)
+        .args(["--gi", "--exit-after-gi", "--json"]);
     let output = run_bounded(master, 60);
     let stdout = assert_success(&output);
     let objects: Vec<Value> = stdout

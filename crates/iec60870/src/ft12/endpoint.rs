@@ -97,6 +97,11 @@ impl<A: TimedApplication> SecondaryStation<A> {
         &mut self.app
     }
 
+    /// The application, once the line is done with.
+    pub fn into_app(self) -> A {
+        self.app
+    }
+
     /// The link layer.
     pub fn secondary(&self) -> &Secondary {
         &self.secondary

@@ -8,6 +8,7 @@
 //! | `deframer` | [`Deframer`]: frames out of a serial byte stream, resynchronising after noise and broken frames |
 //! | `line` | [`LineSettings`]: baud rate and character format (8E1), transmit and idle (33 bit) times |
 //! | `primary` | [`Primary`]: the unbalanced master of one line and many secondaries (start-up, FCB, class 1/2 polling, ACD, DFC, repeats, broadcast, failed stations) |
+//! | `balanced` | [`Balanced`]: one end of a balanced point-to-point link (IEC 101): primary and secondary at once, direction bit, test of link when idle |
 //! | `secondary` | [`Secondary`]: the unbalanced slave (repeat detection by FCB, ACD/DFC from its [`SecondaryApplication`]) |
 //! | `endpoint` | [`LineEndpoint`]: either end of a line as an adapter drives it (bytes and time in, bytes out); [`SecondaryStation`] = secondary + application, answering after the idle time |
 //! | [`io`] (feature `tokio`) | serial ports, pseudo-terminals and TCP as [`io::Transport`], and [`io::drive`], the loop around an endpoint |
@@ -34,6 +35,7 @@
 //! [`PrimaryConfig::response_timeout`] after that, and 33 bit times of quiet
 //! ([`LineSettings::idle_time`]) separate frames and follow every error.
 
+mod balanced;
 mod deframer;
 mod endpoint;
 mod frame;
@@ -44,6 +46,7 @@ mod primary;
 mod secondary;
 mod simulated;
 
+pub use balanced::{Balanced, BalancedConfig, BalancedEvent};
 pub use deframer::{DeframeError, Deframer};
 pub use endpoint::{LineEndpoint, SecondaryStation, TimedApplication};
 pub use frame::{

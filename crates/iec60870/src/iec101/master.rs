@@ -10,7 +10,10 @@ use chrono::NaiveDateTime;
 
 use crate::asdu::{AsduParams, CommonAddress};
 use crate::controlling::start_requests;
-use crate::ft12::{Answer, LineEndpoint, LineSettings, Primary, PrimaryError, PrimaryEvent};
+use crate::ft12::{
+    Answer, Balanced, BalancedEvent, LineEndpoint, LineSettings, Primary, PrimaryError,
+    PrimaryEvent,
+};
 use crate::time::Cp56Time2a;
 
 /// What the master does when an outstation's link comes up.
@@ -37,6 +40,17 @@ pub enum MasterEvent {
     /// Everything on the link layer (for a protocol log): exchanges, timeouts, link up
     /// and down, line errors.
     Link(PrimaryEvent),
+    /// The same on a balanced link.
+    Balanced(BalancedEvent),
+}
+
+/// The link layer under the master.
+#[derive(Debug)]
+enum Link {
+    /// Unbalanced: we poll one or many outstations.
+    Unbalanced(Primary),
+    /// Balanced: one outstation at the link address, both sending when they like.
+    Balanced(Balanced, u16),
 }
 
 /// The clock a master synchronises outstations to.
@@ -44,7 +58,7 @@ pub type Clock = Box<dyn FnMut() -> NaiveDateTime + Send>;
 
 /// An IEC 101 master polling one or many outstations on one line.
 pub struct Master {
-    primary: Primary,
+    link: Link,
     params: AsduParams,
     start_up: StartUp,
     common_addresses: Vec<(u16, CommonAddress)>,
@@ -55,7 +69,7 @@ pub struct Master {
 impl std::fmt::Debug for Master {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Master")
-            .field("primary", &self.primary)
+            .field("link", &self.link)
             .field("params", &self.params)
             .finish_non_exhaustive()
     }
@@ -64,8 +78,27 @@ impl std::fmt::Debug for Master {
 impl Master {
     /// A master over `primary` with the line's ASDU field sizes.
     pub fn new(primary: Primary, params: AsduParams, start_up: StartUp, clock: Clock) -> Master {
+        Master::with_link(Link::Unbalanced(primary), params, start_up, clock)
+    }
+
+    /// A master on a balanced link to the outstation at `address` (its link address,
+    /// as events name it) with `common_address`.
+    pub fn balanced(
+        link: Balanced,
+        address: u16,
+        common_address: CommonAddress,
+        params: AsduParams,
+        start_up: StartUp,
+        clock: Clock,
+    ) -> Master {
+        let mut master = Master::with_link(Link::Balanced(link, address), params, start_up, clock);
+        master.common_addresses.push((address, common_address));
+        master
+    }
+
+    fn with_link(link: Link, params: AsduParams, start_up: StartUp, clock: Clock) -> Master {
         Master {
-            primary,
+            link,
             params,
             start_up,
             common_addresses: Vec::new(),
@@ -74,13 +107,16 @@ impl Master {
         }
     }
 
-    /// Adds an outstation at a link address with its common address.
+    /// Adds an outstation at a link address with its common address (unbalanced lines;
+    /// a balanced link has its one outstation from the start).
     pub fn add_station(
         &mut self,
         address: u16,
         common_address: CommonAddress,
     ) -> Result<(), PrimaryError> {
-        self.primary.add_station(address)?;
+        if let Link::Unbalanced(primary) = &mut self.link {
+            primary.add_station(address)?;
+        }
         self.common_addresses.push((address, common_address));
         Ok(())
     }
@@ -90,14 +126,31 @@ impl Master {
         &self.params
     }
 
-    /// The link layer (for single telegrams, statistics and link states).
-    pub fn primary(&mut self) -> &mut Primary {
-        &mut self.primary
+    /// The unbalanced link layer (for single telegrams, statistics and link states).
+    pub fn primary(&mut self) -> Option<&mut Primary> {
+        match &mut self.link {
+            Link::Unbalanced(primary) => Some(primary),
+            Link::Balanced(..) => None,
+        }
     }
 
     /// Sends an ASDU to an outstation (send/confirm once its link is up).
     pub fn send(&mut self, address: u16, asdu: Vec<u8>) -> Result<(), PrimaryError> {
-        self.primary.send(address, asdu)
+        match &mut self.link {
+            Link::Unbalanced(primary) => primary.send(address, asdu),
+            Link::Balanced(link, own) if *own == address => {
+                link.send(asdu);
+                Ok(())
+            }
+            Link::Balanced(..) => Err(PrimaryError::UnknownStation(address)),
+        }
+    }
+
+    fn endpoint(&mut self) -> &mut dyn LineEndpoint {
+        match &mut self.link {
+            Link::Unbalanced(primary) => primary,
+            Link::Balanced(link, _) => link,
+        }
     }
 
     /// The next event.
@@ -106,9 +159,32 @@ impl Master {
     }
 
     fn process(&mut self) {
-        while let Some(event) = self.primary.poll_event() {
+        if let Link::Balanced(link, address) = &mut self.link {
+            let address = *address;
+            let mut up = false;
+            while let Some(event) = link.poll_event() {
+                match &event {
+                    BalancedEvent::LinkUp => up = true,
+                    BalancedEvent::UserData(asdu) => self.events.push_back(MasterEvent::Asdu {
+                        address,
+                        asdu: asdu.clone(),
+                    }),
+                    _ => {}
+                }
+                self.events.push_back(MasterEvent::Balanced(event));
+            }
+            if up {
+                self.start_station(address);
+            }
+            return;
+        }
+        let Link::Unbalanced(primary) = &mut self.link else {
+            return;
+        };
+        let mut started = Vec::new();
+        while let Some(event) = primary.poll_event() {
             match &event {
-                PrimaryEvent::LinkUp { address } => self.start_station(*address),
+                PrimaryEvent::LinkUp { address } => started.push(*address),
                 PrimaryEvent::Exchange {
                     address,
                     answer: Answer::UserData(asdu),
@@ -120,6 +196,9 @@ impl Master {
                 _ => {}
             }
             self.events.push_back(MasterEvent::Link(event));
+        }
+        for address in started {
+            self.start_station(address);
         }
     }
 
@@ -144,8 +223,8 @@ impl Master {
             self.start_up.interrogate,
         ) {
             if let Ok(bytes) = request.to_bytes(&self.params) {
-                // The station was just added, so it is known; nothing to report.
-                let _ = self.primary.send(address, bytes);
+                // The station is known (its link just came up); nothing to report.
+                let _ = self.send(address, bytes);
             }
         }
     }
@@ -153,32 +232,38 @@ impl Master {
 
 impl LineEndpoint for Master {
     fn handle_bytes(&mut self, now: Instant, bytes: &[u8]) {
-        self.primary.handle_bytes(now, bytes);
+        self.endpoint().handle_bytes(now, bytes);
         self.process();
     }
 
     fn handle_line_pause(&mut self, now: Instant) {
-        self.primary.handle_line_pause(now);
+        self.endpoint().handle_line_pause(now);
         self.process();
     }
 
     fn handle_timeout(&mut self, now: Instant) {
-        self.primary.handle_timeout(now);
+        self.endpoint().handle_timeout(now);
         self.process();
     }
 
     fn poll_transmit(&mut self, now: Instant) -> Option<Vec<u8>> {
-        let bytes = self.primary.poll_transmit(now);
+        let bytes = self.endpoint().poll_transmit(now);
         self.process();
         bytes
     }
 
     fn next_deadline(&self) -> Option<Instant> {
-        self.primary.next_deadline()
+        match &self.link {
+            Link::Unbalanced(primary) => primary.next_deadline(),
+            Link::Balanced(link, _) => link.next_deadline(),
+        }
     }
 
     fn line(&self) -> LineSettings {
-        self.primary.config().line
+        match &self.link {
+            Link::Unbalanced(primary) => primary.config().line,
+            Link::Balanced(link, _) => link.line(),
+        }
     }
 
     fn poll_wake(&mut self, _context: &mut Context<'_>) -> Poll<()> {

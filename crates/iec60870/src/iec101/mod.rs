@@ -8,6 +8,7 @@
 //! | Module | Role | Built from |
 //! |---|---|---|
 //! | `slave` | [`Slave`]: the controlled station behind an unbalanced secondary | [`crate::outstation::LinkCore`] (interrogation, commands with select/execute, clock sync, counters, event buffering with time tags) and a class 1 queue as its [`LinkLayer`](crate::outstation::LinkLayer) |
+//! | `slave` | [`BalancedSlave`]: the same on a balanced point-to-point link, sending as a primary | the outstation core with [`crate::ft12::Balanced`] as its link layer |
 //! | `master` | [`Master`]: the controlling station as an unbalanced primary for one or many outstations | [`crate::ft12::Primary`] and [`crate::controlling::start_requests`] (clock sync and interrogation when a link comes up) |
 //!
 //! # Data flow
@@ -27,4 +28,4 @@ mod master;
 mod slave;
 
 pub use master::{Clock, Master, MasterEvent, StartUp};
-pub use slave::Slave;
+pub use slave::{BalancedSlave, Slave};

@@ -6,7 +6,10 @@ use std::sync::Arc;
 use std::task::{Context, Poll};
 use std::time::Instant;
 
-use crate::ft12::{PrimaryFunction, SecondaryApplication, TimedApplication};
+use crate::ft12::{
+    Balanced, BalancedEvent, LineEndpoint, LineSettings, PrimaryFunction, SecondaryApplication,
+    TimedApplication,
+};
 use crate::outstation::{GroupChanges, LinkCore, LinkLayer, Outstation, Peer};
 
 /// ASDUs the core may hand to the link ahead of the master's class 1 polls. The rest
@@ -138,6 +141,121 @@ impl TimedApplication for Slave {
 
     fn next_deadline(&self) -> Option<Instant> {
         None
+    }
+
+    fn poll_wake(&mut self, context: &mut Context<'_>) -> Poll<()> {
+        if self.core.awaits_commands() && self.core.poll_commands(context).is_ready() {
+            return Poll::Ready(());
+        }
+        let version = self.changes.version();
+        if version != self.seen {
+            self.seen = version;
+            return Poll::Ready(());
+        }
+        self.changes.poll_changed(self.seen, context)
+    }
+}
+
+/// The balanced link as the outstation core sees it: user data it sends as primary,
+/// confirmed by the other end one at a time.
+impl LinkLayer for Balanced {
+    fn can_send(&self) -> bool {
+        self.is_up() && self.unconfirmed() < CLASS1_WINDOW
+    }
+
+    fn send_asdu(&mut self, _now: Instant, asdu: &[u8]) -> bool {
+        Balanced::send(self, asdu.to_vec());
+        true
+    }
+
+    fn unconfirmed(&self) -> usize {
+        Balanced::unconfirmed(self)
+    }
+
+    fn hand_over(&mut self) -> usize {
+        0
+    }
+}
+
+/// An [`Outstation`]'s link on a balanced (point-to-point) IEC 101 line: it sends its
+/// data as soon as it has it, as a primary station, instead of waiting for polls.
+#[derive(Debug)]
+pub struct BalancedSlave {
+    core: LinkCore,
+    link: Balanced,
+    changes: GroupChanges,
+    seen: u64,
+    started: bool,
+}
+
+impl BalancedSlave {
+    /// The link `id` of `outstation` to `peer` over the balanced link `link`.
+    pub fn new(outstation: &Arc<Outstation>, id: u64, peer: Peer, link: Balanced) -> Option<Self> {
+        let core = outstation.open_link(id, peer)?;
+        let changes = core.changes();
+        Some(BalancedSlave {
+            seen: changes.version(),
+            core,
+            link,
+            changes,
+            started: false,
+        })
+    }
+
+    /// Closes the link: what is in flight goes back to the group's buffer.
+    pub fn close(self) {
+        self.core.close(&self.link);
+    }
+
+    fn process(&mut self, now: Instant) {
+        while let Some(event) = self.link.poll_event() {
+            match event {
+                BalancedEvent::LinkUp if !self.started => {
+                    self.started = true;
+                    self.core.start();
+                }
+                BalancedEvent::LinkDown => {
+                    self.started = false;
+                    self.core.stop(&self.link);
+                }
+                BalancedEvent::UserData(asdu) => self.core.handle_asdu(now, asdu),
+                BalancedEvent::Confirmed => self.core.acknowledged(&self.link),
+                _ => {}
+            }
+        }
+        self.core.check_still_active(&mut self.link);
+        self.core.fill(now, &mut self.link);
+    }
+}
+
+impl LineEndpoint for BalancedSlave {
+    fn handle_bytes(&mut self, now: Instant, bytes: &[u8]) {
+        self.link.handle_bytes(now, bytes);
+        self.process(now);
+    }
+
+    fn handle_line_pause(&mut self, now: Instant) {
+        self.link.handle_line_pause(now);
+        self.process(now);
+    }
+
+    fn handle_timeout(&mut self, now: Instant) {
+        self.link.handle_timeout(now);
+        self.process(now);
+    }
+
+    fn poll_transmit(&mut self, now: Instant) -> Option<Vec<u8>> {
+        let bytes = self.link.poll_transmit(now);
+        self.process(now);
+        bytes
+    }
+
+    fn next_deadline(&self) -> Option<Instant> {
+        self.link.next_deadline()
+    }
+
+    fn line(&self) -> LineSettings {
+        self.link.line()
     }
 
     fn poll_wake(&mut self, context: &mut Context<'_>) -> Poll<()> {

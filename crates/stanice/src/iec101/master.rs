@@ -8,7 +8,8 @@ use clap::Args;
 use iec60870::asdu::{Asdu, Cause, CommonAddress, TypeId};
 use iec60870::cs104::client::ClientEvent;
 use iec60870::ft12::io::drive;
-use iec60870::ft12::{Primary, PrimaryConfig, PrimaryEvent};
+use iec60870::ft12::BalancedEvent;
+use iec60870::ft12::{Balanced, BalancedConfig, Primary, PrimaryConfig, PrimaryEvent};
 use iec60870::iec101::{Master, MasterEvent, StartUp};
 use tokio::sync::mpsc;
 
@@ -69,20 +70,42 @@ pub(crate) async fn run(args: MasterArgs) -> anyhow::Result<ExitCode> {
         poll_interval: millis(args.poll_interval, 0..=3_600_000, "--poll-interval")?,
         ..PrimaryConfig::default()
     };
-    let primary = Primary::new(config, tokio::time::Instant::now().into_std());
-    let mut master = Master::new(
-        primary,
-        params,
-        StartUp {
-            clock_sync: args.clock_sync,
-            interrogate: args.gi,
-            originator: 0,
-        },
-        Box::new(|| chrono::Utc::now().naive_utc()),
-    );
-    for address in &args.address {
-        master.add_station(*address, CommonAddress::new(args.ca))?;
-    }
+    let start_up = StartUp {
+        clock_sync: args.clock_sync,
+        interrogate: args.gi,
+        originator: 0,
+    };
+    let clock: iec60870::iec101::Clock = Box::new(|| chrono::Utc::now().naive_utc());
+    let now = tokio::time::Instant::now().into_std();
+    let mut master = if args.sizes.balanced {
+        let [address] = args.address[..] else {
+            anyhow::bail!("a balanced link has one outstation: give one --address");
+        };
+        let link = Balanced::new(
+            BalancedConfig {
+                address_size: config.address_size,
+                line: config.line,
+                response_timeout: config.response_timeout,
+                retries: config.retries,
+                ..BalancedConfig::new(address, true)
+            },
+            now,
+        );
+        Master::balanced(
+            link,
+            address,
+            CommonAddress::new(args.ca),
+            params,
+            start_up,
+            clock,
+        )
+    } else {
+        let mut master = Master::new(Primary::new(config, now), params, start_up, clock);
+        for address in &args.address {
+            master.add_station(*address, CommonAddress::new(args.ca))?;
+        }
+        master
+    };
     let line = args.line.open(&transport).await?;
     if !args.json {
         println!(
@@ -119,6 +142,9 @@ pub(crate) async fn run(args: MasterArgs) -> anyhow::Result<ExitCode> {
                     }
                 }
                 MasterEvent::Link(event) => link_lines(event, args.json, args.verbose),
+                MasterEvent::Balanced(event) => {
+                    balanced_lines(event, &args.address, args.json, args.verbose)
+                }
             };
             if !print_lines(&lines) {
                 return ControlFlow::Break(());
@@ -146,11 +172,36 @@ fn link_lines(event: &PrimaryEvent, json: bool, verbose: bool) -> Vec<String> {
         PrimaryEvent::LinkUp { address } => ("link_up", *address),
         PrimaryEvent::LinkDown { address } => ("link_down", *address),
         PrimaryEvent::Undelivered { address, .. } => ("undelivered", *address),
-        _ if verbose && !json => {
-            return vec![format!("{} link: {event:?}", render::receipt_time())]
-        }
-        _ => return Vec::new(),
+        _ => return verbose_line(event, json, verbose),
     };
+    link_news(name, address, json)
+}
+
+/// How a balanced link's event is shown, as [`link_lines`] does.
+fn balanced_lines(
+    event: &BalancedEvent,
+    address: &[u16],
+    json: bool,
+    verbose: bool,
+) -> Vec<String> {
+    let name = match event {
+        BalancedEvent::LinkUp => "link_up",
+        BalancedEvent::LinkDown => "link_down",
+        BalancedEvent::Undelivered(_) => "undelivered",
+        _ => return verbose_line(event, json, verbose),
+    };
+    link_news(name, address.first().copied().unwrap_or_default(), json)
+}
+
+fn verbose_line(event: &dyn std::fmt::Debug, json: bool, verbose: bool) -> Vec<String> {
+    if verbose && !json {
+        vec![format!("{} link: {event:?}", render::receipt_time())]
+    } else {
+        Vec::new()
+    }
+}
+
+fn link_news(name: &str, address: u16, json: bool) -> Vec<String> {
     if json {
         vec![serde_json::json!({"event": name, "address": address}).to_string()]
     } else {

@@ -21,9 +21,13 @@ use iec60870::ft12::AddressSize;
 /// when they do not, so they are options of every command.
 #[derive(Args, Clone, Debug)]
 pub(crate) struct FieldSizes {
-    /// Octets of the link address (1 or 2 on an unbalanced line).
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u8).range(1..=2))]
+    /// Octets of the link address: 1 or 2, or 0 on a balanced link.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u8).range(0..=2))]
     link_address_size: u8,
+    /// Balanced transmission (point to point, both stations send when they like)
+    /// instead of the master polling.
+    #[arg(long)]
+    pub(crate) balanced: bool,
     /// Octets of the cause of transmission (2 carries the originator address).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u8).range(1..=2))]
     cot_size: u8,
@@ -41,6 +45,11 @@ impl FieldSizes {
     }
 
     pub(crate) fn params(&self) -> anyhow::Result<AsduParams> {
+        if self.link_address_size == 0 && !self.balanced {
+            anyhow::bail!(
+                "--link-address-size 0 needs --balanced: a polled line addresses its outstations"
+            );
+        }
         // An FT1.2 frame holds 255 octets of control field, link address and ASDU.
         let max_asdu = 255 - 1 - usize::from(self.link_address_size);
         AsduParams::try_new(self.cot_size, self.ca_size, self.ioa_size, max_asdu)

@@ -9,8 +9,8 @@ use std::time::Duration;
 use clap::Args;
 use iec60870::asdu::CommonAddress;
 use iec60870::ft12::io::{drive, DriveEnd, LineListener, Transport};
-use iec60870::ft12::{Secondary, SecondaryConfig, SecondaryStation};
-use iec60870::iec101::Slave;
+use iec60870::ft12::{Balanced, BalancedConfig, Secondary, SecondaryConfig, SecondaryStation};
+use iec60870::iec101::{BalancedSlave, Slave};
 use iec60870::outstation::{Outstation, OutstationConfig, Peer, StationHandler};
 use tokio::sync::mpsc;
 
@@ -109,20 +109,39 @@ pub(crate) async fn run(args: SlaveArgs) -> anyhow::Result<ExitCode> {
                 port: line.peer.as_str().into(),
                 link_address: args.address,
             };
-            let Some(slave) = Slave::new(
-                &outstation,
-                id,
-                peer,
-                tokio::time::Instant::now().into_std(),
-            ) else {
-                anyhow::bail!("the outstation takes no link");
+            let now = tokio::time::Instant::now().into_std();
+            let end = if args.sizes.balanced {
+                let link = Balanced::new(
+                    BalancedConfig {
+                        address_size: args.sizes.address_size(),
+                        line: settings,
+                        ..BalancedConfig::new(args.address, false)
+                    },
+                    now,
+                );
+                let Some(mut slave) = BalancedSlave::new(&outstation, id, peer, link) else {
+                    anyhow::bail!("the outstation takes no link");
+                };
+                let (_keep, mut actions) = mpsc::unbounded_channel();
+                let end = drive(line.stream, &mut slave, &mut actions, |_| {
+                    ControlFlow::Continue(())
+                })
+                .await;
+                slave.close();
+                end
+            } else {
+                let Some(slave) = Slave::new(&outstation, id, peer, now) else {
+                    anyhow::bail!("the outstation takes no link");
+                };
+                let mut station = SecondaryStation::new(settings, Secondary::new(secondary), slave);
+                let (_keep, mut actions) = mpsc::unbounded_channel();
+                let end = drive(line.stream, &mut station, &mut actions, |_| {
+                    ControlFlow::Continue(())
+                })
+                .await;
+                station.into_app().close();
+                end
             };
-            let mut station = SecondaryStation::new(settings, Secondary::new(secondary), slave);
-            let (_keep, mut actions) = mpsc::unbounded_channel();
-            let end = drive(line.stream, &mut station, &mut actions, |_| {
-                ControlFlow::Continue(())
-            })
-            .await;
             match end {
                 Ok(DriveEnd::Closed) => println!("master on {} went away", line.peer),
                 Ok(DriveEnd::Stopped) => {}
