@@ -58,6 +58,26 @@ The exit code is 0 on a positive confirmation and termination, non-zero otherwis
   stanice iec104 decode --asdu 01 01 03 00 01 00 01 00 00 01",
     ),
     (
+        "iec101",
+        "  stanice iec101 slave --pty --points points.csv --address 3 --simulate
+  stanice iec101 master --serial /dev/pts/4 --address 3 --gi
+  stanice iec101 master --tcp 10.0.0.9:2401 --address 1,2,3 --gi --clock-sync --json",
+    ),
+    (
+        "iec101 master",
+        "  stanice iec101 master --serial /dev/ttyUSB0 --baud 9600 --address 3 --ca 7 --gi
+  stanice iec101 master --serial /dev/ttyUSB0 --address 1,2,3 --timeout 300 --retries 3 --verbose
+  stanice iec101 master --tcp 10.0.0.9:2401 --balanced --link-address-size 0 --address 0 --gi
+  stanice iec101 master --serial /dev/pts/4 --cot-size 2 --ca-size 2 --ioa-size 3 --gi --exit-after-gi --json
+The field sizes (--link-address-size, --cot-size, --ca-size, --ioa-size) must match the outstation's.",
+    ),
+    (
+        "iec101 slave",
+        "  stanice iec101 slave --pty --points points.csv --address 3   # prints `pty: /dev/pts/N`
+  stanice iec101 slave --serial /dev/ttyS0 --baud 19200 --points points.csv --simulate
+  stanice iec101 slave --listen 0.0.0.0:2401 --points points.csv --balanced --link-address-size 0 --address 0",
+    ),
+    (
         "demo",
         "  stanice demo                                   # web HMI on http://127.0.0.1:8080/
   stanice demo --speed 60 --store none           # fast, without writing events
