@@ -4,7 +4,7 @@
 //!
 //! One module per concept, from the bytes up:
 //!
-//! - [`time`]: the time tags CP56Time2a, CP24Time2a and CP16Time2a.
+//! - [`time`]: the time tags CP56Time2a, CP32Time2a (IEC 103), CP24Time2a and CP16Time2a.
 //! - [`asdu`]: the application layer, sans-IO. Type identifications, causes of
 //!   transmission, addresses, information elements and the ASDU codec. Field sizes (COT,
 //!   common address, IOA) are [`asdu::AsduParams`], so IEC 101 reuses the codec.
@@ -26,6 +26,8 @@
 //! - [`iec101`]: IEC 101 over FT1.2: the outstation core behind an unbalanced
 //!   secondary ([`iec101::Slave`]) and a master polling outstations
 //!   ([`iec101::Master`]).
+//! - [`iec103`]: IEC 103, the protection-equipment companion standard: its ASDU codec
+//!   (FUN/INF, measurands, identification, GI, general command, disturbance transfer).
 //! - [`cs104`]: IEC 104.
 //!   - `session`: the sans-IO APCI state machine of one connection: STARTDT/STOPDT/TESTFR,
 //!     k/w windows, t1/t2/t3 timers. It takes bytes and `Instant`s and hands out bytes,
@@ -61,5 +63,6 @@ pub mod controlling;
 pub mod cs104;
 pub mod ft12;
 pub mod iec101;
+pub mod iec103;
 pub mod outstation;
 pub mod time;

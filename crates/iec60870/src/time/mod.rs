@@ -564,6 +564,163 @@ impl fmt::Display for Cp24Time2a {
     }
 }
 
+/// Four-octet time tag of IEC 60870-5-103: milliseconds, minute and hour, plus IV and SU
+/// (no date: a receiver completes it with [`Cp32Time2a::resolve`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Cp32Time2a {
+    millisecond: u16,
+    minute: u8,
+    hour: u8,
+    invalid: bool,
+    summer_time: bool,
+}
+
+impl Cp32Time2a {
+    /// Octets on the wire.
+    pub const LEN: usize = 4;
+
+    /// Builds a tag: `hour` 0..23, `minute` 0..59, `millisecond` of the minute 0..59999.
+    pub fn new(hour: u8, minute: u8, millisecond: u16) -> Result<Self, TimeError> {
+        check("hour", hour.into(), 0, 23)?;
+        check("minute", minute.into(), 0, 59)?;
+        check(
+            "millisecond",
+            millisecond.into(),
+            0,
+            u32::from(MS_PER_MINUTE) - 1,
+        )?;
+        Ok(Self {
+            millisecond,
+            minute,
+            hour,
+            invalid: false,
+            summer_time: false,
+        })
+    }
+
+    /// Sets or clears IV (the relay's clock is not synchronised, or the tag is invalid).
+    #[must_use]
+    pub fn with_invalid(mut self, invalid: bool) -> Self {
+        self.invalid = invalid;
+        self
+    }
+
+    /// Sets or clears SU (summer time).
+    #[must_use]
+    pub fn with_summer_time(mut self, summer_time: bool) -> Self {
+        self.summer_time = summer_time;
+        self
+    }
+
+    /// Milliseconds of the minute, 0..59999.
+    pub fn millisecond(&self) -> u16 {
+        self.millisecond
+    }
+
+    /// Minute 0..59.
+    pub fn minute(&self) -> u8 {
+        self.minute
+    }
+
+    /// Hour 0..23.
+    pub fn hour(&self) -> u8 {
+        self.hour
+    }
+
+    /// IV: the time tag is invalid.
+    pub fn is_invalid(&self) -> bool {
+        self.invalid
+    }
+
+    /// SU: summer time.
+    pub fn is_summer_time(&self) -> bool {
+        self.summer_time
+    }
+
+    /// Decodes the four octets; out-of-range fields are an error, RES1/RES2 are ignored.
+    pub fn from_bytes(bytes: [u8; 4]) -> Result<Self, TimeError> {
+        let [ms_lo, ms_hi, minute, hour] = bytes;
+        Ok(Self::new(
+            hour & 0x1F,
+            minute & 0x3F,
+            u16::from_le_bytes([ms_lo, ms_hi]),
+        )?
+        .with_invalid(minute & 0x80 != 0)
+        .with_summer_time(hour & 0x80 != 0))
+    }
+
+    /// Decodes a slice that must be exactly [`Cp32Time2a::LEN`] octets long.
+    pub fn decode(bytes: &[u8]) -> Result<Self, TimeError> {
+        Self::from_bytes(exact(bytes)?)
+    }
+
+    /// The four octets on the wire.
+    pub fn to_bytes(&self) -> [u8; 4] {
+        let [ms_lo, ms_hi] = self.millisecond.to_le_bytes();
+        [
+            ms_lo,
+            ms_hi,
+            self.minute | flag(self.invalid, 0x80),
+            self.hour | flag(self.summer_time, 0x80),
+        ]
+    }
+
+    /// Appends the four octets to `out`.
+    pub fn encode(&self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&self.to_bytes());
+    }
+
+    /// The time of day of a date and time (flags clear); the date is dropped.
+    pub fn from_naive(datetime: NaiveDateTime) -> Self {
+        let millis = datetime.second() * 1000 + datetime.nanosecond() / 1_000_000;
+        Self {
+            millisecond: u16::try_from(millis)
+                .unwrap_or(MS_PER_MINUTE - 1)
+                .min(MS_PER_MINUTE - 1),
+            minute: u8::try_from(datetime.minute()).unwrap_or(0),
+            hour: u8::try_from(datetime.hour()).unwrap_or(0),
+            invalid: false,
+            summer_time: false,
+        }
+    }
+
+    /// Completes the tag with the date of `reference` (typically the time of reception):
+    /// of the same time of day on the reference's day, the day before and the day after,
+    /// the one closest to `reference`, so a tag of 23:59:58 received at 00:00:01 lands on
+    /// the previous day (the midnight roll-over that 103 masters get wrong).
+    pub fn resolve(&self, reference: NaiveDateTime) -> Option<NaiveDateTime> {
+        let day_start = reference.date().and_hms_opt(0, 0, 0)?;
+        let offset = chrono::Duration::hours(self.hour.into())
+            + chrono::Duration::minutes(self.minute.into())
+            + chrono::Duration::milliseconds(self.millisecond.into());
+        let in_day = day_start.checked_add_signed(offset)?;
+        let one_day = chrono::Duration::days(1);
+        [
+            in_day.checked_sub_signed(one_day),
+            Some(in_day),
+            in_day.checked_add_signed(one_day),
+        ]
+        .into_iter()
+        .flatten()
+        .min_by_key(|candidate| (*candidate - reference).abs())
+    }
+}
+
+impl fmt::Display for Cp32Time2a {
+    /// `08:28:32.666 [IV SU]`, flags only when set.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{:02}:{:02}:{:02}.{:03}",
+            self.hour,
+            self.minute,
+            self.millisecond / 1000,
+            self.millisecond % 1000
+        )?;
+        write_time_flags(f, &[(self.invalid, "IV"), (self.summer_time, "SU")])
+    }
+}
+
 /// Two-octet duration: milliseconds 0..59999 (elapsed, relay duration or operating time of
 /// protection equipment, and the delay of C_CD_NA_1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
@@ -629,6 +786,41 @@ impl fmt::Display for Cp16Time2a {
 #[allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn cp32_round_trip_flags_and_midnight() {
+        let tag = Cp32Time2a::new(8, 28, 32_666).unwrap().with_invalid(true);
+        assert_eq!(tag.to_bytes(), [0x9A, 0x7F, 0x9C, 0x08]);
+        assert_eq!(Cp32Time2a::from_bytes(tag.to_bytes()), Ok(tag));
+        assert_eq!(tag.to_string(), "08:28:32.666 [IV]");
+        assert!(Cp32Time2a::from_bytes([0, 0, 0, 24]).is_err());
+        assert!(
+            Cp32Time2a::from_bytes([0x60, 0xEA, 0, 0]).is_err(),
+            "60000 ms"
+        );
+        let late = Cp32Time2a::new(23, 59, 58_000).unwrap();
+        let after_midnight = NaiveDate::from_ymd_opt(2026, 11, 24)
+            .unwrap()
+            .and_hms_opt(0, 0, 1)
+            .unwrap();
+        assert_eq!(
+            late.resolve(after_midnight),
+            NaiveDate::from_ymd_opt(2026, 11, 23)
+                .unwrap()
+                .and_hms_opt(23, 59, 58)
+        );
+        let early = Cp32Time2a::new(0, 0, 1_000).unwrap();
+        let before_midnight = NaiveDate::from_ymd_opt(2026, 11, 23)
+            .unwrap()
+            .and_hms_opt(23, 59, 59)
+            .unwrap();
+        assert_eq!(
+            early.resolve(before_midnight),
+            NaiveDate::from_ymd_opt(2026, 11, 24)
+                .unwrap()
+                .and_hms_opt(0, 0, 1)
+        );
+    }
 
     /// CP56 of the first M_DP_TB_1 line of spec §7.3.
     const BREAKER_OFF_TIME: [u8; 7] = [0xD8, 0x76, 0xBB, 0x09, 0x1A, 0x04, 0x11];
