@@ -492,3 +492,198 @@ proptest! {
         }
     }
 }
+
+mod over_a_pseudo_terminal {
+    //! The 103 master against the REF630 device over a real pseudo-terminal pair: the
+    //! thesis's PCVDEW6 session (spec §6) and a command refused in LOCAL, executed in
+    //! REMOTE.
+
+    use std::ops::ControlFlow;
+    use std::time::Duration;
+
+    use iec60870::ft12::io::{drive, EndpointAction, Transport};
+    use iec60870::ft12::{
+        LineSettings, Primary, PrimaryConfig, Secondary, SecondaryConfig, SecondaryStation,
+    };
+    use iec60870::iec103::*;
+    use tokio::sync::mpsc;
+
+    type Relay = SecondaryStation<Device>;
+
+    fn wall_clock() -> chrono::NaiveDateTime {
+        chrono::NaiveDate::from_ymd_opt(2017, 4, 7)
+            .unwrap()
+            .and_hms_milli_opt(15, 43, 0, 870)
+            .unwrap()
+    }
+
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn master_reads_and_commands_the_ref630() {
+        let line = LineSettings::new(9600);
+        let relay_line = Transport::Pty.open().await.unwrap();
+        let path = relay_line.pty_path.clone().unwrap();
+        let (relay_actions, mut relay_inbox) = mpsc::unbounded_channel::<EndpointAction<Relay>>();
+        let relay = tokio::spawn(async move {
+            let now = tokio::time::Instant::now().into_std();
+            let mut profile = DeviceProfile::ref630(1);
+            profile.cycle = Duration::from_millis(300);
+            let device = Device::new(profile, now, wall_clock());
+            let mut station =
+                SecondaryStation::new(line, Secondary::new(SecondaryConfig::new(1)), device);
+            let _ = drive(relay_line.stream, &mut station, &mut relay_inbox, |_| {
+                ControlFlow::Continue(())
+            })
+            .await;
+        });
+
+        let now = tokio::time::Instant::now().into_std();
+        let mut primary = Primary::new(
+            PrimaryConfig {
+                line,
+                response_timeout: Duration::from_millis(500),
+                poll_interval: Duration::from_millis(50),
+                ..PrimaryConfig::default()
+            },
+            now,
+        );
+        primary.add_station(1).unwrap();
+        let mut master = Master::new(
+            primary,
+            StartUp {
+                clock_sync: false,
+                interrogate: true,
+            },
+            Box::new(wall_clock),
+            now,
+        );
+        master.set_command_timeout(Duration::from_secs(5));
+        let master_line = Transport::Serial { path, line }.open().await.unwrap();
+        let (_keep, mut inbox) = mpsc::unbounded_channel::<EndpointAction<Master>>();
+        let mut received: Vec<Asdu> = Vec::new();
+        let mut results = Vec::new();
+        let mut phase = 0;
+        let run = drive(master_line.stream, &mut master, &mut inbox, |master| {
+            while let Some(event) = master.poll_event() {
+                match event {
+                    MasterEvent::Asdu { asdu, .. } => received.push(asdu),
+                    MasterEvent::CommandResult {
+                        positive,
+                        timed_out,
+                        ..
+                    } => results.push((positive, timed_out)),
+                    _ => {}
+                }
+            }
+            let gi_done = received.iter().any(|asdu| asdu.header.type_id == 8);
+            let measured = |received: &[Asdu], rated: bool| {
+                received.iter().any(|asdu| match &asdu.body {
+                    Body::Measurands(values) if asdu.header.type_id == 9 => {
+                        let il1 = values[0].to_physical(2.4);
+                        if rated {
+                            (il1 - 1.0).abs() < 0.01
+                        } else {
+                            il1 == 0.0
+                        }
+                    }
+                    _ => false,
+                })
+            };
+            match phase {
+                0 if gi_done && measured(&received, false) => {
+                    // Rated current and voltage injected (the FREJA300 of step 7).
+                    let _ = relay_actions.send(Box::new(|relay: &mut Relay| {
+                        relay
+                            .app()
+                            .inject_rated_multiples(&[1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0]);
+                        relay.app().set_local(true);
+                    }));
+                    phase = 1;
+                }
+                1 if measured(&received, true)
+                    && received.iter().any(|asdu| {
+                        asdu.header.inf == 190 && asdu.header.cause == Cause::LOCAL_OPERATION
+                    }) =>
+                {
+                    master.general_command(1, 1, 160, false).unwrap();
+                    phase = 2;
+                }
+                2 if results.len() == 1 => {
+                    let _ = relay_actions
+                        .send(Box::new(|relay: &mut Relay| relay.app().set_local(false)));
+                    phase = 3;
+                }
+                3 if received.iter().any(|asdu| {
+                    asdu.header.inf == 190 && matches!(asdu.body, Body::TimeTagged { dpi: 1, .. })
+                }) =>
+                {
+                    master.general_command(1, 1, 160, false).unwrap();
+                    phase = 4;
+                }
+                4 if received.iter().any(|asdu| {
+                    asdu.header.inf == 160 && asdu.header.cause == Cause::REMOTE_OPERATION
+                }) =>
+                {
+                    return ControlFlow::Break(());
+                }
+                _ => {}
+            }
+            ControlFlow::Continue(())
+        });
+        tokio::time::timeout(Duration::from_secs(60), run)
+            .await
+            .expect("the session within 60 s")
+            .unwrap();
+        relay.abort();
+
+        // Polls 1-2: identification after reset CU, then the power-on start-up.
+        let identification: Vec<(u8, Cause, String)> = received
+            .iter()
+            .filter(|asdu| asdu.header.type_id == 5)
+            .map(|asdu| {
+                (
+                    asdu.header.inf,
+                    asdu.header.cause,
+                    asdu.identification_text().unwrap(),
+                )
+            })
+            .collect();
+        assert_eq!(
+            identification,
+            vec![
+                (3, Cause::RESET_CU, "REF630 11.3.".to_owned()),
+                (5, Cause::POWER_ON, "REF630 11.3.".to_owned())
+            ]
+        );
+        // Polls 3-6: truck TEST off, SERVICE on, breaker on, earth switch off, IV set.
+        let gi: Vec<(u8, u8, u8, bool)> = received
+            .iter()
+            .filter(|asdu| asdu.header.cause == Cause::GENERAL_INTERROGATION)
+            .filter_map(|asdu| match asdu.body {
+                Body::TimeTagged { dpi, time, .. } => {
+                    Some((asdu.header.fun, asdu.header.inf, dpi, time.is_invalid()))
+                }
+                _ => None,
+            })
+            .collect();
+        assert_eq!(
+            gi,
+            vec![
+                (5, 9, 1, true),
+                (5, 10, 2, true),
+                (1, 160, 2, true),
+                (1, 168, 1, true),
+                (1, 190, 1, true)
+            ]
+        );
+        assert_eq!(
+            results,
+            vec![(false, false), (true, false)],
+            "refused in LOCAL, executed in REMOTE"
+        );
+        let breaker_open = received
+            .iter()
+            .find(|asdu| asdu.header.inf == 160 && asdu.header.cause == Cause::REMOTE_OPERATION)
+            .unwrap();
+        assert!(matches!(breaker_open.body, Body::TimeTagged { dpi: 1, .. }));
+    }
+}

@@ -7,6 +7,17 @@
 //! | `asdu` | [`Asdu`] = [`Header`] (`TYP VSQ COT CA FUN INF`) + [`Body`]: the standard messages of both directions (time-tagged messages, measurands, identification, time sync, GI, general command, disturbance data transfer 23-31), generic services (10, 11, 21) passed through |
 //! | `cause` | [`Cause`]: the 103 causes of transmission |
 //! | `measurand` | [`Measurand`]: the 13-bit fraction of a configured limit with OV and ER |
+//! | `device` | [`Device`]: a protection device's side (identification on reset, GI, cyclic measurands in class 2, events and command acknowledgements in class 1, LOCAL/REMOTE, an unsynchronised clock, faults) for a [`DeviceProfile`] such as [`DeviceProfile::ref630`]; the relay simulator |
+//! | `master` | [`Master`]: the control system's side over an [`crate::ft12::Primary`]: start-up (clock sync, GI), general commands followed to their acknowledgement, every ASDU decoded |
+//!
+//! # Data flow
+//!
+//! ```text
+//! master: Master::general_command -> ASDU 20 -> Primary (send/confirm) -> line
+//!         line -> Primary -> class 1/2 user data -> Asdu::decode -> MasterEvent
+//! device: line -> Secondary -> Device::user_data -> class 1 queue (acks, events, GI)
+//!         clock -> Device::handle_timeout -> class 2 (measurands every cycle)
+//! ```
 //!
 //! The link layer is [`crate::ft12`] (unbalanced only, one-octet link address); the
 //! time tag of the messages is [`crate::time::Cp32Time2a`] (no date: resolve it against
@@ -33,6 +44,8 @@
 
 mod asdu;
 mod cause;
+mod device;
+mod master;
 mod measurand;
 
 pub use asdu::{
@@ -41,4 +54,6 @@ pub use asdu::{
     INF_RESET_CU, INF_RESET_FCB, INF_START_RESTART,
 };
 pub use cause::Cause;
+pub use device::{CommandPoint, Device, DeviceEvent, DeviceProfile, Indication, MeasurandChannel};
+pub use master::{Clock, Master, MasterEvent, StartUp};
 pub use measurand::Measurand;
