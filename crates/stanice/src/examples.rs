@@ -78,6 +78,29 @@ The field sizes (--link-address-size, --cot-size, --ca-size, --ioa-size) must ma
   stanice iec101 slave --listen 0.0.0.0:2401 --points points.csv --balanced --link-address-size 0 --address 0",
     ),
     (
+        "iec103",
+        "  stanice iec103 relay --pty --inject 1,1             # prints `pty: /dev/pts/N`
+  stanice iec103 master --serial /dev/pts/4 --gi --clock-sync
+  stanice iec103 master --serial /dev/pts/4 --telegrams reset-link,class2,class1",
+    ),
+    (
+        "iec103 master",
+        "  stanice iec103 master --serial /dev/ttyUSB0 --baud 9600 --address 1 --gi --clock-sync
+  stanice iec103 master --serial /dev/ttyUSB0 --gi --command 1:160:OFF --exit-after-commands
+  stanice iec103 master --serial /dev/ttyUSB0 --address 3 --timeout 500 --telegrams time,reset-link,class2,class1
+  stanice iec103 master --tcp 10.0.0.20:4001 --address 1,2,3 --gi --json
+Single telegrams (--telegrams) are PCVDEW6's menu: reset-link (r), link-status (s), reset-fcb (f),
+class1 (1), class2 (2), gi (g), time (i, broadcast). Measurands II (INF 148) are shown as
+multiples of rated (2.4 x for currents and powers, 1.2 x for voltages and frequency).",
+    ),
+    (
+        "iec103 relay",
+        "  stanice iec103 relay --pty --address 1 --cycle 5
+  stanice iec103 relay --serial /dev/ttyS0 --baud 19200 --inject 0.8,0.9
+  stanice iec103 relay --listen 0.0.0.0:4001
+While it runs, type `help` for its console: inject, local/remote, open/close, fault, restart.",
+    ),
+    (
         "demo",
         "  stanice demo                                   # web HMI on http://127.0.0.1:8080/
   stanice demo --speed 60 --store none           # fast, without writing events

@@ -5,17 +5,20 @@
 //!   commands, frame decoder), what CPTT and QTester104 do for commissioning engineers.
 //! - `stanice iec101 ...`: the IEC 101 master and slave over serial lines,
 //!   pseudo-terminals or TCP.
+//! - `stanice iec103 ...`: the IEC 103 master and the REF630 relay simulator.
 //! - `stanice run PROJECT`: runs a station project (nodes, PLCs, plant, links, store);
 //!   `stanice demo` runs the Vsetín railway station.
 //! - `stanice points` / `stanice events`: a node's data points; the event store.
 //! - `stanice plc ...`: checks and runs Structured Text.
 //! - `stanice hmi` / `stanice user`: the web HMI and its users.
 
+mod console;
 mod demo;
 mod events;
 mod examples;
 mod hmi;
 mod iec101;
+mod iec103;
 mod iec104;
 mod interrupt;
 mod plc;
@@ -49,6 +52,10 @@ enum Command {
     /// and slave.
     #[command(subcommand)]
     Iec101(iec101::Iec101Command),
+    /// IEC 60870-5-103 tools: a master for protection relays (PCVDEW6's functions) and a
+    /// relay simulator (ABB REF630).
+    #[command(subcommand)]
+    Iec103(iec103::Iec103Command),
     /// Run the railway-station demo (examples/vsetin).
     Demo(demo::DemoArgs),
     /// Run a station project: every node, or those named with --node.
@@ -93,6 +100,7 @@ fn main() -> std::process::ExitCode {
         match cli.command {
             Command::Iec104(command) => iec104::run(command).await,
             Command::Iec101(command) => iec101::run(command).await,
+            Command::Iec103(command) => iec103::run(command).await,
             Command::Demo(args) => demo::run(args).await,
             Command::Run(args) => run::run(args).await,
             Command::Points(args) => points::run(args),

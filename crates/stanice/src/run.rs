@@ -5,7 +5,6 @@
 //! standard input inject faults and hand operations (`supply-loss T1`, `selector RH2
 //! local`, `link-cut RDRT/RH`, `clear all`, `status`, `help`).
 
-use std::io::BufRead as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Duration;
@@ -426,33 +425,9 @@ async fn help_text(runtime: &Runtime) -> String {
     out.join("\n")
 }
 
-/// Standard input's lines, read on a thread of their own.
-///
-/// Not `tokio::io::stdin`: it reads on the runtime's blocking pool, and the runtime waits
-/// for that read when it shuts down, so Ctrl-C stopped the station only once Enter was
-/// pressed. A plain thread blocked in `read` does not hold up the process's exit.
-fn stdin_lines() -> tokio::sync::mpsc::Receiver<String> {
-    let (sender, receiver) = tokio::sync::mpsc::channel(16);
-    let spawned = std::thread::Builder::new()
-        .name("console".to_owned())
-        .spawn(move || {
-            for line in std::io::stdin().lock().lines() {
-                let Ok(line) = line else { break };
-                if sender.blocking_send(line).is_err() {
-                    break;
-                }
-            }
-        });
-    if let Err(error) = spawned {
-        // The station runs on without its console (the receiver sees a closed channel).
-        eprintln!("warning: no console: {error}");
-    }
-    receiver
-}
-
 /// Reads operations from standard input until it closes.
 async fn console(runtime: &Runtime, hmi: Option<&hmi::Hmi>) {
-    let mut lines = stdin_lines();
+    let mut lines = crate::console::stdin_lines();
     while let Some(line) = lines.recv().await {
         let line = line.trim();
         match line {

@@ -234,6 +234,211 @@ fn iec101_master_reads_a_slave(line_options: &[&str]) {
         .any(|object| object["type"] == "C_IC_NA_1" && object["cot"] == "actterm"));
 }
 
+/// Starts `stanice iec103 relay --pty` with its console on a pipe; returns it, its
+/// console and the path for the master.
+fn relay_on_a_pty(extra: &[&str]) -> (Background, std::process::ChildStdin, String) {
+    let mut relay = stanice();
+    relay
+        .args(["iec103", "relay", "--pty", "--address", "1"])
+        .args(extra)
+        .stdin(Stdio::piped());
+    let (mut relay, line) = start_until_line(relay, "pty: ");
+    let console = relay.0.stdin.take().unwrap();
+    (
+        relay,
+        console,
+        line.trim_start_matches("pty: ").trim().to_owned(),
+    )
+}
+
+/// The PCVDEW6 session of the thesis (spec §6) against the relay simulator, telegram by
+/// telegram: a reset to the wrong address times out; at address 1 the reset is
+/// acknowledged with ACD, class 2 brings the measurands (zero, then 1.00 x rated after an
+/// injection), class 2 before the next cycle brings no data, class 1 the identification
+/// `REF630 11.3.` after reset CU and power on.
+#[test]
+fn iec103_master_replays_the_pcvdew6_session() {
+    use std::io::Write as _;
+    // One cycle at start and the next in half an hour: the second class 2 poll must find
+    // no data, whatever the machine's speed.
+    let (_relay, _console, path) = relay_on_a_pty(&["--cycle", "1800"]);
+    let telegrams = |path: &str, address: &str, list: &str| {
+        let mut master = stanice();
+        master.args([
+            "iec103",
+            "master",
+            "--serial",
+            path,
+            "--address",
+            address,
+            "--telegrams",
+            list,
+        ]);
+        assert_success(&run_bounded(master, 30))
+    };
+    let wrong = telegrams(&path, "3", "reset-link");
+    assert!(
+        wrong.contains("ResetRemoteLink to 3: Error: dataReceiveTimeOut"),
+        "{wrong}"
+    );
+    let session = telegrams(
+        &path,
+        "1",
+        "time,reset-link,class2,class2,class1,class1,class1",
+    );
+    let lines: Vec<&str> = session.lines().collect();
+    let find = |needle: &str| {
+        lines
+            .iter()
+            .position(|line| line.contains(needle))
+            .unwrap_or_else(|| panic!("no line with {needle:?} in:\n{session}"))
+    };
+    assert!(session.contains("Send time:"), "{session}");
+    assert!(lines[find("ResetRemoteLink to 1:")].contains("fixed CON Ack  LINK state <OU,AD>= AD"));
+    let zero = find("148 Cycl.");
+    assert!(
+        lines[zero].contains(
+            "Ir 0.00, Is 0.00, It 0.00, Ure 0.00, Use 0.00, Ute 0.00, P 0.00, Q 0.00, f 0.00"
+        ),
+        "{session}"
+    );
+    assert!(
+        lines[zero + 2].contains("RequestClass2 to 1: fixed RES Nodata"),
+        "{session}"
+    );
+    let reset_cu = find("3 RCU ASDU 5");
+    assert!(
+        lines[reset_cu].contains("Comp: 2 String: >REF630 11.3.<"),
+        "{session}"
+    );
+    assert!(
+        lines[find("5 C-Strt ASDU 5")].contains(">REF630 11.3.<"),
+        "{session}"
+    );
+
+    // Injections, on a relay reporting every second: poll until a cycle carries them.
+    let (_relay, mut console, path) = relay_on_a_pty(&["--cycle", "1"]);
+    writeln!(console, "inject 1 1").unwrap();
+    let deadline = Instant::now() + Duration::from_secs(20);
+    loop {
+        let poll = telegrams(&path, "1", "reset-link,class2");
+        if poll.contains(
+            "Ir 1.00, Is 1.00, It 1.00, Ure 1.00, Use 1.00, Ute 1.00, P 0.00, Q 0.00, f 0.00",
+        ) {
+            break;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "the injection never showed: {poll}"
+        );
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    writeln!(console, "inject 3 3").unwrap();
+    let deadline = Instant::now() + Duration::from_secs(20);
+    loop {
+        let poll = telegrams(&path, "1", "reset-link,class2");
+        // Beyond the limits: clamped at 2.4 x / 1.2 x rated with OV.
+        if poll.contains("Ir 2.40 OV") && poll.contains("Ure 1.20 OV") {
+            break;
+        }
+        assert!(Instant::now() < deadline, "no overflow shown: {poll}");
+        std::thread::sleep(Duration::from_millis(200));
+    }
+}
+
+/// A general command refused while the relay is in LOCAL (exit code 1), executed in
+/// REMOTE, as JSON lines.
+#[test]
+fn iec103_command_is_refused_in_local_and_executed_in_remote() {
+    use std::io::Write as _;
+    let (_relay, mut console, path) = relay_on_a_pty(&[]);
+    writeln!(console, "local").unwrap();
+    let command = |expect_success: bool| {
+        let mut master = stanice();
+        master.args([
+            "iec103",
+            "master",
+            "--serial",
+            &path,
+            "--gi",
+            "--command",
+            "1:160:OFF",
+            "--exit-after-commands",
+            "--json",
+        ]);
+        let output = run_bounded(master, 30);
+        assert_eq!(
+            output.status.success(),
+            expect_success,
+            "{}",
+            String::from_utf8_lossy(&output.stdout)
+        );
+        String::from_utf8_lossy(&output.stdout).into_owned()
+    };
+    // The switch may still be on its way from the console: ask until it is LOCAL.
+    let deadline = Instant::now() + Duration::from_secs(20);
+    let refused = loop {
+        let mut master = stanice();
+        master.args([
+            "iec103",
+            "master",
+            "--serial",
+            &path,
+            "--gi",
+            "--exit-after-gi",
+            "--json",
+        ]);
+        let gi = assert_success(&run_bounded(master, 30));
+        if gi.contains("\"inf\":190")
+            && gi
+                .lines()
+                .any(|line| line.contains("\"inf\":190") && line.contains("\"state\":\"On\""))
+        {
+            break command(false);
+        }
+        assert!(
+            Instant::now() < deadline,
+            "the relay never went LOCAL: {gi}"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    let result: Value = refused
+        .lines()
+        .map(|line| serde_json::from_str::<Value>(line).unwrap())
+        .find(|object| object["event"] == "command")
+        .unwrap();
+    assert_eq!(result["positive"], false);
+    assert_eq!(
+        result["timed_out"], false,
+        "refused, not unanswered: {refused}"
+    );
+
+    writeln!(console, "remote").unwrap();
+    let deadline = Instant::now() + Duration::from_secs(20);
+    loop {
+        let mut master = stanice();
+        master.args([
+            "iec103",
+            "master",
+            "--serial",
+            &path,
+            "--gi",
+            "--command",
+            "1:160:OFF",
+            "--exit-after-commands",
+            "--json",
+        ]);
+        let output = run_bounded(master, 30);
+        if output.status.success() {
+            let stdout = String::from_utf8_lossy(&output.stdout);
+            assert!(stdout.contains("\"positive\":true"), "{stdout}");
+            break;
+        }
+        assert!(Instant::now() < deadline, "the relay never went REMOTE");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
 #[test]
 fn client_prints_every_point_as_json() {
     let port = free_port();

@@ -135,3 +135,50 @@ fn iec101_over_tcp_dissects_cleanly() {
     // End of initialisation, clock sync and interrogation confirmed, 4 points, termination.
     assert!(report["asdus"].as_u64().unwrap() >= 10, "{report}");
 }
+
+#[test]
+fn iec103_over_tcp_dissects_cleanly() {
+    if !peer::peers_available() {
+        return;
+    }
+    let port = free_port();
+    let capture = peer::Capture::start_ft12("iec103", port, "iec60870_5_103");
+    let _relay = Background(
+        stanice()
+            .args([
+                "iec103",
+                "relay",
+                "--listen",
+                &format!("127.0.0.1:{port}"),
+                "--cycle",
+                "1",
+                "--inject",
+                "1,1",
+            ])
+            .stdout(Stdio::null())
+            .spawn()
+            .unwrap(),
+    );
+    wait_listening(port);
+    let out = run_to_end(
+        stanice().args([
+            "iec103",
+            "master",
+            "--tcp",
+            &format!("127.0.0.1:{port}"),
+            "--gi",
+            "--clock-sync",
+            "--command",
+            "1:160:OFF",
+            "--exit-after-commands",
+            "--json",
+        ]),
+        60,
+    );
+    assert!(out.contains("\"positive\":true"), "{out}");
+    let report = capture.stop_and_check();
+    eprintln!("capture report: {report}");
+    // Identification, time sync, GI (5 indications and its end), the command and its
+    // acknowledgement at least.
+    assert!(report["asdus"].as_u64().unwrap() >= 11, "{report}");
+}

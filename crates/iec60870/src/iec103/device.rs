@@ -598,10 +598,10 @@ impl SecondaryApplication for Device {
         self.events.push_back(DeviceEvent::Reset(function));
         match function {
             PrimaryFunction::ResetRemoteLink => {
-                // Reset of the communication unit: the buffers go, the identification
-                // (and a start-up not yet reported) comes.
+                // Reset of the communication unit: the events go, the identification
+                // (and a start-up not yet reported) comes; the last measurands stay
+                // valid until the next cycle.
                 self.class1.clear();
-                self.class2 = None;
                 self.identification(Cause::RESET_CU, INF_RESET_CU);
                 match self.start_up_pending.take() {
                     Some(Cause::POWER_ON) => self.identification(Cause::POWER_ON, INF_POWER_ON),

@@ -2,7 +2,6 @@
 
 use std::ops::ControlFlow;
 use std::process::ExitCode;
-use std::time::Duration;
 
 use clap::Args;
 use iec60870::asdu::{Asdu, Cause, CommonAddress, TypeId};
@@ -146,7 +145,7 @@ pub(crate) async fn run(args: MasterArgs) -> anyhow::Result<ExitCode> {
                     balanced_lines(event, &args.address, args.json, args.verbose)
                 }
             };
-            if !print_lines(&lines) {
+            if !crate::console::print_lines(&lines) {
                 return ControlFlow::Break(());
             }
         }
@@ -155,12 +154,9 @@ pub(crate) async fn run(args: MasterArgs) -> anyhow::Result<ExitCode> {
         }
         ControlFlow::Continue(())
     });
-    let deadline = args
-        .duration
-        .map(|seconds| Duration::from_secs_f64(seconds.clamp(0.0, 1e9)));
     tokio::select! {
         result = run => { result?; }
-        () = sleep(deadline) => {}
+        () = crate::console::run_for(args.duration) => {}
         () = interrupt.recv() => {}
     }
     Ok(ExitCode::SUCCESS)
@@ -210,19 +206,5 @@ fn link_news(name: &str, address: u16, json: bool) -> Vec<String> {
             render::receipt_time(),
             name.replace('_', " ")
         )]
-    }
-}
-
-/// Writes lines to standard output; false once it is closed (a broken pipe).
-fn print_lines(lines: &[String]) -> bool {
-    use std::io::Write;
-    let mut out = std::io::stdout().lock();
-    lines.iter().all(|line| writeln!(out, "{line}").is_ok()) && out.flush().is_ok()
-}
-
-async fn sleep(duration: Option<Duration>) {
-    match duration {
-        Some(duration) => tokio::time::sleep(duration).await,
-        None => std::future::pending().await,
     }
 }

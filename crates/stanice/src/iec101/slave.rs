@@ -153,17 +153,10 @@ pub(crate) async fn run(args: SlaveArgs) -> anyhow::Result<ExitCode> {
         }
     };
     let mut interrupt = crate::interrupt::Interrupt::listen();
-    let stop = async {
-        match args.duration {
-            Some(seconds) => {
-                tokio::time::sleep(Duration::from_secs_f64(seconds.clamp(0.0, 1e9))).await
-            }
-            None => interrupt.recv().await,
-        }
-    };
     tokio::select! {
         result = serve => result?,
-        () = stop => {}
+        () = crate::console::run_for(args.duration) => {}
+        () = interrupt.recv() => {}
     }
     Ok(ExitCode::SUCCESS)
 }

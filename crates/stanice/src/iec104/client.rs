@@ -91,7 +91,7 @@ pub(crate) async fn run(args: ClientArgs) -> anyhow::Result<ExitCode> {
         } else {
             vec![render::analyser_text(&event)]
         };
-        if !print_lines(&lines) {
+        if !crate::console::print_lines(&lines) {
             // The reader went away (`| head`): stop quietly, as command-line tools do.
             break;
         }
@@ -105,13 +105,6 @@ pub(crate) async fn run(args: ClientArgs) -> anyhow::Result<ExitCode> {
     }
     client.close().await;
     Ok(exit)
-}
-
-/// Writes lines to standard output; false once it is closed (a broken pipe).
-fn print_lines(lines: &[String]) -> bool {
-    use std::io::Write;
-    let mut out = std::io::stdout().lock();
-    lines.iter().all(|line| writeln!(out, "{line}").is_ok()) && out.flush().is_ok()
 }
 
 async fn sleep_until(deadline: Option<tokio::time::Instant>) {

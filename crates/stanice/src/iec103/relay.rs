@@ -1,0 +1,249 @@
+//! `stanice iec103 relay`: the REF630 of the thesis on a serial line, a pseudo-terminal
+//! or TCP, operated from its console as a relay tester would operate the real one.
+
+use std::ops::ControlFlow;
+use std::process::ExitCode;
+use std::time::Duration;
+
+use clap::Args;
+use iec60870::ft12::io::{drive, DriveEnd, EndpointAction, LineListener, Transport};
+use iec60870::ft12::{Secondary, SecondaryConfig, SecondaryStation};
+use iec60870::iec103::{dpi_text, Cause, Device, DeviceEvent, DeviceProfile};
+use tokio::sync::mpsc;
+
+use crate::iec104::render::receipt_time;
+use crate::serial_line::LineArgs;
+
+/// The console's operations.
+const CONSOLE_HELP: &str = "\
+Console (one operation a line):
+  inject I U [P Q F]   measured values as multiples of rated (FREJA300): inject 1 1, inject 0.8 0.9
+  local | remote       the LOCAL/REMOTE switch (commands are refused in LOCAL)
+  open | close         operate the breaker by hand (reported with cause 11, local operation)
+  earth-switch on|off  operate the earth switch by hand
+  truck test|service   rack the truck out to TEST or in to SERVICE
+  fault                an earth fault: protection trip (ASDU 2 with fault number), breaker opens
+  restart              a warm restart: the next reset of the CU reports start/restart
+  status               positions, switch, clock
+  help";
+
+type Relay = SecondaryStation<Device>;
+
+/// Arguments of `stanice iec103 relay`.
+#[derive(Args, Debug)]
+pub(crate) struct RelayArgs {
+    #[command(flatten)]
+    line: LineArgs,
+    /// The relay's link and common address (SlaveAddress, 1-31 on the REF630).
+    #[arg(long, default_value_t = 1)]
+    address: u8,
+    /// Seconds between cyclic measurands (CycMeasRepTime, 1-1800).
+    #[arg(long, default_value_t = 5.0)]
+    cycle: f64,
+    /// Measured values at start, as multiples of rated: I,U (currents, voltages).
+    #[arg(long, value_delimiter = ',', value_name = "I,U")]
+    inject: Vec<f64>,
+    /// Answer "ACK" and "no data" with the single character E5 where allowed.
+    #[arg(long)]
+    single_char: bool,
+    /// Stop after this many seconds (runs until Ctrl-C otherwise).
+    #[arg(long)]
+    duration: Option<f64>,
+}
+
+/// Multiples of rated for the nine channels from the console's `I U [P Q F]`.
+fn multiples(values: &[f64]) -> Vec<f64> {
+    let get = |index: usize| values.get(index).copied().unwrap_or(0.0);
+    let (current, voltage) = (get(0), get(1));
+    vec![
+        current,
+        current,
+        current,
+        voltage,
+        voltage,
+        voltage,
+        get(2),
+        get(3),
+        get(4),
+    ]
+}
+
+pub(crate) async fn run(args: RelayArgs) -> anyhow::Result<ExitCode> {
+    if !(1.0..=1800.0).contains(&args.cycle) {
+        anyhow::bail!("--cycle must be within 1..=1800 s (CycMeasRepTime)");
+    }
+    let transport = args.line.transport()?;
+    let settings = args.line.settings()?;
+    let mut profile = DeviceProfile::ref630(args.address);
+    profile.cycle = Duration::from_secs_f64(args.cycle);
+    let now = tokio::time::Instant::now().into_std();
+    let mut device = Device::new(profile, now, chrono::Utc::now().naive_utc());
+    device.inject_rated_multiples(&multiples(&args.inject));
+    let secondary = SecondaryConfig {
+        single_character: args.single_char,
+        ..SecondaryConfig::new(args.address.into())
+    };
+    let mut station = SecondaryStation::new(settings, Secondary::new(secondary), device);
+    let (operations, mut inbox) = mpsc::unbounded_channel::<EndpointAction<Relay>>();
+    let mut console = crate::console::stdin_lines();
+    tokio::spawn(async move {
+        while let Some(line) = console.recv().await {
+            let words: Vec<String> = line.split_whitespace().map(str::to_lowercase).collect();
+            if words.is_empty() {
+                continue;
+            }
+            if words.first().map(String::as_str) == Some("help") {
+                println!("{CONSOLE_HELP}");
+                continue;
+            }
+            let operation: EndpointAction<Relay> =
+                Box::new(move |relay: &mut Relay| operate(relay, &words));
+            if operations.send(operation).is_err() {
+                break;
+            }
+        }
+    });
+    let serve = async {
+        let listener = match &transport {
+            Transport::Listen(address) => Some(LineListener::bind(address).await?),
+            _ => None,
+        };
+        if let Some(listener) = &listener {
+            println!("waiting for a master on tcp {}", listener.local_addr()?);
+        }
+        loop {
+            let line = match &listener {
+                Some(listener) => listener.accept().await?,
+                None => args.line.open(&transport).await?,
+            };
+            println!(
+                "REF630 relay simulator at address {} on {} ({settings}), CycMeasRepTime {} s; type `help`",
+                args.address, line.peer, args.cycle
+            );
+            let end = drive(line.stream, &mut station, &mut inbox, |relay| {
+                while let Some(event) = relay.app().poll_event() {
+                    println!("{} {}", receipt_time(), describe(&event));
+                }
+                ControlFlow::Continue(())
+            })
+            .await;
+            match end {
+                Ok(DriveEnd::Closed) => println!("master on {} went away", line.peer),
+                Ok(DriveEnd::Stopped) => {}
+                Err(error) => println!("line {} failed: {error}", line.peer),
+            }
+            if listener.is_none() {
+                return Ok::<(), anyhow::Error>(());
+            }
+        }
+    };
+    let mut interrupt = crate::interrupt::Interrupt::listen();
+    tokio::select! {
+        result = serve => result?,
+        () = crate::console::run_for(args.duration) => {}
+        () = interrupt.recv() => {}
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// One console operation on the relay.
+fn operate(relay: &mut Relay, words: &[String]) {
+    let device = relay.app();
+    let word = |index: usize| words.get(index).map(String::as_str).unwrap_or_default();
+    match word(0) {
+        "inject" => {
+            let values: Result<Vec<f64>, _> = words
+                .iter()
+                .skip(1)
+                .map(|word| word.parse::<f64>())
+                .collect();
+            match values {
+                Ok(values) if !values.is_empty() => {
+                    device.inject_rated_multiples(&multiples(&values));
+                    println!("injected {values:?} x rated; reported at the next cycle");
+                }
+                _ => println!(
+                    "inject: give multiples of rated, e.g. `inject 1 1` or `inject 0.8 0.9`"
+                ),
+            }
+        }
+        "local" => device.set_local(true),
+        "remote" => device.set_local(false),
+        "open" | "close" => {
+            let dpi = if word(0) == "close" { 2 } else { 1 };
+            device.set_indication(1, 160, dpi, Cause::LOCAL_OPERATION);
+        }
+        "earth-switch" => {
+            let dpi = if word(1) == "on" { 2 } else { 1 };
+            device.set_indication(1, 168, dpi, Cause::LOCAL_OPERATION);
+        }
+        "truck" => {
+            let service = word(1) == "service";
+            device.set_indication(5, 10, if service { 2 } else { 1 }, Cause::LOCAL_OPERATION);
+            device.set_indication(5, 9, if service { 1 } else { 2 }, Cause::LOCAL_OPERATION);
+        }
+        "fault" => {
+            let fan = device.earth_fault();
+            println!("earth fault number {fan}: trip, breaker open");
+        }
+        "restart" => {
+            device.restart();
+            println!("warm restart: reported at the next reset of the communication unit");
+        }
+        "status" => {
+            let position = |fun, inf| device.indication(fun, inf).map(dpi_text).unwrap_or("?");
+            println!(
+                "breaker {}, earth switch {}, truck TEST {} SERVICE {}, switch {}, clock {} ({})",
+                position(1, 160),
+                position(1, 168),
+                position(5, 9),
+                position(5, 10),
+                if device.is_local() { "LOCAL" } else { "REMOTE" },
+                device.clock().format("%Y-%m-%d %H:%M:%S%.3f"),
+                if device.is_synchronised() {
+                    "synchronised"
+                } else {
+                    "not synchronised: time tags IV"
+                },
+            );
+        }
+        other => println!("unknown operation {other:?}; type `help`"),
+    }
+}
+
+fn describe(event: &DeviceEvent) -> String {
+    match event {
+        DeviceEvent::Reset(function) => format!("master: {function:?}"),
+        DeviceEvent::Interrogated { scn } => format!("general interrogation, scan number {scn}"),
+        DeviceEvent::ClockSynchronised { time } => {
+            format!(
+                "clock synchronised to {}",
+                time.format("%Y-%m-%d %H:%M:%S%.3f")
+            )
+        }
+        DeviceEvent::Command {
+            fun,
+            inf,
+            on,
+            accepted,
+            reason,
+        } => format!(
+            "general command FUN {fun} INF {inf} {}: {}",
+            if *on { "ON" } else { "OFF" },
+            if *accepted {
+                "accepted".to_owned()
+            } else {
+                format!("refused, {reason}")
+            }
+        ),
+        DeviceEvent::Changed {
+            fun,
+            inf,
+            dpi,
+            cause,
+        } => {
+            format!("FUN {fun} INF {inf} -> {} ({cause})", dpi_text(*dpi))
+        }
+        DeviceEvent::Ignored(bytes) => format!("ignored {} octets: {bytes:02X?}", bytes.len()),
+    }
+}
