@@ -28,6 +28,7 @@
 use std::time::{Duration, Instant};
 
 use iec60870::ft12::*;
+use iec60870::iec103::{Asdu, Body, Cause, Measurand, INF_MEASURANDS_II};
 
 const RELAYS: u16 = 31;
 const BAUD: u32 = 19200;
@@ -50,13 +51,24 @@ impl SecondaryApplication for Measurands {
         None
     }
     fn class2(&mut self) -> Option<Vec<u8>> {
-        let mut asdu = vec![0x09, 0x09, 0x02, self.address, 0x01, 0x94];
-        for value in [
-            0x3558u16, 0x3558, 0x3558, 0x6AA8, 0x6AA8, 0x6AA8, 0, 0, 0x6AA8,
-        ] {
-            asdu.extend_from_slice(&value.to_le_bytes());
-        }
-        Some(asdu)
+        // Measurands II as the REF630 sends them: 1.0 x rated current, 1.0 x rated voltage.
+        let values = [2.4, 2.4, 2.4, 1.2, 1.2, 1.2, 2.4, 2.4, 1.2]
+            .iter()
+            .enumerate()
+            .map(|(index, limit)| {
+                Measurand::from_physical(if index < 6 { 1.0 } else { 0.0 }, *limit)
+            })
+            .collect();
+        Asdu::new(
+            9,
+            Cause::CYCLIC,
+            self.address,
+            1,
+            INF_MEASURANDS_II,
+            Body::Measurands(values),
+        )
+        .to_bytes()
+        .ok()
     }
 }
 

@@ -687,3 +687,83 @@ mod over_a_pseudo_terminal {
         assert!(matches!(breaker_open.body, Body::TimeTagged { dpi: 1, .. }));
     }
 }
+
+/// The link-layer frames of the spec's session (§6, derived frames for link address 1),
+/// octet for octet, against the REF630 device behind an FT1.2 secondary.
+#[test]
+fn the_sessions_frames_octet_for_octet() {
+    use iec60870::ft12::{AddressSize, Deframer, Frame, Secondary, SecondaryConfig};
+    let now = std::time::Instant::now();
+    let time = chrono::NaiveDate::from_ymd_opt(2017, 4, 7)
+        .unwrap()
+        .and_hms_opt(8, 28, 32)
+        .unwrap();
+    let mut device = Device::new(DeviceProfile::ref630(1), now, time);
+    iec60870::ft12::TimedApplication::handle_timeout(&mut device, now);
+    let mut secondary = Secondary::new(SecondaryConfig::new(1));
+    let mut exchange = |request: &[u8]| -> Vec<u8> {
+        let mut deframer = Deframer::new(AddressSize::One);
+        deframer.push(request);
+        let frame: Frame = deframer.next_frame().unwrap().unwrap();
+        secondary
+            .handle(&frame, &mut device)
+            .map(|answer| answer.to_bytes(AddressSize::One).unwrap())
+            .unwrap_or_default()
+    };
+    // Reset remote link: ACK with ACD (the identification waits in class 1).
+    assert_eq!(
+        exchange(&[0x10, 0x40, 0x01, 0x41, 0x16]),
+        [0x10, 0x20, 0x01, 0x21, 0x16]
+    );
+    // Request link status: status of link, ACD still set.
+    assert_eq!(
+        exchange(&[0x10, 0x49, 0x01, 0x4A, 0x16]),
+        [0x10, 0x2B, 0x01, 0x2C, 0x16]
+    );
+    // Class 2, FCB 1: the measurands of the start-up cycle, nothing injected.
+    let mut measurands = vec![
+        0x68, 0x1A, 0x1A, 0x68, 0x28, 0x01, 0x09, 0x89, 0x02, 0x01, 0x01, 0x94,
+    ];
+    measurands.extend_from_slice(&[0; 18]);
+    let sum = measurands[4..]
+        .iter()
+        .fold(0u8, |sum, octet| sum.wrapping_add(*octet));
+    measurands.extend_from_slice(&[sum, 0x16]);
+    assert_eq!(exchange(&[0x10, 0x7B, 0x01, 0x7C, 0x16]), measurands);
+    // Class 2, FCB 0, before the next cycle: no data (ACD set).
+    assert_eq!(
+        exchange(&[0x10, 0x5B, 0x01, 0x5C, 0x16]),
+        [0x10, 0x29, 0x01, 0x2A, 0x16]
+    );
+    // The same frame again (our answer lost): the same answer, not a new poll.
+    assert_eq!(
+        exchange(&[0x10, 0x5B, 0x01, 0x5C, 0x16]),
+        [0x10, 0x29, 0x01, 0x2A, 0x16]
+    );
+    // Class 1, FCB 1: identification after reset CU, ACD set (power on follows).
+    let mut identification = vec![
+        0x68, 0x15, 0x15, 0x68, 0x28, 0x01, 0x05, 0x81, 0x04, 0x01, 0xA0, 0x03, 0x02,
+    ];
+    identification.extend_from_slice(b"REF630 11.3.");
+    let sum = identification[4..]
+        .iter()
+        .fold(0u8, |sum, octet| sum.wrapping_add(*octet));
+    identification.extend_from_slice(&[sum, 0x16]);
+    assert_eq!(exchange(&[0x10, 0x7A, 0x01, 0x7B, 0x16]), identification);
+    // Class 1, FCB 0: power on, then nothing waits (ACD clear).
+    let power_on = exchange(&[0x10, 0x5A, 0x01, 0x5B, 0x16]);
+    assert_eq!(
+        &power_on[..13],
+        [0x68, 0x15, 0x15, 0x68, 0x08, 0x01, 0x05, 0x81, 0x06, 0x01, 0xA0, 0x05, 0x02]
+    );
+    // Class 1, FCB 1: no data, fixed frame 10 09 01 0A 16 of the spec.
+    assert_eq!(
+        exchange(&[0x10, 0x7A, 0x01, 0x7B, 0x16]),
+        [0x10, 0x09, 0x01, 0x0A, 0x16]
+    );
+    // Reset FCB: ACK with ACD (the identification with COT 3 waits).
+    assert_eq!(
+        exchange(&[0x10, 0x47, 0x01, 0x48, 0x16]),
+        [0x10, 0x20, 0x01, 0x21, 0x16]
+    );
+}
