@@ -5,7 +5,9 @@
     clippy::unwrap_used,
     clippy::expect_used,
     clippy::panic,
-    clippy::indexing_slicing
+    clippy::indexing_slicing,
+    // Instant::now only as the base of the tests' own clock.
+    clippy::disallowed_methods
 )]
 
 use iec60870::iec103::*;
