@@ -554,6 +554,7 @@ mod over_a_pseudo_terminal {
             StartUp {
                 clock_sync: false,
                 interrogate: true,
+                disturbances: true,
             },
             Box::new(wall_clock),
             now,
@@ -563,6 +564,7 @@ mod over_a_pseudo_terminal {
         let (_keep, mut inbox) = mpsc::unbounded_channel::<EndpointAction<Master>>();
         let mut received: Vec<Asdu> = Vec::new();
         let mut results = Vec::new();
+        let mut records: Vec<Box<DisturbanceRecord>> = Vec::new();
         let mut phase = 0;
         let run = drive(master_line.stream, &mut master, &mut inbox, |master| {
             while let Some(event) = master.poll_event() {
@@ -573,6 +575,7 @@ mod over_a_pseudo_terminal {
                         timed_out,
                         ..
                     } => results.push((positive, timed_out)),
+                    MasterEvent::Disturbance { record, .. } => records.push(record),
                     _ => {}
                 }
             }
@@ -625,8 +628,12 @@ mod over_a_pseudo_terminal {
                     asdu.header.inf == 160 && asdu.header.cause == Cause::REMOTE_OPERATION
                 }) =>
                 {
-                    return ControlFlow::Break(());
+                    let _ = relay_actions.send(Box::new(|relay: &mut Relay| {
+                        relay.app().earth_fault();
+                    }));
+                    phase = 5;
                 }
+                5 if records.len() == 1 => return ControlFlow::Break(()),
                 _ => {}
             }
             ControlFlow::Continue(())
@@ -687,6 +694,41 @@ mod over_a_pseudo_terminal {
             .find(|asdu| asdu.header.inf == 160 && asdu.header.cause == Cause::REMOTE_OPERATION)
             .unwrap();
         assert!(matches!(breaker_open.body, Body::TimeTagged { dpi: 1, .. }));
+
+        // The earth fault's record, uploaded: four channels of 300 samples at 1 kHz, the
+        // fault current five times rated in L1, the trip and the breaker's opening tagged.
+        let record = &records[0];
+        assert_eq!(record.fan, 1);
+        assert_eq!(record.interval_us, 1000);
+        assert_eq!(record.channels.len(), 4);
+        assert!(record
+            .channels
+            .iter()
+            .all(|channel| channel.samples.len() == 300));
+        let peak = |acc: u8, range: std::ops::Range<usize>| {
+            let channel = record
+                .channels
+                .iter()
+                .find(|channel| channel.acc == acc)
+                .unwrap();
+            channel.samples[range]
+                .iter()
+                .map(|sdv| channel.primary(*sdv).abs())
+                .fold(0.0, f64::max)
+        };
+        assert!(
+            (peak(1, 120..200) - 500.0 * 2f64.sqrt()).abs() < 10.0,
+            "fault current peak"
+        );
+        assert!(peak(1, 230..300) < 1.0, "breaker open");
+        assert!(record
+            .tags
+            .iter()
+            .any(|tag| tag.tag.fun == 160 && tag.tag.inf == 92 && tag.tag.dpi == 2));
+        assert!(record
+            .tags
+            .iter()
+            .any(|tag| tag.tag.inf == 160 && tag.tag.dpi == 1));
     }
 }
 

@@ -12,6 +12,7 @@
 //! - `stanice plc ...`: checks and runs Structured Text.
 //! - `stanice hmi` / `stanice user`: the web HMI and its users.
 
+mod comtrade;
 mod console;
 mod demo;
 mod events;

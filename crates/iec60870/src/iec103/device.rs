@@ -11,6 +11,9 @@ use super::asdu::{
     Asdu, Body, Direction, FUN_GLOBAL, INF_POWER_ON, INF_RESET_CU, INF_RESET_FCB, INF_START_RESTART,
 };
 use super::cause::Cause;
+use super::disturbance::{
+    DisturbanceRecord, DisturbanceSender, RecordChannel, RecordTag, SOF_TRIP,
+};
 use super::measurand::Measurand;
 use crate::ft12::{PrimaryFunction, SecondaryApplication, TimedApplication};
 use crate::time::{Cp32Time2a, Cp56Time2a};
@@ -246,6 +249,7 @@ pub struct Device {
     start_up_pending: Option<Cause>,
     fault_number: u16,
     operations: Vec<PendingOperation>,
+    disturbances: DisturbanceSender,
     events: VecDeque<DeviceEvent>,
 }
 
@@ -271,6 +275,7 @@ impl Device {
             start_up_pending: Some(Cause::POWER_ON),
             fault_number: 0,
             operations: Vec::new(),
+            disturbances: DisturbanceSender::default(),
             events: VecDeque::new(),
         }
     }
@@ -391,7 +396,8 @@ impl Device {
     }
 
     /// An earth fault: the protection trips (ASDU 2 with relative time and the new
-    /// fault number, then back to OFF) and the breaker opens.
+    /// fault number, then back to OFF), the breaker opens, and a disturbance record of
+    /// the phase and earth currents is kept and announced (ASDU 23).
     pub fn earth_fault(&mut self) -> u16 {
         self.fault_number = self.fault_number.wrapping_add(1);
         let fan = self.fault_number;
@@ -419,7 +425,84 @@ impl Device {
             }
         }
         self.set_indication(1, 160, 1, Cause::SPONTANEOUS);
+        let record = self.fault_record(fan);
+        let list =
+            self.disturbances
+                .record(record, self.profile.address, self.profile.function_type);
+        self.push_class1(&list);
         fan
+    }
+
+    /// The record of an earth fault on phase L1: 1 kHz for 0.3 s; 0.1 s of load current
+    /// before the fault, 0.12 s of fault (five times rated in L1 and the earth current),
+    /// then the breaker has opened. Tags: the trip at 40 ms into the fault and its reset,
+    /// the breaker's opening.
+    fn fault_record(&self, fan: u16) -> DisturbanceRecord {
+        const SAMPLES: usize = 300;
+        const FAULT_START: usize = 100;
+        const BREAKER_OPEN: usize = 220;
+        // One secondary ampere is 100 disturbance values (RFA), the CT 100 A / 1 A.
+        const RFA: f32 = 100.0;
+        let load = self.values.first().copied().unwrap_or(0.0);
+        let rated = self
+            .profile
+            .measurands
+            .first()
+            .map_or(100.0, |channel| channel.rated);
+        let amplitude = |primary: f64| primary / rated * f64::from(RFA) * std::f64::consts::SQRT_2;
+        let phase_shift = [0.0, -2.0 / 3.0, 2.0 / 3.0];
+        let mut channels: Vec<RecordChannel> = (0..4u8)
+            .map(|index| RecordChannel {
+                acc: index + 1,
+                rpv: rated as f32,
+                rsv: 1.0,
+                rfa: RFA,
+                samples: Vec::with_capacity(SAMPLES),
+            })
+            .collect();
+        for sample in 0..SAMPLES {
+            let t = sample as f64 / 1000.0;
+            let mut sum = 0.0;
+            for (phase, shift) in phase_shift.iter().enumerate() {
+                let current = match sample {
+                    s if s >= BREAKER_OPEN => 0.0,
+                    s if s >= FAULT_START && phase == 0 => 5.0 * rated,
+                    _ => load,
+                };
+                let value = amplitude(current)
+                    * (2.0 * std::f64::consts::PI * (50.0 * t + shift / 2.0)).sin();
+                sum += value;
+                if let Some(channel) = channels.get_mut(phase) {
+                    channel
+                        .samples
+                        .push(value.round().clamp(-32768.0, 32767.0) as i16);
+                }
+            }
+            if let Some(earth) = channels.get_mut(3) {
+                earth
+                    .samples
+                    .push(sum.round().clamp(-32768.0, 32767.0) as i16);
+            }
+        }
+        let tag = |position: usize, fun: u8, inf: u8, dpi: u8| RecordTag {
+            position: u16::try_from(position).unwrap_or(u16::MAX),
+            tag: super::asdu::DisturbanceTag { fun, inf, dpi },
+        };
+        let (fun, inf) = self.profile.earth_fault;
+        let now = self.clock();
+        DisturbanceRecord {
+            fan,
+            sof: SOF_TRIP,
+            recorded_at: now,
+            first_sample: now - chrono::Duration::milliseconds(FAULT_START as i64),
+            interval_us: 1000,
+            channels,
+            tags: vec![
+                tag(FAULT_START + 40, fun, inf, 2),
+                tag(BREAKER_OPEN, 1, 160, 1),
+                tag(BREAKER_OPEN + 10, fun, inf, 1),
+            ],
+        }
     }
 
     fn index(&self, fun: u8, inf: u8) -> Option<usize> {
@@ -632,6 +715,11 @@ impl SecondaryApplication for Device {
             Body::GiInitiation { scn } if !broadcast => self.general_interrogation(scn),
             Body::GeneralCommand { dco, rii } if !broadcast => {
                 self.general_command(asdu.header.fun, asdu.header.inf, dco, rii)
+            }
+            Body::DisturbanceOrder { .. } | Body::DisturbanceAck { .. } if !broadcast => {
+                for answer in self.disturbances.handle(&asdu, self.profile.address) {
+                    self.push_class1(&answer);
+                }
             }
             _ => self.events.push_back(DeviceEvent::Ignored(bytes.to_vec())),
         }

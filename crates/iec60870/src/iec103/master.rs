@@ -11,6 +11,7 @@ use chrono::NaiveDateTime;
 
 use super::asdu::{Asdu, Body, DecodeError, Direction, FUN_GLOBAL};
 use super::cause::Cause;
+use super::disturbance::{DisturbanceReceiver, DisturbanceRecord, ReceiverStep, TOO_REQUEST_LIST};
 use crate::ft12::{Answer, LineEndpoint, LineSettings, Primary, PrimaryError, PrimaryEvent};
 use crate::time::Cp56Time2a;
 
@@ -21,6 +22,9 @@ pub struct StartUp {
     pub clock_sync: bool,
     /// Start a general interrogation (ASDU 7).
     pub interrogate: bool,
+    /// Upload the disturbance records a device announces (ASDU 23) and ask for its
+    /// list at start.
+    pub disturbances: bool,
 }
 
 /// What the master saw.
@@ -65,6 +69,13 @@ pub enum MasterEvent {
         /// No acknowledgement within the command timeout.
         timed_out: bool,
     },
+    /// A disturbance record uploaded completely.
+    Disturbance {
+        /// The device.
+        address: u16,
+        /// The record.
+        record: Box<DisturbanceRecord>,
+    },
     /// Everything on the link layer: exchanges, timeouts, link up and down, errors.
     Link(PrimaryEvent),
 }
@@ -90,6 +101,7 @@ pub struct Master {
     return_information: u8,
     command_timeout: Duration,
     commands: Vec<PendingCommand>,
+    disturbances: std::collections::HashMap<u16, DisturbanceReceiver>,
     events: VecDeque<MasterEvent>,
     now: Instant,
 }
@@ -114,6 +126,7 @@ impl Master {
             return_information: 0,
             command_timeout: Duration::from_secs(10),
             commands: Vec::new(),
+            disturbances: std::collections::HashMap::new(),
             events: VecDeque::new(),
             now,
         }
@@ -262,6 +275,22 @@ impl Master {
             if self.start_up.interrogate {
                 let _ = self.general_interrogation(device);
             }
+            if self.start_up.disturbances {
+                let list = Asdu::new(
+                    24,
+                    Cause::DISTURBANCE_DATA,
+                    device,
+                    FUN_GLOBAL,
+                    0,
+                    Body::DisturbanceOrder {
+                        too: TOO_REQUEST_LIST,
+                        tov: 0,
+                        fan: 0,
+                        acc: 0,
+                    },
+                );
+                let _ = self.send_asdu(device, &list);
+            }
         }
     }
 
@@ -306,6 +335,28 @@ impl Master {
                 return;
             }
             _ => {}
+        }
+        if self.start_up.disturbances && (23..=31).contains(&asdu.header.type_id) {
+            let reference = (self.clock)();
+            let step = self
+                .disturbances
+                .entry(address)
+                .or_default()
+                .handle(&asdu, reference);
+            self.events.push_back(MasterEvent::Asdu { address, asdu });
+            let reply = match step {
+                ReceiverStep::Wait => return,
+                ReceiverStep::Send(reply) => reply,
+                ReceiverStep::Complete(record, reply) => {
+                    self.events
+                        .push_back(MasterEvent::Disturbance { address, record });
+                    reply
+                }
+            };
+            if let Ok(bytes) = reply.to_bytes() {
+                let _ = self.primary.send(address, bytes);
+            }
+            return;
         }
         self.events.push_back(MasterEvent::Asdu { address, asdu });
     }

@@ -8,6 +8,7 @@
 //! | `cause` | [`Cause`]: the 103 causes of transmission |
 //! | `measurand` | [`Measurand`]: the 13-bit fraction of a configured limit with OV and ER |
 //! | `device` | [`Device`]: a protection device's side (identification on reset, GI, cyclic measurands in class 2, events and command acknowledgements in class 1, LOCAL/REMOTE, an unsynchronised clock, faults) for a [`DeviceProfile`] such as [`DeviceProfile::ref630`]; the relay simulator |
+//! | `disturbance` | transmission of disturbance data (ASDU 23-31): [`DisturbanceRecord`], the device's [`DisturbanceSender`] and the master's [`DisturbanceReceiver`] |
 //! | `master` | [`Master`]: the control system's side over an [`crate::ft12::Primary`]: start-up (clock sync, GI), general commands followed to their acknowledgement, every ASDU decoded |
 //!
 //! # Data flow
@@ -45,6 +46,7 @@
 mod asdu;
 mod cause;
 mod device;
+mod disturbance;
 mod master;
 mod measurand;
 
@@ -55,5 +57,11 @@ pub use asdu::{
 };
 pub use cause::Cause;
 pub use device::{CommandPoint, Device, DeviceEvent, DeviceProfile, Indication, MeasurandChannel};
+pub use disturbance::{
+    DisturbanceReceiver, DisturbanceRecord, DisturbanceSender, ReceiverStep, RecordChannel,
+    RecordTag, SOF_TRANSMITTED, SOF_TRIP, TOO_ABORT_DATA, TOO_CHANNEL_RECEIVED, TOO_DATA_RECEIVED,
+    TOO_END_OF_CHANNEL, TOO_END_OF_DATA, TOO_END_OF_TAGS, TOO_REQUEST_CHANNEL, TOO_REQUEST_DATA,
+    TOO_REQUEST_LIST, TOO_REQUEST_TAGS, TOO_SELECT_FAULT, TOO_TAGS_RECEIVED, TOV_INSTANTANEOUS,
+};
 pub use master::{Clock, Master, MasterEvent, StartUp};
 pub use measurand::Measurand;

@@ -116,6 +116,16 @@ pub(crate) struct MasterArgs {
     /// class1 (1), class2 (2), gi (g), time (i).
     #[arg(long, value_delimiter = ',', conflicts_with_all = ["gi", "clock_sync", "command"])]
     telegrams: Vec<Telegram>,
+    /// Upload every disturbance record the devices announce (ASDU 23-31) and write it as
+    /// COMTRADE (.cfg + .dat, ASCII) into DIR.
+    #[arg(long, value_name = "DIR")]
+    disturbance_dir: Option<std::path::PathBuf>,
+    /// The COMTRADE revision of the written records.
+    #[arg(long, value_enum, default_value = "1999", requires = "disturbance_dir")]
+    comtrade: crate::comtrade::Revision,
+    /// Stop once this many disturbance records are written.
+    #[arg(long, value_name = "N", requires = "disturbance_dir")]
+    exit_after_records: Option<usize>,
     /// Stop after this many seconds (runs until Ctrl-C otherwise).
     #[arg(long)]
     duration: Option<f64>,
@@ -153,6 +163,7 @@ struct Progress {
     generic_read_sent: bool,
     telegrams: VecDeque<Telegram>,
     telegram_open: bool,
+    records: usize,
 }
 
 pub(crate) async fn run(args: MasterArgs) -> anyhow::Result<ExitCode> {
@@ -175,6 +186,7 @@ pub(crate) async fn run(args: MasterArgs) -> anyhow::Result<ExitCode> {
         StartUp {
             clock_sync: args.clock_sync,
             interrogate: args.gi,
+            disturbances: args.disturbance_dir.is_some(),
         },
         Box::new(|| chrono::Utc::now().naive_utc()),
         now,
@@ -200,6 +212,7 @@ pub(crate) async fn run(args: MasterArgs) -> anyhow::Result<ExitCode> {
         generic_read_sent: false,
         telegrams: args.telegrams.iter().copied().collect(),
         telegram_open: false,
+        records: 0,
     };
     let mut interrupt = crate::interrupt::Interrupt::listen();
     let (_keep, mut actions) = mpsc::unbounded_channel();
@@ -276,6 +289,10 @@ fn observe(
                     )]
                 }
             }
+            MasterEvent::Disturbance { address, record } => {
+                progress.records += 1;
+                disturbance_lines(*address, record, args)
+            }
             MasterEvent::Link(event) => link_lines(event, args, progress),
         };
         if !crate::console::print_lines(&lines) {
@@ -323,6 +340,12 @@ fn observe(
             .address
             .iter()
             .all(|address| progress.gi_done.contains(&u16::from(*address)))
+    {
+        return ControlFlow::Break(());
+    }
+    if args
+        .exit_after_records
+        .is_some_and(|count| progress.records >= count)
     {
         return ControlFlow::Break(());
     }
@@ -388,6 +411,52 @@ fn next_telegram(master: &mut Master, first: u8, progress: &mut Progress) -> Con
         Err(error) => {
             eprintln!("cannot send {telegram:?}: {error}");
             ControlFlow::Break(())
+        }
+    }
+}
+
+/// Writes an uploaded record as COMTRADE and says where.
+fn disturbance_lines(
+    address: u16,
+    record: &iec60870::iec103::DisturbanceRecord,
+    args: &MasterArgs,
+) -> Vec<String> {
+    let Some(directory) = &args.disturbance_dir else {
+        return Vec::new();
+    };
+    let name = format!("device{address}_fault{}", record.fan);
+    let written = crate::comtrade::write(
+        directory,
+        &name,
+        record,
+        "stanice iec103 master",
+        &format!("103 device {address}"),
+        args.comtrade,
+    );
+    let summary = format!(
+        "disturbance record FAN {} of device {address}: {} channels x {} samples at {} us, {} tags",
+        record.fan,
+        record.channels.len(),
+        record.elements(),
+        record.interval_us,
+        record.tags.len()
+    );
+    match written {
+        Ok((cfg, dat)) if args.json => vec![serde_json::json!({
+            "event": "disturbance", "address": address, "fan": record.fan,
+            "channels": record.channels.len(), "samples": record.elements(),
+            "cfg": cfg.display().to_string(), "dat": dat.display().to_string(),
+        })
+        .to_string()],
+        Ok((cfg, dat)) => vec![format!(
+            "{} {summary} -> {} + {}",
+            receipt_time(),
+            cfg.display(),
+            dat.display()
+        )],
+        Err(error) => {
+            eprintln!("{summary}: {error:#}");
+            Vec::new()
         }
     }
 }
