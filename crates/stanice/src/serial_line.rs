@@ -97,3 +97,37 @@ pub(crate) fn millis(
     }
     Ok(Duration::from_millis(value))
 }
+
+/// How a master polls its line: the options shared by `stanice iec101 master` and
+/// `stanice iec103 master`.
+#[derive(Args, Clone, Debug)]
+pub(crate) struct PollingArgs {
+    /// Milliseconds to wait for an answer after a request has left the line.
+    #[arg(long, default_value_t = 500)]
+    pub(crate) timeout: u64,
+    /// Repeats of an unanswered request.
+    #[arg(long, default_value_t = 2)]
+    pub(crate) retries: u8,
+    /// Milliseconds between two class 2 polls of a device.
+    #[arg(long, default_value_t = 100)]
+    pub(crate) poll_interval: u64,
+    /// Also print the link layer: every request and answer, timeouts, line errors.
+    #[arg(long)]
+    pub(crate) verbose: bool,
+}
+
+impl PollingArgs {
+    /// The primary's settings for a line.
+    pub(crate) fn primary_config(
+        &self,
+        line: iec60870::ft12::LineSettings,
+    ) -> anyhow::Result<iec60870::ft12::PrimaryConfig> {
+        Ok(iec60870::ft12::PrimaryConfig {
+            line,
+            response_timeout: millis(self.timeout, 5..=60_000, "--timeout")?,
+            retries: self.retries,
+            poll_interval: millis(self.poll_interval, 0..=3_600_000, "--poll-interval")?,
+            ..iec60870::ft12::PrimaryConfig::default()
+        })
+    }
+}

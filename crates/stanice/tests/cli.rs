@@ -352,56 +352,33 @@ fn iec103_master_replays_the_pcvdew6_session() {
 fn iec103_command_is_refused_in_local_and_executed_in_remote() {
     use std::io::Write as _;
     let (_relay, mut console, path) = relay_on_a_pty(&[]);
-    writeln!(console, "local").unwrap();
-    let command = |expect_success: bool| {
+    let master = |extra: &[&str]| {
         let mut master = stanice();
-        master.args([
-            "iec103",
-            "master",
-            "--serial",
-            &path,
-            "--gi",
-            "--command",
-            "1:160:OFF",
-            "--exit-after-commands",
-            "--json",
-        ]);
-        let output = run_bounded(master, 30);
-        assert_eq!(
-            output.status.success(),
-            expect_success,
-            "{}",
-            String::from_utf8_lossy(&output.stdout)
-        );
-        String::from_utf8_lossy(&output.stdout).into_owned()
+        master
+            .args(["iec103", "master", "--serial", &path, "--gi", "--json"])
+            .args(extra);
+        run_bounded(master, 30)
     };
-    // The switch may still be on its way from the console: ask until it is LOCAL.
-    let deadline = Instant::now() + Duration::from_secs(20);
-    let refused = loop {
-        let mut master = stanice();
-        master.args([
-            "iec103",
-            "master",
-            "--serial",
-            &path,
-            "--gi",
-            "--exit-after-gi",
-            "--json",
-        ]);
-        let gi = assert_success(&run_bounded(master, 30));
-        if gi.contains("\"inf\":190")
-            && gi
-                .lines()
-                .any(|line| line.contains("\"inf\":190") && line.contains("\"state\":\"On\""))
-        {
-            break command(false);
+    let command = || master(&["--command", "1:160:OFF", "--exit-after-commands"]);
+    let switch_is = |state: &str| {
+        let gi = assert_success(&master(&["--exit-after-gi"]));
+        gi.lines().any(|line| {
+            line.contains("\"inf\":190") && line.contains(&format!("\"state\":\"{state}\""))
+        })
+    };
+    // The console's operation takes effect on its own time: ask until the switch shows it.
+    let wait_for_switch = |state: &str| {
+        let deadline = Instant::now() + Duration::from_secs(20);
+        while !switch_is(state) {
+            assert!(Instant::now() < deadline, "the switch never showed {state}");
+            std::thread::sleep(Duration::from_millis(100));
         }
-        assert!(
-            Instant::now() < deadline,
-            "the relay never went LOCAL: {gi}"
-        );
-        std::thread::sleep(Duration::from_millis(100));
     };
+    writeln!(console, "local").unwrap();
+    wait_for_switch("On");
+    let refused = command();
+    assert!(!refused.status.success(), "a refused command fails the run");
+    let refused = String::from_utf8_lossy(&refused.stdout).into_owned();
     let result: Value = refused
         .lines()
         .map(|line| serde_json::from_str::<Value>(line).unwrap())
@@ -414,29 +391,9 @@ fn iec103_command_is_refused_in_local_and_executed_in_remote() {
     );
 
     writeln!(console, "remote").unwrap();
-    let deadline = Instant::now() + Duration::from_secs(20);
-    loop {
-        let mut master = stanice();
-        master.args([
-            "iec103",
-            "master",
-            "--serial",
-            &path,
-            "--gi",
-            "--command",
-            "1:160:OFF",
-            "--exit-after-commands",
-            "--json",
-        ]);
-        let output = run_bounded(master, 30);
-        if output.status.success() {
-            let stdout = String::from_utf8_lossy(&output.stdout);
-            assert!(stdout.contains("\"positive\":true"), "{stdout}");
-            break;
-        }
-        assert!(Instant::now() < deadline, "the relay never went REMOTE");
-        std::thread::sleep(Duration::from_millis(100));
-    }
+    wait_for_switch("Off");
+    let executed = assert_success(&command());
+    assert!(executed.contains("\"positive\":true"), "{executed}");
 }
 
 /// An earth fault on the relay simulator: the master uploads its disturbance record

@@ -144,15 +144,7 @@ impl TimedApplication for Slave {
     }
 
     fn poll_wake(&mut self, context: &mut Context<'_>) -> Poll<()> {
-        if self.core.awaits_commands() && self.core.poll_commands(context).is_ready() {
-            return Poll::Ready(());
-        }
-        let version = self.changes.version();
-        if version != self.seen {
-            self.seen = version;
-            return Poll::Ready(());
-        }
-        self.changes.poll_changed(self.seen, context)
+        poll_outstation(&mut self.core, &self.changes, &mut self.seen, context)
     }
 }
 
@@ -259,14 +251,25 @@ impl LineEndpoint for BalancedSlave {
     }
 
     fn poll_wake(&mut self, context: &mut Context<'_>) -> Poll<()> {
-        if self.core.awaits_commands() && self.core.poll_commands(context).is_ready() {
-            return Poll::Ready(());
-        }
-        let version = self.changes.version();
-        if version != self.seen {
-            self.seen = version;
-            return Poll::Ready(());
-        }
-        self.changes.poll_changed(self.seen, context)
+        poll_outstation(&mut self.core, &self.changes, &mut self.seen, context)
     }
+}
+
+/// Ready when a command's outcome came in or the redundancy group changed (an event
+/// queued) since `seen`; registers the context's waker with both otherwise.
+fn poll_outstation(
+    core: &mut LinkCore,
+    changes: &GroupChanges,
+    seen: &mut u64,
+    context: &mut Context<'_>,
+) -> Poll<()> {
+    if core.awaits_commands() && core.poll_commands(context).is_ready() {
+        return Poll::Ready(());
+    }
+    let version = changes.version();
+    if version != *seen {
+        *seen = version;
+        return Poll::Ready(());
+    }
+    changes.poll_changed(*seen, context)
 }

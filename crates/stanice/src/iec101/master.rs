@@ -14,7 +14,7 @@ use tokio::sync::mpsc;
 
 use super::FieldSizes;
 use crate::iec104::render;
-use crate::serial_line::{millis, LineArgs};
+use crate::serial_line::{LineArgs, PollingArgs};
 
 /// Arguments of `stanice iec101 master`.
 #[derive(Args, Debug)]
@@ -42,18 +42,8 @@ pub(crate) struct MasterArgs {
     /// Stop when the general interrogation has terminated (with --gi), at every station.
     #[arg(long, requires = "gi")]
     exit_after_gi: bool,
-    /// Milliseconds to wait for an answer after a request has left the line.
-    #[arg(long, default_value_t = 500)]
-    timeout: u64,
-    /// Repeats of an unanswered request.
-    #[arg(long, default_value_t = 2)]
-    retries: u8,
-    /// Milliseconds between two class 2 polls of an outstation.
-    #[arg(long, default_value_t = 100)]
-    poll_interval: u64,
-    /// Also print the link layer: every request and answer, timeouts, line errors.
-    #[arg(long)]
-    verbose: bool,
+    #[command(flatten)]
+    polling: PollingArgs,
     #[command(flatten)]
     sizes: FieldSizes,
 }
@@ -63,11 +53,7 @@ pub(crate) async fn run(args: MasterArgs) -> anyhow::Result<ExitCode> {
     let params = args.sizes.params()?;
     let config = PrimaryConfig {
         address_size: args.sizes.address_size(),
-        line: args.line.settings()?,
-        response_timeout: millis(args.timeout, 5..=60_000, "--timeout")?,
-        retries: args.retries,
-        poll_interval: millis(args.poll_interval, 0..=3_600_000, "--poll-interval")?,
-        ..PrimaryConfig::default()
+        ..args.polling.primary_config(args.line.settings()?)?
     };
     let start_up = StartUp {
         clock_sync: args.clock_sync,
@@ -140,9 +126,9 @@ pub(crate) async fn run(args: MasterArgs) -> anyhow::Result<ExitCode> {
                         vec![render::analyser_text(&client_event)]
                     }
                 }
-                MasterEvent::Link(event) => link_lines(event, args.json, args.verbose),
+                MasterEvent::Link(event) => link_lines(event, args.json, args.polling.verbose),
                 MasterEvent::Balanced(event) => {
-                    balanced_lines(event, &args.address, args.json, args.verbose)
+                    balanced_lines(event, &args.address, args.json, args.polling.verbose)
                 }
             };
             if !crate::console::print_lines(&lines) {

@@ -14,7 +14,7 @@ use tokio::sync::mpsc;
 
 use super::render;
 use crate::iec104::render::receipt_time;
-use crate::serial_line::{millis, LineArgs};
+use crate::serial_line::{LineArgs, PollingArgs};
 
 /// A general command of `--command FUN:INF:ON|OFF`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -139,19 +139,8 @@ pub(crate) struct MasterArgs {
     /// One JSON object per ASDU instead of text lines.
     #[arg(long)]
     json: bool,
-    /// Milliseconds to wait for an answer after a request has left the line (PCVDEW6
-    /// allows 5-1000).
-    #[arg(long, default_value_t = 500)]
-    timeout: u64,
-    /// Repeats of an unanswered request.
-    #[arg(long, default_value_t = 2)]
-    retries: u8,
-    /// Milliseconds between two class 2 polls of a device.
-    #[arg(long, default_value_t = 100)]
-    poll_interval: u64,
-    /// Also print the link layer: every request and answer, timeouts, line errors.
-    #[arg(long)]
-    verbose: bool,
+    #[command(flatten)]
+    polling: PollingArgs,
 }
 
 /// What the run is waiting for.
@@ -169,13 +158,12 @@ struct Progress {
 pub(crate) async fn run(args: MasterArgs) -> anyhow::Result<ExitCode> {
     let transport = args.line.transport()?;
     let manual = !args.telegrams.is_empty();
+    let polling = args.polling.primary_config(args.line.settings()?)?;
     let config = PrimaryConfig {
-        line: args.line.settings()?,
-        response_timeout: millis(args.timeout, 5..=60_000, "--timeout")?,
-        retries: if manual { 0 } else { args.retries },
-        poll_interval: millis(args.poll_interval, 0..=3_600_000, "--poll-interval")?,
+        // PCVDEW6's single telegrams are not repeated: a timeout is what they show.
+        retries: if manual { 0 } else { polling.retries },
         automatic: !manual,
-        ..PrimaryConfig::default()
+        ..polling
     };
     if args.address.is_empty() {
         bail!("--address: name at least one device");
@@ -532,10 +520,12 @@ fn link_lines(event: &PrimaryEvent, args: &MasterArgs, progress: &mut Progress) 
                 )]
             }
         }
-        PrimaryEvent::LineError(LineError::Frame(error)) if args.verbose && !args.json => {
+        PrimaryEvent::LineError(LineError::Frame(error)) if args.polling.verbose && !args.json => {
             vec![format!("{} line error: {error}", receipt_time())]
         }
-        _ if args.verbose && !args.json => vec![format!("{} link: {event:?}", receipt_time())],
+        _ if args.polling.verbose && !args.json => {
+            vec![format!("{} link: {event:?}", receipt_time())]
+        }
         _ => Vec::new(),
     }
 }
