@@ -1,6 +1,6 @@
 //! Arbitrary line octets, cut at arbitrary points, into the FT1.2 deframer, a primary
-//! polling three secondaries and a secondary, with clock jumps and line pauses between
-//! the chunks. Nothing may panic; every frame the deframer yields must encode back to
+//! polling three secondaries, a secondary and one end of a balanced link, with clock
+//! jumps and line pauses between the chunks. Nothing may panic; every frame the deframer yields must encode back to
 //! the octets it came from; the primary may only ever transmit frames that deframe.
 //!
 //! The first byte picks the address field size; then each op byte says what to do
@@ -60,8 +60,20 @@ fuzz_target!(|data: &[u8]| {
         single_character: head & 0x80 != 0,
         class1_on_class2_request: head & 0x40 != 0,
     });
-    let mut app = Quiet((0..3u8).map(|n| vec![0x01, 0x81, 0x01, 0x01, 0xA0, n]).collect());
+    let mut app = Quiet(
+        (0..3u8)
+            .map(|n| vec![0x01, 0x81, 0x01, 0x01, 0xA0, n])
+            .collect(),
+    );
     let mut deframer = Deframer::new(size);
+    let mut balanced = Balanced::new(
+        BalancedConfig {
+            address_size: size,
+            ..BalancedConfig::new(1, head & 0x20 != 0)
+        },
+        t0,
+    );
+    let mut balanced_sent: Vec<u8> = Vec::new();
     while let Some((&op, tail)) = rest.split_first() {
         rest = tail;
         match op >> 6 {
@@ -70,6 +82,7 @@ fuzz_target!(|data: &[u8]| {
                 let (chunk, tail) = rest.split_at(take.min(rest.len()));
                 rest = tail;
                 primary.handle_bytes(now, chunk);
+                balanced.handle_bytes(now, chunk);
                 deframer.push(chunk);
                 while let Some(next) = deframer.next_frame() {
                     let Ok(frame) = next else { continue };
@@ -85,16 +98,35 @@ fuzz_target!(|data: &[u8]| {
             2 => {
                 now += Duration::from_millis(u64::from(op & 0x3F) * 10);
                 primary.handle_timeout(now);
+                balanced.handle_timeout(now);
+                if op & 0x01 != 0 {
+                    balanced.send(vec![0x64, 0x01, 0x06, 0x01, 0x00, 0x00, 0x14]);
+                }
             }
             _ => {
                 primary.handle_line_pause(now);
+                balanced.handle_line_pause(now);
                 deframer.abandon_partial();
             }
         }
+        while let Some(bytes) = balanced.poll_transmit(now) {
+            balanced_sent.clear();
+            balanced_sent.extend_from_slice(&bytes);
+            let mut check = Deframer::new(size);
+            check.push(&balanced_sent);
+            assert!(
+                matches!(check.next_frame(), Some(Ok(_))),
+                "the balanced end sent a broken frame"
+            );
+        }
+        while balanced.poll_event().is_some() {}
         while let Some(bytes) = primary.poll_transmit(now) {
             let mut check = Deframer::new(size);
             check.push(&bytes);
-            assert!(matches!(check.next_frame(), Some(Ok(_))), "the primary sent a broken frame");
+            assert!(
+                matches!(check.next_frame(), Some(Ok(_))),
+                "the primary sent a broken frame"
+            );
             assert!(check.next_frame().is_none());
         }
         while primary.poll_event().is_some() {}
