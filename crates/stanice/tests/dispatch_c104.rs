@@ -102,16 +102,35 @@ fn run_bounded(mut command: Command, seconds: u64) -> (Output, bool) {
 struct Demo {
     child: Child,
     output: Arc<Mutex<Vec<String>>>,
+    console: Option<std::process::ChildStdin>,
 }
 
 impl Demo {
     /// Starts the demo on a free port range; a range another process took between the
     /// pick and the demo's bind ("Address already in use") is picked again, three times.
     fn start_on_free_ports() -> (Demo, u16) {
+        Demo::start_on_free_ports_with(23, |port| {
+            [
+                "demo",
+                "--port-base",
+                &port.to_string(),
+                "--store",
+                "none",
+                "--start",
+                DEMO_START,
+            ]
+            .map(str::to_owned)
+            .to_vec()
+        })
+    }
+
+    /// Starts `stanice ARGS` (made for a base port with `count` free ports after it) the
+    /// same way.
+    fn start_on_free_ports_with(count: u16, args: impl Fn(u16) -> Vec<String>) -> (Demo, u16) {
         let mut refused = Vec::new();
         for _ in 0..3 {
-            let port = free_port_range(23);
-            match Demo::start(port) {
+            let port = free_port_range(count);
+            match Demo::start(&args(port)) {
                 Ok(demo) => return (demo, port),
                 Err(tail) if tail.contains("Address already in use") => {
                     eprintln!("demo: ports from {port} taken meanwhile; another range");
@@ -123,11 +142,10 @@ impl Demo {
         panic!("the demo found no free port range (tried {refused:?})");
     }
 
-    fn start(port_base: u16) -> Result<Demo, String> {
+    fn start(args: &[String]) -> Result<Demo, String> {
         let mut child = Command::new(env!("CARGO_BIN_EXE_stanice"))
-            .args(["demo", "--port-base", &port_base.to_string()])
-            .args(["--store", "none", "--start", DEMO_START])
-            .stdin(Stdio::null())
+            .args(args)
+            .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
             .spawn()
@@ -144,7 +162,12 @@ impl Demo {
                 }
             });
         }
-        let mut demo = Demo { child, output };
+        let console = child.stdin.take();
+        let mut demo = Demo {
+            child,
+            output,
+            console,
+        };
         let deadline = Instant::now() + Duration::from_secs(30);
         while Instant::now() < deadline {
             if demo
@@ -162,6 +185,14 @@ impl Demo {
             std::thread::sleep(Duration::from_millis(50));
         }
         Err(demo.tail())
+    }
+
+    /// Types a line on its console.
+    fn type_line(&mut self, line: &str) {
+        use std::io::Write as _;
+        let console = self.console.as_mut().unwrap();
+        writeln!(console, "{line}").unwrap();
+        console.flush().unwrap();
     }
 
     fn lines(&self) -> Vec<String> {
@@ -459,4 +490,121 @@ fn c104_dispatch_reads_the_station_and_operates_it() {
         summary.unwrap_or(Value::Null),
         started.elapsed().as_secs_f64()
     );
+}
+
+/// c104's controlling station against `port` (CA 1): its JSON lines.
+fn c104_client(port: u16, args: &[&str]) -> Vec<Value> {
+    let mut command = Command::new("python3");
+    command
+        .arg(peer_script("c104_client.py"))
+        .args(["--port", &port.to_string(), "--ca", "1"])
+        .args(args);
+    let (output, finished) = run_bounded(command, 60);
+    assert!(finished, "c104_client did not finish");
+    String::from_utf8_lossy(&output.stdout)
+        .lines()
+        .filter_map(|line| serde_json::from_str(line).ok())
+        .collect()
+}
+
+/// The value of `ioa` in a general interrogation by c104.
+fn interrogated(port: u16, ioa: u64) -> Option<Value> {
+    c104_client(port, &["--gi", "--duration", "0.2"])
+        .into_iter()
+        .find(|object| object["ioa"] == ioa && object["cot"] == "INTERROGATED_BY_STATION")
+        .map(|object| object["value"].clone())
+}
+
+/// Asks c104 until `ioa` has a value `accept` takes (a minute at most).
+fn wait_for_value(port: u16, ioa: u64, what: &str, accept: impl Fn(&Value) -> bool) -> Value {
+    let deadline = Instant::now() + Duration::from_secs(60);
+    loop {
+        let value = interrogated(port, ioa);
+        if let Some(value) = value.as_ref().filter(|value| accept(value)) {
+            return value.clone();
+        }
+        assert!(
+            Instant::now() < deadline,
+            "IOA {ioa} never showed {what} (last {value:?})"
+        );
+        std::thread::sleep(Duration::from_millis(200));
+    }
+}
+
+/// The COM600 gateway example (spec §7): c104 reads the simulated REF630's signals from
+/// the gateway's IEC 104 server with the thesis's addresses, a breaker command is refused
+/// while the relay is in LOCAL and executed in REMOTE, an injection shows as the COM600's
+/// raw engineering integers (100 A -> 100).
+#[test]
+fn c104_reads_the_com600_gateway_and_commands_the_relay() {
+    if !peers_available() {
+        return;
+    }
+    let project = repository_root().join("examples/com600-gateway");
+    let (mut gateway, port) = Demo::start_on_free_ports_with(1, |port| {
+        vec![
+            "run".to_owned(),
+            project.display().to_string(),
+            "--port-base".to_owned(),
+            port.to_string(),
+            "--store".to_owned(),
+            "none".to_owned(),
+        ]
+    });
+    // The relay answers (status point FALSE) with its breaker closed (DPI 2).
+    wait_for_value(port, 9000, "the relay answering", |value| value == false);
+    wait_for_value(port, 2000, "the breaker closed", |value| value == 2);
+
+    gateway.type_line("relay REF630 local");
+    wait_for_value(port, 2003, "LOCAL", |value| value == true);
+    let refused = c104_client(
+        port,
+        &[
+            "--command",
+            "C_DC_NA_1:2100:OFF:expect-fail",
+            "--duration",
+            "0.2",
+        ],
+    );
+    let result = refused
+        .iter()
+        .find(|line| line["event"] == "command_result")
+        .unwrap();
+    assert_eq!(result["confirm"], "negative", "refused in LOCAL: {result}");
+    assert_eq!(
+        interrogated(port, 2000),
+        Some(json!(2)),
+        "the breaker did not move"
+    );
+
+    gateway.type_line("relay REF630 remote");
+    wait_for_value(port, 2003, "REMOTE", |value| value == false);
+    let executed = c104_client(
+        port,
+        &["--command", "C_DC_NA_1:2100:OFF", "--duration", "0.2"],
+    );
+    let result = executed
+        .iter()
+        .find(|line| line["event"] == "command_result")
+        .unwrap();
+    assert_eq!(result["ok"], true, "executed in REMOTE: {result}");
+    wait_for_value(port, 2000, "the breaker open", |value| value == 1);
+
+    gateway.type_line("relay REF630 inject 1 1");
+    let current = wait_for_value(port, 3100, "rated current", |value| {
+        value.as_f64().unwrap_or(0.0) > 0.0
+    });
+    assert!(
+        (current.as_f64().unwrap() * 32768.0 - 100.0).abs() < 0.5,
+        "100 A as the raw integer 100: {current}"
+    );
+    let voltage = wait_for_value(port, 1100, "rated voltage", |value| {
+        value.as_f64().unwrap_or(0.0) > 0.0
+    });
+    // The 13-bit measurand carries 15.2 kV / 4096 = 3.7 V steps.
+    assert!(
+        (voltage.as_f64().unwrap() * 32768.0 - 12667.0).abs() < 4.0,
+        "12.67 kV: {voltage}"
+    );
+    let _ = gateway.tail();
 }

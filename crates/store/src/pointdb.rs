@@ -68,6 +68,29 @@ pub enum PointSource {
     /// Whether a controlling station of the server's redundancy group with this name is
     /// connected (TRUE = none is), for a point named by the group's `status_point`.
     ClientStatus(String),
+    /// A signal of a protection device on one of the node's serial lines (IEC 103): the
+    /// indication FUN/INF, or with `index` the index-th value of the measurand set
+    /// FUN/INF.
+    Line {
+        /// The line's name.
+        line: String,
+        /// The device's name on the line.
+        device: String,
+        /// Function type.
+        fun: u8,
+        /// Information number.
+        inf: u8,
+        /// The position in a measurand set; `None` for an indication.
+        index: Option<u8>,
+    },
+    /// Whether a device on a serial line answers (TRUE = it does not), for a point named
+    /// by the device's `status_point`.
+    DeviceStatus {
+        /// The line's name.
+        line: String,
+        /// The device's name.
+        device: String,
+    },
 }
 
 /// How a point is transmitted upward.

@@ -169,3 +169,68 @@ impl<A: TimedApplication> LineEndpoint for SecondaryStation<A> {
         self.app.poll_wake(context)
     }
 }
+
+/// Several secondary stations on one line (a multi-drop RS-485 bus, or relays behind a
+/// star coupler) as one endpoint: every station hears every frame, the one addressed
+/// answers. For simulated lines of many devices.
+pub struct SharedLine<A> {
+    stations: Vec<SecondaryStation<A>>,
+}
+
+impl<A: TimedApplication> SharedLine<A> {
+    /// A line with these stations (all at the same speed).
+    pub fn new(stations: Vec<SecondaryStation<A>>) -> SharedLine<A> {
+        SharedLine { stations }
+    }
+
+    /// Every station.
+    pub fn stations_mut(&mut self) -> impl Iterator<Item = &mut SecondaryStation<A>> {
+        self.stations.iter_mut()
+    }
+
+    /// The station with this link address.
+    pub fn station(&mut self, address: u16) -> Option<&mut SecondaryStation<A>> {
+        self.stations
+            .iter_mut()
+            .find(|station| station.secondary().config().address == address)
+    }
+}
+
+impl<A: TimedApplication> LineEndpoint for SharedLine<A> {
+    fn handle_bytes(&mut self, now: Instant, bytes: &[u8]) {
+        for station in &mut self.stations {
+            station.handle_bytes(now, bytes);
+        }
+    }
+
+    fn handle_line_pause(&mut self, now: Instant) {
+        for station in &mut self.stations {
+            station.handle_line_pause(now);
+        }
+    }
+
+    fn handle_timeout(&mut self, now: Instant) {
+        for station in &mut self.stations {
+            LineEndpoint::handle_timeout(station, now);
+        }
+    }
+
+    fn poll_transmit(&mut self, now: Instant) -> Option<Vec<u8>> {
+        self.stations
+            .iter_mut()
+            .find_map(|station| station.poll_transmit(now))
+    }
+
+    fn next_deadline(&self) -> Option<Instant> {
+        self.stations
+            .iter()
+            .filter_map(LineEndpoint::next_deadline)
+            .min()
+    }
+
+    fn line(&self) -> LineSettings {
+        self.stations
+            .first()
+            .map_or_else(LineSettings::default, LineEndpoint::line)
+    }
+}

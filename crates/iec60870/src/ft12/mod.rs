@@ -48,7 +48,7 @@ mod simulated;
 
 pub use balanced::{Balanced, BalancedConfig, BalancedEvent};
 pub use deframer::{DeframeError, Deframer};
-pub use endpoint::{LineEndpoint, SecondaryStation, TimedApplication};
+pub use endpoint::{LineEndpoint, SecondaryStation, SharedLine, TimedApplication};
 pub use frame::{
     checksum, AddressSize, Control, EncodeError, Frame, PrimaryFunction, SecondaryFunction, END,
     MAX_FRAME_LEN, MAX_LENGTH_FIELD, SINGLE_CHARACTER, START_FIXED, START_VARIABLE,

@@ -127,7 +127,39 @@
 //!                                      # too) appears here, same name, IOA + ioa_offset
 //!                                      # (default 0), as a concentrator maps a whole
 //!                                      # outstation; explicit points may stand beside them
+//!
+//! [[node.line]]                        # a serial line this node polls as IEC 103 master
+//! name = "relays"                      # (the gateway role: its devices' signals become
+//!                                      # this node's points); unique per node
+//! protocol = "iec103"                  # the only protocol for now
+//! simulate = "ref630"                  # exactly one of: port = "/dev/ttyUSB0",
+//!                                      # tcp = "host:port" (terminal server), simulate =
+//!                                      # "ref630" (the thesis's relay at each device's
+//!                                      # address, inside this process; console: `relay
+//!                                      # DEVICE local|remote|inject I U|fault|...`)
+//! baud = 9600                          # default 9600 (1200..=115200); parity = "even"
+//!                                      # (default), stop_bits = 1
+//! timeout_ms = 500                     # response timeout, default 500 (5..=60000)
+//! retries = 2                          # default 2 (0..=10)
+//! poll_interval_ms = 100               # class 2 polls of a device, default 100
+//!
+//! [[node.line.device]]
+//! name = "F1"                          # unique per line
+//! address = 1                          # link and common address 1..=254, unique per line
+//! status_point = "COMM_F1"             # optional: a single point, TRUE while the device
+//!                                      # does not answer (then its points are IV)
+//! local_indication = [1, 190]          # optional FUN, INF of its LOCAL/REMOTE indication:
+//!                                      # commands are refused while it is ON
 //! ```
+//!
+//! Points and commands name a line device's signals: `source = "line:LINE/DEVICE/FUN/INF"`
+//! (an indication, for M_SP_* and M_DP_* points: ON is DPI 2), `source =
+//! "line:LINE/DEVICE/FUN/INF/INDEX"` (the INDEX-th value of the measurand set FUN/INF,
+//! for M_ME_* points, with `measurand_limit = 240.0`, the engineering value at fraction
+//! 1.0, and for normalized points optionally `full_scale`; without it the engineering
+//! value goes as the raw integer, as the COM600 sent it), `target =
+//! "line:LINE/DEVICE/FUN/INF"` (C_SC_NA_1 or C_DC_NA_1: a general command ON/OFF, its
+//! acknowledgement becomes the confirmation).
 //!
 //! # Checks
 //!
@@ -236,6 +268,8 @@ pub struct NodeConfig {
     pub commands: Vec<CommandConfig>,
     /// IEC 104 client links to lower nodes.
     pub links: Vec<LinkConfig>,
+    /// Serial lines the node polls as master (the gateway role).
+    pub lines: Vec<LineConfig>,
     /// Values written into the PLC after its cold start (variable path -> IEC literal):
     /// parameters such as a board's switch-on delay.
     pub initial_values: Vec<(String, String)>,
@@ -332,6 +366,17 @@ pub enum CommandTarget {
         /// The IOA on the lower node.
         ioa: Ioa,
     },
+    /// A general command (IEC 103 ASDU 20) to FUN/INF of a device on a serial line.
+    Line {
+        /// The line's name.
+        line: String,
+        /// The device's name.
+        device: String,
+        /// Function type.
+        fun: u8,
+        /// Information number.
+        inf: u8,
+    },
 }
 
 /// How a point is transmitted.
@@ -369,6 +414,8 @@ pub struct PointConfig {
     /// A BOOL PLC variable: while TRUE the point is sent invalid (IV), as the TC700 does
     /// for the points of a faulty I/O module (spec 7.2).
     pub invalid_when: Option<String>,
+    /// For a measurand from a serial-line device: how its fraction becomes the value.
+    pub scaling: Option<MeasurandScaling>,
     /// Free text.
     pub description: String,
 }
@@ -429,6 +476,64 @@ pub enum LinkTarget {
     Node(String),
     /// An explicit address.
     Address(SocketAddr),
+}
+
+/// How an IEC 103 measurand (a fraction of the device's limit) becomes a point's value:
+/// the engineering value is `fraction * limit`; a float point carries it, a scaled point
+/// its rounded integer, a normalized point `value / full_scale`, or without `full_scale`
+/// the engineering value as the raw integer (what the COM600 of the thesis sent, spec
+/// IEC-A4).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MeasurandScaling {
+    /// The engineering value at fraction 1.0 (the device's MaxIL1, MaxUL1 ...).
+    pub limit: f64,
+    /// The engineering value at normalized 1.0, for normalized points.
+    pub full_scale: Option<f64>,
+}
+
+/// Where a serial line is.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum LineTransport {
+    /// A serial port device.
+    Serial(String),
+    /// A terminal server over TCP (`host:port`).
+    Tcp(String),
+    /// Simulated devices inside this process (`ref630`: the thesis's relay at each
+    /// device's address), operated from the console (`relay DEVICE local`, ...).
+    Simulated(String),
+}
+
+/// A device on a serial line, `[[node.line.device]]`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct DeviceConfig {
+    /// Unique on its line.
+    pub name: String,
+    /// Link address (and common address of ASDU), 1..=254.
+    pub address: u8,
+    /// A single point of the node, TRUE while the device does not answer.
+    pub status_point: Option<String>,
+    /// FUN/INF of the device's LOCAL/REMOTE indication: commands to the device are
+    /// refused while it is ON.
+    pub local_indication: Option<(u8, u8)>,
+}
+
+/// A serial line the node polls as master, `[[node.line]]` (IEC 103).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LineConfig {
+    /// Unique per node.
+    pub name: String,
+    /// Where it is.
+    pub transport: LineTransport,
+    /// Speed and character format.
+    pub settings: iec60870::ft12::LineSettings,
+    /// Response timeout.
+    pub timeout: Duration,
+    /// Repeats of an unanswered request.
+    pub retries: u8,
+    /// Least time between two class 2 polls of a device.
+    pub poll_interval: Duration,
+    /// The devices.
+    pub devices: Vec<DeviceConfig>,
 }
 
 /// An IEC 104 client link to a lower node, `[[node.link]]`.

@@ -50,6 +50,8 @@ pub(in crate::config) struct RawNode {
     #[serde(default)]
     pub(in crate::config) link: Vec<RawLink>,
     #[serde(default)]
+    pub(in crate::config) line: Vec<RawLine>,
+    #[serde(default)]
     pub(in crate::config) set: std::collections::BTreeMap<String, String>,
     #[serde(default)]
     pub(in crate::config) table: Vec<RawTable>,
@@ -136,6 +138,8 @@ pub(in crate::config) struct RawPoint {
     pub(in crate::config) groups: Vec<i64>,
     pub(in crate::config) deadband: Option<f64>,
     pub(in crate::config) invalid_when: Option<String>,
+    pub(in crate::config) measurand_limit: Option<f64>,
+    pub(in crate::config) full_scale: Option<f64>,
     #[serde(default)]
     pub(in crate::config) description: String,
 }
@@ -183,4 +187,31 @@ pub(in crate::config) struct RawLink {
 pub(in crate::config) struct RawRepublish {
     #[serde(default)]
     pub(in crate::config) ioa_offset: i64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(in crate::config) struct RawLine {
+    pub(in crate::config) name: String,
+    pub(in crate::config) protocol: String,
+    pub(in crate::config) port: Option<String>,
+    pub(in crate::config) tcp: Option<String>,
+    pub(in crate::config) simulate: Option<String>,
+    pub(in crate::config) baud: Option<i64>,
+    pub(in crate::config) parity: Option<String>,
+    pub(in crate::config) stop_bits: Option<i64>,
+    pub(in crate::config) timeout_ms: Option<i64>,
+    pub(in crate::config) retries: Option<i64>,
+    pub(in crate::config) poll_interval_ms: Option<i64>,
+    #[serde(default)]
+    pub(in crate::config) device: Vec<RawDevice>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(in crate::config) struct RawDevice {
+    pub(in crate::config) name: String,
+    pub(in crate::config) address: i64,
+    pub(in crate::config) status_point: Option<String>,
+    pub(in crate::config) local_indication: Option<[i64; 2]>,
 }

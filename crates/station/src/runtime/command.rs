@@ -47,6 +47,13 @@ pub(crate) enum Route {
         link: String,
         ioa: iec60870::asdu::Ioa,
     },
+    /// To a device on a serial line, as a general command to FUN/INF.
+    Line {
+        line: String,
+        device: String,
+        fun: u8,
+        inf: u8,
+    },
 }
 
 #[derive(Debug, Clone)]
@@ -67,6 +74,8 @@ pub(crate) struct NodeHandler {
     pub commands: HashMap<u32, RoutedCommand>,
     /// Set once the links are up (they start after every server of the process).
     pub links: std::sync::OnceLock<HashMap<String, LinkHandle>>,
+    /// Set once the serial lines are started.
+    pub lines: std::sync::OnceLock<HashMap<String, super::line::LineHandle>>,
     /// Links whose lower node takes this node's time, with the lower node's clock when it
     /// runs in this process (set directly, see [`super::link`]).
     pub sync_links: Vec<(String, Option<Arc<super::clock::NodeClock>>)>,
@@ -98,6 +107,7 @@ impl StationHandler for NodeHandler {
         };
         let points = Arc::clone(&self.points);
         let handler_links = self.links.get().cloned().unwrap_or_default();
+        let handler_lines = self.lines.get().cloned().unwrap_or_default();
         let simulation = self.simulation.clone();
         let this = Recorded {
             points,
@@ -157,6 +167,23 @@ impl StationHandler for NodeHandler {
                 }
                 Route::Link { link, ioa } => {
                     forward(handler_links.get(&link), &link, ioa, &command).await
+                }
+                Route::Line {
+                    line,
+                    device,
+                    fun,
+                    inf,
+                } => {
+                    let (outcome, detail) = general_command(
+                        handler_lines.get(&line),
+                        &line,
+                        &device,
+                        fun,
+                        inf,
+                        &command,
+                    )
+                    .await;
+                    (outcome, detail, None)
                 }
             };
             match (this.finish(outcome, detail).await, termination) {
@@ -385,6 +412,56 @@ fn await_return(
 /// Sends a command down a link. The confirmation is the lower node's, as the link task
 /// meets it; an executed command's termination waits for the lower node's termination to
 /// reach the link task too (the return information before it is then published here).
+/// A command to a line device: a general command ON/OFF, its acknowledgement the outcome.
+async fn general_command(
+    line: Option<&super::line::LineHandle>,
+    name: &str,
+    device: &str,
+    fun: u8,
+    inf: u8,
+    command: &server::Command,
+) -> (CommandOutcome, String) {
+    use super::line::CommandProblem;
+    let Some(line) = line else {
+        return (
+            CommandOutcome::Failed,
+            format!("line {name} is not running"),
+        );
+    };
+    let on = match &command.element {
+        Element::SingleCommand { on, .. } => *on,
+        Element::DoubleCommand { state, .. } => *state == DoublePointState::On,
+        _ => {
+            return (
+                CommandOutcome::Refused,
+                "only single and double commands go to a line device".to_owned(),
+            )
+        }
+    };
+    if command.select {
+        // IEC 103 has no select: the selection stays here, the execute goes to the device.
+        return (
+            CommandOutcome::Executed,
+            format!("selected ({device} on line {name})"),
+        );
+    }
+    match line.command(device, fun, inf, on).await {
+        Ok(()) => (
+            CommandOutcome::Executed,
+            format!("acknowledged by {device} (FUN {fun} INF {inf})"),
+        ),
+        Err(CommandProblem::Local) => (
+            CommandOutcome::RefusedLocalMode,
+            format!("{device} is in LOCAL: not sent"),
+        ),
+        Err(CommandProblem::Refused) => (
+            CommandOutcome::Refused,
+            format!("refused by {device} (negative acknowledgement)"),
+        ),
+        Err(CommandProblem::NoAnswer(why)) => (CommandOutcome::Failed, why),
+    }
+}
+
 async fn forward(
     link: Option<&LinkHandle>,
     name: &str,

@@ -17,6 +17,8 @@
 //! - [`sink`]: where a node's changes go upward (its IEC 104 server; an IEC 101 slave or MQTT later).
 //! - [`link`]: the IEC 104 client links to lower nodes (concentration, invalidation,
 //!   status points, time source).
+//! - [`line`]: the serial lines to protection devices (IEC 103 master, the gateway role:
+//!   their signals become points, commands become general commands).
 //! - `command`: the server hooks — commands routed to a PLC variable (refused in local
 //!   mode) or down a link, each audited; clock synchronisation passed down.
 //!
@@ -27,6 +29,7 @@
 
 pub mod clock;
 mod command;
+pub mod line;
 pub mod link;
 pub mod node;
 pub mod simulation;
@@ -154,6 +157,8 @@ pub struct NodeRuntime {
     pub server: Option<ServerHandle>,
     /// Its links to lower nodes.
     pub links: Vec<LinkHandle>,
+    /// Its serial lines to protection devices.
+    pub lines: Vec<line::LineHandle>,
 }
 
 impl NodeRuntime {
@@ -342,6 +347,17 @@ impl Runtime {
                             link: link.clone(),
                             ioa: *ioa,
                         },
+                        CommandTarget::Line {
+                            line,
+                            device,
+                            fun,
+                            inf,
+                        } => Route::Line {
+                            line: line.clone(),
+                            device: device.clone(),
+                            fun: *fun,
+                            inf: *inf,
+                        },
                     };
                     (
                         command.ioa.get(),
@@ -359,6 +375,7 @@ impl Runtime {
                 points: Arc::clone(points),
                 commands,
                 links: std::sync::OnceLock::new(),
+                lines: std::sync::OnceLock::new(),
                 sync_links: config
                     .links
                     .iter()
@@ -441,6 +458,7 @@ impl Runtime {
                 points: Arc::clone(points),
                 server,
                 links: Vec::new(),
+                lines: Vec::new(),
             });
         }
 
@@ -506,6 +524,50 @@ impl Runtime {
                 node.links.push(handle);
             }
             let _ = handler.links.set(by_name);
+            let mut lines_by_name = HashMap::new();
+            for line in &config.lines {
+                let mut map: HashMap<(u8, u8, u8, Option<u8>), Vec<line::LinePoint>> =
+                    HashMap::new();
+                {
+                    let db = points.lock();
+                    for point in &config.points {
+                        let PointSource::Line {
+                            line: name,
+                            device,
+                            fun,
+                            inf,
+                            index,
+                        } = &point.source
+                        else {
+                            continue;
+                        };
+                        let address = line
+                            .devices
+                            .iter()
+                            .find(|d| &d.name == device)
+                            .map(|d| d.address);
+                        if let (true, Some(address), Some(id)) =
+                            (name == &line.name, address, db.id(point.name.as_str()))
+                        {
+                            map.entry((address, *fun, *inf, *index)).or_default().push(
+                                line::LinePoint {
+                                    id,
+                                    type_id: point.type_id,
+                                    scaling: point.scaling,
+                                },
+                            );
+                        }
+                    }
+                }
+                let spec = line::LineSpec {
+                    config: line.clone(),
+                    points: map,
+                };
+                let handle = line::spawn_line(spec, Arc::clone(points));
+                lines_by_name.insert(line.name.clone(), handle.clone());
+                node.lines.push(handle);
+            }
+            let _ = handler.lines.set(lines_by_name);
         }
         requests
             .send(SimRequest::Go)
@@ -613,6 +675,23 @@ impl Runtime {
                 }
                 return Ok(());
             }
+        }
+        if let Some(rest) = text.strip_prefix("relay ") {
+            // A simulated protection device on a serial line: `relay F1 local`.
+            let words: Vec<&str> = rest.split_whitespace().collect();
+            let Some((device, operation)) = words.split_first() else {
+                return Err("expected `relay DEVICE OPERATION`".to_owned());
+            };
+            let mut last_error = format!("no simulated device `{device}` on any line");
+            for line in self.nodes.iter().flat_map(|node| &node.lines) {
+                match line.operate(device, operation) {
+                    Ok(_) => return Ok(()),
+                    Err(error)
+                        if error.contains("has no device") || error.contains("no simulated") => {}
+                    Err(error) => last_error = error,
+                }
+            }
+            return Err(last_error);
         }
         let text = text.to_owned();
         self.with_simulation(move |sim| sim.operate(&text))

@@ -795,12 +795,19 @@ pub(crate) fn run(mut sim: Simulation, pacing: Pacing, requests: mpsc::Receiver<
         let request = match (pacing, going) {
             (Pacing::RealTime { speed }, true) => {
                 let (real0, sim0) = *anchor.get_or_insert((Instant::now(), sim.now));
-                let target = sim0 + Duration::from_secs_f64(real0.elapsed().as_secs_f64() * speed);
+                let target = sim0
+                    + Duration::try_from_secs_f64(real0.elapsed().as_secs_f64() * speed)
+                        .unwrap_or(Duration::MAX / 2);
                 let caught_up = sim.advance_to(target, STEPS_PER_POLL);
                 let wait = if caught_up {
                     let next = sim.next_due();
-                    Duration::from_secs_f64((next.saturating_sub(sim.now)).as_secs_f64() / speed)
-                        .min(Duration::from_millis(100))
+                    // Nothing due at all (a project without PLC tasks and plant, such as
+                    // a gateway) makes the wait infinite: look again after the cap.
+                    Duration::try_from_secs_f64(
+                        (next.saturating_sub(sim.now)).as_secs_f64() / speed,
+                    )
+                    .unwrap_or(Duration::MAX)
+                    .min(Duration::from_millis(100))
                 } else {
                     Duration::ZERO
                 };

@@ -1632,3 +1632,173 @@ port_offset = 1
     let link = &loaded.node("TOP").unwrap().links[0];
     assert!(link.tls.as_ref().unwrap().trust_anchors.ends_with("ca.pem"));
 }
+
+/// The COM600 example: a node with a simulated IEC 103 line, its device, line points and
+/// commands.
+#[test]
+fn com600_gateway_example_loads() {
+    let project = Project::load(&example_folder().join("../com600-gateway")).unwrap();
+    let node = &project.nodes[0];
+    let line = &node.lines[0];
+    assert_eq!(line.name, "relays");
+    assert_eq!(line.devices[0].address, 1);
+    assert_eq!(line.devices[0].local_indication, Some((1, 190)));
+    let breaker = node.points.iter().find(|p| p.ioa.get() == 2000).unwrap();
+    assert_eq!(
+        breaker.source,
+        PointSource::Line {
+            line: "relays".into(),
+            device: "REF630".into(),
+            fun: 1,
+            inf: 160,
+            index: None
+        }
+    );
+    let current = node.points.iter().find(|p| p.ioa.get() == 3100).unwrap();
+    assert_eq!(current.scaling.map(|s| s.limit), Some(240.0));
+    let status = node.points.iter().find(|p| p.ioa.get() == 9000).unwrap();
+    assert_eq!(
+        status.source,
+        PointSource::DeviceStatus {
+            line: "relays".into(),
+            device: "REF630".into()
+        }
+    );
+    let command = node.commands.iter().find(|c| c.ioa.get() == 2100).unwrap();
+    assert_eq!(
+        command.target,
+        CommandTarget::Line {
+            line: "relays".into(),
+            device: "REF630".into(),
+            fun: 1,
+            inf: 160
+        }
+    );
+}
+
+#[test]
+fn line_errors_name_their_place() {
+    let toml = r#"[station]
+name = "s"
+time_zone = "UTC"
+[[node]]
+name = "G"
+common_address = 1
+
+[[node.line]]
+name = "relays"
+protocol = "iec101"
+port = "/dev/ttyS0"
+tcp = "10.0.0.1:4001"
+baud = 300
+
+[[node.line.device]]
+name = "F1"
+address = 0
+status_point = "NOPE"
+
+[[node.point]]
+name = "A"
+type = "M_ME_NC_1"
+ioa = 1
+source = "line:relays/F2/1/148/0"
+
+[[node.point]]
+name = "B"
+type = "M_DP_NA_1"
+ioa = 2
+source = "line:relays/F1/1/300"
+
+[[node.point]]
+name = "C"
+type = "M_SP_NA_1"
+ioa = 3
+source = "line:relays/F1/1/160"
+measurand_limit = 10.0
+
+[[node.command]]
+name = "K"
+type = "C_SE_NC_1"
+ioa = 10
+target = "line:other/F1/1/160"
+"#;
+    let errors = errors(toml, &[]);
+    expect(
+        &errors,
+        10,
+        12,
+        "node[0].line[0].protocol",
+        "only \"iec103\"",
+    );
+    expect(
+        &errors,
+        8,
+        1,
+        "node[0].line[0]",
+        "exactly one of port, tcp and simulate",
+    );
+    expect(&errors, 13, 8, "node[0].line[0].baud", "baud rate 300");
+    expect(
+        &errors,
+        17,
+        11,
+        "node[0].line[0].device[0].address",
+        "outside 1..=254",
+    );
+    expect(
+        &errors,
+        24,
+        10,
+        "node[0].point[0].source",
+        "line `relays` has no device `F2`",
+    );
+    expect(&errors, 30, 10, "node[0].point[1].source", "INF `300`");
+    expect(
+        &errors,
+        37,
+        19,
+        "node[0].point[2].measurand_limit",
+        "only for measurands",
+    );
+    expect(
+        &errors,
+        41,
+        8,
+        "node[0].command[0].type",
+        "C_SC_NA_1 or C_DC_NA_1",
+    );
+    expect(
+        &errors,
+        43,
+        10,
+        "node[0].command[0].target",
+        "no line `other`",
+    );
+}
+
+#[test]
+fn a_device_status_point_must_exist() {
+    let toml = r#"[station]
+name = "s"
+time_zone = "UTC"
+[[node]]
+name = "G"
+common_address = 1
+[[node.line]]
+name = "relays"
+protocol = "iec103"
+simulate = "ref630"
+[[node.line.device]]
+name = "F1"
+address = 1
+status_point = "NOPE"
+"#;
+    expect_only(
+        toml,
+        &[],
+        14,
+        16,
+        "node[0].line[0].device[0].status_point",
+        "no point `NOPE`",
+    );
+}

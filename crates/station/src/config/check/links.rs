@@ -283,6 +283,7 @@ impl Ctx<'_> {
                         groups: point.groups.clone(),
                         deadband: None,
                         invalid_when: None,
+                        scaling: point.scaling,
                         description: point.description.clone(),
                     });
                 }

@@ -1,5 +1,6 @@
 //! The checks of a project: the station, each node, the links between them.
 
+mod line;
 mod links;
 mod node;
 

@@ -250,7 +250,17 @@ impl Ctx<'_> {
                     );
                 }
             }
+            let device_of = raw.line.iter().find_map(|line| {
+                line.device
+                    .iter()
+                    .find(|device| device.status_point.as_deref() == Some(point.name.as_str()))
+                    .map(|device| (line.name.clone(), device.name.clone()))
+            });
             let source = match (&point.source, status_of) {
+                (None, None) if device_of.is_some() => {
+                    let (line, device) = device_of.clone().unwrap_or_default();
+                    PointSource::DeviceStatus { line, device }
+                }
                 (None, None) if group_of.is_some() => {
                     PointSource::ClientStatus(group_of.map(|g| g.name.clone()).unwrap_or_default())
                 }
@@ -280,8 +290,68 @@ impl Ctx<'_> {
                     );
                     PointSource::LinkStatus(link.name.clone())
                 }
-                (Some(source), None) => {
-                    self.point_source(&raw.name, &raw.link, source, &at("source"))
+                (Some(source), None) => match line::parse_line_ref(source) {
+                    Ok(Some(reference)) => {
+                        self.line_ref_exists(&raw.name, &raw.line, &reference, &at("source"));
+                        let indication = matches!(
+                            type_id,
+                            TypeId::M_SP_NA_1
+                                | TypeId::M_SP_TB_1
+                                | TypeId::M_DP_NA_1
+                                | TypeId::M_DP_TB_1
+                        );
+                        match (reference.index, indication, is_measurement(type_id)) {
+                            (None, false, _) => self.err(
+                                &at("type"),
+                                format!("an indication of a line device needs a single or double point type, not {type_id}"),
+                            ),
+                            (Some(_), _, false) => self.err(
+                                &at("type"),
+                                format!("a measurand of a line device needs a measurement type (M_ME_*), not {type_id}"),
+                            ),
+                            (Some(_), _, true) if point.measurand_limit.is_none() => self.err(
+                                &node(&[K("point"), I(p)]),
+                                "a measurand of a line device needs measurand_limit (the engineering value at fraction 1.0)",
+                            ),
+                            _ => {}
+                        }
+                        PointSource::Line {
+                            line: reference.line,
+                            device: reference.device,
+                            fun: reference.fun,
+                            inf: reference.inf,
+                            index: reference.index,
+                        }
+                    }
+                    Ok(None) => self.point_source(&raw.name, &raw.link, source, &at("source")),
+                    Err(message) => {
+                        self.err(&at("source"), message);
+                        PointSource::Variable(source.clone())
+                    }
+                },
+            };
+            let line_measurand = matches!(&source, PointSource::Line { index: Some(_), .. });
+            let scaling = match (point.measurand_limit, point.full_scale) {
+                (None, None) => None,
+                (Some(limit), full_scale) if line_measurand => {
+                    if !(limit.is_finite() && limit > 0.0) {
+                        self.err(
+                            &at("measurand_limit"),
+                            "measurand_limit must be a positive number",
+                        );
+                    }
+                    if full_scale.is_some_and(|f| !(f.is_finite() && f > 0.0)) {
+                        self.err(&at("full_scale"), "full_scale must be a positive number");
+                    }
+                    Some(MeasurandScaling { limit, full_scale })
+                }
+                (Some(_), _) => {
+                    self.err(&at("measurand_limit"), "measurand_limit is only for measurands of line devices (line:LINE/DEVICE/FUN/INF/INDEX)");
+                    None
+                }
+                (None, Some(_)) => {
+                    self.err(&at("full_scale"), "full_scale needs measurand_limit");
+                    None
                 }
             };
             let transmission = match (point.transmission, point.cycle_ms) {
@@ -335,6 +405,7 @@ impl Ctx<'_> {
                 groups,
                 deadband: point.deadband,
                 invalid_when: point.invalid_when.clone(),
+                scaling,
                 description: point.description.clone(),
             });
         }
@@ -387,9 +458,43 @@ impl Ctx<'_> {
                     Ioa::IRRELEVANT
                 }
             };
-            let target = match parse_link_ref(&command.target) {
-                Ok(None) => CommandTarget::Variable(command.target.clone()),
-                Ok(Some((link, ioa))) => {
+            let line_target = match line::parse_line_ref(&command.target) {
+                Ok(Some(reference)) => {
+                    self.line_ref_exists(&raw.name, &raw.line, &reference, &at("target"));
+                    if reference.index.is_some() {
+                        self.err(
+                            &at("target"),
+                            "a command to a line device is line:LINE/DEVICE/FUN/INF",
+                        );
+                    }
+                    if !matches!(type_id, TypeId::C_SC_NA_1 | TypeId::C_DC_NA_1) {
+                        self.err(
+                            &at("type"),
+                            format!("a command to a line device is C_SC_NA_1 or C_DC_NA_1 (a general command ON/OFF), not {type_id}"),
+                        );
+                    }
+                    Some(CommandTarget::Line {
+                        line: reference.line,
+                        device: reference.device,
+                        fun: reference.fun,
+                        inf: reference.inf,
+                    })
+                }
+                Ok(None) => None,
+                Err(message) => {
+                    self.err(&at("target"), message);
+                    Some(CommandTarget::Variable(command.target.clone()))
+                }
+            };
+            let target = match line_target.map(Ok).unwrap_or_else(|| {
+                parse_link_ref(&command.target).map(|link| {
+                    link.map_or_else(
+                        || CommandTarget::Variable(command.target.clone()),
+                        |(link, ioa)| CommandTarget::Link { link, ioa },
+                    )
+                })
+            }) {
+                Ok(CommandTarget::Link { link, ioa }) => {
                     if !raw.link.iter().any(|l| l.name == link) {
                         self.err(
                             &at("target"),
@@ -398,6 +503,7 @@ impl Ctx<'_> {
                     }
                     CommandTarget::Link { link, ioa }
                 }
+                Ok(target) => target,
                 Err(message) => {
                     self.err(&at("target"), message);
                     CommandTarget::Variable(command.target.clone())
@@ -526,6 +632,7 @@ impl Ctx<'_> {
             points,
             commands,
             links: Vec::new(),
+            lines: self.check_lines(n, raw),
             initial_values: raw
                 .set
                 .iter()
