@@ -589,6 +589,20 @@ fn c104_reads_the_com600_gateway_and_commands_the_relay() {
         .unwrap();
     assert_eq!(result["ok"], true, "executed in REMOTE: {result}");
     wait_for_value(port, 2000, "the breaker open", |value| value == 1);
+    // The thesis's single commands: remote close 4150 ON closes, remote open 4250 ON opens.
+    for (ioa, position, what) in [
+        (4150, 2, "closed by remote close"),
+        (4250, 1, "opened by remote open"),
+    ] {
+        let command = format!("C_SC_NA_1:{ioa}:1");
+        let result = c104_client(port, &["--command", &command, "--duration", "0.2"]);
+        let result = result
+            .iter()
+            .find(|line| line["event"] == "command_result")
+            .unwrap();
+        assert_eq!(result["ok"], true, "{what}: {result}");
+        wait_for_value(port, 2000, what, |value| value == position);
+    }
 
     gateway.type_line("relay REF630 inject 1 1");
     let current = wait_for_value(port, 3100, "rated current", |value| {

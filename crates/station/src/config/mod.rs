@@ -159,7 +159,9 @@
 //! 1.0, and for normalized points optionally `full_scale`; without it the engineering
 //! value goes as the raw integer, as the COM600 sent it), `target =
 //! "line:LINE/DEVICE/FUN/INF"` (C_SC_NA_1 or C_DC_NA_1: a general command ON/OFF, its
-//! acknowledgement becomes the confirmation).
+//! acknowledgement becomes the confirmation; `line:LINE/DEVICE/FUN/INF=OFF` sends OFF
+//! whatever the command's value, as a single command ON that opens). Scaled points
+//! take `scale_factor` (the integer sent is the engineering value times it).
 //!
 //! # Checks
 //!
@@ -376,6 +378,10 @@ pub enum CommandTarget {
         fun: u8,
         /// Information number.
         inf: u8,
+        /// A fixed general command (`=ON`/`=OFF` after the reference: a single command
+        /// ON that opens, as the thesis's "remote open"); `None` follows the command's
+        /// own value.
+        value: Option<bool>,
     },
 }
 
@@ -489,6 +495,8 @@ pub struct MeasurandScaling {
     pub limit: f64,
     /// The engineering value at normalized 1.0, for normalized points.
     pub full_scale: Option<f64>,
+    /// For scaled points: the integer sent is `round(value * factor)` (default 1).
+    pub factor: Option<f64>,
 }
 
 /// Where a serial line is.

@@ -140,6 +140,7 @@ pub(in crate::config) struct RawPoint {
     pub(in crate::config) invalid_when: Option<String>,
     pub(in crate::config) measurand_limit: Option<f64>,
     pub(in crate::config) full_scale: Option<f64>,
+    pub(in crate::config) scale_factor: Option<f64>,
     #[serde(default)]
     pub(in crate::config) description: String,
 }

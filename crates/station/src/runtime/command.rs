@@ -47,12 +47,14 @@ pub(crate) enum Route {
         link: String,
         ioa: iec60870::asdu::Ioa,
     },
-    /// To a device on a serial line, as a general command to FUN/INF.
+    /// To a device on a serial line, as a general command to FUN/INF (ON/OFF fixed by
+    /// `value`, or the command's own).
     Line {
         line: String,
         device: String,
         fun: u8,
         inf: u8,
+        value: Option<bool>,
     },
 }
 
@@ -173,16 +175,11 @@ impl StationHandler for NodeHandler {
                     device,
                     fun,
                     inf,
+                    value,
                 } => {
-                    let (outcome, detail) = general_command(
-                        handler_lines.get(&line),
-                        &line,
-                        &device,
-                        fun,
-                        inf,
-                        &command,
-                    )
-                    .await;
+                    let target = (device.as_str(), fun, inf, value);
+                    let (outcome, detail) =
+                        general_command(handler_lines.get(&line), &line, target, &command).await;
                     (outcome, detail, None)
                 }
             };
@@ -416,9 +413,7 @@ fn await_return(
 async fn general_command(
     line: Option<&super::line::LineHandle>,
     name: &str,
-    device: &str,
-    fun: u8,
-    inf: u8,
+    (device, fun, inf, fixed): (&str, u8, u8, Option<bool>),
     command: &server::Command,
 ) -> (CommandOutcome, String) {
     use super::line::CommandProblem;
@@ -438,6 +433,7 @@ async fn general_command(
             )
         }
     };
+    let on = fixed.unwrap_or(on);
     if command.select {
         // IEC 103 has no select: the selection stays here, the execute goes to the device.
         return (

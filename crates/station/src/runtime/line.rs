@@ -574,7 +574,8 @@ fn apply(
                     let physical = value.to_physical(scaling.limit);
                     let converted = match point.type_id {
                         TypeId::M_ME_NB_1 | TypeId::M_ME_TB_1 | TypeId::M_ME_TE_1 => {
-                            PointValue::Int(physical.round() as i64)
+                            let scaled = physical * scaling.factor.unwrap_or(1.0);
+                            PointValue::Int(scaled.round().clamp(-32768.0, 32767.0) as i64)
                         }
                         TypeId::M_ME_NA_1
                         | TypeId::M_ME_TA_1

@@ -352,11 +352,13 @@ impl Runtime {
                             device,
                             fun,
                             inf,
+                            value,
                         } => Route::Line {
                             line: line.clone(),
                             device: device.clone(),
                             fun: *fun,
                             inf: *inf,
+                            value: *value,
                         },
                     };
                     (

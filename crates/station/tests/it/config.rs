@@ -1671,9 +1671,18 @@ fn com600_gateway_example_loads() {
             line: "relays".into(),
             device: "REF630".into(),
             fun: 1,
-            inf: 160
+            inf: 160,
+            value: None
         }
     );
+    let remote_open = node.commands.iter().find(|c| c.ioa.get() == 4250).unwrap();
+    assert!(matches!(
+        remote_open.target,
+        CommandTarget::Line {
+            value: Some(false),
+            ..
+        }
+    ));
 }
 
 #[test]

@@ -331,6 +331,22 @@ impl Ctx<'_> {
                 },
             };
             let line_measurand = matches!(&source, PointSource::Line { index: Some(_), .. });
+            if point.scale_factor.is_some() && point.measurand_limit.is_none() {
+                self.err(&at("scale_factor"), "scale_factor needs measurand_limit");
+            }
+            if let Some(factor) = point.scale_factor {
+                if !matches!(
+                    type_id,
+                    TypeId::M_ME_NB_1 | TypeId::M_ME_TB_1 | TypeId::M_ME_TE_1
+                ) {
+                    self.err(&at("scale_factor"), format!("scale_factor is for scaled values (M_ME_NB_1, M_ME_TB_1, M_ME_TE_1), not {type_id}"));
+                } else if !(factor.is_finite() && factor != 0.0) {
+                    self.err(
+                        &at("scale_factor"),
+                        "scale_factor must be a finite number other than 0",
+                    );
+                }
+            }
             let scaling = match (point.measurand_limit, point.full_scale) {
                 (None, None) => None,
                 (Some(limit), full_scale) if line_measurand => {
@@ -343,7 +359,11 @@ impl Ctx<'_> {
                     if full_scale.is_some_and(|f| !(f.is_finite() && f > 0.0)) {
                         self.err(&at("full_scale"), "full_scale must be a positive number");
                     }
-                    Some(MeasurandScaling { limit, full_scale })
+                    Some(MeasurandScaling {
+                        limit,
+                        full_scale,
+                        factor: point.scale_factor,
+                    })
                 }
                 (Some(_), _) => {
                     self.err(&at("measurand_limit"), "measurand_limit is only for measurands of line devices (line:LINE/DEVICE/FUN/INF/INDEX)");
@@ -458,7 +478,16 @@ impl Ctx<'_> {
                     Ioa::IRRELEVANT
                 }
             };
-            let line_target = match line::parse_line_ref(&command.target) {
+            let (reference_text, fixed_value) = match command.target.rsplit_once('=') {
+                Some((reference, "ON")) if reference.starts_with("line:") => {
+                    (reference, Some(true))
+                }
+                Some((reference, "OFF")) if reference.starts_with("line:") => {
+                    (reference, Some(false))
+                }
+                _ => (command.target.as_str(), None),
+            };
+            let line_target = match line::parse_line_ref(reference_text) {
                 Ok(Some(reference)) => {
                     self.line_ref_exists(&raw.name, &raw.line, &reference, &at("target"));
                     if reference.index.is_some() {
@@ -478,6 +507,7 @@ impl Ctx<'_> {
                         device: reference.device,
                         fun: reference.fun,
                         inf: reference.inf,
+                        value: fixed_value,
                     })
                 }
                 Ok(None) => None,
