@@ -505,6 +505,84 @@ impl Device {
         }
     }
 
+    /// The operations of a relay tester at the relay (the simulator's console
+    /// language, shared by `stanice iec103 relay` and the station's `relay DEVICE ...`):
+    /// `inject I U [P Q F]` (multiples of rated), `local`, `remote`, `open`, `close`,
+    /// `earth-switch on|off`, `truck test|service`, `fault`, `restart`, `status`. Returns
+    /// what was done, or why not. Positions follow the REF630 profile's numbers.
+    pub fn operate(&mut self, words: &[&str]) -> Result<String, String> {
+        let word = |index: usize| {
+            words
+                .get(index)
+                .map(|w| w.to_ascii_lowercase())
+                .unwrap_or_default()
+        };
+        match word(0).as_str() {
+            "inject" => {
+                let values: Result<Vec<f64>, _> = words.iter().skip(1).map(|w| w.parse::<f64>()).collect();
+                match values {
+                    Ok(values) if !values.is_empty() => {
+                        let get = |index: usize| values.get(index).copied().unwrap_or(0.0);
+                        let (current, voltage) = (get(0), get(1));
+                        self.inject_rated_multiples(&[
+                            current, current, current, voltage, voltage, voltage, get(2), get(3), get(4),
+                        ]);
+                        Ok(format!("injected {values:?} x rated; reported at the next cycle"))
+                    }
+                    _ => Err("inject: give multiples of rated, e.g. `inject 1 1` or `inject 0.8 0.9`".to_owned()),
+                }
+            }
+            "local" => {
+                self.set_local(true);
+                Ok("LOCAL: remote commands are refused".to_owned())
+            }
+            "remote" => {
+                self.set_local(false);
+                Ok("REMOTE".to_owned())
+            }
+            "open" | "close" => {
+                let dpi = if word(0) == "close" { 2 } else { 1 };
+                self.set_indication(1, 160, dpi, Cause::LOCAL_OPERATION);
+                Ok(format!("breaker {}", if dpi == 2 { "closed" } else { "open" }))
+            }
+            "earth-switch" => {
+                let dpi = if word(1) == "on" { 2 } else { 1 };
+                self.set_indication(1, 168, dpi, Cause::LOCAL_OPERATION);
+                Ok(format!("earth switch {}", if dpi == 2 { "on" } else { "off" }))
+            }
+            "truck" => {
+                let service = word(1) == "service";
+                self.set_indication(5, 10, if service { 2 } else { 1 }, Cause::LOCAL_OPERATION);
+                self.set_indication(5, 9, if service { 1 } else { 2 }, Cause::LOCAL_OPERATION);
+                Ok(format!("truck in {}", if service { "SERVICE" } else { "TEST" }))
+            }
+            "fault" => {
+                let fan = self.earth_fault();
+                Ok(format!("earth fault number {fan}: trip, breaker open"))
+            }
+            "restart" => {
+                self.restart();
+                Ok("warm restart: reported at the next reset of the communication unit".to_owned())
+            }
+            "status" => {
+                let position = |fun, inf| self.indication(fun, inf).map(super::asdu::dpi_text).unwrap_or("?");
+                Ok(format!(
+                    "breaker {}, earth switch {}, truck TEST {} SERVICE {}, switch {}, clock {} ({})",
+                    position(1, 160),
+                    position(1, 168),
+                    position(5, 9),
+                    position(5, 10),
+                    if self.is_local() { "LOCAL" } else { "REMOTE" },
+                    self.clock().format("%Y-%m-%d %H:%M:%S%.3f"),
+                    if self.is_synchronised() { "synchronised" } else { "not synchronised: time tags IV" },
+                ))
+            }
+            other => Err(format!(
+                "unknown operation {other:?}: inject, local, remote, open, close, earth-switch, truck, fault, restart, status"
+            )),
+        }
+    }
+
     fn index(&self, fun: u8, inf: u8) -> Option<usize> {
         self.profile
             .indications

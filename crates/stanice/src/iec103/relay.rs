@@ -8,7 +8,7 @@ use std::time::Duration;
 use clap::Args;
 use iec60870::ft12::io::{drive, DriveEnd, EndpointAction, LineListener, Transport};
 use iec60870::ft12::{Secondary, SecondaryConfig, SecondaryStation};
-use iec60870::iec103::{dpi_text, Cause, Device, DeviceEvent, DeviceProfile};
+use iec60870::iec103::{dpi_text, Device, DeviceEvent, DeviceProfile};
 use tokio::sync::mpsc;
 
 use crate::iec104::render::receipt_time;
@@ -51,23 +51,6 @@ pub(crate) struct RelayArgs {
     duration: Option<f64>,
 }
 
-/// Multiples of rated for the nine channels from the console's `I U [P Q F]`.
-fn multiples(values: &[f64]) -> Vec<f64> {
-    let get = |index: usize| values.get(index).copied().unwrap_or(0.0);
-    let (current, voltage) = (get(0), get(1));
-    vec![
-        current,
-        current,
-        current,
-        voltage,
-        voltage,
-        voltage,
-        get(2),
-        get(3),
-        get(4),
-    ]
-}
-
 pub(crate) async fn run(args: RelayArgs) -> anyhow::Result<ExitCode> {
     if !(1.0..=1800.0).contains(&args.cycle) {
         anyhow::bail!("--cycle must be within 1..=1800 s (CycMeasRepTime)");
@@ -78,7 +61,13 @@ pub(crate) async fn run(args: RelayArgs) -> anyhow::Result<ExitCode> {
     profile.cycle = Duration::from_secs_f64(args.cycle);
     let now = tokio::time::Instant::now().into_std();
     let mut device = Device::new(profile, now, chrono::Utc::now().naive_utc());
-    device.inject_rated_multiples(&multiples(&args.inject));
+    if !args.inject.is_empty() {
+        let words: Vec<String> = std::iter::once("inject".to_owned())
+            .chain(args.inject.iter().map(f64::to_string))
+            .collect();
+        let words: Vec<&str> = words.iter().map(String::as_str).collect();
+        device.operate(&words).map_err(anyhow::Error::msg)?;
+    }
     let secondary = SecondaryConfig {
         single_character: args.single_char,
         ..SecondaryConfig::new(args.address.into())
@@ -148,66 +137,10 @@ pub(crate) async fn run(args: RelayArgs) -> anyhow::Result<ExitCode> {
 
 /// One console operation on the relay.
 fn operate(relay: &mut Relay, words: &[String]) {
-    let device = relay.app();
-    let word = |index: usize| words.get(index).map(String::as_str).unwrap_or_default();
-    match word(0) {
-        "inject" => {
-            let values: Result<Vec<f64>, _> = words
-                .iter()
-                .skip(1)
-                .map(|word| word.parse::<f64>())
-                .collect();
-            match values {
-                Ok(values) if !values.is_empty() => {
-                    device.inject_rated_multiples(&multiples(&values));
-                    println!("injected {values:?} x rated; reported at the next cycle");
-                }
-                _ => println!(
-                    "inject: give multiples of rated, e.g. `inject 1 1` or `inject 0.8 0.9`"
-                ),
-            }
-        }
-        "local" => device.set_local(true),
-        "remote" => device.set_local(false),
-        "open" | "close" => {
-            let dpi = if word(0) == "close" { 2 } else { 1 };
-            device.set_indication(1, 160, dpi, Cause::LOCAL_OPERATION);
-        }
-        "earth-switch" => {
-            let dpi = if word(1) == "on" { 2 } else { 1 };
-            device.set_indication(1, 168, dpi, Cause::LOCAL_OPERATION);
-        }
-        "truck" => {
-            let service = word(1) == "service";
-            device.set_indication(5, 10, if service { 2 } else { 1 }, Cause::LOCAL_OPERATION);
-            device.set_indication(5, 9, if service { 1 } else { 2 }, Cause::LOCAL_OPERATION);
-        }
-        "fault" => {
-            let fan = device.earth_fault();
-            println!("earth fault number {fan}: trip, breaker open");
-        }
-        "restart" => {
-            device.restart();
-            println!("warm restart: reported at the next reset of the communication unit");
-        }
-        "status" => {
-            let position = |fun, inf| device.indication(fun, inf).map(dpi_text).unwrap_or("?");
-            println!(
-                "breaker {}, earth switch {}, truck TEST {} SERVICE {}, switch {}, clock {} ({})",
-                position(1, 160),
-                position(1, 168),
-                position(5, 9),
-                position(5, 10),
-                if device.is_local() { "LOCAL" } else { "REMOTE" },
-                device.clock().format("%Y-%m-%d %H:%M:%S%.3f"),
-                if device.is_synchronised() {
-                    "synchronised"
-                } else {
-                    "not synchronised: time tags IV"
-                },
-            );
-        }
-        other => println!("unknown operation {other:?}; type `help`"),
+    let words: Vec<&str> = words.iter().map(String::as_str).collect();
+    match relay.app().operate(&words) {
+        Ok(done) => println!("{done}"),
+        Err(error) => println!("{error}; type `help`"),
     }
 }
 

@@ -145,8 +145,8 @@ impl LineHandle {
         }
     }
 
-    /// A console operation on a simulated device: `local`, `remote`, `inject I U`,
-    /// `open`, `close`, `fault`. Errors name what is wrong.
+    /// A console operation on a simulated device ([`Device::operate`]: `local`,
+    /// `remote`, `inject I U`, `open`, `close`, `fault` ...). Errors name what is wrong.
     pub fn operate(&self, device: &str, words: &[&str]) -> Result<String, String> {
         let Some(simulated) = &self.simulated else {
             return Err(format!("line {} has no simulated devices", self.name));
@@ -159,70 +159,25 @@ impl LineHandle {
             return Err(format!("line {} has no device {device}", self.name));
         };
         let address = u16::from(*address);
-        let words: Vec<String> = words.iter().map(|word| word.to_lowercase()).collect();
-        let operation = match words.first().map(String::as_str) {
-            Some(word @ ("local" | "remote" | "open" | "close" | "fault")) => word.to_owned(),
-            Some("inject") => {
-                let values: Result<Vec<f64>, _> = words
-                    .iter()
-                    .skip(1)
-                    .map(|word| word.parse::<f64>())
-                    .collect();
-                match values {
-                    Ok(values) if !values.is_empty() => format!(
-                        "inject {}",
-                        values
-                            .iter()
-                            .map(f64::to_string)
-                            .collect::<Vec<_>>()
-                            .join(" ")
-                    ),
-                    _ => return Err("inject: multiples of rated, e.g. `inject 1 1`".to_owned()),
-                }
-            }
-            _ => {
-                return Err(
-                    "relay operations: local, remote, open, close, fault, inject I U".to_owned(),
-                )
-            }
-        };
-        let done = operation.clone();
+        let words: Vec<String> = words.iter().map(|word| (*word).to_owned()).collect();
+        let (done, answer) = std::sync::mpsc::channel();
         simulated
             .send(Box::new(move |line: &mut Simulated| {
-                let Some(station) = line.station(address) else {
-                    return;
+                let result = match line.station(address) {
+                    Some(station) => {
+                        let words: Vec<&str> = words.iter().map(String::as_str).collect();
+                        station.app().operate(&words)
+                    }
+                    None => Err("no such device".to_owned()),
                 };
-                let device = station.app();
-                let words: Vec<&str> = operation.split_whitespace().collect();
-                match words.first().copied() {
-                    Some("local") => device.set_local(true),
-                    Some("remote") => device.set_local(false),
-                    Some("open") => {
-                        device.set_indication(1, 160, 1, Cause::LOCAL_OPERATION);
-                    }
-                    Some("close") => {
-                        device.set_indication(1, 160, 2, Cause::LOCAL_OPERATION);
-                    }
-                    Some("fault") => {
-                        device.earth_fault();
-                    }
-                    Some("inject") => {
-                        let values: Vec<f64> = words
-                            .iter()
-                            .skip(1)
-                            .filter_map(|w| w.parse().ok())
-                            .collect();
-                        let current = values.first().copied().unwrap_or(0.0);
-                        let voltage = values.get(1).copied().unwrap_or(0.0);
-                        device.inject_rated_multiples(&[
-                            current, current, current, voltage, voltage, voltage, 0.0, 0.0, 0.0,
-                        ]);
-                    }
-                    _ => {}
-                }
+                let _ = done.send(result);
             }))
             .map_err(|_| format!("line {} stopped", self.name))?;
-        Ok(format!("{device}: {done}"))
+        // The line's loop runs the operation at once; a line being reopened may take
+        // a moment.
+        answer
+            .recv_timeout(Duration::from_secs(5))
+            .map_err(|_| format!("line {} did not take the operation", self.name))?
     }
 }
 
