@@ -131,3 +131,54 @@ impl PollingArgs {
         })
     }
 }
+
+/// The lines a device-side tool (an IEC 101 slave, a relay simulator) serves one after
+/// the other: the masters of a TCP listener as they come, or the one line of a serial
+/// port or pseudo-terminal.
+pub(crate) struct ServedLines<'a> {
+    args: &'a LineArgs,
+    transport: iec60870::ft12::io::Transport,
+    listener: Option<iec60870::ft12::io::LineListener>,
+    opened: bool,
+}
+
+impl<'a> ServedLines<'a> {
+    /// Binds the listener of `--listen` (printing where it waits).
+    pub(crate) async fn new(args: &'a LineArgs) -> anyhow::Result<ServedLines<'a>> {
+        let transport = args.transport()?;
+        let listener = match &transport {
+            Transport::Listen(address) => {
+                let listener = iec60870::ft12::io::LineListener::bind(address).await?;
+                println!("waiting for a master on tcp {}", listener.local_addr()?);
+                Some(listener)
+            }
+            _ => None,
+        };
+        Ok(ServedLines {
+            args,
+            transport,
+            listener,
+            opened: false,
+        })
+    }
+
+    /// The next line to serve, `None` when a single line has been served.
+    pub(crate) async fn next(&mut self) -> anyhow::Result<Option<OpenLine>> {
+        if let Some(listener) = &self.listener {
+            return Ok(Some(listener.accept().await?));
+        }
+        if std::mem::replace(&mut self.opened, true) {
+            return Ok(None);
+        }
+        Ok(Some(self.args.open(&self.transport).await?))
+    }
+}
+
+/// Says how serving a line ended.
+pub(crate) fn report_end(peer: &str, end: std::io::Result<iec60870::ft12::io::DriveEnd>) {
+    match end {
+        Ok(iec60870::ft12::io::DriveEnd::Closed) => println!("master on {peer} went away"),
+        Ok(iec60870::ft12::io::DriveEnd::Stopped) => {}
+        Err(error) => println!("line {peer} failed: {error}"),
+    }
+}

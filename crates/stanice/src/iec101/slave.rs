@@ -8,7 +8,7 @@ use std::time::Duration;
 
 use clap::Args;
 use iec60870::asdu::CommonAddress;
-use iec60870::ft12::io::{drive, DriveEnd, LineListener, Transport};
+use iec60870::ft12::io::drive;
 use iec60870::ft12::{Balanced, BalancedConfig, Secondary, SecondaryConfig, SecondaryStation};
 use iec60870::iec101::{BalancedSlave, Slave};
 use iec60870::outstation::{Outstation, OutstationConfig, Peer, StationHandler};
@@ -17,7 +17,7 @@ use tokio::sync::mpsc;
 use super::FieldSizes;
 use crate::iec104::points_file;
 use crate::iec104::server::CommandLogger;
-use crate::serial_line::LineArgs;
+use crate::serial_line::{report_end, LineArgs, ServedLines};
 
 /// Arguments of `stanice iec101 slave`.
 #[derive(Args, Debug)]
@@ -53,7 +53,6 @@ pub(crate) struct SlaveArgs {
 }
 
 pub(crate) async fn run(args: SlaveArgs) -> anyhow::Result<ExitCode> {
-    let transport = args.line.transport()?;
     let settings = args.line.settings()?;
     let points = points_file::load(&args.points)?;
     let mut config = OutstationConfig::new(CommonAddress::new(args.ca), args.sizes.params()?);
@@ -86,20 +85,9 @@ pub(crate) async fn run(args: SlaveArgs) -> anyhow::Result<ExitCode> {
         class1_on_class2_request: false,
     };
     let serve = async {
-        // A TCP listener takes one master after the other; any other line is served once.
-        let listener = match &transport {
-            Transport::Listen(address) => Some(LineListener::bind(address).await?),
-            _ => None,
-        };
-        if let Some(listener) = &listener {
-            println!("waiting for a master on tcp {}", listener.local_addr()?);
-        }
+        let mut lines = ServedLines::new(&args.line).await?;
         let mut id = 0;
-        loop {
-            let line = match &listener {
-                Some(listener) => listener.accept().await?,
-                None => args.line.open(&transport).await?,
-            };
+        while let Some(line) = lines.next().await? {
             id += 1;
             println!(
                 "IEC 101 outstation at link address {} (common address {}) on {}, {summary}",
@@ -142,15 +130,9 @@ pub(crate) async fn run(args: SlaveArgs) -> anyhow::Result<ExitCode> {
                 station.into_app().close();
                 end
             };
-            match end {
-                Ok(DriveEnd::Closed) => println!("master on {} went away", line.peer),
-                Ok(DriveEnd::Stopped) => {}
-                Err(error) => println!("line {} failed: {error}", line.peer),
-            }
-            if listener.is_none() {
-                return Ok::<(), anyhow::Error>(());
-            }
+            report_end(&line.peer, end);
         }
+        Ok::<(), anyhow::Error>(())
     };
     let mut interrupt = crate::interrupt::Interrupt::listen();
     tokio::select! {

@@ -6,13 +6,13 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use clap::Args;
-use iec60870::ft12::io::{drive, DriveEnd, EndpointAction, LineListener, Transport};
+use iec60870::ft12::io::{drive, EndpointAction};
 use iec60870::ft12::{Secondary, SecondaryConfig, SecondaryStation};
 use iec60870::iec103::{dpi_text, Device, DeviceEvent, DeviceProfile};
 use tokio::sync::mpsc;
 
 use crate::iec104::render::receipt_time;
-use crate::serial_line::LineArgs;
+use crate::serial_line::{report_end, LineArgs, ServedLines};
 
 /// The console's operations.
 const CONSOLE_HELP: &str = "\
@@ -55,7 +55,6 @@ pub(crate) async fn run(args: RelayArgs) -> anyhow::Result<ExitCode> {
     if !(1.0..=1800.0).contains(&args.cycle) {
         anyhow::bail!("--cycle must be within 1..=1800 s (CycMeasRepTime)");
     }
-    let transport = args.line.transport()?;
     let settings = args.line.settings()?;
     let mut profile = DeviceProfile::ref630(args.address);
     profile.cycle = Duration::from_secs_f64(args.cycle);
@@ -93,18 +92,8 @@ pub(crate) async fn run(args: RelayArgs) -> anyhow::Result<ExitCode> {
         }
     });
     let serve = async {
-        let listener = match &transport {
-            Transport::Listen(address) => Some(LineListener::bind(address).await?),
-            _ => None,
-        };
-        if let Some(listener) = &listener {
-            println!("waiting for a master on tcp {}", listener.local_addr()?);
-        }
-        loop {
-            let line = match &listener {
-                Some(listener) => listener.accept().await?,
-                None => args.line.open(&transport).await?,
-            };
+        let mut lines = ServedLines::new(&args.line).await?;
+        while let Some(line) = lines.next().await? {
             println!(
                 "REF630 relay simulator at address {} on {} ({settings}), CycMeasRepTime {} s; type `help`",
                 args.address, line.peer, args.cycle
@@ -116,15 +105,9 @@ pub(crate) async fn run(args: RelayArgs) -> anyhow::Result<ExitCode> {
                 ControlFlow::Continue(())
             })
             .await;
-            match end {
-                Ok(DriveEnd::Closed) => println!("master on {} went away", line.peer),
-                Ok(DriveEnd::Stopped) => {}
-                Err(error) => println!("line {} failed: {error}", line.peer),
-            }
-            if listener.is_none() {
-                return Ok::<(), anyhow::Error>(());
-            }
+            report_end(&line.peer, end);
         }
+        Ok::<(), anyhow::Error>(())
     };
     let mut interrupt = crate::interrupt::Interrupt::listen();
     tokio::select! {
