@@ -262,6 +262,8 @@ fn iec103_master_replays_the_pcvdew6_session() {
     // One cycle at start and the next in half an hour: the second class 2 poll must find
     // no data, whatever the machine's speed.
     let (_relay, _console, path) = relay_on_a_pty(&["--cycle", "1800"]);
+    // Single telegrams are not repeated: a generous answer timeout keeps a loaded machine
+    // from turning a slow answer into a missing one.
     let telegrams = |path: &str, address: &str, list: &str| {
         let mut master = stanice();
         master.args([
@@ -271,6 +273,8 @@ fn iec103_master_replays_the_pcvdew6_session() {
             path,
             "--address",
             address,
+            "--timeout",
+            "3000",
             "--telegrams",
             list,
         ]);
