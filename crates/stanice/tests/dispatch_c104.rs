@@ -541,7 +541,68 @@ fn c104_reads_the_com600_gateway_and_commands_the_relay() {
         return;
     }
     let project = repository_root().join("examples/com600-gateway");
-    let (mut gateway, port) = Demo::start_on_free_ports_with(1, |port| {
+    let (mut gateway, port) = start_gateway(&project);
+    gateway_scenario(port, |operation| {
+        gateway.type_line(&format!("relay REF630 {operation}"))
+    });
+}
+
+/// The same gateway with the relay in another process on a real serial line (a
+/// pseudo-terminal): `stanice iec103 relay --pty`, the project's line on its path.
+#[test]
+fn c104_reads_the_com600_gateway_with_the_relay_on_a_pseudo_terminal() {
+    if !peers_available() {
+        return;
+    }
+    let mut relay = Command::new(env!("CARGO_BIN_EXE_stanice"))
+        .args(["iec103", "relay", "--pty", "--address", "1", "--cycle", "1"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut relay_console = relay.stdin.take().unwrap();
+    let mut relay_output = BufReader::new(relay.stdout.take().unwrap()).lines();
+    let path = relay_output
+        .next()
+        .and_then(Result::ok)
+        .and_then(|line| line.strip_prefix("pty: ").map(str::to_owned))
+        .expect("the relay prints its pty first");
+    // Keep draining the relay's log so it never blocks on a full pipe.
+    std::thread::spawn(move || for _ in relay_output {});
+    let project = tempfile_dir("com600-pty");
+    let text =
+        std::fs::read_to_string(repository_root().join("examples/com600-gateway/station.toml"))
+            .unwrap()
+            .replace("simulate = \"ref630\"", &format!("port = \"{path}\""))
+            .replace(
+                "store = \"sqlite:events.sqlite\"",
+                "store = \"sqlite::memory:\"",
+            );
+    assert!(text.contains(&path), "the project names the pty");
+    std::fs::write(project.join("station.toml"), text).unwrap();
+    let (gateway, port) = start_gateway(&project);
+    gateway_scenario(port, |operation| {
+        use std::io::Write as _;
+        writeln!(relay_console, "{operation}").unwrap();
+        relay_console.flush().unwrap();
+    });
+    drop(gateway);
+    let _ = relay.kill();
+    let _ = relay.wait();
+}
+
+/// A fresh folder in the temp dir.
+fn tempfile_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("stanice-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// `stanice run PROJECT` on a free port.
+fn start_gateway(project: &std::path::Path) -> (Demo, u16) {
+    Demo::start_on_free_ports_with(1, |port| {
         vec![
             "run".to_owned(),
             project.display().to_string(),
@@ -550,12 +611,17 @@ fn c104_reads_the_com600_gateway_and_commands_the_relay() {
             "--store".to_owned(),
             "none".to_owned(),
         ]
-    });
+    })
+}
+
+/// What c104 sees of the gateway while `relay` operates the relay (`local`, `remote`,
+/// `inject 1 1`).
+fn gateway_scenario(port: u16, mut relay: impl FnMut(&str)) {
     // The relay answers (status point FALSE) with its breaker closed (DPI 2).
     wait_for_value(port, 9000, "the relay answering", |value| value == false);
     wait_for_value(port, 2000, "the breaker closed", |value| value == 2);
 
-    gateway.type_line("relay REF630 local");
+    relay("local");
     wait_for_value(port, 2003, "LOCAL", |value| value == true);
     let refused = c104_client(
         port,
@@ -577,7 +643,7 @@ fn c104_reads_the_com600_gateway_and_commands_the_relay() {
         "the breaker did not move"
     );
 
-    gateway.type_line("relay REF630 remote");
+    relay("remote");
     wait_for_value(port, 2003, "REMOTE", |value| value == false);
     let executed = c104_client(
         port,
@@ -604,7 +670,7 @@ fn c104_reads_the_com600_gateway_and_commands_the_relay() {
         wait_for_value(port, 2000, what, |value| value == position);
     }
 
-    gateway.type_line("relay REF630 inject 1 1");
+    relay("inject 1 1");
     let current = wait_for_value(port, 3100, "rated current", |value| {
         value.as_f64().unwrap_or(0.0) > 0.0
     });
@@ -620,5 +686,4 @@ fn c104_reads_the_com600_gateway_and_commands_the_relay() {
         (voltage.as_f64().unwrap() * 32768.0 - 12667.0).abs() < 4.0,
         "12.67 kV: {voltage}"
     );
-    let _ = gateway.tail();
 }
