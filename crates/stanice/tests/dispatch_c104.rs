@@ -619,6 +619,7 @@ fn start_gateway(project: &std::path::Path) -> (Demo, u16) {
 fn gateway_scenario(port: u16, mut relay: impl FnMut(&str)) {
     // The relay answers (status point FALSE) with its breaker closed (DPI 2).
     wait_for_value(port, 9000, "the relay answering", |value| value == false);
+    wait_for_value(port, 9001, "the line answering", |value| value == false);
     wait_for_value(port, 2000, "the breaker closed", |value| value == 2);
 
     relay("local");

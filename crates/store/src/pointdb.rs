@@ -83,6 +83,12 @@ pub enum PointSource {
         /// The position in a measurand set; `None` for an indication.
         index: Option<u8>,
     },
+    /// Whether any device on a serial line answers (TRUE = none does), for a point named
+    /// by the line's `status_point`.
+    LineStatus {
+        /// The line's name.
+        line: String,
+    },
     /// Whether a device on a serial line answers (TRUE = it does not), for a point named
     /// by the device's `status_point`.
     DeviceStatus {

@@ -142,6 +142,7 @@
 //! timeout_ms = 500                     # response timeout, default 500 (5..=60000)
 //! retries = 2                          # default 2 (0..=10)
 //! poll_interval_ms = 100               # class 2 polls of a device, default 100
+//! status_point = "COMM_LINE"           # optional: a single point, TRUE while no device answers
 //!
 //! [[node.line.device]]
 //! name = "F1"                          # unique per line
@@ -540,6 +541,8 @@ pub struct LineConfig {
     pub retries: u8,
     /// Least time between two class 2 polls of a device.
     pub poll_interval: Duration,
+    /// A single point of the node, TRUE while no device of the line answers.
+    pub status_point: Option<String>,
     /// The devices.
     pub devices: Vec<DeviceConfig>,
 }

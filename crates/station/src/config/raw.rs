@@ -204,6 +204,7 @@ pub(in crate::config) struct RawLine {
     pub(in crate::config) timeout_ms: Option<i64>,
     pub(in crate::config) retries: Option<i64>,
     pub(in crate::config) poll_interval_ms: Option<i64>,
+    pub(in crate::config) status_point: Option<String>,
     #[serde(default)]
     pub(in crate::config) device: Vec<RawDevice>,
 }

@@ -216,6 +216,8 @@ pub(crate) fn spawn_line(spec: LineSpec, node: Arc<NodePoints>) -> LineHandle {
 #[derive(Default)]
 struct Shared {
     indications: HashMap<(u8, u8, u8), u8>,
+    /// The devices answering now.
+    answering: std::collections::HashSet<u8>,
     pending: HashMap<(u16, u8), oneshot::Sender<Result<(), CommandProblem>>>,
 }
 
@@ -230,6 +232,7 @@ async fn run(
     for device in &spec.config.devices {
         set_device_down(&spec, &node, device.address);
     }
+    set_line_status(&spec, &node, false);
     loop {
         let stream = match open(&spec.config, &mut simulated).await {
             Ok(stream) => stream,
@@ -280,12 +283,14 @@ async fn run(
             .lock()
             .map(|mut shared| {
                 shared.indications.clear();
+                shared.answering.clear();
                 shared.pending.drain().map(|(_, reply)| reply).collect()
             })
             .unwrap_or_default();
         for reply in pending {
             let _ = reply.send(Err(CommandProblem::NoAnswer("the line closed".to_owned())));
         }
+        set_line_status(&spec, &node, false);
         tokio::time::sleep(REOPEN_AFTER).await;
     }
 }
@@ -404,17 +409,47 @@ fn observe(
                 if let Ok(address) = u8::try_from(address) {
                     tracing::warn!(node = %node.name(), line = %spec.config.name, address, "device not answering");
                     set_device_down(spec, node, address);
+                    answering(spec, node, shared, address, false);
                 }
             }
             MasterEvent::Link(PrimaryEvent::LinkUp { address }) => {
                 if let Ok(address) = u8::try_from(address) {
                     tracing::info!(node = %node.name(), line = %spec.config.name, address, "device answering");
                     set_device_status(spec, node, address, true);
+                    answering(spec, node, shared, address, true);
                 }
             }
             _ => {}
         }
     }
+}
+
+/// Notes a device answering or not; the line's status point is TRUE while none does.
+fn answering(spec: &LineSpec, node: &NodePoints, shared: &Mutex<Shared>, address: u8, up: bool) {
+    let any = shared.lock().map(|mut shared| {
+        if up {
+            shared.answering.insert(address);
+        } else {
+            shared.answering.remove(&address);
+        }
+        !shared.answering.is_empty()
+    });
+    if let Ok(any) = any {
+        set_line_status(spec, node, any);
+    }
+}
+
+fn set_line_status(spec: &LineSpec, node: &NodePoints, up: bool) {
+    let Some(point) = spec.config.status_point.clone() else {
+        return;
+    };
+    node.change_with(&format!("line {}", spec.config.name), |db, now| {
+        db.set_link_status(point.as_str(), up, now)
+            .ok()
+            .flatten()
+            .into_iter()
+            .collect()
+    });
 }
 
 fn device_name(spec: &LineSpec, address: u8) -> Option<&str> {

@@ -1664,6 +1664,14 @@ fn com600_gateway_example_loads() {
             device: "REF630".into()
         }
     );
+    let line_status = node.points.iter().find(|p| p.ioa.get() == 9001).unwrap();
+    assert_eq!(
+        line_status.source,
+        PointSource::LineStatus {
+            line: "relays".into()
+        }
+    );
+    assert_eq!(line.status_point.as_deref(), Some("COMM_LINE"));
     let command = node.commands.iter().find(|c| c.ioa.get() == 2100).unwrap();
     assert_eq!(
         command.target,

@@ -77,6 +77,21 @@ impl Ctx<'_> {
         }
     }
 
+    /// A line's or device's status point: a single point of the node without a source.
+    fn status_point_of_line(&mut self, raw: &RawNode, point: &str, path: &[Seg]) {
+        match raw.point.iter().find(|p| p.name == point) {
+            None => self.err(path, format!("node `{}` has no point `{point}`", raw.name)),
+            Some(p) if !matches!(p.type_id.as_str(), "M_SP_NA_1" | "M_SP_TB_1") => self.err(
+                path,
+                format!("the status point `{point}` must be M_SP_NA_1 or M_SP_TB_1"),
+            ),
+            Some(p) if p.source.is_some() => {
+                self.err(path, format!("the status point `{point}` takes no source"))
+            }
+            Some(_) => {}
+        }
+    }
+
     pub(in crate::config) fn check_lines(&mut self, n: usize, raw: &RawNode) -> Vec<LineConfig> {
         let mut lines = Vec::new();
         let mut names = HashSet::new();
@@ -212,24 +227,7 @@ impl Ctx<'_> {
                     }
                 });
                 if let Some(point) = &device.status_point {
-                    match raw.point.iter().find(|p| &p.name == point) {
-                        None => self.err(
-                            &at("status_point"),
-                            format!("node `{}` has no point `{point}`", raw.name),
-                        ),
-                        Some(p) if !matches!(p.type_id.as_str(), "M_SP_NA_1" | "M_SP_TB_1") => self
-                            .err(
-                                &at("status_point"),
-                                format!(
-                                    "the status point `{point}` must be M_SP_NA_1 or M_SP_TB_1"
-                                ),
-                            ),
-                        Some(p) if p.source.is_some() => self.err(
-                            &at("status_point"),
-                            format!("the status point `{point}` takes no source"),
-                        ),
-                        Some(_) => {}
-                    }
+                    self.status_point_of_line(raw, point, &at("status_point"));
                 }
                 devices.push(DeviceConfig {
                     name: device.name.clone(),
@@ -238,8 +236,12 @@ impl Ctx<'_> {
                     local_indication,
                 });
             }
+            if let Some(point) = &line.status_point {
+                self.status_point_of_line(raw, point, &at("status_point"));
+            }
             lines.push(LineConfig {
                 name: line.name.clone(),
+                status_point: line.status_point.clone(),
                 transport,
                 settings,
                 timeout,

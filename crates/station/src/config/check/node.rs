@@ -256,7 +256,15 @@ impl Ctx<'_> {
                     .find(|device| device.status_point.as_deref() == Some(point.name.as_str()))
                     .map(|device| (line.name.clone(), device.name.clone()))
             });
+            let line_of = raw
+                .line
+                .iter()
+                .find(|line| line.status_point.as_deref() == Some(point.name.as_str()))
+                .map(|line| line.name.clone());
             let source = match (&point.source, status_of) {
+                (None, None) if line_of.is_some() => PointSource::LineStatus {
+                    line: line_of.clone().unwrap_or_default(),
+                },
                 (None, None) if device_of.is_some() => {
                     let (line, device) = device_of.clone().unwrap_or_default();
                     PointSource::DeviceStatus { line, device }
