@@ -3,11 +3,13 @@
 //! evaluating alarms and broadcasting everything to the browsers.
 //!
 //! When the link is lost every point turns invalid at once (and the browsers blink);
-//! after reconnection a general interrogation brings the values back.
+//! after reconnection a general interrogation brings the values back. The connection is a
+//! [`cs104::link::Link`](iec60870::cs104::link::Link), the same loop the station's
+//! concentrator links use; [`Station`] is what observes it.
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex, RwLock};
+use std::sync::{Arc, Mutex, OnceLock, RwLock};
 use std::time::Duration;
 
 use chrono::{DateTime, Utc};
@@ -15,7 +17,8 @@ use iec60870::asdu::{
     Asdu, CommandQualifier, CommonAddress, DoublePointState, Element, Ioa, SetpointQualifier,
     TimeTag, TypeId,
 };
-use iec60870::cs104::client::{spawn_client, ClientConfig, ClientError, ClientEvent, ClientHandle};
+use iec60870::cs104::client::{ClientConfig, ClientError, ClientHandle};
+use iec60870::cs104::link::{Link, LinkDown, LinkObserver};
 use serde::Serialize;
 use serde_json::{json, Value};
 use store::pointdb::TimeZonePolicy;
@@ -24,7 +27,7 @@ use store::{
     Actor, CommandOutcome, CommandPhase, CommandRecord, EventCause, EventRecord, PointValue,
     Quality, SourceTime,
 };
-use tokio::sync::{broadcast, mpsc};
+use tokio::sync::broadcast;
 
 use crate::alarms::{Alarm, Alarms};
 use crate::config::{HmiConfig, PointRow};
@@ -86,11 +89,6 @@ impl ControlOutcome {
     }
 }
 
-enum LinkControl {
-    Cut,
-    Restore,
-}
-
 /// The station as the HMI knows it.
 pub struct Station {
     config: HmiConfig,
@@ -102,8 +100,8 @@ pub struct Station {
     common_address: CommonAddress,
     node_label: String,
     live: broadcast::Sender<String>,
-    client: Mutex<Option<ClientHandle>>,
-    control: mpsc::UnboundedSender<LinkControl>,
+    /// Set once, right after the station is built (the link's observer is the station).
+    link: OnceLock<Link>,
     recorder: Recorder,
     alarms: Mutex<Alarms>,
     zone: TimeZonePolicy,
@@ -188,7 +186,6 @@ impl Station {
             .collect();
         let points = monitor.iter().map(|p| view_of(p)).collect();
         let (live, _) = broadcast::channel(4096);
-        let (control, control_rx) = mpsc::unbounded_channel();
         let alarms = Alarms::new(&config.alarms);
         let station = Arc::new(Station {
             node_label: format!("CA{}", ca.get()),
@@ -200,14 +197,17 @@ impl Station {
             addresses,
             common_address: ca,
             live,
-            client: Mutex::new(None),
-            control,
+            link: OnceLock::new(),
             recorder,
             alarms: Mutex::new(alarms),
             zone,
             local_address,
         });
-        tokio::spawn(run(Arc::clone(&station), control_rx));
+        let link = Link::spawn(
+            station.link_config(),
+            Arc::new(Observer(Arc::clone(&station))),
+        );
+        let _ = station.link.set(link);
         station
     }
 
@@ -285,11 +285,33 @@ impl Station {
 
     /// Cuts the link to the station (a test of what the operator sees), or restores it.
     pub fn set_link(&self, up: bool) {
-        let _ = self.control.send(if up {
-            LinkControl::Restore
-        } else {
-            LinkControl::Cut
-        });
+        if let Some(link) = self.link.get() {
+            if up {
+                link.restore();
+            } else {
+                link.cut();
+            }
+        }
+    }
+
+    /// The client configuration of the link to the station.
+    fn link_config(&self) -> ClientConfig {
+        let mut config = ClientConfig::new(
+            self.addresses.first().cloned().unwrap_or_default(),
+            self.common_address,
+        );
+        config.addresses = self.addresses.clone();
+        config.local_address = self.local_address;
+        config.interrogate_on_start = true;
+        config.reconnect_delay = Duration::from_millis(300);
+        config.reconnect_delay_max = Duration::from_secs(5);
+        config.command_timeout = Duration::from_secs(5);
+        // An operator must not watch stale values as live: if another controlling
+        // station's STARTDT took the data (spoofed from our address, or a second HMI in
+        // our redundancy group), notice within seconds, show the link down and take the
+        // data back.
+        config.standby_probe = Some(Duration::from_secs(10));
+        config
     }
 
     /// Sends a live message to every browser.
@@ -338,10 +360,10 @@ impl Station {
         if asdu.cot.negative || !asdu.type_id.is_monitor() {
             return;
         }
-        let cause = asdu.cot.cause.value();
-        if !matches!(cause, 1..=3 | 5 | 11 | 12 | 20..=36) {
+        let Some(event_cause) = EventCause::of_received(asdu.cot.cause) else {
             return;
-        }
+        };
+        let is_event = EventCause::received_as_event(asdu.cot.cause);
         for object in &asdu.objects {
             let Some(&index) = self.by_ioa.get(&object.ioa.get()) else {
                 continue;
@@ -367,7 +389,7 @@ impl Station {
                 point.invalid = quality.invalid;
                 point.quality = quality_flags(quality);
                 point.time = time;
-                if !changed && !matches!(cause, 3 | 11 | 12) {
+                if !changed && !is_event {
                     continue;
                 }
                 point.clone()
@@ -385,13 +407,7 @@ impl Station {
                     invalid: false,
                 })),
                 received_time: received,
-                cause: match cause {
-                    11 => EventCause::ReturnRemote,
-                    12 => EventCause::ReturnLocal,
-                    20..=36 => EventCause::Interrogated,
-                    1 => EventCause::Cyclic,
-                    _ => EventCause::Spontaneous,
-                },
+                cause: event_cause,
                 origin: self.addresses.join(","),
             });
             if let PointValue::Bool(on) = value {
@@ -420,11 +436,7 @@ impl Station {
         else {
             return (ControlOutcome::Refused, format!("no command `{command}`"));
         };
-        let client = self
-            .client
-            .lock()
-            .unwrap_or_else(|p| p.into_inner())
-            .clone();
+        let client = self.link.get().and_then(Link::client);
         let (outcome, detail) = match (client, self.is_up()) {
             (Some(client), true) => {
                 let result = async {
@@ -618,58 +630,21 @@ fn command_element(
     })
 }
 
-async fn run(station: Arc<Station>, mut control: mpsc::UnboundedReceiver<LinkControl>) {
-    let mut cut = false;
-    loop {
-        if cut {
-            match control.recv().await {
-                Some(LinkControl::Restore) => cut = false,
-                Some(LinkControl::Cut) => continue,
-                None => return,
-            }
-        }
-        let mut config = ClientConfig::new(
-            station.addresses.first().cloned().unwrap_or_default(),
-            station.common_address,
-        );
-        config.addresses = station.addresses.clone();
-        config.local_address = station.local_address;
-        config.interrogate_on_start = true;
-        config.reconnect_delay = Duration::from_millis(300);
-        config.reconnect_delay_max = Duration::from_secs(5);
-        config.command_timeout = Duration::from_secs(5);
-        // An operator must not watch stale values as live: if another controlling
-        // station's STARTDT took the data (spoofed from our address, or a second HMI in
-        // our redundancy group), notice within seconds, show the link down and take the
-        // data back.
-        config.standby_probe = Some(Duration::from_secs(10));
-        let (client, mut events) = spawn_client(config);
-        *station.client.lock().unwrap_or_else(|p| p.into_inner()) = Some(client.clone());
-        loop {
-            tokio::select! {
-                event = events.recv() => match event {
-                    None => break,
-                    Some(ClientEvent::Started) => station.set_up(true),
-                    Some(ClientEvent::Disconnected { .. }) => station.set_up(false),
-                    Some(ClientEvent::Asdu(asdu)) => station.apply(&asdu),
-                    Some(_) => {}
-                },
-                request = control.recv() => match request {
-                    Some(LinkControl::Cut) => {
-                        *station.client.lock().unwrap_or_else(|p| p.into_inner()) = None;
-                        client.close().await;
-                        station.set_up(false);
-                        cut = true;
-                        break;
-                    }
-                    Some(LinkControl::Restore) => {}
-                    None => {
-                        client.close().await;
-                        return;
-                    }
-                },
-            }
-        }
+/// The station observes its own link. (The link's task holds the station for as long as
+/// the link runs, as the HMI's server does.)
+struct Observer(Arc<Station>);
+
+impl LinkObserver for Observer {
+    fn started(&self, _client: &ClientHandle) {
+        self.0.set_up(true);
+    }
+
+    fn down(&self, _why: &LinkDown) {
+        self.0.set_up(false);
+    }
+
+    fn asdu(&self, asdu: &Asdu) {
+        self.0.apply(asdu);
     }
 }
 

@@ -17,6 +17,8 @@
 //!   session, the FT1.2 link layer of IEC 101) plugs in through
 //!   [`outstation::LinkLayer`]. A fuzz target and `tests/outstation.rs` drive it with no
 //!   socket at all.
+//! - [`point_list`]: the CSV point lists (address, type, value, name, description,
+//!   select, groups) of the test tools' outstations and the HMI, read once.
 //! - [`controlling`]: the controlling station's part without a transport: open requests
 //!   and how received ASDUs finish them (confirmation, termination, timeouts), what it
 //!   sends when data transfer starts (clock sync, interrogation).
@@ -36,6 +38,9 @@
 //!     accepts TCP/TLS connections and drives a `Session` and an outstation `LinkCore`
 //!     for each; the client connects with back-off, drives a `Session` and the
 //!     controlling core's `OpenRequests`, and probes a quiet standby connection.
+//!   - `link` (feature `tokio`): a controlling station's link kept up for its owner
+//!     (cut, restore, stop, state and data to a `LinkObserver`): the station's
+//!     concentrator links and the HMI use it.
 //!   - `tls` (feature `tokio`): rustls configuration for mutual authentication
 //!     (IEC 62351-3).
 //!
@@ -65,4 +70,5 @@ pub mod ft12;
 pub mod iec101;
 pub mod iec103;
 pub mod outstation;
+pub mod point_list;
 pub mod time;

@@ -31,6 +31,8 @@ mod commands;
 mod events;
 #[path = "station/interrogation.rs"]
 mod interrogation;
+#[path = "station/link.rs"]
+mod link;
 #[path = "station/redundancy.rs"]
 mod redundancy;
 #[path = "station/redundancy_modes.rs"]

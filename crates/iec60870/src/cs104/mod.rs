@@ -4,6 +4,8 @@
 pub mod client;
 pub mod config;
 #[cfg(feature = "tokio")]
+pub mod link;
+#[cfg(feature = "tokio")]
 mod repeated_warning;
 #[cfg(feature = "tokio")]
 pub mod server;

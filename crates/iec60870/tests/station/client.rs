@@ -54,11 +54,17 @@ async fn connects_to_the_second_address_when_the_first_refuses() {
 
 /// Starts a server on `address`, retrying while the previous one still holds the port.
 async fn restart_server(address: SocketAddr) -> ServerHandle {
+    restart_server_with(address, image()).await
+}
+
+/// Starts a server serving `image` on `address`, retrying while the previous one still
+/// holds the port.
+pub(crate) async fn restart_server_with(address: SocketAddr, image: ProcessImage) -> ServerHandle {
     within(WAIT, "the port to be free again", async {
         loop {
             let mut config = server_config();
             config.listen = address;
-            match spawn_server(config, image(), Arc::new(ReadOnlyStation)).await {
+            match spawn_server(config, image.clone(), Arc::new(ReadOnlyStation)).await {
                 Ok(server) => return server,
                 Err(_) => tokio::time::sleep(Duration::from_millis(20)).await,
             }

@@ -1,26 +1,28 @@
 //! A node's IEC 104 client link to a lower node (concentration).
 //!
-//! One task per link drives a [`cs104::client`](iec60870::cs104::client): data of the
-//! lower node (spontaneous, interrogated, periodic, return information) update the
-//! points whose source is `link:NAME/IOA`; when the connection is lost those points turn
-//! invalid (IV, last value kept) and the link's status point reports the failure; after
-//! reconnection the lower node's buffered events and the general interrogation bring
-//! them back. On start (and every [`CLOCK_SYNC_PERIOD`]) the node synchronises the lower
-//! node's clock with its own, so it stays the time source while its upper link is down.
-//! Commands forwarded down the link use the same client ([`LinkHandle::client`]); the
-//! link task reports their confirmation and termination as it meets them in the lower
-//! node's stream ([`LinkHandle::watch_command`]), after the data received before them, so
-//! a forwarded command's return information is published here before its termination.
+//! Each link is a [`cs104::link::Link`](iec60870::cs104::link::Link) (the loop that keeps
+//! a client connected, cut and restored, written once for the runtime and the HMI) with a
+//! [`Concentrator`] as its observer: data of the lower node (spontaneous, interrogated,
+//! periodic, return information) update the points whose source is `link:NAME/IOA`; when
+//! the connection is lost those points turn invalid (IV, last value kept) and the link's
+//! status point reports the failure; after reconnection the lower node's buffered events
+//! and the general interrogation bring them back. On start (and every
+//! [`CLOCK_SYNC_PERIOD`]) the node synchronises the lower node's clock with its own, so it
+//! stays the time source while its upper link is down. Commands forwarded down the link
+//! use the same client ([`LinkHandle::client`]); the observer reports their confirmation
+//! and termination as it meets them in the lower node's stream
+//! ([`LinkHandle::watch_command`]), after the data received before them, so a forwarded
+//! command's return information is published here before its termination.
 
 use std::collections::HashMap;
 use std::net::SocketAddr;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use iec60870::asdu::{Asdu, Cause, CommonAddress, Ioa, TypeId};
-use iec60870::cs104::client::{spawn_client, ClientConfig, ClientEvent, ClientHandle};
-use tokio::sync::{mpsc, oneshot};
+use iec60870::cs104::client::{ClientConfig, ClientHandle};
+use iec60870::cs104::link::{Link, LinkDown, LinkObserver};
+use tokio::sync::oneshot;
 
 use crate::pointdb::{from_element, PointId};
 use crate::store::EventCause;
@@ -51,22 +53,17 @@ pub(crate) struct LinkSpec {
     pub local_clock: Option<Arc<NodeClock>>,
 }
 
-enum LinkControl {
-    Cut,
-    Restore,
-    /// The runtime stops: close without reporting the link lost.
-    Stop,
-}
-
 /// A running link: its state, its client (for forwarded commands), cut and restore.
 #[derive(Debug, Clone)]
 pub struct LinkHandle {
     name: String,
-    control: mpsc::UnboundedSender<LinkControl>,
-    client: Arc<Mutex<Option<ClientHandle>>>,
-    up: Arc<AtomicBool>,
-    commands: Arc<Mutex<Vec<CommandWatch>>>,
+    link: Link,
+    commands: Arc<CommandWatches>,
 }
+
+/// The forwarded commands whose answers a link looks out for.
+#[derive(Debug, Default)]
+struct CommandWatches(Mutex<Vec<CommandWatch>>);
 
 /// A forwarded command whose answers the link task looks out for.
 #[derive(Debug)]
@@ -106,26 +103,23 @@ impl LinkHandle {
 
     /// Whether data transfer is started on the link.
     pub fn is_up(&self) -> bool {
-        self.up.load(Ordering::Acquire)
+        self.link.is_up()
     }
 
     /// The client, while the link is not cut.
     pub fn client(&self) -> Option<ClientHandle> {
-        self.client
-            .lock()
-            .unwrap_or_else(|poison| poison.into_inner())
-            .clone()
+        self.link.client()
     }
 
     /// Cuts the link (fault injection: a cable pulled): closes the connection and stays
     /// disconnected until [`LinkHandle::restore`].
     pub fn cut(&self) {
-        let _ = self.control.send(LinkControl::Cut);
+        self.link.cut();
     }
 
     /// Reconnects a cut link.
     pub fn restore(&self) {
-        let _ = self.control.send(LinkControl::Restore);
+        self.link.restore();
     }
 
     /// Watches for the answers of a command about to be sent down the link (type and the
@@ -133,7 +127,7 @@ impl LinkHandle {
     pub(crate) fn watch_command(&self, type_id: TypeId, ioa: Ioa) -> CommandAnswers {
         let (confirmed, confirmed_rx) = oneshot::channel();
         let (terminated, terminated_rx) = oneshot::channel();
-        let mut commands = self.lock_commands();
+        let mut commands = self.commands.lock();
         commands.retain(|watch| !watch.abandoned());
         commands.push(CommandWatch {
             type_id,
@@ -147,10 +141,15 @@ impl LinkHandle {
         }
     }
 
-    fn lock_commands(&self) -> std::sync::MutexGuard<'_, Vec<CommandWatch>> {
-        self.commands
-            .lock()
-            .unwrap_or_else(|poison| poison.into_inner())
+    /// Closes the link for good (runtime shutdown).
+    pub(crate) fn stop(&self) {
+        self.link.stop();
+    }
+}
+
+impl CommandWatches {
+    fn lock(&self) -> std::sync::MutexGuard<'_, Vec<CommandWatch>> {
+        self.0.lock().unwrap_or_else(|poison| poison.into_inner())
     }
 
     /// Passes a command's answer from the lower node to whoever forwarded the command.
@@ -164,7 +163,7 @@ impl LinkHandle {
         if !confirmation && !termination {
             return;
         }
-        let mut commands = self.lock_commands();
+        let mut commands = self.lock();
         for watch in commands
             .iter_mut()
             .filter(|watch| watch.type_id == asdu.type_id && watch.ioa == object.ioa)
@@ -180,112 +179,80 @@ impl LinkHandle {
         // Answered in full, or nobody waits any more (a taken sender counts as abandoned).
         commands.retain(|watch| !watch.abandoned());
     }
-
-    /// Closes the link for good (runtime shutdown).
-    pub(crate) fn stop(&self) {
-        let _ = self.control.send(LinkControl::Stop);
-    }
 }
 
 /// Starts a link's task on the current tokio runtime.
 pub(crate) fn spawn_link(spec: LinkSpec, node: Arc<NodePoints>) -> LinkHandle {
-    let (control, receiver) = mpsc::unbounded_channel();
-    let handle = LinkHandle {
-        name: spec.name.clone(),
-        control,
-        client: Arc::new(Mutex::new(None)),
-        up: Arc::new(AtomicBool::new(false)),
-        commands: Arc::new(Mutex::new(Vec::new())),
-    };
-    tokio::spawn(run(spec, node, receiver, handle.clone()));
-    handle
-}
-
-async fn run(
-    spec: LinkSpec,
-    node: Arc<NodePoints>,
-    mut control: mpsc::UnboundedReceiver<LinkControl>,
-    handle: LinkHandle,
-) {
+    let mut config = ClientConfig::new(spec.address.to_string(), spec.common_address);
+    config.interrogate_on_start = spec.interrogate_on_start;
+    config.reconnect = true;
+    config.reconnect_delay = Duration::from_millis(200);
+    config.reconnect_delay_max = Duration::from_secs(5);
+    config.tls = spec.tls.clone();
     let origin = format!("link:{}", spec.name);
     set_down(&spec, &node, &origin);
-    let mut cut = false;
-    loop {
-        if cut {
-            match control.recv().await {
-                Some(LinkControl::Restore) => cut = false,
-                Some(LinkControl::Cut) => {}
-                Some(LinkControl::Stop) | None => return,
-            }
-            continue;
+    let commands = Arc::new(CommandWatches::default());
+    let name = spec.name.clone();
+    let observer = Concentrator {
+        spec,
+        node,
+        origin,
+        commands: Arc::clone(&commands),
+    };
+    LinkHandle {
+        name,
+        link: Link::spawn(config, Arc::new(observer)),
+        commands,
+    }
+}
+
+/// What a concentrator does with its link to a lower node: the lower node's values into
+/// this node's points, its state into the status point, the lower clock kept in step,
+/// forwarded commands' answers to whoever forwarded them.
+struct Concentrator {
+    spec: LinkSpec,
+    node: Arc<NodePoints>,
+    /// `link:NAME`, the origin of the changes the link makes.
+    origin: String,
+    commands: Arc<CommandWatches>,
+}
+
+impl LinkObserver for Concentrator {
+    fn started(&self, client: &ClientHandle) {
+        let (spec, node) = (&self.spec, &self.node);
+        tracing::info!(node = %node.name(), link = %spec.name, address = %spec.address, "link up");
+        if let Some(point) = &spec.status_point {
+            node.change_with(&self.origin, |db, now| {
+                db.set_link_status(point.as_str(), true, now)
+                    .ok()
+                    .flatten()
+                    .into_iter()
+                    .collect()
+            });
         }
-        let mut config = ClientConfig::new(spec.address.to_string(), spec.common_address);
-        config.interrogate_on_start = spec.interrogate_on_start;
-        config.reconnect = true;
-        config.reconnect_delay = Duration::from_millis(200);
-        config.reconnect_delay_max = Duration::from_secs(5);
-        config.tls = spec.tls.clone();
-        let (client, mut events) = spawn_client(config);
-        *handle
-            .client
-            .lock()
-            .unwrap_or_else(|poison| poison.into_inner()) = Some(client.clone());
-        let mut sync_timer = tokio::time::interval(CLOCK_SYNC_PERIOD);
-        sync_timer.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
-        loop {
-            tokio::select! {
-                event = events.recv() => match event {
-                    None => break,
-                    Some(ClientEvent::Started) => {
-                        handle.up.store(true, Ordering::Release);
-                        tracing::info!(node = %node.name(), link = %spec.name, address = %spec.address, "link up");
-                        if let Some(point) = &spec.status_point {
-                            node.change_with(&origin, |db, now| {
-                                db.set_link_status(point.as_str(), true, now).ok().flatten().into_iter().collect()
-                            });
-                        }
-                        if spec.clock_sync {
-                            synchronise(&spec, &node, &client);
-                        }
-                    }
-                    Some(ClientEvent::Asdu(asdu)) => {
-                        apply(&spec, &node, &origin, &asdu);
-                        if asdu.type_id.is_command() {
-                            handle.answered(&asdu);
-                        }
-                    }
-                    Some(ClientEvent::Disconnected { reason }) => {
-                        if handle.up.swap(false, Ordering::AcqRel) {
-                            tracing::warn!(node = %node.name(), link = %spec.name, %reason, "link down");
-                            set_down(&spec, &node, &origin);
-                        }
-                    }
-                    Some(_) => {}
-                },
-                _ = sync_timer.tick(), if spec.clock_sync => {
-                    if handle.is_up() {
-                        synchronise(&spec, &node, &client);
-                    }
-                }
-                request = control.recv() => match request {
-                    Some(LinkControl::Cut) => {
-                        *handle.client.lock().unwrap_or_else(|poison| poison.into_inner()) = None;
-                        client.close().await;
-                        handle.up.store(false, Ordering::Release);
-                        tracing::warn!(node = %node.name(), link = %spec.name, "link cut");
-                        set_down(&spec, &node, &origin);
-                        cut = true;
-                        break;
-                    }
-                    Some(LinkControl::Restore) => {}
-                    Some(LinkControl::Stop) | None => {
-                        *handle.client.lock().unwrap_or_else(|poison| poison.into_inner()) = None;
-                        client.close().await;
-                        return;
-                    }
-                },
-            }
+        if spec.clock_sync {
+            synchronise(spec, node, client);
         }
+    }
+
+    fn down(&self, why: &LinkDown) {
+        tracing::warn!(node = %self.node.name(), link = %self.spec.name, reason = %why, "link down");
+        set_down(&self.spec, &self.node, &self.origin);
+    }
+
+    fn asdu(&self, asdu: &Asdu) {
+        apply(&self.spec, &self.node, &self.origin, asdu);
+        if asdu.type_id.is_command() {
+            self.commands.answered(asdu);
+        }
+    }
+
+    fn period(&self) -> Option<Duration> {
+        self.spec.clock_sync.then_some(CLOCK_SYNC_PERIOD)
+    }
+
+    fn every_period(&self, client: &ClientHandle) {
+        synchronise(&self.spec, &self.node, client);
     }
 }
 
@@ -327,16 +294,16 @@ fn apply(spec: &LinkSpec, node: &NodePoints, origin: &str, asdu: &Asdu) {
     if asdu.cot.negative || asdu.cot.test || !asdu.type_id.is_monitor() {
         return;
     }
-    let cause = asdu.cot.cause.value();
-    let event = matches!(cause, 3 | 11 | 12);
-    let event_cause = match cause {
-        11 => EventCause::ReturnRemote,
-        12 => EventCause::ReturnLocal,
-        // Spontaneous, periodic, background, read and interrogation answers: for the
-        // node above, a change is a change (report by exception); the node's own
+    let Some(received) = EventCause::of_received(asdu.cot.cause) else {
+        return;
+    };
+    let event = EventCause::received_as_event(asdu.cot.cause);
+    let event_cause = match received {
+        // For the node above, a change is a change (report by exception): an interrogated,
+        // periodic or read value is published as a spontaneous one, and the node's own
         // transmission setting decides how it is sent.
-        1..=3 | 5 | 20..=36 => EventCause::Spontaneous,
-        _ => return,
+        EventCause::Interrogated | EventCause::Cyclic => EventCause::Spontaneous,
+        other => other,
     };
     for object in &asdu.objects {
         let Some(ids) = spec.points.get(&object.ioa.get()) else {
