@@ -301,37 +301,33 @@ impl HmiConfig {
     }
 }
 
+/// Reads `points.csv` with the library's point-list reader (`stanice points` writes it:
+/// `ioa,type,name,description`); every point needs a name of its own, the screens refer
+/// to points by name.
 fn load_points(file: &Path) -> Result<Vec<PointRow>, HmiError> {
-    let bad = |line: u64, message: String| {
-        HmiError::Config(format!("{}:{line}: {message}", file.display()))
-    };
-    let mut reader = csv::Reader::from_path(file)
+    let text = std::fs::read_to_string(file)
         .map_err(|e| HmiError::Config(format!("{}: {e}", file.display())))?;
-    let mut rows = Vec::new();
+    let rows = iec60870::point_list::parse(&text)
+        .map_err(|e| HmiError::Config(format!("{}:{e}", file.display())))?;
     let mut seen = HashSet::new();
-    for record in reader.records() {
-        let record =
-            record.map_err(|e| bad(e.position().map_or(0, |p| p.line()), e.to_string()))?;
-        let line = record.position().map_or(0, |p| p.line());
-        let field = |i: usize| record.get(i).unwrap_or("").trim().to_owned();
-        let ioa: u32 = field(0)
-            .parse()
-            .map_err(|_| bad(line, format!("`{}` is not an IOA", field(0))))?;
-        let type_id: TypeId = field(1)
-            .parse()
-            .map_err(|_| bad(line, format!("unknown type `{}`", field(1))))?;
-        let name = field(2);
-        if name.is_empty() || !seen.insert(name.clone()) {
-            return Err(bad(line, format!("empty or duplicate name `{name}`")));
+    let mut points = Vec::with_capacity(rows.len());
+    for row in rows {
+        if row.name.is_empty() || !seen.insert(row.name.clone()) {
+            return Err(HmiError::Config(format!(
+                "{}:{}: empty or duplicate name `{}`",
+                file.display(),
+                row.line,
+                row.name
+            )));
         }
-        rows.push(PointRow {
-            ioa,
-            type_id,
-            name,
-            description: field(3),
+        points.push(PointRow {
+            ioa: row.ioa.get(),
+            type_id: row.type_id,
+            name: row.name,
+            description: row.description,
         });
     }
-    Ok(rows)
+    Ok(points)
 }
 
 fn line_col(text: &str, offset: usize) -> (usize, usize) {

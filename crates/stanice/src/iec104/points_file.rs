@@ -1,10 +1,9 @@
-//! The outstation's CSV point list.
+//! The test tools' outstation: a process image from a CSV point list.
 //!
-//! Header `ioa,type,value`, one row per point; `type` is a standard mnemonic. Monitor
-//! types (`M_*`) are data points with their initial value; command types (`C_*`) are
-//! points that accept commands (value empty or ignored). Optional columns:
-//! `select` (`true`: the command point requires select-before-operate), `groups`
-//! (interrogation groups 1..=16 separated by `;`), `name` (shown in logs).
+//! The list is read by the library's one point-list reader
+//! ([`iec60870::point_list`]: header `ioa,type,value` with optional `name`,
+//! `description`, `select`, `groups`); here its rows become the outstation's monitor
+//! points (`M_*`, with their initial value) and command points (`C_*`).
 //!
 //! ```csv
 //! ioa,type,value,name
@@ -15,10 +14,11 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use anyhow::{bail, Context};
+use anyhow::Context;
 use iec60870::asdu::text::parse_monitor;
-use iec60870::asdu::{Ioa, TypeId};
+use iec60870::asdu::Ioa;
 use iec60870::cs104::server::{CommandPoint, MonitorPoint, ProcessImage};
+use iec60870::point_list;
 
 /// One point of the file.
 #[derive(Debug, Clone)]
@@ -47,104 +47,47 @@ pub(crate) fn load(path: &Path) -> anyhow::Result<PointList> {
 
 /// Parses the file's text; errors start with `line:` so the caller can prefix the path.
 pub(crate) fn parse(text: &str) -> anyhow::Result<PointList> {
-    let mut reader = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .comment(Some(b'#'))
-        .flexible(true)
-        .from_reader(text.as_bytes());
-    let headers = reader
-        .headers()
-        .context("1: cannot read the header")?
-        .clone();
-    let column = |name: &str| {
-        headers
-            .iter()
-            .position(|header| header.eq_ignore_ascii_case(name))
-    };
-    let (Some(ioa_column), Some(type_column)) = (column("ioa"), column("type")) else {
-        bail!("1: the header must name the columns ioa,type,value");
-    };
-    let value_column = column("value");
-    let select_column = column("select");
-    let groups_column = column("groups");
-    let name_column = column("name");
     let mut list = PointList::default();
-    for record in reader.records() {
-        let record = record.map_err(|error| {
-            let line = error.position().map_or(0, csv::Position::line);
-            anyhow::anyhow!("{line}: {error}")
-        })?;
-        let line = record.position().map_or(0, csv::Position::line);
-        let field = |index: Option<usize>| index.and_then(|index| record.get(index)).unwrap_or("");
-        let ioa_text = field(Some(ioa_column));
-        let ioa: u32 = ioa_text
-            .parse()
-            .map_err(|_| anyhow::anyhow!("{line}: ioa '{ioa_text}' is not a number"))?;
-        let ioa = Ioa::try_new(ioa).map_err(|error| anyhow::anyhow!("{line}: {error}"))?;
-        let type_text = field(Some(type_column));
-        let type_id: TypeId = type_text.parse().map_err(|_| {
-            anyhow::anyhow!("{line}: unknown type '{type_text}' (use a mnemonic such as M_SP_NA_1)")
-        })?;
-        let name = field(name_column).to_owned();
-        if type_id.is_monitor() {
-            let element = parse_monitor(type_id, field(value_column))
-                .map_err(|error| anyhow::anyhow!("{line}: {error}"))?;
-            let groups = parse_groups(field(groups_column))
-                .map_err(|error| anyhow::anyhow!("{line}: {error}"))?;
+    for row in point_list::parse(text)? {
+        let line = row.line;
+        let ioa = row.ioa;
+        if row.type_id.is_monitor() {
+            // A list without a value column gives every monitor point the value of empty
+            // text, which the value reader refuses for the types that need one.
+            let element = match row.value {
+                Some(element) => element,
+                None => parse_monitor(row.type_id, "")
+                    .map_err(|error| anyhow::anyhow!("{line}: {error}"))?,
+            };
             list.image
                 .add_monitor(MonitorPoint {
                     ioa,
-                    event_type: type_id,
-                    groups,
+                    event_type: row.type_id,
+                    groups: row.groups,
                     element,
                     time: None,
                 })
                 .map_err(|error| anyhow::anyhow!("{line}: {error}"))?;
             list.monitor.push(PointRow { ioa });
-            if !name.is_empty() {
-                list.monitor_names.insert(ioa.get(), name);
+            if !row.name.is_empty() {
+                list.monitor_names.insert(ioa.get(), row.name);
             }
-        } else if type_id.is_command() {
-            let select_required = match field(select_column).to_ascii_lowercase().as_str() {
-                "" | "0" | "false" | "no" => false,
-                "1" | "true" | "yes" => true,
-                other => bail!("{line}: select must be true or false, not '{other}'"),
-            };
+        } else {
             list.image
                 .add_command(CommandPoint {
                     ioa,
-                    command_type: type_id,
-                    select_required,
+                    command_type: row.type_id,
+                    select_required: row.select,
                     max_age: None,
                 })
                 .map_err(|error| anyhow::anyhow!("{line}: {error}"))?;
             list.commands.push(PointRow { ioa });
-            if !name.is_empty() {
-                list.command_names.insert(ioa.get(), name);
+            if !row.name.is_empty() {
+                list.command_names.insert(ioa.get(), row.name);
             }
-        } else {
-            bail!("{line}: {type_id} is neither a monitor nor a command type");
         }
     }
     Ok(list)
-}
-
-fn parse_groups(text: &str) -> anyhow::Result<u16> {
-    let mut groups = 0u16;
-    for part in text
-        .split(';')
-        .map(str::trim)
-        .filter(|part| !part.is_empty())
-    {
-        let group: u8 = part
-            .parse()
-            .map_err(|_| anyhow::anyhow!("group '{part}' is not a number"))?;
-        if !(1..=16).contains(&group) {
-            bail!("group {group} is not in 1..=16");
-        }
-        groups |= 1 << (group - 1);
-    }
-    Ok(groups)
 }
 
 #[cfg(test)]
