@@ -130,22 +130,6 @@ fn view_of(row: &PointRow) -> PointView {
     }
 }
 
-fn quality_flags(q: Quality) -> Vec<&'static str> {
-    let mut flags = Vec::new();
-    for (set, name) in [
-        (q.invalid, "IV"),
-        (q.not_topical, "NT"),
-        (q.substituted, "SB"),
-        (q.blocked, "BL"),
-        (q.overflow, "OV"),
-    ] {
-        if set {
-            flags.push(name);
-        }
-    }
-    flags
-}
-
 fn json_value(value: &PointValue) -> Value {
     match value {
         PointValue::Bool(b) => json!(b),
@@ -387,7 +371,7 @@ impl Station {
                 let changed = point.value != new_value || point.invalid != quality.invalid;
                 point.value = new_value;
                 point.invalid = quality.invalid;
-                point.quality = quality_flags(quality);
+                point.quality = quality.set_flags();
                 point.time = time;
                 if !changed && !is_event {
                     continue;

@@ -57,19 +57,7 @@ fn parse_since(text: &str, now: DateTime<Utc>) -> anyhow::Result<DateTime<Utc>> 
 }
 
 fn quality_flags(quality: Quality) -> String {
-    let mut flags = Vec::new();
-    for (set, name) in [
-        (quality.invalid, "IV"),
-        (quality.not_topical, "NT"),
-        (quality.substituted, "SB"),
-        (quality.blocked, "BL"),
-        (quality.overflow, "OV"),
-    ] {
-        if set {
-            flags.push(name);
-        }
-    }
-    flags.join(" ")
+    quality.set_flags().join(" ")
 }
 
 pub(crate) async fn run(args: EventsArgs) -> anyhow::Result<ExitCode> {

@@ -111,6 +111,21 @@ impl Quality {
             | bit(self.blocked, BL)
     }
 
+    /// The names of the flags that are set, in the standard's order (`IV NT SB BL OV`):
+    /// how every tool and screen of the project lists a quality.
+    pub fn set_flags(&self) -> Vec<&'static str> {
+        [
+            (self.invalid, "IV"),
+            (self.not_topical, "NT"),
+            (self.substituted, "SB"),
+            (self.blocked, "BL"),
+            (self.overflow, "OV"),
+        ]
+        .into_iter()
+        .filter_map(|(set, name)| set.then_some(name))
+        .collect()
+    }
+
     /// Writes `[iv nt sb bl]` or, with `with_overflow`, `[iv nt sb bl ov]`.
     pub(crate) fn write_flags(
         &self,

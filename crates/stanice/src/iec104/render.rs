@@ -34,26 +34,6 @@ pub(crate) fn analyser_text(event: &ClientEvent) -> String {
     }
 }
 
-fn quality_flags(quality: &Quality) -> Vec<&'static str> {
-    let mut flags = Vec::new();
-    if quality.invalid {
-        flags.push("IV");
-    }
-    if quality.not_topical {
-        flags.push("NT");
-    }
-    if quality.substituted {
-        flags.push("SB");
-    }
-    if quality.blocked {
-        flags.push("BL");
-    }
-    if quality.overflow {
-        flags.push("OV");
-    }
-    flags
-}
-
 /// The value and quality of an element, as JSON.
 pub(crate) fn element_value(element: &Element) -> (Value, Option<Value>, Option<&Quality>) {
     match element {
@@ -64,7 +44,7 @@ pub(crate) fn element_value(element: &Element) -> (Value, Option<Value>, Option<
         }
         Element::Bitstring { bits, quality } => (json!(bits), None, Some(quality)),
         Element::Normalized { raw, quality } => (
-            json!(f64::from(*raw) / 32768.0),
+            json!(f64::from(Element::normalized_value(*raw))),
             Some(json!(raw)),
             Some(quality),
         ),
@@ -79,9 +59,11 @@ pub(crate) fn element_value(element: &Element) -> (Value, Option<Value>, Option<
         Element::SingleCommand { on, .. } => (json!(on), None, None),
         Element::DoubleCommand { state, .. } => (json!(state.bits()), None, None),
         Element::RegulatingStep { state, .. } => (json!(state.bits()), None, None),
-        Element::SetpointNormalized { raw, .. } => {
-            (json!(f64::from(*raw) / 32768.0), Some(json!(raw)), None)
-        }
+        Element::SetpointNormalized { raw, .. } => (
+            json!(f64::from(Element::normalized_value(*raw))),
+            Some(json!(raw)),
+            None,
+        ),
         Element::SetpointScaled { value, .. } => (json!(value), None, None),
         Element::SetpointFloat { value, .. } => (json!(value), None, None),
         Element::BitstringCommand { bits } => (json!(bits), None, None),
@@ -92,7 +74,7 @@ pub(crate) fn element_value(element: &Element) -> (Value, Option<Value>, Option<
 
 fn object_json(asdu: &Asdu, object: &InformationObject) -> Value {
     let (value, raw, quality) = element_value(&object.element);
-    let mut quality = quality.map(quality_flags).unwrap_or_default();
+    let mut quality = quality.map(Quality::set_flags).unwrap_or_default();
     if let Element::IntegratedTotal(reading) = &object.element {
         if reading.is_invalid() {
             quality.push("IV");
