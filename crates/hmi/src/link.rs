@@ -25,7 +25,7 @@ use store::pointdb::TimeZonePolicy;
 use store::Recorder;
 use store::{
     Actor, CommandOutcome, CommandPhase, CommandRecord, EventCause, EventRecord, PointValue,
-    Quality, SourceTime,
+    SourceTime,
 };
 use tokio::sync::broadcast;
 
