@@ -6,7 +6,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use iec60870::asdu::{Cause, CommandQualifier, Element, TypeId};
-use iec60870::cs104::client::{spawn_client, ClientError, ClientEvent};
+use iec60870::cs104::client::{spawn_client, ClientConfig, ClientError, ClientEvent};
 use iec60870::cs104::server::{spawn_server, ProcessImage, ReadOnlyStation, ServerHandle};
 use iec60870::cs104::{Role, Session, SessionEvent};
 
@@ -73,16 +73,21 @@ pub(crate) async fn restart_server_with(address: SocketAddr, image: ProcessImage
     .await
 }
 
+/// A client of the server at `address` that reconnects quickly (50-200 ms).
+pub(crate) fn reconnecting_config(address: SocketAddr) -> ClientConfig {
+    let mut config = client_config(address);
+    config.reconnect = true;
+    config.reconnect_delay = Duration::from_millis(50);
+    config.reconnect_delay_max = Duration::from_millis(200);
+    config
+}
+
 #[tokio::test]
 async fn reconnects_after_the_server_restarts() {
     init_logs();
     let server = start_server(server_config(), image(), Arc::new(ReadOnlyStation)).await;
     let address = server.local_addr();
-    let mut config = client_config(address);
-    config.reconnect = true;
-    config.reconnect_delay = Duration::from_millis(50);
-    config.reconnect_delay_max = Duration::from_millis(200);
-    let mut client = Client::start(config).await;
+    let mut client = Client::start(reconnecting_config(address)).await;
 
     server.shutdown();
     within(WAIT, "the disconnection", async {

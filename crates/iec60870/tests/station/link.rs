@@ -149,12 +149,8 @@ async fn a_lost_connection_is_reported_once_and_the_client_comes_back() {
     init_logs();
     let server = start_server(server_config(), image(), Arc::new(ReadOnlyStation)).await;
     let address = server.local_addr();
-    let mut config = client_config(address);
-    config.reconnect = true;
-    config.reconnect_delay = Duration::from_millis(50);
-    config.reconnect_delay_max = Duration::from_millis(200);
     let (observer, mut seen) = recording(Some(Duration::from_millis(20)));
-    let link = Link::spawn(config, observer);
+    let link = Link::spawn(crate::client::reconnecting_config(address), observer);
     assert_eq!(next(&mut seen, "the start").await, Seen::Started);
     // The periodic duty runs while started.
     within(WAIT, "a periodic call", async {
