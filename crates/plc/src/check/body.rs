@@ -4,8 +4,32 @@ use super::*;
 use crate::stdlib::{self, Builtin};
 use std::collections::HashSet;
 
-pub(super) fn check_bodies(c: &mut Checked, diags: &mut Vec<Diagnostic>) {
+pub(super) fn check_bodies(
+    c: &mut Checked,
+    type_inits: &[(Init, Ty)],
+    diags: &mut Vec<Diagnostic>,
+) {
     let mut calls: HashMap<PouId, Vec<(PouId, Span)>> = HashMap::new();
+    // initial values of TYPE declarations and STRUCT members, once, before the variables
+    // that share them
+    let member_inits: Vec<(Init, Ty)> = c
+        .types
+        .structs
+        .iter()
+        .flat_map(|s| &s.fields)
+        .filter_map(|f| Some((f.init.clone()?, f.ty.clone())))
+        .collect();
+    for (init, ty) in type_inits.iter().chain(&member_inits) {
+        let mut bc = BodyCx {
+            c,
+            diags,
+            pou: None,
+            loops: 0,
+            calls: Vec::new(),
+            used: HashSet::new(),
+        };
+        bc.init(init, ty);
+    }
     // globals' initial values
     for gi in 0..c.globals.len() {
         let (init, ty) = match c.globals.get(gi) {
@@ -160,6 +184,14 @@ impl BodyCx<'_> {
 
     fn init(&mut self, init: &Init, ty: &Ty) {
         match init {
+            // shared by every variable of a TYPE with an initial value (and by `a, b : T :=
+            // v`): typed once, against the same type each time
+            Init::Expr(e)
+                if self
+                    .c
+                    .expr_ty
+                    .get(e.id.0 as usize)
+                    .is_some_and(Option::is_some) => {}
             Init::Expr(e) => {
                 let t = self.expr(e, Some(ty));
                 self.coerce_to(e, &t, ty, "initial value");

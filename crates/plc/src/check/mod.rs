@@ -236,6 +236,8 @@ pub fn check(unit: CompilationUnit, stdlib_items: usize) -> Result<Checked, Vec<
         globals: Vec::new(),
         global_index: HashMap::new(),
         consts: HashMap::new(),
+        type_decls: HashMap::new(),
+        type_inits: Vec::new(),
     };
     cx.register(stdlib_items);
     cx.resolve_all();
@@ -258,6 +260,7 @@ pub fn check(unit: CompilationUnit, stdlib_items: usize) -> Result<Checked, Vec<
         pous,
         pou_index,
         global_index,
+        type_inits,
         ..
     } = cx;
     let mut checked = Checked {
@@ -276,7 +279,7 @@ pub fn check(unit: CompilationUnit, stdlib_items: usize) -> Result<Checked, Vec<
     };
     let mut diags = diags;
     checked.tasks = configure(&checked, &mut diags);
-    body::check_bodies(&mut checked, &mut diags);
+    body::check_bodies(&mut checked, &type_inits, &mut diags);
     let (errors, warnings): (Vec<_>, Vec<_>) = diags.into_iter().partition(Diagnostic::is_error);
     if errors.is_empty() {
         checked.warnings = warnings;
@@ -415,6 +418,11 @@ struct Decls<'u> {
     global_index: HashMap<String, usize>,
     /// Integer constants for array bounds etc.: global and local CONSTANT values.
     consts: HashMap<String, i128>,
+    /// TYPE declarations by upper-case name (the first of duplicates).
+    type_decls: HashMap<String, &'u TypeDecl>,
+    /// Initial values written in TYPE declarations with the type they initialise, checked
+    /// once with the bodies (variables of those types share the expressions).
+    type_inits: Vec<(Init, Ty)>,
 }
 
 impl<'u> Decls<'u> {
@@ -484,6 +492,7 @@ impl<'u> Decls<'u> {
                         }
                         self.type_slots
                             .insert(d.name.key.clone(), TypeSlot::Pending(idx, di));
+                        self.type_decls.insert(d.name.key.clone(), d);
                     }
                 }
                 Item::Globals(_) | Item::Task(_) | Item::ProgramConfig(_) => {}
@@ -541,7 +550,7 @@ impl<'u> Decls<'u> {
                             retain: b.retain,
                             persistent: b.persistent,
                             at: d.at.as_ref().map(|a| a.0.clone()),
-                            init: d.init.clone(),
+                            init: merge_init(d.init.clone(), self.type_default(&d.ty)),
                             span: n.span,
                             range: self.subrange_of(&d.ty),
                         });
@@ -600,6 +609,24 @@ impl<'u> Decls<'u> {
         None
     }
 
+    /// The initial value a declaration of type `t` starts with when it gives none: the
+    /// `:=` of the TYPE declaration `t` names, through derived types (the nearest
+    /// declaration wins; structure initializers are merged field by field).
+    fn type_default(&self, t: &TypeRef) -> Option<Init> {
+        let mut t = t;
+        let mut found = None;
+        // a bound, not a limit users meet: cycles of TYPE aliases are reported elsewhere
+        for _ in 0..32 {
+            let TypeRef::Named(id) = t else { break };
+            let Some(decl) = self.type_decls.get(&id.key) else {
+                break;
+            };
+            found = merge_init(found, decl.init.clone());
+            t = &decl.ty;
+        }
+        found
+    }
+
     fn named_type(&mut self, key: &str, span: Span) -> Option<Ty> {
         if let Some(t) = Ty::elementary(key) {
             return Some(t);
@@ -646,6 +673,9 @@ impl<'u> Decls<'u> {
                     TypeRef::Enum(values, _) => self.enum_type(&decl.name.name, values),
                     other => self.resolve_type(other, std::slice::from_ref(&decl.name)),
                 };
+                if let Some(init) = &decl.init {
+                    self.type_inits.push((init.clone(), ty.clone()));
+                }
                 self.type_slots
                     .insert(key.to_string(), TypeSlot::Done(ty.clone()));
                 Some(ty)
@@ -672,7 +702,7 @@ impl<'u> Decls<'u> {
                     key: n.key.clone(),
                     ty: ty.clone(),
                     offset: off,
-                    init: d.init.clone(),
+                    init: merge_init(d.init.clone(), self.type_default(&d.ty)),
                     range: self.subrange_of(&d.ty),
                 });
                 off = off.plus(size_of(&ty, &self.types, &self.pous));
@@ -774,6 +804,7 @@ impl<'u> Decls<'u> {
                     }
                 }
                 let elem_range = self.subrange_of(elem);
+                let elem_init = self.type_default(elem);
                 let elem = self.resolve_type(elem, names);
                 let elem_size = size_of(&elem, &self.types, &self.pous);
                 let a = ArrayTy {
@@ -781,6 +812,7 @@ impl<'u> Decls<'u> {
                     elem,
                     elem_size,
                     elem_range,
+                    elem_init,
                 };
                 if a.len()
                     .saturating_mul(elem_size.i + elem_size.r + elem_size.s)
@@ -843,6 +875,7 @@ impl<'u> Decls<'u> {
                 Some(t) => self.resolve_type(t, std::slice::from_ref(&pou.name)),
                 None => Ty::Void,
             };
+            let result_init = pou.return_type.as_ref().and_then(|t| self.type_default(t));
             ret = Some(rt.clone());
             index.insert(pou.name.key.clone(), 0);
             let sz = size_of(&rt, &self.types, &self.pous);
@@ -856,7 +889,7 @@ impl<'u> Decls<'u> {
                 retain: false,
                 persistent: false,
                 at: None,
-                init: None,
+                init: result_init,
                 span: pou.name.span,
                 range: None,
             });
@@ -951,7 +984,11 @@ impl<'u> Decls<'u> {
                         retain: b.retain,
                         persistent: b.persistent,
                         at: d.at.as_ref().map(|a| a.0.clone()),
-                        init: d.init.clone(),
+                        init: match b.kind {
+                            // a reference and a global's alias start as what they refer to
+                            VarKind::InOut | VarKind::External => d.init.clone(),
+                            _ => merge_init(d.init.clone(), self.type_default(&d.ty)),
+                        },
                         span: n.span,
                         range: if b.kind == VarKind::InOut {
                             None
@@ -983,5 +1020,28 @@ impl<'u> Decls<'u> {
             Some(Item::Pou(p)) => (p.name.name.clone(), p.name.span),
             _ => (String::new(), Span::default()),
         }
+    }
+}
+
+/// `near` over `far`: the initial value written nearer to the variable wins; of two
+/// structure initializers every field not given by `near` comes from `far`.
+pub(crate) fn merge_init(near: Option<Init>, far: Option<Init>) -> Option<Init> {
+    match (near, far) {
+        (Some(Init::Struct(mut fields, span)), Some(Init::Struct(defaults, _))) => {
+            for (name, default) in defaults {
+                match fields.iter_mut().find(|(n, _)| n.key == name.key) {
+                    Some((_, given)) => {
+                        let merged = merge_init(Some(given.clone()), Some(default));
+                        if let Some(m) = merged {
+                            *given = m;
+                        }
+                    }
+                    None => fields.push((name, default)),
+                }
+            }
+            Some(Init::Struct(fields, span))
+        }
+        (Some(near), _) => Some(near),
+        (None, far) => far,
     }
 }

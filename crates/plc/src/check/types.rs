@@ -47,7 +47,7 @@ impl Size {
 }
 
 /// An array type.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct ArrayTy {
     /// `(lower, upper)` per dimension.
     pub dims: Vec<(i64, i64)>,
@@ -57,6 +57,20 @@ pub struct ArrayTy {
     pub elem_size: Size,
     /// Subrange bounds of the element type (checked on every element store).
     pub elem_range: Option<(i64, i64)>,
+    /// Initial value of every element not given one by the array's own initializer: the
+    /// `:=` of the TYPE declaration the element type names (`ARRAY[1..3] OF Level`).
+    pub elem_init: Option<crate::syntax::Init>,
+}
+
+/// Two array types are the same type whatever initial values their element types declare:
+/// an initial value is where a variable starts, not what it may hold.
+impl PartialEq for ArrayTy {
+    fn eq(&self, other: &Self) -> bool {
+        self.dims == other.dims
+            && self.elem == other.elem
+            && self.elem_size == other.elem_size
+            && self.elem_range == other.elem_range
+    }
 }
 
 impl ArrayTy {

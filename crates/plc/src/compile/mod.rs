@@ -219,11 +219,13 @@ impl Cx<'_> {
                     _ => &[],
                 };
                 for f in &def.fields {
-                    let i = overrides
+                    let given = overrides
                         .iter()
                         .find(|(n, _)| n.key == f.key)
-                        .map(|(_, i)| i)
-                        .or(f.init.as_ref());
+                        .map(|(_, i)| i.clone());
+                    // `(inner := (b := 5))` keeps what the field's declaration gives `a`
+                    let merged = crate::check::merge_init(given, f.init.clone());
+                    let i = merged.as_ref();
                     let fat = InitTarget::new(&format!("{}.{}", at.name, f.name), at.span, f.range);
                     self.init_value(&f.ty, i, off.plus(f.offset), &fat, ops);
                 }
@@ -246,7 +248,7 @@ impl Cx<'_> {
                     }
                 }
                 let simple = a.elem.is_elementary() || matches!(a.elem, Ty::Enum(_));
-                if simple && elems.is_empty() {
+                if simple && elems.is_empty() && a.elem_init.is_none() {
                     let size = a.elem_size.times(n);
                     let default = match a.elem_range {
                         Some((lo, _)) => lo,
@@ -259,7 +261,7 @@ impl Cx<'_> {
                     return;
                 }
                 for k in 0..n {
-                    let init = elems.get(k).copied().flatten();
+                    let init = elems.get(k).copied().flatten().or(a.elem_init.as_ref());
                     let eat = InitTarget::new(
                         &format!("{}[{}]", at.name, elem_index(a, k)),
                         at.span,
