@@ -6,7 +6,7 @@
 //!
 //! | module        | what it does                                                      |
 //! |---------------|-------------------------------------------------------------------|
-//! | [`config`]    | the project folder: `station.toml`, nodes, points, links, tables, errors with file:line:col |
+//! | [`config`]    | the project folder: `station.toml`, nodes, points, links, tables; its errors: where ([`config::ConfigError`], file:line:col and key) and what, typed ([`config::ConfigProblem`]) |
 //! | [`runtime`]   | runs a project: simulated clock, plant and PLCs, servers, links (concentration, commands down the hierarchy), recording |
 //!
 //! The point database, the event store and store addresses are the crate [`store`]'s,

@@ -1,8 +1,13 @@
-//! Problems found in a project, with their file, line and column.
+//! Where problems are: [`ConfigError`] owns the place of one problem (file, line, column,
+//! key path) and its [`ConfigProblem`] (what is wrong, typed, in `problem`);
+//! [`ConfigErrors`] owns all problems of one load, capped per file.
+//!
+//! `Display` of a [`ConfigError`] is `file:line:col: error: key: message`, the message
+//! being the problem's own `Display`.
 
 use super::*;
 
-/// One problem in a project.
+/// One problem in a project: where it is and what it is.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ConfigError {
     /// The file.
@@ -14,18 +19,24 @@ pub struct ConfigError {
     /// Key path such as `node[2].point[5].ioa`; empty for syntax errors.
     pub key: String,
     /// What is wrong.
-    pub message: String,
+    pub problem: ConfigProblem,
 }
 
 impl ConfigError {
-    pub(in crate::config) fn unpositioned(file: &Path, message: String) -> ConfigError {
+    pub(in crate::config) fn unpositioned(file: &Path, problem: ConfigProblem) -> ConfigError {
         ConfigError {
             file: file.to_path_buf(),
             line: 0,
             column: 0,
             key: String::new(),
-            message,
+            problem,
         }
+    }
+
+    /// What is wrong, as text (the problem's `Display`): the message part of
+    /// `file:line:col: error: key: message`.
+    pub fn message(&self) -> String {
+        self.problem.to_string()
     }
 }
 
@@ -39,7 +50,7 @@ impl fmt::Display for ConfigError {
         if !self.key.is_empty() {
             write!(f, "{}: ", self.key)?;
         }
-        f.write_str(&self.message)
+        write!(f, "{}", self.problem)
     }
 }
 
@@ -65,7 +76,7 @@ pub(in crate::config) fn not_utf8(file: &Path, bytes: &[u8]) -> ConfigError {
         line,
         column,
         key: String::new(),
-        message: format!("not UTF-8 text: byte 0x{byte:02X} (save the file as UTF-8)"),
+        problem: ConfigProblem::NotUtf8 { byte },
     }
 }
 

@@ -4,13 +4,15 @@
 //! [`Project::load`] reads `FOLDER/station.toml`, checks it and returns the typed model, or
 //! [`ConfigErrors`] with *all* problems found. Each [`ConfigError`] names the file, the
 //! 1-based line and column (in characters) of the offending value, its key path such as
-//! `node[2].point[5].ioa` (array indices are 0-based, in file order) and a message; its
-//! `Display` is `file:line:col: error: key: message`. Only the first syntax error is
-//! reported, alone (what a recovering parser finds after it mostly follows from it, and
-//! nothing else can be checked); a type error (a string where a number belongs, an unknown
-//! key, a missing required key) stops before the semantic checks, which then all run. At
-//! most [`MAX_ERRORS_PER_FILE`] problems are kept per file, the rest counted
-//! ([`ConfigErrors::omitted`]).
+//! `node[2].point[5].ioa` (array indices are 0-based, in file order) and a typed
+//! [`ConfigProblem`] (module [`problem`]: an unknown reference, a duplicate, a value out of
+//! range, a missing file, an ST compile error ...) that programs can match on; its
+//! `Display` is `file:line:col: error: key: message`, the message being the problem's.
+//! Only the first syntax error is reported, alone (what a recovering parser finds after it
+//! mostly follows from it, and nothing else can be checked); a type error (a string where a
+//! number belongs, an unknown key, a missing required key) stops before the semantic
+//! checks, which then all run. At most [`MAX_ERRORS_PER_FILE`] problems are kept per file,
+//! the rest counted ([`ConfigErrors::omitted`]).
 //!
 //! # Format
 //!
@@ -200,9 +202,10 @@
 //! # Layout
 //!
 //! The model (what a loaded project is) is here; `raw` holds the file as serde reads it,
-//! `spans` the key paths and their positions, `error` the problems, and `check` turns the
-//! raw file into the model: the station and the order of things in `check`, one node in
-//! `check::node`, the links between nodes in `check::links`.
+//! `spans` the key paths and their positions, `error` where problems are, `problem` what
+//! they are, and `check` turns the raw file into the model: the station and the order of
+//! things in `check`, one node in `check::node`, the links between nodes in
+//! `check::links`, serial lines in `check::line`.
 use std::collections::{HashMap, HashSet};
 use std::fmt;
 use std::net::{IpAddr, Ipv4Addr, SocketAddr};
@@ -577,7 +580,11 @@ impl Project {
         let bytes = std::fs::read(&file).map_err(|e| {
             ConfigErrors::single(ConfigError::unpositioned(
                 &file,
-                format!("cannot read: {e}"),
+                ConfigProblem::Unreadable {
+                    file: None,
+                    kind: e.kind(),
+                    detail: e.to_string(),
+                },
             ))
         })?;
         let text = String::from_utf8(bytes)
@@ -600,7 +607,8 @@ impl Project {
         // unclosed `[` made it report every later line (17,161 errors for the Vsetín file).
         if let Some(error) = syntax.first() {
             let span = error.span().unwrap_or(0..0);
-            ctx.push_at(span, String::new(), error.message().to_owned());
+            let detail = error.message().to_owned();
+            ctx.push_at(span, String::new(), ConfigProblem::Syntax { detail });
             return Err(ctx.into_errors());
         }
         let raw: RawProject = match toml::from_str(text) {
@@ -608,7 +616,9 @@ impl Project {
             Err(error) => {
                 let span = error.span().unwrap_or(0..0);
                 let key = ctx.key_at(span.start);
-                ctx.push_at(span, key, error.message().to_owned());
+                let detail = error.message().to_owned();
+                let kind = SchemaKind::of(&detail);
+                ctx.push_at(span, key, ConfigProblem::Schema { kind, detail });
                 return Err(ctx.into_errors());
             }
         };
@@ -676,10 +686,13 @@ impl NodeConfig {
 
 mod check;
 mod error;
+pub mod problem;
 mod raw;
 mod spans;
 
 use error::*;
 pub use error::{ConfigError, ConfigErrors, MAX_ERRORS_PER_FILE};
+pub use problem::ConfigProblem;
+use problem::*;
 use raw::*;
 use spans::*;

@@ -63,14 +63,19 @@ pub(in crate::config) fn table_get<'t, 'i>(
 }
 
 impl Ctx<'_> {
-    pub(in crate::config) fn push_at(&mut self, span: Range<usize>, key: String, message: String) {
+    pub(in crate::config) fn push_at(
+        &mut self,
+        span: Range<usize>,
+        key: String,
+        problem: ConfigProblem,
+    ) {
         let (line, column) = line_col(self.text, span.start);
         self.push(ConfigError {
             file: self.file.clone(),
             line,
             column,
             key,
-            message,
+            problem,
         });
     }
 
@@ -117,9 +122,9 @@ impl Ctx<'_> {
         span
     }
 
-    pub(in crate::config) fn err(&mut self, path: &[Seg], message: impl Into<String>) {
+    pub(in crate::config) fn err(&mut self, path: &[Seg], problem: impl Into<ConfigProblem>) {
         let span = self.span(path);
-        self.push_at(span, key_string(path), message.into());
+        self.push_at(span, key_string(path), problem.into());
     }
 
     /// The key path of the innermost value containing `offset` (for serde errors).

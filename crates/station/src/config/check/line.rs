@@ -14,18 +14,26 @@ pub(in crate::config) struct LineRef {
 }
 
 /// Reads a `line:` reference; `Ok(None)` when the text is no line reference.
-pub(in crate::config) fn parse_line_ref(text: &str) -> Result<Option<LineRef>, String> {
+pub(in crate::config) fn parse_line_ref(text: &str) -> Result<Option<LineRef>, ConfigProblem> {
     let Some(rest) = text.strip_prefix("line:") else {
         return Ok(None);
     };
-    let malformed = || {
-        format!("`{text}` is not of the form line:LINE/DEVICE/FUN/INF or line:LINE/DEVICE/FUN/INF/INDEX")
+    let malformed = || ConfigProblem::Malformed {
+        text: text.to_owned(),
+        form: Form::LineRef,
     };
     let parts: Vec<&str> = rest.split('/').collect();
-    let number = |part: &str, what: &str| -> Result<u8, String> {
-        part.trim()
+    let number = |given: &str, part: &'static str| -> Result<u8, ConfigProblem> {
+        given
+            .trim()
             .parse::<u8>()
-            .map_err(|_| format!("`{text}`: {what} `{part}` is not a number 0..=255"))
+            .map_err(|_| ConfigProblem::Malformed {
+                text: text.to_owned(),
+                form: Form::LineNumber {
+                    part,
+                    given: given.to_owned(),
+                },
+            })
     };
     let (line, device, fun, inf, index) = match parts[..] {
         [line, device, fun, inf] => (line, device, fun, inf, None),
@@ -57,7 +65,11 @@ impl Ctx<'_> {
         match lines.iter().find(|line| line.name == reference.line) {
             None => self.err(
                 path,
-                format!("node `{node}` has no line `{}`", reference.line),
+                ConfigProblem::Unknown {
+                    what: Reference::Line,
+                    name: reference.line.clone(),
+                    within: node.to_owned(),
+                },
             ),
             Some(line)
                 if !line
@@ -67,10 +79,11 @@ impl Ctx<'_> {
             {
                 self.err(
                     path,
-                    format!(
-                        "line `{}` has no device `{}`",
-                        reference.line, reference.device
-                    ),
+                    ConfigProblem::Unknown {
+                        what: Reference::Device,
+                        name: reference.device.clone(),
+                        within: reference.line.clone(),
+                    },
                 )
             }
             Some(_) => {}
@@ -80,14 +93,29 @@ impl Ctx<'_> {
     /// A line's or device's status point: a single point of the node without a source.
     fn status_point_of_line(&mut self, raw: &RawNode, point: &str, path: &[Seg]) {
         match raw.point.iter().find(|p| p.name == point) {
-            None => self.err(path, format!("node `{}` has no point `{point}`", raw.name)),
+            None => self.err(
+                path,
+                ConfigProblem::Unknown {
+                    what: Reference::Point,
+                    name: point.to_owned(),
+                    within: raw.name.clone(),
+                },
+            ),
             Some(p) if !matches!(p.type_id.as_str(), "M_SP_NA_1" | "M_SP_TB_1") => self.err(
                 path,
-                format!("the status point `{point}` must be M_SP_NA_1 or M_SP_TB_1"),
+                ConfigProblem::WrongType {
+                    type_id: p.type_id.clone(),
+                    usage: TypeUse::LineStatus {
+                        point: point.to_owned(),
+                    },
+                },
             ),
-            Some(p) if p.source.is_some() => {
-                self.err(path, format!("the status point `{point}` takes no source"))
-            }
+            Some(p) if p.source.is_some() => self.err(
+                path,
+                Conflict::StatusPointWithSource {
+                    point: point.to_owned(),
+                },
+            ),
             Some(_) => {}
         }
     }
@@ -99,12 +127,22 @@ impl Ctx<'_> {
             let at =
                 |key: &'static str| -> Vec<Seg> { vec![K("node"), I(n), K("line"), I(l), K(key)] };
             if !names.insert(line.name.clone()) {
-                self.err(&at("name"), format!("duplicate line name `{}`", line.name));
+                self.err(
+                    &at("name"),
+                    ConfigProblem::Duplicate {
+                        what: Unique::LineName,
+                        value: line.name.clone(),
+                        other: raw.name.clone(),
+                    },
+                );
             }
             if line.protocol != "iec103" {
                 self.err(
                     &at("protocol"),
-                    format!("protocol `{}`: only \"iec103\" lines are supported (IEC 101 lines are not yet)", line.protocol),
+                    ConfigProblem::UnknownValue {
+                        what: Vocabulary::Protocol,
+                        value: line.protocol.clone(),
+                    },
                 );
             }
             let transport = match (&line.port, &line.tcp, &line.simulate) {
@@ -114,57 +152,91 @@ impl Ctx<'_> {
                     if profile != "ref630" {
                         self.err(
                             &at("simulate"),
-                            format!("no simulated device `{profile}`; known: \"ref630\""),
+                            ConfigProblem::UnknownValue {
+                                what: Vocabulary::SimulatedDevice,
+                                value: profile.clone(),
+                            },
                         );
                     }
                     LineTransport::Simulated(profile.clone())
                 }
                 _ => {
-                    self.err(
-                        &[K("node"), I(n), K("line"), I(l)],
-                        "give exactly one of port, tcp and simulate",
-                    );
+                    self.err(&[K("node"), I(n), K("line"), I(l)], Conflict::LineTransport);
                     LineTransport::Simulated("ref630".to_owned())
                 }
             };
-            let mut settings = iec60870::ft12::LineSettings::new(9600);
-            if let Some(baud) = line.baud {
-                settings.baud = u32::try_from(baud).unwrap_or(0);
+            type Settings = iec60870::ft12::LineSettings;
+            let mut settings = Settings::new(9600);
+            // Speed and stop bits are checked here, as ranges with their keys; the
+            // codec's own validation below then only catches what it adds later.
+            let mut within =
+                |value: Option<i64>, key: &'static str, what: &'static str, min: i64, max: i64| {
+                    let value = value?;
+                    if (min..=max).contains(&value) {
+                        Some(value)
+                    } else {
+                        self.err(
+                            &at(key),
+                            ConfigProblem::OutOfRange {
+                                what,
+                                value,
+                                min,
+                                max: Some(max),
+                            },
+                        );
+                        None
+                    }
+                };
+            let baud = within(
+                line.baud,
+                "baud",
+                "baud rate",
+                Settings::MIN_BAUD.into(),
+                Settings::MAX_BAUD.into(),
+            );
+            let stop_bits = within(line.stop_bits, "stop_bits", "stop_bits", 1, 2);
+            if let Some(baud) = baud.and_then(|b| u32::try_from(b).ok()) {
+                settings.baud = baud;
+            }
+            if let Some(stop_bits) = stop_bits.and_then(|s| u8::try_from(s).ok()) {
+                settings.stop_bits = stop_bits;
             }
             if let Some(parity) = &line.parity {
                 match parity.parse() {
                     Ok(parity) => settings.parity = parity,
-                    Err(message) => self.err(&at("parity"), message),
+                    Err(_) => self.err(
+                        &at("parity"),
+                        ConfigProblem::UnknownValue {
+                            what: Vocabulary::Parity,
+                            value: parity.clone(),
+                        },
+                    ),
                 }
             }
-            if let Some(stop_bits) = line.stop_bits {
-                settings.stop_bits = u8::try_from(stop_bits).unwrap_or(0);
-            }
-            if let Err(message) = settings.validate() {
-                let key = if message.contains("baud") {
-                    "baud"
-                } else {
-                    "stop_bits"
-                };
-                self.err(&at(key), message);
+            if let Err(detail) = settings.validate() {
+                self.err(
+                    &[K("node"), I(n), K("line"), I(l)],
+                    ConfigProblem::Invalid { detail },
+                );
             }
             let mut millis = |value: Option<i64>,
-                              default: u64,
-                              range: std::ops::RangeInclusive<u64>,
+                              default: i64,
+                              range: std::ops::RangeInclusive<i64>,
                               key: &'static str| {
-                let value = value.map_or(Ok(default), u64::try_from).unwrap_or(u64::MAX);
-                if range.contains(&value) {
-                    Duration::from_millis(value)
+                let given = value.unwrap_or(default);
+                if range.contains(&given) {
+                    Duration::from_millis(given.unsigned_abs())
                 } else {
                     self.err(
                         &at(key),
-                        format!(
-                            "{key} {value} is outside {}..={}",
-                            range.start(),
-                            range.end()
-                        ),
+                        ConfigProblem::OutOfRange {
+                            what: key,
+                            value: given,
+                            min: *range.start(),
+                            max: Some(*range.end()),
+                        },
                     );
-                    Duration::from_millis(default)
+                    Duration::from_millis(default.unsigned_abs())
                 }
             };
             let timeout = millis(line.timeout_ms, 500, 5..=60_000, "timeout_ms");
@@ -178,7 +250,15 @@ impl Ctx<'_> {
                 None => 2,
                 Some(Ok(retries)) if retries <= 10 => retries,
                 Some(_) => {
-                    self.err(&at("retries"), "retries must be within 0..=10");
+                    self.err(
+                        &at("retries"),
+                        ConfigProblem::OutOfRange {
+                            what: "retries",
+                            value: line.retries.unwrap_or_default(),
+                            min: 0,
+                            max: Some(10),
+                        },
+                    );
                     2
                 }
             };
@@ -192,10 +272,11 @@ impl Ctx<'_> {
                 if !device_names.insert(device.name.clone()) {
                     self.err(
                         &at("name"),
-                        format!(
-                            "duplicate device name `{}` on line `{}`",
-                            device.name, line.name
-                        ),
+                        ConfigProblem::Duplicate {
+                            what: Unique::DeviceName,
+                            value: device.name.clone(),
+                            other: line.name.clone(),
+                        },
                     );
                 }
                 let address = match u8::try_from(device.address) {
@@ -203,7 +284,12 @@ impl Ctx<'_> {
                     _ => {
                         self.err(
                             &at("address"),
-                            format!("address {} is outside 1..=254", device.address),
+                            ConfigProblem::OutOfRange {
+                                what: "address",
+                                value: device.address,
+                                min: 1,
+                                max: Some(254),
+                            },
                         );
                         1
                     }
@@ -211,16 +297,31 @@ impl Ctx<'_> {
                 if !addresses.insert(address) {
                     self.err(
                         &at("address"),
-                        format!("address {address} is used twice on line `{}`", line.name),
+                        ConfigProblem::Duplicate {
+                            what: Unique::DeviceAddress,
+                            value: address.to_string(),
+                            other: line.name.clone(),
+                        },
                     );
                 }
                 let local_indication = device.local_indication.and_then(|[fun, inf]| {
                     match (u8::try_from(fun), u8::try_from(inf)) {
                         (Ok(fun), Ok(inf)) => Some((fun, inf)),
-                        _ => {
+                        (fun_ok, _) => {
+                            // the first of the two that does not fit
+                            let (what, value) = if fun_ok.is_err() {
+                                ("FUN", fun)
+                            } else {
+                                ("INF", inf)
+                            };
                             self.err(
                                 &at("local_indication"),
-                                "FUN and INF must be within 0..=255",
+                                ConfigProblem::OutOfRange {
+                                    what,
+                                    value,
+                                    min: 0,
+                                    max: Some(u8::MAX.into()),
+                                },
                             );
                             None
                         }
@@ -274,6 +375,7 @@ mod tests {
         assert!(parse_line_ref("line:relays/F1/1").is_err());
         assert!(parse_line_ref("line:relays/F1/1/256")
             .unwrap_err()
+            .to_string()
             .contains("INF `256`"));
         assert!(parse_line_ref("line://1/2").is_err());
     }

@@ -25,36 +25,51 @@ impl Ctx<'_> {
             for (l, link) in node.link.iter().enumerate() {
                 let at = |key: &'static str| vec![K("node"), I(n), K("link"), I(l), K(key)];
                 if !names.insert(link.name.clone()) {
-                    self.err(&at("name"), format!("duplicate link name `{}`", link.name));
+                    self.err(
+                        &at("name"),
+                        ConfigProblem::Duplicate {
+                            what: Unique::LinkName,
+                            value: link.name.clone(),
+                            other: node.name.clone(),
+                        },
+                    );
                 }
                 let mut target_node = None;
                 let target = match (&link.node, &link.address) {
                     (Some(_), Some(_)) => {
-                        self.err(&at("address"), "give either node or address, not both");
+                        self.err(&at("address"), Conflict::NodeAndAddress);
                         None
                     }
                     (None, None) => {
                         self.err(
                             &[K("node"), I(n), K("link"), I(l)],
-                            "a link needs node or address",
+                            ConfigProblem::Missing {
+                                what: "node or address",
+                                needed_by: "a link",
+                                hint: "",
+                            },
                         );
                         None
                     }
                     (Some(name), None) => match index.get(name.as_str()) {
                         None => {
-                            self.err(&at("node"), format!("no node `{name}` in the project"));
+                            self.err(
+                                &at("node"),
+                                ConfigProblem::Unknown {
+                                    what: Reference::Node,
+                                    name: name.clone(),
+                                    within: String::new(),
+                                },
+                            );
                             None
                         }
                         Some(&t) if t == n => {
-                            self.err(&at("node"), "a node cannot link to itself");
+                            self.err(&at("node"), Conflict::LinkToItself);
                             None
                         }
                         Some(&t) => {
                             if raw.node.get(t).is_some_and(|t| t.server.is_none()) {
-                                self.err(
-                                    &at("node"),
-                                    format!("node `{name}` has no [node.server]"),
-                                );
+                                self.err(&at("node"), Conflict::NoServer { node: name.clone() });
                             }
                             let lower_tls = raw
                                 .node
@@ -62,14 +77,12 @@ impl Ctx<'_> {
                                 .and_then(|t| t.server.as_ref())
                                 .is_some_and(|server| server.tls.is_some());
                             match (lower_tls, link.tls.is_some()) {
-                                (true, false) => self.err(
-                                    &at("node"),
-                                    format!(
-                                        "node `{name}`'s server requires TLS: give the link tls"
-                                    ),
+                                (true, false) => self
+                                    .err(&at("node"), Conflict::TlsRequired { node: name.clone() }),
+                                (false, true) => self.err(
+                                    &at("tls"),
+                                    Conflict::TlsUnavailable { node: name.clone() },
                                 ),
-                                (false, true) => self
-                                    .err(&at("tls"), format!("node `{name}`'s server has no tls")),
                                 _ => {}
                             }
                             if let Some(e) = edges.get_mut(n) {
@@ -84,15 +97,18 @@ impl Ctx<'_> {
                         Err(_) => {
                             self.err(
                                 &at("address"),
-                                format!("`{address}` is not an IP:PORT address"),
+                                ConfigProblem::Malformed {
+                                    text: address.clone(),
+                                    form: Form::SocketAddress,
+                                },
                             );
                             None
                         }
                     },
                 };
                 let common = match link.common_address {
-                    Some(value) => common_address(value).unwrap_or_else(|message| {
-                        self.err(&at("common_address"), message);
+                    Some(value) => common_address(value).unwrap_or_else(|problem| {
+                        self.err(&at("common_address"), problem);
                         CommonAddress::new(0)
                     }),
                     None => match target_node.and_then(|t| nodes.get(t)) {
@@ -101,7 +117,11 @@ impl Ctx<'_> {
                             if matches!(target, Some(LinkTarget::Address(_))) {
                                 self.err(
                                     &[K("node"), I(n), K("link"), I(l)],
-                                    "a link with an address needs common_address",
+                                    ConfigProblem::Missing {
+                                        what: "common_address",
+                                        needed_by: "a link with an address",
+                                        hint: "",
+                                    },
                                 );
                             }
                             CommonAddress::new(0)
@@ -112,7 +132,11 @@ impl Ctx<'_> {
                     if !node.point.iter().any(|p| &p.name == status) {
                         self.err(
                             &at("status_point"),
-                            format!("node `{}` has no point `{status}`", node.name),
+                            ConfigProblem::Unknown {
+                                what: Reference::Point,
+                                name: status.clone(),
+                                within: node.name.clone(),
+                            },
                         );
                     }
                 }
@@ -128,10 +152,11 @@ impl Ctx<'_> {
                                 if name == &link.name && !lower_points.contains(ioa) {
                                     problems.push((
                                         vec![K("node"), I(n), K("point"), I(p), K("source")],
-                                        format!(
-                                            "node `{}` serves no point with IOA {ioa}",
-                                            lower.name
-                                        ),
+                                        ConfigProblem::Unknown {
+                                            what: Reference::LowerPoint,
+                                            name: ioa.to_string(),
+                                            within: lower.name.clone(),
+                                        },
                                     ));
                                 }
                             }
@@ -141,17 +166,18 @@ impl Ctx<'_> {
                                 if name == &link.name && !lower_commands.contains(ioa) {
                                     problems.push((
                                         vec![K("node"), I(n), K("command"), I(c), K("target")],
-                                        format!(
-                                            "node `{}` accepts no command with IOA {ioa}",
-                                            lower.name
-                                        ),
+                                        ConfigProblem::Unknown {
+                                            what: Reference::LowerCommand,
+                                            name: ioa.to_string(),
+                                            within: lower.name.clone(),
+                                        },
                                     ));
                                 }
                             }
                         }
                     }
-                    for (path, message) in problems {
-                        self.err(&path, message);
+                    for (path, problem) in problems {
+                        self.err(&path, problem);
                     }
                 }
                 let tls = link.tls.as_ref().map(|tls| {
@@ -228,10 +254,12 @@ impl Ctx<'_> {
                     _ => {
                         self.err(
                             &at,
-                            format!(
-                                "ioa_offset {} is outside 0..=16777215",
-                                republish.ioa_offset
-                            ),
+                            ConfigProblem::OutOfRange {
+                                what: "ioa_offset",
+                                value: republish.ioa_offset,
+                                min: 0,
+                                max: Some(Ioa::MAX.get().into()),
+                            },
                         );
                         continue;
                     }
@@ -251,24 +279,29 @@ impl Ctx<'_> {
                 for point in &lower.points {
                     let ioa = shifted(point.ioa, offset);
                     let Some(ioa) = ioa else {
-                        problems.push(format!(
-                            "point `{}` (IOA {}) + {offset} is past the largest IOA",
-                            point.name, point.ioa
-                        ));
+                        problems.push(RepublishClash::PastLargestIoa {
+                            object: Object::Point,
+                            name: point.name.clone(),
+                            ioa: point.ioa,
+                            offset,
+                        });
                         continue;
                     };
                     if !names.insert(point.name.clone()) {
-                        problems.push(format!(
-                            "point `{}` of `{}` is already a point of `{}`",
-                            point.name, lower.name, this.name
-                        ));
+                        problems.push(RepublishClash::PointName {
+                            name: point.name.clone(),
+                            lower: lower.name.clone(),
+                            upper: this.name.clone(),
+                        });
                         continue;
                     }
                     if !ioas.insert(ioa.get()) {
-                        problems.push(format!(
-                            "point `{}` of `{}` lands on IOA {ioa}, already used at `{}`",
-                            point.name, lower.name, this.name
-                        ));
+                        problems.push(RepublishClash::PointIoa {
+                            name: point.name.clone(),
+                            lower: lower.name.clone(),
+                            ioa,
+                            upper: this.name.clone(),
+                        });
                         continue;
                     }
                     this.points.push(PointConfig {
@@ -294,26 +327,32 @@ impl Ctx<'_> {
                 for command in &lower.commands {
                     let ioa = shifted(command.ioa, offset);
                     let Some(ioa) = ioa else {
-                        problems.push(format!(
-                            "command `{}` (IOA {}) + {offset} is past the largest IOA",
-                            command.name, command.ioa
-                        ));
+                        problems.push(RepublishClash::PastLargestIoa {
+                            object: Object::Command,
+                            name: command.name.clone(),
+                            ioa: command.ioa,
+                            offset,
+                        });
                         continue;
                     };
                     if ioas.contains(&ioa.get()) && !command_ioas.contains(&ioa.get()) {
-                        problems.push(format!(
-                            "command `{}` of `{}` lands on IOA {ioa}, the address of a point at `{}`",
-                            command.name, lower.name, this.name
-                        ));
+                        problems.push(RepublishClash::CommandOnPoint {
+                            name: command.name.clone(),
+                            lower: lower.name.clone(),
+                            ioa,
+                            upper: this.name.clone(),
+                        });
                         continue;
                     }
                     if !command_names.insert(command.name.clone())
                         || !command_ioas.insert(ioa.get())
                     {
-                        problems.push(format!(
-                            "command `{}` of `{}` (IOA {ioa} here) clashes with a command of `{}`",
-                            command.name, lower.name, this.name
-                        ));
+                        problems.push(RepublishClash::Command {
+                            name: command.name.clone(),
+                            lower: lower.name.clone(),
+                            ioa,
+                            upper: this.name.clone(),
+                        });
                         continue;
                     }
                     this.commands.push(CommandConfig {
@@ -337,8 +376,8 @@ impl Ctx<'_> {
                 if let Some(link) = this.links.iter_mut().find(|x| x.name == raw_link.name) {
                     link.republish = Some(offset);
                 }
-                for message in problems {
-                    self.err(&at, message);
+                for problem in problems {
+                    self.err(&at, problem);
                 }
             }
         }
@@ -387,16 +426,16 @@ impl Ctx<'_> {
                         }
                         Some(Mark::Open) => {
                             let from = stack.iter().position(|(n, _)| *n == target).unwrap_or(0);
-                            let mut cycle: Vec<&str> = stack
+                            let mut cycle: Vec<String> = stack
                                 .get(from..)
                                 .unwrap_or(&[])
                                 .iter()
-                                .map(|(n, _)| name(*n))
+                                .map(|(n, _)| name(*n).to_owned())
                                 .collect();
-                            cycle.push(name(target));
+                            cycle.push(name(target).to_owned());
                             self.err(
                                 &[K("node"), I(node), K("link"), I(link), K("node")],
-                                format!("the links form a cycle: {}", cycle.join(" -> ")),
+                                ConfigProblem::Cycle { nodes: cycle },
                             );
                         }
                         _ => {}

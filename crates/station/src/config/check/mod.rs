@@ -9,27 +9,36 @@ use super::*;
 // ---------------------------------------------------------------------------------------
 // Checks
 
-pub(in crate::config) fn parse_ip(text: &str) -> Result<IpAddr, String> {
-    text.trim()
-        .parse()
-        .map_err(|_| format!("`{text}` is not an IP address"))
+pub(in crate::config) fn parse_ip(text: &str) -> Result<IpAddr, ConfigProblem> {
+    text.trim().parse().map_err(|_| ConfigProblem::Malformed {
+        text: text.to_owned(),
+        form: Form::IpAddress,
+    })
 }
 
-pub(in crate::config) fn common_address(value: i64) -> Result<CommonAddress, String> {
+pub(in crate::config) fn common_address(value: i64) -> Result<CommonAddress, ConfigProblem> {
     match u16::try_from(value) {
         Ok(v) if (1..=65534).contains(&v) => Ok(CommonAddress::new(v)),
-        _ => Err(format!(
-            "common address {value} is outside 1..=65534 (0 is unused, 65535 is broadcast)"
-        )),
+        _ => Err(ConfigProblem::OutOfRange {
+            what: "common address",
+            value,
+            min: 1,
+            max: Some(65534),
+        }),
     }
 }
 
-pub(in crate::config) fn ioa(value: i64) -> Result<Ioa, String> {
+pub(in crate::config) fn ioa(value: i64) -> Result<Ioa, ConfigProblem> {
     u32::try_from(value)
         .ok()
         .filter(|v| *v >= 1)
         .and_then(|v| Ioa::try_new(v).ok())
-        .ok_or_else(|| format!("IOA {value} is outside 1..=16777215"))
+        .ok_or(ConfigProblem::OutOfRange {
+            what: "IOA",
+            value,
+            min: 1,
+            max: Some(Ioa::MAX.get().into()),
+        })
 }
 
 /// Splits `link:NAME/IOA`; `Ok(None)` for a variable path.
@@ -40,14 +49,21 @@ pub(in crate::config) fn shifted(ioa: Ioa, offset: u32) -> Option<Ioa> {
         .and_then(|i| Ioa::try_new(i).ok())
 }
 
-pub(in crate::config) fn parse_link_ref(text: &str) -> Result<Option<(String, Ioa)>, String> {
+pub(in crate::config) fn parse_link_ref(
+    text: &str,
+) -> Result<Option<(String, Ioa)>, ConfigProblem> {
     let Some(rest) = text.strip_prefix("link:") else {
         if text.trim().is_empty() {
-            return Err("empty variable path".to_owned());
+            return Err(ConfigProblem::Empty {
+                what: "variable path",
+            });
         }
         return Ok(None);
     };
-    let malformed = || format!("`{text}` is not of the form link:LINK/IOA");
+    let malformed = || ConfigProblem::Malformed {
+        text: text.to_owned(),
+        form: Form::LinkRef,
+    };
     let (name, number) = rest.rsplit_once('/').ok_or_else(malformed)?;
     if name.is_empty() {
         return Err(malformed());
@@ -83,11 +99,18 @@ impl Ctx<'_> {
         let mut seen_ports: HashMap<u16, String> = HashMap::new();
         for (n, node) in raw.node.iter().enumerate() {
             if node.name.trim().is_empty() {
-                self.err(&[K("node"), I(n), K("name")], "node name is empty");
+                self.err(
+                    &[K("node"), I(n), K("name")],
+                    ConfigProblem::Empty { what: "node name" },
+                );
             } else if let Some(first) = seen_names.get(&node.name) {
                 self.err(
                     &[K("node"), I(n), K("name")],
-                    format!("duplicate node name `{}` (also node[{first}])", node.name),
+                    ConfigProblem::Duplicate {
+                        what: Unique::NodeName,
+                        value: node.name.clone(),
+                        other: format!("node[{first}]"),
+                    },
                 );
             } else {
                 seen_names.insert(node.name.clone(), n);
@@ -98,10 +121,11 @@ impl Ctx<'_> {
                 if let Some(other) = seen_ports.get(&server.port_offset) {
                     self.err(
                         &path,
-                        format!(
-                            "port_offset {} is also used by node `{other}`",
-                            server.port_offset
-                        ),
+                        ConfigProblem::Duplicate {
+                            what: Unique::PortOffset,
+                            value: server.port_offset.to_string(),
+                            other: other.clone(),
+                        },
                     );
                 } else {
                     seen_ports.insert(server.port_offset, built.name.clone());
@@ -109,10 +133,10 @@ impl Ctx<'_> {
                 if station.port_base.checked_add(server.port_offset).is_none() {
                     self.err(
                         &path,
-                        format!(
-                            "port_base {} + port_offset {} is past 65535",
-                            station.port_base, server.port_offset
-                        ),
+                        Conflict::PortPast65535 {
+                            port_base: station.port_base,
+                            port_offset: server.port_offset,
+                        },
                     );
                 }
             }
@@ -136,10 +160,10 @@ impl Ctx<'_> {
             Err(_) => {
                 self.err(
                     &[K("station"), K("time_zone")],
-                    format!(
-                        "unknown time zone `{}` (an IANA name such as Europe/Prague)",
-                        raw.time_zone
-                    ),
+                    ConfigProblem::UnknownValue {
+                        what: Vocabulary::TimeZone,
+                        value: raw.time_zone.clone(),
+                    },
                 );
                 chrono_tz::UTC
             }
@@ -148,7 +172,12 @@ impl Ctx<'_> {
         if retention_days == 0 {
             self.err(
                 &[K("station"), K("retention_days")],
-                "retention_days must be at least 1",
+                ConfigProblem::OutOfRange {
+                    what: "retention_days",
+                    value: 0,
+                    min: 1,
+                    max: None,
+                },
             );
         }
         let store_text = raw.store.as_deref().unwrap_or("sqlite:events.sqlite");
@@ -157,15 +186,15 @@ impl Ctx<'_> {
         let store = match crate::store_url::StoreUrl::parse(store_text) {
             Ok(url) => url.resolved_in(folder).to_string(),
             Err(error) => {
-                self.err(&[K("station"), K("store")], error.to_string());
+                self.err(&[K("station"), K("store")], error);
                 store_text.to_owned()
             }
         };
         let bind = match raw.bind.as_deref().map(parse_ip) {
             None => IpAddr::V4(Ipv4Addr::LOCALHOST),
             Some(Ok(ip)) => ip,
-            Some(Err(message)) => {
-                self.err(&[K("station"), K("bind")], message);
+            Some(Err(problem)) => {
+                self.err(&[K("station"), K("bind")], problem);
                 IpAddr::V4(Ipv4Addr::LOCALHOST)
             }
         };
@@ -191,12 +220,19 @@ impl Ctx<'_> {
             Ok(None) => PointSource::Variable(source.to_owned()),
             Ok(Some((link, ioa))) => {
                 if !links.iter().any(|l| l.name == link) {
-                    self.err(path, format!("node `{node}` has no link `{link}`"));
+                    self.err(
+                        path,
+                        ConfigProblem::Unknown {
+                            what: Reference::Link,
+                            name: link.clone(),
+                            within: node.to_owned(),
+                        },
+                    );
                 }
                 PointSource::Link { link, ioa }
             }
-            Err(message) => {
-                self.err(path, message);
+            Err(problem) => {
+                self.err(path, problem);
                 PointSource::Variable(source.to_owned())
             }
         }
@@ -207,12 +243,21 @@ impl Ctx<'_> {
         &mut self,
         ms: i64,
         path: &[Seg],
-        key: &str,
+        key: &'static str,
     ) -> Option<Duration> {
-        if (1..=86_400_000).contains(&ms) {
+        const MAX: i64 = 86_400_000;
+        if (1..=MAX).contains(&ms) {
             Some(Duration::from_millis(ms.unsigned_abs()))
         } else {
-            self.err(path, format!("{key} {ms} is outside 1..=86400000"));
+            self.err(
+                path,
+                ConfigProblem::OutOfRange {
+                    what: key,
+                    value: ms,
+                    min: 1,
+                    max: Some(MAX),
+                },
+            );
             None
         }
     }
@@ -222,10 +267,10 @@ impl Ctx<'_> {
         for (i, text) in texts.iter().enumerate() {
             match parse_ip(text) {
                 Ok(ip) => out.push(ip),
-                Err(message) => {
+                Err(problem) => {
                     let mut p = path.to_vec();
                     p.push(I(i));
-                    self.err(&p, message);
+                    self.err(&p, problem);
                 }
             }
         }
@@ -259,7 +304,12 @@ impl Ctx<'_> {
     ) -> PathBuf {
         let resolved = resolve(folder, relative);
         if !resolved.is_file() {
-            self.err(path, format!("file `{}` not found", resolved.display()));
+            self.err(
+                path,
+                ConfigProblem::FileNotFound {
+                    path: resolved.clone(),
+                },
+            );
         }
         resolved
     }

@@ -14,8 +14,8 @@ impl Ctx<'_> {
             p.extend_from_slice(rest);
             p
         };
-        let common = common_address(raw.common_address).unwrap_or_else(|message| {
-            self.err(&node(&[K("common_address")]), message);
+        let common = common_address(raw.common_address).unwrap_or_else(|problem| {
+            self.err(&node(&[K("common_address")]), problem);
             CommonAddress::new(0)
         });
 
@@ -32,7 +32,14 @@ impl Ctx<'_> {
                         Ok(text) => files.push((resolved.display().to_string(), text)),
                         Err(e) => self.push(not_utf8(&resolved, e.as_bytes())),
                     },
-                    Err(e) => self.err(&path, format!("cannot read `{}`: {e}", resolved.display())),
+                    Err(e) => self.err(
+                        &path,
+                        ConfigProblem::Unreadable {
+                            file: Some(resolved.clone()),
+                            kind: e.kind(),
+                            detail: e.to_string(),
+                        },
+                    ),
                 }
             }
             sources.push(resolved);
@@ -45,7 +52,12 @@ impl Ctx<'_> {
             let port_offset = u16::try_from(s.port_offset).unwrap_or_else(|_| {
                 self.err(
                     &node(&[K("server"), K("port_offset")]),
-                    format!("port_offset {} is outside 0..=65535", s.port_offset),
+                    ConfigProblem::OutOfRange {
+                        what: "port_offset",
+                        value: s.port_offset,
+                        min: 0,
+                        max: Some(u16::MAX.into()),
+                    },
                 );
                 0
             });
@@ -65,7 +77,11 @@ impl Ctx<'_> {
                     if groups.is_empty() {
                         self.err(
                             &node(&[K("server"), K("redundancy_groups")]),
-                            "at least one redundancy group is needed",
+                            ConfigProblem::Missing {
+                                what: "redundancy group",
+                                needed_by: "",
+                                hint: "at least one is needed; leave redundancy_groups out for one catch-all group",
+                            },
                         );
                     }
                     let mut names = HashSet::new();
@@ -73,7 +89,11 @@ impl Ctx<'_> {
                         if !names.insert(group.name.clone()) {
                             self.err(
                                 &node(&[K("server"), K("redundancy_groups"), I(g), K("name")]),
-                                format!("duplicate redundancy group `{}`", group.name),
+                                ConfigProblem::Duplicate {
+                                    what: Unique::RedundancyGroup,
+                                    value: group.name.clone(),
+                                    other: raw.name.clone(),
+                                },
                             );
                         }
                         let clients = self.ips(
@@ -109,10 +129,10 @@ impl Ctx<'_> {
                     .unwrap_or_else(|| {
                         self.err(
                             &node(&[K("server"), K("redundancy")]),
-                            format!(
-                                "unknown redundancy mode `{mode_name}` (one of {})",
-                                iec60870::cs104::server::RedundancyMode::NAMES.join(", ")
-                            ),
+                            ConfigProblem::UnknownValue {
+                                what: Vocabulary::RedundancyMode,
+                                value: mode_name.to_owned(),
+                            },
                         );
                         iec60870::cs104::server::RedundancyMode::SingleGroup
                     });
@@ -140,19 +160,33 @@ impl Ctx<'_> {
             if !task_names.insert(task.name.clone()) {
                 self.err(
                     &node(&[K("task"), I(t), K("name")]),
-                    format!("duplicate task name `{}`", task.name),
+                    ConfigProblem::Duplicate {
+                        what: Unique::TaskName,
+                        value: task.name.clone(),
+                        other: raw.name.clone(),
+                    },
                 );
             }
             if task.interval_ms == 0 {
                 self.err(
                     &node(&[K("task"), I(t), K("interval_ms")]),
-                    "interval_ms must be at least 1",
+                    ConfigProblem::OutOfRange {
+                        what: "interval_ms",
+                        value: 0,
+                        min: 1,
+                        max: None,
+                    },
                 );
             }
             if task.watchdog_ms == Some(0) {
                 self.err(
                     &node(&[K("task"), I(t), K("watchdog_ms")]),
-                    "watchdog_ms must be at least 1",
+                    ConfigProblem::OutOfRange {
+                        what: "watchdog_ms",
+                        value: 0,
+                        min: 1,
+                        max: None,
+                    },
                 );
             }
             if all_sources_read {
@@ -160,7 +194,11 @@ impl Ctx<'_> {
                     if !texts.iter().any(|text| declares_program(text, program)) {
                         self.err(
                             &node(&[K("task"), I(t), K("programs"), I(p)]),
-                            format!("no PROGRAM `{program}` is declared in the node's sources"),
+                            ConfigProblem::Unknown {
+                                what: Reference::Program,
+                                name: program.clone(),
+                                within: raw.name.clone(),
+                            },
                         );
                     }
                 }
@@ -192,7 +230,11 @@ impl Ctx<'_> {
             if !point_names.insert(point.name.clone()) {
                 self.err(
                     &at("name"),
-                    format!("duplicate point name `{}`", point.name),
+                    ConfigProblem::Duplicate {
+                        what: Unique::PointName,
+                        value: point.name.clone(),
+                        other: raw.name.clone(),
+                    },
                 );
             }
             let type_id = match point.type_id.parse::<TypeId>() {
@@ -200,12 +242,21 @@ impl Ctx<'_> {
                 Ok(t) => {
                     self.err(
                         &at("type"),
-                        format!("{t} is not a monitor-direction process type"),
+                        ConfigProblem::WrongType {
+                            type_id: t.to_string(),
+                            usage: TypeUse::Point,
+                        },
                     );
                     TypeId::M_SP_NA_1
                 }
                 Err(_) => {
-                    self.err(&at("type"), format!("unknown type `{}`", point.type_id));
+                    self.err(
+                        &at("type"),
+                        ConfigProblem::UnknownValue {
+                            what: Vocabulary::TypeId,
+                            value: point.type_id.clone(),
+                        },
+                    );
                     TypeId::M_SP_NA_1
                 }
             };
@@ -214,15 +265,19 @@ impl Ctx<'_> {
                     if let Some(other) = point_ioas.get(&a) {
                         self.err(
                             &at("ioa"),
-                            format!("IOA {a} is also used by point `{other}`"),
+                            ConfigProblem::Duplicate {
+                                what: Unique::PointIoa,
+                                value: a.to_string(),
+                                other: other.clone(),
+                            },
                         );
                     } else {
                         point_ioas.insert(a, point.name.clone());
                     }
                     a
                 }
-                Err(message) => {
-                    self.err(&at("ioa"), message);
+                Err(problem) => {
+                    self.err(&at("ioa"), problem);
                     Ioa::IRRELEVANT
                 }
             };
@@ -243,10 +298,12 @@ impl Ctx<'_> {
                 if !matches!(type_id, TypeId::M_SP_NA_1 | TypeId::M_SP_TB_1) {
                     self.err(
                         &at("type"),
-                        format!(
-                            "the status point of redundancy group `{}` must be M_SP_NA_1 or M_SP_TB_1",
-                            group.name
-                        ),
+                        ConfigProblem::WrongType {
+                            type_id: type_id.to_string(),
+                            usage: TypeUse::GroupStatus {
+                                group: group.name.clone(),
+                            },
+                        },
                     );
                 }
             }
@@ -276,10 +333,12 @@ impl Ctx<'_> {
                     if !matches!(type_id, TypeId::M_SP_NA_1 | TypeId::M_SP_TB_1) {
                         self.err(
                             &at("type"),
-                            format!(
-                                "the status point of link `{}` must be M_SP_NA_1 or M_SP_TB_1",
-                                link.name
-                            ),
+                            ConfigProblem::WrongType {
+                                type_id: type_id.to_string(),
+                                usage: TypeUse::LinkStatus {
+                                    link: link.name.clone(),
+                                },
+                            },
                         );
                     }
                     PointSource::LinkStatus(link.name.clone())
@@ -287,14 +346,20 @@ impl Ctx<'_> {
                 (None, None) => {
                     self.err(
                         &node(&[K("point"), I(p)]),
-                        "missing source (only the status point of a link or a redundancy group has none)",
+                        ConfigProblem::Missing {
+                            what: "source",
+                            needed_by: "",
+                            hint: "only the status point of a link, a redundancy group, a line or a device has none",
+                        },
                     );
                     PointSource::Variable(String::new())
                 }
                 (Some(_), Some(link)) => {
                     self.err(
                         &at("source"),
-                        format!("the status point of link `{}` takes no source", link.name),
+                        Conflict::LinkStatusWithSource {
+                            link: link.name.clone(),
+                        },
                     );
                     PointSource::LinkStatus(link.name.clone())
                 }
@@ -311,15 +376,25 @@ impl Ctx<'_> {
                         match (reference.index, indication, is_measurement(type_id)) {
                             (None, false, _) => self.err(
                                 &at("type"),
-                                format!("an indication of a line device needs a single or double point type, not {type_id}"),
+                                ConfigProblem::WrongType {
+                                    type_id: type_id.to_string(),
+                                    usage: TypeUse::LineIndication,
+                                },
                             ),
                             (Some(_), _, false) => self.err(
                                 &at("type"),
-                                format!("a measurand of a line device needs a measurement type (M_ME_*), not {type_id}"),
+                                ConfigProblem::WrongType {
+                                    type_id: type_id.to_string(),
+                                    usage: TypeUse::LineMeasurand,
+                                },
                             ),
                             (Some(_), _, true) if point.measurand_limit.is_none() => self.err(
                                 &node(&[K("point"), I(p)]),
-                                "a measurand of a line device needs measurand_limit (the engineering value at fraction 1.0)",
+                                ConfigProblem::Missing {
+                                    what: "measurand_limit",
+                                    needed_by: "a measurand of a line device",
+                                    hint: "the engineering value at fraction 1.0",
+                                },
                             ),
                             _ => {}
                         }
@@ -332,26 +407,43 @@ impl Ctx<'_> {
                         }
                     }
                     Ok(None) => self.point_source(&raw.name, &raw.link, source, &at("source")),
-                    Err(message) => {
-                        self.err(&at("source"), message);
+                    Err(problem) => {
+                        self.err(&at("source"), problem);
                         PointSource::Variable(source.clone())
                     }
                 },
             };
             let line_measurand = matches!(&source, PointSource::Line { index: Some(_), .. });
             if point.scale_factor.is_some() && point.measurand_limit.is_none() {
-                self.err(&at("scale_factor"), "scale_factor needs measurand_limit");
+                self.err(
+                    &at("scale_factor"),
+                    ConfigProblem::Missing {
+                        what: "measurand_limit",
+                        needed_by: "scale_factor",
+                        hint: "",
+                    },
+                );
             }
             if let Some(factor) = point.scale_factor {
                 if !matches!(
                     type_id,
                     TypeId::M_ME_NB_1 | TypeId::M_ME_TB_1 | TypeId::M_ME_TE_1
                 ) {
-                    self.err(&at("scale_factor"), format!("scale_factor is for scaled values (M_ME_NB_1, M_ME_TB_1, M_ME_TE_1), not {type_id}"));
+                    self.err(
+                        &at("scale_factor"),
+                        ConfigProblem::WrongType {
+                            type_id: type_id.to_string(),
+                            usage: TypeUse::ScaleFactor,
+                        },
+                    );
                 } else if !(factor.is_finite() && factor != 0.0) {
                     self.err(
                         &at("scale_factor"),
-                        "scale_factor must be a finite number other than 0",
+                        ConfigProblem::InvalidNumber {
+                            what: "scale_factor",
+                            value: factor.to_string(),
+                            expected: "a finite number other than 0",
+                        },
                     );
                 }
             }
@@ -361,11 +453,22 @@ impl Ctx<'_> {
                     if !(limit.is_finite() && limit > 0.0) {
                         self.err(
                             &at("measurand_limit"),
-                            "measurand_limit must be a positive number",
+                            ConfigProblem::InvalidNumber {
+                                what: "measurand_limit",
+                                value: limit.to_string(),
+                                expected: "a positive number",
+                            },
                         );
                     }
-                    if full_scale.is_some_and(|f| !(f.is_finite() && f > 0.0)) {
-                        self.err(&at("full_scale"), "full_scale must be a positive number");
+                    if let Some(f) = full_scale.filter(|f| !(f.is_finite() && *f > 0.0)) {
+                        self.err(
+                            &at("full_scale"),
+                            ConfigProblem::InvalidNumber {
+                                what: "full_scale",
+                                value: f.to_string(),
+                                expected: "a positive number",
+                            },
+                        );
                     }
                     Some(MeasurandScaling {
                         limit,
@@ -374,11 +477,21 @@ impl Ctx<'_> {
                     })
                 }
                 (Some(_), _) => {
-                    self.err(&at("measurand_limit"), "measurand_limit is only for measurands of line devices (line:LINE/DEVICE/FUN/INF/INDEX)");
+                    self.err(
+                        &at("measurand_limit"),
+                        Conflict::MeasurandLimitWithoutMeasurand,
+                    );
                     None
                 }
                 (None, Some(_)) => {
-                    self.err(&at("full_scale"), "full_scale needs measurand_limit");
+                    self.err(
+                        &at("full_scale"),
+                        ConfigProblem::Missing {
+                            what: "measurand_limit",
+                            needed_by: "full_scale",
+                            hint: "",
+                        },
+                    );
                     None
                 }
             };
@@ -387,18 +500,30 @@ impl Ctx<'_> {
                     period: Duration::from_millis(ms),
                 },
                 (RawTransmission::Cyclic, Some(_)) => {
-                    self.err(&at("cycle_ms"), "cycle_ms must be at least 1");
+                    self.err(
+                        &at("cycle_ms"),
+                        ConfigProblem::OutOfRange {
+                            what: "cycle_ms",
+                            value: 0,
+                            min: 1,
+                            max: None,
+                        },
+                    );
                     Transmission::Spontaneous
                 }
                 (RawTransmission::Cyclic, None) => {
-                    self.err(&at("transmission"), "cyclic transmission needs cycle_ms");
+                    self.err(
+                        &at("transmission"),
+                        ConfigProblem::Missing {
+                            what: "cycle_ms",
+                            needed_by: "cyclic transmission",
+                            hint: "",
+                        },
+                    );
                     Transmission::Spontaneous
                 }
                 (_, Some(_)) => {
-                    self.err(
-                        &at("cycle_ms"),
-                        "cycle_ms is only allowed with transmission = \"cyclic\"",
-                    );
+                    self.err(&at("cycle_ms"), Conflict::CycleWithoutCyclic);
                     Transmission::Spontaneous
                 }
                 (RawTransmission::Spontaneous, None) => Transmission::Spontaneous,
@@ -410,7 +535,12 @@ impl Ctx<'_> {
                     Ok(v) if (1..=16).contains(&v) => groups.push(v),
                     _ => self.err(
                         &node(&[K("point"), I(p), K("groups"), I(g)]),
-                        format!("interrogation group {group} is outside 1..=16"),
+                        ConfigProblem::OutOfRange {
+                            what: "interrogation group",
+                            value: *group,
+                            min: 1,
+                            max: Some(16),
+                        },
                     ),
                 }
             }
@@ -418,10 +548,20 @@ impl Ctx<'_> {
                 if !is_measurement(type_id) {
                     self.err(
                         &at("deadband"),
-                        format!("a deadband needs a measurement type (M_ME_*), not {type_id}"),
+                        ConfigProblem::WrongType {
+                            type_id: type_id.to_string(),
+                            usage: TypeUse::Deadband,
+                        },
                     );
                 } else if !(deadband >= 0.0 && deadband.is_finite()) {
-                    self.err(&at("deadband"), "deadband must be a finite value >= 0");
+                    self.err(
+                        &at("deadband"),
+                        ConfigProblem::InvalidNumber {
+                            what: "deadband",
+                            value: deadband.to_string(),
+                            expected: "a finite value >= 0",
+                        },
+                    );
                 }
             }
             points.push(PointConfig {
@@ -447,17 +587,33 @@ impl Ctx<'_> {
             if !command_names.insert(command.name.clone()) {
                 self.err(
                     &at("name"),
-                    format!("duplicate command name `{}`", command.name),
+                    ConfigProblem::Duplicate {
+                        what: Unique::CommandName,
+                        value: command.name.clone(),
+                        other: raw.name.clone(),
+                    },
                 );
             }
             let type_id = match command.type_id.parse::<TypeId>() {
                 Ok(t) if t.is_command() => t,
                 Ok(t) => {
-                    self.err(&at("type"), format!("{t} is not a command type"));
+                    self.err(
+                        &at("type"),
+                        ConfigProblem::WrongType {
+                            type_id: t.to_string(),
+                            usage: TypeUse::Command,
+                        },
+                    );
                     TypeId::C_SC_NA_1
                 }
                 Err(_) => {
-                    self.err(&at("type"), format!("unknown type `{}`", command.type_id));
+                    self.err(
+                        &at("type"),
+                        ConfigProblem::UnknownValue {
+                            what: Vocabulary::TypeId,
+                            value: command.type_id.clone(),
+                        },
+                    );
                     TypeId::C_SC_NA_1
                 }
             };
@@ -466,7 +622,11 @@ impl Ctx<'_> {
                     if let Some(other) = command_ioas.get(&a) {
                         self.err(
                             &at("ioa"),
-                            format!("IOA {a} is also used by command `{other}`"),
+                            ConfigProblem::Duplicate {
+                                what: Unique::CommandIoa,
+                                value: a.to_string(),
+                                other: other.clone(),
+                            },
                         );
                     } else if let Some(point) = point_ioas.get(&a) {
                         // Many controlling stations (lib60870, most SCADA) keep one
@@ -474,15 +634,19 @@ impl Ctx<'_> {
                         // IOA would clash there.
                         self.err(
                             &at("ioa"),
-                            format!("IOA {a} is also the address of point `{point}`"),
+                            ConfigProblem::Duplicate {
+                                what: Unique::CommandOnPointIoa,
+                                value: a.to_string(),
+                                other: point.clone(),
+                            },
                         );
                     } else {
                         command_ioas.insert(a, command.name.clone());
                     }
                     a
                 }
-                Err(message) => {
-                    self.err(&at("ioa"), message);
+                Err(problem) => {
+                    self.err(&at("ioa"), problem);
                     Ioa::IRRELEVANT
                 }
             };
@@ -499,15 +663,15 @@ impl Ctx<'_> {
                 Ok(Some(reference)) => {
                     self.line_ref_exists(&raw.name, &raw.line, &reference, &at("target"));
                     if reference.index.is_some() {
-                        self.err(
-                            &at("target"),
-                            "a command to a line device is line:LINE/DEVICE/FUN/INF",
-                        );
+                        self.err(&at("target"), Conflict::LineCommandWithIndex);
                     }
                     if !matches!(type_id, TypeId::C_SC_NA_1 | TypeId::C_DC_NA_1) {
                         self.err(
                             &at("type"),
-                            format!("a command to a line device is C_SC_NA_1 or C_DC_NA_1 (a general command ON/OFF), not {type_id}"),
+                            ConfigProblem::WrongType {
+                                type_id: type_id.to_string(),
+                                usage: TypeUse::LineCommand,
+                            },
                         );
                     }
                     Some(CommandTarget::Line {
@@ -519,8 +683,8 @@ impl Ctx<'_> {
                     })
                 }
                 Ok(None) => None,
-                Err(message) => {
-                    self.err(&at("target"), message);
+                Err(problem) => {
+                    self.err(&at("target"), problem);
                     Some(CommandTarget::Variable(command.target.clone()))
                 }
             };
@@ -536,14 +700,18 @@ impl Ctx<'_> {
                     if !raw.link.iter().any(|l| l.name == link) {
                         self.err(
                             &at("target"),
-                            format!("node `{}` has no link `{link}`", raw.name),
+                            ConfigProblem::Unknown {
+                                what: Reference::Link,
+                                name: link.clone(),
+                                within: raw.name.clone(),
+                            },
                         );
                     }
                     CommandTarget::Link { link, ioa }
                 }
                 Ok(target) => target,
-                Err(message) => {
-                    self.err(&at("target"), message);
+                Err(problem) => {
+                    self.err(&at("target"), problem);
                     CommandTarget::Variable(command.target.clone())
                 }
             };
@@ -554,7 +722,11 @@ impl Ctx<'_> {
                 if !known {
                     self.err(
                         &[K("node"), I(n), K("command"), I(c), K("from_groups"), I(g)],
-                        format!("node `{}` has no redundancy group `{group}`", raw.name),
+                        ConfigProblem::Unknown {
+                            what: Reference::RedundancyGroup,
+                            name: group.clone(),
+                            within: raw.name.clone(),
+                        },
                     );
                 }
             }
@@ -562,17 +734,19 @@ impl Ctx<'_> {
                 None => None,
                 Some(ms) if (1..=3_600_000).contains(&ms) => {
                     if matches!(target, CommandTarget::Link { .. }) {
-                        self.err(
-                            &at("pulse_ms"),
-                            "a forwarded command is pulsed by the node that executes it",
-                        );
+                        self.err(&at("pulse_ms"), Conflict::ForwardedPulse);
                     }
                     Some(Duration::from_millis(ms.unsigned_abs()))
                 }
                 Some(ms) => {
                     self.err(
                         &at("pulse_ms"),
-                        format!("pulse_ms {ms} is outside 1..=3600000"),
+                        ConfigProblem::OutOfRange {
+                            what: "pulse_ms",
+                            value: ms,
+                            min: 1,
+                            max: Some(3_600_000),
+                        },
                     );
                     None
                 }
@@ -593,11 +767,20 @@ impl Ctx<'_> {
                 if !setpoint {
                     self.err(
                         &at("range"),
-                        format!("range applies to set-points, not {type_id}"),
+                        ConfigProblem::WrongType {
+                            type_id: type_id.to_string(),
+                            usage: TypeUse::Range,
+                        },
                     );
                     None
                 } else if !(low.is_finite() && high.is_finite() && low <= high) {
-                    self.err(&at("range"), format!("range [{low}, {high}] is empty"));
+                    self.err(
+                        &at("range"),
+                        ConfigProblem::EmptyRange {
+                            low: low.to_string(),
+                            high: high.to_string(),
+                        },
+                    );
                     None
                 } else {
                     Some(low..=high)
@@ -608,7 +791,11 @@ impl Ctx<'_> {
                     if command.feedback_timeout_ms.is_some() {
                         self.err(
                             &at("feedback_timeout_ms"),
-                            "feedback_timeout_ms needs feedback",
+                            ConfigProblem::Missing {
+                                what: "feedback",
+                                needed_by: "feedback_timeout_ms",
+                                hint: "",
+                            },
                         );
                     }
                     None
@@ -617,14 +804,15 @@ impl Ctx<'_> {
                     if !point_names.contains(point) {
                         self.err(
                             &at("feedback"),
-                            format!("node `{}` has no point `{point}`", raw.name),
+                            ConfigProblem::Unknown {
+                                what: Reference::Point,
+                                name: point.clone(),
+                                within: raw.name.clone(),
+                            },
                         );
                     }
                     if matches!(target, CommandTarget::Link { .. }) {
-                        self.err(
-                            &at("feedback"),
-                            "a forwarded command's return information comes from the node that executes it",
-                        );
+                        self.err(&at("feedback"), Conflict::ForwardedFeedback);
                     }
                     let timeout = match command.feedback_timeout_ms {
                         None => DEFAULT_FEEDBACK_TIMEOUT,
@@ -724,7 +912,10 @@ impl Ctx<'_> {
                         line: at.line,
                         column: at.col,
                         key: String::new(),
-                        message: diagnostic.message.clone(),
+                        problem: ConfigProblem::StDiagnostic {
+                            code: diagnostic.code,
+                            message: diagnostic.message.clone(),
+                        },
                     });
                 }
                 return;
@@ -735,7 +926,9 @@ impl Ctx<'_> {
             Err(error) => {
                 self.err(
                     &[K("node"), I(n), K("sources")],
-                    format!("the PLC does not start: {error}"),
+                    ConfigProblem::PlcStart {
+                        detail: error.to_string(),
+                    },
                 );
                 return;
             }
@@ -782,7 +975,17 @@ impl Ctx<'_> {
             if let Err(error) = plc.leaf(variable) {
                 let mut path = vec![K("node"), I(n)];
                 path.extend(rest);
-                self.err(&path, format!("{error} in the node's PLC program"));
+                let problem = match error {
+                    plc::PlcError::UnknownPath(name) => ConfigProblem::Unknown {
+                        what: Reference::PlcVariable,
+                        name,
+                        within: raw.name.clone(),
+                    },
+                    other => ConfigProblem::PlcVariable {
+                        detail: other.to_string(),
+                    },
+                };
+                self.err(&path, problem);
             }
         }
     }
