@@ -199,6 +199,7 @@ impl BodyCx<'_> {
             Init::Array(items, span) => match ty {
                 Ty::Array(a) => {
                     let elem = a.elem.clone();
+                    self.init_count(items, a.len());
                     for (count, v) in items {
                         if let Some(n) = count {
                             let t = self.expr(n, Some(&Ty::DInt));
@@ -265,6 +266,57 @@ impl BodyCx<'_> {
                     ),
                 ),
             },
+        }
+    }
+
+    /// Reports an array initializer that gives more values than the array has elements
+    /// (counting `n(v)` as `n` values), at the first value that does not fit.
+    fn init_count(&mut self, items: &[(Option<Expr>, Init)], capacity: usize) {
+        let repeat = |count: &Option<Expr>| match count.as_ref().map(|c| &c.kind) {
+            None => 1,
+            Some(ExprKind::Literal(Literal::Int(k, _))) => {
+                usize::try_from(*k).unwrap_or(usize::MAX)
+            }
+            // the parser only makes repetitions of integer literals
+            Some(_) => 1,
+        };
+        let total = items
+            .iter()
+            .fold(0usize, |n, (count, _)| n.saturating_add(repeat(count)));
+        if total <= capacity {
+            return;
+        }
+        let mut given = 0usize;
+        for (count, v) in items {
+            given = given.saturating_add(repeat(count));
+            if given > capacity {
+                let at = match count {
+                    Some(c) => c.span.to(init_span(v)),
+                    None => init_span(v),
+                };
+                // an initializer shared by every variable of a TYPE is reported once
+                if self
+                    .diags
+                    .iter()
+                    .any(|d| d.primary == at && d.code == Code::TypeMismatch)
+                {
+                    return;
+                }
+                let values = if total == usize::MAX {
+                    "more".to_string()
+                } else {
+                    total.to_string()
+                };
+                self.err(
+                    Code::TypeMismatch,
+                    at,
+                    format!(
+                        "too many initial values: {values} for an array of {capacity} element{}",
+                        if capacity == 1 { "" } else { "s" }
+                    ),
+                );
+                return;
+            }
         }
     }
 
@@ -1356,9 +1408,34 @@ impl BodyCx<'_> {
                 self.coerce_to(&a.value, &t, &v.ty, &format!("argument '{}'", v.name));
             }
         }
-        // every VAR_IN_OUT must be bound
+        // IEC 61131-3: a call without parameter names gives every input, in order
+        // (`inst()` with no arguments at all is a call that leaves the inputs as they are)
+        let non_formal = !args.is_empty() && args.iter().all(|a| a.name.is_none());
+        if non_formal && pos < positional.len() {
+            let missing: Vec<&str> = positional
+                .iter()
+                .skip(pos)
+                .filter_map(|&i| pou.vars.get(i))
+                .map(|v| v.name.as_str())
+                .collect();
+            self.diags.push(
+                Diagnostic::error(
+                    Code::WrongArguments,
+                    span,
+                    format!(
+                        "too few arguments to '{}': {pos} of {} input(s) given, missing {}",
+                        pou.name,
+                        positional.len(),
+                        missing.join(", ")
+                    ),
+                )
+                .with_note("name the inputs (`x := ...`) to leave some at their initial values"),
+            );
+        }
+        // every VAR_IN_OUT must be bound (a too short non-formal list is reported above)
+        let too_few = non_formal && pos < positional.len();
         for (i, v) in pou.vars.iter().enumerate() {
-            if v.kind == VarKind::InOut && !assigned.contains(&(i, false)) {
+            if v.kind == VarKind::InOut && !assigned.contains(&(i, false)) && !too_few {
                 self.err(
                     Code::WrongArguments,
                     span,
@@ -1367,6 +1444,14 @@ impl BodyCx<'_> {
             }
         }
         let _ = is_fb;
+    }
+}
+
+/// Where an initial value is written.
+fn init_span(init: &Init) -> Span {
+    match init {
+        Init::Expr(e) => e.span,
+        Init::Array(_, span) | Init::Struct(_, span) => *span,
     }
 }
 

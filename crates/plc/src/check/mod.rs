@@ -526,6 +526,9 @@ impl<'u> Decls<'u> {
             if let Item::Globals(b) = item {
                 for d in &b.decls {
                     let ty = self.resolve_type(&d.ty, &d.names[..]);
+                    if b.constant {
+                        self.no_constant_instances(&ty, &d.names);
+                    }
                     for n in &d.names {
                         if let Some(&first) = self.global_index.get(&n.key) {
                             let mut d = Diagnostic::error(
@@ -720,7 +723,19 @@ impl<'u> Decls<'u> {
     fn enum_type(&mut self, name: &str, values: &[(Ident, Option<Expr>)]) -> Ty {
         let mut out = Vec::new();
         let mut next: i64 = 0;
+        let mut seen: HashMap<&str, Span> = HashMap::new();
         for (n, v) in values {
+            if let Some(first) = seen.insert(n.key.as_str(), n.span) {
+                self.diags.push(
+                    Diagnostic::error(
+                        Code::Duplicate,
+                        n.span,
+                        format!("enumeration value '{}' is declared more than once", n.name),
+                    )
+                    .with_label(first, "first declared here"),
+                );
+                continue;
+            }
             if let Some(e) = v {
                 match self.const_int(e) {
                     Some(v) => next = i64::try_from(v).unwrap_or(0),
@@ -833,14 +848,39 @@ impl<'u> Decls<'u> {
             }
             TypeRef::Subrange { base, lo, hi } => {
                 // Subranges are checked like their base type (range checks come later).
-                if self.const_int(lo).is_none() || self.const_int(hi).is_none() {
-                    self.err(
+                let base_ty = self.named_type(&base.key, base.span).unwrap_or(Ty::Void);
+                let bounds = lo.span.to(hi.span);
+                match (self.const_int(lo), self.const_int(hi)) {
+                    (Some(l), Some(h)) if l > h => self.err(
+                        Code::TypeMismatch,
+                        bounds,
+                        format!("empty subrange {l}..{h}: the lower bound is above the upper"),
+                    ),
+                    (Some(l), Some(h)) => match base_ty.int_range() {
+                        Some((min, max)) if base_ty != Ty::Bool && (l < min || h > max) => {
+                            self.err(
+                                Code::TypeMismatch,
+                                bounds,
+                                format!(
+                                    "subrange {l}..{h} does not fit its base type {base_ty} ({min}..{max})"
+                                ),
+                            );
+                        }
+                        Some(_) if base_ty != Ty::Bool => {}
+                        _ if base_ty != Ty::Void => self.err(
+                            Code::TypeMismatch,
+                            base.span,
+                            format!("a subrange needs an integer base type, not {base_ty}"),
+                        ),
+                        _ => {}
+                    },
+                    _ => self.err(
                         Code::NotConstant,
-                        lo.span.to(hi.span),
+                        bounds,
                         "subrange bounds must be constant",
-                    );
+                    ),
                 }
-                self.named_type(&base.key, base.span).unwrap_or(Ty::Void)
+                base_ty
             }
         }
     }
@@ -943,11 +983,29 @@ impl<'u> Decls<'u> {
                 } else {
                     self.resolve_type(&d.ty, &d.names)
                 };
+                if b.constant && b.kind != VarKind::External {
+                    self.no_constant_instances(&ty, &d.names);
+                }
+                // IEC 61131-3: a function has no state from one call to the next, so it
+                // holds no instances; it may work on one passed as VAR_IN_OUT
                 if pou.kind == PouKind::Function
-                    && matches!(ty, Ty::Fb(_))
                     && b.kind != VarKind::InOut
+                    && b.kind != VarKind::External
+                    && self.holds_instance(&ty)
                 {
-                    // allowed in CODESYS (instance lives in the function frame); keep it
+                    for n in &d.names {
+                        self.diags.push(
+                            Diagnostic::error(
+                                Code::Unsupported,
+                                n.span,
+                                format!(
+                                    "function '{}' cannot declare the function block instance '{}'",
+                                    pou.name.name, n.name
+                                ),
+                            )
+                            .with_note("a FUNCTION keeps no state between calls; declare the instance in the caller and pass it as VAR_IN_OUT, or make this a FUNCTION_BLOCK"),
+                        );
+                    }
                 }
                 if ty == Ty::Void && b.kind != VarKind::External {
                     ty = Ty::Void;
@@ -1008,6 +1066,36 @@ impl<'u> Decls<'u> {
         }
         if let Some(s) = self.pou_state.get_mut(id.0) {
             *s = PouSlot::Done;
+        }
+    }
+
+    /// Whether a value of `ty` is or contains a function block instance.
+    fn holds_instance(&self, ty: &Ty) -> bool {
+        match ty {
+            Ty::Fb(_) => true,
+            Ty::Array(a) => self.holds_instance(&a.elem),
+            Ty::Struct(id) => self
+                .types
+                .struct_def(*id)
+                .is_some_and(|s| s.fields.iter().any(|f| self.holds_instance(&f.ty))),
+            _ => false,
+        }
+    }
+
+    /// Reports instances declared CONSTANT: an instance's state changes when it is called.
+    fn no_constant_instances(&mut self, ty: &Ty, names: &[Ident]) {
+        if !self.holds_instance(ty) {
+            return;
+        }
+        for n in names {
+            self.err(
+                Code::NotAssignable,
+                n.span,
+                format!(
+                    "'{}' holds a function block instance and cannot be CONSTANT",
+                    n.name
+                ),
+            );
         }
     }
 
