@@ -647,8 +647,9 @@ impl BodyCx<'_> {
             }
             Literal::Int(v, None) => {
                 if let Some(h) = hint {
+                    // for BOOL that is 0 and 1, FALSE and TRUE (IEC 61131-3 bit literals)
                     if let Some((lo, hi)) = h.int_range() {
-                        if *v >= lo && *v <= hi && *h != Ty::Bool {
+                        if *v >= lo && *v <= hi {
                             return h.clone();
                         }
                     }
@@ -1281,6 +1282,15 @@ impl BodyCx<'_> {
         match stdlib::signature(&b, &tys) {
             Ok((params, ret)) => {
                 for ((a, t), p) in args.iter().zip(&tys).zip(&params) {
+                    // `SEL(0, a, b)`: the literal was typed like the other arguments first
+                    let t = match &a.value.kind {
+                        ExprKind::Literal(Literal::Int(0 | 1, None))
+                            if *p == Ty::Bool && *t != Ty::Bool =>
+                        {
+                            &self.expr(&a.value, Some(&Ty::Bool))
+                        }
+                        _ => t,
+                    };
                     if !self.coerce_to(&a.value, t, p, "argument") {
                         return Ty::Void;
                     }
