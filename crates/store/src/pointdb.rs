@@ -68,20 +68,14 @@ pub enum PointSource {
     /// Whether a controlling station of the server's redundancy group with this name is
     /// connected (TRUE = none is), for a point named by the group's `status_point`.
     ClientStatus(String),
-    /// A signal of a protection device on one of the node's serial lines (IEC 103): the
-    /// indication FUN/INF, or with `index` the index-th value of the measurand set
-    /// FUN/INF.
+    /// A signal of a device on one of the node's serial lines (`line:LINE/DEVICE/...`).
     Line {
         /// The line's name.
         line: String,
         /// The device's name on the line.
         device: String,
-        /// Function type.
-        fun: u8,
-        /// Information number.
-        inf: u8,
-        /// The position in a measurand set; `None` for an indication.
-        index: Option<u8>,
+        /// Which of the device's signals.
+        signal: LineSignal,
     },
     /// Whether any device on a serial line answers (TRUE = none does), for a point named
     /// by the line's `status_point`.
@@ -96,6 +90,26 @@ pub enum PointSource {
         line: String,
         /// The device's name.
         device: String,
+    },
+}
+
+/// A signal of a device on a serial line, as its protocol names it.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub enum LineSignal {
+    /// A protection device (IEC 103): the indication FUN/INF, or with `index` the
+    /// index-th value of the measurand set FUN/INF.
+    Iec103 {
+        /// Function type.
+        fun: u8,
+        /// Information number.
+        inf: u8,
+        /// The position in a measurand set; `None` for an indication.
+        index: Option<u8>,
+    },
+    /// An outstation (IEC 101): its information object at this address.
+    Iec101 {
+        /// The outstation's IOA.
+        ioa: Ioa,
     },
 }
 

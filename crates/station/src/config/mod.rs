@@ -358,7 +358,7 @@ pub struct IoBinding {
 
 /// Where a point's value comes from (the point database's type, so a source stays one
 /// type from the project to the database).
-pub use crate::pointdb::PointSource;
+pub use crate::pointdb::{LineSignal, PointSource};
 
 /// Where a command goes.
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
@@ -370,6 +370,16 @@ pub enum CommandTarget {
         /// The link's name.
         link: String,
         /// The IOA on the lower node.
+        ioa: Ioa,
+    },
+    /// Forwarded as it came (type, value, select/execute, time tag) to information object
+    /// `ioa` of an IEC 101 outstation on a serial line.
+    LineObject {
+        /// The line's name.
+        line: String,
+        /// The device's name.
+        device: String,
+        /// The outstation's IOA.
         ioa: Ioa,
     },
     /// A general command (IEC 103 ASDU 20) to FUN/INF of a device on a serial line.
@@ -520,8 +530,11 @@ pub enum LineTransport {
 pub struct DeviceConfig {
     /// Unique on its line.
     pub name: String,
-    /// Link address (and common address of ASDU), 1..=254.
+    /// Link address, 1..=254.
     pub address: u8,
+    /// Common address of ASDU (`common_address`; the link address when not given). IEC
+    /// 103 devices use their link address.
+    pub common_address: u16,
     /// A single point of the node, TRUE while the device does not answer.
     pub status_point: Option<String>,
     /// FUN/INF of the device's LOCAL/REMOTE indication: commands to the device are
@@ -529,11 +542,32 @@ pub struct DeviceConfig {
     pub local_indication: Option<(u8, u8)>,
 }
 
-/// A serial line the node polls as master, `[[node.line]]` (IEC 103).
+/// The protocol of a serial line.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum LineProtocol {
+    /// IEC 60870-5-103 protection devices (`protocol = "iec103"`).
+    Iec103,
+    /// IEC 60870-5-101 outstations (`protocol = "iec101"`), with the line's field sizes.
+    Iec101(Iec101Settings),
+}
+
+/// The field sizes of an IEC 101 line (`link_address_size`, `cot_size`,
+/// `common_address_size`, `ioa_size`; defaults 1, 1, 1, 2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Iec101Settings {
+    /// The link address field: one or two octets.
+    pub address_size: iec60870::ft12::AddressSize,
+    /// Cause of transmission, common address and IOA sizes.
+    pub params: iec60870::asdu::AsduParams,
+}
+
+/// A serial line the node polls as master, `[[node.line]]` (IEC 103 or IEC 101).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct LineConfig {
     /// Unique per node.
     pub name: String,
+    /// The protocol and what it needs.
+    pub protocol: LineProtocol,
     /// Where it is.
     pub transport: LineTransport,
     /// Speed and character format.

@@ -354,8 +354,13 @@ pub enum Form {
     SocketAddress,
     /// `link:LINK/IOA`.
     LinkRef,
-    /// `line:LINE/DEVICE/FUN/INF[/INDEX]`.
+    /// `line:LINE/DEVICE/FUN/INF[/INDEX]` (IEC 103) or `line:LINE/DEVICE/IOA` (IEC 101).
     LineRef,
+    /// The IOA of an IEC 101 `line:LINE/DEVICE/IOA` reference.
+    LineIoa {
+        /// The text given there.
+        given: String,
+    },
     /// A number 0..=255 in a `line:` reference.
     LineNumber {
         /// Which part: `FUN`, `INF` or `INDEX`.
@@ -470,6 +475,25 @@ pub enum Conflict {
     /// `feedback` on a forwarded command.
     #[error("a forwarded command's return information comes from the node that executes it")]
     ForwardedFeedback,
+    /// A `line:` reference in the other protocol's form.
+    #[error("line `{line}` is {protocol}: its signals are {form}")]
+    LineRefProtocol {
+        /// The line.
+        line: String,
+        /// Its protocol.
+        protocol: &'static str,
+        /// The form its references take.
+        form: &'static str,
+    },
+    /// A key of the other protocol on a line (field sizes on an IEC 103 line, a
+    /// simulated relay on an IEC 101 line, `=ON`/`=OFF` on a forwarded IEC 101 command).
+    #[error("{key} is not for an {protocol} line")]
+    NotForProtocol {
+        /// The key.
+        key: &'static str,
+        /// The line's protocol.
+        protocol: &'static str,
+    },
 }
 
 /// A point or command republished from a lower node that does not fit the upper one.
@@ -614,7 +638,7 @@ fn unknown_value_text(what: Vocabulary, value: &str) -> String {
             iec60870::cs104::server::RedundancyMode::NAMES.join(", ")
         ),
         Vocabulary::Protocol => format!(
-            "protocol `{value}`: only \"iec103\" lines are supported (IEC 101 lines are not yet)"
+            "protocol `{value}`: a line is \"iec103\" (protection relays) or \"iec101\" (outstations)"
         ),
         Vocabulary::SimulatedDevice => {
             format!("no simulated device `{value}`; known: \"ref630\"")
@@ -642,8 +666,11 @@ fn malformed_text(text: &str, form: &Form) -> String {
         Form::SocketAddress => format!("`{text}` is not an IP:PORT address"),
         Form::LinkRef => format!("`{text}` is not of the form link:LINK/IOA"),
         Form::LineRef => format!(
-            "`{text}` is not of the form line:LINE/DEVICE/FUN/INF or line:LINE/DEVICE/FUN/INF/INDEX"
+            "`{text}` is not of the form line:LINE/DEVICE/FUN/INF or line:LINE/DEVICE/FUN/INF/INDEX (IEC 103) or line:LINE/DEVICE/IOA (IEC 101)"
         ),
+        Form::LineIoa { given } => {
+            format!("`{text}`: IOA `{given}` is not an address 0..=16777215")
+        }
         Form::LineNumber { part, given } => {
             format!("`{text}`: {part} `{given}` is not a number 0..=255")
         }

@@ -205,6 +205,10 @@ pub(in crate::config) struct RawLine {
     pub(in crate::config) retries: Option<i64>,
     pub(in crate::config) poll_interval_ms: Option<i64>,
     pub(in crate::config) status_point: Option<String>,
+    pub(in crate::config) link_address_size: Option<i64>,
+    pub(in crate::config) cot_size: Option<i64>,
+    pub(in crate::config) common_address_size: Option<i64>,
+    pub(in crate::config) ioa_size: Option<i64>,
     #[serde(default)]
     pub(in crate::config) device: Vec<RawDevice>,
 }
@@ -214,6 +218,7 @@ pub(in crate::config) struct RawLine {
 pub(in crate::config) struct RawDevice {
     pub(in crate::config) name: String,
     pub(in crate::config) address: i64,
+    pub(in crate::config) common_address: Option<i64>,
     pub(in crate::config) status_point: Option<String>,
     pub(in crate::config) local_indication: Option<[i64; 2]>,
 }

@@ -56,6 +56,12 @@ pub(crate) enum Route {
         inf: u8,
         value: Option<bool>,
     },
+    /// To an IEC 101 outstation on a serial line, forwarded as it came to its `ioa`.
+    LineObject {
+        line: String,
+        device: String,
+        ioa: iec60870::asdu::Ioa,
+    },
 }
 
 #[derive(Debug, Clone)]
@@ -182,6 +188,14 @@ impl StationHandler for NodeHandler {
                         general_command(handler_lines.get(&line), &line, target, &command).await;
                     (outcome, detail, None)
                 }
+                Route::LineObject { line, device, ioa } => match handler_lines.get(&line) {
+                    Some(handle) => handle.forward(&device, ioa, &command).await,
+                    None => (
+                        CommandOutcome::Failed,
+                        format!("line {line} is not running"),
+                        None,
+                    ),
+                },
             };
             match (this.finish(outcome, detail).await, termination) {
                 (server::CommandOutcome::Executed, Some(termination)) => {
@@ -406,9 +420,6 @@ fn await_return(
     })
 }
 
-/// Sends a command down a link. The confirmation is the lower node's, as the link task
-/// meets it; an executed command's termination waits for the lower node's termination to
-/// reach the link task too (the return information before it is then published here).
 /// A command to a line device: a general command ON/OFF, its acknowledgement the outcome.
 async fn general_command(
     line: Option<&super::line::LineHandle>,
@@ -458,6 +469,9 @@ async fn general_command(
     }
 }
 
+/// Sends a command down a link. The confirmation is the lower node's, as the link task
+/// meets it; an executed command's termination waits for the lower node's termination to
+/// reach the link task too (the return information before it is then published here).
 async fn forward(
     link: Option<&LinkHandle>,
     name: &str,

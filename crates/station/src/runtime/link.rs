@@ -16,18 +16,18 @@
 
 use std::collections::HashMap;
 use std::net::SocketAddr;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::Duration;
 
-use iec60870::asdu::{Asdu, Cause, CommonAddress, Ioa, TypeId};
+use iec60870::asdu::{Asdu, CommonAddress, Ioa, TypeId};
 use iec60870::cs104::client::{ClientConfig, ClientHandle};
 use iec60870::cs104::link::{Link, LinkDown, LinkObserver};
-use tokio::sync::oneshot;
 
 use crate::pointdb::{from_element, PointId};
 use crate::store::EventCause;
 
 use super::clock::NodeClock;
+use super::forwarded::{CommandAnswers, CommandWatches};
 use super::node::NodePoints;
 
 /// How often a node re-synchronises the clocks of the nodes below it.
@@ -61,40 +61,6 @@ pub struct LinkHandle {
     commands: Arc<CommandWatches>,
 }
 
-/// The forwarded commands whose answers a link looks out for.
-#[derive(Debug, Default)]
-struct CommandWatches(Mutex<Vec<CommandWatch>>);
-
-/// A forwarded command whose answers the link task looks out for.
-#[derive(Debug)]
-struct CommandWatch {
-    type_id: TypeId,
-    ioa: Ioa,
-    confirmed: Option<oneshot::Sender<bool>>,
-    terminated: Option<oneshot::Sender<()>>,
-}
-
-impl CommandWatch {
-    /// Nothing left to report: each answer was passed on or its receiver is gone.
-    fn abandoned(&self) -> bool {
-        self.confirmed
-            .as_ref()
-            .is_none_or(oneshot::Sender::is_closed)
-            && self
-                .terminated
-                .as_ref()
-                .is_none_or(oneshot::Sender::is_closed)
-    }
-}
-
-/// The answers of a forwarded command, as the link task meets them: its confirmation
-/// (positive or not), then its termination.
-#[derive(Debug)]
-pub(crate) struct CommandAnswers {
-    pub confirmed: oneshot::Receiver<bool>,
-    pub terminated: oneshot::Receiver<()>,
-}
-
 impl LinkHandle {
     /// The link's name.
     pub fn name(&self) -> &str {
@@ -125,59 +91,12 @@ impl LinkHandle {
     /// Watches for the answers of a command about to be sent down the link (type and the
     /// lower node's address).
     pub(crate) fn watch_command(&self, type_id: TypeId, ioa: Ioa) -> CommandAnswers {
-        let (confirmed, confirmed_rx) = oneshot::channel();
-        let (terminated, terminated_rx) = oneshot::channel();
-        let mut commands = self.commands.lock();
-        commands.retain(|watch| !watch.abandoned());
-        commands.push(CommandWatch {
-            type_id,
-            ioa,
-            confirmed: Some(confirmed),
-            terminated: Some(terminated),
-        });
-        CommandAnswers {
-            confirmed: confirmed_rx,
-            terminated: terminated_rx,
-        }
+        self.commands.watch(type_id, ioa)
     }
 
     /// Closes the link for good (runtime shutdown).
     pub(crate) fn stop(&self) {
         self.link.stop();
-    }
-}
-
-impl CommandWatches {
-    fn lock(&self) -> std::sync::MutexGuard<'_, Vec<CommandWatch>> {
-        self.0.lock().unwrap_or_else(|poison| poison.into_inner())
-    }
-
-    /// Passes a command's answer from the lower node to whoever forwarded the command.
-    fn answered(&self, asdu: &Asdu) {
-        let Some(object) = asdu.objects.first() else {
-            return;
-        };
-        let cause = asdu.cot.cause;
-        let confirmation = cause == Cause::ACTIVATION_CON || (44..=47).contains(&cause.value());
-        let termination = cause == Cause::ACTIVATION_TERMINATION;
-        if !confirmation && !termination {
-            return;
-        }
-        let mut commands = self.lock();
-        for watch in commands
-            .iter_mut()
-            .filter(|watch| watch.type_id == asdu.type_id && watch.ioa == object.ioa)
-        {
-            if confirmation {
-                if let Some(confirmed) = watch.confirmed.take() {
-                    let _ = confirmed.send(!asdu.cot.negative);
-                }
-            } else if let Some(terminated) = watch.terminated.take() {
-                let _ = terminated.send(());
-            }
-        }
-        // Answered in full, or nobody waits any more (a taken sender counts as abandoned).
-        commands.retain(|watch| !watch.abandoned());
     }
 }
 

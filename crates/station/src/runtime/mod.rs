@@ -29,6 +29,7 @@
 
 pub mod clock;
 mod command;
+mod forwarded;
 pub mod line;
 pub mod link;
 pub mod node;
@@ -48,7 +49,7 @@ use tokio::sync::oneshot;
 use crate::config::{
     CommandTarget, NodeConfig, PointSource, Project, Transmission as ConfigTransmission,
 };
-use crate::pointdb::{PointDb, PointSpec, TimeZonePolicy, Transmission};
+use crate::pointdb::{LineSignal, PointDb, PointSpec, TimeZonePolicy, Transmission};
 use crate::store::{
     open_store, spawn_retention, EventStore, Retention, RetentionHandle, StoreError,
 };
@@ -360,6 +361,11 @@ impl Runtime {
                             inf: *inf,
                             value: *value,
                         },
+                        CommandTarget::LineObject { line, device, ioa } => Route::LineObject {
+                            line: line.clone(),
+                            device: device.clone(),
+                            ioa: *ioa,
+                        },
                     };
                     (
                         command.ioa.get(),
@@ -528,17 +534,16 @@ impl Runtime {
             let _ = handler.links.set(by_name);
             let mut lines_by_name = HashMap::new();
             for line in &config.lines {
-                let mut map: HashMap<(u8, u8, u8, Option<u8>), Vec<line::LinePoint>> =
+                let mut signals: HashMap<(u8, u8, u8, Option<u8>), Vec<line::LinePoint>> =
                     HashMap::new();
+                let mut objects = line::ObjectPoints::new();
                 {
                     let db = points.lock();
                     for point in &config.points {
                         let PointSource::Line {
                             line: name,
                             device,
-                            fun,
-                            inf,
-                            index,
+                            signal,
                         } = &point.source
                         else {
                             continue;
@@ -548,22 +553,30 @@ impl Runtime {
                             .iter()
                             .find(|d| &d.name == device)
                             .map(|d| d.address);
-                        if let (true, Some(address), Some(id)) =
+                        let (true, Some(address), Some(id)) =
                             (name == &line.name, address, db.id(point.name.as_str()))
-                        {
-                            map.entry((address, *fun, *inf, *index)).or_default().push(
-                                line::LinePoint {
+                        else {
+                            continue;
+                        };
+                        match signal {
+                            LineSignal::Iec103 { fun, inf, index } => signals
+                                .entry((address, *fun, *inf, *index))
+                                .or_default()
+                                .push(line::LinePoint {
                                     id,
                                     type_id: point.type_id,
                                     scaling: point.scaling,
-                                },
-                            );
+                                }),
+                            LineSignal::Iec101 { ioa } => {
+                                objects.entry((address, ioa.get())).or_default().push(id)
+                            }
                         }
                     }
                 }
                 let spec = line::LineSpec {
                     config: line.clone(),
-                    points: map,
+                    signals,
+                    objects,
                 };
                 let handle = line::spawn_line(spec, Arc::clone(points));
                 lines_by_name.insert(line.name.clone(), handle.clone());

@@ -11,7 +11,8 @@ use station::config::problem::{
     Conflict, Form, Reference, SchemaKind, TypeUse, Unique, Vocabulary,
 };
 use station::config::{
-    CommandTarget, ConfigError, ConfigProblem, LinkTarget, PointSource, Project, Transmission,
+    CommandTarget, ConfigError, ConfigProblem, LineProtocol, LineSignal, LinkTarget, PointSource,
+    Project, Transmission,
 };
 
 /// A project folder with `station.toml` = `toml` and the extra `files`.
@@ -1660,9 +1661,11 @@ fn com600_gateway_example_loads() {
         PointSource::Line {
             line: "relays".into(),
             device: "REF630".into(),
-            fun: 1,
-            inf: 160,
-            index: None
+            signal: LineSignal::Iec103 {
+                fun: 1,
+                inf: 160,
+                index: None
+            }
         }
     );
     let current = node.points.iter().find(|p| p.ioa.get() == 3100).unwrap();
@@ -1715,7 +1718,7 @@ common_address = 1
 
 [[node.line]]
 name = "relays"
-protocol = "iec101"
+protocol = "iec102"
 port = "/dev/ttyS0"
 tcp = "10.0.0.1:4001"
 baud = 300
@@ -1756,7 +1759,7 @@ target = "line:other/F1/1/160"
         10,
         12,
         "node[0].line[0].protocol",
-        "only \"iec103\"",
+        "\"iec103\" (protection relays) or \"iec101\" (outstations)",
     );
     expect(
         &errors,
@@ -1802,6 +1805,201 @@ target = "line:other/F1/1/160"
         "node[0].command[0].target",
         "no line `other`",
     );
+}
+
+/// An IEC 101 line: field sizes, a device's own common address, `line:LINE/DEVICE/IOA`
+/// sources of any monitor type and commands forwarded as they come.
+#[test]
+fn iec101_lines_load_with_their_field_sizes_and_objects() {
+    let toml = r#"[station]
+name = "s"
+time_zone = "UTC"
+[[node]]
+name = "G"
+common_address = 1
+[[node.line]]
+name = "rtus"
+protocol = "iec101"
+tcp = "127.0.0.1:2401"
+link_address_size = 2
+cot_size = 2
+common_address_size = 2
+ioa_size = 3
+[[node.line.device]]
+name = "RTU1"
+address = 3
+common_address = 700
+[[node.point]]
+name = "Feeder"
+type = "M_DP_TB_1"
+ioa = 100
+source = "line:rtus/RTU1/4001"
+[[node.point]]
+name = "Power"
+type = "M_ME_NC_1"
+ioa = 101
+source = "line:rtus/RTU1/5000"
+[[node.command]]
+name = "Open"
+type = "C_DC_NA_1"
+ioa = 200
+target = "line:rtus/RTU1/4101"
+"#;
+    let project = load(toml, &[]).unwrap();
+    let node = &project.nodes[0];
+    let line = &node.lines[0];
+    let LineProtocol::Iec101(settings) = line.protocol else {
+        panic!("an IEC 101 line: {:?}", line.protocol);
+    };
+    assert_eq!(settings.address_size, iec60870::ft12::AddressSize::Two);
+    assert_eq!(
+        (
+            settings.params.cot_size(),
+            settings.params.common_address_size(),
+            settings.params.ioa_size()
+        ),
+        (2, 2, 3)
+    );
+    assert_eq!(line.devices[0].common_address, 700);
+    assert_eq!(
+        node.points[1].source,
+        PointSource::Line {
+            line: "rtus".into(),
+            device: "RTU1".into(),
+            signal: LineSignal::Iec101 {
+                ioa: Ioa::try_new(5000).unwrap()
+            }
+        }
+    );
+    assert_eq!(
+        node.commands[0].target,
+        CommandTarget::LineObject {
+            line: "rtus".into(),
+            device: "RTU1".into(),
+            ioa: Ioa::try_new(4101).unwrap()
+        }
+    );
+    // The default sizes: link address 1, COT 1, CA 1, IOA 2; CA = link address.
+    let defaults = toml
+        .replace(
+            "link_address_size = 2\ncot_size = 2\ncommon_address_size = 2\nioa_size = 3\n",
+            "",
+        )
+        .replace("common_address = 700\n", "");
+    let project = load(&defaults, &[]).unwrap();
+    let line = &project.nodes[0].lines[0];
+    let LineProtocol::Iec101(settings) = line.protocol else {
+        panic!("an IEC 101 line");
+    };
+    assert_eq!(settings.address_size, iec60870::ft12::AddressSize::One);
+    assert_eq!(
+        (
+            settings.params.cot_size(),
+            settings.params.common_address_size(),
+            settings.params.ioa_size()
+        ),
+        (1, 1, 2)
+    );
+    assert_eq!(line.devices[0].common_address, 3);
+}
+
+/// References in the other protocol's form, keys of the other protocol, sizes out of range.
+#[test]
+fn iec101_and_iec103_keys_and_references_are_not_mixed() {
+    let toml = r#"[station]
+name = "s"
+time_zone = "UTC"
+[[node]]
+name = "G"
+common_address = 1
+[[node.line]]
+name = "rtus"
+protocol = "iec101"
+simulate = "ref630"
+ioa_size = 4
+[[node.line.device]]
+name = "RTU1"
+address = 3
+[[node.line]]
+name = "relays"
+protocol = "iec103"
+port = "/dev/ttyS0"
+cot_size = 2
+[[node.line.device]]
+name = "F1"
+address = 1
+common_address = 9
+[[node.point]]
+name = "A"
+type = "M_SP_NA_1"
+ioa = 1
+source = "line:rtus/RTU1/1/160"
+[[node.point]]
+name = "B"
+type = "M_SP_NA_1"
+ioa = 2
+source = "line:relays/F1/4001"
+[[node.command]]
+name = "K"
+type = "C_SC_NA_1"
+ioa = 10
+target = "line:rtus/RTU1/4101=ON"
+"#;
+    let errors = errors(toml, &[]);
+    let problem_at = |key: &str| {
+        errors
+            .iter()
+            .find(|e| e.key == key)
+            .map(|e| e.problem.clone())
+            .unwrap_or_else(|| panic!("no error at {key} in {errors:#?}"))
+    };
+    assert_eq!(
+        problem_at("node[0].line[0].simulate"),
+        ConfigProblem::Conflict(Conflict::NotForProtocol {
+            key: "simulate",
+            protocol: "iec101"
+        })
+    );
+    assert!(matches!(
+        problem_at("node[0].line[0].ioa_size"),
+        ConfigProblem::OutOfRange { value: 4, .. }
+    ));
+    assert_eq!(
+        problem_at("node[0].line[1].cot_size"),
+        ConfigProblem::Conflict(Conflict::NotForProtocol {
+            key: "cot_size",
+            protocol: "iec103"
+        })
+    );
+    assert_eq!(
+        problem_at("node[0].line[1].device[0].common_address"),
+        ConfigProblem::Conflict(Conflict::NotForProtocol {
+            key: "common_address",
+            protocol: "iec103"
+        })
+    );
+    assert!(matches!(
+        problem_at("node[0].point[0].source"),
+        ConfigProblem::Conflict(Conflict::LineRefProtocol {
+            protocol: "iec101",
+            ..
+        })
+    ));
+    assert!(matches!(
+        problem_at("node[0].point[1].source"),
+        ConfigProblem::Conflict(Conflict::LineRefProtocol {
+            protocol: "iec103",
+            ..
+        })
+    ));
+    assert!(matches!(
+        problem_at("node[0].command[0].target"),
+        ConfigProblem::Conflict(Conflict::NotForProtocol {
+            key: "=ON/=OFF",
+            ..
+        })
+    ));
+    assert!(errors[0].to_string().contains("station.toml:"));
 }
 
 #[test]

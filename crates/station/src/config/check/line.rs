@@ -3,15 +3,28 @@
 
 use super::*;
 
-/// A signal named by `line:LINE/DEVICE/FUN/INF[/INDEX]`.
+/// A signal named by `line:LINE/DEVICE/FUN/INF[/INDEX]` (IEC 103) or
+/// `line:LINE/DEVICE/IOA` (IEC 101).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(in crate::config) struct LineRef {
     pub(in crate::config) line: String,
     pub(in crate::config) device: String,
-    pub(in crate::config) fun: u8,
-    pub(in crate::config) inf: u8,
-    pub(in crate::config) index: Option<u8>,
+    pub(in crate::config) signal: LineSignal,
 }
+
+impl LineRef {
+    /// The index of an IEC 103 measurand; `None` for an indication or an IEC 101 object.
+    pub(in crate::config) fn index(&self) -> Option<u8> {
+        match self.signal {
+            LineSignal::Iec103 { index, .. } => index,
+            LineSignal::Iec101 { .. } => None,
+        }
+    }
+}
+
+/// The protocol names a line's `protocol` key takes.
+const IEC103: &str = "iec103";
+const IEC101: &str = "iec101";
 
 /// Reads a `line:` reference; `Ok(None)` when the text is no line reference.
 pub(in crate::config) fn parse_line_ref(text: &str) -> Result<Option<LineRef>, ConfigProblem> {
@@ -35,9 +48,39 @@ pub(in crate::config) fn parse_line_ref(text: &str) -> Result<Option<LineRef>, C
                 },
             })
     };
-    let (line, device, fun, inf, index) = match parts[..] {
-        [line, device, fun, inf] => (line, device, fun, inf, None),
-        [line, device, fun, inf, index] => (line, device, fun, inf, Some(index)),
+    let (line, device, signal) = match parts[..] {
+        [line, device, ioa] => {
+            let ioa = ioa
+                .trim()
+                .parse::<u32>()
+                .ok()
+                .and_then(|ioa| Ioa::try_new(ioa).ok())
+                .ok_or_else(|| ConfigProblem::Malformed {
+                    text: text.to_owned(),
+                    form: Form::LineIoa {
+                        given: ioa.to_owned(),
+                    },
+                })?;
+            (line, device, LineSignal::Iec101 { ioa })
+        }
+        [line, device, fun, inf] => (
+            line,
+            device,
+            LineSignal::Iec103 {
+                fun: number(fun, "FUN")?,
+                inf: number(inf, "INF")?,
+                index: None,
+            },
+        ),
+        [line, device, fun, inf, index] => (
+            line,
+            device,
+            LineSignal::Iec103 {
+                fun: number(fun, "FUN")?,
+                inf: number(inf, "INF")?,
+                index: Some(number(index, "INDEX")?),
+            },
+        ),
         _ => return Err(malformed()),
     };
     if line.is_empty() || device.is_empty() {
@@ -46,9 +89,7 @@ pub(in crate::config) fn parse_line_ref(text: &str) -> Result<Option<LineRef>, C
     Ok(Some(LineRef {
         line: line.to_owned(),
         device: device.to_owned(),
-        fun: number(fun, "FUN")?,
-        inf: number(inf, "INF")?,
-        index: index.map(|index| number(index, "INDEX")).transpose()?,
+        signal,
     }))
 }
 
@@ -86,7 +127,23 @@ impl Ctx<'_> {
                     },
                 )
             }
-            Some(_) => {}
+            Some(line) => {
+                let (protocol, form) = match (&reference.signal, line.protocol.as_str()) {
+                    (LineSignal::Iec101 { .. }, IEC103) => {
+                        (IEC103, "line:LINE/DEVICE/FUN/INF[/INDEX]")
+                    }
+                    (LineSignal::Iec103 { .. }, IEC101) => (IEC101, "line:LINE/DEVICE/IOA"),
+                    _ => return,
+                };
+                self.err(
+                    path,
+                    Conflict::LineRefProtocol {
+                        line: line.name.clone(),
+                        protocol,
+                        form,
+                    },
+                );
+            }
         }
     }
 
@@ -136,20 +193,38 @@ impl Ctx<'_> {
                     },
                 );
             }
-            if line.protocol != "iec103" {
-                self.err(
-                    &at("protocol"),
-                    ConfigProblem::UnknownValue {
-                        what: Vocabulary::Protocol,
-                        value: line.protocol.clone(),
-                    },
-                );
-            }
+            let protocol = match line.protocol.as_str() {
+                IEC103 => {
+                    self.no_iec101_keys(line, &at);
+                    LineProtocol::Iec103
+                }
+                IEC101 => LineProtocol::Iec101(self.iec101_settings(line, &at)),
+                _ => {
+                    self.err(
+                        &at("protocol"),
+                        ConfigProblem::UnknownValue {
+                            what: Vocabulary::Protocol,
+                            value: line.protocol.clone(),
+                        },
+                    );
+                    LineProtocol::Iec103
+                }
+            };
             let transport = match (&line.port, &line.tcp, &line.simulate) {
                 (Some(port), None, None) => LineTransport::Serial(port.clone()),
                 (None, Some(tcp), None) => LineTransport::Tcp(tcp.clone()),
                 (None, None, Some(profile)) => {
-                    if profile != "ref630" {
+                    if matches!(protocol, LineProtocol::Iec101(_)) {
+                        // The simulated devices are IEC 103 relays; an IEC 101
+                        // outstation is `stanice iec101 slave` on a port or over TCP.
+                        self.err(
+                            &at("simulate"),
+                            Conflict::NotForProtocol {
+                                key: "simulate",
+                                protocol: IEC101,
+                            },
+                        );
+                    } else if profile != "ref630" {
                         self.err(
                             &at("simulate"),
                             ConfigProblem::UnknownValue {
@@ -294,6 +369,35 @@ impl Ctx<'_> {
                         1
                     }
                 };
+                let common_address = match device.common_address {
+                    None => u16::from(address),
+                    Some(given) if matches!(protocol, LineProtocol::Iec103) => {
+                        let _ = given;
+                        self.err(
+                            &at("common_address"),
+                            Conflict::NotForProtocol {
+                                key: "common_address",
+                                protocol: IEC103,
+                            },
+                        );
+                        u16::from(address)
+                    }
+                    Some(given) => match u16::try_from(given) {
+                        Ok(ca) if ca >= 1 => ca,
+                        _ => {
+                            self.err(
+                                &at("common_address"),
+                                ConfigProblem::OutOfRange {
+                                    what: "common_address",
+                                    value: given,
+                                    min: 1,
+                                    max: Some(u16::MAX.into()),
+                                },
+                            );
+                            1
+                        }
+                    },
+                };
                 if !addresses.insert(address) {
                     self.err(
                         &at("address"),
@@ -333,6 +437,7 @@ impl Ctx<'_> {
                 devices.push(DeviceConfig {
                     name: device.name.clone(),
                     address,
+                    common_address,
                     status_point: device.status_point.clone(),
                     local_indication,
                 });
@@ -342,6 +447,7 @@ impl Ctx<'_> {
             }
             lines.push(LineConfig {
                 name: line.name.clone(),
+                protocol,
                 status_point: line.status_point.clone(),
                 transport,
                 settings,
@@ -352,6 +458,73 @@ impl Ctx<'_> {
             });
         }
         lines
+    }
+
+    /// An IEC 103 line takes none of IEC 101's field sizes (its are fixed).
+    fn no_iec101_keys(&mut self, line: &RawLine, at: &dyn Fn(&'static str) -> Vec<Seg>) {
+        for (key, value) in [
+            ("link_address_size", line.link_address_size),
+            ("cot_size", line.cot_size),
+            ("common_address_size", line.common_address_size),
+            ("ioa_size", line.ioa_size),
+        ] {
+            if value.is_some() {
+                self.err(
+                    &at(key),
+                    Conflict::NotForProtocol {
+                        key,
+                        protocol: IEC103,
+                    },
+                );
+            }
+        }
+    }
+
+    /// The field sizes of an IEC 101 line, each within what the standard allows.
+    fn iec101_settings(
+        &mut self,
+        line: &RawLine,
+        at: &dyn Fn(&'static str) -> Vec<Seg>,
+    ) -> Iec101Settings {
+        let mut size = |key: &'static str, value: Option<i64>, default: u8, max: u8| -> u8 {
+            match value {
+                None => default,
+                Some(given) if (1..=i64::from(max)).contains(&given) => {
+                    u8::try_from(given).unwrap_or(default)
+                }
+                Some(given) => {
+                    self.err(
+                        &at(key),
+                        ConfigProblem::OutOfRange {
+                            what: key,
+                            value: given,
+                            min: 1,
+                            max: Some(max.into()),
+                        },
+                    );
+                    default
+                }
+            }
+        };
+        let address_size = match size("link_address_size", line.link_address_size, 1, 2) {
+            2 => iec60870::ft12::AddressSize::Two,
+            _ => iec60870::ft12::AddressSize::One,
+        };
+        let cot = size("cot_size", line.cot_size, 1, 2);
+        let common_address = size("common_address_size", line.common_address_size, 1, 2);
+        let ioa = size("ioa_size", line.ioa_size, 2, 3);
+        // An FT1.2 variable frame carries 255 octets: control field, link address, ASDU.
+        let link_octets = match address_size {
+            iec60870::ft12::AddressSize::Two => 2,
+            _ => 1,
+        };
+        let params =
+            iec60870::asdu::AsduParams::try_new(cot, common_address, ioa, 255 - 1 - link_octets)
+                .unwrap_or(iec60870::asdu::AsduParams::IEC101_DEFAULT);
+        Iec101Settings {
+            address_size,
+            params,
+        }
     }
 }
 
@@ -367,12 +540,25 @@ mod tests {
             Ok(Some(LineRef {
                 line: "relays".into(),
                 device: "F1".into(),
-                fun: 1,
-                inf: 148,
-                index: Some(3)
+                signal: LineSignal::Iec103 {
+                    fun: 1,
+                    inf: 148,
+                    index: Some(3)
+                }
             }))
         );
-        assert!(parse_line_ref("line:relays/F1/1").is_err());
+        assert_eq!(
+            parse_line_ref("line:rtus/RTU1/4001"),
+            Ok(Some(LineRef {
+                line: "rtus".into(),
+                device: "RTU1".into(),
+                signal: LineSignal::Iec101 {
+                    ioa: Ioa::try_new(4001).unwrap()
+                }
+            }))
+        );
+        assert!(parse_line_ref("line:rtus/RTU1/16777216").is_err());
+        assert!(parse_line_ref("line:relays/F1").is_err());
         assert!(parse_line_ref("line:relays/F1/1/256")
             .unwrap_err()
             .to_string()

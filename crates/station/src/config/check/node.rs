@@ -373,7 +373,11 @@ impl Ctx<'_> {
                                 | TypeId::M_DP_NA_1
                                 | TypeId::M_DP_TB_1
                         );
-                        match (reference.index, indication, is_measurement(type_id)) {
+                        let iec103 = matches!(reference.signal, LineSignal::Iec103 { .. });
+                        match (reference.index(), indication, is_measurement(type_id)) {
+                            // An IEC 101 object carries its own type: any monitor type
+                            // (checked with the point's type) takes it.
+                            _ if !iec103 => {}
                             (None, false, _) => self.err(
                                 &at("type"),
                                 ConfigProblem::WrongType {
@@ -401,9 +405,7 @@ impl Ctx<'_> {
                         PointSource::Line {
                             line: reference.line,
                             device: reference.device,
-                            fun: reference.fun,
-                            inf: reference.inf,
-                            index: reference.index,
+                            signal: reference.signal,
                         }
                     }
                     Ok(None) => self.point_source(&raw.name, &raw.link, source, &at("source")),
@@ -413,7 +415,13 @@ impl Ctx<'_> {
                     }
                 },
             };
-            let line_measurand = matches!(&source, PointSource::Line { index: Some(_), .. });
+            let line_measurand = matches!(
+                &source,
+                PointSource::Line {
+                    signal: LineSignal::Iec103 { index: Some(_), .. },
+                    ..
+                }
+            );
             if point.scale_factor.is_some() && point.measurand_limit.is_none() {
                 self.err(
                     &at("scale_factor"),
@@ -662,25 +670,46 @@ impl Ctx<'_> {
             let line_target = match line::parse_line_ref(reference_text) {
                 Ok(Some(reference)) => {
                     self.line_ref_exists(&raw.name, &raw.line, &reference, &at("target"));
-                    if reference.index.is_some() {
-                        self.err(&at("target"), Conflict::LineCommandWithIndex);
+                    match reference.signal {
+                        LineSignal::Iec103 { fun, inf, index } => {
+                            if index.is_some() {
+                                self.err(&at("target"), Conflict::LineCommandWithIndex);
+                            }
+                            if !matches!(type_id, TypeId::C_SC_NA_1 | TypeId::C_DC_NA_1) {
+                                self.err(
+                                    &at("type"),
+                                    ConfigProblem::WrongType {
+                                        type_id: type_id.to_string(),
+                                        usage: TypeUse::LineCommand,
+                                    },
+                                );
+                            }
+                            Some(CommandTarget::Line {
+                                line: reference.line,
+                                device: reference.device,
+                                fun,
+                                inf,
+                                value: fixed_value,
+                            })
+                        }
+                        // Forwarded as it came: the command's own type and value.
+                        LineSignal::Iec101 { ioa } => {
+                            if fixed_value.is_some() {
+                                self.err(
+                                    &at("target"),
+                                    Conflict::NotForProtocol {
+                                        key: "=ON/=OFF",
+                                        protocol: "iec101",
+                                    },
+                                );
+                            }
+                            Some(CommandTarget::LineObject {
+                                line: reference.line,
+                                device: reference.device,
+                                ioa,
+                            })
+                        }
                     }
-                    if !matches!(type_id, TypeId::C_SC_NA_1 | TypeId::C_DC_NA_1) {
-                        self.err(
-                            &at("type"),
-                            ConfigProblem::WrongType {
-                                type_id: type_id.to_string(),
-                                usage: TypeUse::LineCommand,
-                            },
-                        );
-                    }
-                    Some(CommandTarget::Line {
-                        line: reference.line,
-                        device: reference.device,
-                        fun: reference.fun,
-                        inf: reference.inf,
-                        value: fixed_value,
-                    })
                 }
                 Ok(None) => None,
                 Err(problem) => {

@@ -1,45 +1,48 @@
-//! A node's serial line to protection devices (IEC 103): the gateway role of the ABB
-//! COM600 in the thesis.
+//! A node's serial lines: the gateway role (the ABB COM600 of the thesis). Each line has
+//! one protocol and one master polling its devices:
 //!
-//! One task per line drives an [`iec103::Master`] over the line's transport: the
-//! devices' indications (ASDU 1/2) and measurands (ASDU 3/9) update the points whose
-//! source is `line:LINE/DEVICE/FUN/INF[/INDEX]`, converted to each point's type (a
-//! measurand's fraction times its `measurand_limit`, then float, scaled or normalized);
-//! a device that stops answering turns its points invalid (IV, value kept) and its
-//! status point TRUE; when it answers again the master interrogates it and the values
-//! come back. Commands routed to `line:` targets become general commands (ASDU 20);
-//! their acknowledgement (ASDU 1, COT 20/21) is the outcome; while the device reports
-//! LOCAL on its `local_indication` they are refused without being sent.
+//! - [`iec103`]: protection relays (IEC 103): indications and measurands to points,
+//!   commands as general commands (ASDU 20), refused while the relay reports LOCAL.
+//! - [`iec101`]: outstations (IEC 101): their monitor data to points, commands forwarded
+//!   as they came and followed to their confirmation and termination.
+//!
+//! What every line shares is here: its handle ([`LineHandle`]), the transports (serial
+//! port, terminal server over TCP, simulated relays), and the status of its devices (a
+//! device that stops answering turns its points invalid and its status point TRUE; the
+//! line's status point is TRUE while none answers).
 //!
 //! A `simulate = "ref630"` line runs the thesis's relay at each device's address inside
 //! this process, on an in-memory line; the console operates it ([`LineHandle::operate`]).
 
-use std::collections::HashMap;
+mod iec101;
+mod iec103;
+
+use std::collections::{HashMap, HashSet};
 use std::ops::ControlFlow;
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Duration;
 
-use iec60870::asdu::{Quality, TypeId};
+use iec60870::asdu::{Ioa, TypeId};
 use iec60870::ft12::io::{drive, EndpointAction, Transport};
-use iec60870::ft12::{
-    Primary, PrimaryConfig, PrimaryEvent, Secondary, SecondaryConfig, SecondaryStation, SharedLine,
-};
-use iec60870::iec103::{self, Body, Cause, Device, DeviceProfile, MasterEvent, StartUp};
-use tokio::sync::{mpsc, oneshot};
+use iec60870::ft12::{Secondary, SecondaryConfig, SecondaryStation, SharedLine};
+use iec60870::iec103::{Device, DeviceProfile};
+use iec60870::outstation::{Command, TerminationFuture};
+use tokio::sync::mpsc;
 
-use crate::config::{LineConfig, LineTransport, MeasurandScaling};
+use crate::config::{LineConfig, LineProtocol, LineTransport, MeasurandScaling};
 use crate::pointdb::{PointId, PointSource};
-use crate::store::EventCause;
-use crate::store::{PointValue, SourceTime};
+use crate::store::CommandOutcome;
 
 use super::node::NodePoints;
+pub(crate) use iec101::ObjectPoints;
+use iec103::Simulated;
 
-/// How long a general command waits for the device's acknowledgement.
+/// How long a command waits for the device's acknowledgement or confirmation.
 const COMMAND_TIMEOUT: Duration = Duration::from_secs(10);
 /// The pause before a failed transport is opened again.
 const REOPEN_AFTER: Duration = Duration::from_secs(5);
 
-/// A point fed by a line device, with what its conversion needs.
+/// A point fed by an IEC 103 device, with what its conversion needs.
 #[derive(Debug, Clone)]
 pub(crate) struct LinePoint {
     pub id: PointId,
@@ -51,22 +54,10 @@ pub(crate) struct LinePoint {
 #[derive(Debug, Clone)]
 pub(crate) struct LineSpec {
     pub config: LineConfig,
-    /// (device address, FUN, INF, index) -> the points it feeds.
-    pub points: HashMap<(u8, u8, u8, Option<u8>), Vec<LinePoint>>,
-}
-
-type Simulated = SharedLine<Device>;
-
-/// What the node asks of a line.
-enum Request {
-    Command {
-        address: u8,
-        fun: u8,
-        inf: u8,
-        on: bool,
-        local: Option<(u8, u8)>,
-        reply: oneshot::Sender<Result<(), CommandProblem>>,
-    },
+    /// IEC 103: (device address, FUN, INF, index) -> the points it feeds.
+    pub signals: HashMap<(u8, u8, u8, Option<u8>), Vec<LinePoint>>,
+    /// IEC 101: (device address, IOA) -> the points it feeds.
+    pub objects: ObjectPoints,
 }
 
 /// Why a general command did not go through.
@@ -80,17 +71,54 @@ pub(crate) enum CommandProblem {
     NoAnswer(String),
 }
 
-/// A device as the handle knows it: name, address, LOCAL/REMOTE indication.
-type DeviceEntry = (String, u8, Option<(u8, u8)>);
+/// A device as the handle knows it.
+#[derive(Debug, Clone)]
+struct DeviceEntry {
+    name: String,
+    address: u8,
+    common_address: u16,
+    local_indication: Option<(u8, u8)>,
+}
+
+/// The master of a line, by protocol.
+#[derive(Clone)]
+enum Driver {
+    Iec103(iec103::Iec103Line),
+    Iec101(iec101::Iec101Line),
+}
 
 /// A running line.
 #[derive(Clone)]
 pub struct LineHandle {
     name: String,
     devices: Vec<DeviceEntry>,
-    actions: mpsc::UnboundedSender<EndpointAction<iec103::Master>>,
-    shared: Arc<Mutex<Shared>>,
+    driver: Driver,
     simulated: Option<mpsc::UnboundedSender<EndpointAction<Simulated>>>,
+}
+
+/// The devices of a line answering now (the line's status point is TRUE while none does).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Answering(Arc<Mutex<HashSet<u8>>>);
+
+impl Answering {
+    /// Notes a device answering or not; whether any does now.
+    fn set(&self, address: u8, up: bool) -> bool {
+        let mut answering = self.0.lock().unwrap_or_else(PoisonError::into_inner);
+        if up {
+            answering.insert(address);
+        } else {
+            answering.remove(&address);
+        }
+        !answering.is_empty()
+    }
+
+    /// None answers (the line closed).
+    fn clear(&self) {
+        self.0
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .clear();
+    }
 }
 
 impl std::fmt::Debug for LineHandle {
@@ -107,7 +135,13 @@ impl LineHandle {
         &self.name
     }
 
-    /// Sends a general command to a device and waits for its acknowledgement.
+    fn device(&self, name: &str) -> Option<&DeviceEntry> {
+        self.devices
+            .iter()
+            .find(|device| device.name.eq_ignore_ascii_case(name))
+    }
+
+    /// Sends a general command (IEC 103) to a device and waits for its acknowledgement.
     pub(crate) async fn command(
         &self,
         device: &str,
@@ -115,33 +149,53 @@ impl LineHandle {
         inf: u8,
         on: bool,
     ) -> Result<(), CommandProblem> {
-        let Some((_, address, local)) = self.devices.iter().find(|(name, ..)| name == device)
-        else {
+        let Some(entry) = self.device(device) else {
             return Err(CommandProblem::NoAnswer(format!(
                 "no device {device} on line {}",
                 self.name
             )));
         };
-        let (reply, answer) = oneshot::channel();
-        let request = Request::Command {
-            address: *address,
-            fun,
-            inf,
-            on,
-            local: *local,
-            reply,
-        };
-        let shared = Arc::clone(&self.shared);
-        self.actions
-            .send(Box::new(move |master: &mut iec103::Master| {
-                command(master, &shared, request)
-            }))
-            .map_err(|_| CommandProblem::NoAnswer(format!("line {} stopped", self.name)))?;
-        match tokio::time::timeout(COMMAND_TIMEOUT + Duration::from_secs(1), answer).await {
-            Ok(Ok(result)) => result,
-            _ => Err(CommandProblem::NoAnswer(format!(
-                "no acknowledgement from {device}"
+        match &self.driver {
+            Driver::Iec103(line) => {
+                line.command(entry.address, (fun, inf, on), entry.local_indication)
+                    .await
+            }
+            Driver::Iec101(_) => Err(CommandProblem::NoAnswer(format!(
+                "line {} is IEC 101: its commands go to an IOA",
+                self.name
             ))),
+        }
+    }
+
+    /// Forwards a command (IEC 101) to IOA `ioa` of a device: its confirmation is the
+    /// outcome, an executed command's termination waits for the device's.
+    pub(crate) async fn forward(
+        &self,
+        device: &str,
+        ioa: Ioa,
+        command: &Command,
+    ) -> (CommandOutcome, String, Option<TerminationFuture>) {
+        let Some(entry) = self.device(device) else {
+            return (
+                CommandOutcome::Failed,
+                format!("no device {device} on line {}", self.name),
+                None,
+            );
+        };
+        match &self.driver {
+            Driver::Iec101(line) => {
+                line.forward(
+                    (&entry.name, entry.address, entry.common_address),
+                    ioa,
+                    command,
+                )
+                .await
+            }
+            Driver::Iec103(_) => (
+                CommandOutcome::Refused,
+                format!("line {} is IEC 103: it takes general commands", self.name),
+                None,
+            ),
         }
     }
 
@@ -151,14 +205,10 @@ impl LineHandle {
         let Some(simulated) = &self.simulated else {
             return Err(format!("line {} has no simulated devices", self.name));
         };
-        let Some((_, address, _)) = self
-            .devices
-            .iter()
-            .find(|(name, ..)| name.eq_ignore_ascii_case(device))
-        else {
+        let Some(entry) = self.device(device) else {
             return Err(format!("line {} has no device {device}", self.name));
         };
-        let address = u16::from(*address);
+        let address = u16::from(entry.address);
         let words: Vec<String> = words.iter().map(|word| (*word).to_owned()).collect();
         let (done, answer) = std::sync::mpsc::channel();
         simulated
@@ -183,115 +233,39 @@ impl LineHandle {
 
 /// Starts the line's task.
 pub(crate) fn spawn_line(spec: LineSpec, node: Arc<NodePoints>) -> LineHandle {
-    let (actions, inbox) = mpsc::unbounded_channel();
-    let shared = Arc::new(Mutex::new(Shared::default()));
-    let simulated = match &spec.config.transport {
-        LineTransport::Simulated(_) => Some(mpsc::unbounded_channel()),
-        _ => None,
-    };
-    let handle = LineHandle {
-        name: spec.config.name.clone(),
-        devices: spec
-            .config
-            .devices
-            .iter()
-            .map(|device| (device.name.clone(), device.address, device.local_indication))
-            .collect(),
-        actions,
-        shared: Arc::clone(&shared),
-        simulated: simulated.as_ref().map(|(sender, _)| sender.clone()),
-    };
-    tokio::spawn(run(
-        spec,
-        node,
-        inbox,
-        shared,
-        simulated.map(|(_, receiver)| receiver),
-    ));
-    handle
-}
-
-/// The devices' states a command needs: indications by (address, FUN, INF), and the
-/// commands awaiting their acknowledgement by (address, RII).
-#[derive(Default)]
-struct Shared {
-    indications: HashMap<(u8, u8, u8), u8>,
-    /// The devices answering now.
-    answering: std::collections::HashSet<u8>,
-    pending: HashMap<(u16, u8), oneshot::Sender<Result<(), CommandProblem>>>,
-}
-
-async fn run(
-    spec: LineSpec,
-    node: Arc<NodePoints>,
-    mut inbox: mpsc::UnboundedReceiver<EndpointAction<iec103::Master>>,
-    shared: Arc<Mutex<Shared>>,
-    mut simulated: Option<mpsc::UnboundedReceiver<EndpointAction<Simulated>>>,
-) {
-    let name = spec.config.name.clone();
-    for device in &spec.config.devices {
-        set_device_down(&spec, &node, device.address);
-    }
-    set_line_status(&spec, &node, false);
-    loop {
-        let stream = match open(&spec.config, &mut simulated).await {
-            Ok(stream) => stream,
-            Err(error) => {
-                tracing::warn!(node = %node.name(), line = %name, %error, "cannot open the line; trying again");
-                tokio::time::sleep(REOPEN_AFTER).await;
-                continue;
-            }
-        };
-        let now = tokio::time::Instant::now().into_std();
-        let mut primary = Primary::new(
-            PrimaryConfig {
-                line: spec.config.settings,
-                response_timeout: spec.config.timeout,
-                retries: spec.config.retries,
-                poll_interval: spec.config.poll_interval,
-                ..PrimaryConfig::default()
-            },
-            now,
-        );
-        for device in &spec.config.devices {
-            if let Err(error) = primary.add_station(device.address.into()) {
-                tracing::warn!(line = %name, %error, "device not polled");
-            }
-        }
-        let clock_node = Arc::clone(&node);
-        let mut master = iec103::Master::new(
-            primary,
-            StartUp {
-                clock_sync: true,
-                interrogate: true,
-                disturbances: false,
-            },
-            Box::new(move || clock_node.clock().now().naive_utc()),
-            now,
-        );
-        master.set_command_timeout(COMMAND_TIMEOUT);
-        let end = drive(stream, &mut master, &mut inbox, |master| {
-            observe(master, &spec, &node, &shared);
-            ControlFlow::Continue(())
+    let devices = spec
+        .config
+        .devices
+        .iter()
+        .map(|device| DeviceEntry {
+            name: device.name.clone(),
+            address: device.address,
+            common_address: device.common_address,
+            local_indication: device.local_indication,
         })
-        .await;
-        tracing::warn!(node = %node.name(), line = %name, ?end, "line closed; opening it again");
-        for device in &spec.config.devices {
-            set_device_down(&spec, &node, device.address);
+        .collect();
+    let name = spec.config.name.clone();
+    let answering = Answering::default();
+    let (driver, simulated) = match spec.config.protocol.clone() {
+        LineProtocol::Iec103 => {
+            let simulated = match &spec.config.transport {
+                LineTransport::Simulated(_) => Some(mpsc::unbounded_channel()),
+                _ => None,
+            };
+            let (sender, receiver) = simulated.unzip();
+            let line = iec103::spawn(spec, node, answering, receiver);
+            (Driver::Iec103(line), sender)
         }
-        let pending: Vec<_> = shared
-            .lock()
-            .map(|mut shared| {
-                shared.indications.clear();
-                shared.answering.clear();
-                shared.pending.drain().map(|(_, reply)| reply).collect()
-            })
-            .unwrap_or_default();
-        for reply in pending {
-            let _ = reply.send(Err(CommandProblem::NoAnswer("the line closed".to_owned())));
+        LineProtocol::Iec101(settings) => {
+            let line = iec101::spawn(spec, settings, node, answering);
+            (Driver::Iec101(line), None)
         }
-        set_line_status(&spec, &node, false);
-        tokio::time::sleep(REOPEN_AFTER).await;
+    };
+    LineHandle {
+        name,
+        devices,
+        driver,
+        simulated,
     }
 }
 
@@ -345,98 +319,10 @@ async fn open(
     }
 }
 
-fn command(master: &mut iec103::Master, shared: &Mutex<Shared>, request: Request) {
-    let Request::Command {
-        address,
-        fun,
-        inf,
-        on,
-        local,
-        reply,
-    } = request;
-    let Ok(mut shared) = shared.lock() else {
-        return;
-    };
-    if let Some((local_fun, local_inf)) = local {
-        if shared.indications.get(&(address, local_fun, local_inf)) == Some(&2) {
-            let _ = reply.send(Err(CommandProblem::Local));
-            return;
-        }
-    }
-    match master.general_command(address, fun, inf, on) {
-        Ok(rii) => {
-            shared.pending.insert((u16::from(address), rii), reply);
-        }
-        Err(error) => {
-            let _ = reply.send(Err(CommandProblem::NoAnswer(error.to_string())));
-        }
-    }
-}
-
-fn observe(
-    master: &mut iec103::Master,
-    spec: &LineSpec,
-    node: &NodePoints,
-    shared: &Mutex<Shared>,
-) {
-    while let Some(event) = master.poll_event() {
-        match event {
-            MasterEvent::Asdu { address, asdu } => {
-                let Ok(address) = u8::try_from(address) else {
-                    continue;
-                };
-                apply(spec, node, shared, address, &asdu);
-            }
-            MasterEvent::CommandResult {
-                address,
-                rii,
-                positive,
-                ..
-            } => {
-                let reply = shared
-                    .lock()
-                    .ok()
-                    .and_then(|mut shared| shared.pending.remove(&(address, rii)));
-                if let Some(reply) = reply {
-                    let _ = reply.send(if positive {
-                        Ok(())
-                    } else {
-                        Err(CommandProblem::Refused)
-                    });
-                }
-            }
-            MasterEvent::Link(PrimaryEvent::LinkDown { address }) => {
-                if let Ok(address) = u8::try_from(address) {
-                    tracing::warn!(node = %node.name(), line = %spec.config.name, address, "device not answering");
-                    set_device_down(spec, node, address);
-                    answering(spec, node, shared, address, false);
-                }
-            }
-            MasterEvent::Link(PrimaryEvent::LinkUp { address }) => {
-                if let Ok(address) = u8::try_from(address) {
-                    tracing::info!(node = %node.name(), line = %spec.config.name, address, "device answering");
-                    set_device_status(spec, node, address, true);
-                    answering(spec, node, shared, address, true);
-                }
-            }
-            _ => {}
-        }
-    }
-}
-
 /// Notes a device answering or not; the line's status point is TRUE while none does.
-fn answering(spec: &LineSpec, node: &NodePoints, shared: &Mutex<Shared>, address: u8, up: bool) {
-    let any = shared.lock().map(|mut shared| {
-        if up {
-            shared.answering.insert(address);
-        } else {
-            shared.answering.remove(&address);
-        }
-        !shared.answering.is_empty()
-    });
-    if let Ok(any) = any {
-        set_line_status(spec, node, any);
-    }
+fn answering(spec: &LineSpec, node: &NodePoints, answering: &Answering, address: u8, up: bool) {
+    let any = answering.set(address, up);
+    set_line_status(spec, node, any);
 }
 
 fn set_line_status(spec: &LineSpec, node: &NodePoints, up: bool) {
@@ -492,114 +378,4 @@ fn set_device_down(spec: &LineSpec, node: &NodePoints, address: u8) {
         )
     });
     set_device_status(spec, node, address, false);
-}
-
-fn apply(
-    spec: &LineSpec,
-    node: &NodePoints,
-    shared: &Mutex<Shared>,
-    address: u8,
-    asdu: &iec103::Asdu,
-) {
-    let origin = format!("line {}", spec.config.name);
-    let header = &asdu.header;
-    match &asdu.body {
-        Body::TimeTagged { dpi, time, .. } | Body::TimeTaggedRelative { dpi, time, .. } => {
-            if matches!(header.cause, Cause::COMMAND_ACK | Cause::COMMAND_NACK) {
-                // An acknowledgement says what was commanded, not what the device is.
-                return;
-            }
-            if let Ok(mut shared) = shared.lock() {
-                shared
-                    .indications
-                    .insert((address, header.fun, header.inf), *dpi);
-            }
-            let Some(points) = spec.points.get(&(address, header.fun, header.inf, None)) else {
-                return;
-            };
-            let now = node.clock().now();
-            let source_time = time.resolve(now.naive_utc()).map(|naive| SourceTime {
-                time: naive.and_utc(),
-                invalid: time.is_invalid(),
-            });
-            let (cause, event) = match header.cause {
-                Cause::LOCAL_OPERATION => (EventCause::ReturnLocal, true),
-                Cause::REMOTE_OPERATION => (EventCause::ReturnRemote, true),
-                Cause::SPONTANEOUS => (EventCause::Spontaneous, true),
-                _ => (EventCause::Spontaneous, false),
-            };
-            for point in points {
-                let value = match point.type_id {
-                    TypeId::M_DP_NA_1 | TypeId::M_DP_TB_1 => PointValue::DoublePoint(*dpi & 0x03),
-                    _ => PointValue::Bool(*dpi & 0x03 == 2),
-                };
-                if let Err(error) = node.update(
-                    point.id,
-                    value,
-                    Quality::GOOD,
-                    source_time,
-                    cause,
-                    &origin,
-                    event,
-                ) {
-                    tracing::warn!(node = %node.name(), line = %spec.config.name, %error, "value from the line refused");
-                }
-            }
-        }
-        Body::Measurands(values) => {
-            for (index, value) in values.iter().enumerate() {
-                let Ok(index) = u8::try_from(index) else {
-                    continue;
-                };
-                let Some(points) = spec
-                    .points
-                    .get(&(address, header.fun, header.inf, Some(index)))
-                else {
-                    continue;
-                };
-                for point in points {
-                    let Some(scaling) = point.scaling else {
-                        continue;
-                    };
-                    let physical = value.to_physical(scaling.limit);
-                    let converted = match point.type_id {
-                        TypeId::M_ME_NB_1 | TypeId::M_ME_TB_1 | TypeId::M_ME_TE_1 => {
-                            let scaled = physical * scaling.factor.unwrap_or(1.0);
-                            PointValue::Int(scaled.round().clamp(-32768.0, 32767.0) as i64)
-                        }
-                        TypeId::M_ME_NA_1
-                        | TypeId::M_ME_TA_1
-                        | TypeId::M_ME_TD_1
-                        | TypeId::M_ME_ND_1 => {
-                            let fraction = match scaling.full_scale {
-                                Some(full_scale) => physical / full_scale,
-                                // The engineering value as the raw integer, as the COM600
-                                // sent it (100 A -> 100).
-                                None => physical.round() / 32768.0,
-                            };
-                            PointValue::Float(fraction.clamp(-1.0, 32767.0 / 32768.0))
-                        }
-                        _ => PointValue::Float(physical),
-                    };
-                    let quality = Quality {
-                        invalid: value.error(),
-                        overflow: value.overflow(),
-                        ..Quality::GOOD
-                    };
-                    if let Err(error) = node.update(
-                        point.id,
-                        converted,
-                        quality,
-                        None,
-                        EventCause::Spontaneous,
-                        &origin,
-                        false,
-                    ) {
-                        tracing::warn!(node = %node.name(), line = %spec.config.name, %error, "value from the line refused");
-                    }
-                }
-            }
-        }
-        _ => {}
-    }
 }

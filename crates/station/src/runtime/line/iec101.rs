@@ -1,0 +1,320 @@
+//! IEC 101 outstations on a node's serial line: the gateway's second source.
+//!
+//! One task per line drives an [`iec101::Master`] (an FT1.2 primary polling every
+//! outstation of the line, clock synchronisation and general interrogation each time an
+//! outstation's link comes up). The outstations' monitor data update the points whose
+//! source is `line:LINE/DEVICE/IOA`, through the same element-to-value mapping as a
+//! concentrator's IEC 104 link ([`from_element`], [`EventCause::of_received`]); an
+//! outstation that stops answering turns its points invalid and its status point TRUE.
+//!
+//! Commands routed to `line:LINE/DEVICE/IOA` are forwarded as they came (type, value,
+//! select or execute, time tag) to the outstation's IOA; its confirmation becomes the
+//! node's, its termination the node's termination ([`super::super::forwarded`]), after
+//! the return information received before it.
+//!
+//! ```text
+//!  command from above --> LineHandle::forward --> action: Master::send(address, ASDU)
+//!                                 | watch (type, IOA)            | FT1.2 send/confirm
+//!  ACT_CON / ACT_TERM <-- CommandWatches::answered <-- observe <-- outstation's class 1 data
+//!  monitor data ----------> from_element --> NodePoints::update (line:LINE/DEVICE/IOA)
+//! ```
+
+use std::collections::HashMap;
+use std::ops::ControlFlow;
+use std::sync::Arc;
+use std::time::Duration;
+
+use iec60870::asdu::{Asdu, AsduParams, Cause, CommonAddress, Cot, InformationObject, Ioa};
+use iec60870::ft12::io::{drive, EndpointAction};
+use iec60870::ft12::{Primary, PrimaryConfig, PrimaryEvent};
+use iec60870::iec101::{self, MasterEvent, StartUp};
+use iec60870::outstation::{Command, TerminationFuture};
+use tokio::sync::mpsc;
+
+use crate::config::Iec101Settings;
+use crate::pointdb::{from_element, PointId};
+use crate::store::{CommandOutcome, EventCause};
+
+use super::super::forwarded::CommandWatches;
+use super::super::node::NodePoints;
+use super::{answering, open, set_device_down, set_device_status, set_line_status, LineSpec};
+use super::{Answering, COMMAND_TIMEOUT, REOPEN_AFTER};
+
+/// How long an executed command waits for the outstation's termination, which the
+/// standard leaves to the outstation, before it is terminated here.
+const TERMINATION_TIMEOUT: Duration = Duration::from_secs(10);
+
+/// The running IEC 101 part of a line: what forwarding a command needs.
+#[derive(Clone)]
+pub(super) struct Iec101Line {
+    actions: mpsc::UnboundedSender<EndpointAction<iec101::Master>>,
+    commands: Arc<CommandWatches>,
+    params: AsduParams,
+}
+
+/// The outstations' values: (link address, IOA) -> the points they feed.
+pub(crate) type ObjectPoints = HashMap<(u8, u32), Vec<PointId>>;
+
+/// Starts the line's task.
+pub(super) fn spawn(
+    spec: LineSpec,
+    settings: Iec101Settings,
+    node: Arc<NodePoints>,
+    answering: Answering,
+) -> Iec101Line {
+    let (actions, inbox) = mpsc::unbounded_channel();
+    let commands = Arc::new(CommandWatches::default());
+    let line = Iec101Line {
+        actions,
+        commands: Arc::clone(&commands),
+        params: settings.params,
+    };
+    tokio::spawn(run(spec, settings, node, inbox, commands, answering));
+    line
+}
+
+async fn run(
+    spec: LineSpec,
+    settings: Iec101Settings,
+    node: Arc<NodePoints>,
+    mut inbox: mpsc::UnboundedReceiver<EndpointAction<iec101::Master>>,
+    commands: Arc<CommandWatches>,
+    answering_now: Answering,
+) {
+    let name = spec.config.name.clone();
+    for device in &spec.config.devices {
+        set_device_down(&spec, &node, device.address);
+    }
+    set_line_status(&spec, &node, false);
+    let mut no_simulation = None;
+    loop {
+        let stream = match open(&spec.config, &mut no_simulation).await {
+            Ok(stream) => stream,
+            Err(error) => {
+                tracing::warn!(node = %node.name(), line = %name, %error, "cannot open the line; trying again");
+                tokio::time::sleep(REOPEN_AFTER).await;
+                continue;
+            }
+        };
+        let now = tokio::time::Instant::now().into_std();
+        let primary = Primary::new(
+            PrimaryConfig {
+                address_size: settings.address_size,
+                line: spec.config.settings,
+                response_timeout: spec.config.timeout,
+                retries: spec.config.retries,
+                poll_interval: spec.config.poll_interval,
+                ..PrimaryConfig::default()
+            },
+            now,
+        );
+        let clock_node = Arc::clone(&node);
+        let mut master = iec101::Master::new(
+            primary,
+            settings.params,
+            StartUp {
+                clock_sync: true,
+                interrogate: true,
+                originator: 0,
+            },
+            Box::new(move || clock_node.clock().now().naive_utc()),
+        );
+        for device in &spec.config.devices {
+            let common_address = CommonAddress::new(device.common_address);
+            if let Err(error) = master.add_station(device.address.into(), common_address) {
+                tracing::warn!(line = %name, %error, "outstation not polled");
+            }
+        }
+        let end = drive(stream, &mut master, &mut inbox, |master| {
+            observe(master, &spec, &settings, &node, &commands, &answering_now);
+            ControlFlow::Continue(())
+        })
+        .await;
+        tracing::warn!(node = %node.name(), line = %name, ?end, "line closed; opening it again");
+        for device in &spec.config.devices {
+            set_device_down(&spec, &node, device.address);
+        }
+        commands.abandon_all();
+        answering_now.clear();
+        set_line_status(&spec, &node, false);
+        tokio::time::sleep(REOPEN_AFTER).await;
+    }
+}
+
+fn observe(
+    master: &mut iec101::Master,
+    spec: &LineSpec,
+    settings: &Iec101Settings,
+    node: &NodePoints,
+    commands: &CommandWatches,
+    answering_now: &Answering,
+) {
+    while let Some(event) = master.poll_event() {
+        match event {
+            MasterEvent::Asdu { address, asdu } => {
+                let Ok(address) = u8::try_from(address) else {
+                    continue;
+                };
+                match Asdu::decode(&asdu, &settings.params) {
+                    Ok(asdu) if asdu.type_id.is_command() => commands.answered(&asdu),
+                    Ok(asdu) => apply(spec, node, address, &asdu),
+                    Err(error) => {
+                        tracing::warn!(node = %node.name(), line = %spec.config.name, address, %error, "undecodable ASDU from the outstation");
+                    }
+                }
+            }
+            MasterEvent::Link(PrimaryEvent::LinkDown { address }) => {
+                if let Ok(address) = u8::try_from(address) {
+                    tracing::warn!(node = %node.name(), line = %spec.config.name, address, "outstation not answering");
+                    set_device_down(spec, node, address);
+                    answering(spec, node, answering_now, address, false);
+                }
+            }
+            MasterEvent::Link(PrimaryEvent::LinkUp { address }) => {
+                if let Ok(address) = u8::try_from(address) {
+                    tracing::info!(node = %node.name(), line = %spec.config.name, address, "outstation answering");
+                    set_device_status(spec, node, address, true);
+                    answering(spec, node, answering_now, address, true);
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+/// An outstation's monitor data into the points they feed.
+fn apply(spec: &LineSpec, node: &NodePoints, address: u8, asdu: &Asdu) {
+    if asdu.cot.negative || asdu.cot.test || !asdu.type_id.is_monitor() {
+        return;
+    }
+    let Some(received) = EventCause::of_received(asdu.cot.cause) else {
+        return;
+    };
+    let event = EventCause::received_as_event(asdu.cot.cause);
+    // As a concentrator does: for the node above, a change is a change.
+    let cause = match received {
+        EventCause::Interrogated | EventCause::Cyclic => EventCause::Spontaneous,
+        other => other,
+    };
+    let origin = format!("line {}", spec.config.name);
+    for object in &asdu.objects {
+        let Some(ids) = spec.objects.get(&(address, object.ioa.get())) else {
+            continue;
+        };
+        let decoded = from_element(
+            asdu.type_id,
+            &object.element,
+            object.time.as_ref(),
+            node.zone(),
+        );
+        let (value, quality, source_time) = match decoded {
+            Ok(decoded) => decoded,
+            Err(error) => {
+                tracing::warn!(node = %node.name(), line = %spec.config.name, address, ioa = %object.ioa, %error, "value from the outstation refused");
+                continue;
+            }
+        };
+        for id in ids {
+            if let Err(error) = node.update(
+                *id,
+                value.clone(),
+                quality,
+                source_time,
+                cause,
+                &origin,
+                event,
+            ) {
+                tracing::warn!(node = %node.name(), line = %spec.config.name, %error, "value from the outstation refused");
+            }
+        }
+    }
+}
+
+impl Iec101Line {
+    /// Forwards a command to IOA `ioa` of the outstation at `address` (common address
+    /// `common_address`) and follows it: the outstation's confirmation is the outcome;
+    /// an executed command's termination waits for the outstation's.
+    pub(super) async fn forward(
+        &self,
+        (name, address, common_address): (&str, u8, u16),
+        ioa: Ioa,
+        command: &Command,
+    ) -> (CommandOutcome, String, Option<TerminationFuture>) {
+        let mut cot = Cot::new(Cause::ACTIVATION);
+        cot.originator = command.originator;
+        let mut asdu = Asdu::new(command.type_id, cot, CommonAddress::new(common_address));
+        asdu.objects.push(InformationObject {
+            ioa,
+            element: command.element.clone(),
+            time: command.time,
+        });
+        let bytes = match asdu.to_bytes(&self.params) {
+            Ok(bytes) => bytes,
+            Err(error) => {
+                return (
+                    CommandOutcome::Refused,
+                    format!("cannot be sent to {name}: {error}"),
+                    None,
+                )
+            }
+        };
+        let answers = self.commands.watch(command.type_id, ioa);
+        let (sent, sent_rx) = tokio::sync::oneshot::channel();
+        let action: EndpointAction<iec101::Master> = Box::new(move |master| {
+            let _ = sent.send(
+                master
+                    .send(address.into(), bytes)
+                    .map_err(|e| e.to_string()),
+            );
+        });
+        if self.actions.send(action).is_err() {
+            return (CommandOutcome::Failed, "the line stopped".to_owned(), None);
+        }
+        match sent_rx.await {
+            Ok(Ok(())) => {}
+            Ok(Err(why)) => {
+                return (
+                    CommandOutcome::Failed,
+                    format!("not sent to {name}: {why}"),
+                    None,
+                )
+            }
+            Err(_) => return (CommandOutcome::Failed, "the line stopped".to_owned(), None),
+        }
+        let positive = match tokio::time::timeout(COMMAND_TIMEOUT, answers.confirmed).await {
+            Ok(Ok(positive)) => positive,
+            Ok(Err(_)) => {
+                return (
+                    CommandOutcome::Failed,
+                    format!("{name} went away before confirming"),
+                    None,
+                )
+            }
+            Err(_) => {
+                return (
+                    CommandOutcome::TimedOut,
+                    format!("no confirmation from {name} (IOA {ioa})"),
+                    None,
+                )
+            }
+        };
+        if !positive {
+            return (
+                CommandOutcome::Refused,
+                format!("refused by {name} (IOA {ioa})"),
+                None,
+            );
+        }
+        let detail = format!("confirmed by {name} (IOA {ioa})");
+        if command.select {
+            return (CommandOutcome::Executed, detail, None);
+        }
+        let terminated = answers.terminated;
+        let termination: TerminationFuture = Box::pin(async move {
+            // The standard leaves the termination to the outstation: without one the
+            // command is terminated here after the wait.
+            let _ = tokio::time::timeout(TERMINATION_TIMEOUT, terminated).await;
+        });
+        (CommandOutcome::Executed, detail, Some(termination))
+    }
+}
