@@ -1073,27 +1073,9 @@ impl BodyCx<'_> {
             }
         };
         // time arithmetic
-        let timey = |t: &Ty| matches!(t, Ty::Time | Ty::LTime | Ty::Tod | Ty::Dt | Ty::Date);
-        if timey(&ta) || timey(&tb) {
-            let r = match (op, &ta, &tb) {
-                (BinOp::Add, Ty::Time, Ty::Time) | (BinOp::Sub, Ty::Time, Ty::Time) => {
-                    Some(Ty::Time)
-                }
-                (BinOp::Add | BinOp::Sub, Ty::LTime | Ty::Time, Ty::LTime | Ty::Time) => {
-                    Some(Ty::LTime)
-                }
-                (BinOp::Add, Ty::Tod, Ty::Time | Ty::LTime)
-                | (BinOp::Sub, Ty::Tod, Ty::Time | Ty::LTime) => Some(Ty::Tod),
-                (BinOp::Add, Ty::Time | Ty::LTime, Ty::Tod) => Some(Ty::Tod),
-                (BinOp::Add, Ty::Dt, Ty::Time | Ty::LTime)
-                | (BinOp::Sub, Ty::Dt, Ty::Time | Ty::LTime) => Some(Ty::Dt),
-                (BinOp::Sub, Ty::Tod, Ty::Tod)
-                | (BinOp::Sub, Ty::Dt, Ty::Dt)
-                | (BinOp::Sub, Ty::Date, Ty::Date) => Some(Ty::Time),
-                (BinOp::Mul | BinOp::Div, Ty::Time | Ty::LTime, n) if n.is_num() => {
-                    Some(ta.clone())
-                }
-                (BinOp::Mul, n, Ty::Time | Ty::LTime) if n.is_num() => Some(tb.clone()),
+        if ta.is_time_like() || tb.is_time_like() {
+            let r = match Ty::time_arith(op, &ta, &tb) {
+                Some(t) => Some(t),
                 _ if cmp => {
                     if let Some(c) = Ty::common(&ta, &tb) {
                         self.coerce_pair(a, &ta, b, &tb, &c);
@@ -1279,6 +1261,11 @@ impl BodyCx<'_> {
         if tys.contains(&Ty::Void) {
             return Ty::Void;
         }
+        if let Builtin::Arith(op @ (BinOp::Add | BinOp::Sub | BinOp::Mul | BinOp::Div)) = b {
+            if tys.iter().any(Ty::is_time_like) {
+                return self.time_function(e, ident, op, &tys);
+            }
+        }
         match stdlib::signature(&b, &tys) {
             Ok((params, ret)) => {
                 for ((a, t), p) in args.iter().zip(&tys).zip(&params) {
@@ -1307,6 +1294,48 @@ impl BodyCx<'_> {
                 Ty::Void
             }
         }
+    }
+
+    /// `ADD`, `SUB`, `MUL`, `DIV` of times: what the operators accept, folded left to
+    /// right (`ADD(TOD, TIME, TIME)` is `TOD + TIME + TIME`).
+    fn time_function(&mut self, e: &Expr, ident: &Ident, op: BinOp, tys: &[Ty]) -> Ty {
+        let binary = matches!(op, BinOp::Sub | BinOp::Div);
+        if tys.len() < 2 || (binary && tys.len() != 2) {
+            let want = if binary { "2" } else { "at least 2" };
+            self.err(
+                Code::WrongArguments,
+                e.span,
+                format!(
+                    "wrong arguments to {}: expects {want} arguments, got {}",
+                    ident.name,
+                    tys.len()
+                ),
+            );
+            return Ty::Void;
+        }
+        let mut acc = tys.first().cloned().unwrap_or(Ty::Void);
+        for t in tys.iter().skip(1) {
+            match Ty::time_arith(op, &acc, t) {
+                Some(r) => acc = r,
+                None => {
+                    let (x, y) = (self.name(&acc), self.name(t));
+                    self.err(
+                        Code::WrongArguments,
+                        e.span,
+                        format!(
+                            "wrong arguments to {}: {x} {} {y} is not defined",
+                            ident.name,
+                            op.symbol()
+                        ),
+                    );
+                    return Ty::Void;
+                }
+            }
+        }
+        self.c
+            .res
+            .insert(e.id, Res::CallBuiltin(Builtin::Arith(op)));
+        acc
     }
 
     fn call_args(&mut self, pid: PouId, args: &[Arg], span: Span, is_fb: bool) {

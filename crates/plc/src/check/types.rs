@@ -1,5 +1,6 @@
 //! Types, their memory layout and the IEC implicit-conversion rules.
 
+use crate::syntax::BinOp;
 use std::fmt;
 use std::rc::Rc;
 
@@ -212,6 +213,28 @@ impl Ty {
     /// TIME or LTIME.
     pub fn is_duration(&self) -> bool {
         matches!(self, Ty::Time | Ty::LTime)
+    }
+    /// A duration or a point in time: TIME, LTIME, DATE, TOD, DT.
+    pub fn is_time_like(&self) -> bool {
+        matches!(self, Ty::Time | Ty::LTime | Ty::Date | Ty::Tod | Ty::Dt)
+    }
+
+    /// The result of `a op b` when `a` or `b` is a time (IEC 61131-3 time arithmetic: the
+    /// operators and the functions `ADD`, `SUB`, `MUL`, `DIV`); `None` where the standard
+    /// defines no such operation.
+    pub fn time_arith(op: BinOp, a: &Ty, b: &Ty) -> Option<Ty> {
+        use BinOp::{Add, Div, Mul, Sub};
+        Some(match (op, a, b) {
+            (Add | Sub, Ty::Time, Ty::Time) => Ty::Time,
+            (Add | Sub, Ty::LTime | Ty::Time, Ty::LTime | Ty::Time) => Ty::LTime,
+            (Add | Sub, Ty::Tod, Ty::Time | Ty::LTime) => Ty::Tod,
+            (Add, Ty::Time | Ty::LTime, Ty::Tod) => Ty::Tod,
+            (Add | Sub, Ty::Dt, Ty::Time | Ty::LTime) => Ty::Dt,
+            (Sub, Ty::Tod, Ty::Tod) | (Sub, Ty::Dt, Ty::Dt) | (Sub, Ty::Date, Ty::Date) => Ty::Time,
+            (Mul | Div, Ty::Time | Ty::LTime, n) if n.is_num() => a.clone(),
+            (Mul, n, Ty::Time | Ty::LTime) if n.is_num() => b.clone(),
+            _ => return None,
+        })
     }
     /// Elementary (scalar) type.
     pub fn is_elementary(&self) -> bool {

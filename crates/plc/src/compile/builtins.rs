@@ -328,27 +328,28 @@ impl Cx<'_> {
                 let v = take(0);
                 convert(v, &t0, to, self.c)
             }
-            AddTime | AddDtTime => {
+            AddTime | AddDtTime | AddLTime | AddLDtLTime => {
                 let (a, b2) = (as_i(take(0)), as_i(take(1)));
                 CE::I(Box::new(move |vm| Ok(a(vm)?.wrapping_add(b2(vm)?))))
             }
-            SubTime | SubDtTime | SubDtDt | SubDateDate | SubTodTod => {
+            SubTime | SubDtTime | SubDtDt | SubDateDate | SubTodTod | SubLTime | SubLDtLTime
+            | SubLDtLDt | SubLDateLDate | SubLTodLTod => {
                 let (a, b2) = (as_i(take(0)), as_i(take(1)));
                 CE::I(Box::new(move |vm| Ok(a(vm)?.wrapping_sub(b2(vm)?))))
             }
-            AddTodTime => {
+            AddTodTime | AddLTodLTime => {
                 let (a, b2) = (as_i(take(0)), as_i(take(1)));
                 CE::I(Box::new(move |vm| Ok(time::add_tod_time(a(vm)?, b2(vm)?))))
             }
-            SubTodTime => {
+            SubTodTime | SubLTodLTime => {
                 let (a, b2) = (as_i(take(0)), as_i(take(1)));
                 CE::I(Box::new(move |vm| {
                     Ok(time::add_tod_time(a(vm)?, b2(vm)?.wrapping_neg()))
                 }))
             }
-            MulTime | DivTime => {
+            MulTime | DivTime | MulLTime | DivLTime => {
                 let a = as_i(take(0));
-                let is_mul = *b == MulTime;
+                let is_mul = matches!(b, MulTime | MulLTime);
                 match take(1) {
                     CE::I(k) => CE::I(Box::new(move |vm| {
                         let x = a(vm)?;
@@ -451,6 +452,19 @@ impl Cx<'_> {
                         }))
                     }
                 }
+            }
+            Arith(op) if tys.iter().any(Ty::is_time_like) => {
+                // exactly the operator, pair by pair (TOD wraps at midnight, TIME * REAL
+                // rounds), with the checker's rule for each intermediate type
+                let mut all = (0..nvals).map(&mut take);
+                let mut acc = all.next().unwrap_or(CE::I(konst_i(0)));
+                let mut acc_ty = t0.clone();
+                for (v, t) in all.zip(tys.iter().skip(1)) {
+                    let r = Ty::time_arith(*op, &acc_ty, t).unwrap_or_else(|| ret.clone());
+                    acc = super::expr::binary(*op, acc, v, &acc_ty, t, &r, span);
+                    acc_ty = r;
+                }
+                acc
             }
             Arith(op) => {
                 use crate::syntax::BinOp as B;

@@ -1250,7 +1250,7 @@ fn unary(op: UnOp, v: CE, ty: &Ty) -> CE {
 const DAY: i64 = 86_400_000_000_000;
 
 #[allow(clippy::too_many_arguments)]
-fn binary(op: BinOp, a: CE, b: CE, ta: &Ty, tb: &Ty, ty: &Ty, span: Span) -> CE {
+pub(crate) fn binary(op: BinOp, a: CE, b: CE, ta: &Ty, tb: &Ty, ty: &Ty, span: Span) -> CE {
     use BinOp::*;
     let cmp = matches!(op, Lt | Gt | Le | Ge | Eq | Ne);
     match (a, b) {

@@ -86,6 +86,19 @@ pub enum Builtin {
     SubDtDt,
     SubDateDate,
     ConcatDateTod,
+    /// The LTIME forms of the typed time functions (`ADD_LTIME`, `SUB_LDT_LDT`, ...): LDATE,
+    /// LTOD and LDT are DATE, TOD and DT here; the durations they take and give are LTIME.
+    AddLTime,
+    SubLTime,
+    MulLTime,
+    DivLTime,
+    AddLTodLTime,
+    SubLTodLTime,
+    SubLTodLTod,
+    AddLDtLTime,
+    SubLDtLTime,
+    SubLDtLDt,
+    SubLDateLDate,
     DtToTod,
     DtToDate,
     TDiff,
@@ -160,7 +173,18 @@ pub fn lookup(name: &str) -> Option<Builtin> {
         "SUB_DT_TIME" => SubDtTime,
         "SUB_DT_DT" => SubDtDt,
         "SUB_DATE_DATE" => SubDateDate,
-        "CONCAT_DATE_TOD" => ConcatDateTod,
+        "CONCAT_DATE_TOD" | "CONCAT_DATE_LTOD" | "CONCAT_LDATE_LTOD" => ConcatDateTod,
+        "ADD_LTIME" => AddLTime,
+        "SUB_LTIME" => SubLTime,
+        "MUL_LTIME" => MulLTime,
+        "DIV_LTIME" => DivLTime,
+        "ADD_LTOD_LTIME" => AddLTodLTime,
+        "SUB_LTOD_LTIME" => SubLTodLTime,
+        "SUB_LTOD_LTOD" => SubLTodLTod,
+        "ADD_LDT_LTIME" => AddLDtLTime,
+        "SUB_LDT_LTIME" => SubLDtLTime,
+        "SUB_LDT_LDT" => SubLDtLDt,
+        "SUB_LDATE_LDATE" => SubLDateLDate,
         "DT_TO_TOD" | "DATE_AND_TIME_TO_TIME_OF_DAY" => DtToTod,
         "DT_TO_DATE" | "DATE_AND_TIME_TO_DATE" => DtToDate,
         "__NOW" | "TIME" => Now,
@@ -441,6 +465,35 @@ pub fn signature(b: &Builtin, args: &[Ty]) -> Result<(Vec<Ty>, Ty), String> {
         SubDateDate => {
             need(2)?;
             (vec![Ty::Date, Ty::Date], Ty::Time)
+        }
+        AddLTime | SubLTime => {
+            need(2)?;
+            (vec![Ty::LTime, Ty::LTime], Ty::LTime)
+        }
+        MulLTime | DivLTime => {
+            need(2)?;
+            let k = if arg(1).is_num() { arg(1) } else { Ty::LReal };
+            (vec![Ty::LTime, k], Ty::LTime)
+        }
+        AddLTodLTime | SubLTodLTime => {
+            need(2)?;
+            (vec![Ty::Tod, Ty::LTime], Ty::Tod)
+        }
+        SubLTodLTod => {
+            need(2)?;
+            (vec![Ty::Tod, Ty::Tod], Ty::LTime)
+        }
+        AddLDtLTime | SubLDtLTime => {
+            need(2)?;
+            (vec![Ty::Dt, Ty::LTime], Ty::Dt)
+        }
+        SubLDtLDt => {
+            need(2)?;
+            (vec![Ty::Dt, Ty::Dt], Ty::LTime)
+        }
+        SubLDateLDate => {
+            need(2)?;
+            (vec![Ty::Date, Ty::Date], Ty::LTime)
         }
         ConcatDateTod => {
             need(2)?;
