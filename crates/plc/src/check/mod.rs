@@ -507,7 +507,8 @@ impl<'u> Decls<'u> {
             if let Item::Globals(b) = item {
                 if b.constant {
                     for d in &b.decls {
-                        if let Some(Init::Expr(e)) = &d.init {
+                        let init = d.init.clone().or_else(|| self.type_default(&d.ty));
+                        if let Some(Init::Expr(e)) = &init {
                             if let Some(v) = self.const_int(e) {
                                 for n in &d.names {
                                     self.consts.insert(n.key.clone(), v);
@@ -939,7 +940,8 @@ impl<'u> Decls<'u> {
         for b in &pou.vars {
             if b.constant {
                 for d in &b.decls {
-                    if let Some(Init::Expr(e)) = &d.init {
+                    let init = d.init.clone().or_else(|| self.type_default(&d.ty));
+                    if let Some(Init::Expr(e)) = &init {
                         if let Some(v) = self.const_int(e) {
                             for n in &d.names {
                                 self.consts.insert(n.key.clone(), v);

@@ -61,7 +61,7 @@ mod stmt;
 
 use crate::check::{Checked, PouId, Size, Ty};
 use crate::diagnostics::Diagnostic;
-use crate::syntax::{Init, Item, Span, VarKind};
+use crate::syntax::{Init, Item, PouKind, Span, VarKind};
 use crate::vm::{Code, CompiledPou, Fault, InitFn, StmtFn, Vm};
 use std::rc::Rc;
 
@@ -152,12 +152,18 @@ pub fn compile_with(
                 jit: jit.clone(),
             };
             let mut ops = Vec::new();
+            let mut temps = Vec::new();
             for v in &p.vars {
                 if matches!(v.kind, VarKind::External | VarKind::InOut) {
                     continue;
                 }
                 let at = InitTarget::new(&format!("{}.{}", p.name, v.name), v.span, v.range);
                 cx.init_value(&v.ty, v.init.as_ref(), v.offset, &at, &mut ops);
+                // IEC 61131-3: VAR_TEMP starts at its initial value on every call (a
+                // function's whole frame already does)
+                if v.kind == VarKind::Temp && p.kind != PouKind::Function {
+                    cx.init_value(&v.ty, v.init.as_ref(), v.offset, &at, &mut temps);
+                }
             }
             let init = seq_init(ops);
             let body = match checked.unit.items.get(p.item) {
@@ -166,7 +172,14 @@ pub fn compile_with(
             };
             let body: StmtFn = match crate::stdlib::timers::native_body(p) {
                 Some(native) => native,
-                None => Box::new(move |vm| stmt::run_block(&body, vm)),
+                None if temps.is_empty() => Box::new(move |vm| stmt::run_block(&body, vm)),
+                None => {
+                    let temps = seq_init(temps);
+                    Box::new(move |vm| {
+                        temps(vm)?;
+                        stmt::run_block(&body, vm)
+                    })
+                }
             };
             pous.push(CompiledPou { body, init });
         }
