@@ -592,6 +592,184 @@ fn c104_reads_the_com600_gateway_with_the_relay_on_a_pseudo_terminal() {
     let _ = relay.wait();
 }
 
+/// The gateway's IEC 101 side: an outstation in its own process on a real serial line
+/// (`stanice iec101 slave --pty`, link address 3, common address 7), its objects served
+/// over IEC 104 at the gateway's own addresses. c104 reads them; a double command is
+/// forwarded to the outstation, confirmed by it, and its return information arrives; a
+/// command to an object the outstation lacks is refused by it; when the outstation stops,
+/// its status point turns TRUE and its values invalid.
+#[test]
+fn c104_reads_an_iec101_outstation_through_the_gateway() {
+    if !peers_available() {
+        return;
+    }
+    let dir = tempfile_dir("iec101-gateway");
+    let points = dir.join("rtu.csv");
+    std::fs::write(
+        &points,
+        "ioa,type,value,name\n\
+         4001,M_DP_TB_1,2,feeder breaker\n\
+         4001,C_DC_NA_1,,feeder breaker command\n\
+         5000,M_ME_NC_1,12.5,feeder power\n",
+    )
+    .unwrap();
+    let mut rtu = Command::new(env!("CARGO_BIN_EXE_stanice"))
+        .args([
+            "iec101",
+            "slave",
+            "--pty",
+            "--address",
+            "3",
+            "--ca",
+            "7",
+            "--points",
+        ])
+        .arg(&points)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut rtu_output = BufReader::new(rtu.stdout.take().unwrap()).lines();
+    let path = rtu_output
+        .next()
+        .and_then(Result::ok)
+        .and_then(|line| line.strip_prefix("pty: ").map(str::to_owned))
+        .expect("the outstation prints its pty first");
+    let received = Arc::new(Mutex::new(Vec::new()));
+    let log = Arc::clone(&received);
+    std::thread::spawn(move || {
+        for line in rtu_output.map_while(Result::ok) {
+            log.lock().unwrap().push(line);
+        }
+    });
+    let toml = format!(
+        r#"[station]
+name = "IEC 101 gateway"
+time_zone = "UTC"
+store = "sqlite::memory:"
+port_base = 2404
+bind = "127.0.0.1"
+
+[[node]]
+name = "GW"
+common_address = 1
+
+[node.server]
+port_offset = 0
+redundancy = "single-group"
+
+[[node.line]]
+name = "rtus"
+protocol = "iec101"
+port = "{path}"
+timeout_ms = 500
+retries = 2
+poll_interval_ms = 100
+status_point = "COMM_RTUS"
+
+[[node.line.device]]
+name = "RTU"
+address = 3
+common_address = 7
+status_point = "COMM_RTU"
+
+[[node.point]]
+name = "Feeder"
+type = "M_DP_TB_1"
+ioa = 100
+source = "line:rtus/RTU/4001"
+
+[[node.point]]
+name = "Power"
+type = "M_ME_NC_1"
+ioa = 101
+source = "line:rtus/RTU/5000"
+
+[[node.point]]
+name = "COMM_RTU"
+type = "M_SP_NA_1"
+ioa = 9000
+
+[[node.point]]
+name = "COMM_RTUS"
+type = "M_SP_NA_1"
+ioa = 9001
+
+[[node.command]]
+name = "Feeder_Command"
+type = "C_DC_NA_1"
+ioa = 200
+target = "line:rtus/RTU/4001"
+
+[[node.command]]
+name = "Missing_Object"
+type = "C_DC_NA_1"
+ioa = 201
+target = "line:rtus/RTU/4050"
+"#
+    );
+    std::fs::write(dir.join("station.toml"), toml).unwrap();
+    let (gateway, port) = start_gateway(&dir);
+
+    wait_for_value(port, 9000, "the outstation answering", |value| {
+        value == false
+    });
+    wait_for_value(port, 9001, "the line answering", |value| value == false);
+    wait_for_value(port, 100, "the breaker closed", |value| value == 2);
+    let power = wait_for_value(port, 101, "the power", |value| value.is_number());
+    assert!((power.as_f64().unwrap() - 12.5).abs() < 1e-6, "{power}");
+
+    for flags in ["select", ""] {
+        let command = format!("C_DC_NA_1:200:OFF:{flags}");
+        let result = c104_client(port, &["--command", &command, "--duration", "0.2"]);
+        let result = result
+            .iter()
+            .find(|line| line["event"] == "command_result")
+            .unwrap();
+        assert_eq!(result["ok"], true, "{command} confirmed: {result}");
+    }
+    wait_for_value(port, 100, "the breaker open", |value| value == 1);
+    let seen = received.lock().unwrap().join("\n");
+    assert!(
+        seen.lines()
+            .any(|line| line.contains("ioa=4001") && line.contains("execute")),
+        "the outstation logged the forwarded execute:\n{seen}"
+    );
+
+    let refused = c104_client(
+        port,
+        &[
+            "--command",
+            "C_DC_NA_1:201:ON:expect-fail",
+            "--duration",
+            "0.2",
+        ],
+    );
+    let result = refused
+        .iter()
+        .find(|line| line["event"] == "command_result")
+        .unwrap();
+    assert_eq!(
+        result["confirm"], "negative",
+        "refused by the outstation: {result}"
+    );
+
+    let _ = rtu.kill();
+    let _ = rtu.wait();
+    wait_for_value(port, 9000, "the outstation silent", |value| value == true);
+    let feeder = c104_client(port, &["--gi", "--duration", "0.2"])
+        .into_iter()
+        .find(|object| object["ioa"] == 100)
+        .expect("the feeder point in the interrogation");
+    assert_eq!(
+        feeder["quality"].as_u64().map(|bits| bits & 0x80),
+        Some(0x80),
+        "IV while the outstation is silent: {feeder}"
+    );
+    drop(gateway);
+}
+
 /// A fresh folder in the temp dir.
 fn tempfile_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("stanice-{name}-{}", std::process::id()));
