@@ -241,6 +241,13 @@ pub fn check(unit: CompilationUnit, stdlib_items: usize) -> Result<Checked, Vec<
     };
     cx.register(stdlib_items);
     cx.resolve_all();
+    for p in cx.pous.iter_mut().filter(|p| p.stdlib) {
+        for (alias, name) in crate::stdlib::parameter_aliases(&p.name.to_uppercase()) {
+            if let Some(&i) = p.var_index.get(*name) {
+                p.var_index.entry((*alias).to_string()).or_insert(i);
+            }
+        }
+    }
     // layout: globals, programs, functions
     let mut base = Size::default();
     let mut globals = std::mem::take(&mut cx.globals);

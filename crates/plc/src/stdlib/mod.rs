@@ -117,6 +117,21 @@ pub enum Builtin {
     Arith(crate::syntax::BinOp),
 }
 
+/// Other names of the parameters of standard function blocks, as `(alias, name)`: the
+/// CODESYS spellings (`RESET` for a counter's `R`, `LOAD` for `LD`, `SET1`/`RESET` of SR,
+/// `SET`/`RESET1` of RS), so programs written for CODESYS call the blocks unchanged.
+pub fn parameter_aliases(block: &str) -> &'static [(&'static str, &'static str)] {
+    let counter = block.split_once('_').map_or(block, |(kind, _)| kind);
+    match (counter, block) {
+        ("CTU", _) => &[("RESET", "R")],
+        ("CTD", _) => &[("LOAD", "LD")],
+        ("CTUD", _) => &[("RESET", "R"), ("LOAD", "LD")],
+        (_, "SR") => &[("SET1", "S1"), ("RESET", "R")],
+        (_, "RS") => &[("SET", "S"), ("RESET1", "R1")],
+        _ => &[],
+    }
+}
+
 fn type_by_conv_name(name: &str) -> Option<Ty> {
     Ty::elementary(name)
 }
