@@ -1707,6 +1707,28 @@ fn com600_gateway_example_loads() {
     ));
 }
 
+/// The IEC 101 gateway example: its line, device and the forwarded command.
+#[test]
+fn iec101_gateway_example_loads() {
+    let project = Project::load(&example_folder().join("../iec101-gateway")).unwrap();
+    let node = &project.nodes[0];
+    let line = &node.lines[0];
+    assert!(matches!(line.protocol, LineProtocol::Iec101(_)));
+    assert_eq!(
+        (line.devices[0].address, line.devices[0].common_address),
+        (3, 7)
+    );
+    let command = node.commands.iter().find(|c| c.ioa.get() == 200).unwrap();
+    assert_eq!(
+        command.target,
+        CommandTarget::LineObject {
+            line: "rtus".into(),
+            device: "RTU".into(),
+            ioa: Ioa::try_new(4001).unwrap()
+        }
+    );
+}
+
 #[test]
 fn line_errors_name_their_place() {
     let toml = r#"[station]
