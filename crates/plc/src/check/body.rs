@@ -1242,7 +1242,7 @@ impl BodyCx<'_> {
             }
         }
         let typed_hint = match &b {
-            Builtin::Convert(Some(from), _) => Some(from.clone()),
+            Builtin::Convert(Some(from), _) | Builtin::TruncTo(Some(from), _) => Some(from.clone()),
             _ => tys
                 .iter()
                 .skip(usize::from(matches!(b, Builtin::Mux | Builtin::Sel)))

@@ -3,7 +3,7 @@
 use super::expr::{convert, konst_i};
 use super::{Cx, IFn, RFn, SFn, CE};
 use crate::check::Ty;
-use crate::stdlib::{bits, numeric, string, time, Builtin};
+use crate::stdlib::{bits, conv, numeric, string, time, Builtin};
 use crate::syntax::{Arg, Expr};
 use crate::vm::{Fault, FaultKind};
 
@@ -323,6 +323,11 @@ impl Cx<'_> {
             Find => {
                 let (a, s2) = (as_s(take(0)), as_s(take(1)));
                 CE::I(Box::new(move |vm| Ok(string::find(&a(vm)?, &s2(vm)?))))
+            }
+            TruncTo(_, to) => {
+                let a = as_r(take(0));
+                let to = to.clone();
+                CE::I(Box::new(move |vm| Ok(conv::real_trunc_to_int(a(vm)?, &to))))
             }
             Convert(_, to) => {
                 let v = take(0);

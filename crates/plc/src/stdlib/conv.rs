@@ -94,6 +94,16 @@ pub fn real_to_int(v: f64, to: &Ty) -> i64 {
     }
 }
 
+/// Real truncated toward zero to the integer `to`: saturates to the 64-bit range and wraps
+/// to the target width, as [`real_to_int`] does after rounding.
+pub fn real_trunc_to_int(v: f64, to: &Ty) -> i64 {
+    let t = v.trunc();
+    match to {
+        Ty::ULInt if t >= 0.0 => t as u64 as i64,
+        _ => to.wrap(t as i64),
+    }
+}
+
 /// Integer-lane value as text.
 pub fn int_to_string(v: i64, from: &Ty, enum_name: Option<&str>) -> String {
     match from {

@@ -74,6 +74,9 @@ pub enum Builtin {
     Find,
     /// `X_TO_Y` (source checked) or `TO_Y` (source `None`).
     Convert(Option<Ty>, Ty),
+    /// `REAL_TRUNC_INT`, `LREAL_TRUNC_DINT`, ... (IEC 61131-3 typed truncation; source
+    /// checked) or CODESYS `TRUNC_INT` (source `None`, any REAL or LREAL): toward zero.
+    TruncTo(Option<Ty>, Ty),
     AddTime,
     SubTime,
     MulTime,
@@ -220,6 +223,14 @@ pub fn lookup(name: &str) -> Option<Builtin> {
         "OR" => Arith(crate::syntax::BinOp::Or),
         "XOR" => Arith(crate::syntax::BinOp::Xor),
         _ => {
+            if let Some(rest) = name.strip_prefix("TRUNC_") {
+                return Some(TruncTo(None, Ty::elementary(rest).filter(Ty::is_int)?));
+            }
+            if let Some((a, b)) = name.split_once("_TRUNC_") {
+                let from = Ty::elementary(a).filter(Ty::is_real)?;
+                let to = Ty::elementary(b).filter(Ty::is_int)?;
+                return Some(TruncTo(Some(from), to));
+            }
             if let Some(rest) = name.strip_prefix("TO_") {
                 return Some(Convert(None, type_by_conv_name(rest)?));
             }
@@ -450,6 +461,17 @@ pub fn signature(b: &Builtin, args: &[Ty]) -> Result<(Vec<Ty>, Ty), String> {
             if !conv::convertible(&src, to) {
                 return Err(format!("cannot convert {src} to {to}"));
             }
+            (vec![src], to.clone())
+        }
+        TruncTo(from, to) => {
+            need(1)?;
+            let a = arg(0);
+            let src = match from {
+                Some(f) if a.converts_to(f) => f.clone(),
+                Some(f) => return Err(format!("expects {f}, got {a}")),
+                None if a.is_real() => a,
+                None => return Err(format!("expects REAL or LREAL, got {a}")),
+            };
             (vec![src], to.clone())
         }
         AddTime | SubTime => {
