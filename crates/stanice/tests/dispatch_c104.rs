@@ -507,6 +507,15 @@ fn c104_client(port: u16, args: &[&str]) -> Vec<Value> {
         .collect()
 }
 
+/// c104 sends one command (`TYPE:IOA:VALUE[:select][:expect-fail]`) to `port`: its
+/// `command_result` line.
+fn c104_command(port: u16, command: &str) -> Value {
+    c104_client(port, &["--command", command, "--duration", "0.2"])
+        .into_iter()
+        .find(|line| line["event"] == "command_result")
+        .unwrap_or_else(|| panic!("no result for {command}"))
+}
+
 /// The value of `ioa` in a general interrogation by c104.
 fn interrogated(port: u16, ioa: u64) -> Option<Value> {
     c104_client(port, &["--gi", "--duration", "0.2"])
@@ -722,11 +731,7 @@ target = "line:rtus/RTU/4050"
 
     for flags in ["select", ""] {
         let command = format!("C_DC_NA_1:200:OFF:{flags}");
-        let result = c104_client(port, &["--command", &command, "--duration", "0.2"]);
-        let result = result
-            .iter()
-            .find(|line| line["event"] == "command_result")
-            .unwrap();
+        let result = c104_command(port, &command);
         assert_eq!(result["ok"], true, "{command} confirmed: {result}");
     }
     wait_for_value(port, 100, "the breaker open", |value| value == 1);
@@ -737,19 +742,7 @@ target = "line:rtus/RTU/4050"
         "the outstation logged the forwarded execute:\n{seen}"
     );
 
-    let refused = c104_client(
-        port,
-        &[
-            "--command",
-            "C_DC_NA_1:201:ON:expect-fail",
-            "--duration",
-            "0.2",
-        ],
-    );
-    let result = refused
-        .iter()
-        .find(|line| line["event"] == "command_result")
-        .unwrap();
+    let result = c104_command(port, "C_DC_NA_1:201:ON:expect-fail");
     assert_eq!(
         result["confirm"], "negative",
         "refused by the outstation: {result}"
@@ -802,19 +795,7 @@ fn gateway_scenario(port: u16, mut relay: impl FnMut(&str)) {
 
     relay("local");
     wait_for_value(port, 2003, "LOCAL", |value| value == true);
-    let refused = c104_client(
-        port,
-        &[
-            "--command",
-            "C_DC_NA_1:2100:OFF:expect-fail",
-            "--duration",
-            "0.2",
-        ],
-    );
-    let result = refused
-        .iter()
-        .find(|line| line["event"] == "command_result")
-        .unwrap();
+    let result = c104_command(port, "C_DC_NA_1:2100:OFF:expect-fail");
     assert_eq!(result["confirm"], "negative", "refused in LOCAL: {result}");
     assert_eq!(
         interrogated(port, 2000),
@@ -824,14 +805,7 @@ fn gateway_scenario(port: u16, mut relay: impl FnMut(&str)) {
 
     relay("remote");
     wait_for_value(port, 2003, "REMOTE", |value| value == false);
-    let executed = c104_client(
-        port,
-        &["--command", "C_DC_NA_1:2100:OFF", "--duration", "0.2"],
-    );
-    let result = executed
-        .iter()
-        .find(|line| line["event"] == "command_result")
-        .unwrap();
+    let result = c104_command(port, "C_DC_NA_1:2100:OFF");
     assert_eq!(result["ok"], true, "executed in REMOTE: {result}");
     wait_for_value(port, 2000, "the breaker open", |value| value == 1);
     // The thesis's single commands: remote close 4150 ON closes, remote open 4250 ON opens.
@@ -839,12 +813,7 @@ fn gateway_scenario(port: u16, mut relay: impl FnMut(&str)) {
         (4150, 2, "closed by remote close"),
         (4250, 1, "opened by remote open"),
     ] {
-        let command = format!("C_SC_NA_1:{ioa}:1");
-        let result = c104_client(port, &["--command", &command, "--duration", "0.2"]);
-        let result = result
-            .iter()
-            .find(|line| line["event"] == "command_result")
-            .unwrap();
+        let result = c104_command(port, &format!("C_SC_NA_1:{ioa}:1"));
         assert_eq!(result["ok"], true, "{what}: {result}");
         wait_for_value(port, 2000, what, |value| value == position);
     }

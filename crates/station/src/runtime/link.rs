@@ -23,8 +23,7 @@ use iec60870::asdu::{Asdu, CommonAddress, Ioa, TypeId};
 use iec60870::cs104::client::{ClientConfig, ClientHandle};
 use iec60870::cs104::link::{Link, LinkDown, LinkObserver};
 
-use crate::pointdb::{from_element, PointId};
-use crate::store::EventCause;
+use crate::pointdb::PointId;
 
 use super::clock::NodeClock;
 use super::forwarded::{CommandAnswers, CommandWatches};
@@ -210,49 +209,5 @@ fn synchronise(spec: &LinkSpec, node: &NodePoints, client: &ClientHandle) {
 }
 
 fn apply(spec: &LinkSpec, node: &NodePoints, origin: &str, asdu: &Asdu) {
-    if asdu.cot.negative || asdu.cot.test || !asdu.type_id.is_monitor() {
-        return;
-    }
-    let Some(received) = EventCause::of_received(asdu.cot.cause) else {
-        return;
-    };
-    let event = EventCause::received_as_event(asdu.cot.cause);
-    let event_cause = match received {
-        // For the node above, a change is a change (report by exception): an interrogated,
-        // periodic or read value is published as a spontaneous one, and the node's own
-        // transmission setting decides how it is sent.
-        EventCause::Interrogated | EventCause::Cyclic => EventCause::Spontaneous,
-        other => other,
-    };
-    for object in &asdu.objects {
-        let Some(ids) = spec.points.get(&object.ioa.get()) else {
-            continue;
-        };
-        let decoded = from_element(
-            asdu.type_id,
-            &object.element,
-            object.time.as_ref(),
-            node.zone(),
-        );
-        let (value, quality, source_time) = match decoded {
-            Ok(decoded) => decoded,
-            Err(error) => {
-                tracing::warn!(node = %node.name(), link = %spec.name, ioa = %object.ioa, %error, "value from the link refused");
-                continue;
-            }
-        };
-        for id in ids {
-            if let Err(error) = node.update(
-                *id,
-                value.clone(),
-                quality,
-                source_time,
-                event_cause,
-                origin,
-                event,
-            ) {
-                tracing::warn!(node = %node.name(), link = %spec.name, %error, "value from the link refused");
-            }
-        }
-    }
+    node.apply_received(origin, asdu, |ioa| spec.points.get(&ioa).map(Vec::as_slice));
 }

@@ -15,7 +15,11 @@ use std::sync::{Arc, Mutex, MutexGuard};
 
 use chrono::{DateTime, Utc};
 
-use crate::pointdb::{Point, PointChange, PointDb, PointDbError, PointKey, TimeZonePolicy};
+use iec60870::asdu::Asdu;
+
+use crate::pointdb::{
+    from_element, Point, PointChange, PointDb, PointDbError, PointId, PointKey, TimeZonePolicy,
+};
 use crate::store::{EventCause, PointValue, Quality, SourceTime};
 
 use super::clock::NodeClock;
@@ -159,6 +163,65 @@ impl NodePoints {
             self.publish(&change, origin);
         }
         Ok(())
+    }
+
+    /// Applies the monitor data of an ASDU received from a lower station (a node below
+    /// over an IEC 104 link, an IEC 101 outstation on a line) to the points each object
+    /// feeds (`points_of(IOA)`), each value converted to its point's type. Confirmations,
+    /// negative and test ASDUs carry no process value and are left alone.
+    ///
+    /// For the node above, a change is a change (report by exception): an interrogated,
+    /// periodic or read value is applied as a spontaneous one, and this node's own
+    /// transmission setting decides how it is sent; a spontaneous change or return
+    /// information is passed on even when equal to the last value.
+    pub(crate) fn apply_received<'p>(
+        &self,
+        origin: &str,
+        asdu: &Asdu,
+        points_of: impl Fn(u32) -> Option<&'p [PointId]>,
+    ) {
+        if asdu.cot.negative || asdu.cot.test || !asdu.type_id.is_monitor() {
+            return;
+        }
+        let Some(received) = EventCause::of_received(asdu.cot.cause) else {
+            return;
+        };
+        let event = EventCause::received_as_event(asdu.cot.cause);
+        let cause = match received {
+            EventCause::Interrogated | EventCause::Cyclic => EventCause::Spontaneous,
+            other => other,
+        };
+        for object in &asdu.objects {
+            let Some(ids) = points_of(object.ioa.get()) else {
+                continue;
+            };
+            let decoded = from_element(
+                asdu.type_id,
+                &object.element,
+                object.time.as_ref(),
+                self.zone,
+            );
+            let (value, quality, source_time) = match decoded {
+                Ok(decoded) => decoded,
+                Err(error) => {
+                    tracing::warn!(node = %self.name, %origin, ioa = %object.ioa, %error, "value refused");
+                    continue;
+                }
+            };
+            for id in ids {
+                if let Err(error) = self.update(
+                    *id,
+                    value.clone(),
+                    quality,
+                    source_time,
+                    cause,
+                    origin,
+                    event,
+                ) {
+                    tracing::warn!(node = %self.name, %origin, %error, "value refused");
+                }
+            }
+        }
     }
 
     /// Runs `f` on the locked database and publishes the changes it returns.

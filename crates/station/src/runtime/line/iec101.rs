@@ -32,12 +32,12 @@ use iec60870::outstation::{Command, TerminationFuture};
 use tokio::sync::mpsc;
 
 use crate::config::Iec101Settings;
-use crate::pointdb::{from_element, PointId};
-use crate::store::{CommandOutcome, EventCause};
+use crate::pointdb::PointId;
+use crate::store::CommandOutcome;
 
 use super::super::forwarded::CommandWatches;
 use super::super::node::NodePoints;
-use super::{answering, open, set_device_down, set_device_status, set_line_status, LineSpec};
+use super::{device_link, open, set_device_down, set_line_status, LineSpec};
 use super::{Answering, COMMAND_TIMEOUT, REOPEN_AFTER};
 
 /// How long an executed command waits for the outstation's termination, which the
@@ -164,18 +164,10 @@ fn observe(
                 }
             }
             MasterEvent::Link(PrimaryEvent::LinkDown { address }) => {
-                if let Ok(address) = u8::try_from(address) {
-                    tracing::warn!(node = %node.name(), line = %spec.config.name, address, "outstation not answering");
-                    set_device_down(spec, node, address);
-                    answering(spec, node, answering_now, address, false);
-                }
+                device_link(spec, node, answering_now, address, false);
             }
             MasterEvent::Link(PrimaryEvent::LinkUp { address }) => {
-                if let Ok(address) = u8::try_from(address) {
-                    tracing::info!(node = %node.name(), line = %spec.config.name, address, "outstation answering");
-                    set_device_status(spec, node, address, true);
-                    answering(spec, node, answering_now, address, true);
-                }
+                device_link(spec, node, answering_now, address, true);
             }
             _ => {}
         }
@@ -184,50 +176,10 @@ fn observe(
 
 /// An outstation's monitor data into the points they feed.
 fn apply(spec: &LineSpec, node: &NodePoints, address: u8, asdu: &Asdu) {
-    if asdu.cot.negative || asdu.cot.test || !asdu.type_id.is_monitor() {
-        return;
-    }
-    let Some(received) = EventCause::of_received(asdu.cot.cause) else {
-        return;
-    };
-    let event = EventCause::received_as_event(asdu.cot.cause);
-    // As a concentrator does: for the node above, a change is a change.
-    let cause = match received {
-        EventCause::Interrogated | EventCause::Cyclic => EventCause::Spontaneous,
-        other => other,
-    };
     let origin = format!("line {}", spec.config.name);
-    for object in &asdu.objects {
-        let Some(ids) = spec.objects.get(&(address, object.ioa.get())) else {
-            continue;
-        };
-        let decoded = from_element(
-            asdu.type_id,
-            &object.element,
-            object.time.as_ref(),
-            node.zone(),
-        );
-        let (value, quality, source_time) = match decoded {
-            Ok(decoded) => decoded,
-            Err(error) => {
-                tracing::warn!(node = %node.name(), line = %spec.config.name, address, ioa = %object.ioa, %error, "value from the outstation refused");
-                continue;
-            }
-        };
-        for id in ids {
-            if let Err(error) = node.update(
-                *id,
-                value.clone(),
-                quality,
-                source_time,
-                cause,
-                &origin,
-                event,
-            ) {
-                tracing::warn!(node = %node.name(), line = %spec.config.name, %error, "value from the outstation refused");
-            }
-        }
-    }
+    node.apply_received(&origin, asdu, |ioa| {
+        spec.objects.get(&(address, ioa)).map(Vec::as_slice)
+    });
 }
 
 impl Iec101Line {

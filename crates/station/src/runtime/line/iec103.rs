@@ -27,8 +27,8 @@ use crate::store::{PointValue, SourceTime};
 
 use super::super::node::NodePoints;
 use super::{
-    answering, open, set_device_down, set_device_status, set_line_status, Answering,
-    CommandProblem, LineSpec, COMMAND_TIMEOUT, REOPEN_AFTER,
+    device_link, open, set_device_down, set_line_status, Answering, CommandProblem, LineSpec,
+    COMMAND_TIMEOUT, REOPEN_AFTER,
 };
 
 /// The running IEC 103 part of a line: what a general command needs.
@@ -252,18 +252,10 @@ fn observe(
                 }
             }
             MasterEvent::Link(PrimaryEvent::LinkDown { address }) => {
-                if let Ok(address) = u8::try_from(address) {
-                    tracing::warn!(node = %node.name(), line = %spec.config.name, address, "device not answering");
-                    set_device_down(spec, node, address);
-                    answering(spec, node, answering_now, address, false);
-                }
+                device_link(spec, node, answering_now, address, false);
             }
             MasterEvent::Link(PrimaryEvent::LinkUp { address }) => {
-                if let Ok(address) = u8::try_from(address) {
-                    tracing::info!(node = %node.name(), line = %spec.config.name, address, "device answering");
-                    set_device_status(spec, node, address, true);
-                    answering(spec, node, answering_now, address, true);
-                }
+                device_link(spec, node, answering_now, address, true);
             }
             _ => {}
         }

@@ -319,18 +319,34 @@ async fn open(
     }
 }
 
-/// Notes a device answering or not; the line's status point is TRUE while none does.
-fn answering(spec: &LineSpec, node: &NodePoints, answering: &Answering, address: u8, up: bool) {
+/// A device's link came up (`up`) or failed: its status point, its points (invalid while
+/// it is silent) and the line's status point (TRUE while no device answers).
+fn device_link(spec: &LineSpec, node: &NodePoints, answering: &Answering, address: u16, up: bool) {
+    let Ok(address) = u8::try_from(address) else {
+        return;
+    };
+    if up {
+        tracing::info!(node = %node.name(), line = %spec.config.name, address, "device answering");
+        set_device_status(spec, node, address, true);
+    } else {
+        tracing::warn!(node = %node.name(), line = %spec.config.name, address, "device not answering");
+        set_device_down(spec, node, address);
+    }
     let any = answering.set(address, up);
     set_line_status(spec, node, any);
 }
 
 fn set_line_status(spec: &LineSpec, node: &NodePoints, up: bool) {
-    let Some(point) = spec.config.status_point.clone() else {
+    set_status_point(spec, node, spec.config.status_point.as_deref(), up);
+}
+
+/// A line's or device's status point: FALSE while it answers (`up`), TRUE while not.
+fn set_status_point(spec: &LineSpec, node: &NodePoints, point: Option<&str>, up: bool) {
+    let Some(point) = point else {
         return;
     };
     node.change_with(&format!("line {}", spec.config.name), |db, now| {
-        db.set_link_status(point.as_str(), up, now)
+        db.set_link_status(point, up, now)
             .ok()
             .flatten()
             .into_iter()
@@ -347,22 +363,13 @@ fn device_name(spec: &LineSpec, address: u8) -> Option<&str> {
 }
 
 fn set_device_status(spec: &LineSpec, node: &NodePoints, address: u8, up: bool) {
-    let Some(point) = spec
+    let point = spec
         .config
         .devices
         .iter()
         .find(|device| device.address == address)
-        .and_then(|device| device.status_point.clone())
-    else {
-        return;
-    };
-    node.change_with(&format!("line {}", spec.config.name), |db, now| {
-        db.set_link_status(point.as_str(), up, now)
-            .ok()
-            .flatten()
-            .into_iter()
-            .collect()
-    });
+        .and_then(|device| device.status_point.as_deref());
+    set_status_point(spec, node, point, up);
 }
 
 /// Invalidates a device's points and reports it as not answering.
