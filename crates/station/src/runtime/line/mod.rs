@@ -92,6 +92,8 @@ enum Driver {
 pub struct LineHandle {
     name: String,
     devices: Vec<DeviceEntry>,
+    /// The devices answering now: a command to a silent one fails at once.
+    answering: Answering,
     driver: Driver,
     simulated: Option<mpsc::UnboundedSender<EndpointAction<Simulated>>>,
 }
@@ -110,6 +112,13 @@ impl Answering {
             answering.remove(&address);
         }
         !answering.is_empty()
+    }
+
+    fn contains(&self, address: u8) -> bool {
+        self.0
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .contains(&address)
     }
 
     /// None answers (the line closed).
@@ -182,6 +191,13 @@ impl LineHandle {
                 None,
             );
         };
+        if !self.answering.contains(entry.address) {
+            return (
+                CommandOutcome::Failed,
+                format!("{device} on line {} is not answering: not sent", self.name),
+                None,
+            );
+        }
         match &self.driver {
             Driver::Iec101(line) => {
                 line.forward(
@@ -253,17 +269,18 @@ pub(crate) fn spawn_line(spec: LineSpec, node: Arc<NodePoints>) -> LineHandle {
                 _ => None,
             };
             let (sender, receiver) = simulated.unzip();
-            let line = iec103::spawn(spec, node, answering, receiver);
+            let line = iec103::spawn(spec, node, answering.clone(), receiver);
             (Driver::Iec103(line), sender)
         }
         LineProtocol::Iec101(settings) => {
-            let line = iec101::spawn(spec, settings, node, answering);
+            let line = iec101::spawn(spec, settings, node, answering.clone());
             (Driver::Iec101(line), None)
         }
     };
     LineHandle {
         name,
         devices,
+        answering,
         driver,
         simulated,
     }
