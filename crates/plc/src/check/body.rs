@@ -607,6 +607,7 @@ impl BodyCx<'_> {
             ExprKind::Member(..)
             | ExprKind::Index(..)
             | ExprKind::Bit(..)
+            | ExprKind::Part(..)
             | ExprKind::Direct(_) => {}
             _ => self.err(
                 Code::NotAssignable,
@@ -920,6 +921,36 @@ impl BodyCx<'_> {
                     );
                 }
                 Ty::Bool
+            }
+            ExprKind::Part(base, width, index) => {
+                let part = match width {
+                    8 => Ty::Byte,
+                    16 => Ty::Word,
+                    32 => Ty::DWord,
+                    _ => Ty::LWord,
+                };
+                let bt = self.expr(base, None);
+                if bt == Ty::Void {
+                    return part;
+                }
+                let fits = (bt.is_bits() || bt.is_int())
+                    && *width < bt.bits()
+                    && index.checked_mul(*width).is_some_and(|lo| lo < bt.bits());
+                if !fits {
+                    let n = self.name(&bt);
+                    let letter = match width {
+                        8 => 'B',
+                        16 => 'W',
+                        32 => 'D',
+                        _ => 'L',
+                    };
+                    self.err(
+                        Code::TypeMismatch,
+                        e.span,
+                        format!("%{letter}{index} does not exist in {n}"),
+                    );
+                }
+                part
             }
             ExprKind::Index(base, idx) => {
                 let bt = self.expr(base, None);

@@ -25,7 +25,8 @@ pub(crate) struct Place {
     pub(crate) off: Size,
     pub(crate) dynamic: Option<AddrFn>,
     pub(crate) ty: Ty,
-    pub(crate) bit: Option<u32>,
+    /// A bit (`.%X3`) or a part (`.%B1`) of the integer cell at this place.
+    pub(crate) bit: Option<BitField>,
     pub(crate) direct: Option<DirectAddress>,
     /// The single run-time index of a one-index access on a static base (fast path).
     pub(crate) index1: Option<Rc<Index1>>,
@@ -33,6 +34,59 @@ pub(crate) struct Place {
     pub(crate) range: Option<Rc<RangeCheck>>,
     /// A single character `s[i]` of the STRING/WSTRING at this place (1-based).
     pub(crate) char_ix: Option<Rc<CharIndex>>,
+}
+
+/// Bits `shift .. shift + width` of an integer cell holding a value of type `owner`.
+#[derive(Clone, Debug)]
+pub(crate) struct BitField {
+    pub(crate) shift: u32,
+    pub(crate) width: u32,
+    pub(crate) owner: Ty,
+}
+
+impl BitField {
+    /// Bits `shift ..` of a value of type `ty`, which is itself the field `outer` of a
+    /// cell if given (`w.%D1.%B0`, `w.%B1.%X3`).
+    fn inside(outer: Option<BitField>, ty: &Ty, shift: u32, width: u32) -> BitField {
+        match outer {
+            Some(o) => BitField {
+                shift: o.shift.saturating_add(shift),
+                width,
+                owner: o.owner,
+            },
+            None => BitField {
+                shift,
+                width,
+                owner: ty.clone(),
+            },
+        }
+    }
+
+    fn mask(&self) -> i64 {
+        if self.width >= 64 {
+            -1
+        } else {
+            (1i64 << self.width) - 1
+        }
+    }
+
+    /// The field of the cell value `cell`.
+    fn get(&self, cell: i64) -> i64 {
+        cell.checked_shr(self.shift).unwrap_or(0) & self.mask()
+    }
+
+    /// `cell` with the field replaced by `x`, kept in the owner's range (a part written
+    /// into the top of an INT makes it negative, as the bits say).
+    fn set(&self, cell: i64, x: i64) -> i64 {
+        let m = self.mask().checked_shl(self.shift).unwrap_or(0);
+        let v = (cell & !m) | ((x & self.mask()).checked_shl(self.shift).unwrap_or(0) & m);
+        if self.width == 1 {
+            // bits keep the historical store (no re-wrap), as the machine code does
+            v
+        } else {
+            self.owner.wrap(v)
+        }
+    }
 }
 
 /// The index of a character of a string: `s[i]`, 1-based, checked against the current
@@ -148,6 +202,15 @@ pub(crate) fn lvalue_name(e: &Expr) -> String {
         ExprKind::Name { ident, .. } => ident.name.clone(),
         ExprKind::Member(b, f) => format!("{}.{}", lvalue_name(b), f.name),
         ExprKind::Bit(b, bit) => format!("{}.{bit}", lvalue_name(b)),
+        ExprKind::Part(b, width, index) => {
+            let letter = match width {
+                8 => 'B',
+                16 => 'W',
+                32 => 'D',
+                _ => 'L',
+            };
+            format!("{}.%{letter}{index}", lvalue_name(b))
+        }
         ExprKind::Index(b, idx) => {
             let ix: Vec<String> = idx
                 .iter()
@@ -356,8 +419,19 @@ impl Cx<'_> {
                     return None;
                 }
                 bp.range = None;
-                bp.bit = Some(*bit);
+                bp.bit = Some(BitField::inside(bp.bit.take(), &bp.ty, *bit, 1));
                 bp.ty = Ty::Bool;
+                Some(bp)
+            }
+            ExprKind::Part(base, width, index) => {
+                let mut bp = self.place(base)?;
+                if bp.char_ix.is_some() {
+                    return None;
+                }
+                bp.range = None;
+                let shift = index.checked_mul(*width)?;
+                bp.bit = Some(BitField::inside(bp.bit.take(), &bp.ty, shift, *width));
+                bp.ty = self.c.ty(e.id);
                 Some(bp)
             }
             ExprKind::Index(base, idx) => {
@@ -506,11 +580,11 @@ impl Cx<'_> {
                 Ok(vm.io_read(d.area, d.byte, d.bit, d.bits))
             }));
         }
-        if let Some(bit) = p.bit {
+        if let Some(field) = p.bit.clone() {
             let a = p.addr();
             return CE::I(Box::new(move |vm| {
                 let at = a(vm)?;
-                Ok((vm.geti(at.i)? >> bit) & 1)
+                Ok(field.get(vm.geti(at.i)?))
             }));
         }
         let off = p.off;
@@ -600,7 +674,7 @@ impl Cx<'_> {
                 Ok(Flow::Normal)
             });
         }
-        if let Some(bit) = p.bit {
+        if let Some(field) = p.bit.clone() {
             let a = p.addr();
             let CE::I(f) = v else {
                 return Box::new(|_| Ok(Flow::Normal));
@@ -609,8 +683,12 @@ impl Cx<'_> {
                 let x = f(vm)?;
                 let at = a(vm)?;
                 let old = vm.geti(at.i)?;
-                let m = 1i64 << bit;
-                vm.seti(at.i, if x != 0 { old | m } else { old & !m })?;
+                let x = if field.width == 1 {
+                    i64::from(x != 0)
+                } else {
+                    x
+                };
+                vm.seti(at.i, field.set(old, x))?;
                 Ok(Flow::Normal)
             });
         }
@@ -713,6 +791,7 @@ impl Cx<'_> {
             | ExprKind::Member(..)
             | ExprKind::Index(..)
             | ExprKind::Bit(..)
+            | ExprKind::Part(..)
             | ExprKind::Direct(_) => {
                 match self.c.res.get(&e.id) {
                     Some(Res::EnumValue(v)) => return CE::I(konst_i(*v)),
@@ -1141,6 +1220,7 @@ pub(crate) fn contains_call(e: &Expr) -> bool {
         ExprKind::Unary(_, a)
         | ExprKind::Member(a, _)
         | ExprKind::Bit(a, _)
+        | ExprKind::Part(a, ..)
         | ExprKind::Deref(a) => contains_call(a),
         ExprKind::Binary(_, a, b) => contains_call(a) || contains_call(b),
         ExprKind::Index(a, ix) => contains_call(a) || ix.iter().any(contains_call),

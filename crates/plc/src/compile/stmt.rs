@@ -106,6 +106,7 @@ fn leaf_body(c: &crate::check::Checked, stmts: &[Stmt]) -> bool {
             ExprKind::Member(b, _)
             | ExprKind::Deref(b)
             | ExprKind::Bit(b, _)
+            | ExprKind::Part(b, ..)
             | ExprKind::Unary(_, b) => sub(b),
             ExprKind::Index(b, ix) => sub(b) && ix.iter().all(sub),
             ExprKind::Binary(_, a, b) => sub(a) && sub(b),
@@ -213,7 +214,7 @@ impl MayWrite<'_> {
         match &t.kind {
             ExprKind::Name { .. } => self.names_it(t),
             ExprKind::Member(b, _) => self.program_member(b) || self.rooted(b),
-            ExprKind::Bit(b, _) | ExprKind::Index(b, _) => self.rooted(b),
+            ExprKind::Bit(b, _) | ExprKind::Part(b, ..) | ExprKind::Index(b, _) => self.rooted(b),
             ExprKind::Deref(_) => true,
             ExprKind::Literal(_)
             | ExprKind::Unary(..)
@@ -235,6 +236,7 @@ impl MayWrite<'_> {
             ExprKind::Member(b, _)
             | ExprKind::Deref(b)
             | ExprKind::Bit(b, _)
+            | ExprKind::Part(b, ..)
             | ExprKind::Unary(_, b) => sub(b),
             ExprKind::Index(b, ix) => sub(b) || ix.iter().any(sub),
             ExprKind::Binary(_, a, b) => sub(a) || sub(b),
@@ -253,7 +255,7 @@ impl MayWrite<'_> {
             ExprKind::Call(callee, args) => sub(callee) || args.iter().any(|a| sub(&a.value)),
             ExprKind::Member(b, _) => self.program_member(b) || sub(b),
             ExprKind::Deref(_) => true,
-            ExprKind::Bit(b, _) | ExprKind::Unary(_, b) => sub(b),
+            ExprKind::Bit(b, _) | ExprKind::Part(b, ..) | ExprKind::Unary(_, b) => sub(b),
             ExprKind::Index(b, ix) => sub(b) || ix.iter().any(sub),
             ExprKind::Binary(_, a, b) => sub(a) || sub(b),
             ExprKind::Literal(_) | ExprKind::TypedEnum(..) | ExprKind::Direct(_) => false,
@@ -528,7 +530,7 @@ impl Cx<'_> {
                     .as_ref()
                     .map(|b| self.cond(b))
                     .unwrap_or_else(|| konst_i(1));
-                let cell = match (p.base, &p.dynamic, p.bit, p.direct) {
+                let cell = match (p.base, &p.dynamic, &p.bit, p.direct) {
                     (super::expr::Base::Frame, None, None, None) if p.index1.is_none() => {
                         Cell::Frame(p.off.i)
                     }
@@ -686,7 +688,7 @@ impl Cx<'_> {
                 _ => None,
             })
             .collect::<Option<_>>()?;
-        let addr = match (p.base, &p.dynamic, p.bit, p.direct, &p.char_ix) {
+        let addr = match (p.base, &p.dynamic, &p.bit, p.direct, &p.char_ix) {
             (super::expr::Base::Frame, None, None, None, None) => SAddr::F(p.off.s),
             (super::expr::Base::Abs, None, None, None, None) => SAddr::A(p.off.s),
             _ => SAddr::D(p.addr()),

@@ -363,6 +363,10 @@ pub enum ExprKind {
     Member(Box<Expr>, Ident),
     /// `a.%X3` bit access.
     Bit(Box<Expr>, u32),
+    /// `a.%B1`, `a.%W0`, `a.%D1`, `a.%L0`: partial access to a byte, word, double or long
+    /// word of a longer bit string or integer, as (width in bits, index from the least
+    /// significant part).
+    Part(Box<Expr>, u32, u32),
     /// `a[i, j]`
     Index(Box<Expr>, Vec<Expr>),
     /// `p^`

@@ -193,8 +193,10 @@ impl Lexer<'_, '_> {
                 }
             } else if c == b'%' {
                 self.pos += 1;
+                // a dot belongs to the address only before a digit (`%IX0.3`); in
+                // `w.%D1.%B0` it starts the next access
                 while self.peek(0).is_ascii_alphanumeric()
-                    || self.peek(0) == b'.'
+                    || (self.peek(0) == b'.' && self.peek(1).is_ascii_digit())
                     || self.peek(0) == b'*'
                 {
                     self.pos += 1;

@@ -1202,6 +1202,16 @@ impl Parser<'_> {
                             span: s,
                         };
                     }
+                    Tok::Direct(d) if partial_width(&d).is_some() => {
+                        self.bump();
+                        let (width, index) = partial_width(&d).unwrap_or((8, 0));
+                        let s = e.span.to(span);
+                        e = Expr {
+                            id: self.id(),
+                            kind: ExprKind::Part(Box::new(e), width, index),
+                            span: s,
+                        };
+                    }
                     _ => {
                         let name = self.ident()?;
                         let s = e.span.to(name.span);
@@ -1438,4 +1448,21 @@ impl Parser<'_> {
             _ => self.expected("an expression"),
         }
     }
+}
+
+/// `B1`, `W0`, `D1`, `L0` after `.%`: the width in bits of the part and its index.
+fn partial_width(d: &str) -> Option<(u32, u32)> {
+    let mut chars = d.chars();
+    let width = match chars.next()? {
+        'B' | 'b' => 8,
+        'W' | 'w' => 16,
+        'D' | 'd' => 32,
+        'L' | 'l' => 64,
+        _ => return None,
+    };
+    let digits = chars.as_str();
+    if digits.is_empty() || !digits.chars().all(|c| c.is_ascii_digit()) {
+        return None;
+    }
+    Some((width, digits.parse().unwrap_or(u32::MAX)))
 }

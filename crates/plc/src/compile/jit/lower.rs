@@ -305,7 +305,10 @@ fn may_fault(e: &Expr) -> bool {
         ExprKind::Binary(BinOp::Div | BinOp::Mod, ..) | ExprKind::Index(..) => true,
         ExprKind::Call(..) => true,
         ExprKind::Binary(_, a, b) => may_fault(a) || may_fault(b),
-        ExprKind::Unary(_, a) | ExprKind::Member(a, _) | ExprKind::Bit(a, _) => may_fault(a),
+        ExprKind::Unary(_, a)
+        | ExprKind::Member(a, _)
+        | ExprKind::Bit(a, _)
+        | ExprKind::Part(a, ..) => may_fault(a),
         _ => false,
     }
 }
