@@ -47,6 +47,11 @@
 //! - `s[i]` reads or writes one character of a STRING/WSTRING as its CHAR/WCHAR code
 //!   (IEC 61131-3 3rd edition; CHAR is BYTE, WCHAR is WORD here), 1-based; an index
 //!   outside `1..LEN(s)` is a fault.
+//! - `REF_TO T` holds the address of a variable, member or array element taken with
+//!   `REF(x)` (not of a constant, a bit or a character), or NULL (where every reference
+//!   starts). References compare with `=` and `<>` only; `r^` of NULL is a fault.
+//!   Functions have static frames, so a reference to a function's variable stays valid
+//!   memory but sees the values of the function's last call.
 //! - REAL arithmetic follows IEC 60559 (division by zero gives ±INF/NaN).
 //! - Functions have one static frame each (IEC 61131-3 forbids recursion, which the
 //!   checker rejects); VAR_IN_OUT is passed by reference (the callee holds the address of

@@ -1199,6 +1199,12 @@ pub fn format_value(c: &Checked, ty: &Ty, v: &Val) -> String {
         (Ty::Date, Val::Int(x)) => format::date(*x),
         (Ty::Dt, Val::Int(x)) => format::dt(*x),
         (Ty::ULInt | Ty::LWord, Val::Int(x)) => (*x as u64).to_string(),
+        (Ty::Ref(_), Val::Int(0)) => "NULL".into(),
+        (Ty::Ref(_), Val::Int(x)) => {
+            // the cells referred to, per lane (see `compile::expr::pack`)
+            let at = crate::compile::unpack(x.wrapping_sub(1));
+            format!("REF({}, {}, {})", at.i, at.r, at.s)
+        }
         (Ty::Enum(id), Val::Int(x)) => match c.types.enum_def(*id) {
             Some(d) => match d.values.iter().find(|(_, v)| v == x) {
                 Some((n, _)) => format!("{}#{n}", d.name),
@@ -1220,6 +1226,14 @@ pub fn parse_value(c: &Checked, ty: &Ty, text: &str) -> Result<Val, PlcError> {
         text: text.to_string(),
         ty: c.type_name(ty),
     };
+    if let Ty::Ref(_) = ty {
+        // an address comes from REF() in the program; from outside only NULL
+        return if text.trim().eq_ignore_ascii_case("NULL") {
+            Ok(Val::Int(0))
+        } else {
+            Err(bad())
+        };
+    }
     let mut diags = Vec::new();
     let toks = crate::syntax::lexer::lex(crate::syntax::FileId(0), text.trim(), &mut diags);
     if !diags.is_empty() {

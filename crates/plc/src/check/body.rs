@@ -608,6 +608,7 @@ impl BodyCx<'_> {
             | ExprKind::Index(..)
             | ExprKind::Bit(..)
             | ExprKind::Part(..)
+            | ExprKind::Deref(_)
             | ExprKind::Direct(_) => {}
             _ => self.err(
                 Code::NotAssignable,
@@ -727,6 +728,10 @@ impl BodyCx<'_> {
                 .unwrap_or(Ty::Void);
             self.c.res.insert(e.id, Res::Global(g));
             return t;
+        }
+        if ident.key == "NULL" && !quoted {
+            self.c.res.insert(e.id, Res::Null);
+            return Ty::Ref(Rc::new(Ty::Void));
         }
         // enum values: prefer the hinted enum
         if let Some(Ty::Enum(eid)) = hint {
@@ -1008,10 +1013,19 @@ impl BodyCx<'_> {
                     }
                 }
             }
-            ExprKind::Deref(_) => {
-                self.err(Code::Unsupported, e.span, "pointers are not supported");
-                Ty::Void
-            }
+            ExprKind::Deref(base) => match self.expr(base, None) {
+                Ty::Ref(t) if *t != Ty::Void => (*t).clone(),
+                Ty::Void => Ty::Void,
+                other => {
+                    let n = self.name(&other);
+                    self.err(
+                        Code::TypeMismatch,
+                        e.span,
+                        format!("type mismatch: ^ needs a REF_TO value, found {n}"),
+                    );
+                    Ty::Void
+                }
+            },
             ExprKind::Unary(op, a) => {
                 let t = self.expr(a, hint);
                 match op {
@@ -1103,6 +1117,15 @@ impl BodyCx<'_> {
                 Ty::Void
             }
         };
+        // references: only (in)equality, of references to the same type or NULL
+        if matches!(ta, Ty::Ref(_)) || matches!(tb, Ty::Ref(_)) {
+            let same = ta.converts_to(&tb) || tb.converts_to(&ta);
+            return if matches!(op, BinOp::Eq | BinOp::Ne) && same {
+                Ty::Bool
+            } else {
+                mismatch(self)
+            };
+        }
         // time arithmetic
         if ta.is_time_like() || tb.is_time_like() {
             let r = match Ty::time_arith(op, &ta, &tb) {
@@ -1224,6 +1247,9 @@ impl BodyCx<'_> {
                     );
                     return Ty::Void;
                 }
+                if ident.key == "REF" {
+                    return self.reference(e, args);
+                }
                 if let Some(b) = stdlib::lookup(&ident.key) {
                     return self.builtin(e, ident, b, args, hint);
                 }
@@ -1324,6 +1350,86 @@ impl BodyCx<'_> {
                 );
                 Ty::Void
             }
+        }
+    }
+
+    /// `REF(x)`: the address of a variable (or of a member or element of one).
+    fn reference(&mut self, e: &Expr, args: &[Arg]) -> Ty {
+        let [arg] = args else {
+            self.err(
+                Code::WrongArguments,
+                e.span,
+                format!("REF takes one variable, got {} arguments", args.len()),
+            );
+            for a in args {
+                self.expr(&a.value, None);
+            }
+            return Ty::Void;
+        };
+        if arg.name.is_some() || arg.output {
+            self.err(
+                Code::WrongArguments,
+                arg.value.span,
+                "REF takes one variable, without a parameter name",
+            );
+            return Ty::Void;
+        }
+        let t = self.expr(&arg.value, None);
+        if t == Ty::Void {
+            return Ty::Void;
+        }
+        // what has an address of its own: variables, members, elements (not bits, parts,
+        // characters, I/O addresses or values)
+        let mut root = &arg.value;
+        let addressable = loop {
+            match &root.kind {
+                ExprKind::Name { .. } => {
+                    break matches!(
+                        self.c.res.get(&root.id),
+                        Some(Res::Local(_) | Res::Global(_))
+                    )
+                }
+                ExprKind::Member(b, _) => root = b,
+                ExprKind::Index(b, _) if matches!(self.c.ty(b.id), Ty::Array(_)) => root = b,
+                ExprKind::Deref(_) => break true,
+                _ => break false,
+            }
+        };
+        let program_member = matches!(&arg.value.kind, ExprKind::Member(b, _) if matches!(self.c.res.get(&b.id), Some(Res::Program(_))));
+        if !addressable && !program_member {
+            self.err(
+                Code::NotAssignable,
+                arg.value.span,
+                "REF needs a variable, a member or an array element",
+            );
+            return Ty::Void;
+        }
+        if self.is_constant(&arg.value) {
+            self.err(
+                Code::NotAssignable,
+                arg.value.span,
+                "REF of a constant would let it be written",
+            );
+            return Ty::Void;
+        }
+        self.c.res.insert(e.id, Res::CallBuiltin(Builtin::Ref));
+        Ty::Ref(Rc::new(t))
+    }
+
+    /// Whether an access designates (part of) a CONSTANT variable.
+    fn is_constant(&self, e: &Expr) -> bool {
+        match &e.kind {
+            ExprKind::Name { .. } => match self.c.res.get(&e.id) {
+                Some(Res::Local(i)) => self
+                    .pou
+                    .and_then(|p| self.c.pou(p))
+                    .and_then(|p| p.vars.get(*i))
+                    .is_some_and(|v| v.constant),
+                Some(Res::Global(g)) => self.c.globals.get(*g).is_some_and(|v| v.constant),
+                _ => false,
+            },
+            ExprKind::Member(b, _) | ExprKind::Index(b, _) => self.is_constant(b),
+            _ => false,
         }
     }
 

@@ -42,6 +42,8 @@ pub enum Res {
     CallFb(PouId),
     /// A call of a built-in function.
     CallBuiltin(crate::stdlib::Builtin),
+    /// `NULL`, the reference to nothing.
+    Null,
 }
 
 /// A declared variable.
@@ -197,6 +199,8 @@ fn type_name(ty: &Ty, types: &TypeTable, pous: &[PouInfo]) -> String {
             .map(|s| s.name.clone())
             .unwrap_or_default(),
         Ty::Fb(id) => pous.get(id.0).map(|p| p.name.clone()).unwrap_or_default(),
+        Ty::Ref(t) if **t == Ty::Void => "NULL".to_string(),
+        Ty::Ref(t) => format!("REF_TO {}", type_name(t, types, pous)),
         Ty::Array(a) => {
             let dims: Vec<String> = a.dims.iter().map(|(l, h)| format!("{l}..{h}")).collect();
             format!(
@@ -849,6 +853,15 @@ impl<'u> Decls<'u> {
             TypeRef::Struct(fields, _) => {
                 let name = names.first().map(|n| n.name.clone()).unwrap_or_default();
                 self.struct_type(&name, fields)
+            }
+            TypeRef::Ref(target, _) => {
+                // the target is resolved with the reference, so a type cannot refer to
+                // itself (`REF_TO Node` inside `Node` is reported as self-defined)
+                let t = self.resolve_type(target, &[]);
+                if t == Ty::Void {
+                    return Ty::Void;
+                }
+                Ty::Ref(Rc::new(t))
             }
             TypeRef::Enum(values, _) => {
                 let name = names.first().map(|n| n.name.clone()).unwrap_or_default();

@@ -124,6 +124,9 @@ pub enum Ty {
     Enum(EnumId),
     /// Function block instance
     Fb(PouId),
+    /// `REF_TO T`: the address of a variable of type `T`, or NULL. One integer cell (the
+    /// address packed, 0 = NULL); `REF_TO VOID` is the type of `NULL` itself.
+    Ref(Rc<Ty>),
     /// No value (function without result, statement calls)
     Void,
 }
@@ -240,7 +243,7 @@ impl Ty {
     pub fn is_elementary(&self) -> bool {
         !matches!(
             self,
-            Ty::Array(_) | Ty::Struct(_) | Ty::Fb(_) | Ty::Void | Ty::Enum(_)
+            Ty::Array(_) | Ty::Struct(_) | Ty::Fb(_) | Ty::Void | Ty::Enum(_) | Ty::Ref(_)
         )
     }
 
@@ -306,6 +309,8 @@ impl Ty {
         }
         match (self, to) {
             (Ty::String(_), Ty::String(_)) | (Ty::WString(_), Ty::WString(_)) => true,
+            // NULL is a reference to anything
+            (Ty::Ref(from), Ty::Ref(_)) => **from == Ty::Void,
             (Ty::Time, Ty::LTime) => true,
             (Ty::Real, Ty::LReal) => true,
             (a, b) if a.is_signed_int() && b.is_signed_int() => a.int_rank() < b.int_rank(),
@@ -436,6 +441,7 @@ impl fmt::Display for Ty {
             Ty::Struct(id) => return write!(f, "struct #{}", id.0),
             Ty::Enum(id) => return write!(f, "enum #{}", id.0),
             Ty::Fb(id) => return write!(f, "function block #{}", id.0),
+            Ty::Ref(t) => return write!(f, "REF_TO {t}"),
             Ty::Void => "VOID",
         };
         f.write_str(s)

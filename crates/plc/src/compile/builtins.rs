@@ -530,6 +530,8 @@ impl Cx<'_> {
                     }
                 }
             }
+            // compiled by `Cx::reference` (it needs the place, not the value)
+            Ref => CE::I(konst_i(0)),
             DayOfWeek => {
                 let a = as_i(take(0));
                 CE::I(Box::new(move |vm| Ok(time::day_of_week(a(vm)?))))

@@ -423,6 +423,19 @@ impl Cx<'_> {
                 bp.ty = Ty::Bool;
                 Some(bp)
             }
+            ExprKind::Deref(reference) => {
+                let CE::I(get) = self.expr(reference) else {
+                    return None;
+                };
+                let span = e.span;
+                let target: AddrFn = Rc::new(move |vm: &mut Vm| match get(vm)? {
+                    0 => Err(FaultKind::NullReference(span).into()),
+                    packed => Ok(unpack(packed - 1)),
+                });
+                let mut p = Place::abs(Size::default(), self.c.ty(e.id));
+                p.dynamic = Some(target);
+                Some(p)
+            }
             ExprKind::Part(base, width, index) => {
                 let mut bp = self.place(base)?;
                 if bp.char_ix.is_some() {
@@ -792,9 +805,11 @@ impl Cx<'_> {
             | ExprKind::Index(..)
             | ExprKind::Bit(..)
             | ExprKind::Part(..)
+            | ExprKind::Deref(_)
             | ExprKind::Direct(_) => {
                 match self.c.res.get(&e.id) {
                     Some(Res::EnumValue(v)) => return CE::I(konst_i(*v)),
+                    Some(Res::Null) => return CE::I(konst_i(0)),
                     Some(Res::WStringLiteral(s)) => {
                         let s = s.clone();
                         return CE::S(Box::new(move |_| Ok(s.clone())));
@@ -813,7 +828,6 @@ impl Cx<'_> {
                 Some(Res::EnumValue(v)) => CE::I(konst_i(*v)),
                 _ => CE::I(konst_i(0)),
             },
-            ExprKind::Deref(_) => CE::I(konst_i(0)),
             ExprKind::Unary(op, a) => {
                 let v = self.expr(a);
                 unary(*op, v, &ty)
@@ -836,6 +850,7 @@ impl Cx<'_> {
                 binary(*op, va, vb, &ta, &tb, &ty, e.span)
             }
             ExprKind::Call(_, args) => match self.c.res.get(&e.id).cloned() {
+                Some(Res::CallBuiltin(crate::stdlib::Builtin::Ref)) => self.reference(args, e.span),
                 Some(Res::CallBuiltin(b)) => self.builtin(&b, args, e),
                 Some(Res::CallFunction(pid)) => {
                     let (call, result) = self.call_function(pid, args);
@@ -866,6 +881,25 @@ impl Cx<'_> {
                 }
             },
         }
+    }
+
+    /// `REF(x)`: the packed absolute address of `x` plus 1, so that 0 is NULL (and memory
+    /// that starts zeroed starts NULL).
+    fn reference(&mut self, args: &[Arg], span: Span) -> CE {
+        let size = self.c.memory_size;
+        if size.i > PACK_LIMIT || size.r > PACK_LIMIT || size.s > PACK_LIMIT {
+            self.error(
+                span,
+                "the memory image is too large for references (2 M cells per lane)",
+            );
+            return CE::I(konst_i(0));
+        }
+        let Some(place) = args.first().and_then(|a| self.place(&a.value)) else {
+            self.error(span, "cannot take the address of this");
+            return CE::I(konst_i(0));
+        };
+        let addr = place.addr();
+        CE::I(Box::new(move |vm| Ok(pack(addr(vm)?).wrapping_add(1))))
     }
 
     /// Compiles a call of a user FUNCTION: returns the call (args, body, outputs) and the
@@ -1203,10 +1237,13 @@ impl ArgBindExt for ArgBind {
 
 // An aggregate source address travels through `Val::Int` between get and put: lanes packed
 // 21 bits each (memory images are far below 2 M cells per lane).
-fn pack(s: Size) -> i64 {
+/// Cells per lane that [`pack`] can address.
+const PACK_LIMIT: usize = 0x1F_FFFF;
+
+pub(crate) fn pack(s: Size) -> i64 {
     ((s.i as i64) << 42) | ((s.r as i64 & 0x1F_FFFF) << 21) | (s.s as i64 & 0x1F_FFFF)
 }
-fn unpack(p: i64) -> Size {
+pub(crate) fn unpack(p: i64) -> Size {
     Size {
         i: (p >> 42) as usize,
         r: ((p >> 21) & 0x1F_FFFF) as usize,

@@ -55,6 +55,7 @@
 
 mod builtins;
 mod expr;
+pub(crate) use expr::unpack;
 mod fused;
 mod jit;
 mod stmt;

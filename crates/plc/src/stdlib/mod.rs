@@ -115,6 +115,8 @@ pub enum Builtin {
     DayOfWeek,
     /// Extensible comparison chain `GT(a, b, c)` = `a > b AND b > c` (and GE, EQ, LE, LT, NE).
     Compare(crate::syntax::BinOp),
+    /// `REF(x)`: the address of a variable (typed by the checker, not by [`signature`]).
+    Ref,
     /// Extensible arithmetic/logic in function form: `ADD(a, b, c)`, `MUL`, `AND`, `OR`, `XOR`,
     /// and the binary `SUB`, `DIV`.
     Arith(crate::syntax::BinOp),
@@ -583,6 +585,7 @@ pub fn signature(b: &Builtin, args: &[Ty]) -> Result<(Vec<Ty>, Ty), String> {
             }
             (vec![t.clone(); n], t)
         }
+        Ref => return Err("REF takes one variable".into()),
         DayOfWeek => {
             need(1)?;
             let t = if arg(0) == Ty::Date { Ty::Date } else { Ty::Dt };

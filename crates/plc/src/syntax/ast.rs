@@ -186,6 +186,8 @@ pub enum TypeRef {
     Struct(Vec<VarDecl>, Span),
     /// `(A, B := 5, C)`, optionally with a base type.
     Enum(Vec<(Ident, Option<Expr>)>, Span),
+    /// `REF_TO T`.
+    Ref(Box<TypeRef>, Span),
     /// `INT (0..100)`.
     Subrange {
         /// Base type.
@@ -205,7 +207,8 @@ impl TypeRef {
             TypeRef::String { span, .. }
             | TypeRef::Array { span, .. }
             | TypeRef::Struct(_, span)
-            | TypeRef::Enum(_, span) => *span,
+            | TypeRef::Enum(_, span)
+            | TypeRef::Ref(_, span) => *span,
             TypeRef::Subrange { base, hi, .. } => base.span.to(hi.span),
         }
     }

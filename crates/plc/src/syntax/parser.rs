@@ -630,6 +630,10 @@ impl Parser<'_> {
 
     fn type_ref(&mut self, in_type_decl: bool) -> PResult<TypeRef> {
         let start = self.span();
+        if self.eat_kw("REF_TO") {
+            let target = self.type_ref(false)?;
+            return Ok(TypeRef::Ref(Box::new(target), start.to(self.prev_span())));
+        }
         if self.eat_kw("ARRAY") {
             self.expect_p("[")?;
             let mut dims = Vec::new();

@@ -70,6 +70,9 @@ pub enum FaultKind {
     /// The loop-iteration budget of one cycle is exhausted (endless loop).
     #[error("loop iteration budget of the cycle exhausted (endless loop?)")]
     LoopBudget(Span),
+    /// `r^` where `r` is NULL.
+    #[error("dereference of a NULL reference")]
+    NullReference(Span),
     /// A memory access outside the image (a compiler bug, reported instead of panicking).
     #[error("internal error: memory access out of range")]
     Memory,
@@ -102,7 +105,9 @@ impl Fault {
     /// Source position, if known.
     pub fn span(&self) -> Option<Span> {
         match &*self.0 {
-            FaultKind::DivisionByZero(s) | FaultKind::LoopBudget(s) => Some(*s),
+            FaultKind::DivisionByZero(s)
+            | FaultKind::LoopBudget(s)
+            | FaultKind::NullReference(s) => Some(*s),
             FaultKind::IndexOutOfRange { span, .. }
             | FaultKind::StringIndex { span, .. }
             | FaultKind::RangeError { span, .. } => Some(*span),

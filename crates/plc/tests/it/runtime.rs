@@ -743,3 +743,37 @@ END_PROGRAM
         Err(plc::PlcError::BadValue { .. })
     ));
 }
+
+#[test]
+fn null_dereference_faults_at_its_position_both_ways() {
+    let src = "PROGRAM Main
+VAR r : REF_TO INT; x : INT; i : INT; END_VAR
+r := REF(x);
+FOR i := 1 TO 3 DO
+    IF i = 2 THEN r := NULL; END_IF;
+    x := x + r^;
+END_FOR;
+END_PROGRAM
+";
+    for jit in [false, true] {
+        let files = [("t.st".to_string(), src.to_string())];
+        let (sources, r) = plc::build_with(&files, plc::CompileOptions { jit });
+        let mut p = Plc::new(r.unwrap(), sources);
+        p.add_task(TaskConfig::cyclic("main", 10_000_000, &["Main"]))
+            .unwrap();
+        let f = p.run_cycle(at_ms(0));
+        assert_eq!(f.len(), 1, "jit {jit}");
+        let rendered = p.render(&f[0]);
+        assert!(
+            rendered.starts_with(
+                "t.st:6:14: error: task 'main' stopped: dereference of a NULL reference"
+            ),
+            "jit {jit}: {rendered}"
+        );
+        assert_eq!(p.read_text("Main.r").unwrap(), "NULL");
+        assert_eq!(p.read_text("Main.i").unwrap(), "2");
+        // from outside a reference can only be cleared
+        assert!(p.write("Main.r", "NULL").is_ok());
+        assert!(p.write("Main.r", "5").is_err());
+    }
+}

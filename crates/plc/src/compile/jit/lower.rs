@@ -303,7 +303,7 @@ fn plain_int(t: &Ty) -> bool {
 fn may_fault(e: &Expr) -> bool {
     match &e.kind {
         ExprKind::Binary(BinOp::Div | BinOp::Mod, ..) | ExprKind::Index(..) => true,
-        ExprKind::Call(..) => true,
+        ExprKind::Call(..) | ExprKind::Deref(_) => true,
         ExprKind::Binary(_, a, b) => may_fault(a) || may_fault(b),
         ExprKind::Unary(_, a)
         | ExprKind::Member(a, _)
