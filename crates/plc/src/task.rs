@@ -431,7 +431,8 @@ impl Plc {
     /// Program download: replaces the program by `compiled` (a new build), cold-starts it
     /// and carries over every PERSISTENT variable whose path and type still exist. Tasks
     /// are kept (their programs are looked up again by name) and statistics reset;
-    /// forcing is released. Returns how many values were carried over.
+    /// forcing is released; references start NULL. Returns how many values were carried
+    /// over.
     pub fn download(&mut self, compiled: Compiled, sources: SourceMap) -> Result<usize, PlcError> {
         let kept: Vec<(String, Ty, Val)> = self
             .leaves()
@@ -451,6 +452,10 @@ impl Plc {
         }
         let mut n = 0;
         for (path, ty, v) in kept {
+            // an address in the old memory layout means nothing in the new one
+            if matches!(ty, Ty::Ref(_)) {
+                continue;
+            }
             if let Ok(l) = next.leaf(&path) {
                 if l.ty == ty && l.persistent {
                     next.write_leaf(&l, v);

@@ -777,3 +777,38 @@ END_PROGRAM
         assert!(p.write("Main.r", "5").is_err());
     }
 }
+
+#[test]
+fn references_start_null_after_a_download_and_keep_their_target_over_a_warm_start() {
+    let src = "PROGRAM Main
+VAR PERSISTENT r : REF_TO INT; n : INT; END_VAR
+VAR x : INT; END_VAR
+IF r = NULL THEN r := REF(x); END_IF;
+r^ := r^ + 1;
+n := x;
+END_PROGRAM
+";
+    let mut p = plc(src);
+    p.add_task(TaskConfig::cyclic("main", 10_000_000, &["Main"]))
+        .unwrap();
+    p.run_cycle(at_ms(0));
+    assert_ne!(p.read_text("Main.r").unwrap(), "NULL");
+    p.warm_start().unwrap();
+    assert_ne!(
+        p.read_text("Main.r").unwrap(),
+        "NULL",
+        "same layout, same target"
+    );
+    // a variable in front of x moves it: the old address would now be another variable
+    let moved = src.replace("VAR x : INT; END_VAR", "VAR y : INT; x : INT; END_VAR");
+    let (sources, r) = plc::build(&[("t.st".to_string(), moved)]);
+    assert_eq!(
+        p.download(r.unwrap(), sources).unwrap(),
+        1,
+        "only n is carried"
+    );
+    assert_eq!(p.read_text("Main.r").unwrap(), "NULL");
+    p.run_cycle(at_ms(10));
+    assert_eq!(p.read_text("Main.x").unwrap(), "1");
+    assert_eq!(p.read_text("Main.y").unwrap(), "0");
+}
