@@ -1250,7 +1250,10 @@ impl Parser<'_> {
             } else if self.is_p("(")
                 && matches!(
                     e.kind,
-                    ExprKind::Name { .. } | ExprKind::Member(..) | ExprKind::Index(..)
+                    ExprKind::Name { .. }
+                        | ExprKind::Member(..)
+                        | ExprKind::Index(..)
+                        | ExprKind::Deref(_)
                 )
             {
                 self.bump();
