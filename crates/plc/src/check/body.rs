@@ -1299,7 +1299,10 @@ impl BodyCx<'_> {
             }
         }
         let typed_hint = match &b {
-            Builtin::Convert(Some(from), _) | Builtin::TruncTo(Some(from), _) => Some(from.clone()),
+            Builtin::Convert(Some(from), _)
+            | Builtin::TruncTo(Some(from), _)
+            | Builtin::BcdTo(Some(from), _)
+            | Builtin::ToBcd(from, _) => Some(from.clone()),
             _ => tys
                 .iter()
                 .skip(usize::from(matches!(b, Builtin::Mux | Builtin::Sel)))

@@ -324,6 +324,37 @@ impl Cx<'_> {
                 let (a, s2) = (as_s(take(0)), as_s(take(1)));
                 CE::I(Box::new(move |vm| Ok(string::find(&a(vm)?, &s2(vm)?))))
             }
+            BcdTo(_, to) => {
+                let a = as_i(take(0));
+                let (from, to) = (t0.clone(), to.clone());
+                CE::I(Box::new(move |vm| {
+                    let v = a(vm)?;
+                    match conv::bcd_decode(v, from.bits()) {
+                        Ok(x) => Ok(to.wrap(x)),
+                        Err(digit) => Err(FaultKind::Conversion {
+                            span,
+                            what: format!(
+                                "16#{v:X} is no BCD value: its digit {digit:X} is above 9"
+                            ),
+                        }
+                        .into()),
+                    }
+                }))
+            }
+            ToBcd(_, to) => {
+                let a = as_i(take(0));
+                let to = to.clone();
+                CE::I(Box::new(move |vm| {
+                    let v = a(vm)?;
+                    conv::bcd_encode(v, to.bits()).ok_or_else(|| {
+                        FaultKind::Conversion {
+                            span,
+                            what: format!("{v} does not fit BCD in {to}"),
+                        }
+                        .into()
+                    })
+                }))
+            }
             TruncTo(_, to) => {
                 let a = as_r(take(0));
                 let to = to.clone();

@@ -104,6 +104,32 @@ pub fn real_trunc_to_int(v: f64, to: &Ty) -> i64 {
     }
 }
 
+/// The value of the binary coded decimal `v` (one decimal digit per 4 bits), or the
+/// first nibble that is no decimal digit.
+pub fn bcd_decode(v: i64, bits: u32) -> Result<i64, i64> {
+    let mut value: i64 = 0;
+    for k in (0..bits / 4).rev() {
+        let digit = v.checked_shr(4 * k).unwrap_or(0) & 0xF;
+        if digit > 9 {
+            return Err(digit);
+        }
+        value = value.wrapping_mul(10).wrapping_add(digit);
+    }
+    Ok(value)
+}
+
+/// `v` as binary coded decimal in `bits` bits, if it is not negative and has few enough
+/// digits.
+pub fn bcd_encode(v: i64, bits: u32) -> Option<i64> {
+    let mut rest = u64::try_from(v).ok()?;
+    let mut out: u64 = 0;
+    for k in 0..bits / 4 {
+        out |= (rest % 10).checked_shl(4 * k)?;
+        rest /= 10;
+    }
+    (rest == 0).then_some(out as i64)
+}
+
 /// Integer-lane value as text.
 pub fn int_to_string(v: i64, from: &Ty, enum_name: Option<&str>) -> String {
     match from {

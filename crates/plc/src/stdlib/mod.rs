@@ -77,6 +77,12 @@ pub enum Builtin {
     /// `REAL_TRUNC_INT`, `LREAL_TRUNC_DINT`, ... (IEC 61131-3 typed truncation; source
     /// checked) or CODESYS `TRUNC_INT` (source `None`, any REAL or LREAL): toward zero.
     TruncTo(Option<Ty>, Ty),
+    /// `WORD_BCD_TO_UINT` (source checked) or `BCD_TO_INT` (any bit string): a binary
+    /// coded decimal to an integer.
+    BcdTo(Option<Ty>, Ty),
+    /// `UINT_TO_BCD_WORD` or `INT_TO_BCD` (the bit string as wide as the integer): an
+    /// unsigned value to binary coded decimal.
+    ToBcd(Ty, Ty),
     AddTime,
     SubTime,
     MulTime,
@@ -225,6 +231,27 @@ pub fn lookup(name: &str) -> Option<Builtin> {
         "OR" => Arith(crate::syntax::BinOp::Or),
         "XOR" => Arith(crate::syntax::BinOp::Xor),
         _ => {
+            if let Some(rest) = name.strip_prefix("BCD_TO_") {
+                return Some(BcdTo(None, Ty::elementary(rest).filter(Ty::is_int)?));
+            }
+            if let Some((a, b)) = name.split_once("_BCD_TO_") {
+                let from = Ty::elementary(a).filter(Ty::is_bits)?;
+                let to = Ty::elementary(b).filter(Ty::is_int)?;
+                return Some(BcdTo(Some(from), to));
+            }
+            if let Some((a, b)) = name.split_once("_TO_BCD") {
+                let from = Ty::elementary(a).filter(Ty::is_int)?;
+                let to = match b {
+                    "" => match from.bits() {
+                        8 => Ty::Byte,
+                        16 => Ty::Word,
+                        32 => Ty::DWord,
+                        _ => Ty::LWord,
+                    },
+                    _ => Ty::elementary(b.strip_prefix('_')?).filter(Ty::is_bits)?,
+                };
+                return Some(ToBcd(from, to));
+            }
             if let Some(rest) = name.strip_prefix("TRUNC_") {
                 return Some(TruncTo(None, Ty::elementary(rest).filter(Ty::is_int)?));
             }
@@ -464,6 +491,24 @@ pub fn signature(b: &Builtin, args: &[Ty]) -> Result<(Vec<Ty>, Ty), String> {
                 return Err(format!("cannot convert {src} to {to}"));
             }
             (vec![src], to.clone())
+        }
+        BcdTo(from, to) => {
+            need(1)?;
+            let a = arg(0);
+            let src = match from {
+                Some(f) if a.converts_to(f) => f.clone(),
+                Some(f) => return Err(format!("expects {f}, got {a}")),
+                None if a.is_bits() => a,
+                None => return Err(format!("expects a bit string, got {a}")),
+            };
+            (vec![src], to.clone())
+        }
+        ToBcd(from, to) => {
+            need(1)?;
+            if !arg(0).converts_to(from) {
+                return Err(format!("expects {from}, got {}", arg(0)));
+            }
+            (vec![from.clone()], to.clone())
         }
         TruncTo(from, to) => {
             need(1)?;

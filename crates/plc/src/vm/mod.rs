@@ -70,6 +70,14 @@ pub enum FaultKind {
     /// The loop-iteration budget of one cycle is exhausted (endless loop).
     #[error("loop iteration budget of the cycle exhausted (endless loop?)")]
     LoopBudget(Span),
+    /// A conversion whose argument has no result (`WORD_BCD_TO_UINT(16#00A1)`).
+    #[error("{what}")]
+    Conversion {
+        /// Where.
+        span: Span,
+        /// What could not be converted.
+        what: String,
+    },
     /// `r^` where `r` is NULL.
     #[error("dereference of a NULL reference")]
     NullReference(Span),
@@ -110,6 +118,7 @@ impl Fault {
             | FaultKind::NullReference(s) => Some(*s),
             FaultKind::IndexOutOfRange { span, .. }
             | FaultKind::StringIndex { span, .. }
+            | FaultKind::Conversion { span, .. }
             | FaultKind::RangeError { span, .. } => Some(*span),
             FaultKind::Memory => None,
         }
