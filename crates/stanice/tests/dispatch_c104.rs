@@ -492,19 +492,34 @@ fn c104_dispatch_reads_the_station_and_operates_it() {
     );
 }
 
-/// c104's controlling station against `port` (CA 1): its JSON lines.
-fn c104_client(port: u16, args: &[&str]) -> Vec<Value> {
+/// c104's controlling station against `port` (CA 1), bounded by `seconds`: its JSON lines,
+/// whether it finished, and its standard error.
+fn c104_run(port: u16, args: &[&str], seconds: u64) -> (Vec<Value>, bool, String) {
     let mut command = Command::new("python3");
     command
         .arg(peer_script("c104_client.py"))
         .args(["--port", &port.to_string(), "--ca", "1"])
         .args(args);
-    let (output, finished) = run_bounded(command, 60);
-    assert!(finished, "c104_client did not finish");
-    String::from_utf8_lossy(&output.stdout)
+    let (output, finished) = run_bounded(command, seconds);
+    let lines = String::from_utf8_lossy(&output.stdout)
         .lines()
         .filter_map(|line| serde_json::from_str(line).ok())
-        .collect()
+        .collect();
+    (
+        lines,
+        finished,
+        String::from_utf8_lossy(&output.stderr).into_owned(),
+    )
+}
+
+/// c104's controlling station against `port` (CA 1): its JSON lines.
+fn c104_client(port: u16, args: &[&str]) -> Vec<Value> {
+    let (lines, finished, stderr) = c104_run(port, args, 60);
+    assert!(
+        finished,
+        "c104_client {args:?} did not finish; it printed {lines:?}\n{stderr}"
+    );
+    lines
 }
 
 /// c104 sends one command (`TYPE:IOA:VALUE[:select][:expect-fail]`) to `port`: its
@@ -516,17 +531,45 @@ fn c104_command(port: u16, command: &str) -> Value {
         .unwrap_or_else(|| panic!("no result for {command}"))
 }
 
-/// The value of `ioa` in a general interrogation by c104.
+/// The value of `ioa` in a general interrogation by c104; `None` when the value is not
+/// there, or when the interrogation did not complete in c104 (said on standard error with
+/// the frames c104 saw, so a missing termination on the wire can be told from c104
+/// missing one): the caller asks again.
 fn interrogated(port: u16, ioa: u64) -> Option<Value> {
-    c104_client(port, &["--gi", "--duration", "0.2"])
+    let (lines, finished, stderr) = c104_run(
+        port,
+        &[
+            "--gi",
+            "--gi-timeout",
+            "20",
+            "--raw-log",
+            "--duration",
+            "0.2",
+        ],
+        40,
+    );
+    let gi_done = lines
+        .iter()
+        .any(|line| line["event"] == "gi_done" && line["ok"] == true);
+    if !finished || !gi_done {
+        eprintln!(
+            "c104's interrogation of port {port} did not complete (finished: {finished}); asking again. It printed:"
+        );
+        for line in &lines {
+            eprintln!("  {line}");
+        }
+        eprintln!("{stderr}");
+        return None;
+    }
+    lines
         .into_iter()
         .find(|object| object["ioa"] == ioa && object["cot"] == "INTERROGATED_BY_STATION")
         .map(|object| object["value"].clone())
 }
 
-/// Asks c104 until `ioa` has a value `accept` takes (a minute at most).
+/// Asks c104 until `ioa` has a value `accept` takes (90 s at most).
 fn wait_for_value(port: u16, ioa: u64, what: &str, accept: impl Fn(&Value) -> bool) -> Value {
-    let deadline = Instant::now() + Duration::from_secs(60);
+    let deadline = Instant::now() + Duration::from_secs(90);
     loop {
         let value = interrogated(port, ioa);
         if let Some(value) = value.as_ref().filter(|value| accept(value)) {
