@@ -75,17 +75,12 @@ impl BitField {
         cell.checked_shr(self.shift).unwrap_or(0) & self.mask()
     }
 
-    /// `cell` with the field replaced by `x`, kept in the owner's range (a part written
-    /// into the top of an INT makes it negative, as the bits say).
+    /// `cell` with the field replaced by `x`, kept in the owner's range (a bit or part
+    /// written into the top of an INT makes it negative, as the bits say).
     fn set(&self, cell: i64, x: i64) -> i64 {
         let m = self.mask().checked_shl(self.shift).unwrap_or(0);
         let v = (cell & !m) | ((x & self.mask()).checked_shl(self.shift).unwrap_or(0) & m);
-        if self.width == 1 {
-            // bits keep the historical store (no re-wrap), as the machine code does
-            v
-        } else {
-            self.owner.wrap(v)
-        }
+        self.owner.wrap(v)
     }
 }
 

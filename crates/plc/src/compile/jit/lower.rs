@@ -68,6 +68,8 @@ struct JPlace<'e> {
     region: Option<Region>,
     ty: Ty,
     bit: Option<u32>,
+    /// The type of the cell a bit is taken from (its sign bit is kept on stores).
+    bit_owner: Ty,
     range: Option<(i64, i64)>,
 }
 
@@ -335,6 +337,7 @@ impl<'e> Lower<'_, '_, '_> {
                         region: None,
                         ty: v.ty.clone(),
                         bit: None,
+                        bit_owner: Ty::Void,
                         range: v.range,
                     })
                 }
@@ -347,6 +350,7 @@ impl<'e> Lower<'_, '_, '_> {
                         region: None,
                         ty: v.ty.clone(),
                         bit: None,
+                        bit_owner: Ty::Void,
                         range: v.range,
                     })
                 }
@@ -391,6 +395,7 @@ impl<'e> Lower<'_, '_, '_> {
                 }
                 p.range = None;
                 p.bit = Some(*bit);
+                p.bit_owner = p.ty.clone();
                 p.ty = Ty::Bool;
                 Ok(p)
             }
@@ -645,7 +650,10 @@ impl<'e> Lower<'_, '_, '_> {
                 let m = 1i64 << bit;
                 let set = self.b.ins().bor_imm_s(old, m);
                 let clear = self.b.ins().band_imm_s(old, !m);
-                self.b.ins().select(v, set, clear)
+                let bits = self.b.ins().select(v, set, clear);
+                // the top bit of an INT is its sign, as the closures keep it
+                let owner = p.bit_owner.clone();
+                self.wrap(&owner, bits)
             }
             None => v,
         };
