@@ -1,0 +1,50 @@
+//! Drivers and simulators for field devices on serial lines.
+//!
+//! # Layout
+//!
+//! - [`ekm66`]: the Rekoba EKM66 lift controller board's RS-232 protocol
+//!   (`../shared/spec/elevator-ekm66.md`), read-only: the lift is never controlled.
+//!   - [`ekm66::codec`]: the three queries and the four replies, the FT1.2-style
+//!     frame (`68 L L 68 … CS 16`) and a deframer that cuts frames by their length
+//!     octet, never by searching for 0x16, resynchronising on the next 0x68. The reply
+//!     offsets are a table ([`ekm66::codec::StatusLayout`]: the spec's adopted 20-octet
+//!     layout and the alternative 21-octet one), counters are 1, 2 or 4 octets, and the
+//!     direction, time (binary or BCD) and year base decoders are configurable
+//!     (spec EKM-A2..A8).
+//!   - [`ekm66::tables`]: the 53 status codes and 75 fault codes, English and Czech, with
+//!     the colour class of each status.
+//!   - [`ekm66::poller`]: the polling state machine of spec §8, sans-IO: octets and
+//!     `Instant`s in, query octets and events out. Reply time-out, retries, an error
+//!     counter and the communication status; the fault-log synchronisation against an
+//!     [`ekm66::poller::ArchiveCursor`] the caller stores, so that neither a restart of
+//!     the monitor nor of the board nor the wrap-around of the stack index loses or
+//!     repeats a record.
+//!   - [`ekm66::simulator`]: the board without a line: a lift with N floors on a virtual
+//!     clock (trips, door cycles, the status codes, trip counters), a fault stack of
+//!     configurable size with wrap-around, fault injection, a seedable random source.
+//!   - `ekm66::io` (feature `tokio`, on by default): the drive loops of the poller and
+//!     the simulator over the transports of [`iec60870::ft12::io`] (serial ports,
+//!     pseudo-terminals, TCP to RS-232 converters).
+//!
+//! The poller and the simulator are [`iec60870::ft12::LineEndpoint`]s, so the FT1.2
+//! line driver of `iec60870` runs them unchanged.
+//!
+//! # Data flow
+//!
+//! ```text
+//! Poller::poll_transmit -> query octets -> line -> Simulator::handle_bytes
+//!   -> Deframer -> Query -> Board -> reply octets -> line
+//!   -> Poller::handle_bytes -> Deframer -> decode_reply(expected query, CodecConfig)
+//!   -> Event::{Status, Counters, Fault, Comm} -> caller (archive, UI, JSON lines)
+//!                                 \-> ArchiveCursor (persisted by the caller)
+//! ```
+//!
+//! The cores read no clock: `clippy.toml` bans `Instant::now`, `SystemTime::now` and
+//! chrono's `now` in this crate; the adapters use tokio's clock.
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+#![cfg_attr(not(test), deny(clippy::indexing_slicing))]
+
+pub mod ekm66;
