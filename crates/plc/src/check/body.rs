@@ -220,6 +220,7 @@ impl BodyCx<'_> {
                     format!("array initializer for a variable of type {}", self.name(ty)),
                 ),
             },
+            Init::Default(_) => {}
             Init::Struct(fields, span) => match ty {
                 Ty::Struct(id) => {
                     let def = self.c.types.struct_def(*id).cloned();
@@ -1630,7 +1631,7 @@ impl BodyCx<'_> {
 fn init_span(init: &Init) -> Span {
     match init {
         Init::Expr(e) => e.span,
-        Init::Array(_, span) | Init::Struct(_, span) => *span,
+        Init::Array(_, span) | Init::Struct(_, span) | Init::Default(span) => *span,
     }
 }
 

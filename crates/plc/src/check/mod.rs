@@ -1151,7 +1151,7 @@ pub(crate) fn merge_init(near: Option<Init>, far: Option<Init>) -> Option<Init> 
             }
             Some(Init::Struct(fields, span))
         }
+        (Some(Init::Default(_)) | None, far) => far,
         (Some(near), _) => Some(near),
-        (None, far) => far,
     }
 }

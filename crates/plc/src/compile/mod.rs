@@ -256,8 +256,13 @@ impl Cx<'_> {
                             Some(_) => 1,
                             None => 1,
                         };
+                        // `n()`: those elements start as any other of their type
+                        let v = match v {
+                            Init::Default(_) => None,
+                            v => Some(v),
+                        };
                         for _ in 0..k.min(n.saturating_sub(elems.len())) {
-                            elems.push(Some(v));
+                            elems.push(v);
                         }
                     }
                 }

@@ -234,6 +234,8 @@ pub enum Init {
     Array(Vec<(Option<Expr>, Init)>, Span),
     /// `(a := 1, b := 2)`
     Struct(Vec<(Ident, Init)>, Span),
+    /// The `()` of a repetition `n()`: elements keep the initial value of their type.
+    Default(Span),
 }
 
 /// An expression.

@@ -582,21 +582,8 @@ impl Parser<'_> {
                             Some(self.init()?)
                         };
                         self.expect_p(")")?;
-                        match v {
-                            Some(v) => items.push((Some(count), v)),
-                            None => {
-                                let span = self.prev_span();
-                                let id = self.id();
-                                items.push((
-                                    Some(count),
-                                    Init::Expr(Expr {
-                                        id,
-                                        kind: ExprKind::Literal(Literal::Int(0, None)),
-                                        span,
-                                    }),
-                                ));
-                            }
-                        }
+                        let v = v.unwrap_or_else(|| Init::Default(self.prev_span()));
+                        items.push((Some(count), v));
                     } else {
                         items.push((None, self.init()?));
                     }
