@@ -216,7 +216,9 @@ fn type_name(ty: &Ty, types: &TypeTable, pous: &[PouInfo]) -> String {
 #[derive(Clone)]
 enum TypeSlot {
     Pending(usize, usize),
-    InProgress,
+    /// Being resolved; a STRUCT already has its type (its members may refer to it by
+    /// `REF_TO`, a reference being one cell whatever it refers to).
+    InProgress(Option<Ty>),
     Done(Ty),
 }
 
@@ -667,7 +669,7 @@ impl<'u> Decls<'u> {
         match self.type_slots.get(key).cloned() {
             None => None,
             Some(TypeSlot::Done(t)) => Some(t),
-            Some(TypeSlot::InProgress) => {
+            Some(TypeSlot::InProgress(_)) => {
                 self.err(
                     Code::UnknownType,
                     span,
@@ -677,14 +679,19 @@ impl<'u> Decls<'u> {
             }
             Some(TypeSlot::Pending(item, di)) => {
                 self.type_slots
-                    .insert(key.to_string(), TypeSlot::InProgress);
+                    .insert(key.to_string(), TypeSlot::InProgress(None));
                 let unit = self.unit;
                 let decl = match unit.items.get(item) {
                     Some(Item::Types(d)) => d.get(di),
                     _ => None,
                 }?;
                 let ty = match &decl.ty {
-                    TypeRef::Struct(fields, _) => self.struct_type(&decl.name.name, fields),
+                    TypeRef::Struct(fields, _) => {
+                        let id = self.reserve_struct(&decl.name.name);
+                        self.type_slots
+                            .insert(key.to_string(), TypeSlot::InProgress(Some(Ty::Struct(id))));
+                        self.struct_fields(id, fields)
+                    }
                     TypeRef::Enum(values, _) => self.enum_type(&decl.name.name, values),
                     other => self.resolve_type(other, std::slice::from_ref(&decl.name)),
                 };
@@ -699,6 +706,23 @@ impl<'u> Decls<'u> {
     }
 
     fn struct_type(&mut self, name: &str, fields: &[VarDecl]) -> Ty {
+        let id = self.reserve_struct(name);
+        self.struct_fields(id, fields)
+    }
+
+    /// A new struct type, its members still to come ([`Decls::struct_fields`]).
+    fn reserve_struct(&mut self, name: &str) -> StructId {
+        let id = StructId(self.types.structs.len());
+        self.types.structs.push(StructDef {
+            name: name.to_string(),
+            fields: Vec::new(),
+            size: Size::default(),
+        });
+        id
+    }
+
+    /// Lays out the members of the reserved struct `id`.
+    fn struct_fields(&mut self, id: StructId, fields: &[VarDecl]) -> Ty {
         let mut out = Vec::new();
         let mut off = Size::default();
         let mut seen = HashMap::new();
@@ -723,12 +747,10 @@ impl<'u> Decls<'u> {
                 off = off.plus(size_of(&ty, &self.types, &self.pous));
             }
         }
-        let id = StructId(self.types.structs.len());
-        self.types.structs.push(StructDef {
-            name: name.to_string(),
-            fields: out,
-            size: off,
-        });
+        if let Some(def) = self.types.structs.get_mut(id.0) {
+            def.fields = out;
+            def.size = off;
+        }
         Ty::Struct(id)
     }
 
@@ -855,8 +877,12 @@ impl<'u> Decls<'u> {
                 self.struct_type(&name, fields)
             }
             TypeRef::Ref(target, _) => {
-                // the target is resolved with the reference, so a type cannot refer to
-                // itself (`REF_TO Node` inside `Node` is reported as self-defined)
+                // `next : REF_TO Node` inside the STRUCT Node being laid out
+                if let TypeRef::Named(n) = &**target {
+                    if let Some(TypeSlot::InProgress(Some(t))) = self.type_slots.get(&n.key) {
+                        return Ty::Ref(Rc::new(t.clone()));
+                    }
+                }
                 let t = self.resolve_type(target, &[]);
                 if t == Ty::Void {
                     return Ty::Void;
