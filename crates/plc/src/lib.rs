@@ -40,10 +40,16 @@
 //!   the step past the end is not stored if it leaves the subrange) and an
 //!   exhausted per-cycle loop budget are *faults*: the task stops with a diagnostic; the
 //!   host never panics. Constant values outside a subrange are compile-time errors.
-//! - Initial values are stored with the same checks (a subrange variable without an
-//!   initial value starts at its lower bound). A fault while setting them puts the PLC in
+//! - Initial values are stored with the same checks. A variable, STRUCT member or array
+//!   element without one starts at the `:=` of its TYPE declaration (the nearest through
+//!   derived types; structure initializers merge member by member), else at 0, FALSE,
+//!   `''`, the first enumeration value or the lower bound of its subrange. VAR_TEMP
+//!   starts there on every call, a function's whole frame too. A fault while setting them puts the PLC in
 //!   STOP: [`task::Plc::init_fault`] holds the diagnostic, every task is faulted with it
 //!   and the next `run_cycle` returns it; [`task::Plc::try_new`] returns it as an error.
+//! - `x.%X3`, `x.%B1`, `x.%W0`, `x.%D1`, `x.%L0` read and write a bit, byte, word or
+//!   double/long word of a longer bit string or integer (index 0 the least significant);
+//!   what is written into the top of a signed integer makes it negative.
 //! - `s[i]` reads or writes one character of a STRING/WSTRING as its CHAR/WCHAR code
 //!   (IEC 61131-3 3rd edition; CHAR is BYTE, WCHAR is WORD here), 1-based; an index
 //!   outside `1..LEN(s)` is a fault.

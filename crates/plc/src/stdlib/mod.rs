@@ -10,6 +10,11 @@
 //!   `*_TO_*`, ...) typed by [`signature`] and compiled to native closures by
 //!   [`crate::compile`]. One module per family holds the implementations.
 //!
+//! The counters come in every width the standard lists (`CTU_INT` .. `CTUD_ULINT`); the
+//! CODESYS names of block parameters (`RESET`, `LOAD`, `SET1`, ...) name the same inputs
+//! ([`parameter_aliases`]). Conversions include the typed truncations (`REAL_TRUNC_INT`)
+//! and BCD (`WORD_BCD_TO_UINT`, `UINT_TO_BCD_WORD`; a digit above 9 is a fault).
+//!
 //! Beyond the standard, the prelude has `HYSTERESIS`, `RAMP`, `PID` (CODESYS Util
 //! interface), `WEEKLY_SWITCH`, the astronomical clock `SUN_TIME` (NOAA), the Siemens DTL
 //! helpers (`RD_LOC_T`, `RD_SYS_T`, `T_DIFF`, `DT_TO_DTL`, ...) and the Mosaic `System_S`
