@@ -112,9 +112,9 @@ pub enum Ty {
     Date,
     Tod,
     Dt,
-    /// STRING[n]
+    /// `STRING[n]`
     String(u32),
-    /// WSTRING[n]
+    /// `WSTRING[n]`
     WString(u32),
     /// ARRAY
     Array(Rc<ArrayTy>),
