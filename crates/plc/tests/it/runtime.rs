@@ -812,3 +812,40 @@ END_PROGRAM
     assert_eq!(p.read_text("Main.x").unwrap(), "1");
     assert_eq!(p.read_text("Main.y").unwrap(), "0");
 }
+
+/// Every prelude POU is checked and compiled when named, under the checker's current rules.
+#[test]
+fn every_prelude_pou_compiles() {
+    let names: Vec<String> = plc::stdlib::PRELUDE
+        .lines()
+        .filter_map(|l| {
+            let rest = l
+                .strip_prefix("FUNCTION_BLOCK ")
+                .or_else(|| l.strip_prefix("FUNCTION "))?;
+            Some(rest.split([' ', ':']).next()?.to_string())
+        })
+        .collect();
+    assert!(names.len() > 30, "{names:?}");
+    // named as enumeration values: the prelude is included by the names a program uses
+    let src = format!(
+        "TYPE Named : ({}); END_TYPE\nPROGRAM Main\nVAR x : Named; END_VAR\nEND_PROGRAM\n",
+        names.join(", ")
+    );
+    let (sources, r) = plc::build(&[("t.st".to_string(), src)]);
+    let compiled = match r {
+        Ok(c) => c,
+        Err(d) => panic!(
+            "{}",
+            d.iter()
+                .map(|d| d.render(&sources))
+                .collect::<Vec<_>>()
+                .join("\n")
+        ),
+    };
+    for n in &names {
+        assert!(
+            compiled.checked.pou_index.contains_key(n.as_str()),
+            "{n} not compiled"
+        );
+    }
+}
