@@ -758,6 +758,7 @@ impl<'u> Decls<'u> {
         let mut out = Vec::new();
         let mut next: i64 = 0;
         let mut seen: HashMap<&str, Span> = HashMap::new();
+        let mut numbers: HashMap<i64, (String, Span)> = HashMap::new();
         for (n, v) in values {
             if let Some(first) = seen.insert(n.key.as_str(), n.span) {
                 self.diags.push(
@@ -779,6 +780,23 @@ impl<'u> Decls<'u> {
                         "enumeration value must be a constant integer",
                     ),
                 }
+            }
+            // one value, one name: the value is what is stored, shown and matched by CASE
+            if let Some((first, first_span)) = numbers.get(&next) {
+                let at = v.as_ref().map_or(n.span, |e| e.span);
+                self.diags.push(
+                    Diagnostic::error(
+                        Code::Duplicate,
+                        at,
+                        format!(
+                            "enumeration values '{first}' and '{}' both have the value {next}",
+                            n.name
+                        ),
+                    )
+                    .with_label(*first_span, format!("'{first}' has it here")),
+                );
+            } else {
+                numbers.insert(next, (n.name.clone(), n.span));
             }
             out.push((n.name.clone(), next));
             next = next.wrapping_add(1);
