@@ -101,6 +101,27 @@ multiples of rated (2.4 x for currents and powers, 1.2 x for voltages and freque
 While it runs, type `help` for its console: inject, local/remote, open/close, fault, restart.",
     ),
     (
+        "lift",
+        "  stanice lift simulate --pty --floors 6 --speed 10      # prints `pty: /dev/pts/N`
+  stanice lift poll --serial /dev/pts/4 --json",
+    ),
+    (
+        "lift simulate",
+        "  stanice lift simulate --pty --floors 6 --seed 7 --speed 10
+  stanice lift simulate --serial /dev/ttyS0 --stack-size 32 --fault-probability 0
+  stanice lift simulate --listen 0.0.0.0:4001 --status-layout alternative --counter-width 2
+While it runs, type `help` for its console: fault 3C, status 18, status auto, trip 3, silent, answer, clear.",
+    ),
+    (
+        "lift poll",
+        "  stanice lift poll --serial /dev/ttyUSB0                 # 9600 8E1, status every second
+  stanice lift poll --serial /dev/ttyUSB0 --baud 19200 --parity none --json --duration 60
+  stanice lift poll --tcp 10.0.0.30:4001 --archive lift1.cursor --json
+JSON lines carry kind (status, counters, fault, comm) and status, status_text, position,
+target, direction, time, counters, fault_code, fault_text, index. With --archive a restarted
+monitor reads the fault log on where it stopped: no record twice, none missed.",
+    ),
+    (
         "demo",
         "  stanice demo                                   # web HMI on http://127.0.0.1:8080/
   stanice demo --speed 60 --store none           # fast, without writing events

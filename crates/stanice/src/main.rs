@@ -6,6 +6,7 @@
 //! - `stanice iec101 ...`: the IEC 101 master and slave over serial lines,
 //!   pseudo-terminals or TCP.
 //! - `stanice iec103 ...`: the IEC 103 master and the REF630 relay simulator.
+//! - `stanice lift ...`: the EKM66 lift controller's monitor and board simulator.
 //! - `stanice run PROJECT`: runs a station project (nodes, PLCs, plant, links, store);
 //!   `stanice demo` runs the Vsetín railway station.
 //! - `stanice points` / `stanice events`: a node's data points; the event store.
@@ -22,6 +23,7 @@ mod iec101;
 mod iec103;
 mod iec104;
 mod interrupt;
+mod lift;
 mod plc;
 mod points;
 mod run;
@@ -57,6 +59,10 @@ enum Command {
     /// relay simulator (ABB REF630).
     #[command(subcommand)]
     Iec103(iec103::Iec103Command),
+    /// Lift monitoring: the Rekoba EKM66 controller board over RS-232 (a monitor and a
+    /// board simulator; read-only).
+    #[command(subcommand)]
+    Lift(lift::LiftCommand),
     /// Run the railway-station demo (examples/vsetin).
     Demo(demo::DemoArgs),
     /// Run a station project: every node, or those named with --node.
@@ -102,6 +108,7 @@ fn main() -> std::process::ExitCode {
             Command::Iec104(command) => iec104::run(command).await,
             Command::Iec101(command) => iec101::run(command).await,
             Command::Iec103(command) => iec103::run(command).await,
+            Command::Lift(command) => lift::run(command).await,
             Command::Demo(args) => demo::run(args).await,
             Command::Run(args) => run::run(args).await,
             Command::Points(args) => points::run(args),

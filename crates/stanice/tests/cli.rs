@@ -1877,3 +1877,122 @@ fn every_help_has_examples() {
     assert!(text.contains("NT not topical"), "{text}");
     assert!(text.contains("UPPER CASE = set"), "{text}");
 }
+
+/// The JSON lines of `stanice lift poll`.
+fn lift_lines(stdout: &str) -> Vec<Value> {
+    stdout
+        .lines()
+        .map(|line| serde_json::from_str::<Value>(line).unwrap_or_else(|e| panic!("{e}: {line}")))
+        .collect()
+}
+
+/// `stanice lift simulate --pty` and `stanice lift poll --serial PATH --json` as two
+/// processes: the status held from the simulator's console, the trip counters, a fault
+/// injected from the console; a second monitor run with the same archive cursor prints
+/// only the fault injected since, and a silent board is reported lost.
+#[test]
+fn lift_poll_reads_the_simulator_over_a_pseudo_terminal() {
+    use std::io::Write as _;
+    let mut simulator = stanice();
+    simulator
+        .args([
+            "lift",
+            "simulate",
+            "--pty",
+            "--floors",
+            "4",
+            "--seed",
+            "3",
+            "--speed",
+            "20",
+            "--fault-probability",
+            "0",
+            "--status-probability",
+            "0",
+        ])
+        .stdin(Stdio::piped());
+    let (mut simulator, line) = start_until_line(simulator, "pty: ");
+    let mut console = simulator.0.stdin.take().unwrap();
+    let path = line.trim_start_matches("pty: ").trim().to_owned();
+    writeln!(console, "status 18").unwrap();
+    writeln!(console, "fault 3C").unwrap();
+    let archive = std::env::temp_dir().join(format!(
+        "stanice-lift-{}-{}.cursor",
+        std::process::id(),
+        free_port()
+    ));
+    let poll = |seconds: &str| {
+        let mut poll = stanice();
+        poll.args([
+            "lift",
+            "poll",
+            "--serial",
+            &path,
+            "--json",
+            "--duration",
+            seconds,
+            "--poll-period",
+            "100",
+            "--counters-period",
+            "1",
+            "--timeout",
+            "300",
+        ])
+        .arg("--archive")
+        .arg(&archive);
+        lift_lines(&assert_success(&run_bounded(poll, 30)))
+    };
+    let lines = poll("3");
+    let kind = |lines: &[Value], kind: &str| -> Vec<Value> {
+        lines
+            .iter()
+            .filter(|line| line["kind"] == kind)
+            .cloned()
+            .collect()
+    };
+    let statuses = kind(&lines, "status");
+    let held = statuses
+        .iter()
+        .find(|s| s["status"] == 18)
+        .unwrap_or_else(|| panic!("no status 18 in {lines:?}"));
+    assert_eq!(held["status_text"], "Light-curtain fault");
+    for field in ["position", "target", "direction", "time"] {
+        assert!(!held[field].is_null(), "{field} missing in {held}");
+    }
+    assert!(held["time"].as_str().unwrap().len() == 8, "{held}");
+    let counters = kind(&lines, "counters");
+    assert_eq!(
+        counters[0]["counters"].as_array().unwrap().len(),
+        4,
+        "{lines:?}"
+    );
+    let faults = kind(&lines, "fault");
+    assert_eq!(faults.len(), 1, "{lines:?}");
+    assert_eq!(faults[0]["fault_code"], 0x3C);
+    assert_eq!(faults[0]["fault_text"], "Door fault");
+    assert_eq!(faults[0]["index"], 0);
+    assert_eq!(kind(&lines, "comm")[0]["status"], "ok");
+
+    // A second monitor run with the stored cursor: only the new fault.
+    writeln!(console, "fault 11").unwrap();
+    writeln!(console, "status auto").unwrap();
+    let lines = poll("2");
+    let faults = kind(&lines, "fault");
+    assert_eq!(faults.len(), 1, "{lines:?}");
+    assert_eq!(faults[0]["fault_code"], 0x11);
+    assert_eq!(faults[0]["index"], 1);
+    // Released from the console: the lift's own status again.
+    assert_eq!(
+        kind(&lines, "status").last().unwrap()["status"],
+        1,
+        "{lines:?}"
+    );
+
+    // The board goes silent: communication lost.
+    writeln!(console, "silent").unwrap();
+    let lines = poll("3");
+    let comm: Vec<Value> = kind(&lines, "comm");
+    assert_eq!(comm.last().unwrap()["status"], "lost", "{lines:?}");
+    assert!(kind(&lines, "fault").is_empty());
+    let _ = std::fs::remove_file(&archive);
+}

@@ -1,0 +1,225 @@
+//! `stanice lift simulate`: an EKM66 board on a serial line, a pseudo-terminal or TCP,
+//! with a console for fault injection.
+
+use std::process::ExitCode;
+
+use clap::Args;
+use devices::ekm66::io::{run_simulator, EndpointAction};
+use devices::ekm66::simulator::{SimEvent, Simulator, SimulatorConfig};
+use devices::ekm66::tables::{fault_text, status_text};
+use tokio::sync::mpsc;
+
+use super::CodecArgs;
+use crate::serial_line::{report_end, LineArgs, ServedLines};
+
+/// The console's operations.
+const CONSOLE_HELP: &str = "\
+Console (one operation a line):
+  fault CODE        store a fault now, CODE in hex as in Appendix B: fault 3C
+  status CODE       show a status code (decimal, Appendix A) until `status auto`: status 18
+  status auto       back to the status the lift's operation gives
+  trip FLOOR        call the car to a floor
+  silent | answer   stop answering queries (a broken cable) | answer again
+  clear             clear the fault log
+  show              status, doors, fault stack
+  help";
+
+/// Arguments of `stanice lift simulate`.
+#[derive(Args, Debug)]
+pub(crate) struct SimulateArgs {
+    #[command(flatten)]
+    line: LineArgs,
+    #[command(flatten)]
+    codec: CodecArgs,
+    /// Floors, numbered 1..=N.
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u8).range(2..=60))]
+    floors: u8,
+    /// Seed of the random trips, statuses and faults.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Slots of the fault stack; the index wraps to the first after the last.
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u8).range(1..))]
+    stack_size: u8,
+    /// The index of the first slot, 0 or 1.
+    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u8).range(0..=1))]
+    index_base: u8,
+    /// Board seconds per real second (the lift and its clock run faster).
+    #[arg(long, default_value_t = 1.0)]
+    speed: f64,
+    /// Probability of a random fault at the end of a trip (0 for injected faults only).
+    #[arg(long, default_value_t = 0.05)]
+    fault_probability: f64,
+    /// Probability of a status episode at the end of a trip (each the next code of
+    /// Appendix A, so every status shows in turn).
+    #[arg(long, default_value_t = 0.1)]
+    status_probability: f64,
+    /// Print every query answered and every arrival.
+    #[arg(long)]
+    verbose: bool,
+    /// Stop after this many seconds (runs until Ctrl-C otherwise).
+    #[arg(long)]
+    duration: Option<f64>,
+}
+
+pub(crate) async fn run(args: SimulateArgs) -> anyhow::Result<ExitCode> {
+    if !(args.speed.is_finite() && (0.01..=10_000.0).contains(&args.speed)) {
+        anyhow::bail!("--speed must be within 0.01..=10000");
+    }
+    for (name, value) in [
+        ("--fault-probability", args.fault_probability),
+        ("--status-probability", args.status_probability),
+    ] {
+        if !(0.0..=1.0).contains(&value) {
+            anyhow::bail!("{name} must be within 0..=1");
+        }
+    }
+    let settings = args.line.settings()?;
+    let mut config = SimulatorConfig::default();
+    config.floors = args.floors;
+    config.seed = args.seed;
+    config.stack_size = args.stack_size;
+    config.index_base = args.index_base;
+    config.speed = args.speed;
+    config.fault_probability = args.fault_probability;
+    config.status_probability = args.status_probability;
+    config.codec = args.codec.codec()?;
+    config.status_layout = args.codec.layout();
+    config.line = settings;
+    config.start = chrono::Local::now().naive_local();
+    let now = tokio::time::Instant::now().into_std();
+    let mut simulator = Simulator::new(config, now);
+
+    let (operations, mut inbox) = mpsc::unbounded_channel::<EndpointAction<Simulator>>();
+    let mut console = crate::console::stdin_lines();
+    tokio::spawn(async move {
+        while let Some(line) = console.recv().await {
+            let words: Vec<String> = line.split_whitespace().map(str::to_lowercase).collect();
+            if words.is_empty() {
+                continue;
+            }
+            if words.first().map(String::as_str) == Some("help") {
+                println!("{CONSOLE_HELP}");
+                continue;
+            }
+            let operation: EndpointAction<Simulator> =
+                Box::new(move |simulator: &mut Simulator| {
+                    println!("{}", operate(simulator, &words));
+                });
+            if operations.send(operation).is_err() {
+                break;
+            }
+        }
+    });
+    let verbose = args.verbose;
+    let serve = async {
+        let mut lines = ServedLines::new(&args.line).await?;
+        while let Some(line) = lines.next().await? {
+            println!(
+                "EKM66 lift simulator, {} floors, fault stack of {} from index {}, on {} ({settings}), speed {}x; type `help`",
+                args.floors, args.stack_size, args.index_base, line.peer, args.speed
+            );
+            let end = run_simulator(line.stream, &mut simulator, &mut inbox, |event| {
+                if let Some(text) = describe(&event, verbose) {
+                    println!("{text}");
+                }
+                std::ops::ControlFlow::Continue(())
+            })
+            .await;
+            report_end(&line.peer, end);
+        }
+        Ok::<(), anyhow::Error>(())
+    };
+    let mut interrupt = crate::interrupt::Interrupt::listen();
+    tokio::select! {
+        result = serve => result?,
+        () = crate::console::run_for(args.duration) => {}
+        () = interrupt.recv() => {}
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn describe(event: &SimEvent, verbose: bool) -> Option<String> {
+    match event {
+        SimEvent::FaultStored(record) => Some(format!(
+            "fault 0x{:02X} {} stored at index {} ({}, floor {}, target {})",
+            record.code,
+            fault_text(record.code),
+            record.index,
+            record.time,
+            record.floor,
+            record.target
+        )),
+        SimEvent::StatusChanged(code) => Some(format!("status {code} {}", status_text(*code))),
+        SimEvent::Arrived(floor) if verbose => Some(format!("arrived at floor {floor}")),
+        SimEvent::Answered(query) if verbose => Some(format!("answered the {query} query")),
+        _ => None,
+    }
+}
+
+fn parse_hex(word: &str) -> Option<u8> {
+    u8::from_str_radix(word.trim_start_matches("0x"), 16).ok()
+}
+
+/// One console operation on the board.
+fn operate(simulator: &mut Simulator, words: &[String]) -> String {
+    let words: Vec<&str> = words.iter().map(String::as_str).collect();
+    match words.as_slice() {
+        ["fault", code] => match parse_hex(code) {
+            // The FaultStored event reports it.
+            Some(code) => {
+                let record = simulator.inject_fault(code);
+                format!(
+                    "injected fault 0x{:02X} at index {}",
+                    record.code, record.index
+                )
+            }
+            None => format!("not a fault code: {code} (hex, e.g. 3C)"),
+        },
+        ["status", "auto"] => {
+            simulator.release_status();
+            "status from the lift's operation again".to_owned()
+        }
+        ["status", code] => match code.parse::<u8>() {
+            Ok(code) => {
+                simulator.hold_status(code);
+                format!("holding status {code} {}", status_text(code))
+            }
+            Err(_) => format!("not a status code: {code} (decimal, e.g. 18)"),
+        },
+        ["trip", floor] => match floor.parse::<u8>() {
+            Ok(floor) if simulator.request_trip(floor) => format!("called to floor {floor}"),
+            _ => format!("no floor {floor} (1..={})", simulator.config().floors),
+        },
+        ["silent"] => {
+            simulator.set_silent(true);
+            "not answering".to_owned()
+        }
+        ["answer"] => {
+            simulator.set_silent(false);
+            "answering".to_owned()
+        }
+        ["clear"] => {
+            simulator.clear_log();
+            "fault log cleared".to_owned()
+        }
+        ["show"] => {
+            let status = simulator.status();
+            let memory = simulator.memory();
+            let stored = memory.slots.iter().filter(|slot| slot.is_some()).count();
+            format!(
+                "status {} {}, floor {}, target {}, {}, doors {:?}, board time {}, {} faults stored, last at slot {:?}, trips {:?}",
+                status.code,
+                status_text(status.code),
+                status.position,
+                status.target,
+                status.direction,
+                simulator.doors(),
+                simulator.board_time().format("%Y-%m-%d %H:%M:%S"),
+                stored,
+                memory.last,
+                memory.counters
+            )
+        }
+        _ => "unknown operation; type `help`".to_owned(),
+    }
+}
