@@ -944,12 +944,7 @@ impl BodyCx<'_> {
                     && index.checked_mul(*width).is_some_and(|lo| lo < bt.bits());
                 if !fits {
                     let n = self.name(&bt);
-                    let letter = match width {
-                        8 => 'B',
-                        16 => 'W',
-                        32 => 'D',
-                        _ => 'L',
-                    };
+                    let letter = part_letter(*width);
                     self.err(
                         Code::TypeMismatch,
                         e.span,

@@ -198,12 +198,7 @@ pub(crate) fn lvalue_name(e: &Expr) -> String {
         ExprKind::Member(b, f) => format!("{}.{}", lvalue_name(b), f.name),
         ExprKind::Bit(b, bit) => format!("{}.{bit}", lvalue_name(b)),
         ExprKind::Part(b, width, index) => {
-            let letter = match width {
-                8 => 'B',
-                16 => 'W',
-                32 => 'D',
-                _ => 'L',
-            };
+            let letter = crate::syntax::part_letter(*width);
             format!("{}.%{letter}{index}", lvalue_name(b))
         }
         ExprKind::Index(b, idx) => {

@@ -444,3 +444,15 @@ pub enum StmtKind {
     /// `;`
     Empty,
 }
+
+/// The letter of a partial access of `width` bits: `X` (1), `B` (8), `W` (16), `D` (32),
+/// `L` (64), as in `w.%B1`.
+pub fn part_letter(width: u32) -> char {
+    match width {
+        1 => 'X',
+        8 => 'B',
+        16 => 'W',
+        32 => 'D',
+        _ => 'L',
+    }
+}
