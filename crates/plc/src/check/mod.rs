@@ -247,6 +247,8 @@ pub fn check(unit: CompilationUnit, stdlib_items: usize) -> Result<Checked, Vec<
     };
     cx.register(stdlib_items);
     cx.resolve_all();
+    // other spellings of standard block parameters (CODESYS `RESET` for `R`): one more
+    // key for the same variable, so calls, member access and paths all accept them
     for p in cx.pous.iter_mut().filter(|p| p.stdlib) {
         for (alias, name) in crate::stdlib::parameter_aliases(&p.name.to_uppercase()) {
             if let Some(&i) = p.var_index.get(*name) {
