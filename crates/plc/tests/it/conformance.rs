@@ -6,7 +6,9 @@
 //! - `(* set: Main.x = 5 *)` write before the first cycle;
 //! - `(* expect: Main.x = 42 *)` value after the last cycle (IEC literal syntax);
 //! - `(* expect-error: 3:5: undeclared name 'y' *)` a diagnostic at line:col whose message
-//!   contains the text; the program must not compile;
+//!   contains the text; the program must not compile, and every error it reports must be
+//!   expected, unless
+//! - `(* other-errors: why *)` says why more errors follow (e.g. after a syntax error);
 //! - `(* expect-fault: division by zero *)` the task faults with this text.
 //!
 //! Every program runs twice, with loops compiled to machine code and as closures only
@@ -24,6 +26,8 @@ struct Spec {
     sets: Vec<(String, String)>,
     expects: Vec<(String, String)>,
     errors: Vec<(usize, usize, String)>,
+    /// Errors beyond the expected ones are allowed.
+    other_errors: bool,
     fault: Option<String>,
 }
 
@@ -45,6 +49,7 @@ fn directives(text: &str) -> Vec<(String, String)> {
                 "expect",
                 "expect-error",
                 "expect-fault",
+                "other-errors",
             ]
             .contains(&k)
             {
@@ -84,6 +89,7 @@ fn spec(text: &str) -> Spec {
                     .push((line, col, it.next().unwrap_or("").trim().to_string()));
             }
             "expect-fault" => s.fault = Some(v),
+            "other-errors" => s.other_errors = true,
             _ => {}
         }
     }
@@ -131,6 +137,19 @@ fn run_one(path: &Path, jit: bool) -> Result<Outcome, String> {
                         .join("\n")
                 ));
             }
+        }
+        let unexpected: Vec<String> = rendered
+            .iter()
+            .filter(|(l, c, m)| {
+                !spec
+                    .errors
+                    .iter()
+                    .any(|(line, col, msg)| l == line && c == col && m.contains(msg.as_str()))
+            })
+            .map(|(l, c, m)| format!("{l}:{c}: {m}"))
+            .collect();
+        if !unexpected.is_empty() && !spec.other_errors {
+            return Err(format!("unexpected errors:\n{}", unexpected.join("\n")));
         }
         return Ok(Outcome::default());
     }
