@@ -26,87 +26,119 @@ impl fmt::Display for Severity {
     }
 }
 
-/// Every diagnostic the compiler and runtime emit has one code.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[non_exhaustive]
-pub enum Code {
+/// Declares [`Code`] from one table, so that the enum, [`Code::ALL`], the code strings
+/// and the documentation pages (`docs/diagnostics/CODE.md`, embedded) cannot drift: a
+/// code without a page does not compile.
+macro_rules! codes {
+    ($( $(#[$doc:meta])* $name:ident = $code:literal, )*) => {
+        /// Every diagnostic the compiler and runtime emit has one code.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[non_exhaustive]
+        pub enum Code {
+            $( $(#[$doc])* $name, )*
+        }
+
+        impl Code {
+            /// Every code, in the order of the table (by number).
+            pub const ALL: &'static [Code] = &[$(Code::$name),*];
+
+            /// The stable code string, e.g. `E0201`.
+            pub fn as_str(self) -> &'static str {
+                match self {
+                    $(Code::$name => $code,)*
+                }
+            }
+
+            /// The name of the variant, e.g. `TypeMismatch`.
+            pub fn name(self) -> &'static str {
+                match self {
+                    $(Code::$name => stringify!($name),)*
+                }
+            }
+
+            /// The documentation page (Markdown): what the diagnostic means, a wrong
+            /// example and its fix. Shown by `stanice plc explain CODE`.
+            pub fn page(self) -> &'static str {
+                match self {
+                    $(Code::$name => include_str!(concat!("../docs/diagnostics/", $code, ".md")),)*
+                }
+            }
+        }
+    };
+}
+
+codes! {
     /// A character that starts no token.
-    UnexpectedCharacter,
+    UnexpectedCharacter = "E0001",
     /// A comment or string that never ends.
-    Unterminated,
+    Unterminated = "E0002",
     /// A malformed literal (number, time, date).
-    BadLiteral,
+    BadLiteral = "E0003",
     /// The parser expected something else.
-    Syntax,
+    Syntax = "E0004",
     /// A name that is declared nowhere in scope.
-    Undeclared,
+    Undeclared = "E0101",
     /// A name declared twice in one scope.
-    Duplicate,
+    Duplicate = "E0102",
     /// A type name that is not known.
-    UnknownType,
+    UnknownType = "E0103",
     /// Operand or value types that do not fit.
-    TypeMismatch,
+    TypeMismatch = "E0201",
     /// Wrong number, names or kinds of call arguments.
-    WrongArguments,
+    WrongArguments = "E0202",
     /// Assignment to something that is not a variable, or to a constant or input.
-    NotAssignable,
+    NotAssignable = "E0203",
     /// A constant expression was required.
-    NotConstant,
+    NotConstant = "E0204",
     /// A POU calls itself, directly or indirectly (IEC 61131-3 forbids recursion).
-    Recursion,
+    Recursion = "E0205",
     /// A construct that is not supported yet.
-    Unsupported,
-    /// A run-time fault: division by zero, array bounds, watchdog.
-    RuntimeFault,
+    Unsupported = "E0301",
+    /// A run-time fault: division by zero, array bounds, NULL dereference, watchdog.
+    RuntimeFault = "E0401",
     /// A local variable that is never used (warning).
-    UnusedVariable,
+    UnusedVariable = "W0001",
 }
 
 impl Code {
-    /// The stable code string, e.g. `E0201`.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Code::UnexpectedCharacter => "E0001",
-            Code::Unterminated => "E0002",
-            Code::BadLiteral => "E0003",
-            Code::Syntax => "E0004",
-            Code::Undeclared => "E0101",
-            Code::Duplicate => "E0102",
-            Code::UnknownType => "E0103",
-            Code::TypeMismatch => "E0201",
-            Code::WrongArguments => "E0202",
-            Code::NotAssignable => "E0203",
-            Code::NotConstant => "E0204",
-            Code::Recursion => "E0205",
-            Code::Unsupported => "E0301",
-            Code::RuntimeFault => "E0401",
-            Code::UnusedVariable => "W0001",
-        }
-    }
-}
-
-impl Code {
-    /// What the error means and how to fix it (the per-code documentation page).
+    /// What the diagnostic means: the first paragraph of its [page](Code::page).
     pub fn explanation(self) -> &'static str {
-        match self {
-            Code::UnexpectedCharacter => "A character that cannot start any token of Structured Text, e.g. `@` or `?` outside a string or comment.",
-            Code::Unterminated => "A comment `(* ... *)`, `/* ... */`, a pragma `{ ... }` or a string literal is not closed before the end of the line or file.",
-            Code::BadLiteral => "A literal is malformed or does not fit its type: `T#5x` (unknown unit), `16#G1`, `SINT#300`, `D#2024-13-01`.",
-            Code::Syntax => "The parser expected a different token. The message names what was expected and what was found; the position is where the parser gave up.",
-            Code::Undeclared => "A variable, function, type, task or program name that is declared nowhere in scope. Names are case-insensitive; globals need VAR_GLOBAL (and may be named in VAR_EXTERNAL).",
-            Code::Duplicate => "The same name is declared twice in one scope (variables of a POU, fields of a struct, POUs and types of the project).",
-            Code::UnknownType => "A type name that is neither elementary, a TYPE declaration, nor a function block.",
-            Code::TypeMismatch => "Operand or value types do not fit. IEC 61131-3 converts implicitly only to wider types (INT -> DINT -> LINT, INT -> REAL, REAL -> LREAL, ...); narrowing needs an explicit conversion such as DINT_TO_INT.",
-            Code::WrongArguments => "A call has the wrong number, names or kinds of arguments: an unknown parameter name, `:=` on an output, `=>` on an input, too many positional arguments, a missing VAR_IN_OUT, or a function-block call used as an expression.",
-            Code::NotAssignable => "The target of an assignment (or an output / in-out binding) is not a variable: a constant, an expression, an enumeration value, a program name, or an in-out member of another instance.",
-            Code::NotConstant => "A constant is required: array bounds, string lengths, enumeration values, CASE labels, task INTERVAL/PRIORITY.",
-            Code::Recursion => "A function calls itself directly or indirectly, or a function block contains an instance of itself. IEC 61131-3 forbids recursion; each function has one static frame.",
-            Code::Unsupported => "A construct this compiler does not support yet (pointers, string indexing).",
-            Code::UnusedVariable => "A VAR/VAR_TEMP variable of a POU is never read or written. Remove it, or start its name with `_` to keep it deliberately.",
-            Code::RuntimeFault => "The task was stopped at run time: integer division by zero, array index out of range, or the per-cycle loop budget was exhausted (endless loop), or the watchdog tripped.",
-        }
+        self.page()
+            .split("\n\n")
+            .map(str::trim)
+            .find(|p| !p.is_empty() && !p.starts_with('#'))
+            .unwrap_or("")
+    }
+
+    /// The code for `text`: the code string as diagnostics print it (`E0201`) or the
+    /// variant name (`TypeMismatch`), in any case.
+    pub fn parse(text: &str) -> Result<Code, UnknownCode> {
+        let t = text.trim();
+        Code::ALL
+            .iter()
+            .copied()
+            .find(|c| c.as_str().eq_ignore_ascii_case(t) || c.name().eq_ignore_ascii_case(t))
+            .ok_or_else(|| UnknownCode(text.to_string()))
     }
 }
+
+impl fmt::Display for Code {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl std::str::FromStr for Code {
+    type Err = UnknownCode;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Code::parse(s)
+    }
+}
+
+/// A text that names no [`Code`].
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("no diagnostic code '{0}'")]
+pub struct UnknownCode(pub String);
 
 /// A labelled span.
 #[derive(Debug, Clone, PartialEq)]
@@ -261,5 +293,54 @@ impl Diagnostics {
             .map(|d| d.render(sources))
             .collect::<Vec<_>>()
             .join("\n")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_code_has_a_page_with_its_sections() {
+        for code in Code::ALL {
+            let page = code.page();
+            let title = format!("# {}: ", code.as_str());
+            assert!(
+                page.starts_with(&title),
+                "{code}: page starts with '{title}'"
+            );
+            assert!(page.contains(&format!("({})", code.name())), "{code}");
+            for section in ["## Example of the mistake", "## How to fix it"] {
+                assert!(page.contains(section), "{code}: no '{section}'");
+            }
+            assert!(!code.explanation().is_empty(), "{code}");
+            assert_eq!(Code::parse(code.as_str()).ok(), Some(*code));
+            assert_eq!(Code::parse(&code.as_str().to_lowercase()).ok(), Some(*code));
+            assert_eq!(Code::parse(&code.name().to_uppercase()).ok(), Some(*code));
+        }
+        assert!(Code::parse("E9999").is_err());
+    }
+
+    #[test]
+    fn every_page_in_the_folder_belongs_to_a_code() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/diagnostics");
+        let mut files = 0;
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let name = entry.unwrap().file_name().into_string().unwrap();
+            let stem = name.strip_suffix(".md").unwrap();
+            let code = Code::parse(stem).unwrap();
+            assert_eq!(code.as_str(), stem, "{name}: spelled as the code prints");
+            files += 1;
+        }
+        assert_eq!(files, Code::ALL.len());
+    }
+
+    #[test]
+    fn codes_are_unique_and_in_order() {
+        let codes: Vec<&str> = Code::ALL.iter().map(|c| c.as_str()).collect();
+        let mut sorted = codes.clone();
+        sorted.sort_unstable();
+        sorted.dedup();
+        assert_eq!(codes, sorted);
     }
 }

@@ -21,6 +21,16 @@
 //!   `(FileId, byte range)`; expressions have a [`syntax::NodeId`].
 //! - [`diagnostics`]: [`diagnostics::Diagnostic`] with a [`diagnostics::Code`], severity,
 //!   primary and secondary labels and notes; rendered as `file:line:col: error: message`.
+//!
+//! # Diagnostic pages
+//!
+//! Every [`Code`] has a page, `docs/diagnostics/CODE.md` in this crate (embedded:
+//! [`Code::page`]): what the diagnostic means, an example of the mistake and its fix.
+//! `stanice plc explain E0201` prints one, `stanice plc explain --list` lists the codes.
+//! A test compiles each page's example and checks it reports that code (a run-time fault
+//! when it runs) and that the fix compiles clean; rendered diagnostics are `insta`
+//! snapshots (`tests/it/snapshots`).
+//!
 //! - [`check`]: stages as types — parsed [`syntax::CompilationUnit`] to
 //!   [`check::Checked`]: types and their three-lane memory layout, POU signatures, name
 //!   resolution and IEC implicit (widening) conversions. The AST is not modified.

@@ -99,7 +99,9 @@ pub(super) fn check_bodies(
     }
     // recursion: a cycle in the call graph of functions and FB bodies
     let mut state: HashMap<PouId, u8> = HashMap::new();
-    let ids: Vec<PouId> = calls.keys().copied().collect();
+    // in declaration order, so the same program always reports the same call
+    let mut ids: Vec<PouId> = calls.keys().copied().collect();
+    ids.sort_by_key(|id| id.0);
     let mut reported = HashSet::new();
     for id in ids {
         detect_cycle(

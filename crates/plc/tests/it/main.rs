@@ -7,6 +7,7 @@
 )]
 
 mod conformance;
+mod diagnostics;
 mod fused;
 mod fuzzish;
 mod jit;
