@@ -190,6 +190,11 @@ While it runs, type `help` for the faults and hand operations of the console.",
         "  stanice plc run counter.st --program Main --cycles 10 --cycle-ms 100
   stanice plc run logic.st --program Main --set Main.Start=TRUE --set Main.Limit=5",
     ),
+    (
+        "plc explain",
+        "  stanice plc explain E0201                     # what a code means, a wrong example, the fix
+  stanice plc explain --list",
+    ),
 ];
 
 /// The `after_help` of the subcommand at `path`: its examples, and for the client the

@@ -14,6 +14,35 @@ pub(crate) enum PlcCommand {
     Check(CheckArgs),
     /// Run a program on a virtual clock and print its variables.
     Run(RunArgs),
+    /// Explain a diagnostic code: what it means, an example of the mistake and its fix.
+    Explain(ExplainArgs),
+}
+
+/// `stanice plc explain`
+#[derive(Debug, Args)]
+pub(crate) struct ExplainArgs {
+    /// The code as diagnostics print it (`E0201`, any case) or its name (`TypeMismatch`).
+    #[arg(required_unless_present = "list", conflicts_with = "list")]
+    code: Option<String>,
+    /// List every code with its one-line meaning.
+    #[arg(long)]
+    list: bool,
+}
+
+/// Every code with the first sentence of its meaning, one a line.
+fn code_list() -> String {
+    plc::Code::ALL
+        .iter()
+        .map(|c| {
+            let title = c.page().lines().next().unwrap_or_default();
+            let title = title
+                .trim_start_matches('#')
+                .trim()
+                .split_once(": ")
+                .map_or(title, |(_, t)| t);
+            format!("{}  {title}\n", c.as_str())
+        })
+        .collect()
 }
 
 /// `stanice plc check`
@@ -88,6 +117,22 @@ pub(crate) async fn run(command: PlcCommand) -> anyhow::Result<ExitCode> {
                     Ok(ExitCode::FAILURE)
                 }
             }
+        }
+        PlcCommand::Explain(args) => {
+            let mut out = std::io::stdout().lock();
+            let text = match args.code.as_deref() {
+                None => code_list(),
+                Some(code) => match plc::Code::parse(code) {
+                    Ok(code) => code.page().to_owned(),
+                    Err(error) => {
+                        eprint!("error: {error}; the codes are:\n{}", code_list());
+                        return Ok(ExitCode::from(2));
+                    }
+                },
+            };
+            // a closed pipe (`| head`) is not an error
+            let _ = out.write_all(text.as_bytes());
+            Ok(ExitCode::SUCCESS)
         }
         PlcCommand::Run(args) => {
             let files = load(&args.files)?;

@@ -1996,3 +1996,71 @@ fn lift_poll_reads_the_simulator_over_a_pseudo_terminal() {
     assert!(kind(&lines, "fault").is_empty());
     let _ = std::fs::remove_file(&archive);
 }
+
+/// `plc check` of one file, its whole output (run in the file's folder so the path is
+/// stable), and `plc explain` of the codes it names.
+#[test]
+fn plc_check_output_and_explain() {
+    let file = write_source(
+        "explain.st",
+        "PROGRAM Main\nVAR small : INT; big : DINT; spare : BOOL; END_VAR\nsmall := big;\nEND_PROGRAM\n",
+    );
+    let name = file.file_name().unwrap().to_str().unwrap().to_owned();
+    let mut command = stanice();
+    command
+        .current_dir(file.parent().unwrap())
+        .args(["plc", "check", &name]);
+    let output = run_bounded(command, 20);
+    assert_eq!(output.status.code(), Some(1));
+    assert_eq!(
+        String::from_utf8_lossy(&output.stdout),
+        format!(
+            "{name}:2:30: warning: variable 'spare' is declared but never used
+  |
+2 | VAR small : INT; big : DINT; spare : BOOL; END_VAR
+  |                              ^^^^^
+  = code: W0001
+{name}:3:10: error: type mismatch: value of type DINT where INT is expected
+  |
+3 | small := big;
+  |          ^^^
+  {name}:2:5: 'small' is declared as INT here
+  = note: IEC 61131-3 converts implicitly only to wider types; use an explicit *_TO_* conversion
+  = code: E0201
+"
+        )
+    );
+
+    // the page of the code, in any case
+    let mut command = stanice();
+    command.args(["plc", "explain", "e0201"]);
+    let output = run_bounded(command, 20);
+    assert!(output.status.success());
+    let page = String::from_utf8_lossy(&output.stdout);
+    assert!(page.starts_with("# E0201: type mismatch"), "{page}");
+    assert!(page.contains("## Example of the mistake") && page.contains("DINT_TO_INT"));
+
+    // every code listed
+    let mut command = stanice();
+    command.args(["plc", "explain", "--list"]);
+    let output = run_bounded(command, 20);
+    assert!(output.status.success());
+    let list = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        list.lines().any(|l| l.starts_with("E0401  run-time fault")),
+        "{list}"
+    );
+    assert!(list.lines().any(|l| l.starts_with("W0001  ")), "{list}");
+
+    // an unknown code: exit 2 and the list
+    let mut command = stanice();
+    command.args(["plc", "explain", "E9999"]);
+    let output = run_bounded(command, 20);
+    assert_eq!(output.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("no diagnostic code 'E9999'") && stderr.contains("E0201  type mismatch"),
+        "{stderr}"
+    );
+    let _ = std::fs::remove_file(&file);
+}
