@@ -49,7 +49,8 @@
 //!   of what was written; a FOR counter is checked for every value the body runs with,
 //!   the step past the end is not stored if it leaves the subrange) and an
 //!   exhausted per-cycle loop budget are *faults*: the task stops with a diagnostic; the
-//!   host never panics. Constant values outside a subrange are compile-time errors.
+//!   host never panics. The other tasks keep running; the outputs the stopped task drives
+//!   go to their safe values, as on a watchdog trip or a PLC STOP (see [`task::safe`]). Constant values outside a subrange are compile-time errors.
 //! - Initial values are stored with the same checks. A variable, STRUCT member or array
 //!   element without one starts at the `:=` of its TYPE declaration (the nearest through
 //!   derived types; structure initializers merge member by member), else at 0, FALSE,

@@ -14,15 +14,28 @@
 //!
 //! Forcing and writing work by variable path (`Main.lights[3].Q`) or by direct address
 //! (`%IX0.0`, `%QW2`, `%MD20`).
+//!
+//! # Faults, the watchdog and STOP: per-task isolation and safe state
+//!
+//! A run-time fault stops only the task it happens in; the watchdog stops only the task
+//! that overran; [`Plc::stop`] stops every task. The outputs of a stopped task go to
+//! their safe value (default FALSE / 0, declared per output with
+//! `{attribute 'safe_value' := '...'}`, see [`safe`]); on [`Plc::stop`] every output does.
+//! The other tasks keep their schedule. Each stop is a [`TaskStopped`] event (task,
+//! [`StopCause`] with the fault's code and position, the outputs set safe), taken with
+//! [`Plc::poll_event`] after [`Plc::run_cycle`] or [`Plc::stop`]. Forced direct
+//! addresses keep their forced value.
 
 use crate::check::{Checked, PouId, Size, Ty};
 use crate::compile::Compiled;
 use crate::diagnostics::{Code, Diagnostic};
 use crate::syntax::{PouKind, SourceMap};
 use crate::vm::{format, DirectAddress, Fault, Val, Vm};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap, HashSet, VecDeque};
 use std::path::Path;
 use std::rc::Rc;
+
+pub mod safe;
 
 /// Errors of the runtime API.
 #[derive(Debug, thiserror::Error)]
@@ -196,8 +209,74 @@ pub struct CycleStats {
 pub enum TaskState {
     /// Runs when due.
     Running,
-    /// Stopped by a fault; the diagnostic says why and where.
+    /// Stopped by a fault or the watchdog; the diagnostic says why and where.
     Faulted(Diagnostic),
+    /// Stopped by [`Plc::stop`]; [`Plc::start`] resumes it.
+    Stopped,
+}
+
+/// Why a task stopped.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum StopCause {
+    /// A run-time fault: the diagnostic has its code (E0401) and position.
+    Fault(Diagnostic),
+    /// The watchdog: the diagnostic says how many cycles overran and by how much.
+    Watchdog(Diagnostic),
+    /// The PLC was stopped ([`Plc::stop`]).
+    Stop,
+}
+
+impl StopCause {
+    /// The diagnostic of a fault or watchdog stop.
+    pub fn diagnostic(&self) -> Option<&Diagnostic> {
+        match self {
+            StopCause::Fault(d) | StopCause::Watchdog(d) => Some(d),
+            StopCause::Stop => None,
+        }
+    }
+    /// `fault`, `watchdog` or `stop`.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            StopCause::Fault(_) => "fault",
+            StopCause::Watchdog(_) => "watchdog",
+            StopCause::Stop => "stop",
+        }
+    }
+}
+
+/// A task stopped and the outputs it drives were set to their safe values.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TaskStopped {
+    /// The task.
+    pub task: String,
+    /// Why.
+    pub cause: StopCause,
+    /// Monotonic time of the cycle (or of [`Plc::stop`]) in ns.
+    pub at_ns: i64,
+    /// The outputs set to their safe value: direct address (`%QX0.1`) or variable path,
+    /// and the value as an IEC literal.
+    pub outputs: Vec<(String, String)>,
+}
+
+/// Who drives an output.
+#[derive(Debug, Clone, PartialEq)]
+enum Owner {
+    /// A variable of this PROGRAM (index of the POU).
+    Program(usize),
+    /// A global (upper-case name): the tasks whose code names it.
+    Global(String),
+}
+
+/// An output with its safe value.
+#[derive(Debug, Clone)]
+struct SafeOutput {
+    /// `%QX0.1` or the variable path.
+    name: String,
+    leaf: Leaf,
+    at: Option<DirectAddress>,
+    owner: Owner,
+    safe: Val,
 }
 
 struct Task {
@@ -209,6 +288,10 @@ struct Task {
     consecutive_overruns: u32,
     /// Last whole second and tenth of a second seen (system flags), and whether it ran.
     last_tick: Option<(i64, i64)>,
+    /// Indexes of the programs it runs.
+    pous: HashSet<usize>,
+    /// Upper-case names its programs mention, transitively (globals it drives).
+    names: HashSet<String>,
 }
 
 /// A scalar variable reached by path.
@@ -245,6 +328,14 @@ pub struct Plc {
     /// The fault of the last cold start, if it failed; and whether `run_cycle` has yet to
     /// report it.
     init_fault: Option<(Diagnostic, bool)>,
+    /// Outputs and their safe values.
+    outputs: Vec<SafeOutput>,
+    /// A safe value that is not a literal of its output's type (the PLC stays in STOP).
+    safe_error: Option<Diagnostic>,
+    /// Names mentioned by each user POU (for which task drives a global output).
+    mentions: HashMap<String, HashSet<String>>,
+    /// Stops not yet taken with `poll_event`.
+    events: VecDeque<TaskStopped>,
     /// Loop iterations per cycle.
     pub loop_budget: u64,
 }
@@ -269,9 +360,15 @@ impl Plc {
             system_flags: None,
             stopwatch: Box::new(NoStopwatch),
             init_fault: None,
+            outputs: Vec::new(),
+            safe_error: None,
+            mentions: HashMap::new(),
+            events: VecDeque::new(),
             loop_budget: DEFAULT_LOOP_BUDGET,
         };
         plc.io_bindings = plc.collect_io_bindings();
+        plc.mentions = safe::mentions(&plc.compiled.checked, &plc.sources);
+        plc.collect_outputs();
         plc.system_flags = [
             "System_S.R_EDGE_1SEC",
             "System_S.R_EDGE_100MS",
@@ -335,7 +432,10 @@ impl Plc {
             Some((d, _)) => TaskState::Faulted(d.clone()),
             None => TaskState::Running,
         };
+        let names = safe::reachable(&self.mentions, &config.programs);
         self.tasks.push(Task {
+            pous: programs.iter().map(|(p, _)| *p).collect(),
+            names,
             config,
             programs,
             next_due: None,
@@ -369,17 +469,29 @@ impl Plc {
     /// A fault while setting the initial values is returned, kept as [`Plc::init_fault`]
     /// and stops every task (reported once by the next [`Plc::run_cycle`]).
     pub fn cold_start(&mut self) -> Result<(), Fault> {
-        if let Err(f) = self.init_memory() {
-            let d = Diagnostic::error(
+        let memory = self.init_memory();
+        let fault = match (&memory, &self.safe_error) {
+            (Err(f), _) => Some(Diagnostic::error(
                 Code::RuntimeFault,
                 f.span().unwrap_or_default(),
                 format!("initialisation stopped: {f}"),
-            );
+            )),
+            (Ok(()), Some(d)) => Some(d.clone()),
+            (Ok(()), None) => None,
+        };
+        if let Some(d) = fault {
             for t in &mut self.tasks {
                 t.state = TaskState::Faulted(d.clone());
             }
+            let fault = memory.err().unwrap_or_else(|| {
+                crate::vm::FaultKind::Conversion {
+                    span: d.primary,
+                    what: d.message.clone(),
+                }
+                .into()
+            });
             self.init_fault = Some((d, true));
-            return Err(f);
+            return Err(fault);
         }
         self.init_fault = None;
         for t in &mut self.tasks {
@@ -444,7 +556,20 @@ impl Plc {
             })
             .collect();
         let configs: Vec<TaskConfig> = self.tasks.iter().map(|t| t.config.clone()).collect();
+        let bound: Vec<String> = self
+            .outputs
+            .iter()
+            .filter(|o| o.at.is_none())
+            .map(|o| o.name.clone())
+            .collect();
         let mut next = Plc::new(compiled, sources);
+        for path in bound {
+            // an output whose variable is gone is no longer bound
+            match next.bind_output(&path) {
+                Ok(()) | Err(PlcError::UnknownPath(_) | PlcError::NotScalar(_)) => {}
+                Err(e) => return Err(e),
+            }
+        }
         next.loop_budget = self.loop_budget;
         next.stopwatch = std::mem::replace(&mut self.stopwatch, Box::new(NoStopwatch));
         for c in configs {
@@ -585,7 +710,8 @@ impl Plc {
                     format!("task '{}' stopped: {fault}", t.config.name),
                 );
                 t.state = TaskState::Faulted(d.clone());
-                faults.push(d);
+                faults.push(d.clone());
+                self.stop_task(ti, StopCause::Fault(d), now.monotonic_ns);
                 continue;
             }
             if let Some(w) = t.config.watchdog {
@@ -602,7 +728,8 @@ impl Plc {
                             ),
                         );
                         t.state = TaskState::Faulted(d.clone());
-                        faults.push(d);
+                        faults.push(d.clone());
+                        self.stop_task(ti, StopCause::Watchdog(d), now.monotonic_ns);
                     }
                 } else {
                     t.consecutive_overruns = 0;
@@ -610,6 +737,243 @@ impl Plc {
             }
         }
         faults
+    }
+
+    /// Sets the outputs task `ti` drives to their safe values and records the stop.
+    fn stop_task(&mut self, ti: usize, cause: StopCause, at_ns: i64) {
+        let Some(t) = self.tasks.get(ti) else { return };
+        let task = t.config.name.clone();
+        let outputs = self.safe_state(Some(ti));
+        self.events.push_back(TaskStopped {
+            task,
+            cause,
+            at_ns,
+            outputs,
+        });
+    }
+
+    /// Writes the safe value of every output driven by task `ti` (every output for
+    /// `None`) into its variable and the output image; forced addresses stay forced.
+    /// Returns what was set.
+    fn safe_state(&mut self, ti: Option<usize>) -> Vec<(String, String)> {
+        let task = ti.and_then(|i| self.tasks.get(i));
+        let chosen: Vec<SafeOutput> = self
+            .outputs
+            .iter()
+            .filter(|o| match (task, &o.owner) {
+                (None, _) => true,
+                (Some(t), Owner::Program(p)) => t.pous.contains(p),
+                (Some(t), Owner::Global(key)) => t.names.contains(key),
+            })
+            .cloned()
+            .collect();
+        let mut set = Vec::new();
+        for o in chosen {
+            self.write_leaf(&o.leaf, o.safe.clone());
+            if let (Some(d), Ok(v)) = (o.at, self.vm.geti(o.leaf.addr.i)) {
+                self.vm.io_write(d.area, d.byte, d.bit, d.bits, v);
+            }
+            set.push((
+                o.name.clone(),
+                format_value(&self.compiled.checked, &o.leaf.ty, &o.safe),
+            ));
+        }
+        self.apply_io_forces();
+        set
+    }
+
+    /// PLC STOP: every running task stops, every output goes to its safe value; one
+    /// [`TaskStopped`] event per task that was running ([`Plc::poll_event`]).
+    /// [`Plc::start`] (or a cold or warm start) resumes.
+    pub fn stop(&mut self, now: ClockReading) {
+        self.safe_state(None);
+        let outputs: Vec<(String, String)> = self
+            .outputs
+            .iter()
+            .map(|o| {
+                (
+                    o.name.clone(),
+                    format_value(&self.compiled.checked, &o.leaf.ty, &o.safe),
+                )
+            })
+            .collect();
+        for ti in 0..self.tasks.len() {
+            let Some(t) = self.tasks.get_mut(ti) else {
+                continue;
+            };
+            if t.state != TaskState::Running {
+                continue;
+            }
+            t.state = TaskState::Stopped;
+            let task = t.config.name.clone();
+            let pous = t.pous.clone();
+            let names = t.names.clone();
+            self.events.push_back(TaskStopped {
+                task,
+                cause: StopCause::Stop,
+                at_ns: now.monotonic_ns,
+                outputs: outputs
+                    .iter()
+                    .zip(&self.outputs)
+                    .filter(|(_, o)| match &o.owner {
+                        Owner::Program(p) => pous.contains(p),
+                        Owner::Global(key) => names.contains(key),
+                    })
+                    .map(|(x, _)| x.clone())
+                    .collect(),
+            });
+        }
+    }
+
+    /// Resumes the tasks stopped by [`Plc::stop`] (faulted tasks stay faulted until a
+    /// cold or warm start); they run at the next [`Plc::run_cycle`].
+    pub fn start(&mut self) {
+        for t in &mut self.tasks {
+            if t.state == TaskState::Stopped {
+                t.state = TaskState::Running;
+                t.next_due = None;
+                t.consecutive_overruns = 0;
+            }
+        }
+    }
+
+    /// The next task stop not yet taken (fault, watchdog or [`Plc::stop`]), oldest first.
+    /// Poll after [`Plc::run_cycle`] and [`Plc::stop`].
+    pub fn poll_event(&mut self) -> Option<TaskStopped> {
+        self.events.pop_front()
+    }
+
+    /// Binds the variable at `path` as an output the host drives from (a plant signal,
+    /// a field device): when a task that drives it stops, it goes to its safe value
+    /// (see [`safe`]). Variables declared `AT %Q...` are outputs without this.
+    pub fn bind_output(&mut self, path: &str) -> Result<(), PlcError> {
+        let leaf = self.leaf(path)?;
+        if self
+            .outputs
+            .iter()
+            .any(|o| o.at.is_none() && o.leaf.addr == leaf.addr && o.leaf.ty == leaf.ty)
+        {
+            return Ok(());
+        }
+        let c = &self.compiled.checked;
+        let first = split_path(path)
+            .and_then(|s| s.into_iter().next())
+            .map(|(n, _)| n.to_uppercase())
+            .unwrap_or_default();
+        let (owner, name_span) =
+            if let Some(g) = c.global_index.get(&first).and_then(|g| c.globals.get(*g)) {
+                (Owner::Global(first), g.span)
+            } else {
+                let pid = c
+                    .pou_index
+                    .get(&first)
+                    .copied()
+                    .ok_or_else(|| PlcError::UnknownPath(path.to_string()))?;
+                let var = split_path(path)
+                    .and_then(|s| s.into_iter().nth(1))
+                    .map(|(n, _)| n.to_uppercase())
+                    .unwrap_or_default();
+                let span = c
+                    .pou(pid)
+                    .and_then(|p| p.var(&var))
+                    .map(|(_, v)| v.span)
+                    .unwrap_or_default();
+                (Owner::Program(pid.0), span)
+            };
+        let safe = self.safe_value(&leaf.ty, name_span)?;
+        self.outputs.push(SafeOutput {
+            name: path.to_string(),
+            leaf,
+            at: None,
+            owner,
+            safe,
+        });
+        Ok(())
+    }
+
+    /// The safe value declared before the variable named at `name` (0 / FALSE / '' when
+    /// none is declared).
+    fn safe_value(&self, ty: &Ty, name: crate::syntax::Span) -> Result<Val, PlcError> {
+        let default = match ty.lane() {
+            Some(crate::check::Lane::Real) => Val::Real(0.0),
+            Some(crate::check::Lane::Str) => Val::Str(String::new()),
+            _ => Val::Int(0),
+        };
+        let Some((text, pragma)) = safe::declared(&self.sources, name) else {
+            return Ok(default);
+        };
+        parse_value(&self.compiled.checked, ty, &text).map_err(|_| {
+            PlcError::Init(Box::new(safe::bad_value(
+                &self.compiled.checked,
+                ty,
+                &text,
+                pragma,
+            )))
+        })
+    }
+
+    /// The `AT %Q` outputs with their safe values; a bad safe value is kept in
+    /// `safe_error` (the PLC stays in STOP).
+    fn collect_outputs(&mut self) {
+        let c = &self.compiled.checked;
+        let mut found: Vec<(Size, Ty, DirectAddress, Owner, String, crate::syntax::Span)> =
+            Vec::new();
+        for g in &c.globals {
+            if let Some(d) = g.at.as_deref().and_then(DirectAddress::parse) {
+                found.push((
+                    g.offset,
+                    g.ty.clone(),
+                    d,
+                    Owner::Global(g.key.clone()),
+                    g.name.clone(),
+                    g.span,
+                ));
+            }
+        }
+        for (i, p) in c.pous.iter().enumerate() {
+            if p.kind != PouKind::Program {
+                continue;
+            }
+            let Some(base) = p.base else { continue };
+            for v in &p.vars {
+                if let Some(d) = v.at.as_deref().and_then(DirectAddress::parse) {
+                    found.push((
+                        base.plus(v.offset),
+                        v.ty.clone(),
+                        d,
+                        Owner::Program(i),
+                        format!("{}.{}", p.name, v.name),
+                        v.span,
+                    ));
+                }
+            }
+        }
+        for (addr, ty, d, owner, path, span) in found {
+            if d.area != 'Q' {
+                continue;
+            }
+            match self.safe_value(&ty, span) {
+                Ok(safe) => self.outputs.push(SafeOutput {
+                    name: direct_key(&d),
+                    leaf: Leaf {
+                        path,
+                        ty,
+                        addr,
+                        retain: false,
+                        persistent: false,
+                    },
+                    at: Some(d),
+                    owner,
+                    safe,
+                }),
+                Err(PlcError::Init(diag)) => {
+                    if self.safe_error.is_none() {
+                        self.safe_error = Some(*diag);
+                    }
+                }
+                Err(_) => {}
+            }
+        }
     }
 
     fn update_system_flags(&mut self, ti: usize, now: i64) {

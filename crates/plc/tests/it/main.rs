@@ -13,3 +13,4 @@ mod fuzzish;
 mod jit;
 mod railway;
 mod runtime;
+mod safe_stop;
