@@ -8,7 +8,9 @@
 //! 2. command pulses that end at `t` reset their variables;
 //! 3. every node whose PLC has a task due copies its bound plant inputs into PLC
 //!    variables (an input of a pulled or unreachable I/O module keeps its last value and
-//!    is remembered as invalid), runs the cycle, and drives the bound plant outputs;
+//!    is remembered as invalid), runs the cycle, and drives the bound plant outputs (a
+//!    task that stops leaves its outputs at their safe values; the stop is an event of
+//!    the pseudo-point `plc-task:NAME`);
 //! 4. the node's PLC-sourced points are read and handed to its point database: value
 //!    changes and validity changes are reported (IV while the bound input's module is
 //!    unavailable or the PLC task has stopped on a fault);
@@ -425,6 +427,26 @@ impl SimNode {
             tracing::error!(node = %self.points.name(), "{message}");
             self.stopped = Some(fault.message.clone());
         }
+        // A stopped task's outputs are at their safe values now (driven below); the stop
+        // goes to the event store as the text of the pseudo-point `plc-task:NAME`.
+        while let Some(stop) = plc.poll_event() {
+            let mut text = stop.cause.kind().to_owned();
+            if let Some(d) = stop.cause.diagnostic() {
+                let at = plc.sources().location(d.primary);
+                text.push_str(&format!(" {} at {at}: {}", d.code, d.message));
+            }
+            for (output, value) in &stop.outputs {
+                text.push_str(&format!("; {output} := {value}"));
+            }
+            let mut record = crate::store::EventRecord::new(
+                self.points.name(),
+                format!("plc-task:{}", stop.task),
+                PointValue::Text(text),
+                utc,
+            );
+            record.cause = EventCause::Local;
+            self.points.recorder().event(record);
+        }
         if let Some(plant) = plant {
             for output in &mut self.outputs {
                 let Ok(v) = plc.read_leaf(&output.leaf) else {
@@ -663,12 +685,17 @@ fn build_node(
                 valid: true,
                 module_fault: None,
             }),
-            Direction::Output => sim.outputs.push(OutputBinding {
-                signal: binding.signal.clone(),
-                leaf: target,
-                kind: info.kind,
-                last: None,
-            }),
+            Direction::Output => {
+                // goes to its safe value (FALSE / 0 or declared) when its task stops
+                plc.bind_output(&binding.variable)
+                    .map_err(|error| setup(format!("output `{}`: {error}", binding.variable)))?;
+                sim.outputs.push(OutputBinding {
+                    signal: binding.signal.clone(),
+                    leaf: target,
+                    kind: info.kind,
+                    last: None,
+                });
+            }
         }
     }
     {
