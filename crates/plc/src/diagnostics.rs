@@ -1,6 +1,8 @@
 //! Diagnostics: a code, a severity, a primary label, secondary labels and notes.
 //!
-//! Rendered as `file:line:col: error[E0102]: message` followed by indented labels and notes.
+//! Rendered as `file:line:col: error: message`, the source line with carets under the
+//! span, then indented labels, notes and `= code: E0102`. Every [`Code`] has a page
+//! (`docs/diagnostics/CODE.md`, [`Code::page`]) shown by `stanice plc explain CODE`.
 
 use crate::syntax::{SourceMap, Span};
 use std::fmt;

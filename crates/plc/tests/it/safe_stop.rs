@@ -344,3 +344,38 @@ fn a_safe_value_that_does_not_fit_stops_the_plc_at_the_pragma() {
         Err(plc::PlcError::Init(d)) if d.code == Code::BadLiteral
     ));
 }
+
+#[test]
+fn forced_outputs_stay_forced_and_bound_outputs_survive_a_download() {
+    let src = two_tasks("x := 100 / z;");
+    let mut p = plc(&src);
+    p.add_task(TaskConfig::cyclic("bad", 10_000_000, &["Bad"]))
+        .unwrap();
+    p.bind_output("Bad.valve").unwrap();
+    p.force("%QX0.0", "TRUE").unwrap();
+    p.run_cycle(at_ms(0));
+    p.write("Bad.trip", "TRUE").unwrap();
+    assert_eq!(p.run_cycle(at_ms(10)).len(), 1);
+    assert_eq!(
+        p.get_io("%QX0.0").unwrap(),
+        1,
+        "a forced output stays forced"
+    );
+    assert_eq!(p.get_io("%QW4").unwrap(), 0);
+    assert_eq!(events(&mut p).len(), 1);
+
+    // a new build of the same program: the host binding is kept
+    let (sources, r) = plc::build(&[("s.st".to_string(), src.clone())]);
+    p.download(r.unwrap(), sources).unwrap();
+    p.run_cycle(at_ms(20));
+    assert_eq!(p.read_text("Bad.valve").unwrap(), "TRUE");
+    p.write("Bad.trip", "TRUE").unwrap();
+    assert_eq!(p.run_cycle(at_ms(30)).len(), 1);
+    assert_eq!(p.read_text("Bad.valve").unwrap(), "FALSE");
+    let ev = events(&mut p);
+    assert_eq!(ev.len(), 1);
+    assert!(
+        ev[0].outputs.iter().any(|(o, _)| o == "Bad.valve"),
+        "{ev:?}"
+    );
+}
