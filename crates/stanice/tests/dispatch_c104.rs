@@ -578,19 +578,16 @@ fn interrogation(port: u16) -> Result<Vec<Value>, String> {
     Err(log)
 }
 
-/// The value of `ioa` in a general interrogation by c104. An interrogation c104 did not
+/// The object at `ioa` in a general interrogation by c104. An interrogation c104 did not
 /// complete although the station terminated it ([`interrogation`]) is logged and asked
 /// again, three times in a row at most.
-fn interrogated(port: u16, ioa: u64) -> Option<Value> {
+fn interrogated_object(port: u16, ioa: u64) -> Option<Value> {
     for attempt in 1..=3 {
         match interrogation(port) {
             Ok(objects) => {
-                return objects
-                    .into_iter()
-                    .find(|object| {
-                        object["ioa"] == ioa && object["cot"] == "INTERROGATED_BY_STATION"
-                    })
-                    .map(|object| object["value"].clone())
+                return objects.into_iter().find(|object| {
+                    object["ioa"] == ioa && object["cot"] == "INTERROGATED_BY_STATION"
+                })
             }
             Err(log) => eprintln!(
                 "c104 missed the end of its interrogation of port {port} (attempt {attempt} of 3), asking again: {log}"
@@ -598,6 +595,11 @@ fn interrogated(port: u16, ioa: u64) -> Option<Value> {
         }
     }
     panic!("c104 did not complete an interrogation of port {port} three times in a row");
+}
+
+/// The value of `ioa` in a general interrogation by c104 ([`interrogated_object`]).
+fn interrogated(port: u16, ioa: u64) -> Option<Value> {
+    interrogated_object(port, ioa).map(|object| object["value"].clone())
 }
 
 /// Asks c104 until `ioa` has a value `accept` takes (90 s at most).
@@ -827,10 +829,7 @@ target = "line:rtus/RTU/4050"
     let _ = rtu.kill();
     let _ = rtu.wait();
     wait_for_value(port, 9000, "the outstation silent", |value| value == true);
-    let feeder = c104_client(port, &["--gi", "--duration", "0.2"])
-        .into_iter()
-        .find(|object| object["ioa"] == 100)
-        .expect("the feeder point in the interrogation");
+    let feeder = interrogated_object(port, 100).expect("the feeder point in the interrogation");
     assert_eq!(
         feeder["quality"].as_u64().map(|bits| bits & 0x80),
         Some(0x80),
