@@ -23,9 +23,18 @@ cargo +nightly fuzz build --release
 for target in $targets; do
     echo "fuzz smoke: $target for ${seconds}s"
     mkdir -p "corpus/$target"
+    extra=()
     case "$target" in
-        # start the Structured Text targets from the conformance programs
-        plc_*) cp ../crates/plc/tests/conformance/*.st "corpus/$target/" ;;
+        # start the Structured Text targets from the conformance programs and from the
+        # statement fragments that plc_harness wraps in declarations of the newer syntax
+        # (references and NULL dereferences, partial access, typed counters, time
+        # functions, TYPE initial values, safe-value pragmas), with a dictionary of them
+        plc_*)
+            cp ../crates/plc/tests/conformance/*.st "corpus/$target/"
+            for f in ../crates/plc/tests/fuzz/fragments/*.st; do
+                cp "$f" "corpus/$target/fragment_$(basename "$f")"
+            done
+            extra=(-dict=../crates/plc/tests/fuzz/st.dict) ;;
         # the EKM66 replies of spec §12 (after the config octet and a feed op each)
         ekm66_*)
             printf '\x00\x13\x68\x0e\x0e\x68\x01\x00\x01\x01\x02\x02\x00\x00\x00\x00\x00\x38\x22\x0c\x6d\x16' > "corpus/$target/status"
@@ -33,7 +42,7 @@ for target in $targets; do
             printf '\x00\x0b\x68\x06\x06\x68\x01\x00\x04\x05\x00\x00\x0a\x16' > "corpus/$target/empty" ;;
     esac
     cargo +nightly fuzz run --release "$target" "corpus/$target" -- \
-        -max_total_time="$seconds" -rss_limit_mb=2048 -print_final_stats=1 2>&1 \
+        -max_total_time="$seconds" -rss_limit_mb=2048 -print_final_stats=1 ${extra[@]+"${extra[@]}"} 2>&1 \
         | grep -E 'stat::number_of_executed_units|Done|ERROR|panicked|SUMMARY' || true
     # cargo fuzz run exits non-zero on a crash; the pipeline above hides that, so check
     # for artifacts instead.

@@ -1,10 +1,13 @@
 //! Arbitrary bytes as Structured Text, differentially: a program that builds runs three
 //! cycles with its loops compiled to machine code and three as closures only; every
 //! variable and every fault must be the same both ways (the closures are the reference
-//! semantics of the JIT).
+//! semantics of the JIT). Input without a PROGRAM is run as the body of the declarations
+//! in `plc_harness`.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
+
+mod plc_harness;
 use plc::task::{ClockReading, TaskConfig};
 
 fn run(text: &str, jit: bool) -> Option<(Vec<String>, Vec<String>)> {
@@ -45,7 +48,7 @@ fn run(text: &str, jit: bool) -> Option<(Vec<String>, Vec<String>)> {
 }
 
 fuzz_target!(|data: &[u8]| {
-    let text = String::from_utf8_lossy(data).into_owned();
+    let text = plc_harness::source(data);
     let mut sources = plc::SourceMap::new();
     sources.add("fuzz.st", text.clone());
     let (_, diags) = plc::syntax::parse(&sources);

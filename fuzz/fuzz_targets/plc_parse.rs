@@ -1,12 +1,15 @@
 //! Arbitrary bytes as Structured Text: lexing and parsing must never panic; input that
-//! parses cleanly is also checked, compiled and run for one cycle under a small loop
-//! budget, none of which may panic either.
+//! parses cleanly is also checked, compiled and run for three cycles under a small loop
+//! budget, none of which may panic either (a NULL dereference, say, is a fault). Input
+//! without a PROGRAM is run as the body of the declarations in `plc_harness`.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
 
+mod plc_harness;
+
 fuzz_target!(|data: &[u8]| {
-    let text = String::from_utf8_lossy(data).into_owned();
+    let text = plc_harness::source(data);
     let mut sources = plc::SourceMap::new();
     sources.add("fuzz.st", text.clone());
     let (_, diags) = plc::syntax::parse(&sources);
@@ -24,6 +27,12 @@ fuzz_target!(|data: &[u8]| {
                 break;
             }
         }
-        let _ = p.run_cycle(plc::task::ClockReading::default());
+        for k in 0..3 {
+            let now = plc::task::ClockReading {
+                monotonic_ns: k * 1_000_000,
+                ..plc::task::ClockReading::default()
+            };
+            let _ = p.run_cycle(now);
+        }
     }
 });

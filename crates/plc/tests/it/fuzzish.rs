@@ -37,6 +37,12 @@ proptest! {
         "T#1s", "'s'", "\"g\"", "#l", "ARRAY", "OF", "..", ",", "CASE", "ELSE", "END_CASE", "NOT",
         "AND", "16#FF", "1.5", "TON", ".", "=>", "FUNCTION", "END_FUNCTION", "TYPE", "END_TYPE",
         "STRUCT", "END_STRUCT", "(*", "*)", "%IX0.0", "AT", "WHILE", "END_WHILE", "EXIT",
+        // the newer syntax: references, partial access, typed counters and conversions,
+        // time functions, CODESYS parameter names, safe-value pragmas, TYPE initial values
+        "REF_TO", "REF", "^", "NULL", ".%B1", ".%W0", ".%D1", ".%L0", "%QX0.0", "CTU_DINT",
+        "CTD_UDINT", "RESET", "LOAD", "PV", "CU", "REAL_TRUNC_INT", "BCD_TO_INT",
+        "INT_TO_BCD_WORD", "ADD", "ADD_TOD_TIME", "TOD#23:00:00", "LT#1s",
+        "{attribute 'safe_value' := 'TRUE'}", "{attribute 'safe_value' := '-1'}", "(0..9)",
     ]), 0..80)) {
         build(&parts.join(" "));
     }

@@ -347,3 +347,57 @@ END_PROGRAM";
     assert!(vars.contains(&"Main.x = 4".to_string()), "{vars:?}");
     assert!(vars.contains(&"Main.y = 2".to_string()), "{vars:?}");
 }
+
+/// The seeds of the `plc_*` fuzz targets in `tests/fuzz/fragments`, each put into
+/// `tests/fuzz/harness.st` as the targets do: every one builds, runs the same as closures
+/// and as machine code for three cycles, and faults as its first line says (a NULL
+/// dereference, also inside a loop, is a fault and stops the task, never a panic).
+#[test]
+fn fuzz_fragments_build_agree_and_fault_as_declared() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz");
+    let harness = std::fs::read_to_string(dir.join("harness.st")).unwrap();
+    assert!(harness.contains("(* BODY *)"));
+    let mut names: Vec<_> = std::fs::read_dir(dir.join("fragments"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    names.sort();
+    assert!(names.len() >= 10, "fragments: {names:?}");
+    let mut with_jit_loops = 0;
+    for path in names {
+        let body = std::fs::read_to_string(&path).unwrap();
+        assert!(
+            !body.to_ascii_uppercase().contains("PROGRAM"),
+            "{path:?} would not be wrapped"
+        );
+        let first = body.lines().next().unwrap();
+        let expected = first
+            .strip_prefix("(* fault: ")
+            .and_then(|f| f.strip_suffix(" *)"));
+        assert!(
+            expected.is_some() || first == "(* no fault *)",
+            "{path:?}: first line says neither '(* fault: ... *)' nor '(* no fault *)'"
+        );
+        let src = harness.replacen("(* BODY *)", &body, 1);
+        let (v1, f1, _) = run(&src, false, 3);
+        let (v2, f2, loops) = run(&src, true, 3);
+        assert_eq!(f1, f2, "faults differ for {path:?}");
+        assert_eq!(v1, v2, "closures vs jit for {path:?}");
+        with_jit_loops += usize::from(loops > 0);
+        match expected {
+            Some(text) => {
+                assert_eq!(
+                    f1.len(),
+                    1,
+                    "{path:?}: one fault, then the task stays stopped: {f1:?}"
+                );
+                assert!(f1[0].contains(text), "{path:?}: {f1:?}");
+            }
+            None => assert!(f1.is_empty(), "{path:?}: {f1:?}"),
+        }
+    }
+    assert!(
+        with_jit_loops > 0,
+        "no fragment has a loop compiled to machine code"
+    );
+}
