@@ -122,6 +122,93 @@ fn tons(ts: &mut [Ton], now: i64) -> i32 {
     n
 }
 
+const CALLS: &str = "FUNCTION Mix : DINT
+VAR_INPUT a, b : DINT; END_VAR
+Mix := (a * 31 + b) MOD 1000;
+END_FUNCTION
+FUNCTION Clamp : DINT
+VAR_INPUT x, lo, hi : DINT; END_VAR
+IF x < lo THEN Clamp := lo; ELSIF x > hi THEN Clamp := hi; ELSE Clamp := x; END_IF
+END_FUNCTION
+FUNCTION_BLOCK Smooth
+VAR_INPUT x : DINT; END_VAR
+VAR_IN_OUT sum : DINT; END_VAR
+VAR_OUTPUT y : DINT; END_VAR
+VAR prev : DINT; END_VAR
+y := (x + prev) / 2;
+prev := x;
+sum := sum + y;
+END_FUNCTION_BLOCK
+PROGRAM Main VAR f : Smooth; i, v, total : DINT; END_VAR
+total := 0;
+FOR i := 1 TO 10000 DO
+  v := Clamp(Mix(i, v), 100, 900);
+  f(x := v, sum := total);
+END_FOR
+END_PROGRAM";
+
+/// `Main` of [`CALLS`]: `v` and the block's `prev` keep their values from scan to scan.
+#[derive(Default)]
+struct Calls {
+    v: i32,
+    prev: i32,
+}
+
+fn mix(a: i32, b: i32) -> i32 {
+    a.wrapping_mul(31).wrapping_add(b) % 1000
+}
+
+fn clamp(x: i32, lo: i32, hi: i32) -> i32 {
+    if x < lo {
+        lo
+    } else if x > hi {
+        hi
+    } else {
+        x
+    }
+}
+
+/// The function block: `sum` is the VAR_IN_OUT, `prev` its state; returns `y`.
+fn smooth(prev: &mut i32, x: i32, sum: &mut i32) -> i32 {
+    let y = x.wrapping_add(*prev) / 2;
+    *prev = x;
+    *sum = sum.wrapping_add(y);
+    y
+}
+
+fn calls(st: &mut Calls) -> i32 {
+    let mut total = 0;
+    for i in 1..=black_box(10_000i32) {
+        st.v = clamp(mix(i, st.v), 100, 900);
+        black_box(smooth(&mut st.prev, st.v, &mut total));
+    }
+    total
+}
+
+/// The ST program and its Rust twin compute the same `total` over three scans (with and
+/// without the JIT): the two sides of a row run the same algorithm.
+fn check_calls() {
+    let mut native = Calls::default();
+    let want: Vec<String> = (0..3).map(|_| calls(&mut native).to_string()).collect();
+    for jit in [false, true] {
+        let (sources, r) = plc::build_with(
+            &[("bench.st".into(), CALLS.into())],
+            plc::CompileOptions { jit },
+        );
+        let mut p = plc::Plc::new(r.unwrap_or_else(|d| panic!("{d:?}")), sources);
+        p.add_task(TaskConfig::cyclic("t", 0, &["Main"])).unwrap();
+        let mut now = ClockReading::default();
+        let got: Vec<String> = (0..3)
+            .map(|_| {
+                now.monotonic_ns += 1_000_000;
+                assert!(p.run_cycle(now).is_empty());
+                p.read_text("Main.total").unwrap()
+            })
+            .collect();
+        assert_eq!(got, want, "ST (jit {jit}) and Rust disagree");
+    }
+}
+
 fn time_st(src: &str, scans: u32, jit: bool) -> f64 {
     let (sources, r) = plc::build_with(
         &[("bench.st".into(), src.into())],
@@ -159,13 +246,16 @@ fn main() {
             "sort" => (SORT, 500),
             "real" => (REAL_LOOP, 200),
             "string" => (STRINGS, 20000),
+            "calls" => (CALLS, 500),
             _ => (INT_LOOP, 200),
         };
         println!("{:.1}us", time_st(src, scans, true) * 1e6);
         return;
     }
+    check_calls();
     let mut ts = vec![Ton::default(); 1000];
     let mut now = 0i64;
+    let mut calls_state = Calls::default();
     let rows: Vec<(&str, f64, f64, f64)> = vec![
         (
             "integer loop (100k)",
@@ -203,6 +293,12 @@ fn main() {
                 5000,
             ),
         ),
+        (
+            "FUNCTION/FB calls (10k)",
+            time_st(CALLS, 50, true),
+            time_st(CALLS, 20, false),
+            time_native(|| i64::from(calls(&mut calls_state)), 2000),
+        ),
     ];
     println!(
         "{:<24} {:>12} {:>12} {:>12} {:>8}",
@@ -218,8 +314,13 @@ fn main() {
         );
     }
     println!("* strings are outside the JIT subset: that loop runs as closures either way");
+    let calls_jit_loops = {
+        let (_, r) = plc::build(&[("bench.st".into(), CALLS.into())]);
+        r.unwrap_or_else(|d| panic!("{d:?}")).jit_loops
+    };
+    println!("FUNCTION/FB calls: {calls_jit_loops} loop(s) compiled to machine code");
     // what the JIT costs when a program is built (every program above, best of 5)
-    let all = [INT_LOOP, REAL_LOOP, SORT, STRINGS, TONS];
+    let all = [INT_LOOP, REAL_LOOP, SORT, STRINGS, TONS, CALLS];
     for jit in [false, true] {
         let best = (0..5)
             .map(|_| {
