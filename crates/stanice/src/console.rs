@@ -1,5 +1,5 @@
 //! A process's console: standard input's lines for the commands that take operations
-//! while they run (`stanice run`, `stanice iec103 relay`).
+//! while they run (`stanice run`, `stanice iec103 relay`, `stanice lift simulate`).
 
 use std::io::BufRead as _;
 
@@ -43,4 +43,34 @@ pub(crate) async fn run_for(duration: Option<f64>) {
         }
         None => std::future::pending().await,
     }
+}
+
+/// The console of a simulated device: each line of standard input (lower-cased words) an
+/// operation on the device, run by its line's drive loop (between two exchanges, so an
+/// operation never cuts a frame); `help` prints `help` instead. Whatever `operate`
+/// returns is printed.
+pub(crate) fn device_operations<E: 'static>(
+    help: &'static str,
+    operate: fn(&mut E, &[String]) -> String,
+) -> tokio::sync::mpsc::UnboundedReceiver<iec60870::ft12::io::EndpointAction<E>> {
+    let (operations, inbox) = tokio::sync::mpsc::unbounded_channel();
+    let mut console = stdin_lines();
+    tokio::spawn(async move {
+        while let Some(line) = console.recv().await {
+            let words: Vec<String> = line.split_whitespace().map(str::to_lowercase).collect();
+            if words.is_empty() {
+                continue;
+            }
+            if words.first().map(String::as_str) == Some("help") {
+                println!("{help}");
+                continue;
+            }
+            let operation: iec60870::ft12::io::EndpointAction<E> =
+                Box::new(move |device: &mut E| println!("{}", operate(device, &words)));
+            if operations.send(operation).is_err() {
+                break;
+            }
+        }
+    });
+    inbox
 }

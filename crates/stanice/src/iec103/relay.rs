@@ -6,10 +6,9 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use clap::Args;
-use iec60870::ft12::io::{drive, EndpointAction};
+use iec60870::ft12::io::drive;
 use iec60870::ft12::{Secondary, SecondaryConfig, SecondaryStation};
 use iec60870::iec103::{dpi_text, Device, DeviceEvent, DeviceProfile};
-use tokio::sync::mpsc;
 
 use crate::iec104::render::receipt_time;
 use crate::serial_line::{report_end, LineArgs, ServedLines};
@@ -72,25 +71,7 @@ pub(crate) async fn run(args: RelayArgs) -> anyhow::Result<ExitCode> {
         ..SecondaryConfig::new(args.address.into())
     };
     let mut station = SecondaryStation::new(settings, Secondary::new(secondary), device);
-    let (operations, mut inbox) = mpsc::unbounded_channel::<EndpointAction<Relay>>();
-    let mut console = crate::console::stdin_lines();
-    tokio::spawn(async move {
-        while let Some(line) = console.recv().await {
-            let words: Vec<String> = line.split_whitespace().map(str::to_lowercase).collect();
-            if words.is_empty() {
-                continue;
-            }
-            if words.first().map(String::as_str) == Some("help") {
-                println!("{CONSOLE_HELP}");
-                continue;
-            }
-            let operation: EndpointAction<Relay> =
-                Box::new(move |relay: &mut Relay| operate(relay, &words));
-            if operations.send(operation).is_err() {
-                break;
-            }
-        }
-    });
+    let mut inbox = crate::console::device_operations(CONSOLE_HELP, operate);
     let serve = async {
         let mut lines = ServedLines::new(&args.line).await?;
         while let Some(line) = lines.next().await? {
@@ -118,12 +99,12 @@ pub(crate) async fn run(args: RelayArgs) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// One console operation on the relay.
-fn operate(relay: &mut Relay, words: &[String]) {
+/// One console operation on the relay: what it did, or why not.
+fn operate(relay: &mut Relay, words: &[String]) -> String {
     let words: Vec<&str> = words.iter().map(String::as_str).collect();
     match relay.app().operate(&words) {
-        Ok(done) => println!("{done}"),
-        Err(error) => println!("{error}; type `help`"),
+        Ok(done) => done,
+        Err(error) => format!("{error}; type `help`"),
     }
 }
 

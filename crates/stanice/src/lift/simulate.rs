@@ -4,10 +4,9 @@
 use std::process::ExitCode;
 
 use clap::Args;
-use devices::ekm66::io::{run_simulator, EndpointAction};
+use devices::ekm66::io::run_simulator;
 use devices::ekm66::simulator::{SimEvent, Simulator, SimulatorConfig};
 use devices::ekm66::tables::{fault_text, status_text};
-use tokio::sync::mpsc;
 
 use super::CodecArgs;
 use crate::serial_line::{report_end, LineArgs, ServedLines};
@@ -89,27 +88,7 @@ pub(crate) async fn run(args: SimulateArgs) -> anyhow::Result<ExitCode> {
     let now = tokio::time::Instant::now().into_std();
     let mut simulator = Simulator::new(config, now);
 
-    let (operations, mut inbox) = mpsc::unbounded_channel::<EndpointAction<Simulator>>();
-    let mut console = crate::console::stdin_lines();
-    tokio::spawn(async move {
-        while let Some(line) = console.recv().await {
-            let words: Vec<String> = line.split_whitespace().map(str::to_lowercase).collect();
-            if words.is_empty() {
-                continue;
-            }
-            if words.first().map(String::as_str) == Some("help") {
-                println!("{CONSOLE_HELP}");
-                continue;
-            }
-            let operation: EndpointAction<Simulator> =
-                Box::new(move |simulator: &mut Simulator| {
-                    println!("{}", operate(simulator, &words));
-                });
-            if operations.send(operation).is_err() {
-                break;
-            }
-        }
-    });
+    let mut inbox = crate::console::device_operations(CONSOLE_HELP, operate);
     let verbose = args.verbose;
     let serve = async {
         let mut lines = ServedLines::new(&args.line).await?;

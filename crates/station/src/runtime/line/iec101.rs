@@ -37,7 +37,7 @@ use crate::store::CommandOutcome;
 
 use super::super::forwarded::CommandWatches;
 use super::super::node::NodePoints;
-use super::{device_link, open, set_device_down, set_line_status, LineSpec};
+use super::{all_down, device_link, open_when_ready, LineSpec};
 use super::{Answering, COMMAND_TIMEOUT, REOPEN_AFTER};
 
 /// How long an executed command waits for the outstation's termination, which the
@@ -82,20 +82,10 @@ async fn run(
     answering_now: Answering,
 ) {
     let name = spec.config.name.clone();
-    for device in &spec.config.devices {
-        set_device_down(&spec, &node, device.address);
-    }
-    set_line_status(&spec, &node, false);
+    all_down(&spec, &node);
     let mut no_simulation = None;
     loop {
-        let stream = match open(&spec.config, &mut no_simulation).await {
-            Ok(stream) => stream,
-            Err(error) => {
-                tracing::warn!(node = %node.name(), line = %name, %error, "cannot open the line; trying again");
-                tokio::time::sleep(REOPEN_AFTER).await;
-                continue;
-            }
-        };
+        let stream = open_when_ready(&spec, &node, &mut no_simulation).await;
         let now = tokio::time::Instant::now().into_std();
         let primary = Primary::new(
             PrimaryConfig {
@@ -131,12 +121,9 @@ async fn run(
         })
         .await;
         tracing::warn!(node = %node.name(), line = %name, ?end, "line closed; opening it again");
-        for device in &spec.config.devices {
-            set_device_down(&spec, &node, device.address);
-        }
         commands.abandon_all();
         answering_now.clear();
-        set_line_status(&spec, &node, false);
+        all_down(&spec, &node);
         tokio::time::sleep(REOPEN_AFTER).await;
     }
 }

@@ -27,8 +27,8 @@ use crate::store::{PointValue, SourceTime};
 
 use super::super::node::NodePoints;
 use super::{
-    device_link, open, set_device_down, set_line_status, Answering, CommandProblem, LineSpec,
-    COMMAND_TIMEOUT, REOPEN_AFTER,
+    all_down, device_link, open_when_ready, Answering, CommandProblem, LineSpec, COMMAND_TIMEOUT,
+    REOPEN_AFTER,
 };
 
 /// The running IEC 103 part of a line: what a general command needs.
@@ -124,19 +124,9 @@ async fn run(
     mut simulated: Option<mpsc::UnboundedReceiver<EndpointAction<Simulated>>>,
 ) {
     let name = spec.config.name.clone();
-    for device in &spec.config.devices {
-        set_device_down(&spec, &node, device.address);
-    }
-    set_line_status(&spec, &node, false);
+    all_down(&spec, &node);
     loop {
-        let stream = match open(&spec.config, &mut simulated).await {
-            Ok(stream) => stream,
-            Err(error) => {
-                tracing::warn!(node = %node.name(), line = %name, %error, "cannot open the line; trying again");
-                tokio::time::sleep(REOPEN_AFTER).await;
-                continue;
-            }
-        };
+        let stream = open_when_ready(&spec, &node, &mut simulated).await;
         let now = tokio::time::Instant::now().into_std();
         let mut primary = Primary::new(
             PrimaryConfig {
@@ -171,9 +161,6 @@ async fn run(
         })
         .await;
         tracing::warn!(node = %node.name(), line = %name, ?end, "line closed; opening it again");
-        for device in &spec.config.devices {
-            set_device_down(&spec, &node, device.address);
-        }
         let pending: Vec<_> = shared
             .lock()
             .map(|mut shared| {
@@ -185,7 +172,7 @@ async fn run(
             let _ = reply.send(Err(CommandProblem::NoAnswer("the line closed".to_owned())));
         }
         answering_now.clear();
-        set_line_status(&spec, &node, false);
+        all_down(&spec, &node);
         tokio::time::sleep(REOPEN_AFTER).await;
     }
 }

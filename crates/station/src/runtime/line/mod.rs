@@ -286,6 +286,33 @@ pub(crate) fn spawn_line(spec: LineSpec, node: Arc<NodePoints>) -> LineHandle {
     }
 }
 
+/// Opens the line, trying again every [`REOPEN_AFTER`] while it cannot be opened (a
+/// serial adapter unplugged, a terminal server down).
+async fn open_when_ready(
+    spec: &LineSpec,
+    node: &NodePoints,
+    simulated: &mut Option<mpsc::UnboundedReceiver<EndpointAction<Simulated>>>,
+) -> std::pin::Pin<Box<dyn iec60870::ft12::io::LineStream>> {
+    loop {
+        match open(&spec.config, simulated).await {
+            Ok(stream) => return stream,
+            Err(error) => {
+                tracing::warn!(node = %node.name(), line = %spec.config.name, %error, "cannot open the line; trying again");
+                tokio::time::sleep(REOPEN_AFTER).await;
+            }
+        }
+    }
+}
+
+/// Every device of the line down (its points invalid, its status point TRUE), and the
+/// line's status point TRUE: at the start and whenever the line closes.
+fn all_down(spec: &LineSpec, node: &NodePoints) {
+    for device in &spec.config.devices {
+        set_device_down(spec, node, device.address);
+    }
+    set_line_status(spec, node, false);
+}
+
 /// Opens the line; a simulated line starts its devices on an in-memory line.
 async fn open(
     config: &LineConfig,
