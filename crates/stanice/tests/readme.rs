@@ -39,6 +39,14 @@ const SKIPPED: &[(&str, &str)] = &[
         "a benchmark: a release build and minutes of measurement",
     ),
     (
+        "cargo bench -p plc --bench scan_jitter",
+        "a benchmark: a release build and 100 s of real-time scans",
+    ),
+    (
+        "cargo bench -p iec60870 --bench ft12_polling",
+        "a benchmark: a release build and minutes of measurement",
+    ),
+    (
         "cargo bench -p station --bench latency",
         "a benchmark: a release build and minutes of measurement",
     ),
