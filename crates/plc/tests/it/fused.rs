@@ -177,17 +177,7 @@ fn fused_forms_match_the_generic_operators() {
         "{}VAR_GLOBAL {} END_VAR\nPROGRAM Main\nVAR {} END_VAR\n{}END_PROGRAM\n",
         g.src, g.globals, g.vars, g.body
     );
-    let (sources, r) = plc::build(&[("t.st".to_string(), src.clone())]);
-    let compiled = match r {
-        Ok(c) => c,
-        Err(d) => panic!(
-            "{}\n{src}",
-            d.iter()
-                .map(|d| d.render(&sources))
-                .collect::<Vec<_>>()
-                .join("\n")
-        ),
-    };
+    let (sources, compiled) = crate::support::build_one("t.st", &src);
     let mut p = Plc::new(compiled, sources);
     p.add_task(TaskConfig::cyclic("main", 0, &["Main"]))
         .unwrap();

@@ -29,17 +29,8 @@ END_VAR
 
 /// Every variable after `cycles` cycles, and the rendered faults.
 fn run(src: &str, jit: bool, cycles: i64) -> (Vec<String>, Vec<String>, usize) {
-    let (sources, r) = plc::build_with(&[("p.st".into(), src.into())], CompileOptions { jit });
-    let compiled = match r {
-        Ok(c) => c,
-        Err(d) => panic!(
-            "{}\n{src}",
-            d.iter()
-                .map(|d| d.render(&sources))
-                .collect::<Vec<_>>()
-                .join("\n")
-        ),
-    };
+    let (sources, compiled) =
+        crate::support::build_or_fail(&[("p.st".into(), src.into())], CompileOptions { jit });
     let loops = compiled.jit_loops;
     let mut p = Plc::new(compiled, sources);
     p.loop_budget = 20_000;

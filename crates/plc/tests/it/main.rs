@@ -14,3 +14,4 @@ mod jit;
 mod railway;
 mod runtime;
 mod safe_stop;
+mod support;

@@ -41,19 +41,13 @@ fn prague_offset(utc: i64) -> i64 {
 
 impl Station {
     fn new() -> Self {
-        let (sources, r) = plc::build(&[
-            ("osvetleni.st".into(), FB.into()),
-            ("railway_lighting.st".into(), BENCH.into()),
-        ]);
-        let compiled = r.unwrap_or_else(|d| {
-            panic!(
-                "{}",
-                d.iter()
-                    .map(|d| d.render(&sources))
-                    .collect::<Vec<_>>()
-                    .join("\n")
-            )
-        });
+        let (sources, compiled) = crate::support::build_or_fail(
+            &[
+                ("osvetleni.st".into(), FB.into()),
+                ("railway_lighting.st".into(), BENCH.into()),
+            ],
+            plc::CompileOptions::default(),
+        );
         let mut plc = Plc::new(compiled, sources);
         plc.add_task(TaskConfig::cyclic("lighting", 0, &["Main"]))
             .unwrap();

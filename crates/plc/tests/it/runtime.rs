@@ -6,17 +6,7 @@ use std::cell::Cell;
 use std::rc::Rc;
 
 fn plc(src: &str) -> Plc {
-    let (sources, r) = plc::build(&[("t.st".to_string(), src.to_string())]);
-    match r {
-        Ok(c) => Plc::new(c, sources),
-        Err(d) => panic!(
-            "{}",
-            d.iter()
-                .map(|d| d.render(&sources))
-                .collect::<Vec<_>>()
-                .join("\n")
-        ),
-    }
+    crate::support::plc_of("t.st", src)
 }
 
 fn at_ms(ms: i64) -> ClockReading {
@@ -831,17 +821,7 @@ fn every_prelude_pou_compiles() {
         "TYPE Named : ({}); END_TYPE\nPROGRAM Main\nVAR x : Named; END_VAR\nEND_PROGRAM\n",
         names.join(", ")
     );
-    let (sources, r) = plc::build(&[("t.st".to_string(), src)]);
-    let compiled = match r {
-        Ok(c) => c,
-        Err(d) => panic!(
-            "{}",
-            d.iter()
-                .map(|d| d.render(&sources))
-                .collect::<Vec<_>>()
-                .join("\n")
-        ),
-    };
+    let (_, compiled) = crate::support::build_one("t.st", &src);
     for n in &names {
         assert!(
             compiled.checked.pou_index.contains_key(n.as_str()),

@@ -7,17 +7,7 @@ use std::cell::Cell;
 use std::rc::Rc;
 
 fn plc(src: &str) -> Plc {
-    let (sources, r) = plc::build(&[("s.st".to_string(), src.to_string())]);
-    match r {
-        Ok(c) => Plc::new(c, sources),
-        Err(d) => panic!(
-            "{}",
-            d.iter()
-                .map(|d| d.render(&sources))
-                .collect::<Vec<_>>()
-                .join("\n")
-        ),
-    }
+    crate::support::plc_of("s.st", src)
 }
 
 fn at_ms(ms: i64) -> ClockReading {
