@@ -26,7 +26,7 @@ use std::time::Duration;
 
 use iec60870::asdu::{Asdu, AsduParams, Cause, CommonAddress, Cot, InformationObject, Ioa};
 use iec60870::ft12::io::{drive, EndpointAction};
-use iec60870::ft12::{Primary, PrimaryConfig, PrimaryEvent};
+use iec60870::ft12::PrimaryEvent;
 use iec60870::iec101::{self, MasterEvent, StartUp};
 use iec60870::outstation::{Command, TerminationFuture};
 use tokio::sync::mpsc;
@@ -87,17 +87,7 @@ async fn run(
     loop {
         let stream = open_when_ready(&spec, &node, &mut no_simulation).await;
         let now = tokio::time::Instant::now().into_std();
-        let primary = Primary::new(
-            PrimaryConfig {
-                address_size: settings.address_size,
-                line: spec.config.settings,
-                response_timeout: spec.config.timeout,
-                retries: spec.config.retries,
-                poll_interval: spec.config.poll_interval,
-                ..PrimaryConfig::default()
-            },
-            now,
-        );
+        let primary = spec.primary(settings.address_size, now);
         let clock_node = Arc::clone(&node);
         let mut master = iec101::Master::new(
             primary,

@@ -18,7 +18,7 @@ use std::time::Duration;
 
 use iec60870::asdu::{Quality, TypeId};
 use iec60870::ft12::io::{drive, EndpointAction};
-use iec60870::ft12::{Primary, PrimaryConfig, PrimaryEvent, SharedLine};
+use iec60870::ft12::{PrimaryEvent, SharedLine};
 use iec60870::iec103::{self, Body, Cause, Device, MasterEvent, StartUp};
 use tokio::sync::{mpsc, oneshot};
 
@@ -128,16 +128,8 @@ async fn run(
     loop {
         let stream = open_when_ready(&spec, &node, &mut simulated).await;
         let now = tokio::time::Instant::now().into_std();
-        let mut primary = Primary::new(
-            PrimaryConfig {
-                line: spec.config.settings,
-                response_timeout: spec.config.timeout,
-                retries: spec.config.retries,
-                poll_interval: spec.config.poll_interval,
-                ..PrimaryConfig::default()
-            },
-            now,
-        );
+        // IEC 103 link addresses are one octet.
+        let mut primary = spec.primary(iec60870::ft12::AddressSize::One, now);
         for device in &spec.config.devices {
             if let Err(error) = primary.add_station(device.address.into()) {
                 tracing::warn!(line = %name, %error, "device not polled");

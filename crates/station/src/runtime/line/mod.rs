@@ -24,7 +24,9 @@ use std::time::Duration;
 
 use iec60870::asdu::{Ioa, TypeId};
 use iec60870::ft12::io::{drive, EndpointAction, Transport};
-use iec60870::ft12::{Secondary, SecondaryConfig, SecondaryStation, SharedLine};
+use iec60870::ft12::{
+    AddressSize, Primary, PrimaryConfig, Secondary, SecondaryConfig, SecondaryStation, SharedLine,
+};
 use iec60870::iec103::{Device, DeviceProfile};
 use iec60870::outstation::{Command, TerminationFuture};
 use tokio::sync::mpsc;
@@ -58,6 +60,23 @@ pub(crate) struct LineSpec {
     pub signals: HashMap<(u8, u8, u8, Option<u8>), Vec<LinePoint>>,
     /// IEC 101: (device address, IOA) -> the points it feeds.
     pub objects: ObjectPoints,
+}
+
+impl LineSpec {
+    /// The FT1.2 primary polling the line's devices, with the line's timing.
+    fn primary(&self, address_size: AddressSize, now: std::time::Instant) -> Primary {
+        Primary::new(
+            PrimaryConfig {
+                address_size,
+                line: self.config.settings,
+                response_timeout: self.config.timeout,
+                retries: self.config.retries,
+                poll_interval: self.config.poll_interval,
+                ..PrimaryConfig::default()
+            },
+            now,
+        )
+    }
 }
 
 /// Why a general command did not go through.
