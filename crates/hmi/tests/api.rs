@@ -9,6 +9,8 @@
     clippy::indexing_slicing
 )]
 
+#[path = "support/ports.rs"]
+mod ports;
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -96,18 +98,7 @@ async fn setup() -> Setup {
 
 async fn setup_with(extra_toml: &str) -> Setup {
     let project = Project::load(&vsetin()).unwrap();
-    let base = loop {
-        let port = std::net::TcpListener::bind("127.0.0.1:0")
-            .unwrap()
-            .local_addr()
-            .unwrap()
-            .port();
-        if port < 60_000
-            && (0..23).all(|i| std::net::TcpListener::bind(("127.0.0.1", port + i)).is_ok())
-        {
-            break port;
-        }
-    };
+    let base = ports::free_port_range(23);
     let project = project.with_port_base(base);
     let dir = tempfile::tempdir().unwrap();
     screens(&project, dir.path(), extra_toml);

@@ -32,6 +32,8 @@
     missing_docs
 )]
 
+#[path = "support/ports.rs"]
+mod ports;
 use std::net::{IpAddr, SocketAddr, TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -99,19 +101,6 @@ fn free_port() -> u16 {
         .local_addr()
         .unwrap()
         .port()
-}
-
-/// A base port whose next `count` ports are free (the station's nodes listen there).
-fn free_port_range(count: u16) -> u16 {
-    for _ in 0..100 {
-        let base = free_port();
-        if base.checked_add(count).is_some()
-            && (0..count).all(|i| TcpListener::bind(("127.0.0.1", base + i)).is_ok())
-        {
-            return base;
-        }
-    }
-    panic!("no free port range");
 }
 
 /// chromedriver on a free loopback port, killed when dropped, with a fresh profile folder.
@@ -241,7 +230,7 @@ impl Site {
         let folder = vsetin();
         let project = Project::load(&folder)
             .unwrap_or_else(|e| panic!("{:?}", e.errors()))
-            .with_port_base(free_port_range(23));
+            .with_port_base(ports::free_port_range(23));
         let zone = project.station.time_zone;
         let runtime = Runtime::start(
             project,
