@@ -9,7 +9,7 @@
     clippy::indexing_slicing
 )]
 
-#[path = "support/ports.rs"]
+#[path = "../../../tests/support/ports.rs"]
 mod ports;
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};

@@ -32,7 +32,7 @@
     missing_docs
 )]
 
-#[path = "support/ports.rs"]
+#[path = "../../../tests/support/ports.rs"]
 mod ports;
 use std::net::{IpAddr, SocketAddr, TcpListener, TcpStream};
 use std::path::{Path, PathBuf};

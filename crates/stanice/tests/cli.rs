@@ -7,6 +7,8 @@
     clippy::indexing_slicing
 )]
 
+#[path = "../../../tests/support/ports.rs"]
+mod ports;
 use std::io::{BufRead, BufReader, Read};
 use std::path::PathBuf;
 use std::process::{Child, Command, Output, Stdio};
@@ -677,7 +679,7 @@ fn a_bad_point_file_names_its_line() {
 
 #[test]
 fn demo_serves_the_station_to_dispatch() {
-    let port = free_port_range(23);
+    let port = ports::free_port_range(23);
     let mut demo = stanice();
     demo.args(["demo", "--port-base", &port.to_string(), "--store", "none"]);
     let _demo = start_until(demo, "Ctrl-C stops");
@@ -787,19 +789,6 @@ fn demo_serves_the_station_to_dispatch() {
         .unwrap();
     assert!(!stderr.contains("panicked"), "{stderr}");
     assert!(status.success(), "{status}");
-}
-
-/// A base port whose next `count` ports are free.
-fn free_port_range(count: u16) -> u16 {
-    for _ in 0..100 {
-        let base = free_port();
-        if base.checked_add(count).is_some()
-            && (0..count).all(|i| std::net::TcpListener::bind(("127.0.0.1", base + i)).is_ok())
-        {
-            return base;
-        }
-    }
-    panic!("no free port range");
 }
 
 fn write_source(name: &str, text: &str) -> PathBuf {
@@ -1045,7 +1034,7 @@ fn run_records_events_that_events_lists() {
     std::fs::create_dir_all(&dir).unwrap();
     let store = format!("sqlite:{}", dir.join("events.sqlite").display());
     let _ = std::fs::remove_file(dir.join("events.sqlite"));
-    let port = free_port_range(23);
+    let port = ports::free_port_range(23);
     let mut run = stanice();
     run.arg("run")
         .arg(vsetin())
@@ -1133,7 +1122,7 @@ fn assert_success(output: &Output) -> String {
 fn a_relative_project_path_is_resolved_once() {
     let dir = fresh_dir("relative");
     copy_vsetin(&dir, "proj");
-    let port = free_port_range(23);
+    let port = ports::free_port_range(23);
     let mut run = stanice();
     run.current_dir(&dir)
         .args(["run", "proj", "--port-base", &port.to_string()])
@@ -1176,7 +1165,7 @@ fn interrupt(child: &Child) {
 fn ctrl_c_stops_the_station_and_flushes_the_store() {
     let dir = fresh_dir("ctrl-c");
     let project = copy_vsetin(&dir, "proj");
-    let port = free_port_range(23);
+    let port = ports::free_port_range(23);
     let mut run = stanice();
     run.stdin(Stdio::piped())
         .arg("run")
@@ -1236,7 +1225,7 @@ fn run_with_a_broken_hmi_toml_fails_with_file_line_and_column() {
             format!("hmi.toml:{line}:11: "),
         ),
     ];
-    let port = free_port_range(23);
+    let port = ports::free_port_range(23);
     for (broken, expected) in cases {
         std::fs::write(&file, broken).unwrap();
         let mut run = stanice();
@@ -1273,7 +1262,7 @@ fn run_serves_the_hmi_over_https() {
     let (cert_path, key_path) = (dir.join("hmi.crt"), dir.join("hmi.key"));
     std::fs::write(&cert_path, certificate.pem()).unwrap();
     std::fs::write(&key_path, key.serialize_pem()).unwrap();
-    let port = free_port_range(23);
+    let port = ports::free_port_range(23);
     let hmi_port = free_port();
     let mut run = stanice();
     run.arg("run")
@@ -1628,7 +1617,7 @@ fn type_line(station: &mut Background, line: &str) {
 /// its candidates, and `status` shows the breakers and the supply transfer.
 #[test]
 fn the_console_names_the_devices_and_accepts_unique_short_names() {
-    let port = free_port_range(23);
+    let port = ports::free_port_range(23);
     let mut run = stanice();
     run.stdin(Stdio::piped()).arg("run").arg(vsetin()).args([
         "--port-base",
@@ -1754,7 +1743,7 @@ fn command_then_kill(port: u16, station: &mut Background, commands: usize) -> us
 fn a_positively_confirmed_command_is_in_the_audit_even_after_kill_9() {
     let dir = fresh_dir("kill-9");
     let project = copy_vsetin(&dir, "proj");
-    let port = free_port_range(23);
+    let port = ports::free_port_range(23);
     let mut run = stanice();
     run.stdin(Stdio::piped())
         .arg("run")
@@ -1782,7 +1771,7 @@ fn a_positively_confirmed_command_is_in_the_audit_even_after_kill_9() {
 fn idle_clients_do_not_lock_dispatch_out_of_the_station() {
     use iec60870::asdu::CommonAddress;
     use iec60870::cs104::client::{spawn_client, ClientConfig, ClientEvent};
-    let port = free_port_range(23);
+    let port = ports::free_port_range(23);
     let mut run = stanice();
     run.stdin(Stdio::piped()).arg("run").arg(vsetin()).args([
         "--port-base",

@@ -18,6 +18,8 @@
 #[path = "../../../tests/peer/harness.rs"]
 mod peer;
 
+#[path = "../../../tests/support/ports.rs"]
+mod ports;
 use peer::{peer_script, peers_available, repository_root, Capture};
 
 use std::collections::BTreeSet;
@@ -37,26 +39,6 @@ fn vsetin() -> PathBuf {
     repository_root().join("examples/vsetin")
 }
 
-fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port()
-}
-
-/// A base port whose next `count` ports are free.
-fn free_port_range(count: u16) -> u16 {
-    for _ in 0..100 {
-        let base = free_port();
-        if base.checked_add(count).is_some()
-            && (0..count).all(|i| std::net::TcpListener::bind(("127.0.0.1", base + i)).is_ok())
-        {
-            return base;
-        }
-    }
-    panic!("no free port range");
-}
 
 /// Runs a command to completion, killing it after `seconds`. Its output is drained while
 /// it runs, so a chatty command never blocks on a full pipe.
@@ -129,7 +111,7 @@ impl Demo {
     fn start_on_free_ports_with(count: u16, args: impl Fn(u16) -> Vec<String>) -> (Demo, u16) {
         let mut refused = Vec::new();
         for _ in 0..3 {
-            let port = free_port_range(count);
+            let port = ports::free_port_range(count);
             match Demo::start(&args(port)) {
                 Ok(demo) => return (demo, port),
                 Err(tail) if tail.contains("Address already in use") => {

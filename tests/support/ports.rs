@@ -1,5 +1,5 @@
 //! Loopback ports for the station a test runs (its nodes listen on `count` consecutive
-//! ports).
+//! ports), included by the test binaries that start stations (`#[path]`).
 //!
 //! Taken below the kernel's ephemeral range (32768-60999 on Linux): a range found free
 //! there can be taken the next moment by any outgoing connection on the machine (the
