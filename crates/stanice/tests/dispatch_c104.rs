@@ -39,7 +39,6 @@ fn vsetin() -> PathBuf {
     repository_root().join("examples/vsetin")
 }
 
-
 /// Runs a command to completion, killing it after `seconds`. Its output is drained while
 /// it runs, so a chatty command never blocks on a full pipe.
 fn run_bounded(mut command: Command, seconds: u64) -> (Output, bool) {
