@@ -10,7 +10,9 @@
 //! |---------------|----------------------------------------------------------------------|
 //! | [`pointdb`]   | a node's points: typed values with quality and source time, report by exception |
 //! | `model`       | the records: [`EventRecord`], [`CommandRecord`], [`PointValue`] and their codes |
-//! | `query`       | filters, ordering and keyset pages: [`EventQuery`], [`CommandQuery`], [`Page`] |
+//! | `query`       | filters, ordering and keyset pages: [`EventQuery`], [`CommandQuery`], [`Page`]; offset pages with a total: [`CountedPage`] |
+//! | `lift`        | the lift fault archive: [`LiftFaultRecord`], [`LiftFaultQuery`], [`LiftFaultOrder`] |
+//! | `notification` | the record of e-mails and webhook calls sent or suppressed: [`NotificationRecord`], [`NotificationQuery`] |
 //! | [`url`]       | store addresses: [`url::StoreUrl`] (`sqlite:PATH`, `sqlite::memory:`, `postgres://...`) |
 //! | `sql`         | what both backends share: the migrations, the queries' SQL, purge, stats, row mapping, and the `EventStore` behaviour itself |
 //! | `sqlite`, `postgres` | the backends, differing only in how they reach their database |
@@ -35,6 +37,10 @@
 //!                      EventStore (SqliteStore | PostgresStore) --> query_events / query_commands
 //!                                                        ^              (HMI event list, CLI)
 //!                      spawn_retention: purge_older_than every interval
+//!                      (events, commands, notifications; never the lift fault archive)
+//!
+//!  lift monitor --append_lift_faults--> EventStore --query_lift_faults--> HMI fault archive
+//!  notifier ----append_notification---> EventStore --query_notifications--> HMI
 //! ```
 //!
 //! Every value change of every point ([`EventRecord`]) and every command with who issued it
@@ -56,13 +62,27 @@
 //!
 //! # Schema
 //!
-//! Tables `events` and `commands`, versioned by `schema_version`; the migrations are one
+//! Tables `events` and `commands` (migration 1), `lift_faults` and `notifications`
+//! (migration 2), versioned by `schema_version`; the migrations are one
 //! list for both backends (SQL files under `migrations/`, column types filled in per
-//! backend), applied at open. Times are
+//! backend), applied at open, so a database of an older version is brought up to date
+//! when a newer program opens it. Times are
 //! milliseconds since the Unix epoch (UTC) in 64-bit integers; values are split into
 //! `value_kind` plus `value_int`/`value_float`/`value_text`; enums are stored as the stable
 //! codes of [`EventCause::code`], [`CommandOutcome::code`] and [`CommandPhase::code`].
 //! `events.event_ms` is the event time ([`EventRecord::event_time`]) that queries order by.
+//! A lift fault's board time has no zone: `lift_faults.board_ms` holds its wall-clock
+//! reading as if it were UTC (NULL when the board sent an impossible date), and
+//! `lift_faults.filed_ms` the time it is filtered and sorted by
+//! ([`LiftFaultRecord::filed_time`]).
+//!
+//! # Retention
+//!
+//! [`spawn_retention`] deletes events, command records and notification records older than
+//! its cutoff (the notification record is an audit like the command audit, and grows
+//! with every suppressed repeat of a flapping lift's fault). The lift fault archive is never
+//! purged: it is kept for years for the service figures (faults per year, MTBF), and it
+//! grows by a board's fault stack, a few records a day at worst.
 //!
 //! # Example
 //!
@@ -85,7 +105,9 @@
 #![cfg_attr(not(test), deny(clippy::indexing_slicing))]
 
 mod error;
+mod lift;
 mod model;
+mod notification;
 pub mod pointdb;
 #[cfg(feature = "database")]
 mod postgres;
@@ -105,15 +127,17 @@ use std::future::Future;
 use std::pin::Pin;
 
 pub use error::StoreError;
+pub use lift::{LiftFaultOrder, LiftFaultQuery, LiftFaultRecord};
 pub use model::{
     quality_from_bits, quality_to_bits, Actor, CommandOutcome, CommandPhase, CommandRecord,
     EventCause, EventRecord, PointValue, Quality, RecordId, SourceTime,
 };
+pub use notification::{NotificationOutcome, NotificationQuery, NotificationRecord};
 #[cfg(feature = "database")]
 pub use postgres::{PostgresConfig, PostgresStore};
 pub use query::{
-    CommandQuery, Cursor, EventQuery, Order, Page, PointFilter, TimeBasis, DEFAULT_PAGE_SIZE,
-    MAX_PAGE_SIZE,
+    CommandQuery, CountedPage, Cursor, EventQuery, Order, Page, PointFilter, TimeBasis,
+    DEFAULT_PAGE_SIZE, MAX_PAGE_SIZE,
 };
 #[cfg(feature = "database")]
 pub use recorder::{Recorder, CHANNEL_CAPACITY};
@@ -170,8 +194,36 @@ pub trait EventStore: Send + Sync {
         query: &'a CommandQuery,
     ) -> StoreFuture<'a, Page<CommandRecord>>;
 
-    /// Deletes events received before `cutoff` and command records older than `cutoff`;
-    /// returns how many rows went.
+    /// Appends records of lift boards' fault stacks in one transaction (all or nothing) and
+    /// returns the ids the store assigned, in the order of `faults`. Ids grow with
+    /// insertion order, which is the archive's order ([`LiftFaultOrder::Archived`]).
+    fn append_lift_faults<'a>(
+        &'a self,
+        faults: &'a [LiftFaultRecord],
+    ) -> StoreFuture<'a, Vec<RecordId>>;
+
+    /// One page of the lift fault archive, sorted and filtered by `query`, with the number
+    /// of records the filter matches.
+    fn query_lift_faults<'a>(
+        &'a self,
+        query: &'a LiftFaultQuery,
+    ) -> StoreFuture<'a, CountedPage<LiftFaultRecord>>;
+
+    /// Appends one notification record and returns its id.
+    fn append_notification<'a>(
+        &'a self,
+        record: &'a NotificationRecord,
+    ) -> StoreFuture<'a, RecordId>;
+
+    /// One page of notification records, newest first, with the number the filter matches.
+    fn query_notifications<'a>(
+        &'a self,
+        query: &'a NotificationQuery,
+    ) -> StoreFuture<'a, CountedPage<NotificationRecord>>;
+
+    /// Deletes events received before `cutoff`, and command and notification records
+    /// older than `cutoff`; returns how many rows went. The lift fault archive is never
+    /// purged: it is kept for years (faults per year, MTBF).
     fn purge_older_than(&self, cutoff: DateTime<Utc>) -> StoreFuture<'_, u64>;
 
     /// Row counts and time span.

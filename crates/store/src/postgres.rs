@@ -316,10 +316,38 @@ impl Database for PostgresStore {
         })
     }
 
+    fn insert_rows(
+        &self,
+        table: &'static str,
+        columns: &'static str,
+        rows: Vec<Vec<Param>>,
+    ) -> StoreFuture<'_, Vec<RecordId>> {
+        Box::pin(async move {
+            let Some(first) = rows.first() else {
+                return Ok(Vec::new());
+            };
+            // Row by row, each returning its id, so the ids come in the rows' order: these
+            // batches are small (a board's fault stack), unlike the events'.
+            let sql = insert(Backend::Postgres, table, columns, first.clone()).sql;
+            let mut connection = checkout(&self.pool).await?;
+            let stmt = connection.prepare_cached(&sql).await?;
+            let tx = connection.transaction().await?;
+            let mut ids = Vec::with_capacity(rows.len());
+            for row in &rows {
+                let returned = tx.query_one(&stmt, &sql_params(row)).await?;
+                ids.push(id_from_row(&returned)?);
+            }
+            tx.commit().await?;
+            Ok(ids)
+        })
+    }
+
     fn analyze(&self) -> StoreFuture<'_, ()> {
         Box::pin(async move {
             let connection = checkout(&self.pool).await?;
-            Ok(connection.batch_execute("ANALYZE events, commands").await?)
+            Ok(connection
+                .batch_execute("ANALYZE events, commands, lift_faults, notifications")
+                .await?)
         })
     }
 }

@@ -3,6 +3,9 @@
 //! Pages are cut by the key `(time, id)`: a [`Cursor`] holds the key of the last row handed
 //! out, and the next page starts strictly after it. Rows with equal times are ordered by id,
 //! so pages never repeat or skip a row, even while new rows are being appended.
+//!
+//! The lift fault archive and the notification record are paged by offset instead
+//! ([`CountedPage`]): their tables sort by any column and show how many pages there are.
 
 use chrono::{DateTime, Utc};
 use std::fmt;
@@ -100,6 +103,18 @@ pub struct Page<T> {
     pub items: Vec<T>,
     /// The cursor of the next page, `None` when this page is the last.
     pub next: Option<Cursor>,
+}
+
+/// One page of an offset-paged query (the lift fault archive, the notification record),
+/// with the number of rows the whole query matches, for "page 3 of 12".
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub struct CountedPage<T> {
+    /// The rows, in the query's order.
+    pub items: Vec<T>,
+    /// How many rows match the query's filter, on every page together. Counted by a
+    /// statement of its own: a row appended between the two may be counted and not
+    /// listed, or the other way round.
+    pub total: u64,
 }
 
 /// A query over events. Build it with [`EventQuery::default`] and the `with_*` methods.

@@ -222,28 +222,27 @@ fn rows<T>(
     Ok(out)
 }
 
-fn insert_events(
+/// Appends `rows` of `table` in one immediate transaction; ids in their order.
+fn insert_rows(
     conn: &mut Connection,
-    events: &[EventRecord],
+    table: &str,
+    columns: &str,
+    rows: impl IntoIterator<Item = Vec<Param>>,
 ) -> Result<Vec<RecordId>, StoreError> {
-    let Some(first) = events.first() else {
+    let mut rows = rows.into_iter().peekable();
+    let Some(first) = rows.peek() else {
         return Ok(Vec::new());
     };
+    // One statement for the batch, and the row id from the connection rather than
+    // RETURNING: per row, formatting the SQL, looking it up in the statement cache and
+    // stepping a RETURNING row halved the batch throughput.
+    let sql = insert_sql(Backend::Sqlite, table, columns, first);
     let tx = conn.transaction_with_behavior(TransactionBehavior::Immediate)?;
-    let mut ids = Vec::with_capacity(events.len());
+    let mut ids = Vec::with_capacity(rows.size_hint().0);
     {
-        // One statement for the batch, and the row id from the connection rather than
-        // RETURNING: per row, formatting the SQL, looking it up in the statement cache
-        // and stepping a RETURNING row halved the batch throughput.
-        let sql = insert_sql(
-            Backend::Sqlite,
-            "events",
-            EVENT_INSERT,
-            &event_params(first),
-        );
         let mut stmt = tx.prepare_cached(&sql)?;
-        for e in events {
-            stmt.execute(params_from_iter(&event_params(e)))?;
+        for row in rows {
+            stmt.execute(params_from_iter(&row))?;
             ids.push(tx.last_insert_rowid());
         }
     }
@@ -271,7 +270,23 @@ impl Database for SqliteStore {
 
     fn insert_events<'a>(&'a self, events: &'a [EventRecord]) -> StoreFuture<'a, Vec<RecordId>> {
         let events = events.to_vec();
-        Box::pin(self.writer.run(move |c| insert_events(c, &events)))
+        Box::pin(
+            self.writer.run(move |c| {
+                insert_rows(c, "events", EVENT_INSERT, events.iter().map(event_params))
+            }),
+        )
+    }
+
+    fn insert_rows(
+        &self,
+        table: &'static str,
+        columns: &'static str,
+        rows: Vec<Vec<Param>>,
+    ) -> StoreFuture<'_, Vec<RecordId>> {
+        Box::pin(
+            self.writer
+                .run(move |c| insert_rows(c, table, columns, rows)),
+        )
     }
 
     fn analyze(&self) -> StoreFuture<'_, ()> {

@@ -16,14 +16,20 @@ mod select;
 use chrono::{DateTime, Utc};
 
 use crate::{
-    Backend, CommandQuery, CommandRecord, EventQuery, EventRecord, EventStore, Page, RecordId,
+    Backend, CommandQuery, CommandRecord, CountedPage, EventQuery, EventRecord, EventStore,
+    LiftFaultQuery, LiftFaultRecord, NotificationQuery, NotificationRecord, Page, RecordId,
     StoreError, StoreFuture, StoreStats,
 };
 use row::{
-    check_command, check_event, command_from_row, command_params, event_from_row, id_from_row,
-    stats_from_row, to_ms, Decode, COMMAND_INSERT, STATS,
+    check_command, check_event, check_lift_fault, check_notification, command_from_row,
+    command_params, count_from_row, event_from_row, id_from_row, lift_fault_from_row,
+    lift_fault_params, notification_from_row, notification_params, stats_from_row, to_ms, Decode,
+    COMMAND_INSERT, LIFT_FAULT_INSERT, NOTIFICATION_INSERT, STATS,
 };
-use select::{command_cursor, command_sql, event_cursor, event_sql, into_page};
+use select::{
+    command_cursor, command_sql, event_cursor, event_sql, into_page, lift_fault_sql,
+    notification_sql, Counted,
+};
 
 /// Rows one purge statement deletes, so appends interleave with a large purge.
 const PURGE_CHUNK: i64 = 10_000;
@@ -129,6 +135,16 @@ pub(crate) trait Database: Send + Sync {
     /// Appends checked, non-empty `events` in one transaction; ids in their order.
     fn insert_events<'a>(&'a self, events: &'a [EventRecord]) -> StoreFuture<'a, Vec<RecordId>>;
 
+    /// Appends checked, non-empty `rows` (parameters in the order of `columns`, all of
+    /// one shape) to `table` in one transaction; ids in their order. For the small batches
+    /// of other tables than `events`.
+    fn insert_rows(
+        &self,
+        table: &'static str,
+        columns: &'static str,
+        rows: Vec<Vec<Param>>,
+    ) -> StoreFuture<'_, Vec<RecordId>>;
+
     /// Refreshes the query planner's statistics.
     fn analyze(&self) -> StoreFuture<'_, ()>;
 }
@@ -144,6 +160,17 @@ async fn one<D: Database, T: Send + 'static>(
         .into_iter()
         .next()
         .ok_or_else(|| StoreError::Corrupt("a statement returned no row".to_owned()))
+}
+
+/// The count and the page of an offset-paged query.
+async fn counted<D: Database, T: Send + 'static>(
+    db: &D,
+    run: Counted,
+    decode: Decode<T>,
+) -> Result<CountedPage<T>, StoreError> {
+    let total = one(db, run.count, count_from_row).await?;
+    let items = db.rows(run.page, decode).await?;
+    Ok(CountedPage { items, total })
 }
 
 impl<D: Database> EventStore for D {
@@ -196,6 +223,65 @@ impl<D: Database> EventStore for D {
         })
     }
 
+    fn append_lift_faults<'a>(
+        &'a self,
+        faults: &'a [LiftFaultRecord],
+    ) -> StoreFuture<'a, Vec<RecordId>> {
+        Box::pin(async move {
+            if faults.is_empty() {
+                return Ok(Vec::new());
+            }
+            faults.iter().try_for_each(check_lift_fault)?;
+            let rows = faults.iter().map(lift_fault_params).collect();
+            self.insert_rows("lift_faults", LIFT_FAULT_INSERT, rows)
+                .await
+        })
+    }
+
+    fn query_lift_faults<'a>(
+        &'a self,
+        query: &'a LiftFaultQuery,
+    ) -> StoreFuture<'a, CountedPage<LiftFaultRecord>> {
+        Box::pin(async move {
+            counted(
+                self,
+                lift_fault_sql(query, D::BACKEND)?,
+                lift_fault_from_row,
+            )
+            .await
+        })
+    }
+
+    fn append_notification<'a>(
+        &'a self,
+        record: &'a NotificationRecord,
+    ) -> StoreFuture<'a, RecordId> {
+        Box::pin(async move {
+            check_notification(record)?;
+            let run = insert(
+                D::BACKEND,
+                "notifications",
+                NOTIFICATION_INSERT,
+                notification_params(record),
+            );
+            one(self, run, id_from_row).await
+        })
+    }
+
+    fn query_notifications<'a>(
+        &'a self,
+        query: &'a NotificationQuery,
+    ) -> StoreFuture<'a, CountedPage<NotificationRecord>> {
+        Box::pin(async move {
+            counted(
+                self,
+                notification_sql(query, D::BACKEND)?,
+                notification_from_row,
+            )
+            .await
+        })
+    }
+
     fn purge_older_than(&self, cutoff: DateTime<Utc>) -> StoreFuture<'_, u64> {
         Box::pin(async move {
             let (cutoff, limit) = (Param::int(to_ms(cutoff)), Param::int(PURGE_CHUNK));
@@ -205,7 +291,12 @@ impl<D: Database> EventStore for D {
             );
             let params = vec![cutoff, limit];
             let mut total = 0u64;
-            for (table, col) in [("events", "received_ms"), ("commands", "time_ms")] {
+            // Not `lift_faults`: the fault archive is kept for years (see the crate doc).
+            for (table, col) in [
+                ("events", "received_ms"),
+                ("commands", "time_ms"),
+                ("notifications", "time_ms"),
+            ] {
                 let sql = format!(
                     "DELETE FROM {table} WHERE id IN \
                      (SELECT id FROM {table} WHERE {col} < {} LIMIT {})",

@@ -1,17 +1,18 @@
 //! Records to columns and back: the one mapping both backends use.
 //!
-//! A record is written as a list of [`Param`]s in the order of [`EVENT_INSERT`] or
-//! [`COMMAND_INSERT`] and read back from a row of [`EVENT_COLUMNS`] or [`COMMAND_COLUMNS`]
-//! through [`Columns`], which each driver implements in a few lines.
+//! A record is written as a list of [`Param`]s in the order of [`EVENT_INSERT`],
+//! [`COMMAND_INSERT`], [`LIFT_FAULT_INSERT`] or [`NOTIFICATION_INSERT`] and read back from
+//! a row of the matching `*_COLUMNS` through [`Columns`], which each driver implements in
+//! a few lines.
 
-use chrono::{DateTime, Utc};
+use chrono::{DateTime, NaiveDateTime, Utc};
 
 use super::Param;
 use crate::model::{
     quality_from_bits, quality_to_bits, Actor, CommandOutcome, CommandPhase, CommandRecord,
     EventCause, EventRecord, PointValue, RecordId, SourceTime,
 };
-use crate::{StoreError, StoreStats};
+use crate::{LiftFaultRecord, NotificationOutcome, NotificationRecord, StoreError, StoreStats};
 
 /// Converts a time to stored milliseconds since the Unix epoch (finer parts are dropped).
 pub(crate) fn to_ms(t: DateTime<Utc>) -> i64 {
@@ -68,6 +69,25 @@ pub(crate) const EVENT_COLUMNS: &str = "id, node, point, ioa, value_kind, value_
 /// The columns every command query selects, in the order [`command_from_row`] reads them.
 pub(crate) const COMMAND_COLUMNS: &str = "id, time_ms, actor_kind, actor, node, point, ioa, \
      value_kind, value_int, value_float, value_text, phase, outcome, detail";
+
+/// The columns a lift fault record is written to, in the order of [`lift_fault_params`].
+pub(crate) const LIFT_FAULT_INSERT: &str =
+    "node, lift, stack_index, code, floor, target, board_ms, received_ms, filed_ms";
+
+/// The columns every lift fault query selects, in the order [`lift_fault_from_row`] reads
+/// them.
+pub(crate) const LIFT_FAULT_COLUMNS: &str =
+    "id, node, lift, stack_index, code, floor, target, board_ms, received_ms";
+
+/// The columns a notification record is written to, in the order of
+/// [`notification_params`].
+pub(crate) const NOTIFICATION_INSERT: &str =
+    "time_ms, rule, channel, recipient, source, subject, outcome, detail";
+
+/// The columns every notification query selects, in the order [`notification_from_row`]
+/// reads them.
+pub(crate) const NOTIFICATION_COLUMNS: &str =
+    "id, time_ms, rule, channel, recipient, source, subject, outcome, detail";
 
 /// What the stats read: row counts and the received-time span, one row.
 pub(crate) const STATS: &str = "SELECT (SELECT count(*) FROM events), \
@@ -159,6 +179,86 @@ pub(crate) fn command_from_row(r: &dyn Columns) -> Result<CommandRecord, StoreEr
             .ok_or_else(|| StoreError::Corrupt(format!("unknown outcome {outcome}")))?,
         detail: r.need_text(13)?,
     })
+}
+
+/// A board's wall-clock time as stored: its reading taken as if it were UTC.
+pub(crate) fn naive_to_ms(t: NaiveDateTime) -> i64 {
+    t.and_utc().timestamp_millis()
+}
+
+/// A lift fault record as the parameters of one row of [`LIFT_FAULT_INSERT`].
+pub(crate) fn lift_fault_params(f: &LiftFaultRecord) -> Vec<Param> {
+    vec![
+        Param::text(&f.node),
+        Param::text(&f.lift),
+        Param::int(i64::from(f.stack_index)),
+        Param::int(i64::from(f.code)),
+        Param::int(i64::from(f.floor)),
+        Param::int(i64::from(f.target)),
+        Param::Int(f.board_time.map(naive_to_ms)),
+        Param::int(to_ms(f.received_time)),
+        Param::int(naive_to_ms(f.filed_time())),
+    ]
+}
+
+/// A lift fault record from a row of [`LIFT_FAULT_COLUMNS`].
+pub(crate) fn lift_fault_from_row(r: &dyn Columns) -> Result<LiftFaultRecord, StoreError> {
+    let octet = |i: usize| {
+        let v = r.need_int(i)?;
+        u8::try_from(v).map_err(|_| StoreError::Corrupt(format!("octet {v} out of range")))
+    };
+    Ok(LiftFaultRecord {
+        id: Some(r.need_int(0)?),
+        node: r.need_text(1)?,
+        lift: r.need_text(2)?,
+        stack_index: octet(3)?,
+        code: octet(4)?,
+        floor: octet(5)?,
+        target: octet(6)?,
+        board_time: r
+            .int(7)?
+            .map(|ms| from_ms(ms).map(|t| t.naive_utc()))
+            .transpose()?,
+        received_time: from_ms(r.need_int(8)?)?,
+    })
+}
+
+/// A notification record as the parameters of one row of [`NOTIFICATION_INSERT`].
+pub(crate) fn notification_params(n: &NotificationRecord) -> Vec<Param> {
+    vec![
+        Param::int(to_ms(n.time)),
+        Param::text(&n.rule),
+        Param::text(&n.channel),
+        Param::text(&n.recipient),
+        Param::text(&n.source),
+        Param::text(&n.subject),
+        Param::int(i64::from(n.outcome.code())),
+        Param::text(&n.detail),
+    ]
+}
+
+/// A notification record from a row of [`NOTIFICATION_COLUMNS`].
+pub(crate) fn notification_from_row(r: &dyn Columns) -> Result<NotificationRecord, StoreError> {
+    let outcome = r.code(7)?;
+    Ok(NotificationRecord {
+        id: Some(r.need_int(0)?),
+        time: from_ms(r.need_int(1)?)?,
+        rule: r.need_text(2)?,
+        channel: r.need_text(3)?,
+        recipient: r.need_text(4)?,
+        source: r.need_text(5)?,
+        subject: r.need_text(6)?,
+        outcome: NotificationOutcome::from_code(outcome).ok_or_else(|| {
+            StoreError::Corrupt(format!("unknown notification outcome {outcome}"))
+        })?,
+        detail: r.need_text(8)?,
+    })
+}
+
+/// The number a `SELECT count(*)` hands back.
+pub(crate) fn count_from_row(r: &dyn Columns) -> Result<u64, StoreError> {
+    let n = r.need_int(0)?;
+    u64::try_from(n).map_err(|_| StoreError::Corrupt(format!("count {n} out of range")))
 }
 
 /// The id an `INSERT ... RETURNING id` hands back.
@@ -280,4 +380,20 @@ pub(crate) fn check_command(c: &CommandRecord) -> Result<(), StoreError> {
     check_text("point name", &c.point, false)?;
     check_text("detail", &c.detail, true)?;
     check_value(&c.value)
+}
+
+/// Refuses a lift fault record no backend can store faithfully.
+pub(crate) fn check_lift_fault(f: &LiftFaultRecord) -> Result<(), StoreError> {
+    check_text("node name", &f.node, false)?;
+    check_text("lift name", &f.lift, false)
+}
+
+/// Refuses a notification record no backend can store faithfully.
+pub(crate) fn check_notification(n: &NotificationRecord) -> Result<(), StoreError> {
+    check_text("rule", &n.rule, false)?;
+    check_text("channel", &n.channel, false)?;
+    check_text("recipient", &n.recipient, true)?;
+    check_text("source", &n.source, true)?;
+    check_text("subject", &n.subject, true)?;
+    check_text("detail", &n.detail, true)
 }

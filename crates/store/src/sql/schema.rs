@@ -14,10 +14,16 @@ struct Migration {
 }
 
 /// The migrations, in version order.
-const MIGRATIONS: &[Migration] = &[Migration {
-    version: 1,
-    sql: include_str!("../../migrations/0001_init.sql"),
-}];
+const MIGRATIONS: &[Migration] = &[
+    Migration {
+        version: 1,
+        sql: include_str!("../../migrations/0001_init.sql"),
+    },
+    Migration {
+        version: 2,
+        sql: include_str!("../../migrations/0002_lift.sql"),
+    },
+];
 
 /// The newest version this program knows.
 fn supported() -> i64 {
@@ -119,7 +125,15 @@ mod tests {
     #[test]
     fn the_list_is_in_version_order() {
         assert!(MIGRATIONS.windows(2).all(|w| w[0].version < w[1].version));
-        assert_eq!(supported(), 1);
+        assert_eq!(supported(), 2);
+    }
+
+    #[test]
+    fn an_old_database_gets_only_the_newer_steps() {
+        let steps = pending(Backend::Sqlite, 1, 0).unwrap();
+        assert_eq!(steps.iter().map(|s| s.version).collect::<Vec<_>>(), [2]);
+        assert!(steps[0].sql.contains("CREATE TABLE lift_faults"));
+        assert!(pending(Backend::Postgres, 2, 0).unwrap().is_empty());
     }
 
     #[test]

@@ -1,11 +1,18 @@
-//! The `SELECT`s of the queries: filters, keyset pagination and pages, in either dialect.
+//! The `SELECT`s of the queries: filters, keyset pagination and pages, in either dialect;
+//! and the offset pages of the lift fault archive and the notification record, each a
+//! count and a page ([`Counted`]).
 
-use chrono::{DateTime, Utc};
+use chrono::{DateTime, NaiveDateTime, Utc};
 
-use super::row::{to_ms, COMMAND_COLUMNS, EVENT_COLUMNS};
+use super::row::{
+    naive_to_ms, to_ms, COMMAND_COLUMNS, EVENT_COLUMNS, LIFT_FAULT_COLUMNS, NOTIFICATION_COLUMNS,
+};
 use super::{Access, Param, Statement};
 use crate::query::{Cursor, Order, PointFilter, TimeBasis, MAX_PAGE_SIZE};
-use crate::{Backend, CommandQuery, CommandRecord, EventQuery, EventRecord, Page, StoreError};
+use crate::{
+    Backend, CommandQuery, CommandRecord, EventQuery, EventRecord, LiftFaultOrder, LiftFaultQuery,
+    NotificationQuery, Page, StoreError,
+};
 
 /// A `SELECT` under construction: a WHERE clause with its parameters.
 struct SelectBuilder {
@@ -72,14 +79,65 @@ impl SelectBuilder {
     }
 
     fn codes_in(&mut self, col: &str, codes: &[i16]) {
-        if codes.is_empty() {
-            return;
+        self.any_of(col, codes.iter().map(|c| Param::int(i64::from(*c))));
+    }
+
+    /// `col IN (values)`; nothing when there are no values.
+    fn any_of(&mut self, col: &str, values: impl IntoIterator<Item = Param>) {
+        let list: Vec<String> = values.into_iter().map(|p| self.bind(p)).collect();
+        if !list.is_empty() {
+            self.cond(format!("{col} IN ({})", list.join(", ")));
         }
-        let list: Vec<String> = codes
-            .iter()
-            .map(|c| self.bind(Param::int(i64::from(*c))))
-            .collect();
-        self.cond(format!("{col} IN ({})", list.join(", ")));
+    }
+
+    fn naive_range(
+        &mut self,
+        col: &str,
+        since: Option<NaiveDateTime>,
+        until: Option<NaiveDateTime>,
+    ) {
+        if let Some(since) = since {
+            let p = self.bind(Param::int(naive_to_ms(since)));
+            self.cond(format!("{col} >= {p}"));
+        }
+        if let Some(until) = until {
+            let p = self.bind(Param::int(naive_to_ms(until)));
+            self.cond(format!("{col} < {p}"));
+        }
+    }
+
+    /// The count of the rows matching the conditions, and one page of them by offset.
+    fn counted(
+        mut self,
+        columns: &str,
+        table: &str,
+        order_by: &str,
+        offset: u64,
+        limit: u32,
+    ) -> Result<Counted, StoreError> {
+        check_limit(usize::try_from(limit).unwrap_or(usize::MAX))?;
+        let offset = i64::try_from(offset)
+            .map_err(|_| StoreError::InvalidQuery(format!("offset {offset} out of range")))?;
+        let filter = if self.conds.is_empty() {
+            String::new()
+        } else {
+            format!(" WHERE {}", self.conds.join(" AND "))
+        };
+        let count = Statement {
+            access: Access::Read,
+            sql: format!("SELECT count(*) FROM {table}{filter}"),
+            params: self.params.clone(),
+        };
+        let lim = self.bind(Param::int(i64::from(limit)));
+        let off = self.bind(Param::int(offset));
+        let page = Statement {
+            access: Access::Read,
+            sql: format!(
+                "SELECT {columns} FROM {table}{filter} ORDER BY {order_by} LIMIT {lim} OFFSET {off}"
+            ),
+            params: self.params,
+        };
+        Ok(Counted { count, page })
     }
 
     fn keyset(&mut self, col: &str, order: Order, after: Option<Cursor>) -> &'static str {
@@ -169,6 +227,59 @@ pub(crate) fn command_sql(q: &CommandQuery, backend: Backend) -> Result<Statemen
     b.codes_in("outcome", &outcomes);
     let dir = b.keyset("time_ms", q.order, q.after);
     Ok(b.finish(COMMAND_COLUMNS, "commands", "time_ms", dir, q.limit))
+}
+
+/// The two statements of an offset-paged query: how many rows match, and one page.
+#[derive(Debug)]
+pub(crate) struct Counted {
+    pub(crate) count: Statement,
+    pub(crate) page: Statement,
+}
+
+/// The statements of a lift fault archive query.
+pub(crate) fn lift_fault_sql(q: &LiftFaultQuery, backend: Backend) -> Result<Counted, StoreError> {
+    let mut b = SelectBuilder::new(backend);
+    b.text_eq("node", &q.node);
+    b.any_of("lift", q.lifts.iter().map(Param::text));
+    b.any_of("code", q.codes.iter().map(|c| Param::int(i64::from(*c))));
+    b.naive_range("filed_ms", q.since, q.until);
+    let dir = if q.descending { "DESC" } else { "ASC" };
+    let key = match q.order {
+        LiftFaultOrder::Archived => None,
+        LiftFaultOrder::BoardTime => Some("filed_ms"),
+        LiftFaultOrder::Received => Some("received_ms"),
+        LiftFaultOrder::Code => Some("code"),
+        LiftFaultOrder::Lift => Some("lift"),
+        LiftFaultOrder::Floor => Some("floor"),
+    };
+    // The id last, in the same direction: the order is total, so offsets cut it exactly.
+    let order_by = match key {
+        Some(key) => format!("{key} {dir}, id {dir}"),
+        None => format!("id {dir}"),
+    };
+    b.counted(
+        LIFT_FAULT_COLUMNS,
+        "lift_faults",
+        &order_by,
+        q.offset,
+        q.limit,
+    )
+}
+
+/// The statements of a notification query (newest first).
+pub(crate) fn notification_sql(
+    q: &NotificationQuery,
+    backend: Backend,
+) -> Result<Counted, StoreError> {
+    let mut b = SelectBuilder::new(backend);
+    b.text_eq("source", &q.source);
+    b.counted(
+        NOTIFICATION_COLUMNS,
+        "notifications",
+        "time_ms DESC, id DESC",
+        q.offset,
+        q.limit,
+    )
 }
 
 /// Cuts the extra row off a query result and computes the next cursor.

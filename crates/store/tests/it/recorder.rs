@@ -6,7 +6,8 @@ use std::sync::Arc;
 use chrono::{DateTime, Utc};
 use store::Recorder;
 use store::{
-    open_store, Backend, CommandQuery, CommandRecord, EventQuery, EventRecord, EventStore, Page,
+    open_store, Backend, CommandQuery, CommandRecord, CountedPage, EventQuery, EventRecord,
+    EventStore, LiftFaultQuery, LiftFaultRecord, NotificationQuery, NotificationRecord, Page,
     PointValue, RecordId, StoreFuture, StoreStats,
 };
 use tokio::sync::Semaphore;
@@ -43,6 +44,30 @@ impl EventStore for Stalled {
         query: &'a CommandQuery,
     ) -> StoreFuture<'a, Page<CommandRecord>> {
         self.inner.query_commands(query)
+    }
+    fn append_lift_faults<'a>(
+        &'a self,
+        faults: &'a [LiftFaultRecord],
+    ) -> StoreFuture<'a, Vec<RecordId>> {
+        self.inner.append_lift_faults(faults)
+    }
+    fn query_lift_faults<'a>(
+        &'a self,
+        query: &'a LiftFaultQuery,
+    ) -> StoreFuture<'a, CountedPage<LiftFaultRecord>> {
+        self.inner.query_lift_faults(query)
+    }
+    fn append_notification<'a>(
+        &'a self,
+        record: &'a NotificationRecord,
+    ) -> StoreFuture<'a, RecordId> {
+        self.inner.append_notification(record)
+    }
+    fn query_notifications<'a>(
+        &'a self,
+        query: &'a NotificationQuery,
+    ) -> StoreFuture<'a, CountedPage<NotificationRecord>> {
+        self.inner.query_notifications(query)
     }
     fn purge_older_than(&self, cutoff: DateTime<Utc>) -> StoreFuture<'_, u64> {
         self.inner.purge_older_than(cutoff)
