@@ -62,4 +62,11 @@ on_both_backends!(
     batch_of_100k_events,
     concurrent_writers,
     bad_input_is_refused_cleanly,
+    lift_faults_round_trip_and_filters,
+    lift_faults_every_order_both_directions,
+    lift_faults_paging_with_total_and_newest_tail,
+    lift_fault_pages_cover_every_row_once,
+    lift_fault_bad_input_is_refused,
+    notifications_round_trip_and_paging,
+    purge_keeps_lift_faults_and_drops_old_notifications,
 );

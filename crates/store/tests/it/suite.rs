@@ -1,8 +1,12 @@
-//! The shared suite: every function runs against SQLite and PostgreSQL alike.
+//! The shared suite: every function runs against SQLite and PostgreSQL alike (the lift
+//! fault archive and the notification record in `suite/lift.rs`).
 
 use chrono::{DateTime, Duration, TimeZone, Utc};
 use std::collections::HashSet;
 use std::sync::Arc;
+
+mod lift;
+pub(crate) use lift::*;
 
 use store::{
     quality_from_bits, Actor, CommandOutcome, CommandPhase, CommandQuery, CommandRecord, Cursor,
