@@ -11,6 +11,8 @@
 #                  fonts-dejavu-core; the web HMI's browser tests,
 #                  crates/hmi/tests/browser.rs, drive headless Chromium
 #                  through chromedriver over WebDriver)
+#   * aiosmtpd    (PyPI; the loopback SMTP server the notify crate's e-mail
+#                  tests start, crates/notify/tests/smtp_sink.py)
 #
 # Choice of Python environment: c104 is installed with pip into the machine's
 # own python3 (no venv). c104 ships a manylinux wheel for CPython 3.11 on
@@ -27,6 +29,7 @@
 set -euo pipefail
 
 C104_VERSION="2.2.1"   # verified against tests/peer/*.py (see tests/peer/README.md)
+AIOSMTPD_VERSION="1.4.6"   # verified against crates/notify/tests/smtp_sink.py
 PYTHON="${PYTHON:-python3}"
 
 export DEBIAN_FRONTEND=noninteractive
@@ -109,6 +112,33 @@ else
     log "c104 $have installed"
 fi
 
+# ---------------------------------------------------------------- aiosmtpd
+# Pure Python (a py3-none-any wheel): nothing to compile.
+aiosmtpd_installed_version() {
+    "$PYTHON" - <<'EOF' 2>/dev/null || true
+import importlib.metadata as m
+try:
+    import aiosmtpd.smtp  # noqa: F401  (the import itself must work, not only the metadata)
+    print(m.version("aiosmtpd"))
+except Exception:
+    pass
+EOF
+}
+
+have="$(aiosmtpd_installed_version)"
+if [ "$have" = "$AIOSMTPD_VERSION" ]; then
+    log "aiosmtpd $have present"
+else
+    log "aiosmtpd present: '${have:-none}', want $AIOSMTPD_VERSION"
+    "$PYTHON" -m pip install -q "aiosmtpd==$AIOSMTPD_VERSION"
+    have="$(aiosmtpd_installed_version)"
+    if [ "$have" != "$AIOSMTPD_VERSION" ]; then
+        log "ERROR: aiosmtpd $AIOSMTPD_VERSION did not install (found '${have:-none}')"
+        exit 1
+    fi
+    log "aiosmtpd $have installed"
+fi
+
 # ---------------------------------------------------------------- postgresql
 # Only the server binaries under /usr/lib/postgresql/*/bin are used. The package
 # may create and start a system cluster on port 5432; that is harmless, the
@@ -139,6 +169,7 @@ log "chromium: $(chromium --version 2>/dev/null | head -n1)"
 # c104 2.2.1 has no c104.__version__ attribute (its .pyi claims one); the
 # compiled module c104._c104 carries it.
 log "verify: $("$PYTHON" -c 'import c104, c104._c104 as m; print("c104", m.__version__)')"
+log "verify: aiosmtpd $("$PYTHON" -c 'import importlib.metadata as m, aiosmtpd.smtp; print(m.version("aiosmtpd"))')"
 log "verify: $(tshark --version 2>/dev/null | head -n1)"
 log "verify: $("$(ls -d /usr/lib/postgresql/*/bin | sort -V | tail -n1)/initdb" --version)"
 log "verify: $(chromedriver --version 2>/dev/null | head -n1)"
