@@ -27,7 +27,7 @@ use super::codec::{
     encode_reply, CodecConfig, Deframer, Direction, FaultRecord, FaultTime, Query, Reply, Status,
     StatusLayout, TimeOfDay,
 };
-use super::tables::{FAULT_CODES, STATUS_CODES};
+use super::tables::{DoorState, FAULT_CODES, STATUS_CODES};
 
 /// The simulator's settings.
 #[derive(Debug, Clone, PartialEq)]
@@ -102,17 +102,6 @@ pub struct BoardMemory {
     pub last: Option<usize>,
     /// Trips to each floor, floor 1 first.
     pub counters: Vec<u32>,
-}
-
-/// The door state (spec §9).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub enum DoorState {
-    /// Closed.
-    Closed,
-    /// Opening or closing.
-    PartlyOpen,
-    /// Open.
-    Open,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -258,7 +247,9 @@ impl Simulator {
         }
     }
 
-    /// The door state.
+    /// The door state of the simulated car (closed, partly open while opening or
+    /// closing, open; the simulator has no door fault). Not in the protocol: the
+    /// console shows it.
     pub fn doors(&self) -> DoorState {
         match self.phase {
             Phase::Parked | Phase::Travelling => DoorState::Closed,

@@ -818,3 +818,337 @@ impl StatusColours {
             .unwrap_or(ColourClass::Orange)
     }
 }
+
+/// What a status says about the lift's service, for the service figures
+/// ([`super::figures`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LiftMode {
+    /// Available to passengers: idle, travelling, doors, loading, a passenger at the
+    /// doors, a momentary overload, a warning that does not stop the lift.
+    NormalService,
+    /// Not available because of a fault: a blocked or shut-down lift, the safety
+    /// circuit open, a stop by a monitor (thermistor, running time, rope, AWM). A
+    /// stoppage that may need a technician.
+    OutOfService,
+    /// A technician's work: inspection, teach-in run, test stops.
+    Inspection,
+    /// A special or restricted operation that is neither a fault nor a technician's
+    /// work: attendant operation, call lock-outs, priority and recall runs, emergency
+    /// power, fire operation. Not available to ordinary calls.
+    Other,
+    /// A code not in Appendix A (16, 28, …), no status yet or no communication.
+    Unknown,
+}
+
+impl LiftMode {
+    /// All modes, in order.
+    pub const ALL: [LiftMode; 5] = [
+        LiftMode::NormalService,
+        LiftMode::OutOfService,
+        LiftMode::Inspection,
+        LiftMode::Other,
+        LiftMode::Unknown,
+    ];
+
+    /// A stable key for JSON and configuration.
+    pub fn key(self) -> &'static str {
+        match self {
+            LiftMode::NormalService => "normal-service",
+            LiftMode::OutOfService => "out-of-service",
+            LiftMode::Inspection => "inspection",
+            LiftMode::Other => "other",
+            LiftMode::Unknown => "unknown",
+        }
+    }
+
+    /// English label.
+    pub fn english(self) -> &'static str {
+        match self {
+            LiftMode::NormalService => "In service",
+            LiftMode::OutOfService => "Out of service",
+            LiftMode::Inspection => "Inspection",
+            LiftMode::Other => "Special operation",
+            LiftMode::Unknown => "Unknown",
+        }
+    }
+
+    /// Czech label.
+    pub fn czech(self) -> &'static str {
+        match self {
+            LiftMode::NormalService => "V provozu",
+            LiftMode::OutOfService => "Mimo provoz",
+            LiftMode::Inspection => "Inspekce",
+            LiftMode::Other => "Zvláštní provoz",
+            LiftMode::Unknown => "Neznámý",
+        }
+    }
+}
+
+impl fmt::Display for LiftMode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.key())
+    }
+}
+
+/// The service mode of a status code (Appendix A); unknown codes are
+/// [`LiftMode::Unknown`].
+///
+/// Decided from the texts (the Czech originals where the English is thin) and the
+/// colour classes of spec §5: every red code is out of service except the fire
+/// operation; the orange codes split into passenger-caused moments (normal service), a
+/// technician's work (inspection) and special operation (other).
+pub fn lift_mode(status: u8) -> LiftMode {
+    match status {
+        // Ready (1, 4), floor correction (3: a correction run of normal operation), start
+        // of call operation (5), re-levelling (7), loading time (8), fully loaded (12:
+        // the car skips landing calls but serves its load), the automatic runs: start-up
+        // (13), parking (14), warm-up (15).
+        1 | 3 | 4 | 5 | 7 | 8 | 12 | 13 | 14 | 15 => LiftMode::NormalService,
+        // Overloaded (10, 41 "EN 81 overloaded"): the car waits until the load is
+        // reduced; a passenger-caused moment, the lift is in service.
+        10 | 41 => LiftMode::NormalService,
+        // A passenger at the doors: light curtain interrupted (29), landing doors
+        // (30: a landing door not yet closed), door-open button (31), stop by the light
+        // curtain (36). Their permanent forms are faults in Appendix B (0x3E, 0x3F, 0x40).
+        29 | 30 | 31 | 36 => LiftMode::NormalService,
+        // Rope tension (54) and rope warning (55): warnings, orange; the lift still runs
+        // (the stops are 52 and 53).
+        54 | 55 => LiftMode::NormalService,
+        // Faults that stop the lift (all red): SIS error (6), light-curtain fault (18),
+        // door fault (19), shut down (20), evacuation (22: passengers are being freed),
+        // thermistor error (25), parameter-controlled shut-down (26), start-up run error
+        // (27), the AWM stops (32-35: car light, alarm, door-open button, safety
+        // circuit), no shaft data (37), drive hanging (38), travel lock-out (42),
+        // running-time error (43), safety circuit open (44), SK0 fault (45), thermistor
+        // stops (48, 49), parameter error (51), rope replacement and service-life stops
+        // (52, 53).
+        6
+        | 18
+        | 19
+        | 20
+        | 22
+        | 25
+        | 26
+        | 27
+        | 32..=35
+        | 37
+        | 38
+        | 42
+        | 43
+        | 44
+        | 45
+        | 48
+        | 49
+        | 51
+        | 52
+        | 53 => LiftMode::OutOfService,
+        // A technician at work: learning (teach-in) run (21), SK2 and A3 test stops (39,
+        // 40: the EN 81 tests of the safety circuit and of unintended car movement),
+        // inspection (46).
+        21 | 39 | 40 | 46 => LiftMode::Inspection,
+        // Special operation, no fault: lift attendant (2), call lock-out (9), landing-call
+        // lock-out (11), priority run (17: key-switch exclusive use), recall (47),
+        // emergency power (50). Fire case (23) and firefighter run (24) are red on the
+        // panel but are no failure of the lift: counting a fire drill as a failure would
+        // distort MTBF.
+        2 | 9 | 11 | 17 | 47 | 50 | 23 | 24 => LiftMode::Other,
+        _ => LiftMode::Unknown,
+    }
+}
+
+/// The door state shown beside the car (spec §9: open, closed, partly open, door fault).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DoorState {
+    /// Closed.
+    Closed,
+    /// Opening or closing, or not closed and not known to be fully open.
+    PartlyOpen,
+    /// Open.
+    Open,
+    /// A door fault.
+    Fault,
+}
+
+impl fmt::Display for DoorState {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            DoorState::Closed => "closed",
+            DoorState::PartlyOpen => "partly open",
+            DoorState::Open => "open",
+            DoorState::Fault => "door fault",
+        })
+    }
+}
+
+/// The door state a status code implies, `None` when it says nothing about the doors
+/// (spec §9 and EKM-A6: the protocol as known has no door octet, so the state is derived
+/// from the status).
+pub fn door_state(status: u8) -> Option<DoorState> {
+    match status {
+        // Door fault (19) and light-curtain fault (18: the doors' protective device; the
+        // doors cannot close normally).
+        18 | 19 => Some(DoorState::Fault),
+        // Held open: loading time (8), light curtain interrupted (29), door-open button
+        // (31), AWM stop on the door-open button (34), stop by the light curtain (36:
+        // the closing doors reverse to open).
+        8 | 29 | 31 | 34 | 36 => Some(DoorState::Open),
+        // Landing (shaft) doors (30): a landing door is not closed and locked while the
+        // car waits; not closed, not known to be fully open.
+        30 => Some(DoorState::PartlyOpen),
+        // Runs without passengers, which travel with closed doors: floor correction (3),
+        // start-up (13), parking (14), warm-up (15) and learning (21) runs.
+        3 | 13 | 14 | 15 | 21 => Some(DoorState::Closed),
+        // Everything else: "ready" covers idle, travelling and door cycles alike; the
+        // faults and special runs do not say where the doors are.
+        _ => None,
+    }
+}
+
+/// The groups of the minimum fault log of remote lift monitoring (in the manner of
+/// EN 81-28 / EN 627): what a service firm counts per lift. Serialised as its
+/// [`FaultGroup::key`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum FaultGroup {
+    /// The safety circuit broken during travel.
+    SafetyCircuitInTravel,
+    /// A door sequence fault (doors do not close, lock or open as they should).
+    DoorSequence,
+    /// The car stopped outside the door zone (passengers possibly trapped).
+    StopOutsideDoorZone,
+    /// The lift cannot start.
+    CannotStart,
+    /// The main power was off.
+    MainPowerOff,
+    /// Inspection mode.
+    InspectionMode,
+    /// The alarm button.
+    AlarmButton,
+    /// Everything else.
+    Other,
+}
+
+impl FaultGroup {
+    /// All groups, in order.
+    pub const ALL: [FaultGroup; 8] = [
+        FaultGroup::SafetyCircuitInTravel,
+        FaultGroup::DoorSequence,
+        FaultGroup::StopOutsideDoorZone,
+        FaultGroup::CannotStart,
+        FaultGroup::MainPowerOff,
+        FaultGroup::InspectionMode,
+        FaultGroup::AlarmButton,
+        FaultGroup::Other,
+    ];
+
+    /// A stable kebab-case key (also the group's JSON form).
+    pub fn key(self) -> &'static str {
+        match self {
+            FaultGroup::SafetyCircuitInTravel => "safety-circuit",
+            FaultGroup::DoorSequence => "door-sequence",
+            FaultGroup::StopOutsideDoorZone => "outside-door-zone",
+            FaultGroup::CannotStart => "cannot-start",
+            FaultGroup::MainPowerOff => "main-power",
+            FaultGroup::InspectionMode => "inspection",
+            FaultGroup::AlarmButton => "alarm-button",
+            FaultGroup::Other => "other",
+        }
+    }
+
+    /// The group of a key, `None` for another string.
+    pub fn from_key(key: &str) -> Option<FaultGroup> {
+        FaultGroup::ALL.into_iter().find(|group| group.key() == key)
+    }
+
+    /// English label.
+    pub fn english(self) -> &'static str {
+        match self {
+            FaultGroup::SafetyCircuitInTravel => "Safety circuit broken during travel",
+            FaultGroup::DoorSequence => "Door sequence fault",
+            FaultGroup::StopOutsideDoorZone => "Stop outside the door zone",
+            FaultGroup::CannotStart => "Lift cannot start",
+            FaultGroup::MainPowerOff => "Main power off",
+            FaultGroup::InspectionMode => "Inspection mode",
+            FaultGroup::AlarmButton => "Alarm button",
+            FaultGroup::Other => "Other",
+        }
+    }
+
+    /// Czech label.
+    pub fn czech(self) -> &'static str {
+        match self {
+            FaultGroup::SafetyCircuitInTravel => "Přerušení bezpečnostního obvodu za jízdy",
+            FaultGroup::DoorSequence => "Porucha dveří",
+            FaultGroup::StopOutsideDoorZone => "Zastavení mimo dveřní zónu",
+            FaultGroup::CannotStart => "Výtah se nerozjede",
+            FaultGroup::MainPowerOff => "Výpadek hlavního napájení",
+            FaultGroup::InspectionMode => "Inspekce",
+            FaultGroup::AlarmButton => "Tlačítko alarmu",
+            FaultGroup::Other => "Ostatní",
+        }
+    }
+}
+
+impl fmt::Display for FaultGroup {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.key())
+    }
+}
+
+impl Serialize for FaultGroup {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(self.key())
+    }
+}
+
+impl<'de> Deserialize<'de> for FaultGroup {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        let key = String::deserialize(deserializer)?;
+        FaultGroup::from_key(&key)
+            .ok_or_else(|| serde::de::Error::custom(format!("unknown fault group {key:?}")))
+    }
+}
+
+/// The minimum-fault-log group of a fault code (Appendix B); codes not in Appendix B
+/// are [`FaultGroup::Other`].
+pub fn fault_group(code: u8) -> FaultGroup {
+    match code {
+        // Safety circuit opened during travel (0x11) and while the doors open (0x18: the
+        // doors open in advance while the car still levels in the door zone); the
+        // safety-circuit sections SK1 open (0x45) and SK0 fault (0x4D) and the AWM
+        // safety-circuit stop (0x53), which the board reports when the circuit breaks.
+        0x11 | 0x18 | 0x45 | 0x4D | 0x53 => FaultGroup::SafetyCircuitInTravel,
+        // The doors do not go through their sequence: door fault (0x3C), light-grid stop
+        // (0x36), light-curtain fault (0x3D), light curtain permanently interrupted
+        // (0x3E), landing door permanently open (0x3F), door-open button permanently
+        // pressed (0x40) and its AWM stop (0x52).
+        0x36 | 0x3C..=0x40 | 0x52 => FaultGroup::DoorSequence,
+        // The car stops where the board did not plan to: hard stop (0x12), the
+        // running-time monitors (0x13-0x15, 0x44: the drive is cut wherever the car
+        // is), stopping error (0x16), no stop signals (0x2C: the floor-zone signals were
+        // missed), re-levelling fault (0x49: the car could not re-level into the zone).
+        0x12..=0x16 | 0x2C | 0x44 | 0x49 => FaultGroup::StopOutsideDoorZone,
+        // No start (0x10), no start via SIS (0x17), travel lock-out (0x43), start-up
+        // cancelled (0x4E).
+        0x10 | 0x17 | 0x43 | 0x4E => FaultGroup::CannotStart,
+        // System start (0x30: the board came up, after the mains returned or a reset)
+        // and operation on emergency power (0x54: the mains are off).
+        0x30 | 0x54 => FaultGroup::MainPowerOff,
+        // Inspection (0x46), learning run (0x38) and the SIS and SK2 test stops (0x4B,
+        // 0x4C): a technician's work, the log's side of LiftMode::Inspection. (The time
+        // in inspection comes from the status, 46.)
+        0x38 | 0x46 | 0x4B | 0x4C => FaultGroup::InspectionMode,
+        // AWM alarm shut-down (0x51): the alarm stopped the lift. Appendix B has no
+        // plain "alarm button pressed" record; this is the only alarm entry.
+        0x51 => FaultGroup::AlarmButton,
+        // The rest: log and system records (0x01-0x05), the shaft signal faults
+        // (0x20-0x2B, 0x2D), load and call lock-outs (0x31-0x35), evacuation, shut-down,
+        // fire operation, thermistor stops (0x37, 0x39, 0x3A, 0x3B, 0x48), no shaft
+        // data (0x41), drive hanging (0x42), recall (0x47), SIS fault (0x4A), EN 81
+        // overload (0x4F), AWM car light (0x50), loading standby (0x55), parameters
+        // (0x56, 0x57, 0x5A), fire case (0x58), restricted call operation (0x59), the
+        // rope stops and warnings (0x5B-0x5E), and codes not in Appendix B.
+        _ => FaultGroup::Other,
+    }
+}
