@@ -12,7 +12,15 @@
 //!     direction, time (binary or BCD) and year base decoders are configurable
 //!     (spec EKM-A2..A8).
 //!   - [`ekm66::tables`]: the 53 status codes and 75 fault codes, English and Czech, with
-//!     the colour class of each status.
+//!     the colour class of each status; the service mode of a status
+//!     ([`ekm66::tables::lift_mode`]), the door state it implies
+//!     ([`ekm66::tables::door_state`], the one door-state type, also the simulator's) and
+//!     the minimum-fault-log group of a fault code ([`ekm66::tables::fault_group`]).
+//!   - [`ekm66::figures`]: service figures of a lift and a fleet from the lift's history
+//!     (status, position, direction, communication and counter changes, fault records)
+//!     over a period, sans-IO and clock-free: time in service, availability, failures,
+//!     callbacks, MTBF, MTTR, trips and door cycles per floor, the suggested parking
+//!     floor, faults per group.
 //!   - [`ekm66::poller`]: the polling state machine of spec §8, sans-IO: octets and
 //!     `Instant`s in, query octets and events out. Reply time-out, retries, an error
 //!     counter and the communication status; the fault-log synchronisation against an

@@ -8,6 +8,7 @@
     clippy::indexing_slicing
 )]
 
+mod figures;
 mod properties;
 mod pty;
 mod scenario;
