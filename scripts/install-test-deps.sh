@@ -12,7 +12,7 @@
 #                  crates/hmi/tests/browser.rs, drive headless Chromium
 #                  through chromedriver over WebDriver)
 #   * aiosmtpd    (PyPI; the loopback SMTP server the notify crate's e-mail
-#                  tests start, crates/notify/tests/smtp_sink.py)
+#                  tests start, tests/support/smtp_sink.py)
 #
 # Choice of Python environment: c104 is installed with pip into the machine's
 # own python3 (no venv). c104 ships a manylinux wheel for CPython 3.11 on
@@ -29,7 +29,7 @@
 set -euo pipefail
 
 C104_VERSION="2.2.1"   # verified against tests/peer/*.py (see tests/peer/README.md)
-AIOSMTPD_VERSION="1.4.6"   # verified against crates/notify/tests/smtp_sink.py
+AIOSMTPD_VERSION="1.4.6"   # verified against tests/support/smtp_sink.py
 PYTHON="${PYTHON:-python3}"
 
 export DEBIAN_FRONTEND=noninteractive

@@ -91,6 +91,147 @@ pub enum PointSource {
         /// The device's name.
         device: String,
     },
+    /// A value of a watched lift (`[[node.lift]]`): the points each lift brings.
+    Lift {
+        /// The lift's name.
+        lift: String,
+        /// Which of its values.
+        signal: LiftSignal,
+    },
+}
+
+/// A value of a lift watched through its controller board (the points of a
+/// `[[node.lift]]`, one per signal, at the lift's `ioa_base` + [`LiftSignal::offset`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum LiftSignal {
+    /// The board's status code.
+    Status,
+    /// The status's colour class: 0 normal (green), 1 attention (orange), 2 fault (red).
+    Colour,
+    /// The car's floor.
+    Position,
+    /// The target floor of the trip.
+    Target,
+    /// 0 stopped, 1 up, 2 down (whatever the board's own coding).
+    Direction,
+    /// 0 unknown, 1 closed, 2 partly open, 3 open, 4 door fault.
+    Door,
+    /// TRUE while the board does not answer (the communication alarm).
+    NotAnswering,
+    /// TRUE while the lift is out of service (a fault status).
+    OutOfService,
+    /// TRUE while the lift is in inspection (maintenance) mode.
+    Inspection,
+    /// The code of the newest fault archived.
+    LastFault,
+    /// Line errors counted by the poller (time-outs, invalid frames).
+    Errors,
+    /// Faults archived from the board's log.
+    Faults,
+    /// Trips, all floors together.
+    Trips,
+    /// Trips to floor N (1-based).
+    FloorTrips(u8),
+}
+
+impl LiftSignal {
+    /// The signals every lift has, in IOA order (the floors' trip counters follow them).
+    pub const COMMON: [LiftSignal; 13] = [
+        LiftSignal::Status,
+        LiftSignal::Colour,
+        LiftSignal::Position,
+        LiftSignal::Target,
+        LiftSignal::Direction,
+        LiftSignal::Door,
+        LiftSignal::NotAnswering,
+        LiftSignal::OutOfService,
+        LiftSignal::Inspection,
+        LiftSignal::LastFault,
+        LiftSignal::Errors,
+        LiftSignal::Faults,
+        LiftSignal::Trips,
+    ];
+
+    /// The first offset of the floors' trip counters: the common signals leave room for
+    /// three more before them.
+    pub const FLOOR_TRIPS_OFFSET: u32 = 16;
+
+    /// Its IOA's offset from the lift's `ioa_base`.
+    pub fn offset(self) -> u32 {
+        match self {
+            LiftSignal::Status => 0,
+            LiftSignal::Colour => 1,
+            LiftSignal::Position => 2,
+            LiftSignal::Target => 3,
+            LiftSignal::Direction => 4,
+            LiftSignal::Door => 5,
+            LiftSignal::NotAnswering => 6,
+            LiftSignal::OutOfService => 7,
+            LiftSignal::Inspection => 8,
+            LiftSignal::LastFault => 9,
+            LiftSignal::Errors => 10,
+            LiftSignal::Faults => 11,
+            LiftSignal::Trips => 12,
+            LiftSignal::FloorTrips(floor) => {
+                Self::FLOOR_TRIPS_OFFSET + u32::from(floor.saturating_sub(1))
+            }
+        }
+    }
+
+    /// The point name's suffix after `LIFT.`: `status`, `floor3_trips` ...
+    pub fn suffix(self) -> String {
+        match self {
+            LiftSignal::Status => "status".into(),
+            LiftSignal::Colour => "colour".into(),
+            LiftSignal::Position => "position".into(),
+            LiftSignal::Target => "target".into(),
+            LiftSignal::Direction => "direction".into(),
+            LiftSignal::Door => "door".into(),
+            LiftSignal::NotAnswering => "not_answering".into(),
+            LiftSignal::OutOfService => "out_of_service".into(),
+            LiftSignal::Inspection => "inspection".into(),
+            LiftSignal::LastFault => "last_fault".into(),
+            LiftSignal::Errors => "errors".into(),
+            LiftSignal::Faults => "faults".into(),
+            LiftSignal::Trips => "trips".into(),
+            LiftSignal::FloorTrips(floor) => format!("floor{floor}_trips"),
+        }
+    }
+
+    /// The IEC 104 type its point is sent as: indications as single points, codes and
+    /// floors as scaled values, counts as integrated totals, all with CP56 time tags.
+    pub fn type_id(self) -> TypeId {
+        match self {
+            LiftSignal::NotAnswering | LiftSignal::OutOfService | LiftSignal::Inspection => {
+                TypeId::M_SP_TB_1
+            }
+            LiftSignal::Errors
+            | LiftSignal::Faults
+            | LiftSignal::Trips
+            | LiftSignal::FloorTrips(_) => TypeId::M_IT_TB_1,
+            _ => TypeId::M_ME_TE_1,
+        }
+    }
+
+    /// What the point shows, for the point list.
+    pub fn description(self) -> String {
+        match self {
+            LiftSignal::Status => "status code (EKM66 Appendix A)".into(),
+            LiftSignal::Colour => "status colour: 0 normal, 1 attention, 2 fault".into(),
+            LiftSignal::Position => "car floor".into(),
+            LiftSignal::Target => "target floor".into(),
+            LiftSignal::Direction => "direction: 0 stopped, 1 up, 2 down".into(),
+            LiftSignal::Door => "doors: 0 unknown, 1 closed, 2 partly open, 3 open, 4 fault".into(),
+            LiftSignal::NotAnswering => "board not answering (communication alarm)".into(),
+            LiftSignal::OutOfService => "out of service".into(),
+            LiftSignal::Inspection => "inspection mode".into(),
+            LiftSignal::LastFault => "newest archived fault code (Appendix B)".into(),
+            LiftSignal::Errors => "line errors (time-outs, invalid replies)".into(),
+            LiftSignal::Faults => "faults archived".into(),
+            LiftSignal::Trips => "trips, all floors".into(),
+            LiftSignal::FloorTrips(floor) => format!("trips to floor {floor}"),
+        }
+    }
 }
 
 /// A signal of a device on a serial line, as its protocol names it.

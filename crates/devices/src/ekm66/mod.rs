@@ -19,6 +19,7 @@
 //! - A9: codes 1 and 4 keep their texts; unknown codes are shown generically.
 
 pub mod codec;
+pub mod console;
 pub mod figures;
 #[cfg(feature = "tokio")]
 pub mod io;

@@ -4,9 +4,8 @@ use std::time::{Duration, Instant};
 
 use notify::{Notifier, Outcome};
 
-use crate::support::{
-    config, email, notice, refused_port, rule, smtp_peer_available, smtp_plain, t0, SmtpSink,
-};
+use crate::smtp_sink::{smtp_peer_available, SmtpSink};
+use crate::support::{config, email, notice, refused_port, rule, smtp_plain, t0};
 
 #[tokio::test]
 async fn delivers_czech_plain_text_mail() {

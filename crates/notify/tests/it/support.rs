@@ -1,11 +1,8 @@
-//! Shared by the tests: notices, configurations, the SMTP sink process, webhook servers.
+//! Shared by the tests: notices, configurations, webhook servers (the SMTP sink is
+//! `tests/support/smtp_sink.rs` of the workspace).
 
 use std::collections::BTreeMap;
-use std::io::{BufRead, BufReader, Write};
 use std::net::SocketAddr;
-use std::path::{Path, PathBuf};
-use std::process::{Child, ChildStdin, Command, Stdio};
-use std::time::{Duration, Instant};
 
 use axum::Router;
 use chrono::{DateTime, TimeZone, Utc};
@@ -63,105 +60,6 @@ pub(crate) fn rule(name: &str, channels: &[&str], quiet_period_s: u64) -> RuleCo
     let mut rule = RuleConfig::new(name, channels.iter().map(|c| (*c).to_owned()).collect());
     rule.quiet_period_s = quiet_period_s;
     rule
-}
-
-/// Whether python3 with aiosmtpd is here; panics when it must be (CI) and is not.
-pub(crate) fn smtp_peer_available() -> bool {
-    let ok = Command::new("python3")
-        .args(["-c", "import aiosmtpd"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|status| status.success());
-    if ok {
-        return true;
-    }
-    let message = "python3 with aiosmtpd missing; run scripts/install-test-deps.sh";
-    if std::env::var("STANICE_REQUIRE_PEERS").as_deref() == Ok("1") {
-        panic!("{message}");
-    }
-    eprintln!("SKIPPED: {message}");
-    false
-}
-
-/// The aiosmtpd server of `tests/smtp_sink.py`, writing each message to a JSON file.
-pub(crate) struct SmtpSink {
-    child: Child,
-    stdin: Option<ChildStdin>,
-    dir: tempfile::TempDir,
-    pub(crate) port: u16,
-}
-
-impl SmtpSink {
-    /// Starts the sink and waits (bounded) until its port accepts connections.
-    pub(crate) fn start() -> SmtpSink {
-        let dir = tempfile::tempdir().unwrap();
-        let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/smtp_sink.py");
-        let mut child = Command::new("python3")
-            .arg(script)
-            .arg(dir.path())
-            .stdin(Stdio::piped())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::inherit())
-            .spawn()
-            .expect("start python3");
-        let stdin = child.stdin.take();
-        let mut line = String::new();
-        BufReader::new(child.stdout.take().unwrap())
-            .read_line(&mut line)
-            .unwrap();
-        let port: serde_json::Value =
-            serde_json::from_str(&line).unwrap_or_else(|_| panic!("smtp_sink.py said {line:?}"));
-        let port = u16::try_from(port["port"].as_u64().unwrap()).unwrap();
-        let deadline = Instant::now() + Duration::from_secs(10);
-        while std::net::TcpStream::connect(("127.0.0.1", port)).is_err() {
-            assert!(Instant::now() < deadline, "SMTP sink never accepted");
-            std::thread::sleep(Duration::from_millis(20));
-        }
-        SmtpSink {
-            child,
-            stdin,
-            dir,
-            port,
-        }
-    }
-
-    /// Waits (bounded) until `count` messages are there; returns them in arrival order.
-    pub(crate) fn wait_for(&self, count: usize) -> Vec<serde_json::Value> {
-        let deadline = Instant::now() + Duration::from_secs(10);
-        loop {
-            let mut files: Vec<PathBuf> = std::fs::read_dir(self.dir.path())
-                .unwrap()
-                .map(|entry| entry.unwrap().path())
-                .filter(|path| path.extension().is_some_and(|e| e == "json"))
-                .collect();
-            if files.len() >= count {
-                files.sort();
-                return files
-                    .iter()
-                    .map(|file| {
-                        serde_json::from_str(&std::fs::read_to_string(file).unwrap()).unwrap()
-                    })
-                    .collect();
-            }
-            assert!(
-                Instant::now() < deadline,
-                "{} of {count} messages arrived",
-                files.len()
-            );
-            std::thread::sleep(Duration::from_millis(20));
-        }
-    }
-}
-
-impl Drop for SmtpSink {
-    fn drop(&mut self) {
-        if let Some(mut stdin) = self.stdin.take() {
-            let _ = stdin.flush();
-        }
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
 }
 
 /// Serves `router` on a free loopback port; the server lives as long as the runtime.

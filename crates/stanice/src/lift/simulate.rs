@@ -4,6 +4,7 @@
 use std::process::ExitCode;
 
 use clap::Args;
+use devices::ekm66::console;
 use devices::ekm66::io::run_simulator;
 use devices::ekm66::simulator::{SimEvent, Simulator, SimulatorConfig};
 use devices::ekm66::tables::{fault_text, status_text};
@@ -12,16 +13,9 @@ use super::CodecArgs;
 use crate::serial_line::{report_end, LineArgs, ServedLines};
 
 /// The console's operations.
-const CONSOLE_HELP: &str = "\
-Console (one operation a line):
-  fault CODE        store a fault now, CODE in hex as in Appendix B: fault 3C
-  status CODE       show a status code (decimal, Appendix A) until `status auto`: status 18
-  status auto       back to the status the lift's operation gives
-  trip FLOOR        call the car to a floor
-  silent | answer   stop answering queries (a broken cable) | answer again
-  clear             clear the fault log
-  show              status, doors, fault stack
-  help";
+static CONSOLE_HELP: std::sync::LazyLock<String> = std::sync::LazyLock::new(|| {
+    format!("Console (one operation a line):\n{}\n  help", console::HELP)
+});
 
 /// Arguments of `stanice lift simulate`.
 #[derive(Args, Debug)]
@@ -88,7 +82,7 @@ pub(crate) async fn run(args: SimulateArgs) -> anyhow::Result<ExitCode> {
     let now = tokio::time::Instant::now().into_std();
     let mut simulator = Simulator::new(config, now);
 
-    let mut inbox = crate::console::device_operations(CONSOLE_HELP, operate);
+    let mut inbox = crate::console::device_operations(&CONSOLE_HELP, operate);
     let verbose = args.verbose;
     let serve = async {
         let mut lines = ServedLines::new(&args.line).await?;
@@ -135,70 +129,8 @@ fn describe(event: &SimEvent, verbose: bool) -> Option<String> {
     }
 }
 
-fn parse_hex(word: &str) -> Option<u8> {
-    u8::from_str_radix(word.trim_start_matches("0x"), 16).ok()
-}
-
 /// One console operation on the board.
 fn operate(simulator: &mut Simulator, words: &[String]) -> String {
     let words: Vec<&str> = words.iter().map(String::as_str).collect();
-    match words.as_slice() {
-        ["fault", code] => match parse_hex(code) {
-            // The FaultStored event reports it.
-            Some(code) => {
-                let record = simulator.inject_fault(code);
-                format!(
-                    "injected fault 0x{:02X} at index {}",
-                    record.code, record.index
-                )
-            }
-            None => format!("not a fault code: {code} (hex, e.g. 3C)"),
-        },
-        ["status", "auto"] => {
-            simulator.release_status();
-            "status from the lift's operation again".to_owned()
-        }
-        ["status", code] => match code.parse::<u8>() {
-            Ok(code) => {
-                simulator.hold_status(code);
-                format!("holding status {code} {}", status_text(code))
-            }
-            Err(_) => format!("not a status code: {code} (decimal, e.g. 18)"),
-        },
-        ["trip", floor] => match floor.parse::<u8>() {
-            Ok(floor) if simulator.request_trip(floor) => format!("called to floor {floor}"),
-            _ => format!("no floor {floor} (1..={})", simulator.config().floors),
-        },
-        ["silent"] => {
-            simulator.set_silent(true);
-            "not answering".to_owned()
-        }
-        ["answer"] => {
-            simulator.set_silent(false);
-            "answering".to_owned()
-        }
-        ["clear"] => {
-            simulator.clear_log();
-            "fault log cleared".to_owned()
-        }
-        ["show"] => {
-            let status = simulator.status();
-            let memory = simulator.memory();
-            let stored = memory.slots.iter().filter(|slot| slot.is_some()).count();
-            format!(
-                "status {} {}, floor {}, target {}, {}, doors {:?}, board time {}, {} faults stored, last at slot {:?}, trips {:?}",
-                status.code,
-                status_text(status.code),
-                status.position,
-                status.target,
-                status.direction,
-                simulator.doors(),
-                simulator.board_time().format("%Y-%m-%d %H:%M:%S"),
-                stored,
-                memory.last,
-                memory.counters
-            )
-        }
-        _ => "unknown operation; type `help`".to_owned(),
-    }
+    console::operate(simulator, &words).unwrap_or_else(|error| error)
 }

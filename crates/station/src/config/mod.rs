@@ -153,6 +153,59 @@
 //!                                      # does not answer (then its points are IV)
 //! local_indication = [1, 190]          # optional FUN, INF of its LOCAL/REMOTE indication:
 //!                                      # commands are refused while it is ON
+//!
+//! [[node.lift]]                        # a lift watched through its Rekoba EKM66 board
+//! name = "L1"                          # unique per node; its points are L1.status ...
+//! description = "Nádražní 12, goods lift"   # optional
+//! floors = 6                           # 2..=60
+//! ioa_base = 1000                      # its points at 1000 + offset (docs/LIFT.md):
+//!                                      # status, colour, position, target, direction,
+//!                                      # door, not_answering, out_of_service,
+//!                                      # inspection, last_fault, errors, faults, trips
+//!                                      # (+0..+12) and floorN_trips (+16 + N - 1)
+//! port = "/dev/ttyUSB0"                # exactly one of port, tcp = "host:port" (an
+//!                                      # RS-232-to-Ethernet converter), simulate = "ekm66"
+//!                                      # (a simulated board in this process; console:
+//!                                      # `lift L1 fault 0x12`, `lift L1 silent` ...)
+//! baud = 9600                          # default 9600; parity = "even" (default), stop_bits = 1
+//! timeout_ms = 500                     # reply time-out, default 500 (5..=60000)
+//! retries = 3                          # default 3 (0..=10)
+//! poll_period_ms = 1000                # status query period, default 1000
+//! counters_period_ms = 60000           # trip-counter query period, default 60000
+//! status_layout = "any"                # any (default) | adopted (20 octets) | alternative (21)
+//! counter_width = 1                    # octets per trip counter: 1 (default), 2 or 4
+//! time_coding = "binary"               # binary (default) | bcd
+//! year_base = 2000                     # default 2000
+//! direction = [0, 1, 2]                # the board's codes for stopped, up, down
+//! index_base = 0                       # the fault stack's first index, 0 or 1; default: detected
+//! fault_stack = 16                     # simulate only: slots of the fault stack (default 16)
+//! seed = 1                             # simulate only: the random source (default: lift's position)
+//! speed = 1.0                          # simulate only: board seconds per second
+//! fault_probability = 0.05             # simulate only: chance of a fault after a trip
+//!
+//! [node.notify.smtp]                   # optional: notifications of the node's lifts
+//! host = "smtp.example.cz"             # (the notify crate's format, docs/LIFT.md):
+//! security = "starttls"                # none | starttls (default) | tls; port follows
+//! user = "stanice"                     # optional, with password_env = "VARIABLE"
+//! password_env = "STANICE_SMTP_PASSWORD"   # (or password = "...")
+//! from = "Stanice <stanice@example.cz>"
+//!
+//! [node.notify.channel.technicians]    # a named channel
+//! kind = "email"
+//! to = ["novak@example.cz"]
+//!
+//! [node.notify.channel.tickets]
+//! kind = "webhook"                     # a JSON POST of each notice
+//! url = "https://tickets.example.cz/api/hook"
+//!
+//! [[node.notify.rule]]
+//! name = "safety"
+//! sources = ["L*"]                     # lift names (globs), default all
+//! classes = ["safety-circuit", "door-sequence", "comm-lost"]   # fault groups (docs/LIFT.md)
+//!                                      # and comm-lost; default all
+//! channels = ["technicians", "tickets"]
+//! quiet_period_s = 900                 # the same lift and class again within it: suppressed
+//! rate_limit = { max = 10, per_s = 3600 }   # at most 10 notices an hour by this rule
 //! ```
 //!
 //! Points and commands name a line device's signals: `source = "line:LINE/DEVICE/FUN/INF"`
@@ -276,6 +329,12 @@ pub struct NodeConfig {
     pub links: Vec<LinkConfig>,
     /// Serial lines the node polls as master (the gateway role).
     pub lines: Vec<LineConfig>,
+    /// Lifts the node watches through their controller boards (`[[node.lift]]`); their
+    /// points are among [`NodeConfig::points`].
+    pub lifts: Vec<LiftConfig>,
+    /// Who is told of what its lifts report (`[node.notify]`: SMTP server, channels,
+    /// rules), checked.
+    pub notify: Option<notify::NotifyConfig>,
     /// Values written into the PLC after its cold start (variable path -> IEC literal):
     /// parameters such as a board's switch-on delay.
     pub initial_values: Vec<(String, String)>,
@@ -582,6 +641,37 @@ pub struct LineConfig {
     pub status_point: Option<String>,
     /// The devices.
     pub devices: Vec<DeviceConfig>,
+}
+
+/// Where a lift's controller board is reached.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LiftTransport {
+    /// A serial port (RS-232 in the machine room).
+    Serial(String),
+    /// An RS-232-to-Ethernet converter (`host:port`).
+    Tcp(String),
+    /// A simulated EKM66 board inside this process, operated from the console (`lift
+    /// NAME fault 0x12`, ...).
+    Simulated(devices::ekm66::simulator::SimulatorConfig),
+}
+
+/// A lift watched through its EKM66 controller board, `[[node.lift]]`: read-only, the
+/// lift is never controlled. Its points are generated: `NAME.status`, `NAME.position`
+/// ... at `ioa_base` + [`LiftSignal::offset`](crate::pointdb::LiftSignal::offset).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LiftConfig {
+    /// Unique per node; the prefix of its points' names.
+    pub name: String,
+    /// Free text (address, maker, type).
+    pub description: String,
+    /// Floors served, 1..=floors.
+    pub floors: u8,
+    /// The IOA of its first point.
+    pub ioa_base: Ioa,
+    /// Where the board is.
+    pub transport: LiftTransport,
+    /// The polling (periods, time-out, retries, line settings, reply decoders).
+    pub poller: devices::ekm66::poller::PollerConfig,
 }
 
 /// An IEC 104 client link to a lower node, `[[node.link]]`.

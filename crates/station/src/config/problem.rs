@@ -324,6 +324,8 @@ pub enum Unique {
     CommandOnPointIoa,
     /// Device addresses on a line.
     DeviceAddress,
+    /// Lift names in a node.
+    LiftName,
 }
 
 /// A fixed vocabulary a value must come from.
@@ -342,6 +344,12 @@ pub enum Vocabulary {
     SimulatedDevice,
     /// Serial parities.
     Parity,
+    /// Simulated lift boards.
+    SimulatedLift,
+    /// The status reply layouts of a lift board.
+    StatusLayout,
+    /// The time codings of a lift board.
+    TimeCoding,
 }
 
 /// The form a text must have.
@@ -624,6 +632,7 @@ fn duplicate_text(what: Unique, value: &str, other: &str) -> String {
         Unique::CommandIoa => format!("IOA {value} is also used by command `{other}`"),
         Unique::CommandOnPointIoa => format!("IOA {value} is also the address of point `{other}`"),
         Unique::DeviceAddress => format!("address {value} is used twice on line `{other}`"),
+        Unique::LiftName => format!("duplicate lift name `{value}`"),
     }
 }
 
@@ -644,6 +653,15 @@ fn unknown_value_text(what: Vocabulary, value: &str) -> String {
             format!("no simulated device `{value}`; known: \"ref630\"")
         }
         Vocabulary::Parity => format!("parity `{value}`: expected even, odd or none"),
+        Vocabulary::SimulatedLift => {
+            format!("no simulated lift board `{value}`; known: \"ekm66\"")
+        }
+        Vocabulary::StatusLayout => format!(
+            "status layout `{value}`: expected \"any\" (both, by the length octet), \"adopted\" (20 octets) or \"alternative\" (21 octets)"
+        ),
+        Vocabulary::TimeCoding => {
+            format!("time coding `{value}`: expected \"binary\" or \"bcd\"")
+        }
     }
 }
 

@@ -52,6 +52,9 @@ pub(in crate::config) struct RawNode {
     #[serde(default)]
     pub(in crate::config) line: Vec<RawLine>,
     #[serde(default)]
+    pub(in crate::config) lift: Vec<RawLift>,
+    pub(in crate::config) notify: Option<notify::NotifyConfig>,
+    #[serde(default)]
     pub(in crate::config) set: std::collections::BTreeMap<String, String>,
     #[serde(default)]
     pub(in crate::config) table: Vec<RawTable>,
@@ -221,4 +224,34 @@ pub(in crate::config) struct RawDevice {
     pub(in crate::config) common_address: Option<i64>,
     pub(in crate::config) status_point: Option<String>,
     pub(in crate::config) local_indication: Option<[i64; 2]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(in crate::config) struct RawLift {
+    pub(in crate::config) name: String,
+    #[serde(default)]
+    pub(in crate::config) description: String,
+    pub(in crate::config) floors: i64,
+    pub(in crate::config) ioa_base: i64,
+    pub(in crate::config) port: Option<String>,
+    pub(in crate::config) tcp: Option<String>,
+    pub(in crate::config) simulate: Option<String>,
+    pub(in crate::config) baud: Option<i64>,
+    pub(in crate::config) parity: Option<String>,
+    pub(in crate::config) stop_bits: Option<i64>,
+    pub(in crate::config) timeout_ms: Option<i64>,
+    pub(in crate::config) retries: Option<i64>,
+    pub(in crate::config) poll_period_ms: Option<i64>,
+    pub(in crate::config) counters_period_ms: Option<i64>,
+    pub(in crate::config) status_layout: Option<String>,
+    pub(in crate::config) counter_width: Option<i64>,
+    pub(in crate::config) time_coding: Option<String>,
+    pub(in crate::config) year_base: Option<i64>,
+    pub(in crate::config) direction: Option<[i64; 3]>,
+    pub(in crate::config) index_base: Option<i64>,
+    pub(in crate::config) fault_stack: Option<i64>,
+    pub(in crate::config) seed: Option<i64>,
+    pub(in crate::config) speed: Option<f64>,
+    pub(in crate::config) fault_probability: Option<f64>,
 }

@@ -19,6 +19,10 @@
 //!   status points, time source).
 //! - [`line`]: the serial lines to protection devices (IEC 103 master, the gateway role:
 //!   their signals become points, commands become general commands).
+//! - [`lift`]: the lifts watched through their EKM66 boards (lift monitoring: their
+//!   values become points, their fault logs go into the store's archive).
+//! - [`notification`]: e-mail and webhook notices of what the lifts report, each delivery
+//!   recorded.
 //! - `command`: the server hooks — commands routed to a PLC variable (refused in local
 //!   mode) or down a link, each audited; clock synchronisation passed down.
 //!
@@ -30,9 +34,11 @@
 pub mod clock;
 mod command;
 mod forwarded;
+pub mod lift;
 pub mod line;
 pub mod link;
 pub mod node;
+pub mod notification;
 pub mod simulation;
 pub mod sink;
 
@@ -160,6 +166,8 @@ pub struct NodeRuntime {
     pub links: Vec<LinkHandle>,
     /// Its serial lines to protection devices.
     pub lines: Vec<line::LineHandle>,
+    /// The lifts it watches.
+    pub lifts: Vec<lift::LiftHandle>,
 }
 
 impl NodeRuntime {
@@ -168,6 +176,9 @@ impl NodeRuntime {
         self.links.iter().find(|l| l.name() == name)
     }
 }
+
+/// How many archived faults wait for a slow subscriber before it misses some.
+const ARCHIVED_FAULTS_BACKLOG: usize = 1024;
 
 /// A running project.
 pub struct Runtime {
@@ -179,6 +190,7 @@ pub struct Runtime {
     store: Option<Arc<dyn EventStore>>,
     recorder: Recorder,
     retention: Option<RetentionHandle>,
+    archived_faults: tokio::sync::broadcast::Sender<lift::ArchivedFault>,
 }
 
 impl std::fmt::Debug for Runtime {
@@ -262,6 +274,7 @@ impl Runtime {
         };
         let clock = SimClock::new(options.start);
         let zone = zone_of(&project);
+        let (archived_faults, _) = tokio::sync::broadcast::channel(ARCHIVED_FAULTS_BACKLOG);
         let mut shared = Vec::new();
         for &index in &selected {
             let Some(node) = project.nodes.get(index) else {
@@ -467,6 +480,7 @@ impl Runtime {
                 server,
                 links: Vec::new(),
                 lines: Vec::new(),
+                lifts: Vec::new(),
             });
         }
 
@@ -583,6 +597,25 @@ impl Runtime {
                 node.lines.push(handle);
             }
             let _ = handler.lines.set(lines_by_name);
+            let notifications = match (&config.notify, config.lifts.is_empty()) {
+                (Some(notify), false) => Some(
+                    notification::Notifications::spawn(&config.name, notify.clone(), store.clone())
+                        .map_err(|error| {
+                            RuntimeError::Setup(format!("node `{}`: notify: {error}", config.name))
+                        })?,
+                ),
+                _ => None,
+            };
+            for lift in &config.lifts {
+                let spec = lift::LiftSpec::new(lift, points);
+                node.lifts.push(lift::spawn_lift(
+                    spec,
+                    Arc::clone(points),
+                    store.clone(),
+                    archived_faults.clone(),
+                    notifications.clone(),
+                ));
+            }
         }
         requests
             .send(SimRequest::Go)
@@ -607,7 +640,22 @@ impl Runtime {
             store,
             recorder,
             retention,
+            archived_faults,
         })
+    }
+
+    /// Every fault archived from now on, by any lift of the running nodes, once it is in
+    /// the store (notifications, the HMI's live archive).
+    pub fn archived_faults(&self) -> tokio::sync::broadcast::Receiver<lift::ArchivedFault> {
+        self.archived_faults.subscribe()
+    }
+
+    /// A running lift by name (lift names are unique per node; the first node's wins).
+    pub fn lift(&self, name: &str) -> Option<&lift::LiftHandle> {
+        self.nodes
+            .iter()
+            .flat_map(|node| &node.lifts)
+            .find(|lift| lift.name().eq_ignore_ascii_case(name))
     }
 
     /// The project.
@@ -691,6 +739,17 @@ impl Runtime {
                 return Ok(());
             }
         }
+        if let Some(rest) = text.strip_prefix("lift ") {
+            // A simulated lift board: `lift L1 fault 3C`.
+            let words: Vec<&str> = rest.split_whitespace().collect();
+            let Some((name, operation)) = words.split_first() else {
+                return Err("expected `lift NAME OPERATION`".to_owned());
+            };
+            let lift = self
+                .lift(name)
+                .ok_or_else(|| format!("no lift `{name}` runs here"))?;
+            return lift.operate(operation).await.map(|_| ());
+        }
         if let Some(rest) = text.strip_prefix("relay ") {
             // A simulated protection device on a serial line: `relay F1 local`.
             let words: Vec<&str> = rest.split_whitespace().collect();
@@ -731,6 +790,12 @@ impl Runtime {
                 server.shutdown();
             }
         }
+        for lift in self.nodes.iter().flat_map(|node| &node.lifts) {
+            lift.stop();
+        }
+        for lift in self.nodes.iter().flat_map(|node| &node.lifts) {
+            lift.stopped().await;
+        }
         let _ = self.simulation.send(SimRequest::Stop);
         if let Some(thread) = self.thread.take() {
             let _ = tokio::task::spawn_blocking(move || thread.join()).await;
@@ -744,6 +809,9 @@ impl Runtime {
 
 impl Drop for Runtime {
     fn drop(&mut self) {
+        for lift in self.nodes.iter().flat_map(|node| &node.lifts) {
+            lift.stop();
+        }
         let _ = self.simulation.send(SimRequest::Stop);
         for node in &self.nodes {
             if let Some(server) = &node.server {

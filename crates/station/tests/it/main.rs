@@ -8,7 +8,10 @@
 )]
 
 mod config;
+mod lift;
 /// The store tests' throwaway PostgreSQL helpers, one file for both crates.
 #[path = "../../../store/tests/it/pg.rs"]
 mod pg;
 mod runtime_store;
+#[path = "../../../../tests/support/smtp_sink.rs"]
+mod smtp_sink;

@@ -240,103 +240,23 @@ impl Ctx<'_> {
                     LineTransport::Simulated("ref630".to_owned())
                 }
             };
-            type Settings = iec60870::ft12::LineSettings;
-            let mut settings = Settings::new(9600);
-            // Speed and stop bits are checked here, as ranges with their keys; the
-            // codec's own validation below then only catches what it adds later.
-            let mut within =
-                |value: Option<i64>, key: &'static str, what: &'static str, min: i64, max: i64| {
-                    let value = value?;
-                    if (min..=max).contains(&value) {
-                        Some(value)
-                    } else {
-                        self.err(
-                            &at(key),
-                            ConfigProblem::OutOfRange {
-                                what,
-                                value,
-                                min,
-                                max: Some(max),
-                            },
-                        );
-                        None
-                    }
-                };
-            let baud = within(
-                line.baud,
-                "baud",
-                "baud rate",
-                Settings::MIN_BAUD.into(),
-                Settings::MAX_BAUD.into(),
+            let settings = self.serial_settings(
+                SerialKeys {
+                    baud: line.baud,
+                    parity: line.parity.as_deref(),
+                    stop_bits: line.stop_bits,
+                },
+                &at,
+                &[K("node"), I(n), K("line"), I(l)],
             );
-            let stop_bits = within(line.stop_bits, "stop_bits", "stop_bits", 1, 2);
-            if let Some(baud) = baud.and_then(|b| u32::try_from(b).ok()) {
-                settings.baud = baud;
-            }
-            if let Some(stop_bits) = stop_bits.and_then(|s| u8::try_from(s).ok()) {
-                settings.stop_bits = stop_bits;
-            }
-            if let Some(parity) = &line.parity {
-                match parity.parse() {
-                    Ok(parity) => settings.parity = parity,
-                    Err(_) => self.err(
-                        &at("parity"),
-                        ConfigProblem::UnknownValue {
-                            what: Vocabulary::Parity,
-                            value: parity.clone(),
-                        },
-                    ),
-                }
-            }
-            if let Err(detail) = settings.validate() {
-                self.err(
-                    &[K("node"), I(n), K("line"), I(l)],
-                    ConfigProblem::Invalid { detail },
-                );
-            }
-            let mut millis = |value: Option<i64>,
-                              default: i64,
-                              range: std::ops::RangeInclusive<i64>,
-                              key: &'static str| {
-                let given = value.unwrap_or(default);
-                if range.contains(&given) {
-                    Duration::from_millis(given.unsigned_abs())
-                } else {
-                    self.err(
-                        &at(key),
-                        ConfigProblem::OutOfRange {
-                            what: key,
-                            value: given,
-                            min: *range.start(),
-                            max: Some(*range.end()),
-                        },
-                    );
-                    Duration::from_millis(default.unsigned_abs())
-                }
-            };
-            let timeout = millis(line.timeout_ms, 500, 5..=60_000, "timeout_ms");
-            let poll_interval = millis(
+            let timeout = self.millis_in(line.timeout_ms, 500, 5..=60_000, &at("timeout_ms"));
+            let poll_interval = self.millis_in(
                 line.poll_interval_ms,
                 100,
                 0..=3_600_000,
-                "poll_interval_ms",
+                &at("poll_interval_ms"),
             );
-            let retries = match line.retries.map(u8::try_from) {
-                None => 2,
-                Some(Ok(retries)) if retries <= 10 => retries,
-                Some(_) => {
-                    self.err(
-                        &at("retries"),
-                        ConfigProblem::OutOfRange {
-                            what: "retries",
-                            value: line.retries.unwrap_or_default(),
-                            min: 0,
-                            max: Some(10),
-                        },
-                    );
-                    2
-                }
-            };
+            let retries = self.retries_in(line.retries, 2, &at("retries"));
             let mut devices = Vec::new();
             let mut device_names = HashSet::new();
             let mut addresses = HashSet::new();

@@ -1,8 +1,13 @@
 //! The checks of a project: the station, each node, the links between them.
 
+mod lift;
 mod line;
 mod links;
 mod node;
+mod serial;
+
+use lift::TakenPoints;
+use serial::SerialKeys;
 
 use super::*;
 

@@ -586,6 +586,16 @@ impl Ctx<'_> {
             });
         }
 
+        let (lifts, lift_points) = self.check_lifts(
+            n,
+            raw,
+            TakenPoints {
+                names: &mut point_names,
+                ioas: &mut point_ioas,
+            },
+        );
+        points.extend(lift_points);
+
         // commands
         let mut commands = Vec::new();
         let mut command_names = HashSet::new();
@@ -888,6 +898,20 @@ impl Ctx<'_> {
             commands,
             links: Vec::new(),
             lines: self.check_lines(n, raw),
+            lifts,
+            notify: raw.notify.as_ref().map(|config| {
+                if let Err(errors) = config.validate() {
+                    for error in errors {
+                        self.err(
+                            &node(&[K("notify")]),
+                            ConfigProblem::Invalid {
+                                detail: error.to_string(),
+                            },
+                        );
+                    }
+                }
+                config.clone()
+            }),
             initial_values: raw
                 .set
                 .iter()
