@@ -58,6 +58,10 @@ const SKIPPED: &[(&str, &str)] = &[
         "cargo bench -p hmi --bench live",
         "a benchmark: a release build and headless Chromium",
     ),
+    (
+        "cargo bench -p station --bench lift_fleet",
+        "a benchmark: a release build and a minute of 200 lifts polled in real time",
+    ),
 ];
 
 /// Generous bounds: the machine may be busy building or testing something else.
@@ -178,9 +182,9 @@ fn kind(arguments: &[String]) -> Kind {
     let words: Vec<&str> = arguments.iter().map(String::as_str).collect();
     match words.as_slice() {
         ["run" | "demo" | "hmi", ..] => Kind::LongRunning,
-        ["iec104", "server", ..] => Kind::Outstation,
+        ["iec104", "server", ..] | ["lift", "simulate", ..] => Kind::Outstation,
         ["iec104", "client", ..] => Kind::Client,
-        ["iec104", "command", ..] => Kind::PeerOneShot,
+        ["iec104", "command", ..] | ["lift", "poll", ..] => Kind::PeerOneShot,
         _ => Kind::OneShot,
     }
 }
@@ -192,9 +196,25 @@ fn listen_address(arguments: &[String]) -> Option<SocketAddr> {
         return Some(arguments[i + 1].parse().unwrap());
     }
     match arguments.first().map(String::as_str) {
-        Some("run" | "demo") => Some(SocketAddr::from(([127, 0, 0, 1], 2404))),
+        Some("demo") => Some(SocketAddr::from(([127, 0, 0, 1], 2404))),
+        Some("run") => Some(SocketAddr::from((
+            [127, 0, 0, 1],
+            arguments.get(1).map_or(2404, |project| port_base(project)),
+        ))),
         _ => None,
     }
+}
+
+/// The `port_base` of a project's station.toml (2404 when it sets none): where `stanice
+/// run PROJECT` serves its top node.
+fn port_base(project: &str) -> u16 {
+    let text = std::fs::read_to_string(repository_root().join(project).join("station.toml"))
+        .unwrap_or_default();
+    text.lines()
+        .filter_map(|line| line.trim().strip_prefix("port_base"))
+        .filter_map(|rest| rest.trim().strip_prefix('='))
+        .find_map(|value| value.split('#').next()?.trim().parse().ok())
+        .unwrap_or(2404)
 }
 
 /// Waits until `address` can be bound: the previous command's server has let it go and

@@ -91,6 +91,28 @@ pub struct LiftHandle {
     task: tokio::task::AbortHandle,
     /// TRUE once the archive writer has written what it had (or was never started).
     archive_finished: watch::Receiver<bool>,
+    /// What the poller has done so far.
+    counts: Arc<PollCounts>,
+}
+
+/// Counts of a lift's polling, for monitoring and the fleet benchmark.
+#[derive(Debug, Default)]
+pub struct PollCounts {
+    status_replies: std::sync::atomic::AtomicU64,
+    line_errors: std::sync::atomic::AtomicU64,
+}
+
+impl PollCounts {
+    /// Status replies received.
+    pub fn status_replies(&self) -> u64 {
+        self.status_replies
+            .load(std::sync::atomic::Ordering::Relaxed)
+    }
+
+    /// Line errors (time-outs, invalid replies).
+    pub fn line_errors(&self) -> u64 {
+        self.line_errors.load(std::sync::atomic::Ordering::Relaxed)
+    }
 }
 
 impl std::fmt::Debug for LiftHandle {
@@ -105,6 +127,11 @@ impl LiftHandle {
     /// The lift's name.
     pub fn name(&self) -> &str {
         &self.name
+    }
+
+    /// What the poller has done so far.
+    pub fn counts(&self) -> &PollCounts {
+        &self.counts
     }
 
     /// Stops polling; the records already read are still archived ([`Self::stopped`]
@@ -164,9 +191,11 @@ pub(crate) fn spawn_lift(
         _ => None.unzip(),
     };
     let (finished, archive_finished) = watch::channel(false);
+    let counts = Arc::new(PollCounts::default());
     let task = tokio::spawn(run(
         spec,
         node,
+        Arc::clone(&counts),
         store,
         Outlets {
             archived,
@@ -181,6 +210,7 @@ pub(crate) fn spawn_lift(
         simulated,
         task,
         archive_finished,
+        counts,
     }
 }
 
@@ -195,6 +225,7 @@ struct Outlets {
 async fn run(
     spec: LiftSpec,
     node: Arc<NodePoints>,
+    counts: Arc<PollCounts>,
     store: Option<Arc<dyn EventStore>>,
     outlets: Outlets,
     mut board: Option<mpsc::UnboundedReceiver<EndpointAction<Simulator>>>,
@@ -243,7 +274,12 @@ async fn run(
         let mut no_actions = mpsc::unbounded_channel().1;
         let end = run_poller(stream, &mut poller, &mut no_actions, |event, _| {
             match event {
-                Event::Status(status) => lift.status(&status),
+                Event::Status(status) => {
+                    counts
+                        .status_replies
+                        .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    lift.status(&status);
+                }
                 Event::Counters(counters) => lift.counters(&counters),
                 Event::Fault(record) => {
                     let _ = to_archive.send(record);
@@ -261,6 +297,9 @@ async fn run(
                 Event::Comm(_) => {}
                 Event::Error(error) => {
                     errors += 1;
+                    counts
+                        .line_errors
+                        .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                     tracing::debug!(lift = %lift.spec.config.name, %error, "line error");
                     lift.set(LiftSignal::Errors, total(errors));
                 }
