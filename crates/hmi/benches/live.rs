@@ -172,6 +172,7 @@ async fn run(samples: usize) {
         store: None,
         zone: TimeZonePolicy::Utc,
         local_address: None,
+        archive: None,
     })
     .await
     .unwrap();

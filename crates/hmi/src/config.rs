@@ -87,6 +87,62 @@ pub struct AlarmConfig {
     pub acknowledge: bool,
 }
 
+/// A lift of the fleet the lift screens show (`[[lift]]`): its points are `NAME.status`,
+/// `NAME.position`, ... of `points.csv` (the station's `[[node.lift]]` of the same name).
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct LiftConfig {
+    /// The lift's name: the prefix of its points (`L1` for `L1.status`).
+    pub name: String,
+    /// Free text (address, type).
+    #[serde(default)]
+    pub description: String,
+    /// Floors served, 1..=floors (its `NAME.floorN_trips` counters).
+    pub floors: u8,
+}
+
+/// The permission level (0..=9) each lift screen element needs (`[lift_levels]`, lift
+/// spec 10). The server refuses the archive, export and figures requests below their
+/// level; the browser hides what the user's level does not reach.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LiftLevels {
+    /// The fleet list.
+    pub fleet: u8,
+    /// The lift view (car, panel, trips per floor).
+    pub lift: u8,
+    /// The fault archive table.
+    pub archive: u8,
+    /// The CSV export of the archive.
+    pub export: u8,
+    /// The service figures.
+    pub figures: u8,
+}
+
+impl Default for LiftLevels {
+    fn default() -> Self {
+        LiftLevels {
+            fleet: 0,
+            lift: 0,
+            archive: 0,
+            export: 3,
+            figures: 3,
+        }
+    }
+}
+
+impl LiftLevels {
+    fn all(&self) -> [(&'static str, u8); 5] {
+        [
+            ("fleet", self.fleet),
+            ("lift", self.lift),
+            ("archive", self.archive),
+            ("export", self.export),
+            ("figures", self.figures),
+        ]
+    }
+}
+
 fn yes() -> bool {
     true
 }
@@ -109,6 +165,10 @@ struct RawConfig {
     alarm: Vec<AlarmConfig>,
     #[serde(default)]
     trend: Vec<TrendConfig>,
+    #[serde(default)]
+    lift: Vec<LiftConfig>,
+    #[serde(default)]
+    lift_levels: LiftLevels,
 }
 
 #[derive(Deserialize)]
@@ -136,6 +196,10 @@ pub struct HmiConfig {
     pub trends: Vec<String>,
     /// The station's points and commands.
     pub points: Vec<PointRow>,
+    /// The lift fleet of the lift screens (none: no lift screens).
+    pub lifts: Vec<LiftConfig>,
+    /// The levels of the lift screens' elements.
+    pub lift_levels: LiftLevels,
 }
 
 impl HmiConfig {
@@ -166,6 +230,8 @@ impl HmiConfig {
             alarms: raw.alarm,
             trends: raw.trend.into_iter().map(|t| t.point).collect(),
             points,
+            lifts: raw.lift,
+            lift_levels: raw.lift_levels,
         };
         config.check(&text)?;
         Ok(config)
@@ -271,6 +337,46 @@ impl HmiConfig {
                 ));
             }
         }
+        let mut lift_names = HashSet::new();
+        for (index, lift) in self.lifts.iter().enumerate() {
+            let bad = |key: &str, message: String| bad_at("lift", index, key, message);
+            if lift.name.is_empty()
+                || !lift
+                    .name
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+            {
+                return Err(bad(
+                    "name",
+                    format!("lift name `{}` is not URL-safe", lift.name),
+                ));
+            }
+            if !lift_names.insert(lift.name.as_str()) {
+                return Err(bad("name", format!("duplicate lift `{}`", lift.name)));
+            }
+            if lift.floors == 0 {
+                return Err(bad("floors", format!("lift `{}`: no floors", lift.name)));
+            }
+            let status = format!("{}.status", lift.name);
+            if !names.contains(status.as_str()) {
+                return Err(bad(
+                    "name",
+                    format!(
+                        "lift `{}`: points.csv has no `{status}` (stanice points PROJECT writes it)",
+                        lift.name
+                    ),
+                ));
+            }
+        }
+        for (key, level) in self.lift_levels.all() {
+            if level > 9 {
+                let (line, column) = locate_key(text, "[lift_levels]", key);
+                return Err(HmiError::Config(format!(
+                    "{}:{line}:{column}: lift level `{key}` above 9",
+                    file.display()
+                )));
+            }
+        }
         for (index, trend) in self.trends.iter().enumerate() {
             if !names.contains(trend.as_str()) {
                 return Err(bad_at(
@@ -373,6 +479,27 @@ fn locate(text: &str, table: &str, index: usize, key: &str) -> (usize, usize) {
         }
     }
     found.map_or((1, 1), |number| (number + 1, 1))
+}
+
+/// Where `key = ...` of the single table `header` (`[lift_levels]`) is: (line, column).
+fn locate_key(text: &str, header: &str, key: &str) -> (usize, usize) {
+    let mut inside = false;
+    for (number, line) in text.lines().enumerate() {
+        let trimmed = line.trim();
+        if trimmed.starts_with('[') {
+            inside = trimmed == header;
+            continue;
+        }
+        if !inside {
+            continue;
+        }
+        if let Some(rest) = trimmed.strip_prefix(key) {
+            if rest.trim_start().starts_with('=') {
+                return (number + 1, line.len() - trimmed.len() + 1);
+            }
+        }
+    }
+    (1, 1)
 }
 
 #[cfg(test)]

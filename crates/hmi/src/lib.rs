@@ -13,7 +13,9 @@
 //!   recording into the HMI's own event store.
 //! - [`alarms`]: raised/cleared alarms, acknowledgement, shelving.
 //! - [`live`]: the messages of the live WebSocket (the browser's `HMI.receive`).
-//! - [`web`]: the axum router: pages, JSON API, WebSocket.
+//! - [`web`]: the axum router: pages, JSON API, WebSocket; the lift screens' API reads
+//!   the station's own store (the fault archive, the lifts' point history) when
+//!   [`HmiOptions::archive`] names it.
 //! - [`tls`]: HTTPS with the HMI's own certificate.
 //!
 //! # Screens
@@ -104,6 +106,10 @@ pub struct HmiOptions {
     pub listen: SocketAddr,
     /// The HMI's event store (`None`: no history, events and trends are unavailable).
     pub store: Option<String>,
+    /// The station's event store, read only for the lift screens' fault archive and
+    /// service figures (`sqlite:PATH`, `postgres://...`); `None`: the lift screens show
+    /// live values only and the archive API answers 404.
+    pub archive: Option<String>,
     /// The zone of the station's time tags.
     pub zone: TimeZonePolicy,
     /// The local address to connect to the station from (a station may grant its HMI
@@ -187,6 +193,10 @@ impl Hmi {
             Some(url) => Some(Arc::from(open_store(url).await?)),
             None => None,
         };
+        let archive: Option<Arc<dyn EventStore>> = match &options.archive {
+            Some(url) => Some(Arc::from(open_store(url).await?)),
+            None => None,
+        };
         let recorder = match &store {
             Some(store) => Recorder::spawn(Arc::clone(store)),
             None => Recorder::disabled(),
@@ -207,6 +217,7 @@ impl Hmi {
             limiter: Arc::default(),
             verifier: Arc::clone(&verifier),
             store,
+            archive,
             audit_node: format!("CA{}", options.common_address.get()),
             secure_cookies: tls_config.is_some(),
         };

@@ -1,6 +1,9 @@
 //! The users file: names, permission levels 0..=9 and argon2id password hashes.
 //!
-//! `users.toml` holds `[users.NAME] level = 5, hash = "$argon2id$..."`; it is written
+//! `users.toml` holds `[users.NAME] level = 5, hash = "$argon2id$..."` and optionally
+//! `start = "lifts"`, the screen the browser opens after login (lift spec 10: a start
+//! window per account; a mimic's screen id or a page: `lifts`, `faults`, `mobile`,
+//! `events`, ...). It is written
 //! atomically (temporary file, then rename). Verification always runs one argon2
 //! computation, also for unknown names, so timing does not tell which names exist.
 
@@ -24,6 +27,10 @@ pub struct UserRecord {
     pub level: u8,
     /// PHC string of the argon2id hash.
     pub hash: String,
+    /// The screen the browser opens after login (a screen id or a page name); `None`:
+    /// the first screen.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start: Option<String>,
 }
 
 #[derive(Debug, Default, Serialize, Deserialize)]
@@ -62,6 +69,16 @@ pub fn valid_name(name: &str) -> bool {
             .all(|c| c.is_ascii_alphanumeric() || matches!(c, '.' | '-' | '_'))
 }
 
+/// Whether a start screen can be one: 1-64 ASCII letters, digits, '-', '_', '/'
+/// (`lifts`, `rh2`, `lift/L1`).
+pub fn valid_start(start: &str) -> bool {
+    !start.is_empty()
+        && start.len() <= 64
+        && start
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '/'))
+}
+
 impl Users {
     /// Loads `path`; a missing file is an empty user list.
     pub fn load(path: &Path) -> Result<Users, HmiError> {
@@ -70,9 +87,12 @@ impl Users {
                 let file: UsersFile = toml::from_str(&text)
                     .map_err(|e| HmiError::Users(format!("{}: {}", path.display(), e.message())))?;
                 for (name, user) in &file.users {
-                    if !valid_name(name) || user.level > MAX_LEVEL {
+                    if !valid_name(name)
+                        || user.level > MAX_LEVEL
+                        || user.start.as_deref().is_some_and(|s| !valid_start(s))
+                    {
                         return Err(HmiError::Users(format!(
-                            "{}: user `{name}`: bad name or level",
+                            "{}: user `{name}`: bad name, level or start screen",
                             path.display()
                         )));
                     }
@@ -102,6 +122,28 @@ impl Users {
     /// A user's record.
     pub fn record(&self, name: &str) -> Option<&UserRecord> {
         self.users.get(name)
+    }
+
+    /// A user's start screen, if the users file gives one.
+    pub fn start(&self, name: &str) -> Option<&str> {
+        self.users.get(name).and_then(|u| u.start.as_deref())
+    }
+
+    /// Sets (or, with `None`, clears) a user's start screen.
+    pub fn set_start(&mut self, name: &str, start: Option<&str>) -> Result<(), HmiError> {
+        if let Some(start) = start {
+            if !valid_start(start) {
+                return Err(HmiError::Users(format!(
+                    "`{start}`: a start screen is 1-64 letters, digits, '-', '_', '/'"
+                )));
+            }
+        }
+        let user = self
+            .users
+            .get_mut(name)
+            .ok_or_else(|| HmiError::Users(format!("no user `{name}`")))?;
+        user.start = start.map(str::to_owned);
+        self.save()
     }
 
     /// The level of a user whose password is right; `None` otherwise.
@@ -146,6 +188,7 @@ impl Users {
             UserRecord {
                 level,
                 hash: hash(password)?,
+                start: None,
             },
         );
         self.save()
@@ -225,5 +268,28 @@ mod tests {
         assert_eq!(reloaded.verify("operator", "battery staple"), Some(7));
         users.remove("operator").unwrap();
         assert_eq!(Users::load(&path).unwrap().list().count(), 0);
+    }
+
+    #[test]
+    fn start_screen_is_optional_and_kept() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("users.toml");
+        // A users file of before the start screen still loads.
+        let mut users = Users::load(&path).unwrap();
+        users.add("servis", 9, "long enough").unwrap();
+        assert!(!std::fs::read_to_string(&path).unwrap().contains("start"));
+        assert_eq!(Users::load(&path).unwrap().start("servis"), None);
+        users.set_start("servis", Some("lifts")).unwrap();
+        assert!(users.set_start("servis", Some("<script>")).is_err());
+        assert!(users.set_start("nobody", Some("lifts")).is_err());
+        let reloaded = Users::load(&path).unwrap();
+        assert_eq!(reloaded.start("servis"), Some("lifts"));
+        assert_eq!(reloaded.verify("servis", "long enough"), Some(9));
+        std::fs::write(
+            &path,
+            "[users.x]\nlevel = 1\nhash = \"h\"\nstart = \"a b\"\n",
+        )
+        .unwrap();
+        assert!(Users::load(&path).is_err());
     }
 }

@@ -4,7 +4,8 @@
 //! ```text
 //!  request --> harden (security headers; JSON body for bare errors)    outermost
 //!          --> DefaultBodyLimit (MAX_BODY)
-//!          --> session | pages | points | events | alarms | trends | live   (per-area routes)
+//!          --> session | pages | points | events | alarms | trends | lifts | live
+//!              (per-area routes)
 //!              handler(extractors: LoggedIn / Writer / Operator / SameOrigin, then body)
 //!          <-- Result<_, AppError>: an explicit status per refusal, {"error": "..."}
 //! ```
@@ -24,6 +25,7 @@ mod alarms;
 pub mod error;
 mod events;
 pub mod extract;
+mod lifts;
 mod live;
 mod pages;
 mod points;
@@ -75,6 +77,8 @@ pub struct AppState {
     pub verifier: Arc<Verifier>,
     /// The HMI's event store, if any.
     pub store: Option<Arc<dyn EventStore>>,
+    /// The station's event store (the lift fault archive, the lifts' history), if any.
+    pub archive: Option<Arc<dyn EventStore>>,
     /// The node the HMI's audit records name (the station's common address).
     pub audit_node: String,
     /// Cookies only over HTTPS (the HMI serves TLS itself).
@@ -97,6 +101,7 @@ pub fn router(state: AppState) -> Router {
         .merge(events::routes())
         .merge(alarms::routes())
         .merge(trends::routes())
+        .merge(lifts::routes())
         .merge(live::routes())
         .fallback(not_found)
         // Layers run outside in, the last added first. Inner: the body limit applies to

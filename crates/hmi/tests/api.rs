@@ -130,6 +130,7 @@ async fn setup_with(extra_toml: &str) -> Setup {
         store: Some("sqlite::memory:".into()),
         zone: TimeZonePolicy::Zone(chrono_tz::Europe::Prague),
         local_address: Some([127, 0, 0, 2].into()),
+        archive: None,
     })
     .await
     .unwrap();

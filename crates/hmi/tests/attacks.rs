@@ -56,6 +56,7 @@ async fn start(serve: ServeConfig) -> Site {
             store: None,
             zone: TimeZonePolicy::Utc,
             local_address: None,
+            archive: None,
         },
         serve,
     )

@@ -259,6 +259,7 @@ impl Site {
             zone: TimeZonePolicy::Zone(zone),
             // The station's HMI link: the address its redundancy group "hmi" names.
             local_address: Some(IpAddr::from([127, 0, 0, 2])),
+            archive: None,
         })
         .await
         .unwrap();

@@ -1,6 +1,6 @@
 // Stanice web HMI — the application core (index.html).
 //
-// Loaded first; mimic.js, events.js, alarms.js and trends.js add their pages to the HMI
+// Loaded first; mimic.js, events.js, alarms.js, trends.js and lifts.js add their pages to the HMI
 // object below, and HMI.start() runs once every script is in (they are all `defer`).
 //
 //   - HMI.api / HMI.post: JSON requests; a 401 goes back to the login page; every POST
@@ -8,7 +8,9 @@
 //   - the live WebSocket /api/live: a snapshot, then point, link, alarm and command
 //     messages; reconnects with a growing back-off. While it is closed, or while the
 //     station link is down, every value counts as invalid (and blinks on the mimics).
-//   - navigation: #screen/ID for a mimic, #events, #alarms, #trends.
+//   - navigation: #screen/ID for a mimic, #events, #alarms, #trends; lifts.js adds the
+//     lift screens (#lifts, #lift/NAME, #faults, #figures, #mobile) when hmi.toml has
+//     lifts. After login the user's start screen (users.toml `start`) opens.
 //
 // Live messages (HMI.receive): the server's side is one Rust enum, hmi::live::LiveMessage
 // (crates/hmi/src/live.rs), whose doc comment gives each message's fields. In short, each
@@ -352,7 +354,8 @@ const HMI = (window.HMI = {
     let [page, ...rest] = hash.split("/");
     let argument = rest.join("/");
     if (!page || !this.pages[page]) {
-      page = "screen";
+      // No screens but lifts (a lift-service HMI): the fleet list is the first page.
+      page = !this.screens.length && this.pages.lifts ? "lifts" : "screen";
       argument = "";
     }
     if (page === "screen" && !this.screens.some((s) => s.id === argument)) {
@@ -405,10 +408,12 @@ const HMI = (window.HMI = {
     });
     this.showLink();
 
-    const [screens, controls] = await Promise.all([
+    const [screens, controls, lifts] = await Promise.all([
       this.api("/api/screens").catch(() => []),
       this.api("/api/controls").catch(() => []),
+      this.api("/api/lifts").catch(() => null),
     ]);
+    this.liftConfig = lifts; // lifts.js builds the lift screens from it
     this.screens = screens;
     for (const control of controls) this.controls.set(control.command, control);
     const list = document.getElementById("nav-screens");
@@ -419,6 +424,13 @@ const HMI = (window.HMI = {
     );
     window.addEventListener("hashchange", () => this.route());
     this.emit("ready", null);
+    // The user's start screen (users.toml `start`, lift spec 10) when the address names
+    // no page: a mimic's screen id or a page (lifts, faults, mobile, events, ...).
+    const start = this.session.start;
+    if (start && !window.location.hash) {
+      const target = screens.some((s) => s.id === start) ? `screen/${start}` : start;
+      if (this.pages[target.split("/")[0]]) history.replaceState(null, "", `#${target}`);
+    }
     this.route();
     this.connect();
     document.body.dataset.ready = "true";

@@ -33,6 +33,10 @@ pub(crate) struct HmiArgs {
     /// The HMI's event store (`sqlite:PATH`, `postgres://...`, `none`).
     #[arg(long, default_value = "sqlite:hmi-events.sqlite")]
     store: String,
+    /// The station's event store (`sqlite:PATH`, `postgres://...`), read for the lift
+    /// screens' fault archive and service figures; without it they show live values only.
+    #[arg(long)]
+    archive: Option<String>,
     /// The time zone of the station's time tags (IANA name, or UTC).
     #[arg(long, default_value = "Europe/Prague")]
     time_zone: TimeZonePolicy,
@@ -73,6 +77,7 @@ pub(crate) async fn run(args: HmiArgs) -> anyhow::Result<ExitCode> {
             common_address: CommonAddress::new(args.ca),
             listen: args.listen,
             store: (args.store != "none").then(|| args.store.clone()),
+            archive: args.archive.clone(),
             zone: args.time_zone,
             local_address: args.local_address,
         },
@@ -108,6 +113,10 @@ pub(crate) enum UserCommand {
         /// Permission level 0..=9 (0 = read-only).
         #[arg(long)]
         level: u8,
+        /// The screen the browser opens after login: a screen id of hmi.toml or a page
+        /// (`lifts`, `faults`, `mobile`, `events`, `alarms`, `trends`).
+        #[arg(long)]
+        start: Option<String>,
         #[command(flatten)]
         file: UsersFileArgs,
     },
@@ -180,11 +189,26 @@ fn read_password() -> anyhow::Result<String> {
 
 pub(crate) fn user(command: UserCommand) -> anyhow::Result<ExitCode> {
     match command {
-        UserCommand::Add { name, level, file } => {
+        UserCommand::Add {
+            name,
+            level,
+            start,
+            file,
+        } => {
             let users = file.path()?;
             let mut file = hmi::users::Users::load(&users)?;
+            if let Some(start) = &start {
+                if !hmi::users::valid_start(start) {
+                    anyhow::bail!(
+                        "`{start}`: a start screen is 1-64 letters, digits, '-', '_', '/'"
+                    );
+                }
+            }
             let password = read_password()?;
             file.add(&name, level, &password)?;
+            if let Some(start) = &start {
+                file.set_start(&name, Some(start))?;
+            }
             println!(
                 "user {name} added with level {level} to {}",
                 users.display()

@@ -133,6 +133,8 @@ pub(crate) async fn run_project(
         Some("none") => StoreChoice::Disabled,
         Some(url) => StoreChoice::Url(url.to_owned()),
     };
+    // The lift screens read the station's own store (fault archive, point history); an
+    // in-memory store is private to the station, so the HMI gets none then.
     let store_shown = match &store {
         StoreChoice::Project => project.station.store.clone(),
         StoreChoice::Url(url) => url.clone(),
@@ -152,8 +154,10 @@ pub(crate) async fn run_project(
     .await
     .context("the station does not start")?;
     print_banner(&runtime, &store_shown, options.speed, demo);
+    let archive =
+        (store_shown != "none" && !store_shown.contains(":memory:")).then(|| store_shown.clone());
     let hmi = match &plan {
-        Some(plan) => match start_hmi(&runtime, plan).await {
+        Some(plan) => match start_hmi(&runtime, plan, archive).await {
             Ok(hmi) => hmi,
             Err(error) => {
                 runtime.shutdown().await;
@@ -210,7 +214,11 @@ fn check_hmi(project: &Path, plan: &HmiPlan) -> anyhow::Result<()> {
 /// has one. It connects from 127.0.0.2, the address the Vsetín project gives its HMI
 /// link (HMI-local mode, spec 7.4). Without an HMI to serve, or when it does not start,
 /// the station runs on unless the plan requires the HMI (then the error is returned).
-async fn start_hmi(runtime: &Runtime, plan: &HmiPlan) -> anyhow::Result<Option<hmi::Hmi>> {
+async fn start_hmi(
+    runtime: &Runtime,
+    plan: &HmiPlan,
+    archive: Option<String>,
+) -> anyhow::Result<Option<hmi::Hmi>> {
     let project = runtime.project();
     let screens = hmi_folder(&project.folder);
     let not_started = |why: String| {
@@ -259,6 +267,7 @@ async fn start_hmi(runtime: &Runtime, plan: &HmiPlan) -> anyhow::Result<Option<h
             common_address: top.common_address,
             listen: std::net::SocketAddr::from(([127, 0, 0, 1], port)),
             store: Some(store),
+            archive,
             zone: station::pointdb::TimeZonePolicy::Zone(project.station.time_zone),
             local_address: Some(std::net::IpAddr::from([127, 0, 0, 2])),
         },

@@ -41,6 +41,31 @@ pub enum AppError {
     /// not with this HMI (the detail says where it is).
     #[error("{0}")]
     NoAuthority(String),
+    /// 403: the user's level is below the level of a lift screen element
+    /// (`[lift_levels]` of hmi.toml).
+    #[error("the {element} needs level {needed}, user has {has}")]
+    ElementLevel {
+        /// The element (`export`, `figures`, ...).
+        element: &'static str,
+        /// Its level.
+        needed: u8,
+        /// The user's.
+        has: u8,
+    },
+    /// 404: the HMI runs without the station's store: no lift fault archive or figures.
+    #[error("no archive: the HMI was started without the station's store")]
+    NoArchive,
+    /// 404: no lift of this name in hmi.toml.
+    #[error("no lift `{0}`")]
+    NoLift(String),
+    /// 400: a query parameter that is not what it should be.
+    #[error("bad parameter `{name}`: {message}")]
+    BadParameter {
+        /// The parameter.
+        name: &'static str,
+        /// What is wrong with it.
+        message: String,
+    },
     /// 404: no such route or file.
     #[error("not found")]
     NotFound,
@@ -119,17 +144,21 @@ impl AppError {
             AppError::Csrf
             | AppError::ReadOnly
             | AppError::ForeignOrigin
-            | AppError::LevelTooLow { .. } => StatusCode::FORBIDDEN,
+            | AppError::LevelTooLow { .. }
+            | AppError::ElementLevel { .. } => StatusCode::FORBIDDEN,
             AppError::NoAuthority(_) => StatusCode::CONFLICT,
             AppError::NotFound
             | AppError::NoScreen(_)
             | AppError::NoCommand(_)
             | AppError::NoPoint(_)
-            | AppError::NoAlarm => StatusCode::NOT_FOUND,
+            | AppError::NoAlarm
+            | AppError::NoArchive
+            | AppError::NoLift(_) => StatusCode::NOT_FOUND,
             AppError::Body { rejection, .. } => rejection.status(),
             AppError::Query(_)
             | AppError::BadCursor
             | AppError::BadValue(_)
+            | AppError::BadParameter { .. }
             | AppError::Store(_) => StatusCode::BAD_REQUEST,
             AppError::TooManyLogins(_) => StatusCode::TOO_MANY_REQUESTS,
             AppError::Socket(SocketRefusal::NoSession) => StatusCode::UNAUTHORIZED,

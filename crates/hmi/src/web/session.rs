@@ -116,8 +116,15 @@ async fn logout(
 }
 
 async fn session_info(State(state): State<AppState>, user: LoggedIn) -> Json<Value> {
+    let start = state
+        .users
+        .read()
+        .unwrap_or_else(|p| p.into_inner())
+        .start(&user.session.user)
+        .map(str::to_owned);
     Json(json!({
         "user": user.session.user,
+        "start": start,
         "level": user.session.level,
         "csrf": user.session.csrf,
         "title": state.station.config().title,
