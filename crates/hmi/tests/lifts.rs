@@ -214,6 +214,26 @@ fn lift_fleet_example_screens_load() {
     let users = hmi::users::Users::load(&folder.join("users.toml")).unwrap();
     assert_eq!(users.start("Servis1"), Some("lifts"));
     assert_eq!(users.list().count(), 3);
+    // points.csv is what `stanice points examples/lift-fleet` prints (ioa, type, name).
+    let project = Project::load(&folder.join("..")).unwrap_or_else(|e| panic!("{:?}", e.errors()));
+    let mut served: Vec<(u32, String, String)> = project
+        .top_node()
+        .unwrap()
+        .points
+        .iter()
+        .map(|p| (p.ioa.get(), p.type_id.to_string(), p.name.clone()))
+        .collect();
+    served.sort();
+    let mut listed: Vec<(u32, String, String)> = config
+        .points
+        .iter()
+        .map(|p| (p.ioa, p.type_id.to_string(), p.name.clone()))
+        .collect();
+    listed.sort();
+    assert_eq!(
+        listed, served,
+        "regenerate examples/lift-fleet/hmi/points.csv"
+    );
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
