@@ -278,8 +278,14 @@ async fn start_hmi(
         Ok(hmi) => hmi,
         Err(error) => return not_started(error.to_string()),
     };
+    // The Vsetín example's users are named; another project's are in its users file.
+    let users = if project.folder.ends_with("vsetin") {
+        ": the demo's are operator / operator-vsetin, admin / admin-vsetin, viewer / viewer-vsetin"
+    } else {
+        ""
+    };
     println!(
-        "  HMI      {scheme}://{}/  (users in {}: the demo's are operator / operator-vsetin, admin / admin-vsetin, viewer / viewer-vsetin)",
+        "  HMI      {scheme}://{}/  (users in {}{users})",
         hmi.address,
         users_file(&project.folder).display()
     );
@@ -330,10 +336,15 @@ fn print_banner(runtime: &Runtime, store: &str, speed: f64, demo: bool) {
             "  cargo run --release -p stanice -- iec104 client {} --ca {ca} --gi",
             server.local_addr()
         );
-        println!(
-            "  cargo run --release -p stanice -- iec104 command {} --ca {ca} --ioa 2021 --type C_SC_NA_1 --value 1",
-            server.local_addr()
-        );
+        // A command the top node takes, if it takes any.
+        if let Some(command) = config.commands.first() {
+            println!(
+                "  cargo run --release -p stanice -- iec104 command {} --ca {ca} --ioa {} --type {} --value 1",
+                server.local_addr(),
+                command.ioa,
+                command.type_id
+            );
+        }
         println!(
             "  cargo run --release -p stanice -- points {}",
             project.folder.display()
@@ -430,6 +441,18 @@ async fn help_text(runtime: &Runtime) -> String {
     if !links.is_empty() {
         out.push(wrapped("      NODE/LINK: ", &links, " "));
     }
+    let lifts: Vec<String> = runtime
+        .nodes()
+        .iter()
+        .flat_map(|node| &node.lifts)
+        .filter(|lift| lift.is_simulated())
+        .map(|lift| lift.name().to_owned())
+        .collect();
+    if !lifts.is_empty() {
+        out.push("simulated lift boards: lift NAME OPERATION, the operations:".to_owned());
+        out.push(devices::ekm66::console::HELP.to_owned());
+        out.push(wrapped("      NAME: ", &lifts, " "));
+    }
     out.push(CONSOLE_HELP.to_owned());
     out.join("\n")
 }
@@ -450,6 +473,21 @@ async fn console(runtime: &Runtime, hmi: Option<&hmi::Hmi>) {
                 }
                 None => println!("error: no web HMI runs here"),
             },
+            _ if line.starts_with("lift ") => {
+                // A simulated board's answer (`lift L1 show`) is worth printing.
+                let words: Vec<&str> = line.split_whitespace().skip(1).collect();
+                let answer = match words.split_first() {
+                    Some((name, operation)) => match runtime.lift(name) {
+                        Some(lift) => lift.operate(operation).await,
+                        None => Err(format!("no lift `{name}` runs here")),
+                    },
+                    None => Err("expected `lift NAME OPERATION`".to_owned()),
+                };
+                match answer {
+                    Ok(text) => println!("ok: {text}"),
+                    Err(error) => println!("error: {error}"),
+                }
+            }
             _ => match runtime.operate(line).await {
                 Ok(()) => println!("ok: {line}"),
                 Err(error) => println!("error: {error}"),
@@ -493,8 +531,45 @@ async fn print_status(runtime: &Runtime) {
                 links.join(", ")
             }
         );
+        for lift in &node.lifts {
+            println!("    {}", lift_status(&node.points, lift.name()));
+        }
     }
     print_plant_status(runtime).await;
+}
+
+/// One lift's line of `status`: its status text, floor and direction, or the
+/// communication alarm, from its points.
+fn lift_status(points: &station::runtime::NodePoints, lift: &str) -> String {
+    use station::store::PointValue;
+    let value = |signal: &str| {
+        points
+            .point(format!("{lift}.{signal}").as_str())
+            .filter(|point| point.has_value() && !point.quality.invalid)
+            .map(|point| point.value)
+    };
+    let number = |signal: &str| match value(signal) {
+        Some(PointValue::Int(n)) => Some(n),
+        _ => None,
+    };
+    if value("not_answering") == Some(PointValue::Bool(true)) {
+        return format!("lift {lift}: NOT ANSWERING");
+    }
+    let Some(status) = number("status").and_then(|code| u8::try_from(code).ok()) else {
+        return format!("lift {lift}: no status yet");
+    };
+    let direction = match number("direction") {
+        Some(1) => "up",
+        Some(2) => "down",
+        _ => "stopped",
+    };
+    format!(
+        "lift {lift}: {} ({status}), floor {}, {direction}, {} fault(s) archived, last 0x{:02X}",
+        devices::ekm66::tables::status_text(status),
+        number("position").unwrap_or_default(),
+        number("faults").unwrap_or_default(),
+        number("last_fault").unwrap_or_default()
+    )
 }
 
 /// The plant's part of `status`, as the plant reports it.

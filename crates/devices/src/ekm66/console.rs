@@ -6,14 +6,15 @@ use super::simulator::Simulator;
 use super::tables::status_text;
 
 /// What the operations are, for a `help` line.
-pub const HELP: &str = "\
-  fault CODE        store a fault now, CODE in hex as in Appendix B: fault 3C
-  status CODE       show a status code (decimal, Appendix A) until `status auto`: status 18
-  status auto       back to the status the lift's operation gives
-  trip FLOOR        call the car to a floor
-  silent | answer   stop answering queries (a broken cable) | answer again
-  clear             clear the fault log
-  show              status, doors, fault stack";
+pub const HELP: &str = concat!(
+    "  fault CODE        store a fault now, CODE in hex as in Appendix B: fault 3C\n",
+    "  status CODE       show a status code (decimal, Appendix A) until `status auto`: status 18\n",
+    "  status auto       back to the status the lift's operation gives\n",
+    "  trip FLOOR        call the car to a floor\n",
+    "  silent | answer   stop answering queries (a broken cable) | answer again\n",
+    "  clear             clear the fault log\n",
+    "  show              status, doors, fault stack"
+);
 
 fn parse_hex(word: &str) -> Option<u8> {
     let digits = word

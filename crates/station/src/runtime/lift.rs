@@ -232,11 +232,15 @@ async fn run(
     finished: watch::Sender<bool>,
 ) {
     let lift = Lift::new(spec, Arc::clone(&node));
-    let (cursor, faults) = match &store {
+    let (cursor, faults, newest) = match &store {
         Some(store) => rebuild_cursor(store.as_ref(), node.name(), &lift.spec.config.name).await,
-        None => (ArchiveCursor::default(), 0),
+        None => (ArchiveCursor::default(), 0, None),
     };
     lift.set(LiftSignal::Faults, total(faults));
+    lift.set(LiftSignal::Errors, total(0));
+    if let Some(code) = newest {
+        lift.set(LiftSignal::LastFault, PointValue::Int(code.into()));
+    }
     lift.down();
     let (to_archive, queue) = mpsc::unbounded_channel();
     tokio::spawn(archive(
@@ -354,8 +358,13 @@ async fn open(
     }
 }
 
-/// The cursor from the lift's newest archived records, and how many it has in all.
-async fn rebuild_cursor(store: &dyn EventStore, node: &str, lift: &str) -> (ArchiveCursor, u64) {
+/// The cursor from the lift's newest archived records, how many it has in all, and the
+/// code of the newest.
+async fn rebuild_cursor(
+    store: &dyn EventStore,
+    node: &str,
+    lift: &str,
+) -> (ArchiveCursor, u64, Option<u8>) {
     let query = LiftFaultQuery::newest(node, lift, CURSOR_RECORDS);
     match store.query_lift_faults(&query).await {
         Ok(page) => {
@@ -368,11 +377,15 @@ async fn rebuild_cursor(store: &dyn EventStore, node: &str, lift: &str) -> (Arch
                 last: page.items.first().and_then(fault_key),
                 known,
             };
-            (cursor, page.total)
+            (
+                cursor,
+                page.total,
+                page.items.first().map(|record| record.code),
+            )
         }
         Err(error) => {
             tracing::error!(%node, %lift, %error, "cannot read the fault archive: starting without it (records may be archived twice)");
-            (ArchiveCursor::default(), 0)
+            (ArchiveCursor::default(), 0, None)
         }
     }
 }
