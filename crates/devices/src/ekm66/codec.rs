@@ -90,6 +90,15 @@ pub enum ReplyError {
     /// The reply is shorter than its layout's offsets (a layout misconfigured).
     #[error("field at offset {0} outside the frame")]
     Offset(usize),
+    /// The function echo names another query: a late reply to an earlier query (a status
+    /// reply is also a frame of L ≥ 3, which a counter query would otherwise take).
+    #[error("function echo {function:#04x} answers another query than the {query} query")]
+    OtherFunction {
+        /// The echo at position 6.
+        function: u8,
+        /// The query sent.
+        query: Query,
+    },
 }
 
 /// Why octets are not a query (the simulator's side).
@@ -669,6 +678,33 @@ pub fn decode_reply(
 ) -> Result<Reply, ReplyError> {
     let length = frame.length();
     let unexpected = ReplyError::UnexpectedLength { length, query };
+    // The header first (spec §4.4), then the function echo: EKM-A8 leaves the echo
+    // undocumented, so an octet that is no function code is ignored; one that is another
+    // query's function code is that query's (late) reply.
+    let (expected, length_fits) = match query {
+        Query::Status => (
+            FUNCTION_STATUS,
+            config
+                .status_layouts
+                .iter()
+                .any(|layout| layout.length == length),
+        ),
+        Query::Counters => (FUNCTION_COUNTERS, length >= 3),
+        Query::FaultRecord(_) => (
+            FUNCTION_FAULT,
+            length == EMPTY_SLOT_LENGTH || length == FAULT_RECORD_LENGTH,
+        ),
+    };
+    if !length_fits {
+        return Err(unexpected);
+    }
+    if let Ok(function) = frame.octet(6) {
+        if function != expected
+            && [FUNCTION_STATUS, FUNCTION_COUNTERS, FUNCTION_FAULT].contains(&function)
+        {
+            return Err(ReplyError::OtherFunction { function, query });
+        }
+    }
     match query {
         Query::Status => {
             let layout = config

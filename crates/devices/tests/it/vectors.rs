@@ -442,3 +442,26 @@ fn a_0x68_inside_a_frame_is_not_a_start() {
         Some(Ok(Frame::parse(&bytes).unwrap()))
     );
 }
+
+#[test]
+fn a_late_reply_to_another_query_is_refused_by_its_function_echo() {
+    // The status vector (L = 0x0E, echo 0x01) arriving while the counter query waits:
+    // as counters it would be 11 plausible values.
+    let error = decode(Query::Counters, &STATUS_20).unwrap_err();
+    assert!(error.contains("answers another query"), "{error}");
+    // The counter vector (echo 0x03) to a fault query, a fault record to a status query.
+    assert!(decode(Query::FaultRecord(0), &COUNTERS_25).is_err());
+    assert!(decode(Query::Status, &FAULT_23).is_err());
+    // A board that echoes no function code (zeros, EKM-A8) is still understood.
+    let mut quiet = COUNTERS_25;
+    quiet[6] = 0x00;
+    let sum = quiet[4..quiet.len() - 2]
+        .iter()
+        .fold(0u8, |sum, octet| sum.wrapping_add(*octet));
+    let end = quiet.len() - 2;
+    quiet[end] = sum;
+    assert_eq!(
+        decode(Query::Counters, &quiet).unwrap(),
+        Reply::Counters(vec![10, 20, 30, 40, 5, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0])
+    );
+}
