@@ -79,50 +79,82 @@ pub(crate) async fn run(args: PollArgs) -> anyhow::Result<ExitCode> {
         }
         _ => ArchiveCursor::default(),
     };
-    let line = args.line.open(&transport).await?;
-    if !args.json {
-        println!("polling the EKM66 on {} ({})", line.peer, config.line);
-    }
-    let mut poller = Poller::new(config, cursor, tokio::time::Instant::now().into_std());
-    let (_actions, mut inbox) = mpsc::unbounded_channel();
     let mut printer = Printer {
         json: args.json,
         every_status: args.every_status,
         last_status: None,
         last_counters: None,
     };
-    let mut failure = None;
     let archive = args.archive.clone();
-    let poll = run_poller(line.stream, &mut poller, &mut inbox, |event, cursor| {
-        if let (Event::Fault(_), Some(path)) = (&event, &archive) {
-            if let Err(error) = store(path, cursor) {
-                failure = Some(error);
-                return std::ops::ControlFlow::Break(());
+    // A line that closes (a converter's TCP connection dropped, an adapter unplugged) is
+    // opened again, the cursor carried over, until the duration ends or Ctrl-C.
+    let poll_forever = async {
+        let mut cursor = cursor;
+        loop {
+            let line = match args.line.open(&transport).await {
+                Ok(line) => line,
+                Err(error) => {
+                    eprintln!("{error}; trying again in {REOPEN_AFTER:?}");
+                    tokio::time::sleep(REOPEN_AFTER).await;
+                    continue;
+                }
+            };
+            if !args.json {
+                println!("polling the EKM66 on {} ({})", line.peer, config.line);
             }
+            let mut poller = Poller::new(
+                config.clone(),
+                cursor.clone(),
+                tokio::time::Instant::now().into_std(),
+            );
+            let (_actions, mut inbox) = mpsc::unbounded_channel();
+            let mut failure = None;
+            let mut stop = false;
+            let end = run_poller(line.stream, &mut poller, &mut inbox, |event, cursor| {
+                if let (Event::Fault(_), Some(path)) = (&event, &archive) {
+                    if let Err(error) = store(path, cursor) {
+                        failure = Some(error);
+                        return std::ops::ControlFlow::Break(());
+                    }
+                }
+                if printer.print(&event) {
+                    std::ops::ControlFlow::Continue(())
+                } else {
+                    stop = true;
+                    std::ops::ControlFlow::Break(())
+                }
+            })
+            .await;
+            cursor = poller.cursor().clone();
+            if let Some(error) = failure {
+                return Err(error);
+            }
+            if stop {
+                return Ok(());
+            }
+            match end {
+                Ok(devices::ekm66::io::DriveEnd::Stopped) => return Ok(()),
+                Ok(devices::ekm66::io::DriveEnd::Closed) => {
+                    eprintln!("the line closed; opening it again in {REOPEN_AFTER:?}")
+                }
+                Err(error) => {
+                    eprintln!("the line failed: {error}; opening it again in {REOPEN_AFTER:?}")
+                }
+            }
+            tokio::time::sleep(REOPEN_AFTER).await;
         }
-        if printer.print(&event) {
-            std::ops::ControlFlow::Continue(())
-        } else {
-            std::ops::ControlFlow::Break(())
-        }
-    });
+    };
     let mut interrupt = crate::interrupt::Interrupt::listen();
     tokio::select! {
-        end = poll => {
-            match end {
-                Ok(devices::ekm66::io::DriveEnd::Closed) => eprintln!("the line closed"),
-                Ok(devices::ekm66::io::DriveEnd::Stopped) => {}
-                Err(error) => eprintln!("the line failed: {error}"),
-            }
-        }
+        result = poll_forever => result?,
         () = crate::console::run_for(args.duration) => {}
         () = interrupt.recv() => {}
     }
-    if let Some(error) = failure {
-        return Err(error);
-    }
     Ok(ExitCode::SUCCESS)
 }
+
+/// The pause before a closed line is opened again.
+const REOPEN_AFTER: Duration = Duration::from_secs(2);
 
 /// Writes the cursor next to its file and renames it over, so that a crash leaves the
 /// old or the new cursor, never half of one.
