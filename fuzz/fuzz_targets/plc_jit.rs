@@ -2,7 +2,9 @@
 //! cycles with its loops compiled to machine code and three as closures only; every
 //! variable and every fault must be the same both ways (the closures are the reference
 //! semantics of the JIT). Input without a PROGRAM is run as the body of the declarations
-//! in `plc_harness`.
+//! in `plc_harness`, whose FUNCTIONs (`Sq`, `Per` with an output and a division) and FB
+//! (`Acc` with a VAR_IN_OUT) the compiled loops inline where they are called; the seeds
+//! `calls_in_loop.st` and `call_fault_in_loop.st` call them in loops.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;

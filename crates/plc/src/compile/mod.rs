@@ -32,7 +32,7 @@
 //!
 //! Loops go further: every FOR, WHILE and REPEAT statement whose body is in the subset
 //! of `jit` (integer and REAL values, arrays, structs, FB variables, the standard timers
-//! and edges) is compiled to machine code by Cranelift, with its counters and
+//! and edges, calls of user FUNCTIONs and FBs, inlined) is compiled to machine code by Cranelift, with its counters and
 //! accumulators in registers; the closures remain the reference semantics, the code for
 //! everything else, and the fallback where the host has no Cranelift backend
 //! ([`CompileOptions::jit`], `STANICE_PLC_JIT=0`). The conformance suite and a property

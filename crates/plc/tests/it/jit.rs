@@ -12,11 +12,34 @@ VAR a, b, c : DINT := 3; s : INT := -7; t : SINT := 100; l : LINT := 1; u : UDIN
 w : WORD := 16#F0F0; x : LREAL := 0.5; r : REAL := 1.25; f, g : BOOL;
 arr : ARRAY[1..8] OF DINT; m : ARRAY[0..2, 1..3] OF INT; rr : ARRAY[1..4] OF LREAL;
 i0, i1, i2, k : DINT; tm : ARRAY[1..3] OF TON; st : STRUCT_T;
+fk : ARRAY[1..2] OF Fk; fk1 : Fk;
 END_VAR
 ";
 
+/// Types, globals and the callees of the random loops: a FUNCTION with every kind of
+/// parameter, locals with initial values, a division and RETURN; a FB with state, an
+/// indexed array and a nested TON.
 const TYPES: &str = "TYPE STRUCT_T : STRUCT p : DINT; q : LREAL; END_STRUCT; END_TYPE
-VAR_GLOBAL gc : DINT := 2; ga : ARRAY[1..4] OF DINT; END_VAR\n";
+VAR_GLOBAL gc : DINT := 2; ga : ARRAY[1..4] OF DINT; END_VAR
+FUNCTION Fx : DINT
+VAR_INPUT p : DINT; q : LREAL; END_VAR
+VAR_IN_OUT io : DINT; END_VAR
+VAR_OUTPUT o : DINT; END_VAR
+VAR t : DINT := 4; h : ARRAY[0..2] OF DINT; END_VAR
+t := t + p; io := io + t; h[(p MOD 3 + 3) MOD 3] := t;
+IF q > 10.0 THEN o := 1; RETURN; END_IF
+o := p / (io MOD 5); gc := gc + 1;
+Fx := t * 2 + h[0];
+END_FUNCTION
+FUNCTION_BLOCK Fk
+VAR_INPUT p : DINT; END_VAR
+VAR_OUTPUT n : DINT; END_VAR
+VAR h : ARRAY[0..3] OF DINT; tn : TON; END_VAR
+n := n + p; h[n MOD 4] := p;
+tn(IN := p > 0, PT := T#20ms);
+IF tn.Q THEN n := n - 1; END_IF
+END_FUNCTION_BLOCK
+";
 
 /// The variables of [`DECLS`] inside a FB, for loops that run on instance frames.
 const FB_DECLS: &str = "FUNCTION_BLOCK Work
@@ -24,6 +47,7 @@ VAR a, b, c : DINT := 3; s : INT := -7; t : SINT := 100; l : LINT := 1; u : UDIN
 w : WORD := 16#F0F0; x : LREAL := 0.5; r : REAL := 1.25; f, g : BOOL;
 arr : ARRAY[1..8] OF DINT; m : ARRAY[0..2, 1..3] OF INT; rr : ARRAY[1..4] OF LREAL;
 i0, i1, i2, k : DINT; tm : ARRAY[1..3] OF TON; st : STRUCT_T;
+fk : ARRAY[1..2] OF Fk; fk1 : Fk;
 END_VAR
 ";
 
@@ -192,6 +216,11 @@ fn stmt(depth: u32) -> BoxedStrategy<String> {
         Just("gc := gc + c; ga[(c MOD 4) + 1] := gc;".to_string()),
         Just("arr[c + 1] := arr[c] + arr[i1 + 3];".to_string()),
         Just("IF arr[b] > arr[b + 1] THEN k := arr[b]; arr[b] := arr[b + 1]; arr[b + 1] := k; END_IF;".to_string()),
+        dint_expr().prop_map(|e| format!("a := a + Fx({e}, x, c);")),
+        dint_expr().prop_map(|e| format!("c := Fx(p := {e}, q := r, io := arr[(b MOD 8) + 1], o => b);")),
+        real_expr().prop_map(|e| format!("Fx(p := a, q := {e}, io := st.p);")),
+        dint_expr().prop_map(|e| format!("fk[(a MOD 2) + 1](p := {e}); b := b + fk[1].n;")),
+        Just("fk1(p := Fx(a, x, b) MOD 7); c := c - fk1.n;".to_string()),
     ];
     if depth == 0 {
         return simple.boxed();
@@ -391,4 +420,33 @@ fn fuzz_fragments_build_agree_and_fault_as_declared() {
         with_jit_loops > 0,
         "no fragment has a loop compiled to machine code"
     );
+}
+
+/// The conformance programs with calls in loops (`tests/conformance/call_in_loop_*.st`,
+/// run both ways by the suite): their loops compile to machine code, calls of FUNCTIONs
+/// and FB instances (VAR_IN_OUT, outputs, arrays of instances, nested calls) included.
+/// A nested loop is part of the loop around it; the one loop left to the closures is
+/// `Fill`'s own, which indexes its own VAR_IN_OUT (it runs inlined where it is called).
+#[test]
+fn loops_with_calls_compile_to_machine_code() {
+    let expected = [
+        ("exit_continue", 4),
+        ("fault_div", 1),
+        ("fault_index", 1),
+        ("fault_range", 1),
+        ("fb_array", 2),
+        ("fb_outputs", 1),
+        ("function_params", 1),
+        ("inout_sort", 4),
+        ("locals_reinit", 2),
+        ("nested", 1),
+    ];
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/conformance");
+    for (name, loops) in expected {
+        let path = dir.join(format!("call_in_loop_{name}.st"));
+        let text = std::fs::read_to_string(&path).unwrap();
+        let (_, compiled) =
+            crate::support::build_or_fail(&[("p.st".into(), text)], CompileOptions { jit: true });
+        assert_eq!(compiled.jit_loops, loops, "{path:?}");
+    }
 }

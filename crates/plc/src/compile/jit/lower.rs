@@ -3,11 +3,13 @@
 
 use super::{ctx_offset, Extents, FaultSite, JitEngine, JitLoop};
 use crate::check::{Lane, PouId, Res, Size, Ty};
+use crate::compile::expr::contains_call;
 use crate::compile::expr::lvalue_name;
 use crate::compile::Cx;
 use crate::stdlib::timers::NativeFb;
 use crate::syntax::{
-    BinOp, CaseLabel, Expr, ExprKind, Literal, Span, Stmt, StmtKind, UnOp, VarKind,
+    Arg, BinOp, CaseLabel, Expr, ExprKind, Init, Item, Literal, PouKind, Span, Stmt, StmtKind,
+    UnOp, VarKind,
 };
 use cranelift_codegen::ir::condcodes::{FloatCC, IntCC};
 use cranelift_codegen::ir::{
@@ -51,6 +53,7 @@ impl Region {
 }
 
 /// One run-time index of a place.
+#[derive(Clone)]
 struct DynIndex<'e> {
     expr: &'e Expr,
     lo: i64,
@@ -58,10 +61,22 @@ struct DynIndex<'e> {
     stride: Size,
 }
 
+/// Byte addresses computed at run time (an element of an array of FB instances, an
+/// array element passed to VAR_IN_OUT): `off` is relative to them, `region` holds the
+/// cells they may point into.
+#[derive(Clone, Copy)]
+struct Ptrs {
+    ints: Value,
+    reals: Value,
+}
+
 /// Where a value lives, resolved statically as far as possible.
+#[derive(Clone)]
 struct JPlace<'e> {
     frame: bool,
     off: Size,
+    /// Set: `off` is relative to these addresses, not to the frame or the lanes.
+    ptr: Option<Ptrs>,
     /// Run-time indices, in evaluation order.
     dynamic: Vec<DynIndex<'e>>,
     /// The outermost aggregate an index selects in (set with the first run-time index).
@@ -104,6 +119,60 @@ struct Checked {
     lo: i64,
     hi: i64,
     rel: Value,
+}
+
+/// A callee inlined into the loop: its variables live at `base` (a FUNCTION's static
+/// frame, the FB instance), its VAR_IN_OUT are the places of the actual arguments, and
+/// RETURN jumps to `ret`, the end of its body.
+struct Frame {
+    pou: PouId,
+    base: JPlace<'static>,
+    inouts: HashMap<usize, JPlace<'static>>,
+    /// None while the initial values of a FUNCTION's frame are written.
+    ret: Option<Block>,
+}
+
+/// Statements and calls one loop may inline in all before it stays with the closures.
+const INLINE_BUDGET: usize = 2_000;
+/// Nested calls deeper than this stay with the closures.
+const INLINE_DEPTH: usize = 16;
+
+/// A variable of the callee whose frame or instance is at `base`.
+fn callee_var(base: &JPlace<'static>, v: &crate::check::VarInfo) -> JPlace<'static> {
+    JPlace {
+        frame: base.frame,
+        off: base.off.plus(v.offset),
+        ptr: base.ptr,
+        dynamic: Vec::new(),
+        region: base.region,
+        ty: v.ty.clone(),
+        bit: None,
+        bit_owner: Ty::Void,
+        range: v.range,
+    }
+}
+
+/// Statements in `stmts`, nested ones included (the size of an inlined body).
+fn stmt_count(stmts: &[Stmt]) -> usize {
+    stmts
+        .iter()
+        .map(|s| {
+            1 + match &s.kind {
+                StmtKind::If(arms, els) => {
+                    arms.iter().map(|(_, b)| stmt_count(b)).sum::<usize>()
+                        + els.as_deref().map_or(0, stmt_count)
+                }
+                StmtKind::Case(_, arms, els) => {
+                    arms.iter().map(|(_, b)| stmt_count(b)).sum::<usize>()
+                        + els.as_deref().map_or(0, stmt_count)
+                }
+                StmtKind::For { body, .. }
+                | StmtKind::While(_, body)
+                | StmtKind::Repeat(body, _) => stmt_count(body),
+                _ => 0,
+            }
+        })
+        .sum()
 }
 
 /// The loop targets of EXIT and CONTINUE.
@@ -200,6 +269,8 @@ fn attempt(
             loops: Vec::new(),
             versions: HashMap::new(),
             checked: Vec::new(),
+            frames: Vec::new(),
+            inline_budget: INLINE_BUDGET,
         };
         let lowered = lw.stmt(s);
         match lowered {
@@ -272,6 +343,10 @@ struct Lower<'a, 'b, 'x> {
     /// Index checks valid at the point of emission: scoped like the dominator tree
     /// (truncated after a branch, emptied inside a loop).
     checked: Vec<Checked>,
+    /// Callees being inlined, innermost last.
+    frames: Vec<Frame>,
+    /// Statements still allowed to be inlined.
+    inline_budget: usize,
 }
 
 const DAY: i64 = 86_400_000_000_000;
@@ -284,6 +359,14 @@ fn flags() -> MemFlagsData {
 fn byte_off(cell: usize) -> L<i32> {
     cell.checked_mul(8)
         .and_then(|b| i32::try_from(b).ok())
+        .ok_or(Unsupported)
+}
+
+/// The bytes of `cells` cells, as an immediate.
+fn stride_bytes(cells: usize) -> L<i64> {
+    cells
+        .checked_mul(8)
+        .and_then(|b| i64::try_from(b).ok())
         .ok_or(Unsupported)
 }
 
@@ -327,12 +410,23 @@ impl<'e> Lower<'_, '_, '_> {
                         .pou(self.cx.pou.ok_or(Unsupported)?)
                         .and_then(|p| p.vars.get(*i))
                         .ok_or(Unsupported)?;
+                    if let Some(f) = self.frames.last() {
+                        // a variable of an inlined callee
+                        if v.kind == VarKind::InOut {
+                            let mut p = f.inouts.get(i).cloned().ok_or(Unsupported)?;
+                            p.ty = v.ty.clone();
+                            p.range = v.range;
+                            return Ok(p);
+                        }
+                        return Ok(callee_var(&f.base, v));
+                    }
                     if v.kind == VarKind::InOut {
                         return Err(Unsupported);
                     }
                     Ok(JPlace {
                         frame: true,
                         off: v.offset,
+                        ptr: None,
                         dynamic: Vec::new(),
                         region: None,
                         ty: v.ty.clone(),
@@ -346,6 +440,7 @@ impl<'e> Lower<'_, '_, '_> {
                     Ok(JPlace {
                         frame: false,
                         off: v.offset,
+                        ptr: None,
                         dynamic: Vec::new(),
                         region: None,
                         ty: v.ty.clone(),
@@ -457,7 +552,7 @@ impl<'e> Lower<'_, '_, '_> {
 
     /// The register of a statically addressed cell kept in one, if it is.
     fn var_of(&mut self, p: &JPlace<'_>) -> Option<Variable> {
-        if !p.dynamic.is_empty() {
+        if !p.dynamic.is_empty() || p.ptr.is_some() {
             return None;
         }
         let real = p.real();
@@ -490,17 +585,20 @@ impl<'e> Lower<'_, '_, '_> {
             Size { i: 1, r: 0, s: 0 }
         };
         match p.region {
-            Some(r) if !p.dynamic.is_empty() => {
+            Some(r) if !p.dynamic.is_empty() || p.ptr.is_some() => {
                 self.regions.push(r);
                 self.extents.cover(r.frame, r.start, r.start.plus(r.len));
             }
+            _ if p.ptr.is_some() => return Err(Unsupported),
             _ => self.extents.cover(p.frame, p.off, p.off.plus(one)),
         }
-        let base = match (p.frame, real) {
-            (true, false) => self.frame_ints,
-            (true, true) => self.frame_reals,
-            (false, false) => self.ints,
-            (false, true) => self.reals,
+        let base = match (p.ptr, p.frame, real) {
+            (Some(d), _, false) => d.ints,
+            (Some(d), _, true) => d.reals,
+            (None, true, false) => self.frame_ints,
+            (None, true, true) => self.frame_reals,
+            (None, false, false) => self.ints,
+            (None, false, true) => self.reals,
         };
         let off = byte_off(if real { p.off.r } else { p.off.i })?;
         if p.dynamic.is_empty() {
@@ -508,20 +606,8 @@ impl<'e> Lower<'_, '_, '_> {
         }
         let mut lin: Option<Value> = None;
         for d in &p.dynamic {
-            let key = self.index_key(d.expr);
-            let known = key.and_then(|key| {
-                self.checked
-                    .iter()
-                    .find(|c| c.key == key && c.lo == d.lo && c.hi == d.hi)
-                    .map(|c| c.rel)
-            });
-            let rel = match known {
-                Some(rel) => rel,
-                None => self.checked_index(d, key)?,
-            };
-            let stride = if real { d.stride.r } else { d.stride.i };
-            let bytes = i64::try_from(stride.checked_mul(8).ok_or(Unsupported)?)
-                .map_err(|_| Unsupported)?;
+            let rel = self.index_rel(d)?;
+            let bytes = stride_bytes(if real { d.stride.r } else { d.stride.i })?;
             let part = self.b.ins().imul_imm_s(rel, bytes);
             lin = Some(match lin {
                 None => part,
@@ -530,6 +616,22 @@ impl<'e> Lower<'_, '_, '_> {
         }
         let lin = lin.ok_or(Unsupported)?;
         Ok((self.b.ins().iadd(base, lin), off))
+    }
+
+    /// The offset of an index from its lower bound, checked against its bounds unless a
+    /// check of the same value dominates this code.
+    fn index_rel(&mut self, d: &DynIndex<'e>) -> L<Value> {
+        let key = self.index_key(d.expr);
+        let known = key.and_then(|key| {
+            self.checked
+                .iter()
+                .find(|c| c.key == key && c.lo == d.lo && c.hi == d.hi)
+                .map(|c| c.rel)
+        });
+        match known {
+            Some(rel) => Ok(rel),
+            None => self.checked_index(d, key),
+        }
     }
 
     /// Evaluates an index, checks it against its bounds (a fault outside) and returns
@@ -1047,24 +1149,47 @@ impl<'e> Lower<'_, '_, '_> {
                 Ok(())
             }
             StmtKind::Return => {
-                self.jump_away(self.exit, Some(3));
+                match self.frames.last().map(|f| f.ret) {
+                    // the end of the inlined callee's body
+                    Some(Some(ret)) => self.jump_away(ret, None),
+                    Some(None) => return Err(Unsupported),
+                    None => self.jump_away(self.exit, Some(3)),
+                }
                 Ok(())
             }
         }
     }
 
-    /// A call of a standard FB with a native body, inputs only.
+    /// A call statement: a user FUNCTION or FB instance (inlined), or a standard FB with
+    /// a native body (called).
     fn call(&mut self, e: &'e Expr) -> L<()> {
         let c = self.cx.c;
         let ExprKind::Call(callee, args) = &e.kind else {
             return Err(Unsupported);
         };
-        let Some(Res::CallFb(pid)) = c.res.get(&e.id) else {
-            return Err(Unsupported);
-        };
-        let pid: PouId = *pid;
+        match c.res.get(&e.id) {
+            Some(Res::CallFunction(pid)) => self.call_function(*pid, args).map(|_| ()),
+            Some(Res::CallFb(pid)) => {
+                let pou = c.pou(*pid).ok_or(Unsupported)?;
+                match NativeFb::of(pou) {
+                    Some(fb) => self.native_call(*pid, fb, callee, args),
+                    None => self.call_fb(*pid, callee, args),
+                }
+            }
+            _ => Err(Unsupported),
+        }
+    }
+
+    /// A call of a standard FB with a native body, inputs only.
+    fn native_call(
+        &mut self,
+        pid: PouId,
+        fb: NativeFb,
+        callee: &'e Expr,
+        args: &'e [Arg],
+    ) -> L<()> {
+        let c = self.cx.c;
         let pou = c.pou(pid).ok_or(Unsupported)?;
-        let fb = NativeFb::of(pou).ok_or(Unsupported)?;
         let size = c.size_of(&Ty::Fb(pid));
         if size.i < fb.cells() {
             return Err(Unsupported);
@@ -1074,7 +1199,7 @@ impl<'e> Lower<'_, '_, '_> {
             return Err(Unsupported);
         }
         // the body writes the instance's cells: never kept in registers
-        if inst.region.is_none() || inst.dynamic.is_empty() {
+        if inst.dynamic.is_empty() && inst.ptr.is_none() {
             inst.region = Some(Region {
                 frame: inst.frame,
                 start: inst.off,
@@ -1085,16 +1210,7 @@ impl<'e> Lower<'_, '_, '_> {
         self.regions.push(r);
         self.extents.cover(r.frame, r.start, r.start.plus(r.len));
         // the instance address first, then the arguments, as the closures do
-        let (base, off) = if inst.dynamic.is_empty() {
-            let base = if inst.frame {
-                self.frame_ints
-            } else {
-                self.ints
-            };
-            (base, byte_off(inst.off.i)?)
-        } else {
-            self.address(&inst)?
-        };
+        let (base, off) = self.address(&inst)?;
         let cells = self.b.ins().iadd_imm_s(base, i64::from(off));
         let positional: Vec<usize> = pou
             .vars
@@ -1134,6 +1250,341 @@ impl<'e> Lower<'_, '_, '_> {
             .ins()
             .call_indirect(self.fb_sig, entry, &[cells, self.now]);
         Ok(())
+    }
+
+    /// A call of a user FB instance, inlined: the instance's address, the arguments, the
+    /// VAR_TEMP initial values, the body, the outputs (`=>`), in the closures' order.
+    fn call_fb(&mut self, pid: PouId, callee: &'e Expr, args: &'e [Arg]) -> L<()> {
+        let c = self.cx.c;
+        let pou = c.pou(pid).ok_or(Unsupported)?;
+        if pou.kind != PouKind::FunctionBlock {
+            return Err(Unsupported);
+        }
+        let inst = self.resolve(callee)?;
+        if inst.bit.is_some() || inst.ty != Ty::Fb(pid) {
+            return Err(Unsupported);
+        }
+        let base = self.materialize(inst)?;
+        let inouts = self.bind_args(pid, &base, args, false)?;
+        self.inline_body(pid, &base, inouts, true)?;
+        self.outputs(pid, &base, args)
+    }
+
+    /// A call of a user FUNCTION, inlined into its static frame: the arguments and the
+    /// frame's initial values, the body, the outputs (`=>`); then the result, if any.
+    fn call_function(&mut self, pid: PouId, args: &'e [Arg]) -> L<Option<JV>> {
+        let c = self.cx.c;
+        let pou = c.pou(pid).ok_or(Unsupported)?;
+        if pou.kind != PouKind::Function {
+            return Err(Unsupported);
+        }
+        let base = JPlace {
+            frame: false,
+            off: pou.base.ok_or(Unsupported)?,
+            ptr: None,
+            dynamic: Vec::new(),
+            region: None,
+            ty: Ty::Void,
+            bit: None,
+            bit_owner: Ty::Void,
+            range: None,
+        };
+        let inouts = self.bind_args(pid, &base, args, true)?;
+        self.inline_body(pid, &base, inouts, false)?;
+        self.outputs(pid, &base, args)?;
+        match &pou.ret {
+            Some(t) if *t != Ty::Void => {
+                let v = pou.vars.first().ok_or(Unsupported)?;
+                let p = callee_var(&base, v);
+                if !matches!(p.ty.lane(), Some(Lane::Int | Lane::Real)) {
+                    return Err(Unsupported);
+                }
+                self.load(&p).map(Some)
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// Binds the arguments of a call of `pid` whose variables are at `base`, as
+    /// `Cx::bind_args` and the call closures do: inputs stored with their subrange
+    /// checks, VAR_IN_OUT bound to the places of the actual arguments (evaluated now,
+    /// index checks included). When an argument calls something, every input is
+    /// evaluated first and stored afterwards; a FUNCTION's frame gets its initial values
+    /// (`function`) before the stores, and before the evaluation otherwise.
+    fn bind_args(
+        &mut self,
+        pid: PouId,
+        base: &JPlace<'static>,
+        args: &'e [Arg],
+        function: bool,
+    ) -> L<HashMap<usize, JPlace<'static>>> {
+        let c = self.cx.c;
+        let pou = c.pou(pid).ok_or(Unsupported)?;
+        let split = args.iter().any(|a| contains_call(&a.value));
+        let positional: Vec<usize> = pou
+            .vars
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| matches!(v.kind, VarKind::Input | VarKind::InOut))
+            .map(|(i, _)| i)
+            .collect();
+        let mut pos = 0;
+        let mut targets = Vec::with_capacity(args.len());
+        for a in args {
+            let idx = match &a.name {
+                Some(n) => pou.var(&n.key).map(|(i, _)| i).ok_or(Unsupported)?,
+                None => {
+                    let i = *positional.get(pos).ok_or(Unsupported)?;
+                    pos += 1;
+                    i
+                }
+            };
+            let v = pou.vars.get(idx).ok_or(Unsupported)?;
+            if !matches!(v.ty.lane(), Some(Lane::Int | Lane::Real)) && v.kind != VarKind::InOut {
+                return Err(Unsupported);
+            }
+            targets.push((a, v));
+        }
+        let mut values: Vec<Option<JV>> = Vec::new();
+        if split {
+            for (a, v) in &targets {
+                values.push(if a.output || v.kind == VarKind::InOut {
+                    None
+                } else {
+                    Some(self.expr(&a.value)?)
+                });
+            }
+        }
+        if function {
+            let frame = Frame {
+                pou: pid,
+                base: base.clone(),
+                inouts: HashMap::new(),
+                ret: None,
+            };
+            self.in_frame(frame, |lw| lw.init_vars(pid, base, false))?;
+        }
+        let mut inouts = HashMap::new();
+        for (k, (a, v)) in targets.iter().enumerate() {
+            if a.output {
+                continue;
+            }
+            if v.kind == VarKind::InOut {
+                let p = self.resolve(&a.value)?;
+                // the callee's view of the actual must cover exactly the actual's cells
+                if p.bit.is_some() || p.ty != v.ty {
+                    return Err(Unsupported);
+                }
+                let p = self.materialize(p)?;
+                let i = pou.var(&v.key).map(|(i, _)| i).ok_or(Unsupported)?;
+                inouts.insert(i, p);
+                continue;
+            }
+            let x = match values.get(k).copied().flatten() {
+                Some(x) => x,
+                None => self.expr(&a.value)?,
+            };
+            if let (JV::I(x), Some(_)) = (x, v.range) {
+                self.range_check(x, v.range, a.value.span, &v.name);
+            }
+            self.store(&callee_var(base, v), x)?;
+        }
+        Ok(inouts)
+    }
+
+    /// The body of `pid` inlined with its variables at `base`; a FB's VAR_TEMP get their
+    /// initial values first (`fb`).
+    fn inline_body(
+        &mut self,
+        pid: PouId,
+        base: &JPlace<'static>,
+        inouts: HashMap<usize, JPlace<'static>>,
+        fb: bool,
+    ) -> L<()> {
+        let c = self.cx.c;
+        let pou = c.pou(pid).ok_or(Unsupported)?;
+        let Some(Item::Pou(decl)) = c.unit.items.get(pou.item) else {
+            return Err(Unsupported);
+        };
+        // IEC 61131-3 forbids recursion (the checker rejects it); the depth and the
+        // budget bound the code all the same
+        if self.frames.len() >= INLINE_DEPTH || self.frames.iter().any(|f| f.pou == pid) {
+            return Err(Unsupported);
+        }
+        self.inline_budget = self
+            .inline_budget
+            .checked_sub(stmt_count(&decl.body) + 1)
+            .ok_or(Unsupported)?;
+        let ret = self.b.create_block();
+        let frame = Frame {
+            pou: pid,
+            base: base.clone(),
+            inouts,
+            ret: Some(ret),
+        };
+        let scope = self.checked.len();
+        self.in_frame(frame, |lw| {
+            if fb {
+                lw.init_vars(pid, base, true)?;
+            }
+            lw.block(&decl.body)
+        })?;
+        self.b.ins().jump(ret, &[]);
+        self.b.switch_to_block(ret);
+        // a RETURN may have skipped index checks made in the body
+        self.checked.truncate(scope);
+        Ok(())
+    }
+
+    /// Runs `f` with the callee `frame` innermost: names resolve in it, and the
+    /// caller's loops are no targets of EXIT and CONTINUE.
+    fn in_frame<T>(&mut self, frame: Frame, f: impl FnOnce(&mut Self) -> L<T>) -> L<T> {
+        let pou = self.cx.pou.replace(frame.pou);
+        let loops = std::mem::take(&mut self.loops);
+        self.frames.push(frame);
+        let r = f(self);
+        self.frames.pop();
+        self.loops = loops;
+        self.cx.pou = pou;
+        r
+    }
+
+    /// The outputs of a call (`q => x`, `NOT q => x`), after the body, in order.
+    fn outputs(&mut self, pid: PouId, base: &JPlace<'static>, args: &'e [Arg]) -> L<()> {
+        let c = self.cx.c;
+        let pou = c.pou(pid).ok_or(Unsupported)?;
+        for a in args.iter().filter(|a| a.output) {
+            let name = a.name.as_ref().ok_or(Unsupported)?;
+            let (_, v) = pou.var(&name.key).ok_or(Unsupported)?;
+            let src = callee_var(base, v);
+            if !matches!(src.ty.lane(), Some(Lane::Int | Lane::Real)) {
+                return Err(Unsupported);
+            }
+            let mut x = self.load(&src)?;
+            if a.negated {
+                if let JV::I(i) = x {
+                    let z = self.b.ins().icmp_imm_s(IntCC::Equal, i, 0);
+                    x = JV::I(self.b.ins().uextend(types::I64, z));
+                }
+            }
+            let dst = self.resolve(&a.value)?;
+            if !matches!(dst.ty.lane(), Some(Lane::Int | Lane::Real)) {
+                return Err(Unsupported);
+            }
+            let dt = dst.ty.clone();
+            let x = self.convert(x, &v.ty, &dt)?;
+            if let (JV::I(i), Some(_)) = (x, dst.range) {
+                self.range_check(i, dst.range, a.value.span, &lvalue_name(&a.value));
+            }
+            self.store(&dst, x)?;
+        }
+        Ok(())
+    }
+
+    /// Writes the initial values of the callee's variables at `base` as
+    /// `Cx::init_value` does: a FUNCTION's whole frame, or a FB's VAR_TEMP (`temps`).
+    /// Scalars and arrays of scalars without initialisers; anything else stays with the
+    /// closures.
+    fn init_vars(&mut self, pid: PouId, base: &JPlace<'static>, temps: bool) -> L<()> {
+        let c = self.cx.c;
+        let pou = c.pou(pid).ok_or(Unsupported)?;
+        for v in &pou.vars {
+            if matches!(v.kind, VarKind::External | VarKind::InOut)
+                || (temps && v.kind != VarKind::Temp)
+            {
+                continue;
+            }
+            let place = callee_var(base, v);
+            match &v.ty {
+                Ty::Void => {}
+                Ty::Array(a) => {
+                    let simple = (a.elem.is_elementary() || matches!(a.elem, Ty::Enum(_)))
+                        && matches!(a.elem.lane(), Some(Lane::Int | Lane::Real));
+                    if !simple || v.init.is_some() || a.elem_init.is_some() || a.len() > 64 {
+                        return Err(Unsupported);
+                    }
+                    let default = match a.elem_range {
+                        Some((lo, _)) => lo,
+                        None => self.cx.default_int(&a.elem),
+                    };
+                    for k in 0..a.len() {
+                        let mut p = place.clone();
+                        p.off = place.off.plus(a.elem_size.times(k));
+                        p.ty = a.elem.clone();
+                        p.range = None;
+                        let x = if p.real() {
+                            self.rconst(0.0)
+                        } else {
+                            self.iconst(default)
+                        };
+                        self.store(&p, x)?;
+                    }
+                }
+                t if matches!(t.lane(), Some(Lane::Int | Lane::Real)) => {
+                    let x = match &v.init {
+                        Some(Init::Expr(e)) => {
+                            let x = self.expr(e)?;
+                            if let (JV::I(i), Some(_)) = (x, v.range) {
+                                let name = format!("{}.{}", pou.name, v.name);
+                                self.range_check(i, v.range, e.span, &name);
+                            }
+                            x
+                        }
+                        _ if place.real() => self.rconst(0.0),
+                        _ => {
+                            let d = match v.range {
+                                Some((lo, _)) => lo,
+                                None => self.cx.default_int(t),
+                            };
+                            self.iconst(d)
+                        }
+                    };
+                    self.store(&place, x)?;
+                }
+                _ => return Err(Unsupported),
+            }
+        }
+        Ok(())
+    }
+
+    /// The place with its run-time indices evaluated (and checked) here, in their
+    /// order: a static place as it is, any other as addresses computed now.
+    fn materialize(&mut self, p: JPlace<'e>) -> L<JPlace<'static>> {
+        let mut out = JPlace {
+            frame: p.frame,
+            off: p.off,
+            ptr: p.ptr,
+            dynamic: Vec::new(),
+            region: p.region,
+            ty: p.ty.clone(),
+            bit: p.bit,
+            bit_owner: p.bit_owner.clone(),
+            range: p.range,
+        };
+        if p.dynamic.is_empty() {
+            return Ok(out);
+        }
+        let r = p.region.ok_or(Unsupported)?;
+        self.regions.push(r);
+        self.extents.cover(r.frame, r.start, r.start.plus(r.len));
+        let (mut ints, mut reals) = match p.ptr {
+            Some(d) => (d.ints, d.reals),
+            None if p.frame => (self.frame_ints, self.frame_reals),
+            None => (self.ints, self.reals),
+        };
+        for d in &p.dynamic {
+            let rel = self.index_rel(d)?;
+            if d.stride.i > 0 {
+                let part = self.b.ins().imul_imm_s(rel, stride_bytes(d.stride.i)?);
+                ints = self.b.ins().iadd(ints, part);
+            }
+            if d.stride.r > 0 {
+                let part = self.b.ins().imul_imm_s(rel, stride_bytes(d.stride.r)?);
+                reals = self.b.ins().iadd(reals, part);
+            }
+        }
+        out.ptr = Some(Ptrs { ints, reals });
+        Ok(out)
     }
 
     // ---- expressions -----------------------------------------------------------
@@ -1216,6 +1667,14 @@ impl<'e> Lower<'_, '_, '_> {
                 })
             }
             ExprKind::Binary(op, a, b) => self.binary(*op, a, b, &ty, e.span),
+            ExprKind::Call(_, args) => match c.res.get(&e.id) {
+                // a FUNCTION without a result gives 0, as the closures do
+                Some(Res::CallFunction(pid)) => match self.call_function(*pid, args)? {
+                    Some(v) => Ok(v),
+                    None => Ok(self.iconst(0)),
+                },
+                _ => Err(Unsupported),
+            },
             _ => Err(Unsupported),
         }
     }

@@ -15,8 +15,28 @@
 //! access `x.3`); literals and enumeration values; the arithmetic, comparison and logical
 //! operators and the implicit conversions between numbers; assignments, IF, CASE, FOR,
 //! WHILE, REPEAT, EXIT, CONTINUE, RETURN; calls of the standard FBs with native bodies
-//! (TON, TOF, TP, R_TRIG, F_TRIG) with input arguments. Not in it: strings, calls of user
-//! POUs and built-in functions, VAR_IN_OUT references, direct addresses, `**`, TIME×REAL.
+//! (TON, TOF, TP, R_TRIG, F_TRIG) with input arguments; calls of user FUNCTIONs and FB
+//! instances (also elements of arrays of instances), inlined. Not in it: strings, calls
+//! of built-in functions, the VAR_IN_OUT of the POU the loop is in, partial access
+//! (`.%B1`), `^`, direct addresses, `**`, TIME×REAL; a loop with any of these runs as
+//! closures (the lowering refuses the node, `lower::Unsupported`).
+//!
+//! # Calls
+//! A call is inlined into the loop's function, mirroring the closures step by step: the
+//! FB instance's address (its index checked), the arguments in order with their
+//! subrange checks (all evaluated first when one of them calls something), a FUNCTION's
+//! whole static frame set to its initial values (before the arguments are evaluated, or
+//! between evaluating and storing them), a FB's VAR_TEMP set to theirs, the body
+//! (RETURN jumps to its end; its loops tick the same budget), then the outputs (`=>`)
+//! and the result. The callee's variables are cells like any other: a FUNCTION's frame
+//! and an instance at a static address may live in registers for the whole loop, an
+//! instance selected at run time (`fbs[i]`) is addressed through a pointer computed once
+//! per call. VAR_IN_OUT are bound at compile time to the places of the actual arguments
+//! (an array element's index evaluated and checked when the call binds it, as the
+//! closures do): the callee reads and writes the caller's cells directly, and its
+//! reference cells, which only the callee reads, are not written. IEC 61131-3 forbids
+//! recursion; inlining stops at 16 nested calls or 2,000 statements per loop all the
+//! same (closures beyond). Faults in a callee carry the callee's position.
 //!
 //! # Data flow
 //! ```text
@@ -34,7 +54,11 @@
 //! function and the native FB entry it calls. The generated code touches only cells
 //! inside the extents that [`JitLoop::run`] checks against the lanes before the call; run-time
 //! indices are checked against their declared bounds in the generated code (a fault
-//! otherwise), so every address stays inside a checked extent. The lanes are not resized
+//! otherwise), so every address stays inside a checked extent. An address computed once
+//! for an inlined call (an instance `fbs[i]`, a VAR_IN_OUT bound to `a[j]`) is built from
+//! such checked indices, and the whole array it points into is in the extents; a
+//! VAR_IN_OUT is only bound to an actual of exactly the parameter's type, so the callee
+//! reaches no cell outside it. The lanes are not resized
 //! while the code runs (it calls nothing that could).
 #![allow(unsafe_code)]
 
