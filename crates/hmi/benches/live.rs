@@ -14,39 +14,23 @@
 //! every second (10,000 updates/s through the whole path).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-use std::net::{SocketAddr, TcpListener, TcpStream};
+#[path = "support/browser.rs"]
+mod browser;
+use browser::{js, now_ms, report};
+
 use std::path::Path;
-use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
-use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+use std::time::{Duration, Instant};
 
-use fantoccini::{Client, ClientBuilder};
 use hmi::{Hmi, HmiOptions};
 use iec60870::asdu::{CommonAddress, Element, Ioa, Quality, TypeId};
 use iec60870::cs104::server::{
     spawn_server, MonitorPoint, ProcessImage, ReadOnlyStation, ServerConfig,
 };
-use serde_json::{json, Value};
 use store::pointdb::TimeZonePolicy;
 
 const POINTS: u32 = 10_000;
-
-fn now_ms() -> f64 {
-    SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .unwrap()
-        .as_secs_f64()
-        * 1e3
-}
-
-fn free_port() -> u16 {
-    TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port()
-}
 
 fn float(value: f32) -> Element {
     Element::Float {
@@ -78,56 +62,13 @@ fn screens(dir: &Path) {
     users.add("bench", 0, "bench-password").unwrap();
 }
 
-async fn browser(driver_url: &str, profile: &Path) -> Client {
-    let args = vec![
-        "--headless".to_owned(),
-        "--no-sandbox".to_owned(),
-        "--disable-gpu".to_owned(),
-        "--disable-quic".to_owned(),
-        "--no-first-run".to_owned(),
-        "--disable-background-networking".to_owned(),
-        "--disable-component-update".to_owned(),
-        "--disable-sync".to_owned(),
-        "--disable-dev-shm-usage".to_owned(),
-        "--window-size=1280,1024".to_owned(),
-        format!("--user-data-dir={}", profile.display()),
-    ];
-    let mut capabilities = serde_json::Map::new();
-    capabilities.insert("browserName".into(), json!("chrome"));
-    capabilities.insert(
-        "goog:chromeOptions".into(),
-        json!({"args": args, "binary": "/usr/bin/chromium"}),
-    );
-    ClientBuilder::new(hyper_util::client::legacy::connect::HttpConnector::new())
-        .capabilities(capabilities)
-        .connect(driver_url)
-        .await
-        .expect("no WebDriver session")
-}
-
-async fn js(client: &Client, script: &str) -> Value {
-    client.execute(script, vec![]).await.unwrap()
-}
-
-fn report(name: &str, mut samples: Vec<f64>) {
-    samples.sort_by(f64::total_cmp);
-    let at = |p: f64| samples[((samples.len() as f64 - 1.0) * p).round() as usize];
-    println!(
-        "{name:<52} n={:<4} p50 {:>6.2} ms  p99 {:>6.2} ms  max {:>6.2} ms",
-        samples.len(),
-        at(0.5),
-        at(0.99),
-        samples[samples.len() - 1]
-    );
-}
-
 fn main() {
     let samples: usize = std::env::args()
         .skip_while(|a| a != "--samples")
         .nth(1)
         .and_then(|n| n.parse().ok())
         .unwrap_or(200);
-    if !Path::new("/usr/bin/chromedriver").exists() {
+    if !browser::available() {
         eprintln!("SKIPPED: the HMI live benchmark needs chromium and chromedriver (scripts/install-test-deps.sh)");
         return;
     }
@@ -177,33 +118,9 @@ async fn run(samples: usize) {
     .await
     .unwrap();
     let url = format!("http://{}", hmi.address);
-    // The browser.
-    let port = free_port();
-    let mut driver = Command::new("/usr/bin/chromedriver")
-        .args([format!("--port={port}"), "--allowed-ips=127.0.0.1".into()])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let deadline = Instant::now() + Duration::from_secs(10);
-    while TcpStream::connect(SocketAddr::from(([127, 0, 0, 1], port))).is_err() {
-        assert!(Instant::now() < deadline, "chromedriver does not start");
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    let profile = tempfile::tempdir().unwrap();
-    let client = browser(&format!("http://127.0.0.1:{port}"), profile.path()).await;
-    client.goto(&format!("{url}/login")).await.unwrap();
-    let login = client
-        .execute_async(
-            "const done = arguments[arguments.length - 1];\
-             fetch('/api/login', {method: 'POST', headers: {'Content-Type': 'application/json'},\
-               body: JSON.stringify({username: 'bench', password: 'bench-password'})})\
-             .then(r => done(r.status)).catch(e => done(String(e)));",
-            vec![],
-        )
-        .await
-        .unwrap();
-    assert_eq!(login, json!(200));
+    // The browser, logged in.
+    let (mut driver, _profile, client) = browser::start().await;
+    browser::login(&client, &url, "bench", "bench-password").await;
     client.goto(&format!("{url}/#screen/grid")).await.unwrap();
     let ready = Instant::now();
     loop {

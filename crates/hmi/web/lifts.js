@@ -651,12 +651,17 @@
     if (!point || typeof point.name !== "string" || !point.name.endsWith(".faults")) return;
     const name = point.name.slice(0, -".faults".length);
     if (!findLift(name)) return;
-    clearTimeout(archive.timer);
+    // Changes within 50 ms make one reload; a pending reload is not pushed back, so a
+    // fleet whose counters change all the time still sees its archive every 50 ms.
+    const form = document.getElementById("fault-filter");
+    if (!form || !form.lift.value || form.lift.value === name) archive.changed = true;
+    if (archive.timer) return;
     archive.timer = setTimeout(() => {
-      const form = document.getElementById("fault-filter");
-      if (archive.shown && (!form.lift.value || form.lift.value === name)) loadArchive();
+      archive.timer = null;
+      if (archive.shown && archive.changed) loadArchive();
+      archive.changed = false;
       if (mobile.shown) loadMobileFaults();
-    }, 250);
+    }, 50);
   }
 
   // ------------------------------------------------------------------ figures

@@ -62,6 +62,10 @@ const SKIPPED: &[(&str, &str)] = &[
         "cargo bench -p station --bench lift_fleet",
         "a benchmark: a release build and a minute of 200 lifts polled in real time",
     ),
+    (
+        "cargo bench -p hmi --bench lift_fleet",
+        "a benchmark: a release build, 200 lifts in real time and headless Chromium",
+    ),
 ];
 
 /// Generous bounds: the machine may be busy building or testing something else.
