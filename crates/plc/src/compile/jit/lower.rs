@@ -6,15 +6,12 @@ use crate::check::{Lane, PouId, Res, Size, Ty};
 use crate::compile::expr::contains_call;
 use crate::compile::expr::lvalue_name;
 use crate::compile::Cx;
-use crate::stdlib::timers::NativeFb;
 use crate::syntax::{
     Arg, BinOp, CaseLabel, Expr, ExprKind, Init, Item, Literal, PouKind, Span, Stmt, StmtKind,
     UnOp, VarKind,
 };
 use cranelift_codegen::ir::condcodes::{FloatCC, IntCC};
-use cranelift_codegen::ir::{
-    types, AbiParam, Block, InstBuilder, MemFlagsData, SigRef, Signature, Type, Value,
-};
+use cranelift_codegen::ir::{types, AbiParam, Block, InstBuilder, MemFlagsData, Type, Value};
 use cranelift_frontend::{FunctionBuilder, Variable};
 use std::collections::{HashMap, HashSet};
 use std::rc::Rc;
@@ -33,7 +30,7 @@ struct CellKey {
     off: usize,
 }
 
-/// Cells that indexed accesses or native FB bodies reach (never kept in registers).
+/// Cells that indexed accesses reach (never kept in registers).
 #[derive(Clone, Copy, Debug)]
 struct Region {
     frame: bool,
@@ -217,13 +214,8 @@ fn attempt(
     let mut fctx = engine.fctx.try_borrow_mut().map_err(|_| Unsupported)?;
     ctx.func.signature.params.push(AbiParam::new(ptr));
     ctx.func.signature.returns.push(AbiParam::new(types::I64));
-    let call_conv = ctx.func.signature.call_conv;
     let result = {
         let mut b = FunctionBuilder::new(&mut ctx.func, &mut fctx);
-        let mut fb_sig = Signature::new(call_conv);
-        fb_sig.params.push(AbiParam::new(ptr));
-        fb_sig.params.push(AbiParam::new(types::I64));
-        let fb_sig = b.import_signature(fb_sig);
         let entry = b.create_block();
         b.append_block_params_for_function_params(entry);
         b.switch_to_block(entry);
@@ -258,7 +250,6 @@ fn attempt(
             now,
             budget,
             exit,
-            fb_sig,
             vars: HashMap::new(),
             order: Vec::new(),
             dirty: HashSet::new(),
@@ -327,7 +318,6 @@ struct Lower<'a, 'b, 'x> {
     now: Value,
     budget: Variable,
     exit: Block,
-    fb_sig: SigRef,
     /// Cells kept in registers, in order of first use.
     vars: HashMap<CellKey, Variable>,
     order: Vec<CellKey>,
@@ -1160,8 +1150,7 @@ impl<'e> Lower<'_, '_, '_> {
         }
     }
 
-    /// A call statement: a user FUNCTION or FB instance (inlined), or a standard FB with
-    /// a native body (called).
+    /// A call statement: a FUNCTION or a FB instance, inlined.
     fn call(&mut self, e: &'e Expr) -> L<()> {
         let c = self.cx.c;
         let ExprKind::Call(callee, args) = &e.kind else {
@@ -1169,87 +1158,11 @@ impl<'e> Lower<'_, '_, '_> {
         };
         match c.res.get(&e.id) {
             Some(Res::CallFunction(pid)) => self.call_function(*pid, args).map(|_| ()),
-            Some(Res::CallFb(pid)) => {
-                let pou = c.pou(*pid).ok_or(Unsupported)?;
-                match NativeFb::of(pou) {
-                    Some(fb) => self.native_call(*pid, fb, callee, args),
-                    None => self.call_fb(*pid, callee, args),
-                }
-            }
+            // the standard timers and edges too: their ST bodies (which their native
+            // bodies are tested against) inline to less than a call costs
+            Some(Res::CallFb(pid)) => self.call_fb(*pid, callee, args),
             _ => Err(Unsupported),
         }
-    }
-
-    /// A call of a standard FB with a native body, inputs only.
-    fn native_call(
-        &mut self,
-        pid: PouId,
-        fb: NativeFb,
-        callee: &'e Expr,
-        args: &'e [Arg],
-    ) -> L<()> {
-        let c = self.cx.c;
-        let pou = c.pou(pid).ok_or(Unsupported)?;
-        let size = c.size_of(&Ty::Fb(pid));
-        if size.i < fb.cells() {
-            return Err(Unsupported);
-        }
-        let mut inst = self.resolve(callee)?;
-        if inst.bit.is_some() || inst.ty != Ty::Fb(pid) {
-            return Err(Unsupported);
-        }
-        // the body writes the instance's cells: never kept in registers
-        if inst.dynamic.is_empty() && inst.ptr.is_none() {
-            inst.region = Some(Region {
-                frame: inst.frame,
-                start: inst.off,
-                len: size,
-            });
-        }
-        let r = inst.region.ok_or(Unsupported)?;
-        self.regions.push(r);
-        self.extents.cover(r.frame, r.start, r.start.plus(r.len));
-        // the instance address first, then the arguments, as the closures do
-        let (base, off) = self.address(&inst)?;
-        let cells = self.b.ins().iadd_imm_s(base, i64::from(off));
-        let positional: Vec<usize> = pou
-            .vars
-            .iter()
-            .enumerate()
-            .filter(|(_, v)| matches!(v.kind, VarKind::Input | VarKind::InOut))
-            .map(|(i, _)| i)
-            .collect();
-        let mut pos = 0;
-        for a in args {
-            if a.output {
-                return Err(Unsupported);
-            }
-            let idx = match &a.name {
-                Some(n) => pou.var(&n.key).map(|(i, _)| i).ok_or(Unsupported)?,
-                None => {
-                    let i = *positional.get(pos).ok_or(Unsupported)?;
-                    pos += 1;
-                    i
-                }
-            };
-            let v = pou.vars.get(idx).ok_or(Unsupported)?;
-            if v.kind != VarKind::Input || v.ty.lane() != Some(Lane::Int) || v.offset.i >= size.i {
-                return Err(Unsupported);
-            }
-            let JV::I(x) = self.expr(&a.value)? else {
-                return Err(Unsupported);
-            };
-            self.range_check(x, v.range, a.value.span, &v.name);
-            self.b.ins().store(flags(), x, cells, byte_off(v.offset.i)?);
-        }
-        let entry = self
-            .b
-            .ins()
-            .iconst(types::I64, super::native_fb_entry(fb) as usize as i64);
-        self.b
-            .ins()
-            .call_indirect(self.fb_sig, entry, &[cells, self.now]);
-        Ok(())
     }
 
     /// A call of a user FB instance, inlined: the instance's address, the arguments, the
@@ -1673,6 +1586,10 @@ impl<'e> Lower<'_, '_, '_> {
                     Some(v) => Ok(v),
                     None => Ok(self.iconst(0)),
                 },
+                // the scan time, as the standard timers' bodies read it
+                Some(Res::CallBuiltin(crate::stdlib::Builtin::Now)) if args.is_empty() => {
+                    Ok(JV::I(self.now))
+                }
                 _ => Err(Unsupported),
             },
             _ => Err(Unsupported),

@@ -14,9 +14,10 @@
 //! fields, FB instance variables, array elements with any number of run-time indices, bit
 //! access `x.3`); literals and enumeration values; the arithmetic, comparison and logical
 //! operators and the implicit conversions between numbers; assignments, IF, CASE, FOR,
-//! WHILE, REPEAT, EXIT, CONTINUE, RETURN; calls of the standard FBs with native bodies
-//! (TON, TOF, TP, R_TRIG, F_TRIG) with input arguments; calls of user FUNCTIONs and FB
-//! instances (also elements of arrays of instances), inlined. Not in it: strings, calls
+//! WHILE, REPEAT, EXIT, CONTINUE, RETURN; calls of user FUNCTIONs and FB instances (also
+//! elements of arrays of instances) and of the standard FBs written in ST, inlined (the
+//! timers and edges too: the closures run their native bodies, which are tested against
+//! these ST bodies; inlined, they cost less than a call), `__NOW()`. Not in it: strings, calls
 //! of built-in functions, the VAR_IN_OUT of the POU the loop is in, partial access
 //! (`.%B1`), `^`, direct addresses, `**`, TIME×REAL; a loop with any of these runs as
 //! closures (the lowering refuses the node, `lower::Unsupported`).
@@ -47,11 +48,11 @@
 //! ```
 //! Scalars addressed statically (counters, accumulators, `a[3]`) live in registers for
 //! the whole loop and are written back on every way out, faults included; cells that an
-//! indexed access or a native FB may also reach stay in memory.
+//! indexed access may also reach stay in memory.
 //!
 //! # Safety
 //! This module is the one place in the project with `unsafe` code: calling the generated
-//! function and the native FB entry it calls. The generated code touches only cells
+//! function. The generated code touches only cells
 //! inside the extents that [`JitLoop::run`] checks against the lanes before the call; run-time
 //! indices are checked against their declared bounds in the generated code (a fault
 //! otherwise), so every address stays inside a checked extent. An address computed once
@@ -65,7 +66,6 @@
 mod lower;
 
 use crate::check::Size;
-use crate::stdlib::timers::NativeFb;
 use crate::syntax::Span;
 use crate::vm::{Fault, FaultKind, Flow, StmtFn, Vm};
 use cranelift_codegen::settings::{self, Configurable};
@@ -360,30 +360,4 @@ impl JitLoop {
             _ => Err(Fault::memory()),
         }
     }
-}
-
-/// The entry of a native FB body for the generated code: `extern "C" fn(cells, now)`.
-fn native_fb_entry(fb: NativeFb) -> *const u8 {
-    match fb {
-        NativeFb::Ton => native_fb::<0> as *const u8,
-        NativeFb::Tof => native_fb::<1> as *const u8,
-        NativeFb::Tp => native_fb::<2> as *const u8,
-        NativeFb::RTrig => native_fb::<3> as *const u8,
-        NativeFb::FTrig => native_fb::<4> as *const u8,
-    }
-}
-
-/// Runs the native body with code `FB` ([`NativeFb::code`]) on the instance cells at
-/// `cells`.
-///
-/// # Safety
-/// `cells` points to at least `NativeFb::cells()` initialised cells of the integer lane
-/// that nothing else references during the call.
-unsafe extern "C" fn native_fb<const FB: u32>(cells: *mut i64, now: i64) {
-    let Some(fb) = NativeFb::from_code(FB) else {
-        return;
-    };
-    // SAFETY: guaranteed by the caller (the extent of the instance was checked).
-    let cells = unsafe { std::slice::from_raw_parts_mut(cells, fb.cells()) };
-    fb.run_cells(cells, now);
 }
