@@ -719,7 +719,9 @@ impl Runtime {
     }
 
     /// Injects a fault or performs a hand operation on the plant ([`Simulation::operate`]),
-    /// or cuts/restores a link: `link-cut NODE/LINK`, `link-restore NODE/LINK`.
+    /// cuts/restores a link (`link-cut NODE/LINK`, `link-restore NODE/LINK`), stops or
+    /// starts a node's PLC (`plc-stop NODE`, `plc-start NODE`: [`Simulation::run_plc`]), or
+    /// operates a simulated lift board (`lift L1 fault 3C`).
     pub async fn operate(&self, text: &str) -> Result<(), String> {
         let text = text.trim();
         for (prefix, cut) in [("link-cut ", true), ("link-restore ", false)] {
@@ -737,6 +739,15 @@ impl Runtime {
                     handle.restore();
                 }
                 return Ok(());
+            }
+        }
+        for (prefix, run) in [("plc-stop ", false), ("plc-start ", true)] {
+            if let Some(node) = text.strip_prefix(prefix) {
+                let node = node.trim().to_owned();
+                return self
+                    .with_simulation(move |sim| sim.run_plc(&node, run))
+                    .await
+                    .map_err(|e| e.to_string())?;
             }
         }
         if let Some(rest) = text.strip_prefix("lift ") {

@@ -119,7 +119,13 @@ struct SimCommand {
 struct SimNode {
     points: Arc<NodePoints>,
     plc: Option<Plc>,
-    stopped: Option<String>,
+    /// The node's stopped tasks (a fault, the watchdog, `plc-stop`) and why: the points
+    /// their programs feed are invalid and commands to them refused, while the other
+    /// tasks run on (per-task isolation).
+    stopped: HashMap<String, String>,
+    /// Which task runs each program (by upper-case name), and every task.
+    task_of_program: HashMap<String, String>,
+    tasks: Vec<String>,
     inputs: Vec<InputBinding>,
     outputs: Vec<OutputBinding>,
     sourced: Vec<SourcedPoint>,
@@ -231,6 +237,39 @@ impl Simulation {
         receiver
     }
 
+    /// Stops (`run = false`) or starts a node's soft PLC (`plc-stop NODE`, `plc-start
+    /// NODE`): stopped, every output it drives goes to its safe value (declared with
+    /// `{attribute 'safe_value' := ...}`, else FALSE / 0), the points it feeds turn
+    /// invalid, commands to it are refused and the stop is recorded as `plc-task:NAME`
+    /// events; started, its tasks run again from their next cycle.
+    pub fn run_plc(&mut self, node: &str, run: bool) -> Result<(), String> {
+        let now = self.now;
+        let Simulation {
+            plant,
+            nodes,
+            observers,
+            ..
+        } = self;
+        let node = nodes
+            .iter_mut()
+            .find(|candidate| candidate.points.name().eq_ignore_ascii_case(node))
+            .ok_or_else(|| format!("no node `{node}` runs here"))?;
+        node.run_plc(run, now, plant.as_deref_mut(), observers)
+    }
+
+    /// Stops every PLC (the station is shutting down): outputs to their safe values.
+    pub(crate) fn stop_all(&mut self) {
+        let names: Vec<String> = self
+            .nodes
+            .iter()
+            .filter(|node| node.plc.is_some())
+            .map(|node| node.points.name().to_owned())
+            .collect();
+        for name in names {
+            let _ = self.run_plc(&name, false);
+        }
+    }
+
     /// Passes one line of the plant's console language (faults, `clear ...`, hand
     /// operations: [`Plant::console`]) to the plant.
     pub fn operate(&mut self, text: &str) -> Result<(), String> {
@@ -339,10 +378,15 @@ impl Simulation {
     ) -> Result<(), CommandRefusal> {
         let now = self.now;
         let sim_node = self.nodes.get_mut(node).ok_or(CommandRefusal::Unknown)?;
-        if let Some(reason) = &sim_node.stopped {
-            return Err(CommandRefusal::PlcStopped(reason.clone()));
-        }
         let command = sim_node.commands.get(&ioa).ok_or(CommandRefusal::Unknown)?;
+        if let Some(reason) = stopped_reason(
+            &sim_node.stopped,
+            &sim_node.task_of_program,
+            &sim_node.tasks,
+            &command.target.path,
+        ) {
+            return Err(CommandRefusal::PlcStopped(reason.to_owned()));
+        }
         let plc = sim_node.plc.as_mut().ok_or(CommandRefusal::Unknown)?;
         if let Some(enable) = &command.remote_enable {
             match plc.read_leaf(enable) {
@@ -425,8 +469,53 @@ impl SimNode {
         for fault in plc.run_cycle(reading) {
             let message = plc.render(&fault);
             tracing::error!(node = %self.points.name(), "{message}");
-            self.stopped = Some(fault.message.clone());
         }
+        self.settle(now, utc, plant, observers);
+    }
+
+    /// Stops (`run = false`) or starts the node's PLC: on a stop every bound output goes
+    /// to its safe value, on a start the stopped tasks run again from their next cycle.
+    fn run_plc(
+        &mut self,
+        run: bool,
+        now: Duration,
+        plant: Option<&mut (dyn Plant + Send + 'static)>,
+        observers: &[mpsc::Sender<OutputChange>],
+    ) -> Result<(), String> {
+        let Some(plc) = self.plc.as_mut() else {
+            return Err(format!("node {} has no PLC", self.points.name()));
+        };
+        let clock = self.points.clock();
+        let utc = clock.at(now);
+        if run {
+            plc.start();
+            // Faulted tasks stay faulted until a cold start (the fault is still there).
+            self.stopped.retain(|task, _| {
+                matches!(plc.task_state(task), Some(plc::task::TaskState::Faulted(_)))
+            });
+            tracing::info!(node = %self.points.name(), "PLC started");
+        } else {
+            plc.stop(ClockReading {
+                monotonic_ns: i64::try_from(now.as_nanos()).unwrap_or(i64::MAX),
+                utc_ns: utc.timestamp_nanos_opt().unwrap_or(0),
+                utc_offset_ns: clock.utc_offset_ns(utc),
+            });
+            tracing::warn!(node = %self.points.name(), "PLC stopped");
+        }
+        self.settle(now, utc, plant, observers);
+        Ok(())
+    }
+
+    /// After a cycle or a stop: records the tasks that stopped, drives the bound outputs
+    /// and publishes the points the PLC feeds.
+    fn settle(
+        &mut self,
+        now: Duration,
+        utc: chrono::DateTime<chrono::Utc>,
+        plant: Option<&mut (dyn Plant + Send + 'static)>,
+        observers: &[mpsc::Sender<OutputChange>],
+    ) {
+        let Some(plc) = self.plc.as_mut() else { return };
         // A stopped task's outputs are at their safe values now (driven below); the stop
         // goes to the event store as the text of the pseudo-point `plc-task:NAME`.
         while let Some(stop) = plc.poll_event() {
@@ -438,6 +527,8 @@ impl SimNode {
             for (output, value) in &stop.outputs {
                 text.push_str(&format!("; {output} := {value}"));
             }
+            self.stopped
+                .insert(stop.task.clone(), format!("task {}: {text}", stop.task));
             let mut record = crate::store::EventRecord::new(
                 self.points.name(),
                 format!("plc-task:{}", stop.task),
@@ -487,7 +578,14 @@ impl SimNode {
                 .invalid_when
                 .as_ref()
                 .is_some_and(|leaf| matches!(plc.read_leaf(leaf), Ok(Val::Int(x)) if x != 0));
-            let valid = self.stopped.is_none()
+            let stopped = stopped_reason(
+                &self.stopped,
+                &self.task_of_program,
+                &self.tasks,
+                &point.leaf.path,
+            )
+            .is_some();
+            let valid = !stopped
                 && !forced_invalid
                 && point
                     .input
@@ -532,6 +630,24 @@ impl SimNode {
                 })
                 .collect()
         });
+    }
+}
+
+/// Why the PLC variable at `path` is not kept current: the task of its program stopped,
+/// or for a variable of no program (a global) every task; `None` while it is.
+fn stopped_reason<'a>(
+    stopped: &'a HashMap<String, String>,
+    task_of_program: &HashMap<String, String>,
+    tasks: &[String],
+    path: &str,
+) -> Option<&'a str> {
+    let program = path.split(['.', '[']).next()?.to_ascii_uppercase();
+    match task_of_program.get(&program) {
+        Some(task) => stopped.get(task).map(String::as_str),
+        None if !tasks.is_empty() && tasks.iter().all(|task| stopped.contains_key(task)) => {
+            stopped.values().next().map(String::as_str)
+        }
+        None => None,
     }
 }
 
@@ -589,7 +705,17 @@ fn build_node(
     let mut sim = SimNode {
         points: Arc::clone(&points),
         plc: None,
-        stopped: None,
+        stopped: HashMap::new(),
+        task_of_program: config
+            .tasks
+            .iter()
+            .flat_map(|task| {
+                task.programs
+                    .iter()
+                    .map(|program| (program.to_ascii_uppercase(), task.name.clone()))
+            })
+            .collect(),
+        tasks: config.tasks.iter().map(|task| task.name.clone()).collect(),
         inputs: Vec::new(),
         outputs: Vec::new(),
         sourced: Vec::new(),
@@ -867,7 +993,10 @@ pub(crate) fn run(mut sim: Simulation, pacing: Pacing, requests: mpsc::Receiver<
                 let _ = reply.send(sim.command(node, ioa, value, pulse, select));
             }
             SimRequest::With(f) => f(&mut sim),
-            SimRequest::Stop => break,
+            SimRequest::Stop => {
+                sim.stop_all();
+                break;
+            }
         }
     }
     tracing::debug!("simulation thread ends");

@@ -15,3 +15,4 @@ mod pg;
 mod runtime_store;
 #[path = "../../../../tests/support/smtp_sink.rs"]
 mod smtp_sink;
+mod task_isolation;
