@@ -39,18 +39,20 @@
 //! test of random loop programs run both ways and compare every variable and fault.
 //!
 //! Measured with `cargo bench -p plc --bench st_vs_native` (release, one core of a
-//! shared 2-core AMD EPYC VM), time per scan, ST vs the same algorithm in Rust, in one
-//! run (figures vary by about 30% between runs on this VM; the ratios much less):
+//! shared 2-core VM, load average about 2), time per scan, ST vs the same algorithm in
+//! Rust, in one run (figures vary by about 30% between runs on this VM; the ratios much
+//! less):
 //!
 //! | program | ST | ST, closures only | native | ratio |
 //! |---|---|---|---|---|
-//! | integer loop, 100k iterations | 0.23 ms | 1.6 ms | 0.23 ms | 1.0x (closures 4.7x) |
-//! | LREAL loop, 100k iterations | 0.19 ms | 0.82 ms | 0.19 ms | 1.0x (closures 3.4x) |
-//! | bubble sort of 200 DINTs | 59 us | 417 us | 15 us | 3.0-3.8x (closures 27x) |
-//! | 1,000 TON instances per scan | 5.2 us | 19 us | 2.0 us | 2.6-4.0x (closures 8.8x) |
-//! | string building, 100 CONCATs (closures) | 5.6 us | 4.9 us | 3.1 us | 1.5-2.0x |
+//! | integer loop, 100k iterations | 0.10 ms | 0.48 ms | 0.14 ms | 0.7x (closures 3.5x) |
+//! | LREAL loop, 100k iterations | 0.14 ms | 0.36 ms | 0.14 ms | 1.0x (closures 2.5x) |
+//! | bubble sort of 200 DINTs | 38 us | 199 us | 5.5 us | 6.8x (closures 36x) |
+//! | 1,000 TON instances per scan | 1.2 us | 8.6 us | 0.6 us | 2.1x (closures 14x) |
+//! | string building, 100 CONCATs (closures) | 2.5 us | 2.5 us | 1.3 us | 1.8x |
+//! | 10k calls of FUNCTIONs and a FB with VAR_IN_OUT | 28 us | 1.22 ms | 20 us | 1.4x (closures 61x) |
 //!
-//! Building a program costs about 0.5 ms more with the JIT (0.58 ms instead of 0.11 ms
+//! Building a program costs about 0.3 ms more with the JIT (0.37 ms instead of 0.07 ms
 //! per benchmark program): Cranelift compiles each loop once, when the program is built.
 
 mod builtins;
