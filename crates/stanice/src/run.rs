@@ -438,6 +438,21 @@ async fn help_text(runtime: &Runtime) -> String {
         })
         .collect();
     out.push("links:           link-cut NODE/LINK, link-restore NODE/LINK; hmi-link-cut, hmi-link-restore".to_owned());
+    let plcs: Vec<String> = runtime
+        .project()
+        .nodes
+        .iter()
+        .filter(|node| !node.tasks.is_empty())
+        .filter(|node| runtime.node(&node.name).is_some())
+        .map(|node| node.name.clone())
+        .collect();
+    if !plcs.is_empty() {
+        out.push(
+            "PLCs:            plc-stop NODE (outputs to their safe values), plc-start NODE"
+                .to_owned(),
+        );
+        out.push(wrapped("      NODE: ", &plcs, " "));
+    }
     if !links.is_empty() {
         out.push(wrapped("      NODE/LINK: ", &links, " "));
     }
