@@ -450,3 +450,29 @@ fn loops_with_calls_compile_to_machine_code() {
         assert_eq!(compiled.jit_loops, loops, "{path:?}");
     }
 }
+
+/// An index check made in an inlined callee after a RETURN it may take does not stand
+/// for the same index after the call: `a[j]` is checked again and faults at its own
+/// position, as with closures.
+#[test]
+fn an_index_checked_in_a_callee_after_its_return_is_checked_again() {
+    let src = "FUNCTION_BLOCK Peek
+VAR_INPUT skip : BOOL; END_VAR
+VAR_IN_OUT idx : DINT; arr : ARRAY[1..5] OF DINT; END_VAR
+VAR_OUTPUT v : DINT; END_VAR
+IF skip THEN RETURN; END_IF
+v := arr[idx];
+END_FUNCTION_BLOCK
+PROGRAM Main VAR p : Peek; a : ARRAY[1..5] OF DINT := [1, 2, 3, 4, 5]; j, s : DINT; END_VAR
+FOR j := 1 TO 9 DO p(skip := j > 3, idx := j, arr := a); s := s + a[j]; END_FOR
+END_PROGRAM";
+    assert_eq!(assert_same(src, 1), 1);
+    let (vars, faults, _) = run(src, true, 1);
+    assert!(faults[0].starts_with("p.st:9:69:"), "{faults:?}");
+    assert!(
+        faults[0].contains("array index 6 out of range 1..5"),
+        "{faults:?}"
+    );
+    assert!(vars.contains(&"Main.s = 15".to_string()), "{vars:?}");
+    assert!(vars.contains(&"Main.p.v = 3".to_string()), "{vars:?}");
+}
