@@ -1052,3 +1052,118 @@ async fn lift_screens_in_a_real_browser() {
     runtime.shutdown().await;
     eprintln!("lift screens: {timings:?}, {:?} in all", started.elapsed());
 }
+
+/// The pictures of the README's lift monitoring section, from `examples/lift-fleet` (its
+/// station and screens, the store in a temporary folder): the fleet list, a lift view,
+/// the fault archive, the service figures and the phone view. Run by hand:
+/// `cargo test -p hmi --test lifts -- --ignored lift_screenshots`.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+#[ignore = "writes docs/screenshots/lift-*.png; run by hand"]
+async fn lift_screenshots() {
+    let Some((driver, chromium)) = browser_available() else {
+        return;
+    };
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let example = root.join("examples/lift-fleet");
+    let project_dir = tempfile::tempdir().unwrap();
+    std::fs::copy(
+        example.join("station.toml"),
+        project_dir.path().join("station.toml"),
+    )
+    .unwrap();
+    let project = Project::load(project_dir.path())
+        .unwrap_or_else(|e| panic!("{:?}", e.errors()))
+        .with_port_base(ports::free_port_range(3));
+    let archive_url = project.station.store.clone();
+    let top = project.top_node().unwrap().clone();
+    let runtime = Runtime::start(
+        project,
+        RuntimeOptions {
+            nodes: Vec::new(),
+            pacing: Pacing::RealTime { speed: 1.0 },
+            start: Utc::now(),
+            store: StoreChoice::Project,
+        },
+    )
+    .await
+    .unwrap();
+    let server = runtime
+        .node(&top.name)
+        .and_then(|node| node.server.as_ref())
+        .unwrap()
+        .local_addr();
+    let hmi = Hmi::start(HmiOptions {
+        screens: example.join("hmi"),
+        users: example.join("hmi/users.toml"),
+        connect: vec![server.to_string()],
+        common_address: top.common_address,
+        listen: "127.0.0.1:0".parse().unwrap(),
+        store: None,
+        archive: Some(archive_url),
+        zone: TimeZonePolicy::Zone(chrono_tz::Europe::Prague),
+        local_address: None,
+    })
+    .await
+    .unwrap();
+    // Some history: trips for a while, faults of several kinds, one lift not answering.
+    for (lift, code) in [
+        ("L3", "3C"),
+        ("L3", "11"),
+        ("L2", "30"),
+        ("L5", "12"),
+        ("L1", "51"),
+    ] {
+        runtime
+            .operate(&format!("lift {lift} fault {code}"))
+            .await
+            .unwrap();
+    }
+    runtime.operate("lift L4 status 18").await.unwrap();
+    runtime.operate("lift L6 silent").await.unwrap();
+    tokio::time::sleep(Duration::from_secs(8)).await;
+    let url = format!("http://{}", hmi.address);
+    let driver = Driver::start(&driver, chromium);
+    let out = root.join("docs/screenshots");
+    std::fs::create_dir_all(&out).unwrap();
+    let client = driver.session("desk", 1400, 900).await;
+    log_in(&client, &url, "Servis1", "servis1-ekm66").await;
+    for (hash, ready, file) in [
+        (
+            "#lifts",
+            "document.querySelectorAll('#lift-table tr[data-lift]').length === 6",
+            "lift-fleet.png",
+        ),
+        (
+            "#lift/L3",
+            "document.getElementById('page-lift') && !document.getElementById('page-lift').hidden",
+            "lift-view.png",
+        ),
+        (
+            "#faults",
+            "document.getElementById('page-faults').dataset.loaded",
+            "lift-archive.png",
+        ),
+        (
+            "#figures",
+            "document.querySelector('#page-figures table')",
+            "lift-figures.png",
+        ),
+    ] {
+        go(&client, hash).await;
+        until(&client, ready, file).await;
+        tokio::time::sleep(Duration::from_millis(700)).await;
+        std::fs::write(out.join(file), client.screenshot().await.unwrap()).unwrap();
+    }
+    let _ = client.close().await;
+    let phone = driver.session("phone", 720, 1520).await;
+    log_in(&phone, &url, "viewer", "viewer-ekm66").await;
+    tokio::time::sleep(Duration::from_millis(1500)).await;
+    std::fs::write(
+        out.join("lift-mobile.png"),
+        phone.screenshot().await.unwrap(),
+    )
+    .unwrap();
+    let _ = phone.close().await;
+    hmi.shutdown().await;
+    runtime.shutdown().await;
+}

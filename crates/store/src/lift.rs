@@ -95,6 +95,11 @@ pub struct LiftFaultQuery {
     pub since: Option<NaiveDateTime>,
     /// Only records filed strictly before this time.
     pub until: Option<NaiveDateTime>,
+    /// Only records archived at or after this time (the station's clock: a board whose
+    /// clock is wrong files its records elsewhere, the service figures count by this).
+    pub received_since: Option<DateTime<Utc>>,
+    /// Only records archived strictly before this time.
+    pub received_until: Option<DateTime<Utc>>,
     /// The sort column.
     pub order: LiftFaultOrder,
     /// Largest first (and the id tie-break descending too).
@@ -113,6 +118,8 @@ impl Default for LiftFaultQuery {
             codes: Vec::new(),
             since: None,
             until: None,
+            received_since: None,
+            received_until: None,
             order: LiftFaultOrder::BoardTime,
             descending: true,
             offset: 0,
@@ -158,6 +165,17 @@ impl LiftFaultQuery {
     ) -> Self {
         self.since = since;
         self.until = until;
+        self
+    }
+    /// Only records archived in `[since, until)` by the station's clock; either end may be
+    /// open.
+    pub fn with_received_range(
+        mut self,
+        since: Option<DateTime<Utc>>,
+        until: Option<DateTime<Utc>>,
+    ) -> Self {
+        self.received_since = since;
+        self.received_until = until;
         self
     }
     /// Sort by this column, largest first when `descending`.

@@ -672,18 +672,14 @@ async fn lift_figures_of(
             break;
         }
     }
-    // The faults archived in the period (filed by board time, so a day's margin either
-    // side, then taken by the station's time of archiving).
+    // The faults archived in the period, by the station's clock: a board's own clock may
+    // be years off (never set, or a simulator's), its records are counted when they came.
     let mut faults = Vec::new();
-    let margin = TimeDelta::days(1);
     let mut offset = 0u64;
     loop {
         let query = LiftFaultQuery::default()
             .with_lifts([lift.name.clone()])
-            .with_range(
-                Some(period.from().naive_utc() - margin),
-                Some(period.to().naive_utc() + margin),
-            )
+            .with_received_range(Some(period.from()), Some(period.to()))
             .with_order(LiftFaultOrder::Archived, false)
             .with_page(offset, 5000);
         let page = archive.query_lift_faults(&query).await?;

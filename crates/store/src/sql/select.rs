@@ -243,6 +243,11 @@ pub(crate) fn lift_fault_sql(q: &LiftFaultQuery, backend: Backend) -> Result<Cou
     b.any_of("lift", q.lifts.iter().map(Param::text));
     b.any_of("code", q.codes.iter().map(|c| Param::int(i64::from(*c))));
     b.naive_range("filed_ms", q.since, q.until);
+    b.naive_range(
+        "received_ms",
+        q.received_since.map(|t| t.naive_utc()),
+        q.received_until.map(|t| t.naive_utc()),
+    );
     let dir = if q.descending { "DESC" } else { "ASC" };
     let key = match q.order {
         LiftFaultOrder::Archived => None,

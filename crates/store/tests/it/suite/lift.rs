@@ -183,6 +183,27 @@ pub(crate) async fn lift_faults_round_trip_and_filters(store: Arc<dyn EventStore
         lifts(mine.clone().with_range(None, Some(board(0)))).await,
         Vec::<i64>::new()
     );
+    // By the time received, [since, until): 13:00 on the board came at 13:10.
+    assert_eq!(
+        lifts(
+            mine.clone()
+                .with_received_range(Some(at_ms(661 * 60_000)), Some(at_ms(790 * 60_000)))
+        )
+        .await,
+        [id(1), id(2), id(3)]
+    );
+    assert_eq!(
+        lifts(
+            mine.clone()
+                .with_received_range(Some(at_ms(781 * 60_000)), None)
+        )
+        .await,
+        [id(4)]
+    );
+    assert_eq!(
+        lifts(mine.clone().with_received_range(None, Some(at_ms(1)))).await,
+        [id(5)]
+    );
     // Sorted by board time, the record without one sits at 12:00.
     let by_time = all_faults(
         &*store,
