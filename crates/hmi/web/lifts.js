@@ -684,6 +684,7 @@
       ["Availability", percent(f.availability)],
       ["Failures", String(f.failures)],
       ["Callbacks", String(f.callbacks)],
+      ["Failures per year", fixed(f.failures_per_year ?? f.failures_per_lift_year)],
       ["Faults per year", fixed(f.faults_per_year ?? f.faults_per_lift_year)],
       ["Callbacks per year", fixed(f.callbacks_per_year ?? f.callbacks_per_lift_year)],
       ["MTBF", hours(f.mtbf)],

@@ -203,6 +203,8 @@ pub struct ServiceFigures {
     /// episode still open at `to` counts until `to`).
     pub callbacks: u64,
     /// Failures per year: `failures × year / period length`.
+    pub failures_per_year: f64,
+    /// Fault-log records per year: `faults × year / period length`.
     pub faults_per_year: f64,
     /// Callbacks per year: `callbacks × year / period length`.
     pub callbacks_per_year: f64,
@@ -579,7 +581,8 @@ impl ServiceFigures {
             availability_upper: ratio(add(normal_service, unknown), length).unwrap_or(0.0),
             failures,
             callbacks,
-            faults_per_year: rate(failures, YEAR_SECONDS, length),
+            failures_per_year: rate(failures, YEAR_SECONDS, length),
+            faults_per_year: rate(fault_count, YEAR_SECONDS, length),
             callbacks_per_year: rate(callbacks, YEAR_SECONDS, length),
             episodes,
             episode_time,
@@ -651,6 +654,8 @@ pub struct FleetFigures {
     /// Callbacks, summed.
     pub callbacks: u64,
     /// Failures per lift and year: failures × year / lift time.
+    pub failures_per_lift_year: f64,
+    /// Fault-log records per lift and year: faults × year / lift time.
     pub faults_per_lift_year: f64,
     /// Callbacks per lift and year: callbacks × year / lift time.
     pub callbacks_per_lift_year: f64,
@@ -697,6 +702,7 @@ impl FleetFigures {
             availability_upper: 0.0,
             failures: 0,
             callbacks: 0,
+            failures_per_lift_year: 0.0,
             faults_per_lift_year: 0.0,
             callbacks_per_lift_year: 0.0,
             episodes: 0,
@@ -747,7 +753,8 @@ impl FleetFigures {
         fleet.availability_lower = ratio(fleet.normal_service, fleet.lift_time).unwrap_or(0.0);
         fleet.availability_upper =
             ratio(add(fleet.normal_service, fleet.unknown), fleet.lift_time).unwrap_or(0.0);
-        fleet.faults_per_lift_year = rate(fleet.failures, YEAR_SECONDS, fleet.lift_time);
+        fleet.failures_per_lift_year = rate(fleet.failures, YEAR_SECONDS, fleet.lift_time);
+        fleet.faults_per_lift_year = rate(fleet.faults, YEAR_SECONDS, fleet.lift_time);
         fleet.callbacks_per_lift_year = rate(fleet.callbacks, YEAR_SECONDS, fleet.lift_time);
         fleet.mtbf = mean(fleet.normal_service, fleet.failures);
         fleet.mttr = mean(episode_time, fleet.episodes);

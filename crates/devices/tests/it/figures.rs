@@ -68,7 +68,9 @@ fn one_hour_out_of_service_in_a_day() {
     assert_eq!(f.episodes, 1);
     assert_eq!(f.mtbf, Some(hours(23)));
     assert_eq!(f.mttr, Some(hours(1)));
-    assert_eq!(f.faults_per_year, 365.25);
+    assert_eq!(f.failures_per_year, 365.25);
+    // No record of the fault log in this history: failures are not faults.
+    assert_eq!(f.faults_per_year, 0.0);
     assert_eq!(f.callbacks_per_year, 365.25);
     assert_eq!(f.status_at_end, Some(1));
     assert_eq!(f.mode_at_end, LiftMode::NormalService);
@@ -323,6 +325,9 @@ fn the_minimum_fault_log() {
     ];
     let f = ServiceFigures::compute(day(), &[], &faults, &FiguresConfig::default());
     assert_eq!(f.faults, 5);
+    // Five records in a day: 5 × 365.25 a year; no status, so no failure.
+    assert_eq!(f.faults_per_year, 5.0 * 365.25);
+    assert_eq!(f.failures_per_year, 0.0);
     assert_eq!(f.faults_by_group.len(), FaultGroup::ALL.len());
     assert_eq!(f.faults_by_group[&FaultGroup::SafetyCircuitInTravel], 1);
     assert_eq!(f.faults_by_group[&FaultGroup::DoorSequence], 2);
@@ -383,7 +388,11 @@ fn fleet_figures() {
     assert_eq!(fleet.mtbf, Some(hours(35)));
     // (60 + 30) minutes over two episodes.
     assert_eq!(fleet.mttr, Some(TimeDelta::minutes(45)));
-    assert_eq!(fleet.faults_per_lift_year, 2.0 * 365.25 / 3.0);
+    assert_eq!(fleet.failures_per_lift_year, 2.0 * 365.25 / 3.0);
+    assert_eq!(
+        fleet.faults_per_lift_year,
+        fleet.faults as f64 * 365.25 / 3.0
+    );
     assert_eq!(fleet.lifts_by_class.green, 2);
     assert_eq!(fleet.lifts_by_class.unknown, 1);
     assert_eq!(fleet.lifts_by_mode[&LiftMode::NormalService], 2);
