@@ -17,6 +17,8 @@
 
 #[path = "support/browser.rs"]
 mod browser;
+#[path = "../tests/support/chromium.rs"]
+mod chromium;
 use browser::{js, now_ms, report};
 
 use std::collections::HashMap;
@@ -39,8 +41,8 @@ fn arg(name: &str, default: usize) -> usize {
 fn main() {
     let lifts = arg("--lifts", 200);
     let faults = arg("--faults", 200).min(lifts);
-    if !browser::available() {
-        eprintln!("SKIPPED: the lift-fleet browser benchmark needs chromium and chromedriver (scripts/install-test-deps.sh)");
+    // Says SKIPPED without chromium and chromedriver (scripts/install-test-deps.sh).
+    if chromium::browser_available().is_none() {
         return;
     }
     tokio::runtime::Builder::new_multi_thread()
@@ -53,7 +55,7 @@ fn main() {
 
 /// The project (one node, `lifts` simulated boards) and the HMI's screens folder for it.
 fn project(dir: &std::path::Path, lifts: usize) -> Project {
-    let port = browser::free_port();
+    let port = chromium::free_port();
     let mut toml = format!(
         "[station]\nname = \"fleet\"\ntime_zone = \"UTC\"\nstore = \"sqlite:events.sqlite\"\nport_base = {port}\n\n[[node]]\nname = \"FLEET\"\ncommon_address = 1\nserver = {{ port_offset = 0 }}\n"
     );
@@ -115,7 +117,9 @@ async fn run(lifts: usize, faults: usize) {
     .await
     .unwrap();
     let url = format!("http://{}", hmi.address);
-    let (mut driver, _profile, client) = browser::start().await;
+    let Some((_driver, client)) = browser::start().await else {
+        return;
+    };
     browser::login(&client, &url, "bench", "bench-password").await;
     client.goto(&format!("{url}/#faults")).await.unwrap();
     // Every lift answering, the archive page loaded (and empty).
@@ -134,7 +138,7 @@ async fn run(lifts: usize, faults: usize) {
     loop {
         let loaded = js(
             &client,
-            "const page = document.getElementById('page-faults'); return page && page.dataset.loaded ? true : false;",
+            "!!(document.getElementById('page-faults') || {dataset: {}}).dataset.loaded",
         )
         .await;
         if loaded.as_bool() == Some(true) {
@@ -148,11 +152,11 @@ async fn run(lifts: usize, faults: usize) {
     }
     js(
         &client,
-        "window.__seen = {}; const body = document.querySelector('#fault-table tbody');\
+        "(() => { window.__seen = {}; const body = document.querySelector('#fault-table tbody');\
          new MutationObserver(() => { const t = performance.timeOrigin + performance.now();\
            for (const row of body.querySelectorAll('tr[data-lift]')) {\
              const lift = row.getAttribute('data-lift'); if (!(lift in window.__seen)) window.__seen[lift] = t; } })\
-         .observe(body, {childList: true}); return true;",
+         .observe(body, {childList: true}); return true; })()",
     )
     .await;
     println!(
@@ -185,7 +189,7 @@ async fn run(lifts: usize, faults: usize) {
     let mut seen = serde_json::Map::new();
     let wait = Instant::now();
     while seen.len() < faults && wait.elapsed() < Duration::from_secs(20) {
-        seen = js(&client, "return window.__seen;")
+        seen = js(&client, "window.__seen")
             .await
             .as_object()
             .cloned()
@@ -209,8 +213,6 @@ async fn run(lifts: usize, faults: usize) {
         "(a fault is read in the poll cycle after it happens: the 1 s status period is most of it)"
     );
     let _ = client.close().await;
-    let _ = driver.kill();
-    let _ = driver.wait();
     hmi.shutdown().await;
     runtime.shutdown().await;
 }

@@ -16,6 +16,8 @@
 
 #[path = "support/browser.rs"]
 mod browser;
+#[path = "../tests/support/chromium.rs"]
+mod chromium;
 use browser::{js, now_ms, report};
 
 use std::path::Path;
@@ -68,8 +70,8 @@ fn main() {
         .nth(1)
         .and_then(|n| n.parse().ok())
         .unwrap_or(200);
-    if !browser::available() {
-        eprintln!("SKIPPED: the HMI live benchmark needs chromium and chromedriver (scripts/install-test-deps.sh)");
+    // Says SKIPPED without chromium and chromedriver (scripts/install-test-deps.sh).
+    if chromium::browser_available().is_none() {
         return;
     }
     tokio::runtime::Builder::new_multi_thread()
@@ -119,14 +121,16 @@ async fn run(samples: usize) {
     .unwrap();
     let url = format!("http://{}", hmi.address);
     // The browser, logged in.
-    let (mut driver, _profile, client) = browser::start().await;
+    let Some((_driver, client)) = browser::start().await else {
+        return;
+    };
     browser::login(&client, &url, "bench", "bench-password").await;
     client.goto(&format!("{url}/#screen/grid")).await.unwrap();
     let ready = Instant::now();
     loop {
         let shown = js(
             &client,
-            "return document.querySelectorAll('[data-point][data-value]').length;",
+            "document.querySelectorAll('[data-point][data-value]').length",
         )
         .await;
         if shown.as_u64() == Some(u64::from(POINTS)) {
@@ -144,10 +148,10 @@ async fn run(samples: usize) {
     );
     js(
         &client,
-        "window.__seen = []; const target = document.querySelector('[data-point=\"P00001\"]');\
+        "(() => { window.__seen = []; const target = document.querySelector('[data-point=\"P00001\"]');\
          new MutationObserver(() => window.__seen.push([target.getAttribute('data-value'),\
            performance.timeOrigin + performance.now()]))\
-         .observe(target, {attributes: true, attributeFilter: ['data-value']}); return true;",
+         .observe(target, {attributes: true, attributeFilter: ['data-value']}); return true; })()",
     )
     .await;
 
@@ -178,7 +182,7 @@ async fn run(samples: usize) {
         let mut latencies = Vec::new();
         for i in 0..samples {
             value += 1.0;
-            js(&client, "window.__seen.length = 0; return true;").await;
+            js(&client, "(window.__seen.length = 0) === 0").await;
             let sent = now_ms();
             server
                 .update(Ioa::try_new(1).unwrap(), float(value), None)
@@ -186,7 +190,7 @@ async fn run(samples: usize) {
             let expected = format!("{value}");
             let deadline = Instant::now() + Duration::from_secs(10);
             let shown = loop {
-                let seen = js(&client, "return window.__seen;").await;
+                let seen = js(&client, "window.__seen").await;
                 if let Some(time) = seen.as_array().and_then(|list| {
                     list.iter()
                         .find(|entry| {
@@ -216,8 +220,6 @@ async fn run(samples: usize) {
         );
     }
     let _ = client.close().await;
-    let _ = driver.kill();
-    let _ = driver.wait();
     hmi.shutdown().await;
     server.shutdown();
 }

@@ -14,16 +14,18 @@
     missing_docs
 )]
 
+#[path = "support/chromium.rs"]
+mod chromium;
 #[path = "../../../tests/support/ports.rs"]
 mod ports;
+use chromium::{browser_available, js, until, Driver};
 
-use std::net::{SocketAddr, TcpListener, TcpStream};
+use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use chrono::{NaiveDate, TimeDelta, Utc};
-use fantoccini::{Client, ClientBuilder};
+use fantoccini::Client;
 use hmi::{Hmi, HmiOptions};
 use serde_json::{json, Value};
 use station::config::Project;
@@ -31,9 +33,6 @@ use station::pointdb::TimeZonePolicy;
 use station::runtime::{Pacing, Runtime, RuntimeOptions, StoreChoice};
 use store::LiftFaultRecord;
 use tokio::io::{AsyncReadExt as _, AsyncWriteExt as _};
-
-/// How long any one thing may take to appear.
-const WAIT: Duration = Duration::from_secs(20);
 
 fn fleet_points() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/lift-fleet/hmi/points.csv")
@@ -497,150 +496,6 @@ async fn archive_api_pages_sorts_filters_and_exports() {
 
 // ---------------------------------------------------------------------------- browser
 
-fn browser_available() -> Option<(PathBuf, PathBuf)> {
-    let found = |names: &[&str]| {
-        names.iter().find_map(|name| {
-            std::env::var_os("PATH").and_then(|paths| {
-                std::env::split_paths(&paths)
-                    .map(|dir| dir.join(name))
-                    .find(|path| path.is_file())
-            })
-        })
-    };
-    let driver = std::env::var_os("CHROMEDRIVER")
-        .map(PathBuf::from)
-        .or_else(|| found(&["chromedriver"]));
-    let chromium = std::env::var_os("CHROMIUM")
-        .map(PathBuf::from)
-        .or_else(|| found(&["chromium", "chromium-browser", "google-chrome"]));
-    if let (Some(driver), Some(chromium)) = (driver, chromium) {
-        return Some((driver, chromium));
-    }
-    let message =
-        "lift browser test needs chromedriver and chromium; run scripts/install-test-deps.sh";
-    if std::env::var("STANICE_REQUIRE_PEERS").as_deref() == Ok("1") {
-        panic!("{message}");
-    }
-    eprintln!("SKIPPED: {message}");
-    None
-}
-
-/// chromedriver on a free loopback port, killed when dropped.
-struct Driver {
-    child: Child,
-    url: String,
-    chromium: PathBuf,
-    profile: tempfile::TempDir,
-}
-
-impl Driver {
-    fn start(driver: &Path, chromium: PathBuf) -> Driver {
-        for _ in 0..3 {
-            let port = TcpListener::bind("127.0.0.1:0")
-                .unwrap()
-                .local_addr()
-                .unwrap()
-                .port();
-            let mut child = Command::new(driver)
-                .arg(format!("--port={port}"))
-                .arg("--allowed-ips=127.0.0.1")
-                .stdin(Stdio::null())
-                .stdout(Stdio::null())
-                .stderr(Stdio::null())
-                .spawn()
-                .unwrap();
-            let deadline = Instant::now() + Duration::from_secs(60);
-            while Instant::now() < deadline {
-                if TcpStream::connect(("127.0.0.1", port)).is_ok() {
-                    return Driver {
-                        child,
-                        url: format!("http://127.0.0.1:{port}"),
-                        chromium,
-                        profile: tempfile::tempdir().unwrap(),
-                    };
-                }
-                if let Ok(Some(_)) = child.try_wait() {
-                    break;
-                }
-                std::thread::sleep(Duration::from_millis(50));
-            }
-            let _ = child.kill();
-            let _ = child.wait();
-        }
-        panic!("chromedriver did not start");
-    }
-
-    async fn session(&self, name: &str, width: u32, height: u32) -> Client {
-        let args = vec![
-            "--headless".to_owned(),
-            "--no-sandbox".to_owned(),
-            "--disable-gpu".to_owned(),
-            "--no-first-run".to_owned(),
-            "--disable-background-networking".to_owned(),
-            "--disable-dev-shm-usage".to_owned(),
-            format!("--window-size={width},{height}"),
-            format!(
-                "--user-data-dir={}",
-                self.profile.path().join(name).display()
-            ),
-        ];
-        let mut capabilities = serde_json::Map::new();
-        capabilities.insert("browserName".into(), json!("chrome"));
-        capabilities.insert(
-            "goog:chromeOptions".into(),
-            json!({"args": args, "binary": self.chromium.display().to_string()}),
-        );
-        ClientBuilder::new(hyper_util::client::legacy::connect::HttpConnector::new())
-            .capabilities(capabilities)
-            .connect(&self.url)
-            .await
-            .expect("no WebDriver session")
-    }
-}
-
-impl Drop for Driver {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-async fn js(client: &Client, expression: &str) -> Value {
-    client
-        .execute(&format!("return ({expression});"), Vec::new())
-        .await
-        .unwrap_or_else(|e| panic!("script `{expression}` failed: {e}"))
-}
-
-/// Waits until a JavaScript expression is truthy, at most [`WAIT`].
-async fn until(client: &Client, expression: &str, what: &str) -> Duration {
-    let started = Instant::now();
-    loop {
-        let value = client
-            .execute(
-                &format!("try {{ return Boolean({expression}); }} catch (e) {{ return false; }}"),
-                Vec::new(),
-            )
-            .await
-            .unwrap_or(Value::Bool(false));
-        if value == Value::Bool(true) {
-            return started.elapsed();
-        }
-        if started.elapsed() > WAIT {
-            let state = js(
-                client,
-                "JSON.stringify({url: location.href, current: document.body.dataset.current, \
-                 ws: window.HMI && HMI.wsOpen, link: window.HMI && HMI.link, errors: window.HMI && HMI.errors, \
-                 faults: (document.getElementById('faults-total') || {}).textContent, \
-                 message: (document.getElementById('faults-message') || {}).textContent})",
-            )
-            .await;
-            panic!("timed out after {WAIT:?} waiting for {what} (`{expression}`); page: {state}");
-        }
-        tokio::time::sleep(Duration::from_millis(100)).await;
-    }
-}
-
 async fn log_in(client: &Client, url: &str, user: &str, password: &str) {
     client.goto(&format!("{url}/login")).await.unwrap();
     until(
@@ -771,7 +626,7 @@ async fn lift_screens_in_a_real_browser() {
     .unwrap();
     let url = format!("http://{}", hmi.address);
     let driver = Driver::start(&driver, chromium);
-    let client = driver.session("servis", 1280, 900).await;
+    let client = driver.session(1280, 900).await;
     let mut timings = Vec::new();
 
     // --- Servis1 starts on the fleet list: every lift with its status colour.
@@ -981,7 +836,7 @@ async fn lift_screens_in_a_real_browser() {
 
     // --- A read-only user on a phone: the first screen is the mimic (no start screen),
     // the mobile view shows the lifts and the fault list, the export is hidden and refused.
-    let phone = driver.session("viewer", 720, 1520).await;
+    let phone = driver.session(720, 1520).await;
     log_in(&phone, &url, "viewer", "viewer-pass").await;
     assert_eq!(
         js(&phone, "document.body.dataset.current").await,
@@ -1125,7 +980,7 @@ async fn lift_screenshots() {
     let driver = Driver::start(&driver, chromium);
     let out = root.join("docs/screenshots");
     std::fs::create_dir_all(&out).unwrap();
-    let client = driver.session("desk", 1400, 900).await;
+    let client = driver.session(1400, 900).await;
     log_in(&client, &url, "Servis1", "servis1-ekm66").await;
     for (hash, ready, file) in [
         (
@@ -1155,7 +1010,7 @@ async fn lift_screenshots() {
         std::fs::write(out.join(file), client.screenshot().await.unwrap()).unwrap();
     }
     let _ = client.close().await;
-    let phone = driver.session("phone", 720, 1520).await;
+    let phone = driver.session(720, 1520).await;
     log_in(&phone, &url, "viewer", "viewer-ekm66").await;
     tokio::time::sleep(Duration::from_millis(1500)).await;
     std::fs::write(
