@@ -16,6 +16,9 @@
 
 #[path = "support/chromium.rs"]
 mod chromium;
+#[path = "support/http.rs"]
+mod http;
+use http::{request, Reply};
 #[path = "../../../tests/support/ports.rs"]
 mod ports;
 use chromium::{browser_available, js, until, Driver};
@@ -32,7 +35,6 @@ use station::config::Project;
 use station::pointdb::TimeZonePolicy;
 use station::runtime::{Pacing, Runtime, RuntimeOptions, StoreChoice};
 use store::LiftFaultRecord;
-use tokio::io::{AsyncReadExt as _, AsyncWriteExt as _};
 
 fn fleet_points() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/lift-fleet/hmi/points.csv")
@@ -86,84 +88,14 @@ floors = 3
 
 // ---------------------------------------------------------------------------- HTTP
 
-struct Reply {
-    status: u16,
-    headers: Vec<(String, String)>,
-    body: String,
-}
-
-impl Reply {
-    fn json(&self) -> Value {
-        serde_json::from_str(&self.body).unwrap_or_else(|e| panic!("{e}: {}", self.body))
-    }
-    fn header(&self, name: &str) -> Option<&str> {
-        self.headers
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, v)| v.as_str())
-    }
-}
-
+/// A request with the session cookie (none when empty).
 async fn http(address: SocketAddr, method: &str, path: &str, cookie: &str, body: &str) -> Reply {
-    let mut stream = tokio::net::TcpStream::connect(address).await.unwrap();
-    let mut request =
-        format!("{method} {path} HTTP/1.1\r\nHost: {address}\r\nConnection: close\r\n");
-    if !cookie.is_empty() {
-        request.push_str(&format!("Cookie: {cookie}\r\n"));
-    }
-    if method == "POST" {
-        request.push_str(&format!(
-            "Content-Type: application/json\r\nContent-Length: {}\r\n",
-            body.len()
-        ));
-    }
-    request.push_str("\r\n");
-    request.push_str(body);
-    stream.write_all(request.as_bytes()).await.unwrap();
-    let mut raw = Vec::new();
-    tokio::time::timeout(Duration::from_secs(20), stream.read_to_end(&mut raw))
-        .await
-        .unwrap()
-        .unwrap();
-    let text = String::from_utf8(raw).unwrap();
-    let (head, body) = text.split_once("\r\n\r\n").unwrap();
-    let mut lines = head.lines();
-    let status = lines
-        .next()
-        .unwrap()
-        .split(' ')
-        .nth(1)
-        .unwrap()
-        .parse()
-        .unwrap();
-    let headers = lines
-        .filter_map(|l| l.split_once(':'))
-        .map(|(n, v)| (n.trim().to_ascii_lowercase(), v.trim().to_owned()))
-        .collect::<Vec<_>>();
-    // Chunked bodies (the CSV): join the chunks.
-    let body = if headers
-        .iter()
-        .any(|(n, v)| n == "transfer-encoding" && v.contains("chunked"))
-    {
-        let mut out = String::new();
-        let mut rest = body;
-        while let Some((size, after)) = rest.split_once("\r\n") {
-            let size = usize::from_str_radix(size.trim(), 16).unwrap();
-            if size == 0 {
-                break;
-            }
-            out.push_str(&after[..size]);
-            rest = &after[size + 2..];
-        }
-        out
+    let headers: Vec<(&str, &str)> = if cookie.is_empty() {
+        Vec::new()
     } else {
-        body.to_owned()
+        vec![("Cookie", cookie)]
     };
-    Reply {
-        status,
-        headers,
-        body,
-    }
+    request(address, method, path, &headers, body).await
 }
 
 async fn login(address: SocketAddr, user: &str, password: &str) -> String {
