@@ -457,6 +457,43 @@ async fn go(client: &Client, hash: &str) {
         .unwrap();
 }
 
+/// The station runtime of `project` and an HMI on the screens folder `screens` (its
+/// users.toml) connected to its top node, with the station's store as its archive.
+async fn start_station_and_hmi(project: Project, screens: &Path) -> (Runtime, Hmi) {
+    let archive_url = project.station.store.clone();
+    let top = project.top_node().unwrap().clone();
+    let runtime = Runtime::start(
+        project,
+        RuntimeOptions {
+            nodes: Vec::new(),
+            pacing: Pacing::RealTime { speed: 1.0 },
+            start: Utc::now(),
+            store: StoreChoice::Project,
+        },
+    )
+    .await
+    .unwrap();
+    let server = runtime
+        .node(&top.name)
+        .and_then(|node| node.server.as_ref())
+        .unwrap()
+        .local_addr();
+    let hmi = Hmi::start(HmiOptions {
+        screens: screens.to_path_buf(),
+        users: screens.join("users.toml"),
+        connect: vec![server.to_string()],
+        common_address: top.common_address,
+        listen: "127.0.0.1:0".parse().unwrap(),
+        store: None,
+        archive: Some(archive_url),
+        zone: TimeZonePolicy::Zone(chrono_tz::Europe::Prague),
+        local_address: None,
+    })
+    .await
+    .unwrap();
+    (runtime, hmi)
+}
+
 const PROJECT: &str = r#"
 [station]
 name = "Lift test"
@@ -516,7 +553,6 @@ async fn lift_screens_in_a_real_browser() {
     let project = Project::load(project_dir.path())
         .unwrap_or_else(|e| panic!("{:?}", e.errors()))
         .with_port_base(ports::free_port_range(3));
-    let archive_url = project.station.store.clone();
     let top = project.top_node().unwrap().clone();
     let mut csv = String::from("ioa,type,name,description\n");
     for p in &top.points {
@@ -527,35 +563,7 @@ async fn lift_screens_in_a_real_browser() {
     }
     let screens_dir = tempfile::tempdir().unwrap();
     screens(screens_dir.path(), &csv);
-    let runtime = Runtime::start(
-        project,
-        RuntimeOptions {
-            nodes: Vec::new(),
-            pacing: Pacing::RealTime { speed: 1.0 },
-            start: Utc::now(),
-            store: StoreChoice::Project,
-        },
-    )
-    .await
-    .unwrap();
-    let server = runtime
-        .node(&top.name)
-        .and_then(|node| node.server.as_ref())
-        .unwrap()
-        .local_addr();
-    let hmi = Hmi::start(HmiOptions {
-        screens: screens_dir.path().to_path_buf(),
-        users: screens_dir.path().join("users.toml"),
-        connect: vec![server.to_string()],
-        common_address: top.common_address,
-        listen: "127.0.0.1:0".parse().unwrap(),
-        store: None,
-        archive: Some(archive_url),
-        zone: TimeZonePolicy::Zone(chrono_tz::Europe::Prague),
-        local_address: None,
-    })
-    .await
-    .unwrap();
+    let (runtime, hmi) = start_station_and_hmi(project, screens_dir.path()).await;
     let url = format!("http://{}", hmi.address);
     let driver = Driver::start(&driver, chromium);
     let client = driver.session(1280, 900).await;
@@ -861,37 +869,7 @@ async fn lift_screenshots() {
     let project = Project::load(project_dir.path())
         .unwrap_or_else(|e| panic!("{:?}", e.errors()))
         .with_port_base(ports::free_port_range(3));
-    let archive_url = project.station.store.clone();
-    let top = project.top_node().unwrap().clone();
-    let runtime = Runtime::start(
-        project,
-        RuntimeOptions {
-            nodes: Vec::new(),
-            pacing: Pacing::RealTime { speed: 1.0 },
-            start: Utc::now(),
-            store: StoreChoice::Project,
-        },
-    )
-    .await
-    .unwrap();
-    let server = runtime
-        .node(&top.name)
-        .and_then(|node| node.server.as_ref())
-        .unwrap()
-        .local_addr();
-    let hmi = Hmi::start(HmiOptions {
-        screens: example.join("hmi"),
-        users: example.join("hmi/users.toml"),
-        connect: vec![server.to_string()],
-        common_address: top.common_address,
-        listen: "127.0.0.1:0".parse().unwrap(),
-        store: None,
-        archive: Some(archive_url),
-        zone: TimeZonePolicy::Zone(chrono_tz::Europe::Prague),
-        local_address: None,
-    })
-    .await
-    .unwrap();
+    let (runtime, hmi) = start_station_and_hmi(project, &example.join("hmi")).await;
     // Some history: trips for a while, faults of several kinds, one lift not answering.
     for (lift, code) in [
         ("L3", "3C"),
