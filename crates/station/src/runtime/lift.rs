@@ -261,6 +261,20 @@ async fn run(
         _ => None,
     };
     let mut errors: u64 = 0;
+    // Whether the board answered since it was last reported lost: a loss is notified
+    // once, not at every reopening of a dead line.
+    let mut answering = false;
+    let lost = |answering: &mut bool| {
+        if std::mem::take(answering) {
+            if let Some(notifications) = &outlets.notifications {
+                notifications.comm_lost(
+                    &lift.spec.config.name,
+                    &lift.description(),
+                    node.clock().now(),
+                );
+            }
+        }
+    };
     loop {
         let stream = match open(&lift.spec.config, &mut simulated_board, &mut board).await {
             Ok(stream) => stream,
@@ -279,6 +293,7 @@ async fn run(
         let end = run_poller(stream, &mut poller, &mut no_actions, |event, _| {
             match event {
                 Event::Status(status) => {
+                    answering = true;
                     counts
                         .status_replies
                         .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
@@ -290,13 +305,7 @@ async fn run(
                 }
                 Event::Comm(CommStatus::Lost) => {
                     lift.down();
-                    if let Some(notifications) = &outlets.notifications {
-                        notifications.comm_lost(
-                            &lift.spec.config.name,
-                            &lift.description(),
-                            node.clock().now(),
-                        );
-                    }
+                    lost(&mut answering);
                 }
                 Event::Comm(_) => {}
                 Event::Error(error) => {
@@ -316,6 +325,9 @@ async fn run(
         .await;
         cursor = poller.cursor().clone();
         lift.down();
+        // A converter's connection dropped or an adapter unplugged: the board is lost as
+        // surely as one that stopped answering.
+        lost(&mut answering);
         tracing::warn!(node = %node.name(), lift = %lift.spec.config.name, ?end, "the lift's line closed; opening it again");
         tokio::time::sleep(REOPEN_AFTER).await;
     }

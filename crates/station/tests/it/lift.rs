@@ -420,7 +420,7 @@ to = ["novak@example.cz"]
 [[node.notify.rule]]
 name = "door faults"
 sources = ["L*"]
-classes = ["door-sequence"]
+classes = ["door-sequence", "comm-lost"]
 channels = ["technicians"]
 quiet_period_s = 600
 "#,
@@ -482,6 +482,16 @@ quiet_period_s = 600
         station::store::NotificationOutcome::Suppressed
     );
     assert!(records[0].detail.contains("quiet"), "{}", records[0].detail);
+    // A board that stops answering: the communication alarm, mailed.
+    runtime.operate("lift L3 silent").await.unwrap();
+    let (sink, mails) = tokio::task::spawn_blocking(move || {
+        let mails = sink.wait_for(2);
+        (sink, mails)
+    })
+    .await
+    .unwrap();
+    let subject = mails[1]["subject"].as_str().unwrap();
+    assert_eq!(subject, "[L3] controller board not answering");
     drop(sink);
     runtime.shutdown().await;
 }
