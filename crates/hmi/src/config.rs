@@ -117,6 +117,8 @@ pub struct LiftLevels {
     pub export: u8,
     /// The service figures.
     pub figures: u8,
+    /// The record of the notifications sent (who was told what, when).
+    pub notifications: u8,
 }
 
 impl Default for LiftLevels {
@@ -127,18 +129,20 @@ impl Default for LiftLevels {
             archive: 0,
             export: 3,
             figures: 3,
+            notifications: 3,
         }
     }
 }
 
 impl LiftLevels {
-    fn all(&self) -> [(&'static str, u8); 5] {
+    fn all(&self) -> [(&'static str, u8); 6] {
         [
             ("fleet", self.fleet),
             ("lift", self.lift),
             ("archive", self.archive),
             ("export", self.export),
             ("figures", self.figures),
+            ("notifications", self.notifications),
         ]
     }
 }

@@ -191,6 +191,28 @@ async fn archive_api_pages_sorts_filters_and_exports() {
         impossible.board_time = None;
         records.push(impossible);
         store.append_lift_faults(&records).await.unwrap();
+        // What the station's notifier recorded: a mail sent for L1, one suppressed, a
+        // webhook that failed for L2.
+        for (minute, lift, channel, outcome) in [
+            (1, "L1", "email", store::NotificationOutcome::Sent),
+            (2, "L1", "email", store::NotificationOutcome::Suppressed),
+            (3, "L2", "webhook", store::NotificationOutcome::Failed),
+        ] {
+            store
+                .append_notification(&store::NotificationRecord {
+                    id: None,
+                    time: Utc::now() - TimeDelta::minutes(10 - minute),
+                    rule: "door faults".into(),
+                    channel: channel.into(),
+                    recipient: "novak@example.cz".into(),
+                    source: lift.into(),
+                    subject: format!("[{lift}] fault 0x3C Door fault"),
+                    outcome,
+                    detail: "250 OK".into(),
+                })
+                .await
+                .unwrap();
+        }
     }
     let start = |archive: Option<String>| {
         let dir = dir.path().to_path_buf();
@@ -357,6 +379,24 @@ async fn archive_api_pages_sorts_filters_and_exports() {
     assert_eq!(refused.status, 403, "{}", refused.body);
     assert!(refused.json()["error"].as_str().unwrap().contains("export"));
     assert_eq!(get(&viewer, "/api/lifts/figures").await.status, 403);
+
+    // The record of notifications: newest first, by lift, level 3.
+    let sent = get(&servis, "/api/lifts/notifications").await.json();
+    assert_eq!(sent["total"], json!(3));
+    assert_eq!(sent["rows"][0]["lift"], json!("L2"));
+    assert_eq!(sent["rows"][0]["outcome"], json!("failed"));
+    assert_eq!(sent["rows"][2]["outcome"], json!("sent"));
+    let l1 = get(&servis, "/api/lifts/notifications?lift=L1&limit=1")
+        .await
+        .json();
+    assert_eq!(l1["total"], json!(2));
+    assert_eq!(l1["rows"].as_array().unwrap().len(), 1);
+    assert_eq!(l1["rows"][0]["outcome"], json!("suppressed"));
+    assert_eq!(get(&viewer, "/api/lifts/notifications").await.status, 403);
+    for bad in ["lift=L9", "limit=0", "offset=-1", "nope=1"] {
+        let reply = get(&servis, &format!("/api/lifts/notifications?{bad}")).await;
+        assert_eq!(reply.status, 400, "{bad}: {}", reply.body);
+    }
     assert_eq!(get("", "/api/lifts/faults").await.status, 401);
 
     // Figures: no history in this store, yet an answer for the fleet and each lift.
@@ -640,6 +680,13 @@ async fn lift_screens_in_a_real_browser() {
         "the archive",
     )
     .await;
+    // The record of notifications below it (level 3; none sent in this project).
+    until(
+        &client,
+        "!document.getElementById('notifications').hidden && document.getElementById('notifications').dataset.total === '0'",
+        "the notification record",
+    )
+    .await;
     client
         .execute(
             "const f = document.getElementById('fault-filter'); f.limit.value = '10'; f.limit.dispatchEvent(new Event('change'));",
@@ -817,6 +864,10 @@ async fn lift_screens_in_a_real_browser() {
     .await;
     assert_eq!(
         js(&phone, "document.getElementById('faults-export').hidden").await,
+        json!(true)
+    );
+    assert_eq!(
+        js(&phone, "document.getElementById('notifications').hidden").await,
         json!(true)
     );
     assert_eq!(

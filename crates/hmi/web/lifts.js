@@ -492,12 +492,28 @@
         el("button", { type: "button", id: "faults-next", class: "secondary", text: "Next →" }),
         el("span", { id: "faults-total", class: "muted" }),
       ),
+      el(
+        "div",
+        { id: "notifications", hidden: true },
+        el("h3", { text: "Notifications sent" }),
+        el(
+          "div",
+          { class: "table-wrap" },
+          el(
+            "table",
+            { id: "notification-table", class: "list" },
+            el("thead", {}, el("tr", {}, ...["Time", "Lift", "Rule", "Channel", "To", "Subject", "Outcome", "Detail"].map((title) => el("th", { text: title })))),
+            el("tbody"),
+          ),
+        ),
+      ),
     );
     const form = document.getElementById("fault-filter");
     form.addEventListener("submit", (event) => {
       event.preventDefault();
       archive.offset = 0;
       loadArchive();
+      loadNotifications();
     });
     form.addEventListener("reset", () =>
       setTimeout(() => {
@@ -628,6 +644,39 @@
     }
   }
 
+  /** The newest notifications (who was told of which lift's fault), with the archive. */
+  async function loadNotifications() {
+    const box = document.getElementById("notifications");
+    if (!box) return;
+    box.hidden = !allowed("notifications") || !L.config.archive;
+    if (box.hidden) return;
+    const form = document.getElementById("fault-filter");
+    const parameters = new URLSearchParams({ limit: "20" });
+    if (form && form.lift.value) parameters.set("lift", form.lift.value);
+    try {
+      const result = await HMI.api(`/api/lifts/notifications?${parameters}`);
+      document.querySelector("#notification-table tbody").replaceChildren(
+        ...result.rows.map((row) =>
+          el(
+            "tr",
+            { "data-outcome": row.outcome },
+            el("td", { class: "time", text: HMI.formatTime(row.time) }),
+            el("td", { text: row.lift }),
+            el("td", { text: row.rule }),
+            el("td", { text: row.channel }),
+            el("td", { text: row.recipient }),
+            el("td", { text: row.subject }),
+            el("td", { text: row.outcome }),
+            el("td", { text: row.detail }),
+          ),
+        ),
+      );
+      box.dataset.total = String(result.total);
+    } catch (error) {
+      box.hidden = true;
+    }
+  }
+
   function showArchive(argument) {
     const page = document.getElementById("page-faults");
     if (!allowed("archive")) {
@@ -644,6 +693,7 @@
     if (argument && findLift(argument)) form.lift.value = argument;
     archive.offset = 0;
     loadArchive();
+    loadNotifications();
   }
 
   /** A lift's fault counter changed: the archive (and the phone list) show it at once. */
@@ -658,7 +708,11 @@
     if (archive.timer) return;
     archive.timer = setTimeout(() => {
       archive.timer = null;
-      if (archive.shown && archive.changed) loadArchive();
+      if (archive.shown && archive.changed) {
+        loadArchive();
+        // The notice of a new fault goes out after it is archived: look again shortly.
+        setTimeout(loadNotifications, 1000);
+      }
       archive.changed = false;
       if (mobile.shown) loadMobileFaults();
     }, 50);

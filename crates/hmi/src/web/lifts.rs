@@ -33,7 +33,8 @@ use devices::ekm66::tables::{
 use serde::Deserialize;
 use serde_json::{json, Value};
 use store::{
-    EventQuery, EventStore, LiftFaultOrder, LiftFaultQuery, LiftFaultRecord, Order, PointValue,
+    EventQuery, EventStore, LiftFaultOrder, LiftFaultQuery, LiftFaultRecord, NotificationQuery,
+    Order, PointValue,
 };
 
 use super::{AppError, AppState, LoggedIn};
@@ -47,6 +48,7 @@ pub(super) fn routes() -> Router<AppState> {
         .route("/api/lifts/faults.csv", get(faults_csv))
         .route("/api/lifts/figures", get(fleet_figures))
         .route("/api/lifts/{name}/figures", get(lift_figures))
+        .route("/api/lifts/notifications", get(notifications))
 }
 
 /// Rows of one archive page at most.
@@ -107,11 +109,84 @@ async fn fleet(State(state): State<AppState>, user: LoggedIn) -> Json<Value> {
             "archive": has >= levels.archive,
             "export": has >= levels.export.max(levels.archive),
             "figures": has >= levels.figures,
+            "notifications": has >= levels.notifications,
         },
         "archive": state.archive.is_some(),
         "statuses": statuses,
         "faults": faults,
     }))
+}
+
+// ---------------------------------------------------------------------------- notifications
+
+/// The notification record's query string: `lift`, `offset`, `limit`.
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct NotificationsParams {
+    lift: Option<String>,
+    offset: Option<String>,
+    limit: Option<String>,
+}
+
+/// The station's record of the notifications its lifts caused (e-mail, webhook; sent,
+/// failed or suppressed), newest first.
+async fn notifications(
+    State(state): State<AppState>,
+    user: LoggedIn,
+    query: Result<Query<NotificationsParams>, QueryRejection>,
+) -> Result<Json<Value>, AppError> {
+    let config = state.station.config();
+    require(&user, "notifications", config.lift_levels.notifications)?;
+    let Query(params) = query?;
+    let mut query = NotificationQuery::default();
+    if let Some(lift) = present(&params.lift) {
+        if !config.lifts.iter().any(|known| known.name == lift) {
+            return Err(bad("lift", format!("no lift `{}`", LogText(lift))));
+        }
+        query = query.with_source(lift);
+    }
+    let offset = match present(&params.offset) {
+        None => 0,
+        Some(text) => text
+            .parse::<u64>()
+            .ok()
+            .filter(|o| *o <= 1_000_000_000)
+            .ok_or_else(|| bad("offset", "a whole number 0..=1000000000"))?,
+    };
+    let limit = match present(&params.limit) {
+        None => 50,
+        Some(text) => text
+            .parse::<u32>()
+            .ok()
+            .filter(|l| (1..=MAX_PAGE).contains(l))
+            .ok_or_else(|| bad("limit", format!("a whole number 1..={MAX_PAGE}")))?,
+    };
+    let page = state
+        .archive()?
+        .query_notifications(&query.with_page(offset, limit))
+        .await?;
+    let rows: Vec<Value> = page
+        .items
+        .iter()
+        .map(|record| {
+            json!({
+                "time": record.time,
+                "lift": record.source,
+                "rule": record.rule,
+                "channel": record.channel,
+                "recipient": record.recipient,
+                "subject": record.subject,
+                "outcome": record.outcome.to_string(),
+                "detail": record.detail,
+            })
+        })
+        .collect();
+    Ok(Json(json!({
+        "rows": rows,
+        "total": page.total,
+        "offset": offset,
+        "limit": limit,
+    })))
 }
 
 // ---------------------------------------------------------------------------- the archive
