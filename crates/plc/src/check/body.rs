@@ -27,6 +27,7 @@ pub(super) fn check_bodies(
             loops: 0,
             calls: Vec::new(),
             used: HashSet::new(),
+            stmt_call: None,
         };
         bc.init(init, ty);
     }
@@ -44,6 +45,7 @@ pub(super) fn check_bodies(
                 loops: 0,
                 calls: Vec::new(),
                 used: HashSet::new(),
+                stmt_call: None,
             };
             bc.init(&init, &ty);
         }
@@ -64,6 +66,7 @@ pub(super) fn check_bodies(
             loops: 0,
             calls: Vec::new(),
             used: HashSet::new(),
+            stmt_call: None,
         };
         for v in &vars {
             if let Some(init) = &v.init {
@@ -161,6 +164,18 @@ struct BodyCx<'a> {
     calls: Vec<(PouId, Span)>,
     /// Variables of the POU that are referenced.
     used: HashSet<usize>,
+    /// The call being checked as a statement (a function without a result may be one).
+    stmt_call: Option<crate::syntax::NodeId>,
+}
+
+/// The value of an integer literal, also negated (`-5`).
+fn int_literal(e: &Expr) -> Option<i128> {
+    match &e.kind {
+        ExprKind::Literal(Literal::Int(v, _)) => Some(*v),
+        ExprKind::Unary(UnOp::Neg, a) => int_literal(a).map(|v| -v),
+        ExprKind::Unary(UnOp::Plus, a) => int_literal(a),
+        _ => None,
+    }
 }
 
 fn is_untyped_literal(e: &Expr) -> bool {
@@ -554,7 +569,9 @@ impl BodyCx<'_> {
             self.calls.push((id, e.span));
             return;
         }
+        self.stmt_call = Some(e.id);
         self.expr(e, None);
+        self.stmt_call = None;
     }
 
     /// Type of a callee expression if it designates a variable (FB instance).
@@ -1279,6 +1296,9 @@ impl BodyCx<'_> {
         args: &[Arg],
         hint: Option<&Ty>,
     ) -> Ty {
+        if let Some(params) = stdlib::params(&b) {
+            return self.named_builtin(e, ident, b, &params, args);
+        }
         if let Some(a) = args.iter().find(|a| a.output) {
             self.err(
                 Code::WrongArguments,
@@ -1352,6 +1372,187 @@ impl BodyCx<'_> {
                 Ty::Void
             }
         }
+    }
+
+    /// A built-in with named parameters and outputs ([`stdlib::params`]): `CONCAT_DT(YEAR
+    /// := y, ...)`, `SPLIT_DT(IN := d, YEAR => y, ...)` or the same without names, in order.
+    fn named_builtin(
+        &mut self,
+        e: &Expr,
+        ident: &Ident,
+        b: Builtin,
+        params: &[stdlib::Param],
+        args: &[Arg],
+    ) -> Ty {
+        use crate::stdlib::time::{self as t, Field};
+        let is_stmt = self.stmt_call == Some(e.id);
+        self.stmt_call = None;
+        let fname = &ident.name;
+        let mut ok = true;
+        let mut given: Vec<usize> = Vec::new();
+        // literal inputs, checked now: a wrong one would fault on every call
+        let mut constants = t::Fields::default();
+        let mut constant: Vec<(Field, Span)> = Vec::new();
+        for (a, bound) in args.iter().zip(stdlib::bind_args(params, args)) {
+            let at = a.name.as_ref().map_or(a.value.span, |n| n.span);
+            let (i, p) = match bound.map(|i| (i, params.get(i))) {
+                Ok((i, Some(p))) => (i, *p),
+                Ok((_, None)) => continue,
+                Err(err) => {
+                    let msg = match &err {
+                        stdlib::ArgError::Unknown(n) => {
+                            format!("'{fname}' has no parameter '{n}'")
+                        }
+                        stdlib::ArgError::TooMany(n) => {
+                            format!("too many arguments to '{fname}': it has {n} parameters")
+                        }
+                        stdlib::ArgError::NotOutput(n) => {
+                            format!("'{n}' is an input of '{fname}', not an output")
+                        }
+                        stdlib::ArgError::NotInput(n) => {
+                            format!("'{n}' is an output of '{fname}': bind it with '{n} =>'")
+                        }
+                        stdlib::ArgError::Twice(n) => {
+                            format!("'{n}' of '{fname}' given more than once")
+                        }
+                        stdlib::ArgError::AfterNamed => {
+                            "positional argument after named arguments".to_string()
+                        }
+                    };
+                    self.err(Code::WrongArguments, at, msg);
+                    ok = false;
+                    if a.output {
+                        self.lvalue(&a.value);
+                    } else {
+                        self.expr(&a.value, None);
+                    }
+                    continue;
+                }
+            };
+            given.push(i);
+            let name = p.name();
+            if p.output {
+                let t = self.lvalue(&a.value);
+                if t == Ty::Void {
+                    ok = false;
+                    continue;
+                }
+                let (lo, hi) = p.field.map_or((0, 0), Field::range);
+                let fits = t
+                    .int_range()
+                    .is_some_and(|(a, b)| a <= i128::from(lo) && i128::from(hi) <= b);
+                if a.negated || !t.is_int() {
+                    let tn = self.name(&t);
+                    self.err(Code::TypeMismatch, a.value.span, format!("type mismatch: output '{name}' of {fname} is an integer (ANY_INT), bound to a variable of type {tn}"));
+                    ok = false;
+                } else if !fits {
+                    let tn = self.name(&t);
+                    self.err(Code::TypeMismatch, a.value.span, format!("type mismatch: output '{name}' of {fname} ({lo}..{hi}) does not fit a variable of type {tn}"));
+                    ok = false;
+                }
+                continue;
+            }
+            match p.field {
+                None => {
+                    let want = match b {
+                        Builtin::SplitParts(parts) => parts.ty(),
+                        _ => Ty::Void,
+                    };
+                    let t = self.expr(&a.value, Some(&want));
+                    ok &= t != Ty::Void
+                        && self.coerce_to(&a.value, &t, &want, &format!("argument '{name}'"));
+                }
+                Some(field) => {
+                    let t = self.expr(&a.value, None);
+                    if t == Ty::Void {
+                        ok = false;
+                    } else if !t.is_int() {
+                        let tn = self.name(&t);
+                        self.err(Code::TypeMismatch, a.value.span, format!("type mismatch: argument '{name}' of {fname} of type {tn} where an integer (ANY_INT) is expected"));
+                        ok = false;
+                    } else if let Some(v) = int_literal(&a.value) {
+                        let (lo, hi) = field.range();
+                        if v < i128::from(lo) || v > i128::from(hi) {
+                            self.err(
+                                Code::TypeMismatch,
+                                a.value.span,
+                                format!("{name} {v} is outside {lo}..{hi}"),
+                            );
+                            ok = false;
+                        }
+                        constants.set(field, v);
+                        constant.push((field, a.value.span));
+                    }
+                }
+            }
+        }
+        // the day of a constant date (`CONCAT_DATE(2023, 2, 29)`)
+        let known = |f| constant.iter().find(|(g, _)| *g == f).map(|(_, s)| *s);
+        if let (true, Some(_), Some(_), Some(span)) = (
+            ok,
+            known(Field::Year),
+            known(Field::Month),
+            known(Field::Day),
+        ) {
+            let date = t::Fields {
+                year: constants.year,
+                month: constants.month,
+                day: constants.day,
+                ..t::Fields::default()
+            };
+            if let Err(err @ t::FieldsError::NoSuchDay { .. }) = t::concat(t::Parts::Date, &date) {
+                self.err(Code::TypeMismatch, span, err.to_string());
+                ok = false;
+            }
+        }
+        let inputs: Vec<&str> = params
+            .iter()
+            .filter(|p| !p.output && !p.named_only)
+            .map(stdlib::Param::name)
+            .collect();
+        let non_formal = !args.is_empty() && args.iter().all(|a| a.name.is_none());
+        let required: Vec<&str> = params
+            .iter()
+            .enumerate()
+            .filter(|(i, p)| p.required && !given.contains(i))
+            .map(|(_, p)| p.name())
+            .collect();
+        if non_formal && args.len() < inputs.len() {
+            // IEC 61131-3: a call without names gives every input, in order
+            let missing = inputs.get(args.len()..).unwrap_or_default().join(", ");
+            self.diags.push(
+                Diagnostic::error(
+                    Code::WrongArguments,
+                    e.span,
+                    format!(
+                        "too few arguments to '{fname}': {} of {} input(s) given, missing {missing}",
+                        args.len(),
+                        inputs.len(),
+                    ),
+                )
+                .with_note("with names (`YEAR := ...`) the time fields may be left out, at 0"),
+            );
+            ok = false;
+        } else if ok && !required.is_empty() {
+            self.err(
+                Code::WrongArguments,
+                e.span,
+                format!("'{fname}' needs {}", required.join(", ")),
+            );
+            ok = false;
+        }
+        let ret = match b {
+            Builtin::ConcatParts(parts) => parts.ty(),
+            _ if is_stmt => Ty::Void,
+            _ => {
+                self.err(Code::WrongArguments, e.span, format!("'{fname}' has no result: call it as a statement and bind its outputs with `=>`"));
+                return Ty::Void;
+            }
+        };
+        if ok {
+            self.c.res.insert(e.id, Res::CallBuiltin(b));
+        }
+        ret
     }
 
     /// `REF(x)`: the address of a variable (or of a member or element of one).

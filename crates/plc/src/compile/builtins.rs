@@ -3,9 +3,12 @@
 use super::expr::{convert, konst_i};
 use super::{Cx, IFn, RFn, SFn, CE};
 use crate::check::Ty;
-use crate::stdlib::{bits, conv, numeric, string, time, Builtin};
-use crate::syntax::{Arg, Expr};
-use crate::vm::{Fault, FaultKind};
+use crate::stdlib::{self, bits, conv, numeric, string, time, Builtin};
+use crate::syntax::{Arg, Expr, ExprKind};
+use crate::vm::{Fault, FaultKind, StmtFn};
+use std::cell::Cell;
+use std::rc::Rc;
+use Builtin::*;
 
 fn as_i(v: CE) -> IFn {
     match v {
@@ -39,6 +42,11 @@ fn real1(v: CE, ty: &Ty, f: fn(f64) -> f64) -> CE {
 
 impl Cx<'_> {
     pub(crate) fn builtin(&mut self, b: &Builtin, args: &[Arg], e: &Expr) -> CE {
+        match b {
+            ConcatParts(parts) => return self.concat_parts(*parts, args, e),
+            SplitParts(parts) => return self.split_parts(*parts, args),
+            _ => {}
+        }
         let ret = self.c.ty(e.id);
         let tys: Vec<Ty> = args.iter().map(|a| self.c.final_ty(a.value.id)).collect();
         let mut vals: Vec<CE> = args.iter().map(|a| self.expr(&a.value)).collect();
@@ -54,7 +62,6 @@ impl Cx<'_> {
             }
         };
         let span = e.span;
-        use Builtin::*;
         match b {
             Abs => match take(0) {
                 CE::I(f) => {
@@ -567,7 +574,91 @@ impl Cx<'_> {
                 let a = as_i(take(0));
                 CE::I(Box::new(move |vm| Ok(time::day_of_week(a(vm)?))))
             }
+            // compiled above (named parameters and outputs)
+            ConcatParts(_) | SplitParts(_) => CE::I(konst_i(0)),
         }
+    }
+
+    /// `CONCAT_DATE(YEAR := y, MONTH := m, DAY := d)` and the other `CONCAT_*`: the
+    /// inputs in the order written (those left out are 0); a field out of range is a
+    /// fault at the call.
+    fn concat_parts(&mut self, parts: time::Parts, args: &[Arg], e: &Expr) -> CE {
+        let params = stdlib::params(&ConcatParts(parts)).unwrap_or_default();
+        let mut inputs: Vec<(time::Field, bool, IFn)> = Vec::new();
+        for (a, bound) in args.iter().zip(stdlib::bind_args(&params, args)) {
+            let field = bound.ok().and_then(|i| params.get(i)).and_then(|p| p.field);
+            if let Some(field) = field {
+                // ULINT keeps its bit pattern in the cell
+                let unsigned = self.c.final_ty(a.value.id) == Ty::ULInt;
+                inputs.push((field, unsigned, as_i(self.expr(&a.value))));
+            }
+        }
+        let (span, name) = (e.span, callee_name(e));
+        CE::I(Box::new(move |vm| {
+            let mut fields = time::Fields::default();
+            for (field, unsigned, f) in &inputs {
+                let v = f(vm)?;
+                let v = if *unsigned {
+                    i128::from(v as u64)
+                } else {
+                    i128::from(v)
+                };
+                fields.set(*field, v);
+            }
+            time::concat(parts, &fields).map_err(|err| {
+                FaultKind::Conversion {
+                    span,
+                    what: format!("{name}: {err}"),
+                }
+                .into()
+            })
+        }))
+    }
+
+    /// `SPLIT_DATE(IN := d, YEAR => y, ...)` and the other `SPLIT_*`: `IN` first, then the
+    /// outputs stored in the order written (with the subrange checks of any store).
+    fn split_parts(&mut self, parts: time::Parts, args: &[Arg]) -> CE {
+        let params = stdlib::params(&SplitParts(parts)).unwrap_or_default();
+        let fields = Rc::new(Cell::new(time::Fields::default()));
+        let mut value: Option<IFn> = None;
+        let mut stores: Vec<StmtFn> = Vec::new();
+        for (a, bound) in args.iter().zip(stdlib::bind_args(&params, args)) {
+            let Some(p) = bound.ok().and_then(|i| params.get(i)) else {
+                continue;
+            };
+            match p.field {
+                None => value = Some(as_i(self.expr(&a.value))),
+                Some(field) => {
+                    let Some(dst) = self.place(&a.value) else {
+                        self.error(a.value.span, "cannot compile this output");
+                        continue;
+                    };
+                    let read = Rc::clone(&fields);
+                    let v: IFn =
+                        Box::new(move |_| Ok(i64::try_from(read.get().get(field)).unwrap_or(0)));
+                    stores.push(self.store(&dst, CE::I(v)));
+                }
+            }
+        }
+        let value = value.unwrap_or_else(|| konst_i(0));
+        CE::I(Box::new(move |vm| {
+            fields.set(time::split(parts, value(vm)?));
+            for store in &stores {
+                store(vm)?;
+            }
+            Ok(0)
+        }))
+    }
+}
+
+/// The upper-case name of the function a call calls.
+fn callee_name(e: &Expr) -> String {
+    match &e.kind {
+        ExprKind::Call(callee, _) => match &callee.kind {
+            ExprKind::Name { ident, .. } => ident.key.clone(),
+            _ => String::new(),
+        },
+        _ => String::new(),
     }
 }
 

@@ -21,6 +21,14 @@
 //! flags. TON, TOF, TP, R_TRIG and F_TRIG get native bodies ([`timers`]) checked against
 //! their ST text.
 //!
+//! The date and time functions of IEC 61131-3 table 36 with outputs, `SPLIT_DATE`,
+//! `SPLIT_TOD`, `SPLIT_DT` and their L-forms, and their inverses `CONCAT_DATE`,
+//! `CONCAT_TOD`, `CONCAT_DT`, ... are built-ins with named parameters ([`params`],
+//! [`bind_args`]): `SPLIT_DT(IN := x, YEAR => y, DAY => d)` or without names in the
+//! standard's order (`IN`, then the outputs); the fields are ANY_INT. A field out of range
+//! (`MONTH` 13, `HOUR` 24, day 31 in February, a year DATE does not hold) is a run-time
+//! fault at the call, or a diagnostic when it is a constant ([`time::concat`]).
+//!
 //! Extension point: a new FB is added to the prelude (ST) or, if it needs native code, as a
 //! builtin plus an ST wrapper, or an ST declaration with a native body in [`timers`].
 
@@ -124,6 +132,12 @@ pub enum Builtin {
     SystemTime,
     /// Day of week of a DATE/DT, 1 = Monday .. 7 = Sunday (ISO).
     DayOfWeek,
+    /// `CONCAT_DATE`, `CONCAT_TOD`, `CONCAT_DT` and the L-forms: a value from its fields
+    /// (ANY_INT inputs, named or in order; checked at run time, a wrong one is a fault).
+    ConcatParts(time::Parts),
+    /// `SPLIT_DATE`, `SPLIT_TOD`, `SPLIT_DT` and the L-forms: the fields of a value as
+    /// outputs (`YEAR => y`, or in order after `IN`) into ANY_INT variables; a statement.
+    SplitParts(time::Parts),
     /// Extensible comparison chain `GT(a, b, c)` = `a > b AND b > c` (and GE, EQ, LE, LT, NE).
     Compare(crate::syntax::BinOp),
     /// `REF(x)`: the address of a variable (typed by the checker, not by [`signature`]).
@@ -222,6 +236,18 @@ pub fn lookup(name: &str) -> Option<Builtin> {
         "LOCAL_TIME" | "__LOCAL_TIME" => LocalTime,
         "SYSTEM_TIME" | "__SYSTEM_TIME" => SystemTime,
         "DAY_OF_WEEK" => DayOfWeek,
+        "CONCAT_DATE" => ConcatParts(time::Parts::Date),
+        "CONCAT_LDATE" => ConcatParts(time::Parts::LDate),
+        "CONCAT_TOD" => ConcatParts(time::Parts::Tod),
+        "CONCAT_LTOD" => ConcatParts(time::Parts::LTod),
+        "CONCAT_DT" => ConcatParts(time::Parts::Dt),
+        "CONCAT_LDT" => ConcatParts(time::Parts::LDt),
+        "SPLIT_DATE" => SplitParts(time::Parts::Date),
+        "SPLIT_LDATE" => SplitParts(time::Parts::LDate),
+        "SPLIT_TOD" => SplitParts(time::Parts::Tod),
+        "SPLIT_LTOD" => SplitParts(time::Parts::LTod),
+        "SPLIT_DT" => SplitParts(time::Parts::Dt),
+        "SPLIT_LDT" => SplitParts(time::Parts::LDt),
         "GT" => Compare(crate::syntax::BinOp::Gt),
         "GE" => Compare(crate::syntax::BinOp::Ge),
         "EQ" => Compare(crate::syntax::BinOp::Eq),
@@ -641,5 +667,175 @@ pub fn signature(b: &Builtin, args: &[Ty]) -> Result<(Vec<Ty>, Ty), String> {
             let t = if arg(0) == Ty::Date { Ty::Date } else { Ty::Dt };
             (vec![t], Ty::USInt)
         }
+        // typed by the checker against their parameters ([`params`])
+        ConcatParts(_) | SplitParts(_) => return Err("takes named parameters".into()),
     })
+}
+
+/// A parameter of a built-in with named parameters and outputs (`SPLIT_DT(IN := d,
+/// YEAR => y)`): `IN` or a field of a date and time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Param {
+    /// The field, or `None` for `IN`.
+    pub field: Option<time::Field>,
+    /// A VAR_OUTPUT: bound with `=>`, or in a call without names, in order after the inputs.
+    pub output: bool,
+    /// An input that must be given. The others are 0 when left out of a call with
+    /// names, as the standard says; an input whose 0 is always wrong (`MONTH`) must be given.
+    pub required: bool,
+    /// Given by name only: not in the standard's list (`NANOSECOND` of the L-forms), so
+    /// the standard's calls without names mean what they mean elsewhere.
+    pub named_only: bool,
+}
+
+impl Param {
+    /// The parameter's name.
+    pub fn name(&self) -> &'static str {
+        self.field.map_or("IN", time::Field::name)
+    }
+}
+
+/// The parameters of a built-in that has named parameters or outputs, in order; `None`
+/// for the others (their arguments are positional, typed by [`signature`]).
+pub fn params(b: &Builtin) -> Option<Vec<Param>> {
+    let field = |f: time::Field, output: bool| Param {
+        field: Some(f),
+        output,
+        required: !output && matches!(f, time::Field::Year | time::Field::Month | time::Field::Day),
+        named_only: f == time::Field::Nanosecond,
+    };
+    match b {
+        Builtin::ConcatParts(parts) => {
+            Some(parts.fields().iter().map(|&f| field(f, false)).collect())
+        }
+        Builtin::SplitParts(parts) => {
+            let input = Param {
+                field: None,
+                output: false,
+                required: true,
+                named_only: false,
+            };
+            let outputs = parts.fields().iter().map(|&f| field(f, true));
+            Some(std::iter::once(input).chain(outputs).collect())
+        }
+        _ => None,
+    }
+}
+
+/// Why an argument binds to no parameter ([`bind_args`]).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum ArgError {
+    /// A name that is no parameter.
+    #[error("has no parameter '{0}'")]
+    Unknown(String),
+    /// `X =>` of an input.
+    #[error("'{0}' is an input, not an output")]
+    NotOutput(&'static str),
+    /// `X :=` of an output.
+    #[error("'{0}' is an output: bind it with `{0} =>`")]
+    NotInput(&'static str),
+    /// An argument without a name after one with a name.
+    #[error("positional argument after named arguments")]
+    AfterNamed,
+    /// More arguments without names than the parameter list has.
+    #[error("too many arguments: it has {0} parameters")]
+    TooMany(usize),
+    /// A parameter given twice.
+    #[error("'{0}' given more than once")]
+    Twice(&'static str),
+}
+
+/// The parameter (an index into `params`) each argument binds to: by name, or in order
+/// (the parameters that are not [`Param::named_only`], outputs included, as a call
+/// without names lists them).
+pub fn bind_args(params: &[Param], args: &[crate::syntax::Arg]) -> Vec<Result<usize, ArgError>> {
+    let positional: Vec<usize> = params
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| !p.named_only)
+        .map(|(i, _)| i)
+        .collect();
+    let mut next = 0usize;
+    let mut named = false;
+    let mut given: Vec<usize> = Vec::new();
+    args.iter()
+        .map(|a| {
+            let i = match &a.name {
+                Some(n) => {
+                    named = true;
+                    let (i, p) = params
+                        .iter()
+                        .enumerate()
+                        .find(|(_, p)| p.name() == n.key)
+                        .ok_or_else(|| ArgError::Unknown(n.name.clone()))?;
+                    match (a.output, p.output) {
+                        (true, false) => return Err(ArgError::NotOutput(p.name())),
+                        (false, true) => return Err(ArgError::NotInput(p.name())),
+                        _ => i,
+                    }
+                }
+                None if named => return Err(ArgError::AfterNamed),
+                None => {
+                    let i = *positional
+                        .get(next)
+                        .ok_or(ArgError::TooMany(positional.len()))?;
+                    next += 1;
+                    i
+                }
+            };
+            if given.contains(&i) {
+                return Err(ArgError::Twice(params.get(i).map_or("", Param::name)));
+            }
+            given.push(i);
+            Ok(i)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::task::{ClockReading, TaskConfig};
+
+    /// Calls of the date and time functions with named parameters and outputs, as
+    /// `plc check` prints what it refuses.
+    #[test]
+    fn rendered_date_and_time_call_diagnostics() {
+        let src = "PROGRAM Main\nVAR y : INT; b : SINT; r : REAL; d : DATE; END_VAR\n\
+                   SPLIT_DATE(IN := d, YEAR => y, HOURS => y);\n\
+                   SPLIT_DATE(IN := d, YEAR => b, DAY => r);\n\
+                   d := CONCAT_DATE(YEAR := 2023, MONTH := 2, DAY := 29);\n\
+                   d := CONCAT_DATE(MONTH := 1, DAY := 1);\n\
+                   y := SPLIT_TOD(TOD#12:00:00, y);\n\
+                   END_PROGRAM\n";
+        let (sources, r) = crate::build(&[("dates.st".to_string(), src.to_string())]);
+        let Err(diags) = r else {
+            panic!("compiled");
+        };
+        let text = diags
+            .iter()
+            .map(|d| d.render(&sources))
+            .collect::<Vec<_>>()
+            .join("\n");
+        insta::assert_snapshot!("date_and_time_calls", text);
+    }
+
+    /// A wrong field is a run-time fault at the call.
+    #[test]
+    fn rendered_date_and_time_fault() {
+        let src = "PROGRAM Main\nVAR m : INT := 2; d : DATE; x : DT; END_VAR\n\
+                   d := CONCAT_DATE(2024, m, 29);\n\
+                   x := CONCAT_DT(YEAR := 2023, MONTH := m, DAY := 29, HOUR := 1);\n\
+                   END_PROGRAM\n";
+        let (sources, r) = crate::build(&[("fault.st".to_string(), src.to_string())]);
+        let mut p = crate::Plc::new(r.unwrap(), sources);
+        p.add_task(TaskConfig::cyclic("main", 10_000_000, &["Main"]))
+            .unwrap();
+        let faults = p.run_cycle(ClockReading::default());
+        let text = faults
+            .iter()
+            .map(|d| p.render(d))
+            .collect::<Vec<_>>()
+            .join("\n");
+        insta::assert_snapshot!("date_and_time_fault", text);
+    }
 }
