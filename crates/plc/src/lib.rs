@@ -39,7 +39,9 @@
 //!   they are in its subset (the one module with `unsafe`: calling that code).
 //! - [`vm`]: memory image, values, run-time faults, value formatting.
 //! - [`stdlib`]: standard FBs written in ST (timers, edges, counters, bistables, DTL) and
-//!   native built-in functions (numeric, bit, selection, string, conversion, time).
+//!   native built-in functions (numeric, bit, selection, string, conversion, time; the
+//!   date and time fields of `CONCAT_DATE/TOD/DT` and `SPLIT_DATE/TOD/DT` with their
+//!   L-forms, `DAY_OF_WEEK` numbered as the standard does, 0 = Sunday).
 //! - [`task`]: the runtime — [`task::Plc`] with a deterministic `run_cycle(now)`.
 //!
 //! # Run-time rules

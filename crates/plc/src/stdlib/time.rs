@@ -21,10 +21,12 @@ pub fn add_tod_time(tod: i64, t: i64) -> i64 {
     tod.wrapping_add(t).rem_euclid(DAY)
 }
 
-/// ISO weekday of a DATE/DT: 1 = Monday .. 7 = Sunday.
+/// The weekday of a DATE/DT as IEC 61131-3 numbers it: 0 = Sunday .. 6 = Saturday (as
+/// RuSTy and CODESYS's DAY_OF_WEEK; ISO 8601's 1 = Monday .. 7 = Sunday is
+/// `(DAY_OF_WEEK(d) + 6) MOD 7 + 1`).
 pub fn day_of_week(dt: i64) -> i64 {
     // 1970-01-01 was a Thursday (4)
-    (dt.div_euclid(DAY) + 3).rem_euclid(7) + 1
+    (dt.div_euclid(DAY) + 4).rem_euclid(7)
 }
 
 /// (year, month, day, hour, minute, second, nanosecond) of a DT.
