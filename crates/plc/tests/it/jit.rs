@@ -476,3 +476,24 @@ END_PROGRAM";
     assert!(vars.contains(&"Main.s = 15".to_string()), "{vars:?}");
     assert!(vars.contains(&"Main.p.v = 3".to_string()), "{vars:?}");
 }
+
+/// The `jit_*` conformance programs (branch-free swaps, elements carried between
+/// iterations, their faults, EXIT, RETURN, budget, VAR_IN_OUT, REF, wrapping indices):
+/// their loops compile to machine code and agree with the closures.
+#[test]
+fn jit_conformance_programs_compile_and_agree() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/conformance");
+    let mut seen = 0;
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap().to_string_lossy().to_string();
+        if !name.starts_with("jit_") || !name.ends_with(".st") {
+            continue;
+        }
+        let src = std::fs::read_to_string(&path).unwrap();
+        let loops = assert_same(&src, 2);
+        assert!(loops >= 1, "{name}: no loop compiled to machine code");
+        seen += 1;
+    }
+    assert!(seen >= 6, "jit_ programs found: {seen}");
+}

@@ -176,18 +176,120 @@ fn stmt_count(stmts: &[Stmt]) -> usize {
 struct LoopTargets {
     exit: Block,
     next: Block,
+    /// The known elements at each CONTINUE (they meet at `next`).
+    continued: Vec<Vec<Elem>>,
 }
+
+/// An element of a one-dimensional array of scalars selected by an index `v + k` over a
+/// register cell (see [`IndexKey`]): the array (lane, frame or absolute, first cell and
+/// length in its lane, lower bound) and the index.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+struct ElemAt {
+    real: bool,
+    frame: bool,
+    start: usize,
+    len: usize,
+    lo: i64,
+    hi: i64,
+    key: IndexKey,
+}
+
+impl ElemAt {
+    /// Whether a store to `self` may change the cell of `other`. Two such arrays are the
+    /// same or disjoint; in one array, indices over the same value of the same cell
+    /// with different `k` are different elements when neither wraps onto the other
+    /// (`exact`: at least 16 bits and `|k| <= 1000`, both checked within the bounds).
+    fn may_alias(&self, exact: bool, other: &Elem) -> bool {
+        let o = &other.at;
+        if self.real != o.real || self.frame != o.frame {
+            return false;
+        }
+        let disjoint = self.start.saturating_add(self.len) <= o.start
+            || o.start.saturating_add(o.len) <= self.start;
+        if disjoint {
+            return false;
+        }
+        let same_array = self.start == o.start && self.len == o.len && self.lo == o.lo;
+        let same_value = self.key.cell == o.key.cell && self.key.version == o.key.version;
+        !(same_array && same_value && exact && other.exact && self.key.k != o.key.k)
+    }
+}
+
+/// The value an element of memory is known to hold at the point of emission (loaded or
+/// stored there, on every path to it): loads of it reuse the value. Stores are not
+/// delayed (memory always holds the value); a store to memory the element may share a
+/// cell with forgets it.
+#[derive(Clone, Copy, Debug)]
+struct Elem {
+    at: ElemAt,
+    exact: bool,
+    value: Value,
+}
+
+/// The elements known on every path: those with the same value in each list.
+fn meet(lists: &[Vec<Elem>]) -> Vec<Elem> {
+    let Some((first, rest)) = lists.split_first() else {
+        return Vec::new();
+    };
+    first
+        .iter()
+        .copied()
+        .filter(|e| {
+            rest.iter()
+                .all(|l| l.iter().any(|o| o.at == e.at && o.value == e.value))
+        })
+        .collect()
+}
+
+/// An element carried from one iteration of a FOR loop to the next: `a[i + k]` of the
+/// next iteration is `a[i + k + step]` of this one. `at.key` names the index at the
+/// start of the body; `ity` is the type of the index expression (its wrapping).
+#[derive(Clone, PartialEq, Debug)]
+struct Carry {
+    at: ElemAt,
+    ity: Ty,
+}
+
+/// What one attempt at lowering a loop may use; later attempts learn from earlier ones.
+#[derive(Default, Clone)]
+struct Plan {
+    /// Cells an indexed access may reach: never in registers.
+    excluded: HashSet<CellKey>,
+    /// IF statements (by address) whose branch-free form would fault or call: branches.
+    branchy: HashSet<usize>,
+    /// Per FOR statement (by address): the elements carried between its iterations.
+    carry: HashMap<usize, Vec<Carry>>,
+    /// Whether `carry` was learnt (it is learnt once).
+    carry_learnt: bool,
+    /// The last attempt: no branch-free IF, no carried elements.
+    plain: bool,
+}
+
+/// A FOR loop being lowered (outside inlined callees): its counter's cell and version
+/// in the body, and the elements over it the body loads.
+struct ForCtx {
+    id: usize,
+    cell: CellKey,
+    version: u32,
+    used: Vec<Carry>,
+}
+
+/// Attempts at lowering one loop before it stays with the closures.
+const ATTEMPTS: usize = 5;
 
 /// Compiles the loop statement `s` of the POU `cx` compiles, or `None` when any part of
 /// it is outside the JIT subset.
 pub(crate) fn lower_loop(cx: &mut Cx<'_>, engine: &Rc<JitEngine>, s: &Stmt) -> Option<JitLoop> {
-    let mut excluded: HashSet<CellKey> = HashSet::new();
+    let mut plan = Plan::default();
     // A cell first kept in a register may turn out to be reachable by an indexed access
-    // found later in the loop; the second attempt keeps such cells in memory.
-    for _ in 0..2 {
-        match attempt(cx, engine, s, &excluded) {
+    // found later in the loop; an IF lowered without branches may turn out to need one
+    // (a fault); the elements worth carrying between iterations are known once the body
+    // was lowered: later attempts use what earlier ones found. The last is plain.
+    for n in 0..ATTEMPTS {
+        plan.plain = plan.plain || n + 1 == ATTEMPTS;
+        match attempt(cx, engine, s, &plan) {
             Ok(Attempt::Done(l)) => return Some(l),
-            Ok(Attempt::Conflicts(c)) => excluded.extend(c),
+            Ok(Attempt::Retry(p)) => plan = p,
             Err(Unsupported) => return None,
         }
     }
@@ -196,15 +298,10 @@ pub(crate) fn lower_loop(cx: &mut Cx<'_>, engine: &Rc<JitEngine>, s: &Stmt) -> O
 
 enum Attempt {
     Done(JitLoop),
-    Conflicts(Vec<CellKey>),
+    Retry(Plan),
 }
 
-fn attempt(
-    cx: &mut Cx<'_>,
-    engine: &Rc<JitEngine>,
-    s: &Stmt,
-    excluded: &HashSet<CellKey>,
-) -> L<Attempt> {
+fn attempt(cx: &mut Cx<'_>, engine: &Rc<JitEngine>, s: &Stmt, plan: &Plan) -> L<Attempt> {
     let ptr = engine.pointer_type().ok_or(Unsupported)?;
     let frontend = engine.frontend_config().ok_or(Unsupported)?;
     if ptr != types::I64 {
@@ -212,6 +309,8 @@ fn attempt(
     }
     let mut ctx = engine.ctx.try_borrow_mut().map_err(|_| Unsupported)?;
     let mut fctx = engine.fctx.try_borrow_mut().map_err(|_| Unsupported)?;
+    // a context cleared after an earlier attempt has lost the host's convention
+    ctx.func.signature.call_conv = frontend.default_call_conv;
     ctx.func.signature.params.push(AbiParam::new(ptr));
     ctx.func.signature.returns.push(AbiParam::new(types::I64));
     let result = {
@@ -253,7 +352,11 @@ fn attempt(
             vars: HashMap::new(),
             order: Vec::new(),
             dirty: HashSet::new(),
-            excluded,
+            plan,
+            elems: Vec::new(),
+            select_failed: Vec::new(),
+            fors: Vec::new(),
+            carry_seen: HashMap::new(),
             regions: Vec::new(),
             extents: Extents::default(),
             faults: Vec::new(),
@@ -275,16 +378,17 @@ fn attempt(
                     .copied()
                     .filter(|k| lw.regions.iter().any(|r| r.contains(*k)))
                     .collect();
+                let next = lw.next_plan(conflicts);
                 let Lower {
                     extents, faults, b, ..
                 } = lw;
                 b.finalize(frontend);
-                Ok((conflicts, extents, faults))
+                Ok((next, extents, faults))
             }
             Err(e) => Err(e),
         }
     };
-    let (conflicts, extents, faults) = match result {
+    let (next, extents, faults) = match result {
         Ok(r) => r,
         Err(e) => {
             // an abandoned function leaves the builder context mid-way
@@ -293,9 +397,9 @@ fn attempt(
             return Err(e);
         }
     };
-    if !conflicts.is_empty() {
+    if let Some(next) = next {
         ctx.clear();
-        return Ok(Attempt::Conflicts(conflicts));
+        return Ok(Attempt::Retry(next));
     }
     let code = engine.finish(&mut ctx).ok_or(Unsupported)?;
     Ok(Attempt::Done(JitLoop {
@@ -323,7 +427,16 @@ struct Lower<'a, 'b, 'x> {
     order: Vec<CellKey>,
     /// Cells written (stored back on the way out).
     dirty: HashSet<CellKey>,
-    excluded: &'x HashSet<CellKey>,
+    plan: &'x Plan,
+    /// Elements whose values are known here (see [`Elem`]).
+    elems: Vec<Elem>,
+    /// IF statements lowered without branches that needed one.
+    select_failed: Vec<usize>,
+    /// FOR loops being lowered, innermost last.
+    fors: Vec<ForCtx>,
+    /// Per FOR loop: the elements over its counter known at the end of an iteration,
+    /// as they are named in the next one.
+    carry_seen: HashMap<usize, Vec<Carry>>,
     regions: Vec<Region>,
     extents: Extents,
     faults: Vec<FaultSite>,
@@ -384,6 +497,30 @@ fn may_fault(e: &Expr) -> bool {
         | ExprKind::Member(a, _)
         | ExprKind::Bit(a, _)
         | ExprKind::Part(a, ..) => may_fault(a),
+        _ => false,
+    }
+}
+
+/// Whether `e` is cheap enough to evaluate whether or not it is needed: names, members,
+/// elements, literals, `+`, `-` and comparisons of such.
+fn simple(e: &Expr) -> bool {
+    match &e.kind {
+        ExprKind::Literal(_) | ExprKind::Name { .. } => true,
+        ExprKind::Member(a, _) => simple(a),
+        ExprKind::Index(a, ix) => simple(a) && ix.iter().all(simple),
+        ExprKind::Unary(UnOp::Neg | UnOp::Plus, a) => simple(a),
+        ExprKind::Binary(
+            BinOp::Add
+            | BinOp::Sub
+            | BinOp::Lt
+            | BinOp::Gt
+            | BinOp::Le
+            | BinOp::Ge
+            | BinOp::Eq
+            | BinOp::Ne,
+            a,
+            b,
+        ) => simple(a) && simple(b),
         _ => false,
     }
 }
@@ -551,7 +688,7 @@ impl<'e> Lower<'_, '_, '_> {
             frame: p.frame,
             off: if real { p.off.r } else { p.off.i },
         };
-        if self.excluded.contains(&key) {
+        if self.plan.excluded.contains(&key) {
             return None;
         }
         if let Some(v) = self.vars.get(&key) {
@@ -711,8 +848,108 @@ impl<'e> Lower<'_, '_, '_> {
             self.address(p)?;
             return Ok(self.b.use_var(v));
         }
+        let elem = self.elem_at(p);
+        // the index is checked even when the value is known: a carried value may have
+        // been loaded for an index outside the bounds
         let (base, off) = self.address(p)?;
-        Ok(self.b.ins().load(ty, flags(), base, off))
+        let Some((at, exact, ity)) = elem else {
+            return Ok(self.b.ins().load(ty, flags(), base, off));
+        };
+        if exact {
+            for f in self.fors.iter_mut() {
+                let named = Carry {
+                    at,
+                    ity: ity.clone(),
+                };
+                if f.cell == at.key.cell && f.version == at.key.version && !f.used.contains(&named)
+                {
+                    f.used.push(named);
+                }
+            }
+        }
+        if let Some(e) = self.elems.iter().find(|e| e.at == at) {
+            return Ok(e.value);
+        }
+        let value = self.b.ins().load(ty, flags(), base, off);
+        self.elems.push(Elem { at, exact, value });
+        Ok(value)
+    }
+
+    /// The element a place names, if it is one whose value can be known (see
+    /// [`ElemAt`]), whether different `k` are different elements, and the index type.
+    fn elem_at(&mut self, p: &JPlace<'e>) -> Option<(ElemAt, bool, Ty)> {
+        if p.ptr.is_some() || p.bit.is_some() || p.dynamic.len() != 1 {
+            return None;
+        }
+        let d = p.dynamic.first()?;
+        let r = p.region?;
+        let real = p.real();
+        let (stride, other, off, start, len) = if real {
+            (d.stride.r, d.stride.i, p.off.r, r.start.r, r.len.r)
+        } else {
+            (d.stride.i, d.stride.r, p.off.i, r.start.i, r.len.i)
+        };
+        if stride != 1 || other != 0 || d.stride.s != 0 || off != start || r.frame != p.frame {
+            return None;
+        }
+        let key = self.index_key(d.expr)?;
+        let ity = self.cx.c.ty(d.expr.id);
+        let exact = key.k.unsigned_abs() <= 1000 && ity.bits() >= 16 && ity.bits() <= 64;
+        let at = ElemAt {
+            real,
+            frame: p.frame,
+            start,
+            len,
+            lo: d.lo,
+            hi: d.hi,
+            key,
+        };
+        Some((at, exact, ity))
+    }
+
+    /// Loads the element `carry` names for the counter value `counter` (its index
+    /// `counter + k` wrapped to the index type), from the first element when that index
+    /// is outside the bounds: the value is then never used, as every use of it checks
+    /// the index first.
+    fn clamped_load(&mut self, carry: &Carry, counter: Value, k: i64) -> L<Value> {
+        let at = carry.at;
+        let x = self.b.ins().iadd_imm_s(counter, k);
+        let x = self.wrap(&carry.ity, x);
+        let rel = self.b.ins().iadd_imm_s(x, at.lo.wrapping_neg());
+        let span = at
+            .hi
+            .checked_sub(at.lo)
+            .filter(|n| *n >= 0)
+            .ok_or(Unsupported)?;
+        let out = self
+            .b
+            .ins()
+            .icmp_imm_s(IntCC::UnsignedGreaterThan, rel, span);
+        let zero = self.b.ins().iconst(types::I64, 0);
+        let rel = self.b.ins().select(out, zero, rel);
+        let bytes = self.b.ins().imul_imm_s(rel, 8);
+        let cell = |n: usize| {
+            if at.real {
+                Size { i: 0, r: n, s: 0 }
+            } else {
+                Size { i: n, r: 0, s: 0 }
+            }
+        };
+        let r = Region {
+            frame: at.frame,
+            start: cell(at.start),
+            len: cell(at.len),
+        };
+        self.regions.push(r);
+        self.extents.cover(r.frame, r.start, r.start.plus(r.len));
+        let base = self.base_of(CellKey {
+            real: at.real,
+            frame: at.frame,
+            off: 0,
+        });
+        let addr = self.b.ins().iadd(base, bytes);
+        let ty = if at.real { types::F64 } else { types::I64 };
+        Ok(self.b.ins().load(ty, flags(), addr, byte_off(at.start)?))
     }
 
     fn load(&mut self, p: &JPlace<'e>) -> L<JV> {
@@ -732,6 +969,7 @@ impl<'e> Lower<'_, '_, '_> {
             _ => return Err(Unsupported),
         };
         let var = self.var_of(p);
+        let elem = if var.is_none() { self.elem_at(p) } else { None };
         let (base, off) = self.address(p)?;
         let v = match p.bit {
             Some(bit) => {
@@ -763,6 +1001,18 @@ impl<'e> Lower<'_, '_, '_> {
             }
             None => {
                 self.b.ins().store(flags(), v, base, off);
+                match elem {
+                    Some((at, exact, _)) => {
+                        self.elems.retain(|e| !at.may_alias(exact, e));
+                        self.elems.push(Elem {
+                            at,
+                            exact,
+                            value: v,
+                        });
+                    }
+                    // any other cell may be one of the elements
+                    None => self.elems.clear(),
+                }
             }
         }
         Ok(())
@@ -904,15 +1154,24 @@ impl<'e> Lower<'_, '_, '_> {
 
     /// One arm of an IF or CASE: `body` when `cond` holds, then on to `merge`; the code
     /// goes on in the block for the next arm.
-    fn arm(&mut self, cond: Value, body: &'e [Stmt], merge: Block) -> L<()> {
+    /// The elements known at the end of the arm are added to `ends`.
+    fn arm(
+        &mut self,
+        cond: Value,
+        body: &'e [Stmt],
+        merge: Block,
+        ends: &mut Vec<Vec<Elem>>,
+    ) -> L<()> {
         let then = self.b.create_block();
         let next = self.b.create_block();
         self.b.ins().brif(cond, then, &[], next, &[]);
         self.b.switch_to_block(then);
         // checks inside the arm do not hold after it
         let scope = self.checked.len();
+        let known = self.elems.clone();
         self.block(body)?;
         self.checked.truncate(scope);
+        ends.push(std::mem::replace(&mut self.elems, known));
         self.b.ins().jump(merge, &[]);
         self.b.switch_to_block(next);
         Ok(())
@@ -934,16 +1193,24 @@ impl<'e> Lower<'_, '_, '_> {
             }
             StmtKind::Call(e) => self.call(e),
             StmtKind::If(arms, els) => {
+                if let ([(c, body)], None) = (arms.as_slice(), els) {
+                    if self.select_if(s, c, body)? {
+                        return Ok(());
+                    }
+                }
                 let merge = self.b.create_block();
                 let scope = self.checked.len();
+                let mut ends = Vec::new();
                 for (c, body) in arms {
                     let c = self.cond(c)?;
-                    self.arm(c, body, merge)?;
+                    self.arm(c, body, merge, &mut ends)?;
                 }
                 if let Some(els) = els {
                     self.block(els)?;
                 }
                 self.checked.truncate(scope);
+                ends.push(std::mem::take(&mut self.elems));
+                self.elems = meet(&ends);
                 self.b.ins().jump(merge, &[]);
                 self.b.switch_to_block(merge);
                 Ok(())
@@ -951,6 +1218,7 @@ impl<'e> Lower<'_, '_, '_> {
             StmtKind::Case(sel, arms, els) => {
                 let v = self.cond(sel)?;
                 let merge = self.b.create_block();
+                let mut ends = Vec::new();
                 for (labels, body) in arms {
                     let mut hit: Option<Value> = None;
                     for l in labels {
@@ -980,13 +1248,15 @@ impl<'e> Lower<'_, '_, '_> {
                         });
                     }
                     let Some(hit) = hit else { continue };
-                    self.arm(hit, body, merge)?;
+                    self.arm(hit, body, merge, &mut ends)?;
                 }
                 if let Some(els) = els {
                     let arm = self.checked.len();
                     self.block(els)?;
                     self.checked.truncate(arm);
                 }
+                ends.push(std::mem::take(&mut self.elems));
+                self.elems = meet(&ends);
                 self.b.ins().jump(merge, &[]);
                 self.b.switch_to_block(merge);
                 Ok(())
@@ -997,95 +1267,15 @@ impl<'e> Lower<'_, '_, '_> {
                 to,
                 by,
                 body,
-            } => {
-                let p = self.resolve(var)?;
-                if !p.dynamic.is_empty()
-                    || p.bit.is_some()
-                    || p.range.is_some()
-                    || p.ty.lane() != Some(Lane::Int)
-                {
-                    return Err(Unsupported);
-                }
-                let vt = p.ty.clone();
-                let f = self.expr(from)?;
-                self.store(&p, f)?;
-                let end = self.cond(to)?;
-                let (step, sign) = match by {
-                    None => (self.b.ins().iconst(types::I64, 1), Some(true)),
-                    Some(b) => {
-                        let k = match &b.kind {
-                            ExprKind::Literal(Literal::Int(v, _)) => i64::try_from(*v).ok(),
-                            _ => None,
-                        };
-                        let v = self.cond(b)?;
-                        (v, k.map(|k| k >= 0))
-                    }
-                };
-                let JV::I(cur0) = self.load(&p)? else {
-                    return Err(Unsupported);
-                };
-                let head = self.b.create_block();
-                let cur = self.b.append_block_param(head, types::I64);
-                let body_b = self.b.create_block();
-                let next = self.b.create_block();
-                let after = self.b.create_block();
-                self.b.ins().jump(head, &[cur0.into()]);
-                // checks made before the loop may not hold for later iterations
-                let outer = std::mem::take(&mut self.checked);
-                self.b.switch_to_block(head);
-                let past_up = self.b.ins().icmp(IntCC::SignedGreaterThan, cur, end);
-                let past_down = self.b.ins().icmp(IntCC::SignedLessThan, cur, end);
-                let done = match sign {
-                    Some(true) => past_up,
-                    Some(false) => past_down,
-                    None => {
-                        let up = self
-                            .b
-                            .ins()
-                            .icmp_imm_s(IntCC::SignedGreaterThanOrEqual, step, 0);
-                        self.b.ins().select(up, past_up, past_down)
-                    }
-                };
-                self.b.ins().brif(done, after, &[], body_b, &[]);
-                self.b.switch_to_block(body_b);
-                self.tick(s.span);
-                self.loops.push(LoopTargets { exit: after, next });
-                let r = self.block(body);
-                self.loops.pop();
-                r?;
-                self.checked.clear();
-                self.b.ins().jump(next, &[]);
-                self.b.switch_to_block(next);
-                let JV::I(now) = self.load(&p)? else {
-                    return Err(Unsupported);
-                };
-                // a counter of 32 bits or less stepped by a constant below 2^31 cannot
-                // leave the i64 range: no saturation needed
-                let narrow = vt.bits() <= 32 && (vt.is_int() || vt.is_bits());
-                let small_step = match by {
-                    None => true,
-                    Some(b) => {
-                        matches!(&b.kind, ExprKind::Literal(Literal::Int(k, _)) if k.unsigned_abs() < 1 << 31)
-                    }
-                };
-                let stepped = if narrow && small_step {
-                    self.b.ins().iadd(now, step)
-                } else {
-                    self.saturating_add(now, step)
-                };
-                let wrapped = self.wrap(&vt, stepped);
-                self.store(&p, JV::I(wrapped))?;
-                self.b.ins().jump(head, &[stepped.into()]);
-                self.checked = outer;
-                self.b.switch_to_block(after);
-                Ok(())
-            }
+            } => self.for_loop(s, var, from, to, by.as_ref(), body),
             StmtKind::While(c, body) => {
                 let head = self.b.create_block();
                 let body_b = self.b.create_block();
                 let after = self.b.create_block();
                 self.b.ins().jump(head, &[]);
                 let outer = std::mem::take(&mut self.checked);
+                // the head is reached from the body too
+                self.elems.clear();
                 self.b.switch_to_block(head);
                 let c = self.cond(c)?;
                 self.b.ins().brif(c, body_b, &[], after, &[]);
@@ -1094,12 +1284,14 @@ impl<'e> Lower<'_, '_, '_> {
                 self.loops.push(LoopTargets {
                     exit: after,
                     next: head,
+                    continued: Vec::new(),
                 });
                 let r = self.block(body);
                 self.loops.pop();
                 r?;
                 self.b.ins().jump(head, &[]);
                 self.checked = outer;
+                self.elems.clear();
                 self.b.switch_to_block(after);
                 Ok(())
             }
@@ -1109,22 +1301,26 @@ impl<'e> Lower<'_, '_, '_> {
                 let after = self.b.create_block();
                 self.b.ins().jump(body_b, &[]);
                 let outer = std::mem::take(&mut self.checked);
+                self.elems.clear();
                 self.b.switch_to_block(body_b);
                 self.tick(s.span);
                 self.loops.push(LoopTargets {
                     exit: after,
                     next: test,
+                    continued: Vec::new(),
                 });
                 let r = self.block(body);
                 self.loops.pop();
                 r?;
                 // CONTINUE jumps to the test from inside the body
                 self.checked.clear();
+                self.elems.clear();
                 self.b.ins().jump(test, &[]);
                 self.b.switch_to_block(test);
                 let c = self.cond(c)?;
                 self.b.ins().brif(c, after, &[], body_b, &[]);
                 self.checked = outer;
+                self.elems.clear();
                 self.b.switch_to_block(after);
                 Ok(())
             }
@@ -1134,7 +1330,10 @@ impl<'e> Lower<'_, '_, '_> {
                 Ok(())
             }
             StmtKind::Continue => {
-                let to = self.loops.last().map(|l| l.next).ok_or(Unsupported)?;
+                let known = self.elems.clone();
+                let l = self.loops.last_mut().ok_or(Unsupported)?;
+                l.continued.push(known);
+                let to = l.next;
                 self.jump_away(to, None);
                 Ok(())
             }
@@ -1148,6 +1347,263 @@ impl<'e> Lower<'_, '_, '_> {
                 Ok(())
             }
         }
+    }
+
+    /// A FOR loop. A counter in a register stepped by a constant carries the elements
+    /// over it that the plan names from one iteration to the next (`a[i + 1]` of one is
+    /// `a[i]` of the next): loaded before the first iteration, the value known at the end
+    /// of an iteration (else loaded there) for the next.
+    fn for_loop(
+        &mut self,
+        s: &'e Stmt,
+        var: &'e Expr,
+        from: &'e Expr,
+        to: &'e Expr,
+        by: Option<&'e Expr>,
+        body: &'e [Stmt],
+    ) -> L<()> {
+        let p = self.resolve(var)?;
+        if !p.dynamic.is_empty()
+            || p.bit.is_some()
+            || p.range.is_some()
+            || p.ty.lane() != Some(Lane::Int)
+        {
+            return Err(Unsupported);
+        }
+        let vt = p.ty.clone();
+        let f = self.expr(from)?;
+        self.store(&p, f)?;
+        let end = self.cond(to)?;
+        let konst = match by {
+            None => Some(1),
+            Some(b) => match &b.kind {
+                ExprKind::Literal(Literal::Int(v, _)) => i64::try_from(*v).ok(),
+                _ => None,
+            },
+        };
+        let (step, sign) = match by {
+            None => (self.b.ins().iconst(types::I64, 1), Some(true)),
+            Some(b) => {
+                let v = self.cond(b)?;
+                (v, konst.map(|k| k >= 0))
+            }
+        };
+        let JV::I(cur0) = self.load(&p)? else {
+            return Err(Unsupported);
+        };
+        // a counter of 32 bits or less stepped by a constant below 2^31 cannot leave the
+        // i64 range: no saturation needed
+        let narrow = vt.bits() <= 32 && (vt.is_int() || vt.is_bits());
+        let small_step = konst.is_some_and(|k| k.unsigned_abs() < 1 << 31);
+        // the counter's value in the body is then the previous one plus the step
+        let id = s as *const Stmt as usize;
+        let cell = CellKey {
+            real: false,
+            frame: p.frame,
+            off: p.off.i,
+        };
+        let carrying = !self.plan.plain
+            && self.frames.is_empty()
+            && narrow
+            && small_step
+            && self.var_of(&p).is_some();
+        let step_k = konst.unwrap_or(0);
+        let mut carried: Vec<(Carry, Variable)> = Vec::new();
+        if carrying {
+            for c in self.plan.carry.get(&id).cloned().unwrap_or_default() {
+                let var = self
+                    .b
+                    .declare_var(if c.at.real { types::F64 } else { types::I64 });
+                let v = self.clamped_load(&c, cur0, c.at.key.k)?;
+                self.b.def_var(var, v);
+                carried.push((c, var));
+            }
+        }
+        let head = self.b.create_block();
+        let cur = self.b.append_block_param(head, types::I64);
+        let body_b = self.b.create_block();
+        let next = self.b.create_block();
+        let after = self.b.create_block();
+        self.b.ins().jump(head, &[cur0.into()]);
+        // checks made before the loop may not hold for later iterations
+        let outer = std::mem::take(&mut self.checked);
+        self.elems.clear();
+        self.b.switch_to_block(head);
+        let past_up = self.b.ins().icmp(IntCC::SignedGreaterThan, cur, end);
+        let past_down = self.b.ins().icmp(IntCC::SignedLessThan, cur, end);
+        let done = match sign {
+            Some(true) => past_up,
+            Some(false) => past_down,
+            None => {
+                let up = self
+                    .b
+                    .ins()
+                    .icmp_imm_s(IntCC::SignedGreaterThanOrEqual, step, 0);
+                self.b.ins().select(up, past_up, past_down)
+            }
+        };
+        self.b.ins().brif(done, after, &[], body_b, &[]);
+        self.b.switch_to_block(body_b);
+        self.tick(s.span);
+        let version = self.versions.get(&cell).copied().unwrap_or(0);
+        for (c, var) in &carried {
+            let at = ElemAt {
+                key: IndexKey {
+                    cell,
+                    version,
+                    k: c.at.key.k,
+                },
+                ..c.at
+            };
+            let value = self.b.use_var(*var);
+            self.elems.push(Elem {
+                at,
+                exact: true,
+                value,
+            });
+        }
+        if carrying {
+            self.fors.push(ForCtx {
+                id,
+                cell,
+                version,
+                used: Vec::new(),
+            });
+        }
+        self.loops.push(LoopTargets {
+            exit: after,
+            next,
+            continued: Vec::new(),
+        });
+        let r = self.block(body);
+        let targets = self.loops.pop();
+        let ctx = if carrying { self.fors.pop() } else { None };
+        r?;
+        self.checked.clear();
+        self.b.ins().jump(next, &[]);
+        self.b.switch_to_block(next);
+        let mut ends = targets.map(|t| t.continued).unwrap_or_default();
+        ends.push(std::mem::take(&mut self.elems));
+        self.elems = meet(&ends);
+        let JV::I(now) = self.load(&p)? else {
+            return Err(Unsupported);
+        };
+        if carrying {
+            // the next iteration's `a[i + k]` is this one's `a[i + k + step]`
+            let version = self.versions.get(&cell).copied().unwrap_or(0);
+            for (c, var) in &carried {
+                let k = c.at.key.k.checked_add(step_k).ok_or(Unsupported)?;
+                let at = ElemAt {
+                    key: IndexKey { cell, version, k },
+                    ..c.at
+                };
+                let value = match self.elems.iter().find(|e| e.at == at) {
+                    Some(e) => e.value,
+                    None => self.clamped_load(c, now, k)?,
+                };
+                self.b.def_var(*var, value);
+            }
+            if let Some(ctx) = ctx {
+                let worth: Vec<Carry> = self
+                    .elems
+                    .iter()
+                    .filter(|e| e.exact && e.at.key.cell == cell && e.at.key.version == version)
+                    .filter_map(|e| {
+                        let k = e.at.key.k.checked_sub(step_k)?;
+                        ctx.used
+                            .iter()
+                            .find(|u| {
+                                u.at.key.k == k
+                                    && u.at
+                                        == ElemAt {
+                                            key: u.at.key,
+                                            ..e.at
+                                        }
+                            })
+                            .cloned()
+                    })
+                    .collect();
+                self.carry_seen.insert(ctx.id, worth);
+            }
+        }
+        let stepped = if narrow && small_step {
+            self.b.ins().iadd(now, step)
+        } else {
+            self.saturating_add(now, step)
+        };
+        let wrapped = self.wrap(&vt, stepped);
+        self.store(&p, JV::I(wrapped))?;
+        self.b.ins().jump(head, &[stepped.into()]);
+        self.checked = outer;
+        self.elems.clear();
+        self.b.switch_to_block(after);
+        Ok(())
+    }
+
+    /// An IF with one arm of assignments, without branches: each value and the old one
+    /// of its target, the new one selected by the condition, stored (memory that keeps
+    /// its value is written all the same). Only when the values are simple and call
+    /// nothing, the targets are plain cells or elements (no subrange, no bit); when the
+    /// arm would check an index the condition has not, it faults: the next attempt
+    /// lowers this IF with branches. Returns whether it did.
+    fn select_if(&mut self, s: &'e Stmt, cond: &'e Expr, body: &'e [Stmt]) -> L<bool> {
+        let id = s as *const Stmt as usize;
+        if self.plan.plain || self.plan.branchy.contains(&id) || body.is_empty() || body.len() > 4 {
+            return Ok(false);
+        }
+        let mut places = Vec::with_capacity(body.len());
+        for st in body {
+            let StmtKind::Assign(target, value) = &st.kind else {
+                return Ok(false);
+            };
+            if !simple(value) || !simple(target) {
+                return Ok(false);
+            }
+            let p = self.resolve(target)?;
+            if p.bit.is_some()
+                || p.range.is_some()
+                || p.ptr.is_some()
+                || !matches!(p.ty.lane(), Some(Lane::Int | Lane::Real))
+            {
+                return Ok(false);
+            }
+            places.push((p, value));
+        }
+        let c = self.cond(cond)?;
+        let faults = self.faults.len();
+        for (p, value) in places {
+            let new = self.expr(value)?;
+            let old = self.load(&p)?;
+            let x = match (new, old) {
+                (JV::I(n), JV::I(o)) => JV::I(self.b.ins().select(c, n, o)),
+                (JV::R(n), JV::R(o)) => JV::R(self.b.ins().select(c, n, o)),
+                _ => return Err(Unsupported),
+            };
+            self.store(&p, x)?;
+        }
+        if self.faults.len() != faults {
+            self.select_failed.push(id);
+        }
+        Ok(true)
+    }
+
+    /// The plan for the next attempt, if this one should not be kept.
+    fn next_plan(&self, conflicts: Vec<CellKey>) -> Option<Plan> {
+        let mut p = self.plan.clone();
+        p.branchy.extend(self.select_failed.iter().copied());
+        if !conflicts.is_empty() {
+            p.excluded.extend(conflicts);
+            return Some(p);
+        }
+        if !self.select_failed.is_empty() {
+            return Some(p);
+        }
+        if !p.plain && !p.carry_learnt && self.carry_seen.values().any(|v| !v.is_empty()) {
+            p.carry = self.carry_seen.clone();
+            p.carry_learnt = true;
+            return Some(p);
+        }
+        None
     }
 
     /// A call statement: a FUNCTION or a FB instance, inlined.
@@ -1344,8 +1800,9 @@ impl<'e> Lower<'_, '_, '_> {
         })?;
         self.b.ins().jump(ret, &[]);
         self.b.switch_to_block(ret);
-        // a RETURN may have skipped index checks made in the body
+        // a RETURN may have skipped index checks made in the body, and stores
         self.checked.truncate(scope);
+        self.elems.clear();
         Ok(())
     }
 
@@ -1701,8 +2158,11 @@ impl<'e> Lower<'_, '_, '_> {
         }
         self.b.switch_to_block(rhs);
         let scope = self.checked.len();
+        let known = self.elems.clone();
         let y = self.cond(b)?;
         self.checked.truncate(scope);
+        let rhs_known = std::mem::take(&mut self.elems);
+        self.elems = meet(&[known, rhs_known]);
         self.b.ins().jump(merge, &[y.into()]);
         self.b.switch_to_block(merge);
         Ok(JV::I(r))

@@ -50,6 +50,20 @@
 //! the whole loop and are written back on every way out, faults included; cells that an
 //! indexed access may also reach stay in memory.
 //!
+//! Elements of one-dimensional arrays of scalars indexed by `v + k` (`v` a register
+//! cell) are stored to memory at once, but their values are remembered where every path
+//! loaded or stored them: reading `a[j]` again reuses the value until a store that may
+//! reach the same cell (any store but one to `a[j + k']` with another `k'` of the same
+//! `j`, or through a VAR_IN_OUT, or a call's return). A FOR loop stepped by a constant
+//! carries such values into the next iteration (`a[j + 1]` becomes `a[j]`); the index is
+//! checked before every use all the same, so a value loaded for the first iteration
+//! at a clamped address is never used out of bounds. An IF with one arm of up to four
+//! assignments of simple values (a swap) runs without branches: the new values are
+//! selected by the condition and stored (unchanged memory written with its own value);
+//! if that arm could fault or call, the next attempt keeps the branch. Attempts: a loop
+//! is lowered again when the first try learnt what to keep in memory, which IF needs its
+//! branch or what to carry; the last attempt does neither of the latter.
+//!
 //! # Safety
 //! This module is the one place in the project with `unsafe` code: calling the generated
 //! function. The generated code touches only cells
