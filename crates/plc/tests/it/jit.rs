@@ -216,6 +216,8 @@ fn stmt(depth: u32) -> BoxedStrategy<String> {
         Just("gc := gc + c; ga[(c MOD 4) + 1] := gc;".to_string()),
         Just("arr[c + 1] := arr[c] + arr[i1 + 3];".to_string()),
         Just("IF arr[b] > arr[b + 1] THEN k := arr[b]; arr[b] := arr[b + 1]; arr[b + 1] := k; END_IF;".to_string()),
+        Just("IF arr[i1 + 3] > arr[i1 + 4] THEN k := arr[i1 + 3]; arr[i1 + 3] := arr[i1 + 4]; arr[i1 + 4] := k; END_IF;".to_string()),
+        Just("arr[i2 + 2] := arr[i2 + 3] - arr[i2 + 2]; rr[i1 + 2] := rr[i1 + 1] * 0.5;".to_string()),
         dint_expr().prop_map(|e| format!("a := a + Fx({e}, x, c);")),
         dint_expr().prop_map(|e| format!("c := Fx(p := {e}, q := r, io := arr[(b MOD 8) + 1], o => b);")),
         real_expr().prop_map(|e| format!("Fx(p := a, q := {e}, io := st.p);")),

@@ -259,7 +259,11 @@ struct Plan {
     branchy: HashSet<usize>,
     /// Per FOR statement (by address): the elements carried between its iterations.
     carry: HashMap<usize, Vec<Carry>>,
-    /// Whether `carry` was learnt (it is learnt once).
+    /// Per FOR statement (by address): the indices over its counter its body checks.
+    proven: HashMap<usize, Vec<Bound>>,
+    /// FOR statements whose body changes the counter: no copy without checks.
+    unversioned: HashSet<usize>,
+    /// Whether `carry` and `proven` were learnt (they are learnt once).
     carry_learnt: bool,
     /// The last attempt: no branch-free IF, no carried elements.
     plain: bool,
@@ -272,6 +276,53 @@ struct ForCtx {
     cell: CellKey,
     version: u32,
     used: Vec<Carry>,
+    bounds: Vec<Bound>,
+}
+
+/// An index `i + k` over a FOR counter the body checks against `lo..=hi` (both within
+/// the index type).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+struct Bound {
+    k: i64,
+    lo: i64,
+    hi: i64,
+}
+
+/// A FOR loop's parts both of its copies use.
+struct ForParts<'e> {
+    s: &'e Stmt,
+    p: JPlace<'e>,
+    vt: Ty,
+    cur0: Value,
+    end: Value,
+    step: Value,
+    sign: Option<bool>,
+    /// Stepped without saturation (see [`Lower::for_loop`]).
+    fixed: bool,
+    step_k: i64,
+    id: usize,
+    cell: CellKey,
+    /// The counter's register, when the loop may carry elements and skip checks.
+    counter: Option<Variable>,
+    carried: Vec<(Carry, Variable)>,
+}
+
+/// Whether a loop body has no loops and no calls (nothing else ticks the budget).
+fn plain_body(stmts: &[Stmt]) -> bool {
+    stmts.iter().all(|s| match &s.kind {
+        StmtKind::Empty | StmtKind::Exit | StmtKind::Continue | StmtKind::Return => true,
+        StmtKind::Assign(t, v) => !contains_call(t) && !contains_call(v),
+        StmtKind::If(arms, els) => {
+            arms.iter().all(|(c, b)| !contains_call(c) && plain_body(b))
+                && els.as_deref().is_none_or(plain_body)
+        }
+        StmtKind::Case(sel, arms, els) => {
+            !contains_call(sel)
+                && arms.iter().all(|(_, b)| plain_body(b))
+                && els.as_deref().is_none_or(plain_body)
+        }
+        _ => false,
+    })
 }
 
 /// Attempts at lowering one loop before it stays with the closures.
@@ -357,6 +408,8 @@ fn attempt(cx: &mut Cx<'_>, engine: &Rc<JitEngine>, s: &Stmt, plan: &Plan) -> L<
             select_failed: Vec::new(),
             fors: Vec::new(),
             carry_seen: HashMap::new(),
+            bounds_seen: HashMap::new(),
+            version_failed: Vec::new(),
             regions: Vec::new(),
             extents: Extents::default(),
             faults: Vec::new(),
@@ -437,6 +490,10 @@ struct Lower<'a, 'b, 'x> {
     /// Per FOR loop: the elements over its counter known at the end of an iteration,
     /// as they are named in the next one.
     carry_seen: HashMap<usize, Vec<Carry>>,
+    /// Per FOR loop: the indices over its counter its body checks.
+    bounds_seen: HashMap<usize, Vec<Bound>>,
+    /// FOR loops whose copy without checks turned out to change the counter.
+    version_failed: Vec<usize>,
     regions: Vec<Region>,
     extents: Extents,
     faults: Vec<FaultSite>,
@@ -785,6 +842,7 @@ impl<'e> Lower<'_, '_, '_> {
                 Some(v),
             );
             if let Some(key) = key {
+                self.note_bound(d, key);
                 self.checked.push(Checked {
                     key,
                     lo: d.lo,
@@ -793,6 +851,28 @@ impl<'e> Lower<'_, '_, '_> {
                 });
             }
             Ok(rel)
+        }
+    }
+
+    /// Notes an index over a FOR counter being lowered, checked in its body, for the
+    /// copy without checks (only an index whose bounds are values of its type).
+    fn note_bound(&mut self, d: &DynIndex<'e>, key: IndexKey) {
+        let Some((tmin, tmax)) = self.cx.c.ty(d.expr.id).int_range() else {
+            return;
+        };
+        let inside = tmin <= i128::from(d.lo) && i128::from(d.hi) <= tmax;
+        if !inside || key.k.unsigned_abs() > 1000 {
+            return;
+        }
+        let b = Bound {
+            k: key.k,
+            lo: d.lo,
+            hi: d.hi,
+        };
+        for f in self.fors.iter_mut() {
+            if f.cell == key.cell && f.version == key.version && !f.bounds.contains(&b) {
+                f.bounds.push(b);
+            }
         }
     }
 
@@ -1352,7 +1432,10 @@ impl<'e> Lower<'_, '_, '_> {
     /// A FOR loop. A counter in a register stepped by a constant carries the elements
     /// over it that the plan names from one iteration to the next (`a[i + 1]` of one is
     /// `a[i]` of the next): loaded before the first iteration, the value known at the end
-    /// of an iteration (else loaded there) for the next.
+    /// of an iteration (else loaded there) for the next. A body without loops and calls
+    /// whose indices over the counter the plan names gets a second copy without their
+    /// checks and without the budget's test, run when a test before the loop shows that
+    /// no iteration could fault there (see [`Lower::fast_guard`]).
     fn for_loop(
         &mut self,
         s: &'e Stmt,
@@ -1402,11 +1485,12 @@ impl<'e> Lower<'_, '_, '_> {
             frame: p.frame,
             off: p.off.i,
         };
-        let carrying = !self.plan.plain
-            && self.frames.is_empty()
-            && narrow
-            && small_step
-            && self.var_of(&p).is_some();
+        let counter = if !self.plan.plain && self.frames.is_empty() && narrow && small_step {
+            self.var_of(&p)
+        } else {
+            None
+        };
+        let carrying = counter.is_some();
         let step_k = konst.unwrap_or(0);
         let mut carried: Vec<(Carry, Variable)> = Vec::new();
         if carrying {
@@ -1419,34 +1503,171 @@ impl<'e> Lower<'_, '_, '_> {
                 carried.push((c, var));
             }
         }
+        let bounds: Vec<Bound> = match counter {
+            Some(_) if step_k != 0 && plain_body(body) && !self.plan.unversioned.contains(&id) => {
+                self.plan.proven.get(&id).cloned().unwrap_or_default()
+            }
+            _ => Vec::new(),
+        };
+        let parts = ForParts {
+            s,
+            p,
+            vt,
+            cur0,
+            end,
+            step,
+            sign,
+            fixed: narrow && small_step,
+            step_k,
+            id,
+            cell,
+            counter,
+            carried,
+        };
+        let after = self.b.create_block();
+        let outer = std::mem::take(&mut self.checked);
+        match (counter, bounds.is_empty()) {
+            (Some(_), false) => {
+                let ok = self.fast_guard(&parts, &bounds)?;
+                let fast = self.b.create_block();
+                let slow = self.b.create_block();
+                self.b.ins().brif(ok, fast, &[], slow, &[]);
+                self.b.switch_to_block(fast);
+                if !self.for_copy(&parts, Some(&bounds), body, after)? {
+                    // the body changes the counter: its values are not those tested
+                    self.version_failed.push(id);
+                }
+                self.b.switch_to_block(slow);
+                self.for_copy(&parts, None, body, after)?;
+            }
+            _ => {
+                self.for_copy(&parts, None, body, after)?;
+            }
+        }
+        self.checked = outer;
+        self.elems.clear();
+        self.b.switch_to_block(after);
+        Ok(())
+    }
+
+    /// Whether no iteration of the loop could fault at an index of `bounds` or exhaust
+    /// the budget, tested before the loop: the counter runs from its first value to the
+    /// end (both within its type, the value past the end too; the body does not change
+    /// it), each `i + k` stays within
+    /// `lo..=hi` at both ends (so nowhere between, and never wraps), and the budget holds
+    /// at least `|end - first| + 1` iterations.
+    fn fast_guard(&mut self, f: &ForParts<'e>, bounds: &[Bound]) -> L<Value> {
+        let (tmin, tmax) = f.vt.int_range().ok_or(Unsupported)?;
+        let tmin = i64::try_from(tmin).map_err(|_| Unsupported)?;
+        let tmax = i64::try_from(tmax).map_err(|_| Unsupported)?;
+        let (first, last) = if f.step_k > 0 {
+            (f.cur0, f.end)
+        } else {
+            (f.end, f.cur0)
+        };
+        // the value past the end is a value of the type too (stored without wrapping)
+        let tmin = tmin.checked_sub(f.step_k.min(0)).ok_or(Unsupported)?;
+        let tmax = tmax.checked_sub(f.step_k.max(0)).ok_or(Unsupported)?;
+        let ge = self
+            .b
+            .ins()
+            .icmp_imm_s(IntCC::SignedGreaterThanOrEqual, f.end, tmin);
+        let le = self
+            .b
+            .ins()
+            .icmp_imm_s(IntCC::SignedLessThanOrEqual, f.end, tmax);
+        let mut ok = self.b.ins().band(ge, le);
+        for bd in bounds {
+            let lo_at = self.b.ins().iadd_imm_s(first, bd.k);
+            let hi_at = self.b.ins().iadd_imm_s(last, bd.k);
+            let a = self
+                .b
+                .ins()
+                .icmp_imm_s(IntCC::SignedGreaterThanOrEqual, lo_at, bd.lo);
+            let b = self
+                .b
+                .ins()
+                .icmp_imm_s(IntCC::SignedLessThanOrEqual, hi_at, bd.hi);
+            let both = self.b.ins().band(a, b);
+            ok = self.b.ins().band(ok, both);
+        }
+        let span = self.b.ins().isub(last, first);
+        let need = self.b.ins().iadd_imm_s(span, 1);
+        let left = self.b.use_var(self.budget);
+        let none = self
+            .b
+            .ins()
+            .icmp_imm_s(IntCC::SignedLessThanOrEqual, need, 0);
+        let enough = self
+            .b
+            .ins()
+            .icmp(IntCC::UnsignedGreaterThanOrEqual, left, need);
+        let budget = self.b.ins().bor(none, enough);
+        Ok(self.b.ins().band(ok, budget))
+    }
+
+    /// One copy of a FOR loop from its first value (`fast`: the indices of `bounds`
+    /// unchecked, the budget not tested), leaving to `after`. Returns whether the body
+    /// left the counter alone.
+    fn for_copy(
+        &mut self,
+        f: &ForParts<'e>,
+        fast: Option<&[Bound]>,
+        body: &'e [Stmt],
+        after: Block,
+    ) -> L<bool> {
+        let (cell, id) = (f.cell, f.id);
         let head = self.b.create_block();
         let cur = self.b.append_block_param(head, types::I64);
         let body_b = self.b.create_block();
         let next = self.b.create_block();
-        let after = self.b.create_block();
-        self.b.ins().jump(head, &[cur0.into()]);
+        self.b.ins().jump(head, &[f.cur0.into()]);
         // checks made before the loop may not hold for later iterations
-        let outer = std::mem::take(&mut self.checked);
+        self.checked.clear();
         self.elems.clear();
         self.b.switch_to_block(head);
-        let past_up = self.b.ins().icmp(IntCC::SignedGreaterThan, cur, end);
-        let past_down = self.b.ins().icmp(IntCC::SignedLessThan, cur, end);
-        let done = match sign {
+        let past_up = self.b.ins().icmp(IntCC::SignedGreaterThan, cur, f.end);
+        let past_down = self.b.ins().icmp(IntCC::SignedLessThan, cur, f.end);
+        let done = match f.sign {
             Some(true) => past_up,
             Some(false) => past_down,
             None => {
                 let up = self
                     .b
                     .ins()
-                    .icmp_imm_s(IntCC::SignedGreaterThanOrEqual, step, 0);
+                    .icmp_imm_s(IntCC::SignedGreaterThanOrEqual, f.step, 0);
                 self.b.ins().select(up, past_up, past_down)
             }
         };
         self.b.ins().brif(done, after, &[], body_b, &[]);
         self.b.switch_to_block(body_b);
-        self.tick(s.span);
         let version = self.versions.get(&cell).copied().unwrap_or(0);
-        for (c, var) in &carried {
+        match (fast, f.counter) {
+            (Some(bounds), Some(counter)) => {
+                let left = self.b.use_var(self.budget);
+                let less = self.b.ins().iadd_imm_s(left, -1);
+                self.b.def_var(self.budget, less);
+                let j = self.b.use_var(counter);
+                for bd in bounds {
+                    let rel = self
+                        .b
+                        .ins()
+                        .iadd_imm_s(j, bd.k.checked_sub(bd.lo).ok_or(Unsupported)?);
+                    self.checked.push(Checked {
+                        key: IndexKey {
+                            cell,
+                            version,
+                            k: bd.k,
+                        },
+                        lo: bd.lo,
+                        hi: bd.hi,
+                        rel,
+                    });
+                }
+            }
+            _ => self.tick(f.s.span),
+        }
+        for (c, var) in &f.carried {
             let at = ElemAt {
                 key: IndexKey {
                     cell,
@@ -1462,12 +1683,14 @@ impl<'e> Lower<'_, '_, '_> {
                 value,
             });
         }
+        let carrying = f.counter.is_some();
         if carrying {
             self.fors.push(ForCtx {
                 id,
                 cell,
                 version,
                 used: Vec::new(),
+                bounds: Vec::new(),
             });
         }
         self.loops.push(LoopTargets {
@@ -1485,16 +1708,20 @@ impl<'e> Lower<'_, '_, '_> {
         let mut ends = targets.map(|t| t.continued).unwrap_or_default();
         ends.push(std::mem::take(&mut self.elems));
         self.elems = meet(&ends);
-        let JV::I(now) = self.load(&p)? else {
+        let JV::I(now) = self.load(&f.p)? else {
             return Err(Unsupported);
         };
+        let latch_version = self.versions.get(&cell).copied().unwrap_or(0);
         if carrying {
             // the next iteration's `a[i + k]` is this one's `a[i + k + step]`
-            let version = self.versions.get(&cell).copied().unwrap_or(0);
-            for (c, var) in &carried {
-                let k = c.at.key.k.checked_add(step_k).ok_or(Unsupported)?;
+            for (c, var) in &f.carried {
+                let k = c.at.key.k.checked_add(f.step_k).ok_or(Unsupported)?;
                 let at = ElemAt {
-                    key: IndexKey { cell, version, k },
+                    key: IndexKey {
+                        cell,
+                        version: latch_version,
+                        k,
+                    },
                     ..c.at
                 };
                 let value = match self.elems.iter().find(|e| e.at == at) {
@@ -1504,10 +1731,13 @@ impl<'e> Lower<'_, '_, '_> {
                 self.b.def_var(*var, value);
             }
             if let Some(ctx) = ctx {
+                let step_k = f.step_k;
                 let worth: Vec<Carry> = self
                     .elems
                     .iter()
-                    .filter(|e| e.exact && e.at.key.cell == cell && e.at.key.version == version)
+                    .filter(|e| {
+                        e.exact && e.at.key.cell == cell && e.at.key.version == latch_version
+                    })
                     .filter_map(|e| {
                         let k = e.at.key.k.checked_sub(step_k)?;
                         ctx.used
@@ -1524,20 +1754,22 @@ impl<'e> Lower<'_, '_, '_> {
                     })
                     .collect();
                 self.carry_seen.insert(ctx.id, worth);
+                self.bounds_seen.insert(ctx.id, ctx.bounds);
             }
         }
-        let stepped = if narrow && small_step {
-            self.b.ins().iadd(now, step)
+        let stepped = if f.fixed {
+            self.b.ins().iadd(now, f.step)
         } else {
-            self.saturating_add(now, step)
+            self.saturating_add(now, f.step)
         };
-        let wrapped = self.wrap(&vt, stepped);
-        self.store(&p, JV::I(wrapped))?;
+        let wrapped = match fast {
+            // the guard keeps every value up to the one past the end within the type
+            Some(_) if f.fixed => stepped,
+            _ => self.wrap(&f.vt, stepped),
+        };
+        self.store(&f.p, JV::I(wrapped))?;
         self.b.ins().jump(head, &[stepped.into()]);
-        self.checked = outer;
-        self.elems.clear();
-        self.b.switch_to_block(after);
-        Ok(())
+        Ok(latch_version == version)
     }
 
     /// An IF with one arm of assignments, without branches: each value and the old one
@@ -1548,7 +1780,12 @@ impl<'e> Lower<'_, '_, '_> {
     /// lowers this IF with branches. Returns whether it did.
     fn select_if(&mut self, s: &'e Stmt, cond: &'e Expr, body: &'e [Stmt]) -> L<bool> {
         let id = s as *const Stmt as usize;
-        if self.plan.plain || self.plan.branchy.contains(&id) || body.is_empty() || body.len() > 4 {
+        if std::env::var("NOSEL").is_ok()
+            || self.plan.plain
+            || self.plan.branchy.contains(&id)
+            || body.is_empty()
+            || body.len() > 4
+        {
             return Ok(false);
         }
         let mut places = Vec::with_capacity(body.len());
@@ -1591,6 +1828,7 @@ impl<'e> Lower<'_, '_, '_> {
     fn next_plan(&self, conflicts: Vec<CellKey>) -> Option<Plan> {
         let mut p = self.plan.clone();
         p.branchy.extend(self.select_failed.iter().copied());
+        p.unversioned.extend(self.version_failed.iter().copied());
         if !conflicts.is_empty() {
             p.excluded.extend(conflicts);
             return Some(p);
@@ -1598,8 +1836,14 @@ impl<'e> Lower<'_, '_, '_> {
         if !self.select_failed.is_empty() {
             return Some(p);
         }
-        if !p.plain && !p.carry_learnt && self.carry_seen.values().any(|v| !v.is_empty()) {
+        if !self.version_failed.is_empty() {
+            return Some(p);
+        }
+        let learnt = self.carry_seen.values().any(|v| !v.is_empty())
+            || self.bounds_seen.values().any(|v| !v.is_empty());
+        if !p.plain && !p.carry_learnt && learnt {
             p.carry = self.carry_seen.clone();
+            p.proven = self.bounds_seen.clone();
             p.carry_learnt = true;
             return Some(p);
         }

@@ -60,7 +60,14 @@
 //! at a clamped address is never used out of bounds. An IF with one arm of up to four
 //! assignments of simple values (a swap) runs without branches: the new values are
 //! selected by the condition and stored (unchanged memory written with its own value);
-//! if that arm could fault or call, the next attempt keeps the branch. Attempts: a loop
+//! if that arm could fault or call, the next attempt keeps the branch. A FOR loop whose
+//! body has no loops and calls and leaves its counter alone gets a second copy without
+//! the checks of the indices `i + k` over its counter and without the budget's test
+//! (the budget still counts down): a test before the loop picks it when the first and
+//! the last value of the counter (and the one past it) are values of its type, every
+//! `i + k` is within its bounds at both ends, and the budget holds `|end - first| + 1`
+//! iterations; otherwise the checked copy runs and faults where the closures would.
+//! Attempts: a loop
 //! is lowered again when the first try learnt what to keep in memory, which IF needs its
 //! branch or what to carry; the last attempt does neither of the latter.
 //!
