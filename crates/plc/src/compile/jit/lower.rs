@@ -115,7 +115,9 @@ struct Checked {
     key: IndexKey,
     lo: i64,
     hi: i64,
+    /// The offset from `lo` is `rel + bias`.
     rel: Value,
+    bias: i64,
 }
 
 /// A callee inlined into the loop: its variables live at `base` (a FUNCTION's static
@@ -784,14 +786,20 @@ impl<'e> Lower<'_, '_, '_> {
             (None, false, false) => self.ints,
             (None, false, true) => self.reals,
         };
-        let off = byte_off(if real { p.off.r } else { p.off.i })?;
+        let mut off = byte_off(if real { p.off.r } else { p.off.i })?;
         if p.dynamic.is_empty() {
             return Ok((base, off));
         }
         let mut lin: Option<Value> = None;
         for d in &p.dynamic {
-            let rel = self.index_rel(d)?;
+            let (rel, bias) = self.index_rel(d)?;
             let bytes = stride_bytes(if real { d.stride.r } else { d.stride.i })?;
+            // a constant part of the offset goes into the immediate
+            off = bias
+                .checked_mul(bytes)
+                .and_then(|b| i32::try_from(b).ok())
+                .and_then(|b| off.checked_add(b))
+                .ok_or(Unsupported)?;
             let part = self.b.ins().imul_imm_s(rel, bytes);
             lin = Some(match lin {
                 None => part,
@@ -804,17 +812,18 @@ impl<'e> Lower<'_, '_, '_> {
 
     /// The offset of an index from its lower bound, checked against its bounds unless a
     /// check of the same value dominates this code.
-    fn index_rel(&mut self, d: &DynIndex<'e>) -> L<Value> {
+    /// Returned as a value and a constant to add to it.
+    fn index_rel(&mut self, d: &DynIndex<'e>) -> L<(Value, i64)> {
         let key = self.index_key(d.expr);
         let known = key.and_then(|key| {
             self.checked
                 .iter()
                 .find(|c| c.key == key && c.lo == d.lo && c.hi == d.hi)
-                .map(|c| c.rel)
+                .map(|c| (c.rel, c.bias))
         });
         match known {
             Some(rel) => Ok(rel),
-            None => self.checked_index(d, key),
+            None => Ok((self.checked_index(d, key)?, 0)),
         }
     }
 
@@ -848,6 +857,7 @@ impl<'e> Lower<'_, '_, '_> {
                     lo: d.lo,
                     hi: d.hi,
                     rel,
+                    bias: 0,
                 });
             }
             Ok(rel)
@@ -1647,12 +1657,9 @@ impl<'e> Lower<'_, '_, '_> {
                 let left = self.b.use_var(self.budget);
                 let less = self.b.ins().iadd_imm_s(left, -1);
                 self.b.def_var(self.budget, less);
+                // `i + k - lo`, the constant folded into the addresses
                 let j = self.b.use_var(counter);
                 for bd in bounds {
-                    let rel = self
-                        .b
-                        .ins()
-                        .iadd_imm_s(j, bd.k.checked_sub(bd.lo).ok_or(Unsupported)?);
                     self.checked.push(Checked {
                         key: IndexKey {
                             cell,
@@ -1661,7 +1668,8 @@ impl<'e> Lower<'_, '_, '_> {
                         },
                         lo: bd.lo,
                         hi: bd.hi,
-                        rel,
+                        rel: j,
+                        bias: bd.k.checked_sub(bd.lo).ok_or(Unsupported)?,
                     });
                 }
             }
@@ -2187,7 +2195,12 @@ impl<'e> Lower<'_, '_, '_> {
             None => (self.ints, self.reals),
         };
         for d in &p.dynamic {
-            let rel = self.index_rel(d)?;
+            let (rel, bias) = self.index_rel(d)?;
+            let rel = if bias == 0 {
+                rel
+            } else {
+                self.b.ins().iadd_imm_s(rel, bias)
+            };
             if d.stride.i > 0 {
                 let part = self.b.ins().imul_imm_s(rel, stride_bytes(d.stride.i)?);
                 ints = self.b.ins().iadd(ints, part);
