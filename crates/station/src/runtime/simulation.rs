@@ -126,6 +126,10 @@ struct SimNode {
     /// Which task runs each program (by upper-case name), and every task.
     task_of_program: HashMap<String, String>,
     tasks: Vec<String>,
+    /// The station is shutting down: a stop is recorded and drives the outputs, but the
+    /// points are not published invalid (the servers close; an IV event per point at
+    /// every shutdown would bury the history).
+    shutting_down: bool,
     inputs: Vec<InputBinding>,
     outputs: Vec<OutputBinding>,
     sourced: Vec<SourcedPoint>,
@@ -257,8 +261,12 @@ impl Simulation {
         node.run_plc(run, now, plant.as_deref_mut(), observers)
     }
 
-    /// Stops every PLC (the station is shutting down): outputs to their safe values.
+    /// Stops every PLC (the station is shutting down): outputs to their safe values, the
+    /// stops recorded.
     pub(crate) fn stop_all(&mut self) {
+        for node in &mut self.nodes {
+            node.shutting_down = true;
+        }
         let names: Vec<String> = self
             .nodes
             .iter()
@@ -568,6 +576,9 @@ impl SimNode {
                 }
             }
         }
+        if self.shutting_down {
+            return;
+        }
         // Points: read everything first, then take the database lock once.
         let mut changes = Vec::new();
         for point in &mut self.sourced {
@@ -716,6 +727,7 @@ fn build_node(
             })
             .collect(),
         tasks: config.tasks.iter().map(|task| task.name.clone()).collect(),
+        shutting_down: false,
         inputs: Vec::new(),
         outputs: Vec::new(),
         sourced: Vec::new(),
