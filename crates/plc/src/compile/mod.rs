@@ -38,22 +38,24 @@
 //! ([`CompileOptions::jit`], `STANICE_PLC_JIT=0`). The conformance suite and a property
 //! test of random loop programs run both ways and compare every variable and fault.
 //!
-//! Measured with `cargo bench -p plc --bench st_vs_native` (release, one core of a
-//! shared 2-core VM, load average about 2), time per scan, ST vs the same algorithm in
-//! Rust, in one run (figures vary by about 30% between runs on this VM; the ratios much
-//! less):
+//! Measured with `cargo bench -p plc --bench st_vs_native` (release, a shared 2-core VM,
+//! load average about 1.2), time per scan, ST vs the same algorithm in Rust, in one run
+//! (figures vary by about 30% between runs on this VM; the ratios much less):
 //!
 //! | program | ST | ST, closures only | native | ratio |
 //! |---|---|---|---|---|
-//! | integer loop, 100k iterations | 0.10 ms | 0.48 ms | 0.14 ms | 0.7x (closures 3.5x) |
-//! | LREAL loop, 100k iterations | 0.14 ms | 0.36 ms | 0.14 ms | 1.0x (closures 2.5x) |
-//! | bubble sort of 200 DINTs | 38 us | 199 us | 5.5 us | 6.8x (closures 36x) |
-//! | 1,000 TON instances per scan | 1.2 us | 8.6 us | 0.6 us | 2.1x (closures 14x) |
-//! | string building, 100 CONCATs (closures) | 2.5 us | 2.5 us | 1.3 us | 1.8x |
-//! | 10k calls of FUNCTIONs and a FB with VAR_IN_OUT | 28 us | 1.22 ms | 20 us | 1.4x (closures 61x) |
+//! | integer loop, 100k iterations | 0.10 ms | 0.51 ms | 0.12 ms | 0.8x (closures 4.3x) |
+//! | LREAL loop, 100k iterations | 0.15 ms | 0.39 ms | 0.15 ms | 1.0x (closures 2.7x) |
+//! | bubble sort of 200 DINTs, new data every scan | 18 us | 201 us | 31 us | 0.6x (closures 6.6x) |
+//! | 1,000 TON instances per scan | 1.3 us | 8.0 us | 0.7 us | 1.7x (closures 11x) |
+//! | string building, 100 CONCATs (closures) | 2.4 us | 2.4 us | 1.3 us | 1.8x |
+//! | 10k calls of FUNCTIONs and a FB with VAR_IN_OUT | 28 us | 1.26 ms | 20 us | 1.4x (closures 62x) |
 //!
-//! Building a program costs about 0.3 ms more with the JIT (0.37 ms instead of 0.07 ms
-//! per benchmark program): Cranelift compiles each loop once, when the program is built.
+//! The sort's swap is branch-free in the JIT (`select`) and branchy in Rust, which
+//! mispredicts on new data; on the same array every call Rust took 5.6 us (3.1x).
+//! Building a program costs about 0.4 ms more with the JIT (0.46 ms instead of 0.07 ms
+//! per benchmark program): Cranelift compiles each loop when the program is built (some
+//! twice, with what the first attempt learnt).
 
 mod builtins;
 mod expr;
