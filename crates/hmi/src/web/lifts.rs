@@ -145,22 +145,7 @@ async fn notifications(
         }
         query = query.with_source(lift);
     }
-    let offset = match present(&params.offset) {
-        None => 0,
-        Some(text) => text
-            .parse::<u64>()
-            .ok()
-            .filter(|o| *o <= 1_000_000_000)
-            .ok_or_else(|| bad("offset", "a whole number 0..=1000000000"))?,
-    };
-    let limit = match present(&params.limit) {
-        None => 50,
-        Some(text) => text
-            .parse::<u32>()
-            .ok()
-            .filter(|l| (1..=MAX_PAGE).contains(l))
-            .ok_or_else(|| bad("limit", format!("a whole number 1..={MAX_PAGE}")))?,
-    };
+    let (offset, limit) = page_window(&params.offset, &params.limit)?;
     let page = state
         .archive()?
         .query_notifications(&query.with_page(offset, limit))
@@ -210,6 +195,28 @@ struct FaultsParams {
 
 fn present(value: &Option<String>) -> Option<&str> {
     value.as_deref().map(str::trim).filter(|v| !v.is_empty())
+}
+
+/// The `offset` (default 0) and `limit` (default 50, at most [`MAX_PAGE`]) of a paged
+/// list, each mistake named.
+fn page_window(offset: &Option<String>, limit: &Option<String>) -> Result<(u64, u32), AppError> {
+    let offset = match present(offset) {
+        None => 0,
+        Some(text) => text
+            .parse::<u64>()
+            .ok()
+            .filter(|o| *o <= 1_000_000_000)
+            .ok_or_else(|| bad("offset", "a whole number 0..=1000000000"))?,
+    };
+    let limit = match present(limit) {
+        None => 50,
+        Some(text) => text
+            .parse::<u32>()
+            .ok()
+            .filter(|l| (1..=MAX_PAGE).contains(l))
+            .ok_or_else(|| bad("limit", format!("a whole number 1..={MAX_PAGE}")))?,
+    };
+    Ok((offset, limit))
 }
 
 fn bad(name: &'static str, message: impl Into<String>) -> AppError {
@@ -390,22 +397,7 @@ impl FaultFilter {
             Some("false" | "0") => false,
             Some(other) => return Err(bad("desc", format!("`{}`: true or false", LogText(other)))),
         };
-        let offset = match present(&params.offset) {
-            None => 0,
-            Some(text) => text
-                .parse::<u64>()
-                .ok()
-                .filter(|o| *o <= 1_000_000_000)
-                .ok_or_else(|| bad("offset", "a whole number 0..=1000000000"))?,
-        };
-        let limit = match present(&params.limit) {
-            None => 50,
-            Some(text) => text
-                .parse::<u32>()
-                .ok()
-                .filter(|l| (1..=MAX_PAGE).contains(l))
-                .ok_or_else(|| bad("limit", format!("a whole number 1..={MAX_PAGE}")))?,
-        };
+        let (offset, limit) = page_window(&params.offset, &params.limit)?;
         let lang = match present(&params.lang) {
             None | Some("en") => Lang::English,
             Some("cs") => Lang::Czech,
