@@ -31,11 +31,12 @@
 //!     clock (trips, door cycles, the status codes, trip counters), a fault stack of
 //!     configurable size with wrap-around, fault injection, a seedable random source.
 //!   - `ekm66::io` (feature `tokio`, on by default): the drive loops of the poller and
-//!     the simulator over the transports of [`iec60870::ft12::io`] (serial ports,
+//!     the simulator over the transports of the serial-line crate (serial ports,
 //!     pseudo-terminals, TCP to RS-232 converters).
 //!
-//! The poller and the simulator are [`iec60870::ft12::LineEndpoint`]s, so the FT1.2
-//! line driver of `iec60870` runs them unchanged.
+//! The poller and the simulator are [`serial_line::LineEndpoint`]s, so the serial-line
+//! crate's drive loop (the one IEC 101/103 lines run on) runs them unchanged; the line
+//! settings and the checksum are that crate's too. No IEC 60870 code is linked in.
 //!
 //! # Data flow
 //!

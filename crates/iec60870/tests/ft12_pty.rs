@@ -132,9 +132,13 @@ async fn primary_and_secondary_over_a_pseudo_terminal() {
         })
         .await;
     });
+    // A pseudo-terminal keeps no parity: 8N1, or the port refuses FT1.2's 8E1.
     let primary_line = Transport::Serial {
         path,
-        line: LineSettings::new(19200),
+        line: LineSettings {
+            parity: Parity::None,
+            ..LineSettings::new(19200)
+        },
     }
     .open()
     .await

@@ -19,8 +19,8 @@ use iec60870::asdu::{
 };
 use iec60870::ft12::io::{drive, EndpointAction, Transport};
 use iec60870::ft12::{
-    Balanced, BalancedConfig, LineSettings, Primary, PrimaryConfig, Secondary, SecondaryConfig,
-    SecondaryStation,
+    Balanced, BalancedConfig, LineSettings, Parity, Primary, PrimaryConfig, Secondary,
+    SecondaryConfig, SecondaryStation,
 };
 use iec60870::iec101::{BalancedSlave, Master, MasterEvent, Slave, StartUp};
 use iec60870::outstation::{
@@ -117,7 +117,11 @@ async fn master_and_slave(balanced: bool) {
     let (outstation, handler) = outstation();
     let slave_line = Transport::Pty.open().await.expect("a pty pair");
     let path = slave_line.pty_path.clone().unwrap();
-    let line = LineSettings::new(9600);
+    // A pseudo-terminal keeps no parity: 8N1, or the port refuses FT1.2's 8E1.
+    let line = LineSettings {
+        parity: Parity::None,
+        ..LineSettings::new(9600)
+    };
     let slave_outstation = outstation.clone();
     let slave = tokio::spawn(async move {
         let now = tokio::time::Instant::now().into_std();

@@ -507,7 +507,7 @@ mod over_a_pseudo_terminal {
 
     use iec60870::ft12::io::{drive, EndpointAction, Transport};
     use iec60870::ft12::{
-        LineSettings, Primary, PrimaryConfig, Secondary, SecondaryConfig, SecondaryStation,
+        LineSettings, Parity, Primary, PrimaryConfig, Secondary, SecondaryConfig, SecondaryStation,
     };
     use iec60870::iec103::*;
     use tokio::sync::mpsc;
@@ -523,7 +523,11 @@ mod over_a_pseudo_terminal {
 
     #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
     async fn master_reads_and_commands_the_ref630() {
-        let line = LineSettings::new(9600);
+        // A pseudo-terminal keeps no parity: 8N1, or the port refuses FT1.2's 8E1.
+        let line = LineSettings {
+            parity: Parity::None,
+            ..LineSettings::new(9600)
+        };
         let relay_line = Transport::Pty.open().await.unwrap();
         let path = relay_line.pty_path.clone().unwrap();
         let (relay_actions, mut relay_inbox) = mpsc::unbounded_channel::<EndpointAction<Relay>>();

@@ -151,10 +151,9 @@ impl Query {
     }
 }
 
-/// The checksum of user octets: their sum modulo 256.
-pub fn checksum(user: &[u8]) -> u8 {
-    user.iter().fold(0u8, |sum, octet| sum.wrapping_add(*octet))
-}
+/// The checksum of user octets: their sum modulo 256, as FT1.2's (the serial-line
+/// crate's `octet_sum`).
+pub use serial_line::octet_sum as checksum;
 
 /// A frame around user octets; at most 255 are used (the rest is cut).
 pub fn encode_frame(user: &[u8]) -> Vec<u8> {

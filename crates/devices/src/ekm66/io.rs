@@ -1,8 +1,8 @@
 //! The tokio drive loops of the poller and the simulator (feature `tokio`).
 //!
-//! The transports are those of the FT1.2 line driver, reused as they are: a serial port
-//! ([`Transport::Serial`], 9600 8E1 by default, every setting of
-//! [`iec60870::ft12::LineSettings`]), a new pseudo-terminal pair ([`Transport::Pty`]),
+//! The transports are the serial-line crate's: a serial port ([`Transport::Serial`],
+//! 9600 8E1 by default, every setting of [`serial_line::LineSettings`], a setting the
+//! port does not keep an error), a new pseudo-terminal pair ([`Transport::Pty`]),
 //! a TCP connection to an RS-232-to-Ethernet converter ([`Transport::Connect`]) or a
 //! listener ([`Transport::Listen`]). [`run_poller`] and [`run_simulator`] are the loop
 //! of [`drive`] with the events handed to the caller: feed octets, drain transmits,
@@ -14,8 +14,8 @@ use std::pin::Pin;
 
 use tokio::sync::mpsc;
 
-pub use iec60870::ft12::io::{
-    drive, DriveEnd, EndpointAction, LineListener, LineStream, OpenLine, Transport,
+pub use serial_line::io::{
+    drive, DriveEnd, EndpointAction, LineListener, LineStream, OpenError, OpenLine, Transport,
 };
 
 use super::poller::{ArchiveCursor, Event, Poller};

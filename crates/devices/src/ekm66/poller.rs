@@ -42,8 +42,8 @@ use std::collections::VecDeque;
 use std::fmt;
 use std::time::{Duration, Instant};
 
-use iec60870::ft12::{LineEndpoint, LineSettings};
 use serde::{Deserialize, Serialize};
+use serial_line::{LineEndpoint, LineSettings};
 
 use super::codec::{
     decode_reply, CodecConfig, Deframer, FaultRecord, FaultTime, FrameError, Query, Reply,

@@ -18,10 +18,10 @@ use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use chrono::{Datelike as _, NaiveDate, NaiveDateTime, Timelike as _};
-use iec60870::ft12::{LineEndpoint, LineSettings};
 use rand::rngs::StdRng;
 use rand::{RngExt as _, SeedableRng as _};
 use serde::{Deserialize, Serialize};
+use serial_line::{LineEndpoint, LineSettings};
 
 use super::codec::{
     encode_reply, CodecConfig, Deframer, Direction, FaultRecord, FaultTime, Query, Reply, Status,

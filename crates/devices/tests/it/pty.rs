@@ -10,7 +10,7 @@ use devices::ekm66::codec::{FaultRecord, Status};
 use devices::ekm66::io::{run_poller, run_simulator, EndpointAction, Transport};
 use devices::ekm66::poller::*;
 use devices::ekm66::simulator::*;
-use iec60870::ft12::LineSettings;
+use serial_line::{LineSettings, Parity};
 use tokio::sync::mpsc;
 use tokio::task::JoinHandle;
 
@@ -60,9 +60,13 @@ fn start_poller(
     let path = path.to_owned();
     let (sender, receiver) = mpsc::unbounded_channel();
     let task = tokio::spawn(async move {
+        // A pseudo-terminal keeps no parity: 8N1, or the port refuses the board's 8E1.
         let line = Transport::Serial {
             path,
-            line: LineSettings::new(9600),
+            line: LineSettings {
+                parity: Parity::None,
+                ..LineSettings::new(9600)
+            },
         }
         .open()
         .await

@@ -83,7 +83,7 @@ impl Bench {
     }
 
     fn line_time(octets: usize) -> Duration {
-        iec60870::ft12::LineSettings::new(9600).transmit_time(octets)
+        serial_line::LineSettings::new(9600).transmit_time(octets)
     }
 
     fn drain(&mut self) {

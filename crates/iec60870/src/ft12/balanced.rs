@@ -5,10 +5,10 @@
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
+use serial_line::{LineEndpoint, LineSettings};
+
 use super::deframer::Deframer;
-use super::endpoint::LineEndpoint;
 use super::frame::{AddressSize, Control, Frame, PrimaryFunction, SecondaryFunction};
-use super::line::LineSettings;
 use super::primary::LineError;
 
 /// Settings of one end of a balanced link.

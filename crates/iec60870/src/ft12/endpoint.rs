@@ -1,37 +1,16 @@
-//! One end of a line as the I/O adapter sees it: bytes and time in, bytes out.
+//! FT1.2's ends of a line as [`LineEndpoint`]s of the serial-line crate (bytes and time
+//! in, bytes out): the primary, a secondary with its application, several secondaries
+//! on one line.
 
 use std::task::{Context, Poll};
 use std::time::Instant;
 
+use serial_line::{LineEndpoint, LineSettings};
+
 use super::deframer::{DeframeError, Deframer};
 use super::frame::Frame;
-use super::line::LineSettings;
 use super::primary::Primary;
 use super::secondary::{Secondary, SecondaryApplication};
-
-/// A sans-IO endpoint of a serial line, driven by an adapter (tokio over a serial port,
-/// a pseudo-terminal or TCP; the simulated line; a fuzzer).
-pub trait LineEndpoint {
-    /// Octets received.
-    fn handle_bytes(&mut self, now: Instant, bytes: &[u8]);
-    /// The line has been quiet for longer than a frame may pause.
-    fn handle_line_pause(&mut self, now: Instant);
-    /// The clock reached [`LineEndpoint::next_deadline`].
-    fn handle_timeout(&mut self, now: Instant);
-    /// Octets to write now.
-    fn poll_transmit(&mut self, now: Instant) -> Option<Vec<u8>>;
-    /// When to call [`LineEndpoint::handle_timeout`] and [`LineEndpoint::poll_transmit`]
-    /// again without new octets.
-    fn next_deadline(&self) -> Option<Instant>;
-    /// The line's settings, for the pause detection of the adapter.
-    fn line(&self) -> LineSettings;
-    /// Ready when something outside the line wants the endpoint's attention (an
-    /// application's event, a command's outcome); the adapter then runs another turn.
-    /// Registers the context's waker otherwise. Never ready by default.
-    fn poll_wake(&mut self, _context: &mut Context<'_>) -> Poll<()> {
-        Poll::Pending
-    }
-}
 
 impl LineEndpoint for Primary {
     fn handle_bytes(&mut self, now: Instant, bytes: &[u8]) {

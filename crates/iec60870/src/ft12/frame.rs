@@ -436,12 +436,9 @@ fn push_address(address: u16, address_size: AddressSize, out: &mut Vec<u8>) {
     }
 }
 
-/// The FT1.2 checksum: the arithmetic sum modulo 256 of the octets.
-pub fn checksum(octets: &[u8]) -> u8 {
-    octets
-        .iter()
-        .fold(0u8, |sum, octet| sum.wrapping_add(*octet))
-}
+/// The FT1.2 checksum: the arithmetic sum modulo 256 of the octets (the serial-line
+/// crate's, which devices framed like FT1.2 share).
+pub use serial_line::octet_sum as checksum;
 
 /// A frame that cannot be encoded.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]

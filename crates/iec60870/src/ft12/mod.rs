@@ -6,13 +6,17 @@
 //! |---|---|
 //! | `frame` | [`Frame`] (fixed `10 C A CS 16`, variable `68 L L 68 C A ASDU CS 16`, single character `E5`), the [`Control`] field with its function codes, [`AddressSize`] |
 //! | `deframer` | [`Deframer`]: frames out of a serial byte stream, resynchronising after noise and broken frames |
-//! | `line` | [`LineSettings`]: baud rate and character format (8E1), transmit and idle (33 bit) times |
 //! | `primary` | [`Primary`]: the unbalanced master of one line and many secondaries (start-up, FCB, class 1/2 polling, ACD, DFC, repeats, broadcast, failed stations) |
 //! | `balanced` | [`Balanced`]: one end of a balanced point-to-point link (IEC 101): primary and secondary at once, direction bit, test of link when idle |
 //! | `secondary` | [`Secondary`]: the unbalanced slave (repeat detection by FCB, ACD/DFC from its [`SecondaryApplication`]) |
-//! | `endpoint` | [`LineEndpoint`]: either end of a line as an adapter drives it (bytes and time in, bytes out); [`SecondaryStation`] = secondary + application, answering after the idle time |
-//! | [`io`] (feature `tokio`) | serial ports, pseudo-terminals and TCP as [`io::Transport`], and [`io::drive`], the loop around an endpoint |
+//! | `endpoint` | the primary as a [`LineEndpoint`] (either end of a line as an adapter drives it: bytes and time in, bytes out); [`SecondaryStation`] = secondary + application, answering after the idle time; [`SharedLine`] |
 //! | `simulated` | [`SimulatedLine`]: a primary and secondaries on a virtual clock with the line's timing and injected faults, for tests and benchmarks |
+//!
+//! The line itself is the `serial_line` crate's, re-exported here: [`LineSettings`] (baud
+//! rate and character format, 8E1 for FT1.2, transmit and idle (33 bit) times),
+//! [`Parity`], the [`LineEndpoint`] trait, the FT1.2 [`checksum`] (its `octet_sum`), and
+//! as [`io`] (feature `tokio`) its transports (serial ports, pseudo-terminals, TCP as
+//! [`io::Transport`]) and [`io::drive`], the loop around an endpoint.
 //!
 //! # Data flow
 //!
@@ -39,23 +43,27 @@ mod balanced;
 mod deframer;
 mod endpoint;
 mod frame;
-#[cfg(feature = "tokio")]
-pub mod io;
-mod line;
 mod primary;
 mod secondary;
 mod simulated;
 
 pub use balanced::{Balanced, BalancedConfig, BalancedEvent};
 pub use deframer::{DeframeError, Deframer};
-pub use endpoint::{LineEndpoint, SecondaryStation, SharedLine, TimedApplication};
+pub use endpoint::{SecondaryStation, SharedLine, TimedApplication};
 pub use frame::{
     checksum, AddressSize, Control, EncodeError, Frame, PrimaryFunction, SecondaryFunction, END,
     MAX_FRAME_LEN, MAX_LENGTH_FIELD, SINGLE_CHARACTER, START_FIXED, START_VARIABLE,
 };
-pub use line::{LineSettings, Parity};
 pub use primary::{
     Answer, LineError, LinkState, Primary, PrimaryConfig, PrimaryError, PrimaryEvent, StationStats,
 };
 pub use secondary::{Secondary, SecondaryApplication, SecondaryConfig, SecondaryStats};
+pub use serial_line::{LineEndpoint, LineSettings, Parity};
 pub use simulated::{Fault, SimulatedLine};
+
+/// The transports and the drive loop of the serial-line crate (`serial_line::io`), where
+/// the FT1.2 driver's callers have found them.
+#[cfg(feature = "tokio")]
+pub mod io {
+    pub use serial_line::io::*;
+}

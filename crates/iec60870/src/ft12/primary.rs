@@ -3,11 +3,11 @@
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
+use serial_line::LineSettings;
 use thiserror::Error;
 
 use super::deframer::{DeframeError, Deframer};
 use super::frame::{AddressSize, Control, Frame, PrimaryFunction, SecondaryFunction};
-use super::line::LineSettings;
 
 /// Settings of a primary station.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -49,7 +49,12 @@ impl Ctx<'_> {
             }
         }
         if let Err(detail) = settings.validate() {
-            self.err(whole, ConfigProblem::Invalid { detail });
+            self.err(
+                whole,
+                ConfigProblem::Invalid {
+                    detail: detail.to_string(),
+                },
+            );
         }
         settings
     }

@@ -1,8 +1,14 @@
-//! The tokio adapter of the FT1.2 endpoints: serial ports, pseudo-terminals and TCP.
+//! The tokio adapter of line endpoints: serial ports, pseudo-terminals and TCP.
 //!
 //! [`Transport::open`] gives a byte stream; [`drive`] runs a [`LineEndpoint`] on it,
 //! feeding it octets and the clock and writing what it transmits. The endpoint stays
 //! sans-IO: everything here is the loop around it.
+//!
+//! A serial port's settings are read back after they are applied: termios takes what a
+//! driver cannot do without an error and keeps something else (a pseudo-terminal keeps
+//! no parity), and a line whose two ends disagree on the character format only shows
+//! it as broken frames. A setting the port did not keep is an [`OpenError::Refused`]
+//! naming it.
 
 use std::fmt;
 use std::io;
@@ -10,12 +16,13 @@ use std::ops::ControlFlow;
 use std::pin::Pin;
 use std::time::Duration;
 
+use thiserror::Error;
 use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt};
 use tokio::sync::mpsc;
 use tokio::time::Instant;
 
-use super::endpoint::LineEndpoint;
-use super::line::{LineSettings, Parity};
+use crate::endpoint::LineEndpoint;
+use crate::settings::{LineSettings, Parity, Refused, SettingsError};
 
 /// A byte stream a line endpoint runs on.
 pub trait LineStream: AsyncRead + AsyncWrite + Send + Unpin {}
@@ -102,44 +109,79 @@ impl LineListener {
     }
 }
 
+/// Why a transport did not open. Each message names the transport; the system's reason
+/// is part of the message (not a separate `source`), so that a log line of `{error}`
+/// says it all.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum OpenError {
+    /// Settings no line takes; the port was not opened.
+    #[error("serial {path}: {reason}")]
+    Settings {
+        /// The device path.
+        path: String,
+        /// What is wrong with them.
+        reason: SettingsError,
+    },
+    /// The system did not open the port or apply or report its settings.
+    #[error("serial {path}: {reason}")]
+    Serial {
+        /// The device path.
+        path: String,
+        /// The system's reason ("No such file or directory", "Permission denied").
+        reason: io::Error,
+    },
+    /// The port took the settings without an error but kept another value of one.
+    #[error("serial {path}: {refused}")]
+    Refused {
+        /// The device path.
+        path: String,
+        /// The setting, asked and kept.
+        refused: Refused,
+    },
+    /// No pseudo-terminal pair.
+    #[error("pseudo-terminal: {reason}")]
+    Pty {
+        /// The system's reason.
+        reason: io::Error,
+    },
+    /// No TCP connection or listener.
+    #[error("tcp {address}: {reason}")]
+    Tcp {
+        /// The address.
+        address: String,
+        /// The system's reason.
+        reason: io::Error,
+    },
+}
+
+impl From<OpenError> for io::Error {
+    /// For callers that handle every failure of a line as an `io::Error`; the message
+    /// stays, the `OpenError` is the error's inner one.
+    fn from(error: OpenError) -> io::Error {
+        let kind = match &error {
+            OpenError::Settings { .. } | OpenError::Refused { .. } => io::ErrorKind::InvalidInput,
+            OpenError::Serial { reason, .. }
+            | OpenError::Pty { reason }
+            | OpenError::Tcp { reason, .. } => reason.kind(),
+        };
+        io::Error::new(kind, error)
+    }
+}
+
 impl Transport {
     /// Opens the transport; [`Transport::Listen`] waits for one peer.
-    pub async fn open(&self) -> io::Result<OpenLine> {
+    pub async fn open(&self) -> Result<OpenLine, OpenError> {
         match self {
-            Transport::Serial { path, line } => {
-                use tokio_serial::SerialPortBuilderExt as _;
-                line.validate()
-                    .map_err(|message| io::Error::new(io::ErrorKind::InvalidInput, message))?;
-                let parity = match line.parity {
-                    Parity::Even => tokio_serial::Parity::Even,
-                    Parity::Odd => tokio_serial::Parity::Odd,
-                    Parity::None => tokio_serial::Parity::None,
-                };
-                let stop_bits = if line.stop_bits == 2 {
-                    tokio_serial::StopBits::Two
-                } else {
-                    tokio_serial::StopBits::One
-                };
-                let port = tokio_serial::new(path, line.baud)
-                    .data_bits(tokio_serial::DataBits::Eight)
-                    .parity(parity)
-                    .stop_bits(stop_bits)
-                    .flow_control(tokio_serial::FlowControl::None)
-                    .open_native_async()
-                    .map_err(io::Error::from)?;
-                Ok(OpenLine {
-                    stream: Box::pin(port),
-                    pty_path: None,
-                    peer: path.clone(),
-                    _pty_peer_end: None,
-                })
-            }
+            Transport::Serial { path, line } => open_serial(path, line),
             Transport::Pty => {
                 use tokio_serial::SerialPort as _;
-                let (ours, theirs) = tokio_serial::SerialStream::pair().map_err(io::Error::from)?;
-                let path = theirs.name().ok_or_else(|| {
-                    io::Error::other("the pseudo-terminal has no path for its other end")
-                })?;
+                let pty = |reason: io::Error| OpenError::Pty { reason };
+                let (ours, theirs) = tokio_serial::SerialStream::pair()
+                    .map_err(|error| pty(io::Error::from(error)))?;
+                let path = theirs
+                    .name()
+                    .ok_or_else(|| pty(io::Error::other("no path for the other end")))?;
                 Ok(OpenLine {
                     stream: Box::pin(ours),
                     pty_path: Some(path.clone()),
@@ -148,8 +190,12 @@ impl Transport {
                 })
             }
             Transport::Connect(address) => {
-                let stream = tokio::net::TcpStream::connect(address).await?;
-                stream.set_nodelay(true)?;
+                let tcp = |reason| OpenError::Tcp {
+                    address: address.clone(),
+                    reason,
+                };
+                let stream = tokio::net::TcpStream::connect(address).await.map_err(tcp)?;
+                stream.set_nodelay(true).map_err(tcp)?;
                 Ok(OpenLine {
                     stream: Box::pin(stream),
                     pty_path: None,
@@ -157,9 +203,80 @@ impl Transport {
                     _pty_peer_end: None,
                 })
             }
-            Transport::Listen(address) => LineListener::bind(address).await?.accept().await,
+            Transport::Listen(address) => {
+                let tcp = |reason| OpenError::Tcp {
+                    address: address.clone(),
+                    reason,
+                };
+                LineListener::bind(address)
+                    .await
+                    .map_err(tcp)?
+                    .accept()
+                    .await
+                    .map_err(tcp)
+            }
         }
     }
+}
+
+/// Opens a serial port with the line's settings and checks that it kept them.
+fn open_serial(path: &str, line: &LineSettings) -> Result<OpenLine, OpenError> {
+    use tokio_serial::{SerialPort as _, SerialPortBuilderExt as _};
+    line.validate().map_err(|reason| OpenError::Settings {
+        path: path.to_owned(),
+        reason,
+    })?;
+    let serial = |error: tokio_serial::Error| OpenError::Serial {
+        path: path.to_owned(),
+        reason: io::Error::from(error),
+    };
+    let parity = match line.parity {
+        Parity::Even => tokio_serial::Parity::Even,
+        Parity::Odd => tokio_serial::Parity::Odd,
+        Parity::None => tokio_serial::Parity::None,
+    };
+    let stop_bits = if line.stop_bits == 2 {
+        tokio_serial::StopBits::Two
+    } else {
+        tokio_serial::StopBits::One
+    };
+    let port = tokio_serial::new(path, line.baud)
+        .data_bits(tokio_serial::DataBits::Eight)
+        .parity(parity)
+        .stop_bits(stop_bits)
+        .flow_control(tokio_serial::FlowControl::None)
+        .open_native_async()
+        .map_err(serial)?;
+    let kept = LineSettings {
+        baud: port.baud_rate().map_err(serial)?,
+        parity: match port.parity().map_err(serial)? {
+            tokio_serial::Parity::Even => Parity::Even,
+            tokio_serial::Parity::Odd => Parity::Odd,
+            tokio_serial::Parity::None => Parity::None,
+        },
+        stop_bits: match port.stop_bits().map_err(serial)? {
+            tokio_serial::StopBits::One => 1,
+            tokio_serial::StopBits::Two => 2,
+        },
+    };
+    let kept_data_bits = match port.data_bits().map_err(serial)? {
+        tokio_serial::DataBits::Five => 5,
+        tokio_serial::DataBits::Six => 6,
+        tokio_serial::DataBits::Seven => 7,
+        tokio_serial::DataBits::Eight => 8,
+    };
+    if let Some(refused) = line.refused_by(&kept, kept_data_bits) {
+        return Err(OpenError::Refused {
+            path: path.to_owned(),
+            refused,
+        });
+    }
+    Ok(OpenLine {
+        stream: Box::pin(port),
+        pty_path: None,
+        peer: path.to_owned(),
+        _pty_peer_end: None,
+    })
 }
 
 /// Something to do to the endpoint from outside the loop (a command, a request).
