@@ -313,6 +313,8 @@ name = "L7"
 floors = 5
 ioa_base = 1
 port = "{port}"
+# A pseudo-terminal keeps no parity: 8N1, or the port refuses the board's 8E1.
+parity = "none"
 poll_period_ms = 100
 timeout_ms = 300
 "#
