@@ -26,7 +26,8 @@ fn cp56() -> Cp56Time2a {
 fn vectors() -> Vec<(&'static str, Direction, Vec<u8>, Asdu)> {
     let mut identification = vec![0x05, 0x81, 0x04, 0x01, 0xA0, 0x03, 0x02];
     identification.extend_from_slice(b"REF630 11.3.");
-    let mut measurands = vec![0x09, 0x89, 0x02, 0x01, 0x01, 0x94];
+    // SQ = 0, nine measurands (VSQ 0x09): one object, one FUN/INF, as relays send it.
+    let mut measurands = vec![0x09, 0x09, 0x02, 0x01, 0x01, 0x94];
     for word in [0x3558u16, 0x3558, 0x3558, 0x6AA8, 0x6AA8, 0x6AA8, 0, 0, 0] {
         measurands.extend_from_slice(&word.to_le_bytes());
     }
@@ -103,7 +104,7 @@ fn vectors() -> Vec<(&'static str, Direction, Vec<u8>, Asdu)> {
             Asdu {
                 header: Header {
                     type_id: 9,
-                    vsq: 0x89,
+                    vsq: 0x09,
                     cause: Cause::CYCLIC,
                     common_address: 1,
                     fun: 1,
@@ -153,6 +154,23 @@ fn the_sessions_messages_decode_and_encode_octet_for_octet() {
         assert_eq!(decoded, expected, "{name}");
         assert_eq!(expected.to_bytes().unwrap(), octets, "{name}");
     }
+}
+
+/// Measurands and disturbance lists are sent with SQ = 0 (VSQ = the count), and read
+/// with the SQ bit set too, as some stations send them.
+#[test]
+fn element_lists_are_sent_with_sq_0_and_read_with_either() {
+    let (_, _, octets, expected) = vectors()
+        .into_iter()
+        .find(|(name, ..)| name.starts_with("measurands"))
+        .unwrap();
+    assert_eq!(octets[1], 0x09, "nine measurands, SQ = 0");
+    let mut with_sq = octets.clone();
+    with_sq[1] = 0x89;
+    let decoded = Asdu::decode(&with_sq, Direction::Monitor).unwrap();
+    assert_eq!(decoded.body, expected.body);
+    // Re-encoded, it goes out with SQ = 0 whatever it came with.
+    assert_eq!(decoded.to_bytes().unwrap(), octets);
 }
 
 #[test]
@@ -466,8 +484,8 @@ fn any_asdu() -> impl Strategy<Value = (Asdu, Direction)> {
             let mut asdu = Asdu::new(type_id, Cause(cause), common_address, fun, inf, body);
             // Element lists get their VSQ from the count when encoded.
             asdu.header.vsq = match &asdu.body {
-                Body::Measurands(values) if type_id == 9 => 0x80 | values.len() as u8,
-                Body::DisturbanceList(records) => 0x80 | records.len() as u8,
+                Body::Measurands(values) if type_id == 9 => values.len() as u8,
+                Body::DisturbanceList(records) => records.len() as u8,
                 _ => 0x81,
             };
             (asdu, direction)
@@ -772,7 +790,7 @@ fn the_sessions_frames_octet_for_octet() {
     );
     // Class 2, FCB 1: the measurands of the start-up cycle, nothing injected.
     let mut measurands = vec![
-        0x68, 0x1A, 0x1A, 0x68, 0x28, 0x01, 0x09, 0x89, 0x02, 0x01, 0x01, 0x94,
+        0x68, 0x1A, 0x1A, 0x68, 0x28, 0x01, 0x09, 0x09, 0x02, 0x01, 0x01, 0x94,
     ];
     measurands.extend_from_slice(&[0; 18]);
     let sum = measurands[4..]

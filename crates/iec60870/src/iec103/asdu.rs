@@ -630,17 +630,18 @@ impl Asdu {
         Ok(Asdu { header, body })
     }
 
-    /// Appends the ASDU's octets. The VSQ of element lists (9, 23) is set from the
-    /// count; the others are sent as given in the header.
+    /// Appends the ASDU's octets. The VSQ of element lists (9, 23) is the count with
+    /// SQ = 0: one information object (one FUN/INF) holding that many elements, as relays
+    /// and masters in the field send and expect them (ABB's and Beckhoff's manuals; an
+    /// independent master drops the connection on SQ = 1). Decoding accepts both. The
+    /// others are sent as given in the header.
     pub fn encode(&self, out: &mut Vec<u8>) -> Result<(), EncodeError> {
         let header = &self.header;
         let vsq = match &self.body {
             Body::Measurands(values) if header.type_id == 9 => {
-                0x80 | count_in_vsq(header.type_id, values.len(), 127)?
+                count_in_vsq(header.type_id, values.len(), 127)?
             }
-            Body::DisturbanceList(records) => {
-                0x80 | count_in_vsq(header.type_id, records.len(), 127)?
-            }
+            Body::DisturbanceList(records) => count_in_vsq(header.type_id, records.len(), 127)?,
             _ => header.vsq,
         };
         out.extend_from_slice(&[
