@@ -53,6 +53,7 @@ impl LinkLayer for Link {
         self.unconfirmed.clear();
         count
     }
+    fn take_back(&mut self) {}
 }
 
 /// An ASDU that decodes, or a negative mirror of a request the station cannot serve

@@ -84,6 +84,8 @@ impl LinkLayer for TestLink {
         self.unconfirmed.clear();
         count
     }
+
+    fn take_back(&mut self) {}
 }
 
 /// Executes every command and sets the command's feedback point (address + 1000) first,

@@ -362,6 +362,10 @@ struct Core {
     /// Whether completing a controlled station's pending stop emits `Stopped` (not when
     /// the stop was requested on a connection already deactivated locally).
     announce_stop: bool,
+    /// A controlled station's connection stopped locally by a redundancy switch-over
+    /// ([`Session::deactivate`]), which its peer does not know of: it may be taken back
+    /// ([`Session::reactivate`]), and a STOPDT from its peer is still announced.
+    deactivated_locally: bool,
     unexpected: u32,
     tx: Vec<u8>,
     events: VecDeque<SessionEvent>,
@@ -404,6 +408,7 @@ impl Session {
             timers: [None; DEADLINES],
             pending_control: None,
             announce_stop: true,
+            deactivated_locally: false,
             unexpected: 0,
             tx: Vec::new(),
             events: VecDeque::new(),
@@ -531,6 +536,14 @@ impl Session {
     /// STOPDT con is still owed). No event is emitted.
     pub fn deactivate(&mut self) {
         self.core.deactivate();
+    }
+
+    /// Controlled station, redundancy switch-back: the connection that took the group
+    /// over went away, so this one, deactivated by [`Session::deactivate`] and never
+    /// stopped by its peer, is started again locally (no U frame: its peer still
+    /// believes it started). Returns whether it was; does nothing otherwise.
+    pub fn reactivate(&mut self) -> bool {
+        self.core.reactivate()
     }
 
     /// Removes and returns the ASDUs sent but not yet acknowledged, oldest first, to
@@ -795,7 +808,21 @@ impl Core {
                 "connection deactivated locally (redundancy switch-over)"
             );
             self.state = SessionState::Stopped;
+            self.deactivated_locally = true;
         }
+    }
+
+    fn reactivate(&mut self) -> bool {
+        if self.role != Role::ControlledStation
+            || self.state != SessionState::Stopped
+            || !self.deactivated_locally
+        {
+            return false;
+        }
+        info!("connection reactivated locally (redundancy switch-back)");
+        self.deactivated_locally = false;
+        self.state = SessionState::Started;
+        true
     }
 
     /// Queues an S frame acknowledging everything received, if anything is unacknowledged.
@@ -948,6 +975,7 @@ impl Core {
                 }
             }
             (UFunction::StartDtAct, Role::ControlledStation) => {
+                self.deactivated_locally = false;
                 let was = std::mem::replace(&mut self.state, SessionState::Started);
                 self.send_u(UFunction::StartDtCon);
                 if was == SessionState::Stopped {
@@ -958,7 +986,11 @@ impl Core {
                 // Acknowledge everything received before confirming (604 test 5.3.2.70).
                 self.send_ack();
                 if self.state != SessionState::PendingStop {
-                    self.announce_stop = self.state == SessionState::Started;
+                    // A connection stopped locally is announced too: its link must stop
+                    // waiting to take its group's data back.
+                    self.announce_stop =
+                        self.state == SessionState::Started || self.deactivated_locally;
+                    self.deactivated_locally = false;
                     self.state = SessionState::PendingStop;
                 }
                 if self.window() > 0 {

@@ -44,6 +44,10 @@ impl LinkLayer for Class1Queue {
         self.asdus.clear();
         count
     }
+
+    fn take_back(&mut self) {
+        self.started = true;
+    }
 }
 
 /// An [`Outstation`]'s link on an unbalanced IEC 101 line.
@@ -167,6 +171,8 @@ impl LinkLayer for Balanced {
     fn hand_over(&mut self) -> usize {
         0
     }
+
+    fn take_back(&mut self) {}
 }
 
 /// An [`Outstation`]'s link on a balanced (point-to-point) IEC 101 line: it sends its

@@ -142,6 +142,11 @@ pub(crate) struct GroupState {
     pub(crate) active: Option<u64>,
     /// The peer of the active connection (named in the take-over warning).
     pub(crate) active_peer: Option<Peer>,
+    /// Started connections that lost the group's data to a take-over, most recent last:
+    /// when the active connection stops or goes away, the last of them takes the data
+    /// back (its controlling station never stopped data transfer, so it still waits
+    /// for data).
+    pub(crate) standby: Vec<(u64, Peer)>,
     /// The sequence number the next queued event gets.
     pub(crate) next_seq: u64,
     /// Counts changes the group's links wait for: an event queued, the group taken over.
@@ -179,6 +184,7 @@ impl Group {
                 events: VecDeque::new(),
                 active: None,
                 active_peer: None,
+                standby: Vec::new(),
                 next_seq: 0,
                 version: 0,
                 waiting: Vec::new(),

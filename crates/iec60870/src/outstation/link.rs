@@ -69,6 +69,9 @@ pub trait LinkLayer {
     /// (silently: a client must never get an unsolicited STOPDT) and forgets the ASDUs
     /// it has in flight, which the group gave to the new link. Returns how many.
     fn hand_over(&mut self) -> usize;
+    /// The link that took the group over went away: this one, handed over before and
+    /// never stopped by its peer, carries the group's data again.
+    fn take_back(&mut self);
 }
 
 /// Answers queued for a peer that does not acknowledge them: beyond this the peer is
@@ -151,6 +154,9 @@ pub struct LinkCore {
     sent_from_group: VecDeque<bool>,
     /// Whether this link is its group's started link.
     active: bool,
+    /// Started, but its group's data went to another connection (take-over): it takes
+    /// the data back when that connection stops.
+    standing_by: bool,
     /// Alternates group events and interrogation chunks so neither starves the other.
     prefer_interrogation: bool,
     pending_commands: Vec<PendingCommand>,
@@ -185,6 +191,7 @@ impl LinkCore {
             interrogation: None,
             sent_from_group: VecDeque::new(),
             active: false,
+            standing_by: false,
             prefer_interrogation: false,
             pending_commands: Vec::new(),
             terminating: Vec::new(),
@@ -206,6 +213,12 @@ impl LinkCore {
     /// Whether this link is its group's started link.
     pub fn is_active(&self) -> bool {
         self.active
+    }
+
+    /// Whether the group's changes concern this link: it is the started link, or a
+    /// standby one that takes the data back when the started link goes.
+    pub fn follows_group(&self) -> bool {
+        self.active || self.standing_by
     }
 
     /// A handle to wait for the group's changes (new events, another link taking the
@@ -295,6 +308,20 @@ impl LinkCore {
     /// this each turn, before it hands over what it received.
     pub fn check_still_active(&mut self, link: &mut dyn LinkLayer) {
         if !self.active {
+            if self.standing_by && self.group.lock().active == Some(self.id) {
+                // The connection that took the group over went away: this one, started
+                // all along, carries the group's data again.
+                tracing::info!(
+                    "the group's started connection went away: this one takes the data back"
+                );
+                self.standing_by = false;
+                self.active = true;
+                self.sent_from_group.clear();
+                link.take_back();
+                self.outstation
+                    .handler
+                    .connection_changed(&self.peer, true, true);
+            }
             return;
         }
         let still = self.group.lock().active == Some(self.id);
@@ -303,6 +330,7 @@ impl LinkCore {
                 "another connection of the group was started: this one is now on standby"
             );
             self.active = false;
+            self.standing_by = true;
             self.interrogation = None;
             self.responses.clear();
             // The group gave what this link had in flight to the new link; t1 must not
@@ -344,8 +372,15 @@ impl LinkCore {
                 for asdu in in_flight.into_iter().rev() {
                     state.retransmit.push_front(asdu);
                 }
+                let previous_peer = state.active_peer.clone();
+                if let Some(peer) = previous_peer {
+                    state.standby.push((previous, peer));
+                }
             }
         }
+        let id = self.id;
+        state.standby.retain(|(standby, _)| *standby != id);
+        self.standing_by = false;
         state.active = Some(self.id);
         state.active_peer = Some(self.peer.clone());
         self.active = true;
@@ -361,6 +396,15 @@ impl LinkCore {
     /// this link sent from the group's buffer without confirmation goes back to the front
     /// of the buffer.
     pub fn stop(&mut self, link: &dyn LinkLayer) {
+        if self.standing_by {
+            // A standby connection stopped (or went away): it no longer waits for data.
+            self.standing_by = false;
+            let id = self.id;
+            self.group
+                .lock()
+                .standby
+                .retain(|(standby, _)| *standby != id);
+        }
         if !self.active {
             return;
         }
@@ -381,6 +425,15 @@ impl LinkCore {
                 }
                 for asdu in in_flight.into_iter().rev() {
                     state.retransmit.push_front(asdu);
+                }
+                // The connection this one took the data from gets it back.
+                if let Some((standby, peer)) = state.standby.pop() {
+                    tracing::info!(
+                        "{peer}, on standby since this connection took over, takes the group's data back"
+                    );
+                    state.active = Some(standby);
+                    state.active_peer = Some(peer);
+                    Group::wake_all(state);
                 }
             }
         }

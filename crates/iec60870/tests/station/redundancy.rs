@@ -101,6 +101,52 @@ async fn standby_gets_nothing_and_takes_over_with_retransmission() {
     assert_eq!(b.unexpected_frames(), 0);
 }
 
+/// A started connection put on standby by another's STARTDT takes the group's data back
+/// when that connection stops data transfer or goes away (its controlling station never
+/// stopped, so it still waits for data); it got nothing again before.
+#[tokio::test]
+async fn a_connection_on_standby_takes_the_data_back_when_the_other_goes() {
+    init_logs();
+    let server = start_server(server_config(), image(), Arc::new(ReadOnlyStation)).await;
+    let address = server.local_addr();
+    // Values up to `last`: what the previous connection left unacknowledged comes first.
+    async fn until(peer: &mut RawPeer, last: i16) -> Vec<i16> {
+        let mut got = Vec::new();
+        while got.last() != Some(&last) {
+            got.extend(values(&peer.expect_asdu().await));
+        }
+        got
+    }
+    let mut a = RawPeer::connect(address).await;
+    a.start().await;
+    server.update(ioa(1), scaled(1), None).unwrap();
+    assert_eq!(until(&mut a, 1).await, vec![1]);
+
+    // B takes over: A is on standby.
+    let mut b = RawPeer::connect(address).await;
+    b.start().await;
+    server.update(ioa(1), scaled(2), None).unwrap();
+    until(&mut b, 2).await;
+    assert!(a.next_asdu(QUIET).await.is_none(), "A on standby got data");
+
+    // B stops data transfer: A gets the data again, without a STARTDT of its own.
+    b.stop().await;
+    server.update(ioa(1), scaled(3), None).unwrap();
+    until(&mut a, 3).await;
+    assert!(b.next_asdu(QUIET).await.is_none());
+
+    // C takes over and then goes away (connection closed): A again.
+    let mut c = RawPeer::connect(address).await;
+    c.start().await;
+    server.update(ioa(1), scaled(4), None).unwrap();
+    until(&mut c, 4).await;
+    drop(c);
+    wait_connections(&server, 2).await;
+    server.update(ioa(1), scaled(5), None).unwrap();
+    until(&mut a, 5).await;
+    assert_eq!(a.unexpected_frames(), 0);
+}
+
 #[tokio::test]
 async fn switch_over_after_acknowledgement_does_not_repeat_events() {
     init_logs();

@@ -47,6 +47,10 @@ impl LinkLayer for Session {
         self.deactivate();
         self.take_unacknowledged().len()
     }
+
+    fn take_back(&mut self) {
+        self.reactivate();
+    }
 }
 
 /// Serves one accepted (and, with TLS, handshaken) connection until it ends.
@@ -161,7 +165,7 @@ where
             .into_iter()
             .chain(start_deadline)
             .min();
-        let active = core.is_active();
+        let follows_group = core.follows_group();
         let awaits_commands = core.awaits_commands();
         tokio::select! {
             read = reader.read(&mut input) => match read {
@@ -178,7 +182,7 @@ where
             () = sleep_until(deadline) => {
                 session.handle_timeout(tokio::time::Instant::now().into_std());
             }
-            () = changes.changed(seen), if active => {}
+            () = changes.changed(seen), if follows_group => {}
             () = std::future::poll_fn(|context| core.poll_commands(context)), if awaits_commands => {}
             _ = shutdown.changed() => return "server shut down".to_owned(),
         }
