@@ -146,9 +146,19 @@ pub fn parse_command(type_id: TypeId, text: &str, select: bool, qualifier: u8) -
             qualifier: command_qualifier()?,
         },
         TypeId::C_DC_NA_1 | TypeId::C_DC_TA_1 => {
-            let state = parse_double(text)?;
+            // The DCS numbers are the standard's, not a boolean: 1 is OFF and 2 is ON; 0
+            // and 3 are "not permitted" (IEC 60870-5-101, 7.2.6.16).
+            let state = match text.trim().to_ascii_lowercase().as_str() {
+                "" => bail!("a double command needs a value: ON or OFF (DCS 2 or 1)"),
+                other => parse_double(other)?,
+            };
             if !matches!(state, DoublePointState::On | DoublePointState::Off) {
-                bail!("a double command is OFF (1) or ON (2)");
+                bail!(
+                    "'{}' is DCS {}, which IEC 60870-5-101 (7.2.6.16) does not permit in a \
+                     double command: give ON or OFF (DCS 2 = ON, DCS 1 = OFF)",
+                    text.trim(),
+                    state as u8
+                );
             }
             Element::DoubleCommand {
                 state,
@@ -216,7 +226,31 @@ mod tests {
                 ..
             }
         ));
-        assert!(parse_command(TypeId::C_DC_NA_1, "0", false, 0).is_err());
+        assert!(matches!(
+            parse_command(TypeId::C_DC_NA_1, "off", false, 0).unwrap(),
+            Element::DoubleCommand {
+                state: DoublePointState::Off,
+                ..
+            }
+        ));
+        // The DCS numbers: 1 = OFF, 2 = ON; 0 and 3 refused naming the rule.
+        assert!(matches!(
+            parse_command(TypeId::C_DC_NA_1, "2", false, 0).unwrap(),
+            Element::DoubleCommand {
+                state: DoublePointState::On,
+                ..
+            }
+        ));
+        for refused in ["0", "3", ""] {
+            let error = parse_command(TypeId::C_DC_NA_1, refused, false, 0)
+                .unwrap_err()
+                .to_string();
+            assert!(error.contains("ON or OFF"), "{refused}: {error}");
+        }
+        assert!(parse_command(TypeId::C_DC_NA_1, "3", false, 0)
+            .unwrap_err()
+            .to_string()
+            .contains("7.2.6.16"));
         assert!(parse_command(TypeId::C_SC_NA_1, "1", true, 32).is_err());
         assert!(parse_command(TypeId::M_SP_NA_1, "1", false, 0).is_err());
         assert!(parse_command(TypeId::C_SE_NC_1, "nan", false, 0).is_err());
