@@ -368,7 +368,7 @@ async fn archive_api_pages_sorts_filters_and_exports() {
     let rows: Vec<&str> = lines.collect();
     assert_eq!(rows.len(), 10);
     assert!(
-        rows[0].starts_with("2025-03-01,08:27:00,L1,3C,Door fault,Porucha dveri,"),
+        rows[0].starts_with("2025-03-01,08:27:00,L1,3C,Door fault,Porucha dveří,"),
         "{}",
         rows[0]
     );

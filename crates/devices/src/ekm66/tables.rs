@@ -80,7 +80,7 @@ pub const STATUS_CODES: &[StatusCode] = &[
     StatusCode {
         code: 5,
         english: "Start of (free) call operation",
-        czech: "Zac.vol.provozu",
+        czech: "Zač.vol.provozu",
         class: ColourClass::Green,
     },
     StatusCode {
@@ -224,7 +224,7 @@ pub const STATUS_CODES: &[StatusCode] = &[
     StatusCode {
         code: 31,
         english: "Door-open button",
-        czech: "Tlačítko otevíření dveří",
+        czech: "Tlačítko otevření dveří",
         class: ColourClass::Orange,
     },
     StatusCode {
@@ -242,7 +242,7 @@ pub const STATUS_CODES: &[StatusCode] = &[
     StatusCode {
         code: 34,
         english: "AWM: door-open button",
-        czech: "AWM:T.otevr.dveri",
+        czech: "AWM:T.otevř.dveří",
         class: ColourClass::Red,
     },
     StatusCode {
@@ -284,7 +284,7 @@ pub const STATUS_CODES: &[StatusCode] = &[
     StatusCode {
         code: 41,
         english: "EN 81 overloaded",
-        czech: "EN81-pretizeno",
+        czech: "EN81-přetíženo",
         class: ColourClass::Orange,
     },
     StatusCode {
@@ -338,7 +338,7 @@ pub const STATUS_CODES: &[StatusCode] = &[
     StatusCode {
         code: 50,
         english: "Emergency power",
-        czech: "Nouzovy Proud",
+        czech: "Nouzový proud",
         class: ColourClass::Orange,
     },
     StatusCode {
@@ -438,12 +438,12 @@ pub const FAULT_CODES: &[FaultCode] = &[
     FaultCode {
         code: 0x17,
         english: "No start (via SIS)",
-        czech: "Žádný start (pres SIS)",
+        czech: "Žádný start (přes SIS)",
     },
     FaultCode {
         code: 0x18,
         english: "Safety circuit (opened) while doors opening",
-        czech: "B.obvod při otvirani",
+        czech: "B.obvod při otevírání",
     },
     FaultCode {
         code: 0x20,
@@ -458,7 +458,7 @@ pub const FAULT_CODES: &[FaultCode] = &[
     FaultCode {
         code: 0x22,
         english: "Faulty pulse signal — down",
-        czech: "Chybný signál impuls-dolu",
+        czech: "Chybný signál impuls-dolů",
     },
     FaultCode {
         code: 0x23,
@@ -468,7 +468,7 @@ pub const FAULT_CODES: &[FaultCode] = &[
     FaultCode {
         code: 0x24,
         english: "Faulty correction signal — top",
-        czech: "Chybný signál korekce-nahore",
+        czech: "Chybný signál korekce-nahoře",
     },
     FaultCode {
         code: 0x25,
@@ -498,57 +498,57 @@ pub const FAULT_CODES: &[FaultCode] = &[
     FaultCode {
         code: 0x2A,
         english: "Faulty signal — both HKU and HKO",
-        czech: "Chybny signal oba HKU+HKO",
+        czech: "Chybný signál oba HKU+HKO",
     },
     FaultCode {
         code: 0x2B,
         english: "Wrong direction of rotation",
-        czech: "Chybny smer otac",
+        czech: "Chybný směr otáč.",
     },
     FaultCode {
         code: 0x2C,
         english: "No stop signals",
-        czech: "Zadne signaly zastaveni",
+        czech: "Žádné signály zastavení",
     },
     FaultCode {
         code: 0x2D,
         english: "Faulty pulse signal",
-        czech: "Chybny signal impuls",
+        czech: "Chybný signál impuls",
     },
     FaultCode {
         code: 0x30,
         english: "System start",
-        czech: "Start systemu",
+        czech: "Start systému",
     },
     FaultCode {
         code: 0x31,
         english: "Correction run",
-        czech: "Kor.stavu-jizda",
+        czech: "Kor.stavu-jízda",
     },
     FaultCode {
         code: 0x32,
         english: "Call lock-out",
-        czech: "Uzaver volani",
+        czech: "Uzávěr volání",
     },
     FaultCode {
         code: 0x33,
         english: "Overloaded",
-        czech: "Pretizeno",
+        czech: "Přetíženo",
     },
     FaultCode {
         code: 0x34,
         english: "Landing-call lock-out",
-        czech: "Uzaver vnej.vol.",
+        czech: "Uzávěr vněj.vol.",
     },
     FaultCode {
         code: 0x35,
         english: "Full load",
-        czech: "Plne zatizeni",
+        czech: "Plné zatížení",
     },
     FaultCode {
         code: 0x36,
         english: "Light-grid stop",
-        czech: "Svet.mriz-stop",
+        czech: "Svět.mříž-stop",
     },
     FaultCode {
         code: 0x37,
@@ -558,72 +558,72 @@ pub const FAULT_CODES: &[FaultCode] = &[
     FaultCode {
         code: 0x38,
         english: "Learning run",
-        czech: "Ucebni jizda",
+        czech: "Učební jízda",
     },
     FaultCode {
         code: 0x39,
         english: "Shut-down",
-        czech: "Uvedeni do klidu",
+        czech: "Uvedení do klidu",
     },
     FaultCode {
         code: 0x3A,
         english: "Firefighter run",
-        czech: "Pozarni jizda",
+        czech: "Požární jízda",
     },
     FaultCode {
         code: 0x3B,
         english: "Travel stopped by thermistor",
-        czech: "Zast.jizdy term.",
+        czech: "Zast.jízdy term.",
     },
     FaultCode {
         code: 0x3C,
         english: "Door fault",
-        czech: "Porucha dveri",
+        czech: "Porucha dveří",
     },
     FaultCode {
         code: 0x3D,
         english: "Light-curtain fault",
-        czech: "Poruch.svet.zav.",
+        czech: "Poruch.svět.záv.",
     },
     FaultCode {
         code: 0x3E,
         english: "Light curtain permanently interrupted",
-        czech: "Trvale svet.zav.",
+        czech: "Trvale svět.záv.",
     },
     FaultCode {
         code: 0x3F,
         english: "Landing door permanently open",
-        czech: "Trvale otevr.sach.dveri",
+        czech: "Trvale otevř.šach.dveře",
     },
     FaultCode {
         code: 0x40,
         english: "Door-open button permanently pressed",
-        czech: "Trvale tlac.otev.dveri",
+        czech: "Trvale tlač.otev.dveří",
     },
     FaultCode {
         code: 0x41,
         english: "No shaft data",
-        czech: "Zadne udaje sachty",
+        czech: "Žádné údaje šachty",
     },
     FaultCode {
         code: 0x42,
         english: "Drive hanging (stuck)",
-        czech: "Pohon visi",
+        czech: "Pohon visí",
     },
     FaultCode {
         code: 0x43,
         english: "Travel lock-out",
-        czech: "Uzavěr jizdy",
+        czech: "Uzávěr jízdy",
     },
     FaultCode {
         code: 0x44,
         english: "Running-time monitoring",
-        czech: "Kontr.doby behu",
+        czech: "Kontr.doby běhu",
     },
     FaultCode {
         code: 0x45,
         english: "Safety circuit SK1 open",
-        czech: "B.obvod SK1 rozp",
+        czech: "B.obvod SK1 rozp.",
     },
     FaultCode {
         code: 0x46,
@@ -633,17 +633,17 @@ pub const FAULT_CODES: &[FaultCode] = &[
     FaultCode {
         code: 0x47,
         english: "Recall",
-        czech: "Zpetne privolani",
+        czech: "Zpětné přivolání",
     },
     FaultCode {
         code: 0x48,
         english: "Thermistor stop",
-        czech: "Zastaveni term",
+        czech: "Zastavení term.",
     },
     FaultCode {
         code: 0x49,
         english: "Re-levelling fault",
-        czech: "Porucha doregul",
+        czech: "Porucha doregul.",
     },
     FaultCode {
         code: 0x4A,
@@ -668,27 +668,27 @@ pub const FAULT_CODES: &[FaultCode] = &[
     FaultCode {
         code: 0x4E,
         english: "Start-up cancelled",
-        czech: "Spoust.zruseno",
+        czech: "Spoušt.zrušeno",
     },
     FaultCode {
         code: 0x4F,
         english: "EN 81 overloaded",
-        czech: "EN81-pretizeno",
+        czech: "EN81-přetíženo",
     },
     FaultCode {
         code: 0x50,
         english: "AWM: car light — stop",
-        czech: "AWM-Kabin.svetlo-zastav.",
+        czech: "AWM-Kabin.světlo-zastav.",
     },
     FaultCode {
         code: 0x51,
         english: "AWM: alarm shut-down — stop",
-        czech: "AWM-Alarm odstaveni-zastav.",
+        czech: "AWM-Alarm odstavení-zastav.",
     },
     FaultCode {
         code: 0x52,
         english: "AWM: door-open button — stop",
-        czech: "AWM-Tl.otevr.dveri-zastav.",
+        czech: "AWM-Tl.otevř.dveří-zastav.",
     },
     FaultCode {
         code: 0x53,
@@ -698,17 +698,17 @@ pub const FAULT_CODES: &[FaultCode] = &[
     FaultCode {
         code: 0x54,
         english: "Operation on emergency power",
-        czech: "Provoz s nouzovym napajenim",
+        czech: "Provoz s nouzovým napájením",
     },
     FaultCode {
         code: 0x55,
         english: "Loading — standby",
-        czech: "Nakladka-pohotovost",
+        czech: "Nakládka-pohotovost",
     },
     FaultCode {
         code: 0x56,
         english: "Parameter-controlled shut-down",
-        czech: "Para-uvvedeni do klidu",
+        czech: "Para-uvedení do klidu",
     },
     FaultCode {
         code: 0x57,
@@ -718,22 +718,22 @@ pub const FAULT_CODES: &[FaultCode] = &[
     FaultCode {
         code: 0x58,
         english: "Fire case",
-        czech: "Pripad pozaru",
+        czech: "Případ požáru",
     },
     FaultCode {
         code: 0x59,
         english: "Restricted call operation",
-        czech: "Omezeny privol.provoz",
+        czech: "Omezený přivol.provoz",
     },
     FaultCode {
         code: 0x5A,
         english: "No parameter",
-        czech: "Zadny parametr",
+        czech: "Žádný parametr",
     },
     FaultCode {
         code: 0x5B,
         english: "Rope replacement stop",
-        czech: "Vymena lana stop",
+        czech: "Výměna lana stop",
     },
     FaultCode {
         code: 0x5C,
@@ -748,7 +748,7 @@ pub const FAULT_CODES: &[FaultCode] = &[
     FaultCode {
         code: 0x5E,
         english: "Rope warning",
-        czech: "Vystraha lana",
+        czech: "Výstraha lana",
     },
 ];
 
@@ -1150,5 +1150,66 @@ pub fn fault_group(code: u8) -> FaultGroup {
         // (0x56, 0x57, 0x5A), fire case (0x58), restricted call operation (0x59), the
         // rope stops and warnings (0x5B-0x5E), and codes not in Appendix B.
         _ => FaultGroup::Other,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The Czech texts are written as Czech is, with its diacritics: the thesis printed
+    /// most fault texts without them ("Porucha dveri"), as the board's display does.
+    #[test]
+    fn czech_texts_keep_their_diacritics() {
+        // Stems that Czech never writes without diacritics.
+        const UNACCENTED: &[&str] = &[
+            "dveri",
+            "jizd",
+            "pretiz",
+            "zadn",
+            "privol",
+            "signal",
+            "chybny",
+            "uzaver",
+            "sachet",
+            "sacht",
+            "napaj",
+            "nouzovy ",
+            "nouzovym",
+            "zastaveni",
+            "svet.",
+            "svetl",
+            "pozar",
+            "ucebni",
+            "uvedeni",
+            "vymena",
+            "vystrah",
+            "spoust",
+            "zpetn",
+            "nakladk",
+            "otevr",
+            "otac",
+            "systemu",
+            "visi",
+            "behu",
+            "pres ",
+            "zatiz",
+            "zac.",
+            "mriz",
+            "dolu",
+            "nahore",
+            "tlac",
+        ];
+        let texts = STATUS_CODES
+            .iter()
+            .map(|entry| entry.czech)
+            .chain(FAULT_CODES.iter().map(|entry| entry.czech));
+        for text in texts {
+            let lower = text.to_lowercase();
+            for stem in UNACCENTED {
+                assert!(!lower.contains(stem), "{text:?} lacks diacritics ({stem})");
+            }
+        }
+        assert_eq!(fault_text_czech(0x3C), "Porucha dveří");
     }
 }

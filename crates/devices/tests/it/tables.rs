@@ -21,7 +21,7 @@ fn texts_and_classes() {
     assert_eq!(status_text(4), "Fully ready for operation (duplicate of 1)");
     assert_eq!(status_text(16), "unknown status (16)");
     assert_eq!(fault_text(0x3C), "Door fault");
-    assert_eq!(fault_text_czech(0x3C), "Porucha dveri");
+    assert_eq!(fault_text_czech(0x3C), "Porucha dveří");
     assert_eq!(fault_text(0x06), "unknown fault 0x06");
     let mut colours = StatusColours::default();
     assert_eq!(colours.class(1), ColourClass::Green);
