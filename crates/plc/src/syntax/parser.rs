@@ -1193,15 +1193,25 @@ impl Parser<'_> {
                             span: s,
                         };
                     }
-                    Tok::Direct(d) if partial_width(&d).is_some() => {
+                    Tok::Direct(d) if partial_access(&d).is_some() => {
                         self.bump();
-                        let (width, index) = partial_width(&d).unwrap_or((8, 0));
+                        let ((width, index), bit) = partial_access(&d).unwrap_or(((8, 0), None));
                         let s = e.span.to(span);
                         e = Expr {
                             id: self.id(),
                             kind: ExprKind::Part(Box::new(e), width, index),
                             span: s,
                         };
+                        // `%B1.1`: the lexer keeps a dot before a digit in the address
+                        // (`%IX0.3`), so a bare bit index after a part comes in the same
+                        // token (RuSTy's `d.%D1.%W1.%B1.1`).
+                        if let Some(bit) = bit {
+                            e = Expr {
+                                id: self.id(),
+                                kind: ExprKind::Bit(Box::new(e), bit),
+                                span: s,
+                            };
+                        }
                     }
                     _ => {
                         let name = self.ident()?;
@@ -1440,6 +1450,20 @@ impl Parser<'_> {
                 Ok(e)
             }
             _ => self.expected("an expression"),
+        }
+    }
+}
+
+/// `B1`, `W0`, `D1`, `L0` after `.%`, optionally followed by a bit index (`B1.1`): the
+/// width in bits of the part and its index, and the bit.
+fn partial_access(d: &str) -> Option<((u32, u32), Option<u32>)> {
+    match d.split_once('.') {
+        None => Some((partial_width(d)?, None)),
+        Some((part, bit)) => {
+            if bit.is_empty() || !bit.chars().all(|c| c.is_ascii_digit()) {
+                return None;
+            }
+            Some((partial_width(part)?, Some(bit.parse().unwrap_or(u32::MAX))))
         }
     }
 }
