@@ -52,8 +52,9 @@
 //!                                      # (the redundancy_groups); in the first two the
 //!                                      # groups only classify clients for authority and
 //!                                      # status points
-//! max_command_age_ms = 10000           # optional: time-tagged commands older (or further
-//!                                      # in the future) than this are refused
+//! max_command_age_ms = 10000           # time-tagged commands older (or further in the
+//!                                      # future) than this are refused; default 30000,
+//!                                      # "off" for no limit
 //!
 //! [[node.task]]
 //! name = "fast"
@@ -368,9 +369,15 @@ pub struct ServerConfig {
     /// How clients form redundancy groups (`redundancy`); `GroupsByAddress` carries the
     /// groups' addresses.
     pub redundancy: iec60870::cs104::server::RedundancyMode,
-    /// The maximum command delay of time-tagged commands (`max_command_age_ms`).
+    /// The maximum command delay of time-tagged commands (`max_command_age_ms`,
+    /// [`DEFAULT_MAX_COMMAND_AGE`] when not given); `None` when turned off.
     pub max_command_age: Option<Duration>,
 }
+
+/// The maximum command delay of a project's servers unless `max_command_age_ms` says
+/// otherwise: a time-tagged command that waited longer in some queue (a slow WAN, a
+/// replayed capture) is refused rather than carried out late.
+pub const DEFAULT_MAX_COMMAND_AGE: Duration = Duration::from_secs(30);
 
 /// A redundancy group of a server: the connections of its clients share one event buffer.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -386,6 +393,17 @@ pub struct RedundancyGroup {
     /// A single point of the node: TRUE while no client of this group is connected (the
     /// TC700's link-failure points 38-41 of its upper links, spec 7.3).
     pub status_point: Option<String>,
+}
+
+impl RedundancyGroup {
+    /// The group a client at `ip` belongs to, chosen as the server chooses it: the first
+    /// group naming its address, else the first catch-all group.
+    pub fn of_client(groups: &[RedundancyGroup], ip: Option<IpAddr>) -> Option<&RedundancyGroup> {
+        groups
+            .iter()
+            .find(|g| ip.is_some_and(|ip| g.clients.contains(&ip)))
+            .or_else(|| groups.iter().find(|g| g.clients.is_empty()))
+    }
 }
 
 /// TLS certificate, key and trust anchors (PEM files) of one end of a link.

@@ -350,6 +350,8 @@ pub enum Vocabulary {
     StatusLayout,
     /// The time codings of a lift board.
     TimeCoding,
+    /// The words `max_command_age_ms` takes besides a number.
+    CommandAge,
 }
 
 /// The form a text must have.
@@ -662,6 +664,9 @@ fn unknown_value_text(what: Vocabulary, value: &str) -> String {
         Vocabulary::TimeCoding => {
             format!("time coding `{value}`: expected \"binary\" or \"bcd\"")
         }
+        Vocabulary::CommandAge => format!(
+            "max_command_age_ms `{value}`: expected milliseconds (default 30000) or \"off\" (no limit)"
+        ),
     }
 }
 

@@ -77,7 +77,15 @@ pub(in crate::config) struct RawServer {
     pub(in crate::config) redundancy_groups: Option<Vec<RawGroup>>,
     pub(in crate::config) tls: Option<RawTls>,
     pub(in crate::config) redundancy: Option<String>,
-    pub(in crate::config) max_command_age_ms: Option<i64>,
+    pub(in crate::config) max_command_age_ms: Option<RawCommandAge>,
+}
+
+/// `max_command_age_ms`: milliseconds, or `"off"` for no limit.
+#[derive(Deserialize)]
+#[serde(untagged)]
+pub(in crate::config) enum RawCommandAge {
+    Millis(i64),
+    Word(String),
 }
 
 #[derive(Deserialize)]

@@ -100,11 +100,7 @@ impl NodeHandler {
     /// The redundancy group a client belongs to, chosen as the server chooses it: the
     /// first group naming its address, else the first catch-all group.
     fn group_of(&self, peer: &Peer) -> Option<&crate::config::RedundancyGroup> {
-        let ip = peer.ip();
-        self.groups
-            .iter()
-            .find(|g| ip.is_some_and(|ip| g.clients.contains(&ip)))
-            .or_else(|| self.groups.iter().find(|g| g.clients.is_empty()))
+        crate::config::RedundancyGroup::of_client(&self.groups, peer.ip())
     }
 }
 

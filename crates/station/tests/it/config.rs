@@ -124,6 +124,8 @@ target = "Main.A"
     assert_eq!(a.sources, vec![dir.path().join("plc/main.st")]);
     let server = a.server.as_ref().unwrap();
     assert!(server.allowed_clients.is_empty());
+    // Time-tagged commands older than 30 s are refused unless the project says otherwise.
+    assert_eq!(server.max_command_age, Some(Duration::from_secs(30)));
     assert_eq!(server.redundancy_groups.len(), 1);
     assert!(server.redundancy_groups[0].clients.is_empty());
     assert_eq!(
@@ -153,6 +155,38 @@ target = "Main.A"
     let moved = project.with_port_base(3000);
     let a = moved.node("A").unwrap();
     assert_eq!(a.server_address(&moved.station).unwrap().port(), 3003);
+}
+
+/// `max_command_age_ms`: milliseconds, or "off" for no limit; another word is refused
+/// at its position.
+#[test]
+fn the_maximum_command_delay_is_set_or_turned_off() {
+    let project = |age: &str| {
+        format!(
+            "[station]\nname = \"T\"\ntime_zone = \"UTC\"\n[[node]]\nname = \"A\"\n\
+             common_address = 1\n[node.server]\nport_offset = 0\nmax_command_age_ms = {age}\n"
+        )
+    };
+    let age = |text: &str| {
+        load(&project(text), &[])
+            .unwrap()
+            .node("A")
+            .unwrap()
+            .server
+            .as_ref()
+            .unwrap()
+            .max_command_age
+    };
+    assert_eq!(age("5000"), Some(Duration::from_secs(5)));
+    assert_eq!(age("\"off\""), None);
+    expect_only(
+        &project("\"never\""),
+        &[],
+        9,
+        22,
+        "node[0].server.max_command_age_ms",
+        "\"off\" (no limit)",
+    );
 }
 
 #[test]

@@ -136,13 +136,24 @@ impl Ctx<'_> {
                         );
                         iec60870::cs104::server::RedundancyMode::SingleGroup
                     });
-            let max_command_age = s.max_command_age_ms.and_then(|ms| {
-                self.duration_ms(
-                    ms,
-                    &node(&[K("server"), K("max_command_age_ms")]),
-                    "max_command_age_ms",
-                )
-            });
+            let age_path = node(&[K("server"), K("max_command_age_ms")]);
+            let max_command_age = match &s.max_command_age_ms {
+                None => Some(DEFAULT_MAX_COMMAND_AGE),
+                Some(RawCommandAge::Millis(ms)) => {
+                    self.duration_ms(*ms, &age_path, "max_command_age_ms")
+                }
+                Some(RawCommandAge::Word(word)) if word == "off" => None,
+                Some(RawCommandAge::Word(word)) => {
+                    self.err(
+                        &age_path,
+                        ConfigProblem::UnknownValue {
+                            what: Vocabulary::CommandAge,
+                            value: word.clone(),
+                        },
+                    );
+                    None
+                }
+            };
             ServerConfig {
                 port_offset,
                 allowed_clients,
