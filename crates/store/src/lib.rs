@@ -228,6 +228,12 @@ pub trait EventStore: Send + Sync {
 
     /// Row counts and time span.
     fn stats(&self) -> StoreFuture<'_, StoreStats>;
+
+    /// Closes the store at a shutdown, after the last write: SQLite checkpoints its
+    /// write-ahead log into the database file (no `-wal`/`-shm` files left behind),
+    /// PostgreSQL returns its connections. Calls after it fail with
+    /// [`StoreError::Closed`].
+    fn close(&self) -> StoreFuture<'_, ()>;
 }
 
 /// Opens (and migrates) the store named by `url`:

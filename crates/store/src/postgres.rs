@@ -350,4 +350,11 @@ impl Database for PostgresStore {
                 .await?)
         })
     }
+
+    fn close(&self) -> StoreFuture<'_, ()> {
+        Box::pin(async move {
+            self.pool.close();
+            Ok(())
+        })
+    }
 }

@@ -27,34 +27,51 @@ const READERS: usize = 2;
 
 type Job = Box<dyn FnOnce(&mut Connection) + Send>;
 
+/// What a connection's thread takes from its queue.
+enum Message {
+    /// Run a job on the connection.
+    Run(Job),
+    /// Close the connection and end the thread, then say so.
+    Close(oneshot::Sender<()>),
+}
+
 /// Threads that each own a connection and run jobs from one shared queue.
 #[derive(Clone)]
 struct Worker {
-    queue: mpsc::Sender<Job>,
+    queue: mpsc::Sender<Message>,
+    threads: usize,
 }
 
 impl Worker {
     fn spawn(name: &str, connections: Vec<Connection>) -> Result<Worker, StoreError> {
-        let (queue, rx) = mpsc::channel::<Job>();
+        let (queue, rx) = mpsc::channel::<Message>();
         let rx = Arc::new(Mutex::new(rx));
+        let threads = connections.len();
         for (i, mut conn) in connections.into_iter().enumerate() {
             let rx = Arc::clone(&rx);
             std::thread::Builder::new()
                 .name(format!("{name}-{i}"))
                 .spawn(move || loop {
                     // The lock is held only while waiting for the next job.
-                    let job = match rx.lock() {
+                    let message = match rx.lock() {
                         Ok(rx) => rx.recv(),
                         Err(_) => break,
                     };
-                    match job {
-                        Ok(job) => job(&mut conn),
+                    match message {
+                        Ok(Message::Run(job)) => job(&mut conn),
+                        Ok(Message::Close(done)) => {
+                            // The connection closes before the answer: the last one to
+                            // close checkpoints the write-ahead log and removes it.
+                            drop(conn);
+                            let _ = done.send(());
+                            break;
+                        }
                         Err(_) => break, // the store was dropped
                     }
                 })
                 .map_err(StoreError::Thread)?;
         }
-        Ok(Worker { queue })
+        Ok(Worker { queue, threads })
     }
 
     async fn run<T, F>(&self, f: F) -> Result<T, StoreError>
@@ -64,11 +81,26 @@ impl Worker {
     {
         let (tx, rx) = oneshot::channel();
         self.queue
-            .send(Box::new(move |conn| {
+            .send(Message::Run(Box::new(move |conn| {
                 let _ = tx.send(f(conn));
-            }))
+            })))
             .map_err(|_| StoreError::Closed)?;
         rx.await.map_err(|_| StoreError::Closed)?
+    }
+
+    /// Closes every connection once the jobs queued before have run; a thread that took a
+    /// close takes nothing more, so each thread takes one.
+    async fn close(&self) {
+        let mut waits = Vec::with_capacity(self.threads);
+        for _ in 0..self.threads {
+            let (done, wait) = oneshot::channel();
+            if self.queue.send(Message::Close(done)).is_ok() {
+                waits.push(wait);
+            }
+        }
+        for wait in waits {
+            let _ = wait.await;
+        }
     }
 }
 
@@ -291,5 +323,18 @@ impl Database for SqliteStore {
 
     fn analyze(&self) -> StoreFuture<'_, ()> {
         Box::pin(self.writer.run(|c| Ok(c.execute_batch("PRAGMA optimize")?)))
+    }
+
+    fn close(&self) -> StoreFuture<'_, ()> {
+        Box::pin(async move {
+            // Readers first, so that the writer's connection is the database's last: its
+            // close checkpoints the write-ahead log into the file and deletes the -wal and
+            // -shm files (a stopped station leaves one file behind).
+            if self.path.is_some() {
+                self.readers.close().await;
+            }
+            self.writer.close().await;
+            Ok(())
+        })
     }
 }

@@ -147,6 +147,9 @@ pub(crate) trait Database: Send + Sync {
 
     /// Refreshes the query planner's statistics.
     fn analyze(&self) -> StoreFuture<'_, ()>;
+
+    /// Closes the connections ([`EventStore::close`]).
+    fn close(&self) -> StoreFuture<'_, ()>;
 }
 
 /// The one row a statement must return.
@@ -315,6 +318,10 @@ impl<D: Database> EventStore for D {
             self.analyze().await?;
             Ok(total)
         })
+    }
+
+    fn close(&self) -> StoreFuture<'_, ()> {
+        Database::close(self)
     }
 
     fn stats(&self) -> StoreFuture<'_, StoreStats> {

@@ -75,6 +75,10 @@ impl EventStore for Stalled {
     fn stats(&self) -> StoreFuture<'_, StoreStats> {
         self.inner.stats()
     }
+
+    fn close(&self) -> StoreFuture<'_, ()> {
+        self.inner.close()
+    }
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
