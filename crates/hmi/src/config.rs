@@ -159,6 +159,8 @@ fn default_level() -> u8 {
 #[serde(deny_unknown_fields)]
 struct RawConfig {
     title: String,
+    #[serde(default)]
+    local_address: Option<std::net::IpAddr>,
     #[serde(default = "default_level")]
     default_control_level: u8,
     #[serde(default)]
@@ -190,6 +192,10 @@ pub struct HmiConfig {
     pub title: String,
     /// Level for controls not listed.
     pub default_control_level: u8,
+    /// The local address the HMI connects to the station from (`local_address`): a
+    /// station gives its HMI a redundancy group by address, with the HMI's command
+    /// authority. `None`: the system chooses.
+    pub local_address: Option<std::net::IpAddr>,
     /// Screens, in navigation order.
     pub screens: Vec<ScreenConfig>,
     /// Controls.
@@ -229,6 +235,7 @@ impl HmiConfig {
             folder: folder.to_path_buf(),
             title: raw.title,
             default_control_level: raw.default_control_level.min(9),
+            local_address: raw.local_address,
             screens: raw.screen,
             controls: raw.control,
             alarms: raw.alarm,

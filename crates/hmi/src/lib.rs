@@ -162,7 +162,6 @@ impl std::fmt::Display for LogText<'_> {
 }
 
 /// A running HMI.
-#[derive(Debug)]
 pub struct Hmi {
     /// Where it listens.
     pub address: SocketAddr,
@@ -172,6 +171,19 @@ pub struct Hmi {
     pub verifier: Arc<auth::Verifier>,
     shutdown: tokio::sync::watch::Sender<bool>,
     recorder: Recorder,
+    /// Its own store and the station's archive, closed at shutdown.
+    stores: Vec<Arc<dyn EventStore>>,
+}
+
+impl std::fmt::Debug for Hmi {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Hmi")
+            .field("address", &self.address)
+            .field("station", &self.station)
+            .field("verifier", &self.verifier)
+            .field("stores", &self.stores.len())
+            .finish_non_exhaustive()
+    }
 }
 
 impl Hmi {
@@ -184,6 +196,7 @@ impl Hmi {
     /// [`Hmi::start`] with the serving options of `serve`.
     pub async fn start_with(options: HmiOptions, serve: ServeConfig) -> Result<Hmi, HmiError> {
         let config = config::HmiConfig::load(&options.screens)?;
+        let local_address = config.local_address;
         let tls_config = match &serve.tls {
             Some(files) => Some(files.server_config()?),
             None => None,
@@ -207,7 +220,8 @@ impl Hmi {
             options.common_address,
             recorder.clone(),
             options.zone,
-            options.local_address,
+            // The command line's address, else the screens folder's.
+            options.local_address.or(local_address),
         );
         let verifier = Arc::new(auth::Verifier::default());
         let state = web::AppState {
@@ -240,6 +254,10 @@ impl Hmi {
             serve.users_poll,
             stop.clone(),
         ));
+        // Closed at shutdown: the archive is a second set of connections to the station's
+        // own database, whose write-ahead log is removed only when the last one closes.
+        let stores: Vec<Arc<dyn EventStore>> =
+            state.store.iter().chain(&state.archive).cloned().collect();
         let app = web::router(state).into_make_service_with_connect_info::<tls::Peer>();
         let mut stopped = stop;
         let until_stopped = async move {
@@ -280,14 +298,18 @@ impl Hmi {
             verifier,
             shutdown,
             recorder,
+            stores,
         })
     }
 
-    /// Stops serving and waits until the store has every record.
+    /// Stops serving, waits until the store has every record and closes the stores.
     pub async fn shutdown(self) {
         let _ = self.shutdown.send(true);
         self.station.set_link(false);
         self.recorder.flush().await;
+        for store in &self.stores {
+            store.close().await.ok();
+        }
     }
 }
 
