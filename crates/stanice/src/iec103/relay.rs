@@ -45,7 +45,7 @@ pub(crate) struct RelayArgs {
     /// Answer "ACK" and "no data" with the single character E5 where allowed.
     #[arg(long)]
     single_char: bool,
-    /// Stop after this many seconds (runs until Ctrl-C otherwise).
+    /// Stop after this many seconds (runs until Ctrl-C or SIGTERM otherwise).
     #[arg(long)]
     duration: Option<f64>,
 }

@@ -39,7 +39,7 @@ pub(crate) struct ServerArgs {
     /// Seconds between simulated changes.
     #[arg(long, default_value_t = 1.0)]
     simulate_interval: f64,
-    /// Stop after this many seconds (runs until Ctrl-C otherwise).
+    /// Stop after this many seconds (runs until Ctrl-C or SIGTERM otherwise).
     #[arg(long)]
     duration: Option<f64>,
     /// Connections served at once.

@@ -49,7 +49,7 @@ pub(crate) struct SimulateArgs {
     /// Print every query answered and every arrival.
     #[arg(long)]
     verbose: bool,
-    /// Stop after this many seconds (runs until Ctrl-C otherwise).
+    /// Stop after this many seconds (runs until Ctrl-C or SIGTERM otherwise).
     #[arg(long)]
     duration: Option<f64>,
 }

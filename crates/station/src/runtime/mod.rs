@@ -84,13 +84,23 @@ pub enum RuntimeError {
     /// The event store could not be opened.
     #[error("event store: {0}")]
     Store(#[from] StoreError),
-    /// A server could not start (port in use, TLS files).
-    #[error("node `{node}`: {source}")]
+    /// A server could not start (TLS files, an address that cannot be bound). Its cause is
+    /// in the message, not chained as a source: printed with its chain, it read twice.
+    #[error("node `{node}`: {error}")]
     Server {
         /// The node.
         node: String,
         /// Why.
-        source: ServerError,
+        error: ServerError,
+    },
+    /// A server's port is held by another program (another station, an example already
+    /// running): the caller can say how to move the project's ports.
+    #[error("node `{node}` cannot listen on {address}: the port is in use")]
+    PortInUse {
+        /// The node.
+        node: String,
+        /// The address it was to listen on.
+        address: std::net::SocketAddr,
     },
     /// The simulation thread has ended.
     #[error("the simulation has stopped")]
@@ -452,9 +462,19 @@ impl Runtime {
                     }
                     let handle = spawn_server(server, image, handler.clone() as Arc<_>)
                         .await
-                        .map_err(|source| RuntimeError::Server {
-                            node: config.name.clone(),
-                            source,
+                        .map_err(|error| match error {
+                            ServerError::Listen { address, source }
+                                if source.kind() == std::io::ErrorKind::AddrInUse =>
+                            {
+                                RuntimeError::PortInUse {
+                                    node: config.name.clone(),
+                                    address,
+                                }
+                            }
+                            error => RuntimeError::Server {
+                                node: config.name.clone(),
+                                error,
+                            },
                         })?;
                     points.attach_sink(Arc::new(sink::Iec104Sink {
                         server: handle.clone(),
@@ -815,6 +835,9 @@ impl Runtime {
             retention.stop();
         }
         self.recorder.flush().await;
+        if let Some(store) = &self.store {
+            store.close().await.ok();
+        }
     }
 }
 

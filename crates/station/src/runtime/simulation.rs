@@ -508,7 +508,7 @@ impl SimNode {
                 utc_ns: utc.timestamp_nanos_opt().unwrap_or(0),
                 utc_offset_ns: clock.utc_offset_ns(utc),
             });
-            tracing::warn!(node = %self.points.name(), "PLC stopped");
+            tracing::info!(node = %self.points.name(), "PLC stopped");
         }
         self.settle(now, utc, plant, observers);
         Ok(())
