@@ -47,10 +47,11 @@ pub(crate) struct HmiArgs {
     /// The private key (PEM) of --tls-cert.
     #[arg(long, requires = "tls_cert")]
     tls_key: Option<PathBuf>,
-    /// Connect to the station from this local address.
+    /// Connect to the station from this local address; default: the screens folder's
+    /// hmi.toml `local_address` (the address the project gives its HMI's group).
     #[arg(long)]
     local_address: Option<std::net::IpAddr>,
-    /// Stop after this many seconds (runs until Ctrl-C otherwise).
+    /// Stop after this many seconds (runs until Ctrl-C or SIGTERM otherwise).
     #[arg(long)]
     duration: Option<f64>,
 }
@@ -106,7 +107,8 @@ pub(crate) async fn run(args: HmiArgs) -> anyhow::Result<ExitCode> {
 /// `stanice user ...`.
 #[derive(Subcommand, Debug)]
 pub(crate) enum UserCommand {
-    /// Adds a user; the password is read from standard input (one line).
+    /// Adds a user; the password is typed twice without echo on a terminal, or read
+    /// from standard input (one line) when it is a pipe or file.
     Add {
         /// User name.
         name: String,
@@ -127,7 +129,8 @@ pub(crate) enum UserCommand {
         #[command(flatten)]
         file: UsersFileArgs,
     },
-    /// Sets a user's password (from standard input) and optionally level.
+    /// Sets a user's password (typed twice without echo, or one line of standard input)
+    /// and optionally level.
     Passwd {
         /// User name.
         name: String,
@@ -178,9 +181,16 @@ impl UsersFileArgs {
     }
 }
 
+/// The new password: on a terminal typed twice without echo (the two must agree), from
+/// a pipe or file its first line (for scripts).
 fn read_password() -> anyhow::Result<String> {
     if std::io::IsTerminal::is_terminal(&std::io::stdin()) {
-        eprint!("password: ");
+        let first = rpassword::prompt_password("password: ")?;
+        let again = rpassword::prompt_password("password again: ")?;
+        if first != again {
+            anyhow::bail!("the two passwords differ; nothing was changed");
+        }
+        return Ok(first);
     }
     let mut line = String::new();
     std::io::stdin().lock().read_line(&mut line)?;

@@ -24,8 +24,11 @@ mod iec103;
 mod iec104;
 mod interrupt;
 mod lift;
+mod link_report;
 mod plc;
 mod points;
+mod port_in_use;
+mod printed_time;
 mod run;
 mod serial_line;
 

@@ -13,7 +13,7 @@ use anyhow::Context as _;
 use chrono::{DateTime, Utc};
 use clap::Args;
 use station::config::Project;
-use station::runtime::{Pacing, Runtime, RuntimeOptions, StoreChoice};
+use station::runtime::{Pacing, Runtime, RuntimeError, RuntimeOptions, StoreChoice};
 
 use crate::interrupt::Interrupt;
 
@@ -44,7 +44,7 @@ pub(crate) struct RunOptions {
     /// Simulated start time (RFC 3339, e.g. 2025-01-15T16:00:00Z); default: now.
     #[arg(long)]
     start: Option<DateTime<Utc>>,
-    /// Stop after this many real seconds (runs until Ctrl-C otherwise).
+    /// Stop after this many real seconds (runs until Ctrl-C or SIGTERM otherwise).
     #[arg(long)]
     duration: Option<f64>,
     /// Also serve the project's web HMI (its `hmi/` folder) on 127.0.0.1:8080 + (port
@@ -140,7 +140,8 @@ pub(crate) async fn run_project(
         StoreChoice::Url(url) => url.clone(),
         StoreChoice::Disabled => "none".to_owned(),
     };
-    let runtime = Runtime::start(
+    let shown_project = project.clone();
+    let runtime = match Runtime::start(
         project,
         RuntimeOptions {
             nodes: options.nodes.clone(),
@@ -152,7 +153,14 @@ pub(crate) async fn run_project(
         },
     )
     .await
-    .context("the station does not start")?;
+    {
+        Ok(runtime) => runtime,
+        Err(RuntimeError::PortInUse { node, address }) => anyhow::bail!(
+            "the station does not start: {}",
+            crate::port_in_use::explain(&shown_project, &node, address)
+        ),
+        Err(error) => return Err(anyhow::Error::new(error).context("the station does not start")),
+    };
     print_banner(&runtime, &store_shown, options.speed, demo);
     let archive =
         (store_shown != "none" && !store_shown.contains(":memory:")).then(|| store_shown.clone());
@@ -166,7 +174,7 @@ pub(crate) async fn run_project(
         },
         None => None,
     };
-    println!("Type a fault or operation here (`help` lists them); Ctrl-C stops.");
+    println!("Type a fault or operation here (`help` lists them); Ctrl-C stops (SIGTERM too).");
     let stop = async {
         match options.duration {
             Some(seconds) => {
@@ -211,8 +219,8 @@ fn check_hmi(project: &Path, plan: &HmiPlan) -> anyhow::Result<()> {
 }
 
 /// Starts the project's web HMI (`PROJECT/hmi/`) against its top node, when the project
-/// has one. It connects from 127.0.0.2, the address the Vsetín project gives its HMI
-/// link (HMI-local mode, spec 7.4). Without an HMI to serve, or when it does not start,
+/// has one. It connects from its hmi.toml's `local_address` (127.0.0.2 in the Vsetín
+/// project: the TC700's HMI-local mode). Without an HMI to serve, or when it does not start,
 /// the station runs on unless the plan requires the HMI (then the error is returned).
 async fn start_hmi(
     runtime: &Runtime,
@@ -269,7 +277,8 @@ async fn start_hmi(
             store: Some(store),
             archive,
             zone: station::pointdb::TimeZonePolicy::Zone(project.station.time_zone),
-            local_address: Some(std::net::IpAddr::from([127, 0, 0, 2])),
+            // hmi.toml's `local_address`: the project gives its HMI a group by address.
+            local_address: None,
         },
         serve,
     )
@@ -331,29 +340,65 @@ fn print_banner(runtime: &Runtime, store: &str, speed: f64, demo: bool) {
         top.and_then(|(config, node)| node.server.as_ref().map(|s| (config, s)))
     {
         let ca = config.common_address;
+        let program = this_program();
         println!("Look at it from another terminal (the dispatch side, CA {ca}):");
         println!(
-            "  cargo run --release -p stanice -- iec104 client {} --ca {ca} --gi",
+            "  {program} iec104 client {} --ca {ca} --gi",
             server.local_addr()
         );
-        // A command the top node takes, if it takes any.
-        if let Some(command) = config.commands.first() {
+        // A command that a client on this machine (dispatch's group) may send, if any.
+        if let Some((command, select)) = dispatch_command(config) {
+            let select = if select { " --select" } else { "" };
             println!(
-                "  cargo run --release -p stanice -- iec104 command {} --ca {ca} --ioa {} --type {} --value 1",
+                "  {program} iec104 command {} --ca {ca} --ioa {} --type {} --value ON{select}   # {}",
                 server.local_addr(),
                 command.ioa,
-                command.type_id
+                command.type_id,
+                command.name
             );
         }
+        println!("  {program} points {}", project.folder.display());
         println!(
-            "  cargo run --release -p stanice -- points {}",
-            project.folder.display()
-        );
-        println!(
-            "  cargo run --release -p stanice -- events {} --since 10m",
+            "  {program} events {} --since 10m   (--commands: the command audit, with the reason of a refusal)",
             project.folder.display()
         );
     }
+}
+
+/// How to run this program again from the same place: its name or path as it was
+/// started (`stanice` from PATH, `./stanice`, `target/release/stanice` under `cargo
+/// run`), so that a suggested command works for whoever reads it.
+fn this_program() -> String {
+    std::env::args()
+        .next()
+        .filter(|started| !started.is_empty() && !started.contains(char::is_whitespace))
+        .unwrap_or_else(|| "stanice".to_owned())
+}
+
+/// The first single or double command of `node` that a client on this machine may send
+/// (the group that a client at 127.0.0.1 falls in is not excluded by `from_groups`), and
+/// whether it must be selected first.
+fn dispatch_command(
+    node: &station::config::NodeConfig,
+) -> Option<(&station::config::CommandConfig, bool)> {
+    use iec60870::asdu::TypeId;
+    let server = node.server.as_ref()?;
+    let group = station::config::RedundancyGroup::of_client(
+        &server.redundancy_groups,
+        Some(std::net::IpAddr::from([127, 0, 0, 1])),
+    )
+    .map(|group| group.name.clone())
+    .unwrap_or_default();
+    node.commands
+        .iter()
+        .filter(|command| {
+            matches!(
+                command.type_id,
+                TypeId::C_SC_NA_1 | TypeId::C_DC_NA_1 | TypeId::C_SC_TA_1 | TypeId::C_DC_TA_1
+            )
+        })
+        .find(|command| command.from_groups.is_empty() || command.from_groups.contains(&group))
+        .map(|command| (command, command.select_required))
 }
 
 /// Console words that are neither faults nor hand operations of the plant.

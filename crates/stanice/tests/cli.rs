@@ -91,11 +91,36 @@ fn start_until(command: Command, marker: &str) -> Background {
 
 /// Starts a process and waits until a stdout line contains `marker`; returns the line.
 fn start_until_line(mut command: Command, marker: &str) -> (Background, String) {
-    let mut child = command
+    let child = command
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
         .spawn()
         .unwrap();
+    wait_for_marker(child, marker)
+}
+
+/// Starts a process and waits until a stdout line contains `marker`; its standard error
+/// is collected until it ends (the thread's result).
+fn start_until_with_log(
+    mut command: Command,
+    marker: &str,
+) -> (Background, std::thread::JoinHandle<String>) {
+    let mut child = command
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stderr = child.stderr.take().unwrap();
+    let log = std::thread::spawn(move || {
+        let mut text = String::new();
+        let _ = stderr.read_to_string(&mut text);
+        text
+    });
+    (wait_for_marker(child, marker).0, log)
+}
+
+/// Waits until a stdout line of `child` contains `marker`; returns the line.
+fn wait_for_marker(mut child: Child, marker: &str) -> (Background, String) {
     let stdout = child.stdout.take().unwrap();
     let (sender, receiver) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
@@ -191,6 +216,8 @@ fn iec101_master_reads_a_slave(line_options: &[&str]) {
             "master",
             "--serial",
             &path,
+            "--parity",
+            "none",
             "--address",
             "3",
             "--ca",
@@ -273,6 +300,8 @@ fn iec103_master_replays_the_pcvdew6_session() {
             "master",
             "--serial",
             path,
+            "--parity",
+            "none",
             "--address",
             address,
             "--timeout",
@@ -361,7 +390,8 @@ fn iec103_command_is_refused_in_local_and_executed_in_remote() {
     let master = |extra: &[&str]| {
         let mut master = stanice();
         master
-            .args(["iec103", "master", "--serial", &path, "--gi", "--json"])
+            .args(["iec103", "master", "--serial", &path, "--parity", "none"])
+            .args(["--gi", "--json"])
             .args(extra);
         run_bounded(master, 30)
     };
@@ -416,6 +446,8 @@ fn iec103_master_writes_the_disturbance_record_as_comtrade() {
             "master",
             "--serial",
             &path,
+            "--parity",
+            "none",
             "--gi",
             "--exit-after-records",
             "1",
@@ -1150,20 +1182,22 @@ fn a_relative_project_path_is_resolved_once() {
     assert!(text.contains("RH2_VypnoutQF1"), "{text}");
 }
 
-/// Sends SIGINT as Ctrl-C in a terminal does (std has no signals; `kill` is everywhere).
-fn interrupt(child: &Child) {
+/// Sends a signal: `INT` as Ctrl-C in a terminal does, `TERM` as systemd, container
+/// runtimes and `kill` do (std has no signals; `kill` is everywhere).
+fn signal(child: &Child, name: &str) {
     let status = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
+        .args([&format!("-{name}"), &child.id().to_string()])
         .status()
         .unwrap();
     assert!(status.success());
 }
 
-/// Ctrl-C stops `stanice run` while its console waits for a line on a terminal-like
-/// standard input that stays open, and the events recorded so far reach the store.
-#[test]
-fn ctrl_c_stops_the_station_and_flushes_the_store() {
-    let dir = fresh_dir("ctrl-c");
+/// Stops a running `stanice run` by the signal `name` while its console waits for a line
+/// on a terminal-like standard input that stays open, and checks the shutdown: exit 0, the
+/// events recorded so far in the store with the PLCs' stops (their outputs driven safe),
+/// the SQLite write-ahead log checkpointed away, and nothing logged above info.
+fn stop_by_signal_and_check_the_shutdown(name: &str) {
+    let dir = fresh_dir(&format!("signal-{name}"));
     let project = copy_vsetin(&dir, "proj");
     let port = ports::free_port_range(23);
     let mut run = stanice();
@@ -1172,30 +1206,95 @@ fn ctrl_c_stops_the_station_and_flushes_the_store() {
         .arg(&project)
         .args(["--port-base", &port.to_string(), "--speed", "60"])
         .args(["--hmi", "--hmi-port", "0"]);
-    let mut station = start_until(run, "Ctrl-C stops");
+    let (mut station, log) = start_until_with_log(run, "Ctrl-C stops");
     assert!(station.0.stdin.is_some(), "standard input must stay open");
-    interrupt(&station.0);
+    signal(&station.0, name);
     // Within a second on an idle machine; the bound is generous for a busy one.
-    let deadline = Instant::now() + Duration::from_secs(10);
+    let deadline = Instant::now() + Duration::from_secs(20);
     let status = loop {
         if let Some(status) = station.0.try_wait().unwrap() {
             break status;
         }
         assert!(
             Instant::now() < deadline,
-            "the station did not stop on Ctrl-C"
+            "the station did not stop on SIG{name}"
         );
         std::thread::sleep(Duration::from_millis(20));
     };
-    assert!(status.success(), "{status}");
+    let log = log.join().unwrap();
+    assert!(status.success(), "SIG{name}: {status}\n{log}");
+    assert!(
+        !log.contains("WARN") && !log.contains("ERROR"),
+        "a normal stop logs nothing above info:\n{log}"
+    );
+    for leftover in [
+        "events.sqlite-wal",
+        "events.sqlite-shm",
+        "hmi-events.sqlite-wal",
+    ] {
+        assert!(
+            !project.join(leftover).exists(),
+            "{leftover} left behind after SIG{name}"
+        );
+    }
 
     let mut events = stanice();
-    events.arg("events").arg(&project).args(["--since", "1h"]);
+    events
+        .arg("events")
+        .arg(&project)
+        .args(["--since", "1h", "--limit", "10000"]);
     let text = assert_success(&run_bounded(events, 30));
     assert!(
         text.lines().any(|l| l.contains(",RDRT,")),
-        "the store has no events after Ctrl-C: {text}"
+        "the store has no events after SIG{name}: {text}"
     );
+    assert!(
+        text.lines().any(|l| l.contains("plc-task:")),
+        "the PLCs' stops are not recorded after SIG{name}: {text}"
+    );
+}
+
+/// Ctrl-C stops `stanice run` cleanly.
+#[test]
+fn ctrl_c_stops_the_station_and_flushes_the_store() {
+    stop_by_signal_and_check_the_shutdown("INT");
+}
+
+/// SIGTERM (systemd, containers) stops `stanice run` as Ctrl-C does: outputs safe, store
+/// flushed, exit 0 (it ended the process at once with status 143).
+#[test]
+fn sigterm_stops_the_station_as_ctrl_c_does() {
+    stop_by_signal_and_check_the_shutdown("TERM");
+}
+
+/// A port held by another program: the error names the project, the node, the holder and
+/// a free --port-base, once (it was doubled and without a hint).
+#[test]
+fn a_taken_port_names_the_node_the_holder_and_a_free_port_base() {
+    let dir = fresh_dir("port-taken");
+    let project = copy_vsetin(&dir, "proj");
+    let port = ports::free_port_range(23);
+    let _holder = std::net::TcpListener::bind(("127.0.0.1", port)).unwrap();
+    let mut run = stanice();
+    run.arg("run").arg(&project).args([
+        "--port-base",
+        &port.to_string(),
+        "--duration",
+        "1",
+        "--store",
+        "none",
+    ]);
+    let output = run_bounded(run, 60);
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("node `RDRT`"), "{stderr}");
+    assert!(stderr.contains("project `Vsetín`"), "{stderr}");
+    assert!(
+        stderr.contains(&format!("held by process {}", std::process::id())),
+        "{stderr}"
+    );
+    assert!(stderr.contains("--port-base "), "{stderr}");
+    assert_eq!(stderr.matches("in use").count(), 1, "said once: {stderr}");
 }
 
 /// `run --hmi` with a broken hmi.toml fails at once, naming the file, line and column of
@@ -1319,6 +1418,99 @@ fn run_with_input(mut command: Command, input: &str) -> Output {
 
 /// `stanice user` edits the users file it is given, or the project's; without either it
 /// refuses instead of writing `./users.toml` that no HMI reads.
+/// Runs `args` of the stanice binary on a new pseudo-terminal (its controlling terminal
+/// and standard input, as a person's shell gives it), typing each of `lines` after the
+/// prompt before it appears; returns everything the terminal showed and the exit code.
+fn on_a_terminal(args: &[&str], prompts_and_lines: &[(&str, &str)]) -> (String, i32) {
+    const SCRIPT: &str = r#"
+import os, pty, select, sys, termios, time, json
+program, args, steps = sys.argv[1], json.loads(sys.argv[2]), json.loads(sys.argv[3])
+pid, fd = pty.fork()
+if pid == 0:
+    os.execv(program, [program] + args)
+shown = b""
+def read_until(marker, limit):
+    global shown
+    end = time.time() + limit
+    while (marker is None or marker.encode() not in shown) and time.time() < end:
+        ready, _, _ = select.select([fd], [], [], 0.1)
+        if ready:
+            try:
+                chunk = os.read(fd, 4096)
+            except OSError:
+                return
+            if not chunk:
+                return
+            shown += chunk
+def echo_off(limit):
+    # A program turns echo off after its prompt: type only once it has, as a person
+    # would, so that nothing typed is echoed by the terminal before that.
+    end = time.time() + limit
+    while time.time() < end:
+        if not termios.tcgetattr(fd)[3] & termios.ECHO:
+            return
+        time.sleep(0.01)
+for prompt, line in steps:
+    read_until(prompt, 30)
+    echo_off(5)
+    os.write(fd, (line + "\r").encode())
+read_until(None, 30)
+_, status = os.waitpid(pid, 0)
+sys.stdout.write(shown.decode("utf-8", "replace"))
+sys.exit(os.waitstatus_to_exitcode(status))
+"#;
+    let steps: Vec<[&str; 2]> = prompts_and_lines.iter().map(|(p, l)| [*p, *l]).collect();
+    let mut python = Command::new("python3");
+    python
+        .args(["-c", SCRIPT, env!("CARGO_BIN_EXE_stanice")])
+        .arg(serde_json::to_string(args).unwrap())
+        .arg(serde_json::to_string(&steps).unwrap())
+        .stdin(Stdio::null());
+    let output = run_bounded(python, 90);
+    (
+        String::from_utf8_lossy(&output.stdout).into_owned(),
+        output.status.code().unwrap_or(-1),
+    )
+}
+
+/// On a terminal `stanice user add` asks for the password twice and never echoes it; two
+/// passwords that differ change nothing.
+#[test]
+fn user_add_reads_the_password_twice_without_echo_on_a_terminal() {
+    let dir = fresh_dir("users-tty");
+    let users = dir.join("users.toml");
+    let users_arg = users.to_str().unwrap();
+    let (shown, code) = on_a_terminal(
+        &["user", "add", "carol", "--level", "2", "--users", users_arg],
+        &[
+            ("password: ", "carol-typed-secret"),
+            ("again: ", "carol-typed-secret"),
+        ],
+    );
+    assert_eq!(code, 0, "{shown}");
+    assert!(
+        !shown.contains("carol-typed-secret"),
+        "the password was echoed:\n{shown}"
+    );
+    assert!(shown.contains("user carol added"), "{shown}");
+    let file = std::fs::read_to_string(&users).unwrap();
+    assert!(
+        file.contains("carol") && !file.contains("carol-typed-secret"),
+        "{file}"
+    );
+
+    let (shown, code) = on_a_terminal(
+        &["user", "add", "dave", "--level", "2", "--users", users_arg],
+        &[
+            ("password: ", "one-password"),
+            ("again: ", "another-password"),
+        ],
+    );
+    assert_ne!(code, 0, "{shown}");
+    assert!(shown.contains("differ"), "{shown}");
+    assert!(!std::fs::read_to_string(&users).unwrap().contains("dave"));
+}
+
 #[test]
 fn user_commands_need_a_users_file_or_a_project() {
     let dir = fresh_dir("users");
@@ -1917,6 +2109,8 @@ fn lift_poll_reads_the_simulator_over_a_pseudo_terminal() {
             "poll",
             "--serial",
             &path,
+            "--parity",
+            "none",
             "--json",
             "--duration",
             seconds,

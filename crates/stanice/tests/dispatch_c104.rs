@@ -642,7 +642,11 @@ fn c104_reads_the_com600_gateway_with_the_relay_on_a_pseudo_terminal() {
     let text =
         std::fs::read_to_string(repository_root().join("examples/com600-gateway/station.toml"))
             .unwrap()
-            .replace("simulate = \"ref630\"", &format!("port = \"{path}\""))
+            // A pseudo-terminal keeps no parity: the line is opened 8N1.
+            .replace(
+                "simulate = \"ref630\"",
+                &format!("port = \"{path}\"\nparity = \"none\""),
+            )
             .replace(
                 "store = \"sqlite:events.sqlite\"",
                 "store = \"sqlite::memory:\"",
@@ -731,6 +735,7 @@ redundancy = "single-group"
 name = "rtus"
 protocol = "iec101"
 port = "{path}"
+parity = "none"
 timeout_ms = 500
 retries = 2
 poll_interval_ms = 100

@@ -14,6 +14,7 @@ use tokio::sync::mpsc;
 
 use super::FieldSizes;
 use crate::iec104::render;
+use crate::link_report::{primary_event_text, Reach};
 use crate::serial_line::{LineArgs, PollingArgs};
 
 /// Arguments of `stanice iec101 master`.
@@ -33,7 +34,7 @@ pub(crate) struct MasterArgs {
     /// Send a clock synchronisation (UTC) when an outstation's link comes up.
     #[arg(long)]
     clock_sync: bool,
-    /// Stop after this many seconds (runs until Ctrl-C otherwise).
+    /// Stop after this many seconds (runs until Ctrl-C or SIGTERM otherwise).
     #[arg(long)]
     duration: Option<f64>,
     /// One JSON object per information object instead of analyser lines.
@@ -102,6 +103,8 @@ pub(crate) async fn run(args: MasterArgs) -> anyhow::Result<ExitCode> {
     let (_keep, mut actions) = mpsc::unbounded_channel();
     let mut interrogated = std::collections::HashSet::new();
     let stations = args.address.len();
+    let mut reach = Reach::new(&args.address, args.polling.retries);
+    let line_name = transport.to_string();
     let run = drive(line.stream, &mut master, &mut actions, |master| {
         while let Some(event) = master.poll_event() {
             let lines = match &event {
@@ -126,9 +129,31 @@ pub(crate) async fn run(args: MasterArgs) -> anyhow::Result<ExitCode> {
                         vec![render::analyser_text(&client_event)]
                     }
                 }
-                MasterEvent::Link(event) => link_lines(event, args.json, args.polling.verbose),
+                MasterEvent::Link(event) => {
+                    let mut lines = link_lines(event, args.json, args.polling.verbose);
+                    match event {
+                        PrimaryEvent::LinkUp { address } => reach.link_up(*address),
+                        PrimaryEvent::Timeout {
+                            address,
+                            request,
+                            attempt,
+                        } => lines.extend(reach.timed_out(*address, *request, *attempt)),
+                        _ => {}
+                    }
+                    lines
+                }
                 MasterEvent::Balanced(event) => {
-                    balanced_lines(event, &args.address, args.json, args.polling.verbose)
+                    let address = args.address.first().copied().unwrap_or_default();
+                    let mut lines =
+                        balanced_lines(event, &args.address, args.json, args.polling.verbose);
+                    match event {
+                        BalancedEvent::LinkUp => reach.link_up(address),
+                        BalancedEvent::Timeout { request, attempt } => {
+                            lines.extend(reach.timed_out(address, *request, *attempt));
+                        }
+                        _ => {}
+                    }
+                    lines
                 }
             };
             if !crate::console::print_lines(&lines) {
@@ -145,7 +170,7 @@ pub(crate) async fn run(args: MasterArgs) -> anyhow::Result<ExitCode> {
         () = crate::console::run_for(args.duration) => {}
         () = interrupt.recv() => {}
     }
-    Ok(ExitCode::SUCCESS)
+    Ok(reach.verdict(&line_name))
 }
 
 /// How a link-layer event is shown: link up and down always, the rest with --verbose.
@@ -154,7 +179,14 @@ fn link_lines(event: &PrimaryEvent, json: bool, verbose: bool) -> Vec<String> {
         PrimaryEvent::LinkUp { address } => ("link_up", *address),
         PrimaryEvent::LinkDown { address } => ("link_down", *address),
         PrimaryEvent::Undelivered { address, .. } => ("undelivered", *address),
-        _ => return verbose_line(event, json, verbose),
+        _ if verbose && !json => {
+            return vec![format!(
+                "{} link: {}",
+                render::receipt_time(),
+                primary_event_text(event)
+            )]
+        }
+        _ => return Vec::new(),
     };
     link_news(name, address, json)
 }
@@ -170,16 +202,35 @@ fn balanced_lines(
         BalancedEvent::LinkUp => "link_up",
         BalancedEvent::LinkDown => "link_down",
         BalancedEvent::Undelivered(_) => "undelivered",
-        _ => return verbose_line(event, json, verbose),
+        _ if verbose && !json => {
+            return vec![format!(
+                "{} link: {}",
+                render::receipt_time(),
+                balanced_event_text(event)
+            )]
+        }
+        _ => return Vec::new(),
     };
     link_news(name, address.first().copied().unwrap_or_default(), json)
 }
 
-fn verbose_line(event: &dyn std::fmt::Debug, json: bool, verbose: bool) -> Vec<String> {
-    if verbose && !json {
-        vec![format!("{} link: {event:?}", render::receipt_time())]
-    } else {
-        Vec::new()
+/// A balanced link's event in words (for `--verbose`).
+fn balanced_event_text(event: &BalancedEvent) -> String {
+    use crate::link_report::function_name;
+    match event {
+        BalancedEvent::LinkUp => "link up".to_owned(),
+        BalancedEvent::LinkDown => "link down".to_owned(),
+        BalancedEvent::RemoteReset => "the other end reset its link (it restarted)".to_owned(),
+        BalancedEvent::UserData(asdu) => format!("user data ({} octets)", asdu.len()),
+        BalancedEvent::Confirmed => "user data confirmed".to_owned(),
+        BalancedEvent::Undelivered(asdu) => {
+            format!("user data not delivered ({} octets)", asdu.len())
+        }
+        BalancedEvent::Timeout { request, attempt } => format!(
+            "no answer to {} (attempt {attempt})",
+            function_name(*request)
+        ),
+        BalancedEvent::LineError(error) => format!("line error: {error}"),
     }
 }
 

@@ -14,6 +14,7 @@ use tokio::sync::mpsc;
 
 use super::render;
 use crate::iec104::render::receipt_time;
+use crate::link_report::{primary_event_text, Reach};
 use crate::serial_line::{LineArgs, PollingArgs};
 
 /// A general command of `--command FUN:INF:ON|OFF`.
@@ -126,7 +127,7 @@ pub(crate) struct MasterArgs {
     /// Stop once this many disturbance records are written.
     #[arg(long, value_name = "N", requires = "disturbance_dir")]
     exit_after_records: Option<usize>,
-    /// Stop after this many seconds (runs until Ctrl-C otherwise).
+    /// Stop after this many seconds (runs until Ctrl-C or SIGTERM otherwise).
     #[arg(long)]
     duration: Option<f64>,
     /// Stop when the general interrogation has ended at every device (with --gi).
@@ -153,6 +154,9 @@ struct Progress {
     telegrams: VecDeque<Telegram>,
     telegram_open: bool,
     records: usize,
+    /// Which devices answered (not kept for single telegrams, which a device may leave
+    /// unanswered on purpose).
+    reach: Option<Reach>,
 }
 
 pub(crate) async fn run(args: MasterArgs) -> anyhow::Result<ExitCode> {
@@ -165,6 +169,7 @@ pub(crate) async fn run(args: MasterArgs) -> anyhow::Result<ExitCode> {
         automatic: !manual,
         ..polling
     };
+    let config_retries = config.retries;
     if args.address.is_empty() {
         bail!("--address: name at least one device");
     }
@@ -201,6 +206,10 @@ pub(crate) async fn run(args: MasterArgs) -> anyhow::Result<ExitCode> {
         telegrams: args.telegrams.iter().copied().collect(),
         telegram_open: false,
         records: 0,
+        reach: (!manual).then(|| {
+            let addresses: Vec<u16> = args.address.iter().map(|&a| u16::from(a)).collect();
+            Reach::new(&addresses, config_retries)
+        }),
     };
     let mut interrupt = crate::interrupt::Interrupt::listen();
     let (_keep, mut actions) = mpsc::unbounded_channel();
@@ -211,6 +220,12 @@ pub(crate) async fn run(args: MasterArgs) -> anyhow::Result<ExitCode> {
         result = run => { result?; }
         () = crate::console::run_for(args.duration) => {}
         () = interrupt.recv() => {}
+    }
+    if let Some(reach) = &progress.reach {
+        let verdict = reach.verdict(&transport.to_string());
+        if verdict != ExitCode::SUCCESS {
+            return Ok(verdict);
+        }
     }
     let failed = progress.results.iter().any(|positive| !positive);
     Ok(if failed {
@@ -281,7 +296,21 @@ fn observe(
                 progress.records += 1;
                 disturbance_lines(*address, record, args)
             }
-            MasterEvent::Link(event) => link_lines(event, args, progress),
+            MasterEvent::Link(event) => {
+                let mut lines = link_lines(event, args, progress);
+                if let Some(reach) = &mut progress.reach {
+                    match event {
+                        PrimaryEvent::LinkUp { address } => reach.link_up(*address),
+                        PrimaryEvent::Timeout {
+                            address,
+                            request,
+                            attempt,
+                        } => lines.extend(reach.timed_out(*address, *request, *attempt)),
+                        _ => {}
+                    }
+                }
+                lines
+            }
         };
         if !crate::console::print_lines(&lines) {
             return ControlFlow::Break(());
@@ -524,7 +553,11 @@ fn link_lines(event: &PrimaryEvent, args: &MasterArgs, progress: &mut Progress) 
             vec![format!("{} line error: {error}", receipt_time())]
         }
         _ if args.polling.verbose && !args.json => {
-            vec![format!("{} link: {event:?}", receipt_time())]
+            vec![format!(
+                "{} link: {}",
+                receipt_time(),
+                primary_event_text(event)
+            )]
         }
         _ => Vec::new(),
     }

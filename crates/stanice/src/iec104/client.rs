@@ -24,7 +24,7 @@ pub(crate) struct ClientArgs {
     /// Send a clock synchronisation (UTC) after the start of data transfer.
     #[arg(long)]
     clock_sync: bool,
-    /// Stop after this many seconds (runs until Ctrl-C otherwise).
+    /// Stop after this many seconds (runs until Ctrl-C or SIGTERM otherwise).
     #[arg(long)]
     duration: Option<f64>,
     /// One JSON object per information object instead of analyser lines.
@@ -41,11 +41,10 @@ pub(crate) struct ClientArgs {
 }
 
 pub(crate) async fn run(args: ClientArgs) -> anyhow::Result<ExitCode> {
-    let addresses: Vec<String> = args
-        .address
-        .split(',')
-        .map(|address| address.trim().to_owned())
-        .collect();
+    let mut addresses = Vec::new();
+    for address in args.address.split(',') {
+        addresses.push(super::server_address(address).await?);
+    }
     let mut config = ClientConfig::new(
         addresses.first().cloned().unwrap_or_default(),
         CommonAddress::new(args.ca),
@@ -55,6 +54,10 @@ pub(crate) async fn run(args: ClientArgs) -> anyhow::Result<ExitCode> {
     config.interrogate_on_start = args.gi;
     config.clock_sync_on_start = args.clock_sync;
     config.reconnect = !args.no_reconnect;
+    // A connection another controlling station has put on standby (its redundancy group
+    // started elsewhere) gets nothing: after 10 quiet seconds the client probes, and says
+    // so when the station does not answer, rather than sit silent.
+    config.standby_probe = Some(Duration::from_secs(10));
     if let Some(pem) = args.link.tls()? {
         let host = config
             .addresses
@@ -75,6 +78,9 @@ pub(crate) async fn run(args: ClientArgs) -> anyhow::Result<ExitCode> {
         tokio::time::Instant::now() + Duration::from_secs_f64(seconds.clamp(0.0, 1e9))
     });
     let mut exit = ExitCode::SUCCESS;
+    // Whether the server was ever reached, and the last reason it was not.
+    let mut reached = false;
+    let mut last_failure = None;
     loop {
         let event = tokio::select! {
             event = events.recv() => event,
@@ -86,6 +92,21 @@ pub(crate) async fn run(args: ClientArgs) -> anyhow::Result<ExitCode> {
             if asdu.type_id == iec60870::asdu::TypeId::C_IC_NA_1
                 && asdu.cot.cause == iec60870::asdu::Cause::ACTIVATION_TERMINATION);
         let lost = matches!(event, ClientEvent::Disconnected { .. });
+        match &event {
+            ClientEvent::Connected { .. } => reached = true,
+            ClientEvent::Disconnected { reason } => last_failure = Some(reason.clone()),
+            _ => {}
+        }
+        // A refused interrogation (unknown common address, cause 46, say) never terminates:
+        // say so, and with --exit-after-gi end with an error instead of waiting forever.
+        let gi_refused = matches!(&event, ClientEvent::Asdu(asdu)
+            if asdu.type_id == iec60870::asdu::TypeId::C_IC_NA_1 && asdu.cot.negative);
+        if let (true, ClientEvent::Asdu(asdu)) = (gi_refused, &event) {
+            eprintln!(
+                "the station refused the general interrogation of CA {} (negative confirmation, cause {})",
+                asdu.common_address, asdu.cot.cause
+            );
+        }
         let lines = if args.json {
             render::json_lines(&event)
         } else {
@@ -98,12 +119,24 @@ pub(crate) async fn run(args: ClientArgs) -> anyhow::Result<ExitCode> {
         if args.exit_after_gi && gi_terminated {
             break;
         }
+        if args.exit_after_gi && gi_refused {
+            exit = ExitCode::from(1);
+            break;
+        }
         if lost && args.no_reconnect {
             exit = ExitCode::from(1);
             break;
         }
     }
     client.close().await;
+    if !reached {
+        eprintln!(
+            "never reached {}: {}",
+            args.address,
+            last_failure.as_deref().unwrap_or("no connection was made")
+        );
+        return Ok(ExitCode::from(2));
+    }
     Ok(exit)
 }
 

@@ -31,8 +31,10 @@ pub(crate) struct CommandArgs {
     /// C_BO_NA_1 or a time-tagged form (C_SC_TA_1, ...).
     #[arg(long = "type")]
     type_id: TypeId,
-    /// Value: 0/1 or ON/OFF for single and double commands, LOWER/HIGHER for regulating
-    /// steps, a number for set-points, a number or 0x... for bit strings.
+    /// Value: ON/OFF for single and double commands (a single command also takes 1/0; a
+    /// double command also takes its DCS number, 2 = ON, 1 = OFF, and refuses 0 and 3,
+    /// which the standard does not permit), LOWER/HIGHER for regulating steps, a number
+    /// for set-points, a number or 0x... for bit strings.
     #[arg(long, allow_hyphen_values = true)]
     value: String,
     /// Select before operate: send a select, and on its confirmation the execute.
@@ -45,6 +47,11 @@ pub(crate) struct CommandArgs {
     /// Seconds to wait for the connection, the confirmation and the termination.
     #[arg(long, default_value_t = 10.0)]
     timeout: f64,
+    /// Also print every other ASDU that arrives meanwhile (spontaneous data, the
+    /// interrogation a server may send at start); by default only the command's
+    /// confirmation, termination and return information are shown.
+    #[arg(long)]
+    verbose: bool,
     #[command(flatten)]
     link: LinkOptions,
 }
@@ -56,7 +63,8 @@ pub(crate) async fn run(args: CommandArgs) -> anyhow::Result<ExitCode> {
     let ioa = Ioa::try_new(args.ioa).map_err(|error| anyhow::anyhow!("--ioa: {error}"))?;
     let execute = parse_command(args.type_id, &args.value, false, args.qualifier)?;
     let timeout = Duration::from_secs_f64(args.timeout.clamp(0.1, 3600.0));
-    let mut config = ClientConfig::new(args.address.clone(), CommonAddress::new(args.ca));
+    let address = super::server_address(&args.address).await?;
+    let mut config = ClientConfig::new(address, CommonAddress::new(args.ca));
     config.apci = args.link.apci()?;
     config.reconnect = false;
     config.command_timeout = timeout;
@@ -104,13 +112,17 @@ pub(crate) async fn run(args: CommandArgs) -> anyhow::Result<ExitCode> {
     }
     steps.push(("execute", execute));
     let mut code = ExitCode::SUCCESS;
+    let shown = Shown {
+        type_id: args.type_id,
+        ioa,
+        verbose: args.verbose,
+    };
     for (step, element) in steps {
         println!("-> {step} {} ioa={} {}", args.type_id, ioa, element);
         let outcome = exchange(
             &client,
             &mut events,
-            args.type_id,
-            ioa,
+            shown,
             element,
             command_time(args.type_id),
         )
@@ -130,7 +142,7 @@ pub(crate) async fn run(args: CommandArgs) -> anyhow::Result<ExitCode> {
         tokio::select! {
             () = &mut linger => break,
             event = events.recv() => match event {
-                Some(event) => print_received(&event),
+                Some(event) => print_received(&event, shown),
                 None => break,
             },
         }
@@ -145,11 +157,11 @@ pub(crate) async fn run(args: CommandArgs) -> anyhow::Result<ExitCode> {
 async fn exchange(
     client: &iec60870::cs104::client::ClientHandle,
     events: &mut tokio::sync::mpsc::Receiver<ClientEvent>,
-    type_id: TypeId,
-    ioa: Ioa,
+    shown: Shown,
     element: iec60870::asdu::Element,
     time: Option<iec60870::time::Cp56Time2a>,
 ) -> Result<RequestOutcome, ClientError> {
+    let Shown { type_id, ioa, .. } = shown;
     let mut answers_printed = 0;
     let answers = |event: &ClientEvent| match event {
         ClientEvent::Asdu(asdu) => {
@@ -165,7 +177,7 @@ async fn exchange(
             event = events.recv() => match event {
                 Some(event) => {
                     answers_printed += usize::from(answers(&event));
-                    print_received(&event);
+                    print_received(&event, shown);
                 }
                 None => break (&mut command).await,
             },
@@ -179,7 +191,7 @@ async fn exchange(
                 match events.recv().await {
                     Some(event) => {
                         answers_printed += usize::from(answers(&event));
-                        print_received(&event);
+                        print_received(&event, shown);
                     }
                     None => break,
                 }
@@ -190,9 +202,33 @@ async fn exchange(
     outcome
 }
 
+/// What of the received traffic is printed.
+#[derive(Debug, Clone, Copy)]
+struct Shown {
+    /// The command's type and address: its confirmation and termination.
+    type_id: TypeId,
+    ioa: Ioa,
+    /// Everything else too.
+    verbose: bool,
+}
+
+impl Shown {
+    /// The command's own answers and return information (causes 11 and 12); with
+    /// `--verbose` every ASDU.
+    fn shows(&self, asdu: &iec60870::asdu::Asdu) -> bool {
+        use iec60870::asdu::Cause;
+        self.verbose
+            || (asdu.type_id == self.type_id && asdu.objects.iter().any(|o| o.ioa == self.ioa))
+            || matches!(asdu.cot.cause, Cause::RETURN_REMOTE | Cause::RETURN_LOCAL)
+    }
+}
+
 /// One received event, as the protocol analyser prints it (with its arrival time).
-fn print_received(event: &ClientEvent) {
+fn print_received(event: &ClientEvent, shown: Shown) {
     if let ClientEvent::Asdu(asdu) = event {
+        if !shown.shows(asdu) {
+            return;
+        }
         let arrow = if asdu.type_id.is_command() {
             "<-"
         } else {
@@ -223,6 +259,10 @@ fn report(step: &str, outcome: &Result<RequestOutcome, ClientError>) -> bool {
                 true
             } else {
                 println!("{step}: NEGATIVE confirmation (cause {})", outcome.cause);
+                eprintln!(
+                    "the station refused the command; a Stanice station records why in its \
+                     command audit: stanice events PROJECT --commands"
+                );
                 false
             }
         }

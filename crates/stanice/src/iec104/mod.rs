@@ -86,6 +86,49 @@ impl LinkOptions {
     }
 }
 
+/// The IEC 104 port that a server address without one gets (IEC 60870-5-104, 5.1).
+const IEC104_PORT: u16 = 2404;
+
+/// A server address as the command line gives it, checked before any connection is tried:
+/// `HOST:PORT`, or `HOST` alone for the standard port 2404 (`localhost`, `[::1]`). A host
+/// name that does not resolve is an error naming it, not a client that retries forever.
+pub(crate) async fn server_address(text: &str) -> anyhow::Result<String> {
+    let text = text.trim();
+    let with_port = if text.parse::<std::net::SocketAddr>().is_ok() {
+        text.to_owned()
+    } else if let Ok(ip) = text.trim_matches(['[', ']']).parse::<std::net::IpAddr>() {
+        std::net::SocketAddr::new(ip, IEC104_PORT).to_string()
+    } else {
+        match text.rsplit_once(':') {
+            Some((host, port)) => {
+                if host.is_empty() {
+                    anyhow::bail!(
+                        "{text:?}: no host before the port (HOST:PORT, e.g. 127.0.0.1:2404)"
+                    );
+                }
+                port.parse::<u16>().map_err(|_| {
+                    anyhow::anyhow!(
+                        "{text:?}: {port:?} is no port number (HOST:PORT, e.g. 127.0.0.1:2404)"
+                    )
+                })?;
+                text.to_owned()
+            }
+            None if text.is_empty() => {
+                anyhow::bail!("no server address given (HOST:PORT, e.g. 127.0.0.1:2404)")
+            }
+            None => format!("{text}:{IEC104_PORT}"),
+        }
+    };
+    let found = match tokio::net::lookup_host(with_port.clone()).await {
+        Ok(found) => found.count(),
+        Err(error) => anyhow::bail!("{text:?}: cannot resolve the host: {error}"),
+    };
+    if found == 0 {
+        anyhow::bail!("{text:?}: the host name has no address");
+    }
+    Ok(with_port)
+}
+
 /// The `stanice iec104` subcommands.
 #[derive(Subcommand)]
 pub(crate) enum Iec104Command {

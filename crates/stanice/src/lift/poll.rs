@@ -9,7 +9,7 @@ use std::time::Duration;
 use anyhow::Context as _;
 use clap::Args;
 use devices::ekm66::codec::{FaultRecord, Status};
-use devices::ekm66::io::run_poller;
+use devices::ekm66::io::{run_poller, Transport};
 use devices::ekm66::poller::{ArchiveCursor, CommStatus, Event, IndexBase, Poller, PollerConfig};
 use devices::ekm66::tables::{fault_text, status_text};
 use serde_json::json;
@@ -28,7 +28,7 @@ pub(crate) struct PollArgs {
     /// One JSON object a line: kind (status, counters, fault, comm) and its fields.
     #[arg(long)]
     json: bool,
-    /// Stop after this many seconds (runs until Ctrl-C otherwise).
+    /// Stop after this many seconds (runs until Ctrl-C or SIGTERM otherwise).
     #[arg(long)]
     duration: Option<f64>,
     /// Milliseconds from one poll cycle (status, counters when due, new faults) to the
@@ -88,17 +88,29 @@ pub(crate) async fn run(args: PollArgs) -> anyhow::Result<ExitCode> {
     let archive = args.archive.clone();
     // A line that closes (a converter's TCP connection dropped, an adapter unplugged) is
     // opened again, the cursor carried over, until the duration ends or Ctrl-C.
+    // Why the line could not be opened, until it was once.
+    let mut never_opened: Option<String> = Some("the line was not opened".to_owned());
     let poll_forever = async {
         let mut cursor = cursor;
         loop {
             let line = match args.line.open(&transport).await {
                 Ok(line) => line,
                 Err(error) => {
-                    eprintln!("{error}; trying again in {REOPEN_AFTER:?}");
+                    // A serial device that cannot be opened at the start (missing, no
+                    // permission, held by another program) is a wrong argument, not a
+                    // line to wait for: say the operating system's reason and stop.
+                    if never_opened.is_some() && matches!(transport, Transport::Serial { .. }) {
+                        return Err(error);
+                    }
+                    eprintln!("{error:#}; trying again in {}", seconds(REOPEN_AFTER));
+                    if never_opened.is_some() {
+                        never_opened = Some(format!("{error:#}"));
+                    }
                     tokio::time::sleep(REOPEN_AFTER).await;
                     continue;
                 }
             };
+            never_opened = None;
             if !args.json {
                 println!("polling the EKM66 on {} ({})", line.peer, config.line);
             }
@@ -134,12 +146,14 @@ pub(crate) async fn run(args: PollArgs) -> anyhow::Result<ExitCode> {
             }
             match end {
                 Ok(devices::ekm66::io::DriveEnd::Stopped) => return Ok(()),
-                Ok(devices::ekm66::io::DriveEnd::Closed) => {
-                    eprintln!("the line closed; opening it again in {REOPEN_AFTER:?}")
-                }
-                Err(error) => {
-                    eprintln!("the line failed: {error}; opening it again in {REOPEN_AFTER:?}")
-                }
+                Ok(devices::ekm66::io::DriveEnd::Closed) => eprintln!(
+                    "the line closed; opening it again in {}",
+                    seconds(REOPEN_AFTER)
+                ),
+                Err(error) => eprintln!(
+                    "the line failed: {error}; opening it again in {}",
+                    seconds(REOPEN_AFTER)
+                ),
             }
             tokio::time::sleep(REOPEN_AFTER).await;
         }
@@ -150,7 +164,23 @@ pub(crate) async fn run(args: PollArgs) -> anyhow::Result<ExitCode> {
         () = crate::console::run_for(args.duration) => {}
         () = interrupt.recv() => {}
     }
+    if let Some(reason) = never_opened {
+        eprintln!("never reached the board: {reason}");
+        return Ok(ExitCode::from(crate::link_report::NOT_REACHED));
+    }
+    if printer.last_status.is_none() {
+        eprintln!(
+            "the board never answered on {transport} (is it powered, and the line's speed, \
+             parity and coding its own?)"
+        );
+        return Ok(ExitCode::from(crate::link_report::NOT_REACHED));
+    }
     Ok(ExitCode::SUCCESS)
+}
+
+/// A pause as people write it (`2 s`).
+fn seconds(pause: Duration) -> String {
+    format!("{} s", pause.as_secs_f64())
 }
 
 /// The pause before a closed line is opened again.
