@@ -171,7 +171,8 @@ pub struct Hmi {
     pub verifier: Arc<auth::Verifier>,
     shutdown: tokio::sync::watch::Sender<bool>,
     recorder: Recorder,
-    /// Its own store and the station's archive, closed at shutdown.
+    /// The station's archive (read only), closed at shutdown after the recorder has
+    /// closed the HMI's own store.
     stores: Vec<Arc<dyn EventStore>>,
 }
 
@@ -256,8 +257,7 @@ impl Hmi {
         ));
         // Closed at shutdown: the archive is a second set of connections to the station's
         // own database, whose write-ahead log is removed only when the last one closes.
-        let stores: Vec<Arc<dyn EventStore>> =
-            state.store.iter().chain(&state.archive).cloned().collect();
+        let stores: Vec<Arc<dyn EventStore>> = state.archive.iter().cloned().collect();
         let app = web::router(state).into_make_service_with_connect_info::<tls::Peer>();
         let mut stopped = stop;
         let until_stopped = async move {
@@ -306,7 +306,8 @@ impl Hmi {
     pub async fn shutdown(self) {
         let _ = self.shutdown.send(true);
         self.station.set_link(false);
-        self.recorder.flush().await;
+        // The HMI's own store closes with its recorder; the station's archive after it.
+        self.recorder.close().await;
         for store in &self.stores {
             store.close().await.ok();
         }

@@ -27,6 +27,8 @@ enum Record {
     /// A command, and who waits for its commit (told whether it was stored).
     Command(CommandRecord, Option<oneshot::Sender<bool>>),
     Flush(oneshot::Sender<()>),
+    /// Write what is queued, close the store and stop taking records.
+    Close(oneshot::Sender<()>),
 }
 
 /// Hands records to the store writer; cheap to clone. Without a store it counts and drops.
@@ -164,6 +166,17 @@ impl Recorder {
         }
     }
 
+    /// At shutdown: writes what is queued, closes the store ([`EventStore::close`]) and
+    /// stops; records handed over afterwards (a last value from a connection still
+    /// closing) are dropped without a word, as they come after the stop was asked for.
+    pub async fn close(&self) {
+        let Some(sender) = &self.sender else { return };
+        let (done, wait) = oneshot::channel();
+        if sender.send(Record::Close(done)).await.is_ok() {
+            let _ = wait.await;
+        }
+    }
+
     /// (events recorded, commands recorded, records the store refused).
     pub fn counts(&self) -> (u64, u64, u64) {
         (
@@ -207,6 +220,15 @@ async fn write_loop(
                 Record::Flush(done) => {
                     write_events(&*store, &mut events, &counters).await;
                     let _ = done.send(());
+                }
+                Record::Close(done) => {
+                    write_events(&*store, &mut events, &counters).await;
+                    if let Err(error) = store.close().await {
+                        tracing::warn!(%error, "the store did not close cleanly");
+                    }
+                    let _ = done.send(());
+                    // The receiver goes: later records find the channel closed.
+                    return;
                 }
             }
         }

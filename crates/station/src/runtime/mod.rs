@@ -834,10 +834,8 @@ impl Runtime {
         if let Some(retention) = self.retention.take() {
             retention.stop();
         }
-        self.recorder.flush().await;
-        if let Some(store) = &self.store {
-            store.close().await.ok();
-        }
+        // Writes what is queued and closes the store (the SQLite write-ahead log merged).
+        self.recorder.close().await;
     }
 }
 
