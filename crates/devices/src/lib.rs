@@ -3,7 +3,7 @@
 //! # Layout
 //!
 //! - [`ekm66`]: the Rekoba EKM66 lift controller board's RS-232 protocol
-//!   (`../shared/spec/elevator-ekm66.md`), read-only: the lift is never controlled.
+//!   (the lift thesis, docs/THESES.md; docs/LIFT.md), read-only: the lift is never controlled.
 //!   - [`ekm66::codec`]: the three queries and the four replies, the FT1.2-style
 //!     frame (`68 L L 68 … CS 16`) and a deframer that cuts frames by their length
 //!     octet, never by searching for 0x16, resynchronising on the next 0x68. The reply

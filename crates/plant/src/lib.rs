@@ -7,8 +7,8 @@
 //! the project's `plant = "..."` key in [`registry`] and knows no plant by name; adding
 //! one (the lab models, the ball sorter, a lift) is a module here and a registry entry.
 //!
-//! The first plant, [`vsetin`], is the Vsetín railway station (`shared/spec/railway-station.md` §2, §4,
-//! §5, §6): its 6 kV feeds, transformers, distribution boards, diesel generator set,
+//! The first plant, [`vsetin`], is the Vsetín railway station (the railway-station thesis,
+//! docs/THESES.md: the station's supply, lighting, boards and dispatch): its 6 kV feeds, transformers, distribution boards, diesel generator set,
 //! lighting towers and their contacts, relays and meters. The transfer logic (RDA), the
 //! breaker command logic (RH2/RZZ) and the lighting function block are *not* here: they
 //! run as Structured Text in the soft PLC, read this plant's inputs and drive its outputs

@@ -6,7 +6,7 @@ lighting boards and the repeated board points. Edit the tables below and run
 
     python3 examples/vsetin/tools/generate_station_toml.py
 
-IOA plan (spec shared/spec/railway-station.md sections 5-7; where it is silent, ours):
+IOA plan (the railway-station thesis's point lists, docs/THESES.md; where it is silent, ours):
   RDRT own points      1-10 SP of module P9, 21 HMI local, 24/25 module faults,
                        26-29 switchroom doors, 32/33 links RH/RZS, 38-41 upper links
                        ED/MŘS/HMI/service, 50-62 links ROV01..OR;
@@ -99,14 +99,14 @@ def link(name, target, status_point=None, republish=None):
     table("[[node.link]]", **fields)
 
 
-emit("""# The Vsetín railway station (shared/spec/railway-station.md): power boards RH2, RZZ and
+emit("""# The Vsetín railway station (the railway-station thesis, docs/THESES.md): power boards RH2, RZZ and
 # RDA (LOGO!), the concentrators RH1.1 and RZS1 (S7-1500), twelve lighting-tower boards
 # ROV01..ROV12 (S7-1200) and the OŘ-area lighting (S7-1500), and the central PLC RDRT
 # (Tecomat TC700) serving the dispatch systems. Every node is an IEC 104 server; each
 # upper node concentrates the ones below over IEC 104 links on loopback.
 #
 # Written by tools/generate_station_toml.py (its header has the IOA and port plan); the
-# format is documented in crates/station/src/config.rs.
+# format is documented in crates/station/src/config/mod.rs.
 """)
 table("station", name="Vsetín", time_zone="Europe/Prague", store="sqlite:events.sqlite",
       retention_days=60, port_base=2404, bind="127.0.0.1", plant="vsetin")
