@@ -193,6 +193,174 @@ fn iec101_master_reads_a_slave_over_a_pseudo_terminal() {
     iec101_master_reads_a_slave(&["--ioa-size", "3"]);
 }
 
+/// Tools that never reach their peer, or whose request is refused, end non-zero with a
+/// plain message (they printed a banner and exited 0, or hung, or retried forever).
+#[test]
+fn tools_that_never_reach_their_peer_say_so_and_fail() {
+    // An IEC 101 master asking for station 4 of a line whose slave is 3.
+    let points = write_points(POINTS);
+    let mut slave = stanice();
+    slave
+        .args(["iec101", "slave", "--pty", "--address", "3", "--ca", "7"])
+        .arg("--points")
+        .arg(&points);
+    let (_slave, line) = start_until_line(slave, "pty: ");
+    let path = line.trim_start_matches("pty: ").trim().to_owned();
+    let mut master = stanice();
+    master
+        .args(["iec101", "master", "--serial", &path, "--parity", "none"])
+        .args([
+            "--address",
+            "4",
+            "--ca",
+            "7",
+            "--timeout",
+            "100",
+            "--duration",
+            "3",
+        ]);
+    let output = run_bounded(master, 60);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(output.status.code(), Some(2), "{stdout}\n{stderr}");
+    assert!(stdout.contains("station 4 does not answer"), "{stdout}");
+    assert!(stderr.contains("never reached station(s) 4"), "{stderr}");
+    assert!(
+        !stdout.contains('{') && !stderr.contains("Some("),
+        "{stdout}\n{stderr}"
+    );
+
+    // An interrogation of a common address the outstation does not have: refused, said,
+    // and --exit-after-gi ends with exit 1 instead of waiting for a termination.
+    let port = free_port();
+    let _outstation = outstation(port, &[]);
+    let mut client = stanice();
+    client.args(["iec104", "client", &format!("127.0.0.1:{port}")]);
+    client.args(["--gi", "--ca", "5", "--exit-after-gi"]);
+    let output = run_bounded(client, 30);
+    assert_eq!(output.status.code(), Some(1), "{output:?}");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("refused the general interrogation"),
+        "{stderr}"
+    );
+
+    // A host name that does not resolve: said at once, no retrying.
+    let mut client = stanice();
+    client.args([
+        "iec104",
+        "client",
+        "no-such-host.invalid:2404",
+        "--duration",
+        "20",
+    ]);
+    let output = run_bounded(client, 30);
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("cannot resolve"), "{stderr}");
+
+    // A server that is not there: the client ends with exit 2 naming the reason.
+    let mut client = stanice();
+    client.args([
+        "iec104",
+        "client",
+        &format!("127.0.0.1:{}", free_port()),
+        "--duration",
+        "1",
+    ]);
+    let output = run_bounded(client, 30);
+    assert_eq!(output.status.code(), Some(2), "{output:?}");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("never reached"), "{stderr}");
+
+    // A serial device that does not exist: the operating system's reason, no retrying.
+    let mut poll = stanice();
+    poll.args([
+        "lift",
+        "poll",
+        "--serial",
+        "/dev/stanice-no-such-port",
+        "--duration",
+        "20",
+    ]);
+    let output = run_bounded(poll, 30);
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("No such file or directory"), "{stderr}");
+}
+
+/// `stanice events`: a project that never ran is an error and gets no empty store, a
+/// reader that stops early (`| head`) ends it quietly, and a cut at --limit is said.
+#[test]
+fn events_refuses_a_project_that_never_ran_and_survives_a_closed_pipe() {
+    let dir = fresh_dir("events-cli");
+    let project = copy_vsetin(&dir, "proj");
+    let mut events = stanice();
+    events.arg("events").arg(&project);
+    let output = run_bounded(events, 30);
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("has not run yet"), "{stderr}");
+    assert!(
+        !project.join("events.sqlite").exists(),
+        "an empty store was created"
+    );
+
+    let port = ports::free_port_range(23);
+    let mut run = stanice();
+    run.arg("run").arg(&project).args([
+        "--port-base",
+        &port.to_string(),
+        "--speed",
+        "10",
+        "--duration",
+        "2",
+    ]);
+    assert_success(&run_bounded(run, 60));
+
+    // Three lines through a pipe that closes: no panic, exit 0.
+    let mut events = stanice();
+    events
+        .arg("events")
+        .arg(&project)
+        .args(["--limit", "10000"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
+    let mut child = events.spawn().unwrap();
+    let mut stdout = BufReader::new(child.stdout.take().unwrap());
+    for _ in 0..3 {
+        let mut line = String::new();
+        stdout.read_line(&mut line).unwrap();
+    }
+    drop(stdout);
+    let output = wait_bounded(child, 30);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+
+    // A cut at the limit is said; times carry the station's offset.
+    let mut events = stanice();
+    events.arg("events").arg(&project).args(["--limit", "5"]);
+    let output = run_bounded(events, 30);
+    let stdout = assert_success(&output);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("only the newest 5 records"), "{stderr}");
+    let first = stdout.lines().nth(1).unwrap();
+    let time = first.split(',').next().unwrap();
+    assert!(
+        time.ends_with("+01:00") || time.ends_with("+02:00"),
+        "Europe/Prague's offset: {first}"
+    );
+    let mut events = stanice();
+    events
+        .arg("events")
+        .arg(&project)
+        .args(["--limit", "2", "--json", "--time-zone", "UTC"]);
+    let stdout = assert_success(&run_bounded(events, 30));
+    let record: Value = serde_json::from_str(stdout.lines().next().unwrap()).unwrap();
+    assert!(record["time"].as_str().unwrap().ends_with('Z'), "{record}");
+}
+
 /// The same on a balanced point-to-point link without link address.
 #[test]
 fn iec101_balanced_master_reads_a_slave_over_a_pseudo_terminal() {
@@ -2123,9 +2291,9 @@ fn lift_poll_reads_the_simulator_over_a_pseudo_terminal() {
         ])
         .arg("--archive")
         .arg(&archive);
-        lift_lines(&assert_success(&run_bounded(poll, 30)))
+        run_bounded(poll, 30)
     };
-    let lines = poll("3");
+    let lines = lift_lines(&assert_success(&poll("3")));
     let kind = |lines: &[Value], kind: &str| -> Vec<Value> {
         lines
             .iter()
@@ -2159,7 +2327,7 @@ fn lift_poll_reads_the_simulator_over_a_pseudo_terminal() {
     // A second monitor run with the stored cursor: only the new fault.
     writeln!(console, "fault 11").unwrap();
     writeln!(console, "status auto").unwrap();
-    let lines = poll("2");
+    let lines = lift_lines(&assert_success(&poll("2")));
     let faults = kind(&lines, "fault");
     assert_eq!(faults.len(), 1, "{lines:?}");
     assert_eq!(faults[0]["fault_code"], 0x11);
@@ -2171,9 +2339,14 @@ fn lift_poll_reads_the_simulator_over_a_pseudo_terminal() {
         "{lines:?}"
     );
 
-    // The board goes silent: communication lost.
+    // The board goes silent: communication lost, and a monitor that never heard it ends
+    // with exit code 2 saying so.
     writeln!(console, "silent").unwrap();
-    let lines = poll("3");
+    let output = poll("3");
+    assert_eq!(output.status.code(), Some(2), "{output:?}");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("the board never answered"), "{stderr}");
+    let lines = lift_lines(&String::from_utf8_lossy(&output.stdout));
     let comm: Vec<Value> = kind(&lines, "comm");
     assert_eq!(comm.last().unwrap()["status"], "lost", "{lines:?}");
     assert!(kind(&lines, "fault").is_empty());
