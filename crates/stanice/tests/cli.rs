@@ -2181,6 +2181,72 @@ fn idle_clients_do_not_lock_dispatch_out_of_the_station() {
 
 /// The `--help` of `stanice` and of every subcommand (found by walking the Commands lists
 /// of the help texts themselves) ends with an Examples section (issue 11).
+/// Idle clients from other addresses fill the demo's catch-all `dispatch` group (70
+/// connections that never start data transfer); a fresh dispatch client still gets its
+/// general interrogation at once: a newcomer evicts the longest-idle connection that never
+/// started (it got no GI within 20 s, as the idle ones held the group's slots until their
+/// start timeout).
+#[test]
+fn idle_clients_from_other_addresses_do_not_lock_out_a_fresh_dispatch_client() {
+    use iec60870::asdu::CommonAddress;
+    use iec60870::cs104::client::{spawn_client, ClientConfig, ClientEvent};
+    let port = ports::free_port_range(23);
+    let mut run = stanice();
+    run.stdin(Stdio::piped()).arg("run").arg(vsetin()).args([
+        "--port-base",
+        &port.to_string(),
+        "--store",
+        "none",
+    ]);
+    let _station = start_until(run, "Ctrl-C stops");
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .unwrap();
+    let elapsed = runtime.block_on(async {
+        let server: std::net::SocketAddr = format!("127.0.0.1:{port}").parse().unwrap();
+        let mut idle = Vec::new();
+        for last in 1..=70u8 {
+            let socket = tokio::net::TcpSocket::new_v4().unwrap();
+            socket
+                .bind(std::net::SocketAddr::from(([127, 0, 1, last], 0)))
+                .unwrap();
+            if let Ok(stream) = socket.connect(server).await {
+                idle.push(stream);
+            }
+        }
+        assert!(idle.len() >= 32, "{} idle connections", idle.len());
+        // Let the station take them all in (or refuse them) before dispatch comes.
+        tokio::time::sleep(Duration::from_millis(300)).await;
+        let started = Instant::now();
+        let mut config = ClientConfig::new(server.to_string(), CommonAddress::new(1));
+        config.interrogate_on_start = true;
+        config.reconnect = false;
+        let (_client, mut events) = spawn_client(config);
+        let objects = tokio::time::timeout(Duration::from_secs(10), async {
+            let mut objects = 0;
+            while let Some(event) = events.recv().await {
+                match event {
+                    ClientEvent::Asdu(asdu) if asdu.cot.cause.value() == 20 => {
+                        objects += asdu.objects.len();
+                    }
+                    ClientEvent::Asdu(asdu) if asdu.cot.cause.value() == 10 => return objects,
+                    ClientEvent::Disconnected { reason } => panic!("dispatch lost: {reason}"),
+                    _ => {}
+                }
+            }
+            objects
+        })
+        .await
+        .expect("dispatch's interrogation ends while the idle clients hold on");
+        assert!(objects > 400, "{objects} objects interrogated");
+        drop(idle);
+        started.elapsed()
+    });
+    eprintln!("dispatch's GI through 70 idle clients took {elapsed:?}");
+}
+
 #[test]
 fn every_help_has_examples() {
     fn visit(path: &[String], visited: &mut Vec<String>) {

@@ -87,6 +87,7 @@ pub(super) async fn run<S>(
         );
         let reason = drive(
             &shared,
+            slot,
             &mut core,
             &mut session,
             start_deadline,
@@ -104,6 +105,7 @@ pub(super) async fn run<S>(
 /// The connection's loop; returns why it ended.
 async fn drive<S>(
     shared: &Shared,
+    slot: &super::admission::Slot,
     core: &mut LinkCore,
     session: &mut Session,
     mut start_deadline: Option<tokio::time::Instant>,
@@ -128,6 +130,7 @@ where
                 SessionEvent::Asdu(asdu) => core.handle_asdu(now, asdu),
                 SessionEvent::Started => {
                     start_deadline = None;
+                    slot.started();
                     core.start();
                 }
                 SessionEvent::Stopped => core.stop(session),
@@ -185,6 +188,9 @@ where
             () = changes.changed(seen), if follows_group => {}
             () = std::future::poll_fn(|context| core.poll_commands(context)), if awaits_commands => {}
             _ = shutdown.changed() => return "server shut down".to_owned(),
+            () = slot.evicted() => {
+                return "evicted for a newcomer: the table was full and this connection never started data transfer".to_owned();
+            }
         }
     }
 }

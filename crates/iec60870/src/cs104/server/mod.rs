@@ -68,6 +68,10 @@ pub struct ServerConfig {
     /// A connection from a client no redundancy group names is closed when it has not
     /// started data transfer (STARTDT) within this time (`None`: never).
     pub start_timeout: Option<Duration>,
+    /// Connections that never started data transfer a redundancy group keeps when the
+    /// table (or the group's share of it) is full: beyond them, a newcomer evicts the
+    /// longest-idle one. Started connections are never evicted by newcomers.
+    pub standbys_per_group: usize,
     /// TLS (IEC 62351-3): when set, every connection must complete a TLS handshake.
     pub tls: Option<Arc<tokio_rustls::rustls::ServerConfig>>,
     /// What the station does whatever its transport: common address, ASDU field sizes
@@ -87,6 +91,7 @@ impl ServerConfig {
             max_connections_per_group: None,
             reserved_per_group: 0,
             start_timeout: None,
+            standbys_per_group: 2,
             tls: None,
             outstation: OutstationConfig::new(common_address, AsduParams::IEC104),
         }
