@@ -406,8 +406,14 @@ fn shell_words_split_like_a_shell() {
     assert_eq!(shell_words("# only a comment"), Vec::<String>::new());
 }
 
+/// The README's commands and the examples' use the same fixed ports: one test at a time.
+static FIXED_PORTS: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 #[test]
 fn every_readme_command_works_as_written() {
+    let _ports = FIXED_PORTS
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
     let root = repository_root();
     let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
     let commands = readme_commands(&readme);
@@ -467,4 +473,146 @@ fn every_readme_command_works_as_written() {
         }
     }
     assert!(ran >= 10, "only {ran} README commands ran");
+}
+
+/// The commands an example's header suggests: the `#   stanice ...` lines of the comment
+/// block that opens its station.toml.
+fn header_commands(text: &str) -> Vec<Vec<String>> {
+    text.lines()
+        .take_while(|line| line.starts_with('#') || line.trim().is_empty())
+        .filter_map(|line| line.strip_prefix('#'))
+        .map(str::trim)
+        .filter(|line| line.starts_with("stanice "))
+        .map(shell_words)
+        .collect()
+}
+
+/// Runs a one-shot command that talks to a station just started, until it succeeds: the
+/// station's devices come up a moment after its port (a simulated relay's first poll), so
+/// a command may be refused at first. Bounded; the last failure fails the test.
+fn run_until_accepted(line: &str, arguments: &[String]) {
+    let deadline = Instant::now() + ONE_SHOT_TIMEOUT;
+    loop {
+        let output = Command::new(env!("CARGO_BIN_EXE_stanice"))
+            .args(arguments)
+            .current_dir(repository_root())
+            .stdin(Stdio::null())
+            .output()
+            .unwrap();
+        if output.status.success() {
+            return;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "`{line}` failed ({}):\n{}\n{}",
+            output.status,
+            String::from_utf8_lossy(&output.stdout),
+            String::from_utf8_lossy(&output.stderr)
+        );
+        std::thread::sleep(Duration::from_millis(500));
+    }
+}
+
+/// Every command the examples' headers suggest works as written, in order: servers and
+/// stations stay up for the commands after them; a command gets a positive confirmation.
+#[test]
+fn every_example_header_command_works_as_written() {
+    let _ports = FIXED_PORTS
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
+    let root = repository_root();
+    let strays_before = stray_files(&root);
+    let mut examples: Vec<PathBuf> = std::fs::read_dir(root.join("examples"))
+        .unwrap()
+        .flatten()
+        .map(|entry| entry.path().join("station.toml"))
+        .filter(|path| path.is_file())
+        .collect();
+    examples.sort();
+    let mut ran = 0;
+    for example in &examples {
+        let text = std::fs::read_to_string(example).unwrap();
+        let mut background: Vec<Running> = Vec::new();
+        for words in header_commands(&text) {
+            let line = words.join(" ");
+            let arguments = stanice_arguments(&words).unwrap();
+            eprintln!("{}: {line}", example.display());
+            let plain: Vec<&str> = arguments.iter().map(String::as_str).collect();
+            match plain.as_slice() {
+                ["iec104", "command", ..] | ["iec104", "client", .., "--exit-after-gi"] => {
+                    run_until_accepted(&line, &arguments)
+                }
+                ["iec104", "client", ..] => {
+                    let mut client = Running::start(&line, &arguments);
+                    client.wait_for_life(None);
+                    client.interrupt();
+                }
+                ["run" | "iec101" | "iec103" | "iec104" | "lift" | "hmi", ..]
+                    if kind(&arguments) != Kind::OneShot
+                        || matches!(
+                            plain.as_slice(),
+                            ["iec101" | "iec103", "slave" | "relay", ..]
+                        ) =>
+                {
+                    let listen = listen_address(&arguments);
+                    if let Some(address) = listen {
+                        wait_port_free(address);
+                    }
+                    let mut running = Running::start(&line, &arguments);
+                    running.wait_for_life(listen);
+                    background.push(running);
+                }
+                _ => run_one_shot(&line, &arguments),
+            }
+            ran += 1;
+        }
+        // The station first, then what it was connected to.
+        while let Some(running) = background.pop() {
+            running.interrupt();
+        }
+    }
+    for path in stray_files(&root) {
+        if !strays_before.contains(&path) {
+            let _ = std::fs::remove_file(path);
+        }
+    }
+    assert!(ran >= 8, "only {ran} example header commands ran");
+}
+
+/// The command the demo's banner suggests to dispatch is accepted (it suggested one that
+/// the station refused from dispatch), and the banner names the program that runs.
+#[test]
+fn the_demo_banner_suggests_a_command_dispatch_may_send() {
+    let _ports = FIXED_PORTS
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
+    let arguments = vec!["demo".to_owned()];
+    let listen = listen_address(&arguments);
+    if let Some(address) = listen {
+        wait_port_free(address);
+    }
+    let mut demo = Running::start("stanice demo", &arguments);
+    demo.wait_for_life(listen);
+    let deadline = Instant::now() + START_TIMEOUT;
+    let suggestion = loop {
+        let output = demo.output();
+        if let Some(line) = output
+            .lines()
+            .find(|line| line.contains(" iec104 command "))
+        {
+            break line.to_owned();
+        }
+        if Instant::now() > deadline {
+            demo.fail("suggests no command");
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    let words = shell_words(suggestion.trim());
+    assert_eq!(
+        words[0],
+        env!("CARGO_BIN_EXE_stanice"),
+        "the banner names the running program: {suggestion}"
+    );
+    run_until_accepted(&suggestion, &words[1..]);
+    demo.interrupt();
 }
