@@ -39,6 +39,10 @@ pub struct NodePoints {
     /// Commands waiting for the next change of a point (by name) as their return
     /// information; a waiter that gave up has dropped its receiver.
     returns: Mutex<HashMap<String, Vec<tokio::sync::oneshot::Sender<()>>>>,
+    /// Points whose changes the store keeps at most once per interval (by name), with
+    /// the time and quality of the change last stored.
+    storage_intervals: HashMap<String, std::time::Duration>,
+    last_stored: Mutex<HashMap<String, (DateTime<Utc>, Quality)>>,
 }
 
 impl NodePoints {
@@ -49,8 +53,19 @@ impl NodePoints {
         recorder: Recorder,
         clock: Arc<NodeClock>,
     ) -> Arc<NodePoints> {
+        let storage_intervals = db
+            .points()
+            .filter_map(|point| match &point.spec.source {
+                crate::pointdb::PointSource::Lift { signal, .. } => signal
+                    .storage_interval()
+                    .map(|interval| (point.spec.name.clone(), interval)),
+                _ => None,
+            })
+            .collect();
         Arc::new(NodePoints {
             name: name.to_owned(),
+            storage_intervals,
+            last_stored: Mutex::new(HashMap::new()),
             db: Mutex::new(db),
             sinks: std::sync::RwLock::new(Vec::new()),
             zone,
@@ -86,6 +101,29 @@ impl NodePoints {
             .into_iter()
             .filter(|waiter| !waiter.is_closed())
             .collect()
+    }
+
+    /// Whether the store keeps this change: always, but for points with a storage
+    /// interval, whose changes within an interval of the last stored one (and of the same
+    /// quality) are only sent, not stored.
+    fn to_store(&self, change: &PointChange) -> bool {
+        let Some(interval) = self.storage_intervals.get(&change.name) else {
+            return true;
+        };
+        let mut last = self
+            .last_stored
+            .lock()
+            .unwrap_or_else(|poison| poison.into_inner());
+        let skip = last.get(&change.name).is_some_and(|(at, quality)| {
+            *quality == change.quality
+                && (change.received - *at)
+                    .to_std()
+                    .is_ok_and(|since| since < *interval)
+        });
+        if !skip {
+            last.insert(change.name.clone(), (change.received, change.quality));
+        }
+        !skip
     }
 
     /// The node's name.
@@ -259,8 +297,10 @@ impl NodePoints {
                 tracing::warn!(node = %self.name, point = %change.name, sink = %sink.describe(), %error, "not published");
             }
         }
-        self.recorder
-            .event(change.to_event_record(&self.name, origin));
+        if self.to_store(change) {
+            self.recorder
+                .event(change.to_event_record(&self.name, origin));
+        }
         for waiter in waiters {
             let _ = waiter.send(());
         }

@@ -211,6 +211,31 @@ counters_period_ms = 500
     assert!(point(&runtime, "MON", "L2.status").quality.invalid);
     assert!(point(&runtime, "MON", "L2.floor1_trips").quality.invalid);
     assert!(!point(&runtime, "MON", "L1.status").quality.invalid);
+    // The silent board's line-error count grows with every poll; the store keeps one
+    // change of it a minute (it stored every one, 170,000 a day per cut cable).
+    let errors = |runtime: &Runtime| match point(runtime, "MON", "L2.errors").value {
+        PointValue::Int(count) => count,
+        PointValue::Float(count) => count as i64,
+        other => panic!("L2.errors is {other:?}"),
+    };
+    let first = errors(&runtime);
+    wait_until("L2's line errors growing", Duration::from_secs(20), || {
+        (errors(&runtime) >= first + 3).then_some(())
+    })
+    .await;
+    runtime.recorder().flush().await;
+    let stored = runtime
+        .store()
+        .unwrap()
+        .query_events(&station::store::EventQuery::default().with_point("L2.errors"))
+        .await
+        .unwrap()
+        .items;
+    assert!(
+        stored.len() <= 2,
+        "{} changes of L2.errors stored within seconds: {stored:?}",
+        stored.len()
+    );
     runtime.operate("lift L2 answer").await.unwrap();
     wait_until("L2 answering again", Duration::from_secs(20), || {
         valid_value(&runtime, "MON", "L2.status")
