@@ -31,9 +31,13 @@
 //! tasks stops, the output goes to its safe value; a task that is still running and
 //! also writes it drives it again in its next cycle.
 
-use crate::check::{Checked, Ty};
+use super::io::direct_key;
+use super::path::split_path;
+use super::{format_value, parse_value, Leaf, Plc, PlcError};
+use crate::check::{Checked, Size, Ty};
 use crate::diagnostics::{Code, Diagnostic};
-use crate::syntax::{FileId, Item, SourceMap, Span};
+use crate::syntax::{FileId, Item, PouKind, SourceMap, Span};
+use crate::vm::{DirectAddress, Val};
 use std::collections::{HashMap, HashSet};
 
 /// The safe value declared by a `{attribute 'safe_value' := '...'}` pragma directly
@@ -165,6 +169,191 @@ pub(super) fn reachable(
         }
     }
     names
+}
+
+/// Who drives an output.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) enum Owner {
+    /// A variable of this PROGRAM (index of the POU).
+    Program(usize),
+    /// A global (upper-case name): the tasks whose code names it.
+    Global(String),
+}
+
+/// An output with its safe value.
+#[derive(Debug, Clone)]
+pub(super) struct SafeOutput {
+    /// `%QX0.1` or the variable path.
+    pub(super) name: String,
+    pub(super) leaf: Leaf,
+    pub(super) at: Option<DirectAddress>,
+    pub(super) owner: Owner,
+    pub(super) safe: Val,
+}
+
+impl Plc {
+    /// Writes the safe value of every output driven by task `ti` (every output for
+    /// `None`) into its variable and the output image; forced addresses stay forced.
+    /// Returns what was set.
+    pub(super) fn safe_state(&mut self, ti: Option<usize>) -> Vec<(String, String)> {
+        let task = ti.and_then(|i| self.tasks.get(i));
+        let chosen: Vec<SafeOutput> = self
+            .outputs
+            .iter()
+            .filter(|o| match (task, &o.owner) {
+                (None, _) => true,
+                (Some(t), Owner::Program(p)) => t.pous.contains(p),
+                (Some(t), Owner::Global(key)) => t.names.contains(key),
+            })
+            .cloned()
+            .collect();
+        let mut set = Vec::new();
+        for o in chosen {
+            self.write_leaf(&o.leaf, o.safe.clone());
+            if let (Some(d), Ok(v)) = (o.at, self.vm.geti(o.leaf.addr.i)) {
+                self.vm.io_write(d.area, d.byte, d.bit, d.bits, v);
+            }
+            set.push((
+                o.name.clone(),
+                format_value(&self.compiled.checked, &o.leaf.ty, &o.safe),
+            ));
+        }
+        self.apply_io_forces();
+        set
+    }
+
+    /// Binds the variable at `path` as an output the host drives from (a plant signal,
+    /// a field device): when a task that drives it stops, it goes to its safe value
+    /// (see [`safe`](self)). Variables declared `AT %Q...` are outputs without this.
+    pub fn bind_output(&mut self, path: &str) -> Result<(), PlcError> {
+        let leaf = self.leaf(path)?;
+        if self
+            .outputs
+            .iter()
+            .any(|o| o.at.is_none() && o.leaf.addr == leaf.addr && o.leaf.ty == leaf.ty)
+        {
+            return Ok(());
+        }
+        let c = &self.compiled.checked;
+        let first = split_path(path)
+            .and_then(|s| s.into_iter().next())
+            .map(|(n, _)| n.to_uppercase())
+            .unwrap_or_default();
+        let (owner, name_span) =
+            if let Some(g) = c.global_index.get(&first).and_then(|g| c.globals.get(*g)) {
+                (Owner::Global(first), g.span)
+            } else {
+                let pid = c
+                    .pou_index
+                    .get(&first)
+                    .copied()
+                    .ok_or_else(|| PlcError::UnknownPath(path.to_string()))?;
+                let var = split_path(path)
+                    .and_then(|s| s.into_iter().nth(1))
+                    .map(|(n, _)| n.to_uppercase())
+                    .unwrap_or_default();
+                let span = c
+                    .pou(pid)
+                    .and_then(|p| p.var(&var))
+                    .map(|(_, v)| v.span)
+                    .unwrap_or_default();
+                (Owner::Program(pid.0), span)
+            };
+        let safe = self.safe_value(&leaf.ty, name_span)?;
+        self.outputs.push(SafeOutput {
+            name: path.to_string(),
+            leaf,
+            at: None,
+            owner,
+            safe,
+        });
+        Ok(())
+    }
+
+    /// The safe value declared before the variable named at `name` (0 / FALSE / '' when
+    /// none is declared).
+    fn safe_value(&self, ty: &Ty, name: crate::syntax::Span) -> Result<Val, PlcError> {
+        let default = match ty.lane() {
+            Some(crate::check::Lane::Real) => Val::Real(0.0),
+            Some(crate::check::Lane::Str) => Val::Str(String::new()),
+            _ => Val::Int(0),
+        };
+        let Some((text, pragma)) = declared(&self.sources, name) else {
+            return Ok(default);
+        };
+        parse_value(&self.compiled.checked, ty, &text).map_err(|_| {
+            PlcError::Init(Box::new(bad_value(
+                &self.compiled.checked,
+                ty,
+                &text,
+                pragma,
+            )))
+        })
+    }
+
+    /// The `AT %Q` outputs with their safe values; a bad safe value is kept in
+    /// `safe_error` (the PLC stays in STOP).
+    pub(super) fn collect_outputs(&mut self) {
+        let c = &self.compiled.checked;
+        let mut found: Vec<(Size, Ty, DirectAddress, Owner, String, crate::syntax::Span)> =
+            Vec::new();
+        for g in &c.globals {
+            if let Some(d) = g.at.as_deref().and_then(DirectAddress::parse) {
+                found.push((
+                    g.offset,
+                    g.ty.clone(),
+                    d,
+                    Owner::Global(g.key.clone()),
+                    g.name.clone(),
+                    g.span,
+                ));
+            }
+        }
+        for (i, p) in c.pous.iter().enumerate() {
+            if p.kind != PouKind::Program {
+                continue;
+            }
+            let Some(base) = p.base else { continue };
+            for v in &p.vars {
+                if let Some(d) = v.at.as_deref().and_then(DirectAddress::parse) {
+                    found.push((
+                        base.plus(v.offset),
+                        v.ty.clone(),
+                        d,
+                        Owner::Program(i),
+                        format!("{}.{}", p.name, v.name),
+                        v.span,
+                    ));
+                }
+            }
+        }
+        for (addr, ty, d, owner, path, span) in found {
+            if d.area != 'Q' {
+                continue;
+            }
+            match self.safe_value(&ty, span) {
+                Ok(safe) => self.outputs.push(SafeOutput {
+                    name: direct_key(&d),
+                    leaf: Leaf {
+                        path,
+                        ty,
+                        addr,
+                        retain: false,
+                        persistent: false,
+                    },
+                    at: Some(d),
+                    owner,
+                    safe,
+                }),
+                Err(PlcError::Init(diag)) => {
+                    if self.safe_error.is_none() {
+                        self.safe_error = Some(*diag);
+                    }
+                }
+                Err(_) => {}
+            }
+        }
+    }
 }
 
 #[cfg(test)]
