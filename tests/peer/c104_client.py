@@ -176,6 +176,9 @@ class Station:
         # responses seen on the wire, for the command being sent
         self.cmd_wire = {}
         self.cmd_wire_event = threading.Event()
+        # every I frame's (type, cause) in wire order while a command is open: the order
+        # of its confirmation, return information and termination
+        self.cmd_sequence = []
 
         timeout_s = max(args.gi_timeout if args.gi else 0, args.command_timeout)
         self.client = c104.Client(tick_rate_ms=100,
@@ -216,6 +219,8 @@ class Station:
                 return
             tid, cot, n = d["type_id"], d["cot"], d["n"]
             tn = TYPE_NAMES.get(tid, str(tid))
+            if self.cmd_wire:
+                self.cmd_sequence.append([tn, cot])
             if 45 <= tid <= 64 and "ioa" in d:
                 key = (tid, d["ioa"])
                 if key in self.cmd_wire:
@@ -360,13 +365,26 @@ class Station:
         key = (int(typ.value), spec.ioa)
         with self.lock:
             self.cmd_wire[key] = []
+            self.cmd_sequence = []
         self.cmd_wire_event.clear()
         t0 = time.perf_counter()
         c104_ok = bool(p.transmit(cause=c104.Cot.ACTIVATION))
         dt = time.perf_counter() - t0
         confirm, terminated, cots = self._wire_result(key, spec.select)
+        if confirm == "positive" and not terminated:
+            # A direct command returns at its ACT_CON: wait (bounded) for the termination,
+            # so that the wire order of return information and ACT_TERM is seen whole.
+            dl = Deadline(8.0)
+            while not dl.expired():
+                with self.lock:
+                    if any(cot == 10 for cot, _, _ in self.cmd_wire.get(key, [])):
+                        terminated = True
+                        break
+                self.cmd_wire_event.wait(0.05)
+                self.cmd_wire_event.clear()
         with self.lock:
             self.cmd_wire.pop(key, None)
+            sequence = list(self.cmd_sequence)
         # c104 2.2.1 can report success for a refused command: a negative
         # ACT_CON followed at once by e.g. COT 47 (unknown IOA) flips its
         # result back to "success". Trust the frames on the wire as well.
@@ -375,7 +393,7 @@ class Station:
               "value": value_to_json(p.value), "select": spec.select, "ok": ok,
               "expected_ok": not spec.expect_fail, "c104_ok": c104_ok,
               "confirm": confirm, "terminated": terminated, "cots": cots,
-              "seconds": round(dt, 6)})
+              "sequence": sequence, "seconds": round(dt, 6)})
         return ok == (not spec.expect_fail), ok
 
     def _wire_result(self, key, select):

@@ -300,13 +300,26 @@ class Dispatch(Station):
         key = (int(typ.value), spec.ioa)
         with self.lock:
             self.cmd_wire[key] = []
+            self.cmd_sequence = []
         self.cmd_wire_event.clear()
         t0 = time.perf_counter()
         c104_ok = bool(p.transmit(cause=c104.Cot.ACTIVATION))
         dt = time.perf_counter() - t0
         confirm, terminated, cots = self._wire_result(key, spec.select)
+        if confirm == "positive" and not terminated:
+            # A direct command returns at its ACT_CON: wait (bounded) for the termination,
+            # so that the wire order of return information and ACT_TERM is seen whole.
+            dl = Deadline(8.0)
+            while not dl.expired():
+                with self.lock:
+                    if any(cot == 10 for cot, _, _ in self.cmd_wire.get(key, [])):
+                        terminated = True
+                        break
+                self.cmd_wire_event.wait(0.05)
+                self.cmd_wire_event.clear()
         with self.lock:
             self.cmd_wire.pop(key, None)
+            sequence = list(self.cmd_sequence)
         complete = confirm == "positive" and (terminated or not spec.select)
         missed = self.missed_response(c104_ok, dt, complete)
         ok = complete and (c104_ok or missed)
@@ -314,7 +327,7 @@ class Dispatch(Station):
                   "value": value_to_json(p.value), "select": spec.select, "ok": ok,
                   "expected_ok": not spec.expect_fail, "c104_ok": c104_ok,
                   "confirm": confirm, "terminated": terminated, "cots": cots,
-                  "seconds": round(dt, 6)}
+                  "sequence": sequence, "seconds": round(dt, 6)}
         if missed:
             result["c104_missed_response"] = True
         emit(result)

@@ -505,6 +505,43 @@ fn c104_client(port: u16, args: &[&str]) -> Vec<Value> {
 
 /// c104 sends one command (`TYPE:IOA:VALUE[:select][:expect-fail]`) to `port`: its
 /// `command_result` line.
+/// The wire order of an executed command's answers, as c104 saw the frames: its ACT_CON,
+/// then the return information (monitor objects with cause 11), then its ACT_TERM.
+/// `require_return`: the command moved something, so return information must be there.
+fn assert_wire_order(result: &Value, require_return: bool) {
+    let sequence: Vec<(String, u64)> = result["sequence"]
+        .as_array()
+        .unwrap_or_else(|| panic!("no wire sequence in {result}"))
+        .iter()
+        .map(|entry| {
+            (
+                entry[0].as_str().unwrap_or_default().to_owned(),
+                entry[1].as_u64().unwrap_or_default(),
+            )
+        })
+        .collect();
+    let command = result["type"].as_str().unwrap();
+    let position = |cot: u64| sequence.iter().position(|(t, c)| t == command && *c == cot);
+    let con = position(7).unwrap_or_else(|| panic!("no ACT_CON on the wire: {result}"));
+    let term = position(10).unwrap_or_else(|| panic!("no ACT_TERM on the wire: {result}"));
+    let returns: Vec<usize> = sequence
+        .iter()
+        .enumerate()
+        .filter(|(_, (t, c))| t.starts_with("M_") && *c == 11)
+        .map(|(i, _)| i)
+        .collect();
+    assert!(con < term, "ACT_CON after ACT_TERM: {sequence:?}");
+    if require_return {
+        assert!(!returns.is_empty(), "no return information: {sequence:?}");
+    }
+    for at in returns {
+        assert!(
+            con < at && at < term,
+            "return information outside ACT_CON..ACT_TERM: {sequence:?}"
+        );
+    }
+}
+
 fn c104_command(port: u16, command: &str) -> Value {
     c104_client(port, &["--command", command, "--duration", "0.2"])
         .into_iter()
@@ -644,8 +681,8 @@ fn c104_reads_the_com600_gateway_with_the_relay_on_a_pseudo_terminal() {
             .unwrap()
             // A pseudo-terminal keeps no parity: the line is opened 8N1.
             .replace(
-                "simulate = \"ref630\"",
-                &format!("port = \"{path}\"\nparity = \"none\""),
+                "\nsimulate = \"ref630\"\n",
+                &format!("\nport = \"{path}\"\nparity = \"none\"\n"),
             )
             .replace(
                 "store = \"sqlite:events.sqlite\"",
@@ -797,6 +834,7 @@ target = "line:rtus/RTU/4050"
         let command = format!("C_DC_NA_1:200:OFF:{flags}");
         let result = c104_command(port, &command);
         assert_eq!(result["ok"], true, "{command} confirmed: {result}");
+        assert_wire_order(&result, false);
     }
     wait_for_value(port, 100, "the breaker open", |value| value == 1);
     let seen = received.lock().unwrap().join("\n");
@@ -868,6 +906,8 @@ fn gateway_scenario(port: u16, mut relay: impl FnMut(&str)) {
     wait_for_value(port, 2003, "REMOTE", |value| value == false);
     let result = c104_command(port, "C_DC_NA_1:2100:OFF");
     assert_eq!(result["ok"], true, "executed in REMOTE: {result}");
+    // The breaker moved: its position goes out as return information before ACT_TERM.
+    assert_wire_order(&result, true);
     wait_for_value(port, 2000, "the breaker open", |value| value == 1);
     // The thesis's single commands: remote close 4150 ON closes, remote open 4250 ON opens.
     for (ioa, position, what) in [
@@ -876,6 +916,7 @@ fn gateway_scenario(port: u16, mut relay: impl FnMut(&str)) {
     ] {
         let result = c104_command(port, &format!("C_SC_NA_1:{ioa}:1"));
         assert_eq!(result["ok"], true, "{what}: {result}");
+        assert_wire_order(&result, true);
         wait_for_value(port, 2000, what, |value| value == position);
     }
 

@@ -106,10 +106,13 @@
 //! max_age_ms = 5000                    # optional: this command's own maximum command delay
 //! range = [0, 1439]                    # optional, set-points: values outside are refused
 //!                                      # (negative ACT_CON, audited), never clamped
-//! feedback = "RH2_QF1_Position"        # optional, commands on a PLC variable: the point of
-//!                                      # this node that returns the command's effect; its
-//!                                      # first change after an execute is sent as return
-//!                                      # information (cause 11) between ACT_CON and ACT_TERM
+//! feedback = "RH2_QF1_Position"        # optional, commands on a PLC variable or an IEC 103
+//!                                      # general command: the point of this node that
+//!                                      # returns the command's effect; its first change
+//!                                      # after an execute is sent as return information
+//!                                      # (cause 11) between ACT_CON and ACT_TERM; for a
+//!                                      # general command, default: the point read from the
+//!                                      # device at the command's own FUN/INF
 //! feedback_timeout_ms = 5000           # default 5000: ACT_TERM without return information
 //!                                      # after this long (wall-clock time)
 //! description = "open QF1"             # optional

@@ -179,10 +179,20 @@ impl StationHandler for NodeHandler {
                     inf,
                     value,
                 } => {
+                    // As for the PLC: the return information (the relay's indication at
+                    // the command's FUN/INF, or the project's `feedback`) goes out before
+                    // ACT_TERM; the relay reports it after its acknowledgement.
+                    let feedback = routed
+                        .feedback
+                        .filter(|_| !command.select)
+                        .map(|feedback| (this.points.expect_return(&feedback.point), feedback));
                     let target = (device.as_str(), fun, inf, value);
                     let (outcome, detail) =
                         general_command(handler_lines.get(&line), &line, target, &command).await;
-                    (outcome, detail, None)
+                    let termination = feedback.map(|(returned, feedback)| {
+                        await_return(returned, feedback, this.points.name().to_owned())
+                    });
+                    (outcome, detail, termination)
                 }
                 Route::LineObject { line, device, ioa } => match handler_lines.get(&line) {
                     Some(handle) => handle.forward(&device, ioa, &command).await,

@@ -837,6 +837,12 @@ impl Ctx<'_> {
                 }
             });
             let feedback = match &command.feedback {
+                // A relay reports a general command's effect at the command's own FUN/INF:
+                // the point read from there is the command's return information, so that
+                // ACT_TERM follows it (it left before the position changed).
+                None if command.feedback_timeout_ms.is_none() => {
+                    implied_line_feedback(&target, &points)
+                }
                 None => {
                     if command.feedback_timeout_ms.is_some() {
                         self.err(
@@ -1053,4 +1059,32 @@ impl Ctx<'_> {
             }
         }
     }
+}
+
+/// The return information of a general command to an IEC 103 device when the project
+/// names none: the indication the device reports at the command's FUN/INF.
+fn implied_line_feedback(target: &CommandTarget, points: &[PointConfig]) -> Option<Feedback> {
+    let CommandTarget::Line {
+        line,
+        device,
+        fun,
+        inf,
+        ..
+    } = target
+    else {
+        return None;
+    };
+    points
+        .iter()
+        .find(|point| {
+            matches!(&point.source, PointSource::Line {
+                line: point_line,
+                device: point_device,
+                signal: LineSignal::Iec103 { fun: f, inf: i, index: None },
+            } if point_line == line && point_device == device && f == fun && i == inf)
+        })
+        .map(|point| Feedback {
+            point: point.name.clone(),
+            timeout: DEFAULT_FEEDBACK_TIMEOUT,
+        })
 }
