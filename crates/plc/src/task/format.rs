@@ -17,7 +17,7 @@ pub fn format_value(c: &Checked, ty: &Ty, v: &Val) -> String {
         (Ty::ULInt | Ty::LWord, Val::Int(x)) => (*x as u64).to_string(),
         (Ty::Ref(_), Val::Int(0)) => "NULL".into(),
         (Ty::Ref(_), Val::Int(x)) => {
-            // the cells referred to, per lane (see `compile::expr::pack`)
+            // the cells referred to, per lane (see `compile::expr::reference::pack`)
             let at = crate::compile::unpack(x.wrapping_sub(1));
             format!("REF({}, {}, {})", at.i, at.r, at.s)
         }
