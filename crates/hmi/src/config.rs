@@ -161,6 +161,8 @@ struct RawConfig {
     title: String,
     #[serde(default)]
     local_address: Option<std::net::IpAddr>,
+    #[serde(default)]
+    time_zone: Option<String>,
     #[serde(default = "default_level")]
     default_control_level: u8,
     #[serde(default)]
@@ -196,6 +198,9 @@ pub struct HmiConfig {
     /// station gives its HMI a redundancy group by address, with the HMI's command
     /// authority. `None`: the system chooses.
     pub local_address: Option<std::net::IpAddr>,
+    /// The zone of the station's time tags (`time_zone`: an IANA name, `UTC` or
+    /// `local`), as its project's `time_zone` says; `None`: not given (UTC then).
+    pub time_zone: Option<::store::pointdb::TimeZonePolicy>,
     /// Screens, in navigation order.
     pub screens: Vec<ScreenConfig>,
     /// Controls.
@@ -236,6 +241,15 @@ impl HmiConfig {
             title: raw.title,
             default_control_level: raw.default_control_level.min(9),
             local_address: raw.local_address,
+            time_zone: match &raw.time_zone {
+                None => None,
+                Some(name) => Some(name.parse().map_err(|_| {
+                    HmiError::Config(format!(
+                        "{}: time_zone {name:?} is no IANA zone name, UTC or local",
+                        file.display()
+                    ))
+                })?),
+            },
             screens: raw.screen,
             controls: raw.control,
             alarms: raw.alarm,

@@ -36,11 +36,9 @@ pub(crate) fn print_lines(lines: &[String]) -> bool {
 }
 
 /// Resolves after `duration` (a `--duration` option), never without one.
-pub(crate) async fn run_for(duration: Option<f64>) {
+pub(crate) async fn run_for(duration: Option<std::time::Duration>) {
     match duration {
-        Some(seconds) => {
-            tokio::time::sleep(std::time::Duration::from_secs_f64(seconds.clamp(0.0, 1e9))).await
-        }
+        Some(duration) => tokio::time::sleep(duration).await,
         None => std::future::pending().await,
     }
 }

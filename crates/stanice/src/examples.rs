@@ -42,7 +42,7 @@ const EXAMPLES: &[(&str, &str)] = &[
         "iec104 client",
         "  stanice iec104 client 127.0.0.1:2404 --ca 1 --gi          # analyser lines until Ctrl-C
   stanice iec104 client 127.0.0.1:2404 --gi --exit-after-gi --json
-  stanice iec104 client 10.0.0.1:2404,10.0.0.2:2404 --clock-sync --duration 60",
+  stanice iec104 client 10.0.0.1:2404,10.0.0.2:2404 --clock-sync --duration 60s",
     ),
     (
         "iec104 command",
@@ -66,7 +66,7 @@ The exit code is 0 on a positive confirmation and termination, non-zero otherwis
     (
         "iec101 master",
         "  stanice iec101 master --serial /dev/ttyUSB0 --baud 9600 --address 3 --ca 7 --gi
-  stanice iec101 master --serial /dev/ttyUSB0 --address 1,2,3 --timeout 300 --retries 3 --verbose
+  stanice iec101 master --serial /dev/ttyUSB0 --address 1,2,3 --timeout 300ms --retries 3 --verbose
   stanice iec101 master --tcp 10.0.0.9:2401 --balanced --link-address-size 0 --address 0 --gi
   stanice iec101 master --serial /dev/pts/4 --cot-size 2 --ca-size 2 --ioa-size 3 --gi --exit-after-gi --json
 The field sizes (--link-address-size, --cot-size, --ca-size, --ioa-size) must match the outstation's.",
@@ -87,7 +87,7 @@ The field sizes (--link-address-size, --cot-size, --ca-size, --ioa-size) must ma
         "iec103 master",
         "  stanice iec103 master --serial /dev/ttyUSB0 --baud 9600 --address 1 --gi --clock-sync
   stanice iec103 master --serial /dev/ttyUSB0 --gi --command 1:160:OFF --exit-after-commands
-  stanice iec103 master --serial /dev/ttyUSB0 --address 3 --timeout 500 --telegrams time,reset-link,class2,class1
+  stanice iec103 master --serial /dev/ttyUSB0 --address 3 --timeout 500ms --telegrams time,reset-link,class2,class1
   stanice iec103 master --tcp 10.0.0.20:4001 --address 1,2,3 --gi --json
 Single telegrams (--telegrams) are PCVDEW6's menu: reset-link (r), link-status (s), reset-fcb (f),
 class1 (1), class2 (2), gi (g), time (i, broadcast). Measurands II (INF 148) are shown as
@@ -95,7 +95,7 @@ multiples of rated (2.4 x for currents and powers, 1.2 x for voltages and freque
     ),
     (
         "iec103 relay",
-        "  stanice iec103 relay --pty --address 1 --cycle 5
+        "  stanice iec103 relay --pty --address 1 --cycle 5s
   stanice iec103 relay --serial /dev/ttyS0 --baud 19200 --inject 0.8,0.9
   stanice iec103 relay --listen 0.0.0.0:4001
 While it runs, type `help` for its console: inject, local/remote, open/close, fault, restart.",
@@ -115,7 +115,7 @@ While it runs, type `help` for its console: fault 3C, status 18, status auto, tr
     (
         "lift poll",
         "  stanice lift poll --serial /dev/ttyUSB0                 # 9600 8E1, status every second
-  stanice lift poll --serial /dev/ttyUSB0 --baud 19200 --parity none --json --duration 60
+  stanice lift poll --serial /dev/ttyUSB0 --baud 19200 --parity none --json --duration 60s
   stanice lift poll --tcp 10.0.0.30:4001 --archive lift1.cursor --json
 JSON lines carry kind (status, counters, fault, comm) and status, status_text, position,
 target, direction, time, counters, fault_code, fault_text, index. With --archive a restarted
@@ -132,7 +132,7 @@ While it runs, type `help` for the faults and hand operations of the console.",
         "run",
         "  stanice run examples/vsetin
   stanice run examples/vsetin --node RH2 --port-base 12404   # one node, other ports
-  stanice run examples/vsetin --speed 60 --duration 30 --store none
+  stanice run examples/vsetin --speed 60 --duration 30s --store none
 While it runs, type `help` for the faults and hand operations of the console.",
     ),
     (

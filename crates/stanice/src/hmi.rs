@@ -4,7 +4,6 @@ use std::io::BufRead as _;
 use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::time::Duration;
 
 use anyhow::Context as _;
 use clap::{Args, Subcommand};
@@ -27,8 +26,8 @@ pub(crate) struct HmiArgs {
     /// The users file; default: users.toml in the screens folder.
     #[arg(long)]
     users: Option<PathBuf>,
-    /// Where browsers connect.
-    #[arg(long, default_value = "127.0.0.1:8080")]
+    /// Where browsers connect (also spelt `--hmi-listen`, as `stanice run` spells it).
+    #[arg(long, alias = "hmi-listen", default_value = "127.0.0.1:8080")]
     listen: SocketAddr,
     /// The HMI's event store (`sqlite:PATH`, `postgres://...`, `none`).
     #[arg(long, default_value = "sqlite:hmi-events.sqlite")]
@@ -37,9 +36,11 @@ pub(crate) struct HmiArgs {
     /// screens' fault archive and service figures; without it they show live values only.
     #[arg(long)]
     archive: Option<String>,
-    /// The time zone of the station's time tags (IANA name, or UTC).
-    #[arg(long, default_value = "Europe/Prague")]
-    time_zone: TimeZonePolicy,
+    /// The zone of the station's time tags (IANA name, `UTC` or `local`); default: the
+    /// screens folder's hmi.toml `time_zone` (its project's), else UTC, as the test
+    /// servers stamp.
+    #[arg(long, value_name = "ZONE")]
+    time_zone: Option<TimeZonePolicy>,
     /// Serve HTTPS with this certificate chain (PEM); needs --tls-key. Cookies are then
     /// Secure. Behind a reverse proxy that terminates TLS, leave it out (docs/HMI.md).
     #[arg(long, requires = "tls_key")]
@@ -51,13 +52,21 @@ pub(crate) struct HmiArgs {
     /// hmi.toml `local_address` (the address the project gives its HMI's group).
     #[arg(long)]
     local_address: Option<std::net::IpAddr>,
-    /// Stop after this many seconds (runs until Ctrl-C or SIGTERM otherwise).
-    #[arg(long)]
-    duration: Option<f64>,
+    /// Stop after this long (`30s`, `10m`; a plain number is seconds); runs until Ctrl-C
+    /// or SIGTERM otherwise.
+    #[arg(long, value_name = "TIME", value_parser = crate::duration_arg::seconds)]
+    duration: Option<std::time::Duration>,
 }
 
 pub(crate) async fn run(args: HmiArgs) -> anyhow::Result<ExitCode> {
     let mut interrupt = crate::interrupt::Interrupt::listen();
+    let zone = match args.time_zone {
+        Some(zone) => zone,
+        None => hmi::config::HmiConfig::load(&args.screens)
+            .context("the HMI does not start")?
+            .time_zone
+            .unwrap_or_default(),
+    };
     let users = args
         .users
         .clone()
@@ -79,7 +88,7 @@ pub(crate) async fn run(args: HmiArgs) -> anyhow::Result<ExitCode> {
             listen: args.listen,
             store: (args.store != "none").then(|| args.store.clone()),
             archive: args.archive.clone(),
-            zone: args.time_zone,
+            zone,
             local_address: args.local_address,
         },
         serve,
@@ -97,7 +106,7 @@ pub(crate) async fn run(args: HmiArgs) -> anyhow::Result<ExitCode> {
         users.display()
     );
     match args.duration {
-        Some(seconds) => tokio::time::sleep(Duration::from_secs_f64(seconds.clamp(0.0, 1e9))).await,
+        Some(duration) => tokio::time::sleep(duration).await,
         None => interrupt.recv().await,
     }
     hmi.shutdown().await;

@@ -16,6 +16,7 @@
 mod comtrade;
 mod console;
 mod demo;
+mod duration_arg;
 mod events;
 mod examples;
 mod hmi;

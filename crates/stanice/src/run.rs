@@ -7,7 +7,6 @@
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::time::Duration;
 
 use anyhow::Context as _;
 use chrono::{DateTime, Utc};
@@ -44,15 +43,21 @@ pub(crate) struct RunOptions {
     /// Simulated start time (RFC 3339, e.g. 2025-01-15T16:00:00Z); default: now.
     #[arg(long)]
     start: Option<DateTime<Utc>>,
-    /// Stop after this many real seconds (runs until Ctrl-C or SIGTERM otherwise).
-    #[arg(long)]
-    duration: Option<f64>,
+    /// Stop after this long in real time (`30s`, `10m`; a plain number is seconds); runs
+    /// until Ctrl-C or SIGTERM otherwise.
+    #[arg(long, value_name = "TIME", value_parser = crate::duration_arg::seconds)]
+    duration: Option<std::time::Duration>,
     /// Also serve the project's web HMI (its `hmi/` folder) on 127.0.0.1:8080 + (port
     /// base - 2404); the demo does by default.
     #[arg(long)]
     hmi: bool,
-    /// The web HMI's port instead (0: any free port).
-    #[arg(long)]
+    /// Where browsers reach the web HMI instead (`127.0.0.1:8080`; port 0: any free
+    /// port); the same option as `stanice hmi --hmi-listen`. Implies --hmi.
+    #[arg(long, value_name = "ADDR:PORT", conflicts_with = "hmi_port")]
+    hmi_listen: Option<std::net::SocketAddr>,
+    /// The web HMI's port on 127.0.0.1 instead (0: any free port): short for
+    /// `--hmi-listen 127.0.0.1:PORT`.
+    #[arg(long, value_name = "PORT")]
     hmi_port: Option<u16>,
     /// Serve the web HMI over HTTPS with this certificate chain (PEM, the server's
     /// certificate first); needs --hmi-tls-key and implies --hmi. Cookies are then Secure.
@@ -70,7 +75,8 @@ struct HmiPlan {
     required: bool,
     /// The event store is in memory (`--store none`).
     memory_store: bool,
-    port: Option<u16>,
+    /// Where browsers reach it; `None`: 127.0.0.1 at 8080 + (port base - 2404).
+    listen: Option<std::net::SocketAddr>,
     tls: Option<hmi::tls::TlsFiles>,
 }
 
@@ -111,10 +117,15 @@ pub(crate) async fn run_project(
         // clap requires both or neither.
         _ => None,
     };
-    let plan = (options.hmi || demo || tls.is_some()).then(|| HmiPlan {
-        required: options.hmi || tls.is_some(),
+    let asked = options.hmi || tls.is_some() || options.hmi_listen.is_some();
+    let plan = (asked || demo).then(|| HmiPlan {
+        required: asked,
         memory_store: options.store.as_deref() == Some("none"),
-        port: options.hmi_port,
+        listen: options.hmi_listen.or_else(|| {
+            options
+                .hmi_port
+                .map(|port| std::net::SocketAddr::from(([127, 0, 0, 1], port)))
+        }),
         tls,
     });
     if let Some(plan) = plan.as_ref().filter(|plan| plan.required) {
@@ -177,9 +188,7 @@ pub(crate) async fn run_project(
     println!("Type a fault or operation here (`help` lists them); Ctrl-C stops (SIGTERM too).");
     let stop = async {
         match options.duration {
-            Some(seconds) => {
-                tokio::time::sleep(Duration::from_secs_f64(seconds.clamp(0.0, 1e9))).await
-            }
+            Some(duration) => tokio::time::sleep(duration).await,
             None => interrupt.recv().await,
         }
     };
@@ -253,9 +262,9 @@ async fn start_hmi(
         return not_started("the project's top node does not run here (--node)".to_owned());
     };
     let offset = i32::from(project.station.port_base) - 2404;
-    let port = plan
-        .port
-        .unwrap_or_else(|| u16::try_from(8080 + offset).unwrap_or(0));
+    let listen = plan.listen.unwrap_or_else(|| {
+        std::net::SocketAddr::from(([127, 0, 0, 1], u16::try_from(8080 + offset).unwrap_or(0)))
+    });
     let store = if plan.memory_store {
         "sqlite::memory:".to_owned()
     } else {
@@ -273,7 +282,7 @@ async fn start_hmi(
             users: users_file(&project.folder),
             connect: vec![server.local_addr().to_string()],
             common_address: top.common_address,
-            listen: std::net::SocketAddr::from(([127, 0, 0, 1], port)),
+            listen,
             store: Some(store),
             archive,
             zone: station::pointdb::TimeZonePolicy::Zone(project.station.time_zone),

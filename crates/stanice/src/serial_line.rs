@@ -82,35 +82,37 @@ impl LineArgs {
     }
 }
 
-/// A time in milliseconds from an option, checked against a range.
-pub(crate) fn millis(
-    value: u64,
-    range: std::ops::RangeInclusive<u64>,
+/// A duration from an option, checked against a range.
+pub(crate) fn within(
+    value: Duration,
+    range: std::ops::RangeInclusive<Duration>,
     name: &str,
 ) -> anyhow::Result<Duration> {
     if !range.contains(&value) {
         bail!(
-            "{name} must be within {}..={} ms",
+            "{name} must be within {:?}..={:?}",
             range.start(),
             range.end()
         );
     }
-    Ok(Duration::from_millis(value))
+    Ok(value)
 }
 
 /// How a master polls its line: the options shared by `stanice iec101 master` and
 /// `stanice iec103 master`.
 #[derive(Args, Clone, Debug)]
 pub(crate) struct PollingArgs {
-    /// Milliseconds to wait for an answer after a request has left the line.
-    #[arg(long, default_value_t = 500)]
-    pub(crate) timeout: u64,
+    /// How long to wait for an answer after a request has left the line (`500ms`, `1s`;
+    /// a plain number is milliseconds).
+    #[arg(long, value_name = "TIME", default_value = "500ms", value_parser = crate::duration_arg::millis)]
+    pub(crate) timeout: Duration,
     /// Repeats of an unanswered request.
     #[arg(long, default_value_t = 2)]
     pub(crate) retries: u8,
-    /// Milliseconds between two class 2 polls of a device.
-    #[arg(long, default_value_t = 100)]
-    pub(crate) poll_interval: u64,
+    /// The time between two class 2 polls of a device (`100ms`; a plain number is
+    /// milliseconds).
+    #[arg(long, value_name = "TIME", default_value = "100ms", value_parser = crate::duration_arg::millis)]
+    pub(crate) poll_interval: Duration,
     /// Also print the link layer: every request and answer, timeouts, line errors.
     #[arg(long)]
     pub(crate) verbose: bool,
@@ -124,9 +126,17 @@ impl PollingArgs {
     ) -> anyhow::Result<iec60870::ft12::PrimaryConfig> {
         Ok(iec60870::ft12::PrimaryConfig {
             line,
-            response_timeout: millis(self.timeout, 5..=60_000, "--timeout")?,
+            response_timeout: within(
+                self.timeout,
+                Duration::from_millis(5)..=Duration::from_secs(60),
+                "--timeout",
+            )?,
             retries: self.retries,
-            poll_interval: millis(self.poll_interval, 0..=3_600_000, "--poll-interval")?,
+            poll_interval: within(
+                self.poll_interval,
+                Duration::ZERO..=Duration::from_secs(3600),
+                "--poll-interval",
+            )?,
             ..iec60870::ft12::PrimaryConfig::default()
         })
     }

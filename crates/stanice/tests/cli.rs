@@ -729,6 +729,63 @@ fn client_prints_every_point_as_json() {
     assert_eq!(point(282)["quality"], serde_json::json!([]));
     // Counters answer counter interrogation, not GI.
     assert!(!lines.iter().any(|line| line["ioa"] == 800));
+    // Times say their zone: UTC by default, as the test servers stamp.
+    assert!(
+        point(281)["received"].as_str().unwrap().ends_with('Z'),
+        "{}",
+        point(281)
+    );
+}
+
+/// With `--time-zone` the client reads the station's time tags in that zone and prints
+/// them, and the receive time, with the zone's offset (it printed the receive time in
+/// UTC beside time tags in local time, and JSON times without an offset).
+#[test]
+fn the_client_prints_times_with_the_offset_of_its_zone() {
+    let port = free_port();
+    let _server = outstation(
+        port,
+        &[
+            "--simulate",
+            "--simulate-interval",
+            "0.1",
+            "--time-zone",
+            "Europe/Prague",
+        ],
+    );
+    let mut client = stanice();
+    client.args([
+        "iec104",
+        "client",
+        &format!("127.0.0.1:{port}"),
+        "--ca",
+        "7",
+    ]);
+    client.args(["--json", "--time-zone", "Europe/Prague", "--duration", "4"]);
+    let output = run_bounded(client, 30);
+    assert!(output.status.success(), "{output:?}");
+    let lines: Vec<Value> = String::from_utf8_lossy(&output.stdout)
+        .lines()
+        .filter_map(|line| serde_json::from_str(line).ok())
+        .collect();
+    let prague = |text: &str| text.ends_with("+01:00") || text.ends_with("+02:00");
+    let tagged: Vec<&Value> = lines
+        .iter()
+        .filter(|line| line["time"].is_string())
+        .collect();
+    assert!(!tagged.is_empty(), "no time-tagged object in {lines:#?}");
+    for line in tagged {
+        assert!(prague(line["time"].as_str().unwrap()), "{line}");
+        assert!(prague(line["received"].as_str().unwrap()), "{line}");
+        // The tag and the receipt name the same moment (the server stamps it as it sends).
+        let tag = chrono::DateTime::parse_from_rfc3339(line["time"].as_str().unwrap()).unwrap();
+        let received =
+            chrono::DateTime::parse_from_rfc3339(line["received"].as_str().unwrap()).unwrap();
+        assert!(
+            (received - tag).num_seconds().abs() < 60,
+            "tag and receipt an hour apart: {line}"
+        );
+    }
 }
 
 #[test]
@@ -2245,6 +2302,58 @@ fn idle_clients_from_other_addresses_do_not_lock_out_a_fresh_dispatch_client() {
         started.elapsed()
     });
     eprintln!("dispatch's GI through 70 idle clients took {elapsed:?}");
+}
+
+/// One convention for the options of every command: durations take their unit (`5s`,
+/// `250ms`; a word that is none is refused naming the form), `--ca` is 1 unless given in
+/// `client` and `command` alike, and the web HMI's address is `--hmi-listen` in `hmi` and
+/// `run` alike.
+#[test]
+fn options_follow_one_convention() {
+    let port = free_port();
+    let _server = outstation(port, &["--simulate-interval", "250ms"]);
+    let mut command = stanice();
+    command.args([
+        "iec104",
+        "command",
+        &format!("127.0.0.1:{port}"),
+        "--ca",
+        "7",
+    ]);
+    command.args(["--ioa", "2021", "--type", "C_SC_NA_1", "--value", "ON"]);
+    command.args(["--timeout", "5s", "--t1", "15s", "--t3", "1m"]);
+    assert_success(&run_bounded(command, 30));
+
+    let mut client = stanice();
+    client.args(["iec104", "client", "127.0.0.1:2404", "--duration", "ten"]);
+    let output = run_bounded(client, 30);
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("500ms, 2s, 10m"), "{stderr}");
+
+    // Without --ca a command goes to common address 1, as the client's interrogation does:
+    // this outstation is 7, so it is refused (a negative confirmation, not a usage error).
+    let mut command = stanice();
+    command.args(["iec104", "command", &format!("127.0.0.1:{port}")]);
+    command.args(["--ioa", "2021", "--type", "C_SC_NA_1", "--value", "ON"]);
+    let output = run_bounded(command, 30);
+    assert_eq!(output.status.code(), Some(1), "{output:?}");
+
+    let mut hmi = stanice();
+    hmi.args(["hmi", "--connect", "127.0.0.1:1", "--screens"])
+        .arg(vsetin().join("hmi"))
+        .args([
+            "--hmi-listen",
+            "127.0.0.1:0",
+            "--store",
+            "none",
+            "--duration",
+            "500ms",
+        ]);
+    assert_success(&run_bounded(hmi, 60));
+    let mut help = stanice();
+    help.args(["run", "--help"]);
+    assert!(assert_success(&run_bounded(help, 30)).contains("--hmi-listen"));
 }
 
 #[test]

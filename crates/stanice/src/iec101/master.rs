@@ -34,15 +34,21 @@ pub(crate) struct MasterArgs {
     /// Send a clock synchronisation (UTC) when an outstation's link comes up.
     #[arg(long)]
     clock_sync: bool,
-    /// Stop after this many seconds (runs until Ctrl-C or SIGTERM otherwise).
-    #[arg(long)]
-    duration: Option<f64>,
+    /// Stop after this long (`30s`, `10m`; a plain number is seconds); runs until Ctrl-C
+    /// or SIGTERM otherwise.
+    #[arg(long, value_name = "TIME", value_parser = crate::duration_arg::seconds)]
+    duration: Option<std::time::Duration>,
     /// One JSON object per information object instead of analyser lines.
     #[arg(long)]
     json: bool,
     /// Stop when the general interrogation has terminated (with --gi), at every station.
     #[arg(long, requires = "gi")]
     exit_after_gi: bool,
+    /// The zone of the station's time tags, which printed times are shown in too (with
+    /// their offset): an IANA name (`Europe/Prague`), `UTC` (the test servers' default)
+    /// or `local`.
+    #[arg(long, value_name = "ZONE", default_value = "UTC")]
+    time_zone: iec60870::time::TimeZonePolicy,
     #[command(flatten)]
     polling: PollingArgs,
     #[command(flatten)]
@@ -50,6 +56,7 @@ pub(crate) struct MasterArgs {
 }
 
 pub(crate) async fn run(args: MasterArgs) -> anyhow::Result<ExitCode> {
+    crate::printed_time::set_tool_zone(args.time_zone);
     let transport = args.line.transport()?;
     let params = args.sizes.params()?;
     let config = PrimaryConfig {

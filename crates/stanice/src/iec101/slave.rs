@@ -36,12 +36,13 @@ pub(crate) struct SlaveArgs {
     /// Change values over time and send them spontaneously.
     #[arg(long)]
     simulate: bool,
-    /// Seconds between simulated changes.
-    #[arg(long, default_value_t = 1.0)]
-    simulate_interval: f64,
-    /// Stop after this many seconds (runs until Ctrl-C or SIGTERM otherwise).
-    #[arg(long)]
-    duration: Option<f64>,
+    /// The time between simulated changes (`1s`, `100ms`; a plain number is seconds).
+    #[arg(long, value_name = "TIME", default_value = "1s", value_parser = crate::duration_arg::seconds)]
+    simulate_interval: Duration,
+    /// Stop after this long (`30s`, `10m`; a plain number is seconds); runs until Ctrl-C
+    /// or SIGTERM otherwise.
+    #[arg(long, value_name = "TIME", value_parser = crate::duration_arg::seconds)]
+    duration: Option<std::time::Duration>,
     /// Answer "ACK" and "no data" with the single character E5 where allowed.
     #[arg(long)]
     single_char: bool,
@@ -71,7 +72,7 @@ pub(crate) async fn run(args: SlaveArgs) -> anyhow::Result<ExitCode> {
     )?);
     handler.serve(Arc::clone(&outstation));
     if args.simulate {
-        let interval = Duration::from_secs_f64(args.simulate_interval.clamp(0.001, 3600.0));
+        let interval = args.simulate_interval.max(Duration::from_millis(1));
         tokio::spawn(crate::iec104::simulate::run(
             Arc::clone(&outstation),
             monitor_rows,

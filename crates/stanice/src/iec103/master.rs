@@ -127,9 +127,10 @@ pub(crate) struct MasterArgs {
     /// Stop once this many disturbance records are written.
     #[arg(long, value_name = "N", requires = "disturbance_dir")]
     exit_after_records: Option<usize>,
-    /// Stop after this many seconds (runs until Ctrl-C or SIGTERM otherwise).
-    #[arg(long)]
-    duration: Option<f64>,
+    /// Stop after this long (`30s`, `10m`; a plain number is seconds); runs until Ctrl-C
+    /// or SIGTERM otherwise.
+    #[arg(long, value_name = "TIME", value_parser = crate::duration_arg::seconds)]
+    duration: Option<std::time::Duration>,
     /// Stop when the general interrogation has ended at every device (with --gi).
     #[arg(long, requires = "gi")]
     exit_after_gi: bool,
@@ -140,6 +141,11 @@ pub(crate) struct MasterArgs {
     /// One JSON object per ASDU instead of text lines.
     #[arg(long)]
     json: bool,
+    /// The zone of the station's time tags, which printed times are shown in too (with
+    /// their offset): an IANA name (`Europe/Prague`), `UTC` (the test servers' default)
+    /// or `local`.
+    #[arg(long, value_name = "ZONE", default_value = "UTC")]
+    time_zone: iec60870::time::TimeZonePolicy,
     #[command(flatten)]
     polling: PollingArgs,
 }
@@ -160,6 +166,7 @@ struct Progress {
 }
 
 pub(crate) async fn run(args: MasterArgs) -> anyhow::Result<ExitCode> {
+    crate::printed_time::set_tool_zone(args.time_zone);
     let transport = args.line.transport()?;
     let manual = !args.telegrams.is_empty();
     let polling = args.polling.primary_config(args.line.settings()?)?;
@@ -406,7 +413,7 @@ fn next_telegram(master: &mut Master, first: u8, progress: &mut Progress) -> Con
         Telegram::Time => {
             let now = chrono::Utc::now().naive_utc();
             println!(
-                "{} Send time: {} (broadcast)",
+                "{} Send time: {} UTC (broadcast)",
                 receipt_time(),
                 now.format("%Y-%m-%d %H:%M:%S%.3f")
             );

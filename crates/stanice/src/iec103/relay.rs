@@ -36,27 +36,29 @@ pub(crate) struct RelayArgs {
     /// The relay's link and common address (SlaveAddress, 1-31 on the REF630).
     #[arg(long, default_value_t = 1)]
     address: u8,
-    /// Seconds between cyclic measurands (CycMeasRepTime, 1-1800).
-    #[arg(long, default_value_t = 5.0)]
-    cycle: f64,
+    /// The time between cyclic measurands (CycMeasRepTime, 1s-30m; a plain number is
+    /// seconds).
+    #[arg(long, value_name = "TIME", default_value = "5s", value_parser = crate::duration_arg::seconds)]
+    cycle: Duration,
     /// Measured values at start, as multiples of rated: I,U (currents, voltages).
     #[arg(long, value_delimiter = ',', value_name = "I,U")]
     inject: Vec<f64>,
     /// Answer "ACK" and "no data" with the single character E5 where allowed.
     #[arg(long)]
     single_char: bool,
-    /// Stop after this many seconds (runs until Ctrl-C or SIGTERM otherwise).
-    #[arg(long)]
-    duration: Option<f64>,
+    /// Stop after this long (`30s`, `10m`; a plain number is seconds); runs until Ctrl-C
+    /// or SIGTERM otherwise.
+    #[arg(long, value_name = "TIME", value_parser = crate::duration_arg::seconds)]
+    duration: Option<std::time::Duration>,
 }
 
 pub(crate) async fn run(args: RelayArgs) -> anyhow::Result<ExitCode> {
-    if !(1.0..=1800.0).contains(&args.cycle) {
+    if !(Duration::from_secs(1)..=Duration::from_secs(1800)).contains(&args.cycle) {
         anyhow::bail!("--cycle must be within 1..=1800 s (CycMeasRepTime)");
     }
     let settings = args.line.settings()?;
     let mut profile = DeviceProfile::ref630(args.address);
-    profile.cycle = Duration::from_secs_f64(args.cycle);
+    profile.cycle = args.cycle;
     let now = tokio::time::Instant::now().into_std();
     let mut device = Device::new(profile, now, chrono::Utc::now().naive_utc());
     if !args.inject.is_empty() {
@@ -77,7 +79,9 @@ pub(crate) async fn run(args: RelayArgs) -> anyhow::Result<ExitCode> {
         while let Some(line) = lines.next().await? {
             println!(
                 "REF630 relay simulator at address {} on {} ({settings}), CycMeasRepTime {} s; type `help`",
-                args.address, line.peer, args.cycle
+                args.address,
+                line.peer,
+                args.cycle.as_secs_f64()
             );
             let end = drive(line.stream, &mut station, &mut inbox, |relay| {
                 while let Some(event) = relay.app().poll_event() {
@@ -114,7 +118,7 @@ fn describe(event: &DeviceEvent) -> String {
         DeviceEvent::Interrogated { scn } => format!("general interrogation, scan number {scn}"),
         DeviceEvent::ClockSynchronised { time } => {
             format!(
-                "clock synchronised to {}",
+                "clock synchronised to {} (the master's wall-clock time; IEC 103 sends no zone)",
                 time.format("%Y-%m-%d %H:%M:%S%.3f")
             )
         }

@@ -132,7 +132,7 @@ pub(crate) fn json(address: u16, asdu: &Asdu) -> Value {
         }),
         Body::GiTermination { scn } | Body::GiInitiation { scn } => json!({ "scn": scn }),
         Body::TimeSync { time } => json!({
-            "time": time.to_naive().ok().map(|time| time.format("%Y-%m-%dT%H:%M:%S%.3f").to_string()),
+            "time": crate::printed_time::tag_stamp(time),
         }),
         _ => json!({
             "text": asdu.to_string(),

@@ -24,9 +24,10 @@ pub(crate) struct ClientArgs {
     /// Send a clock synchronisation (UTC) after the start of data transfer.
     #[arg(long)]
     clock_sync: bool,
-    /// Stop after this many seconds (runs until Ctrl-C or SIGTERM otherwise).
-    #[arg(long)]
-    duration: Option<f64>,
+    /// Stop after this long (`30s`, `10m`; a plain number is seconds); runs until Ctrl-C
+    /// or SIGTERM otherwise.
+    #[arg(long, value_name = "TIME", value_parser = crate::duration_arg::seconds)]
+    duration: Option<std::time::Duration>,
     /// One JSON object per information object instead of analyser lines.
     #[arg(long)]
     json: bool,
@@ -36,11 +37,17 @@ pub(crate) struct ClientArgs {
     /// Do not reconnect after the connection is lost: exit non-zero instead.
     #[arg(long)]
     no_reconnect: bool,
+    /// The zone of the station's time tags, which printed times are shown in too (with
+    /// their offset): an IANA name (`Europe/Prague`), `UTC` (the test servers' default)
+    /// or `local`.
+    #[arg(long, value_name = "ZONE", default_value = "UTC")]
+    time_zone: iec60870::time::TimeZonePolicy,
     #[command(flatten)]
     link: LinkOptions,
 }
 
 pub(crate) async fn run(args: ClientArgs) -> anyhow::Result<ExitCode> {
+    crate::printed_time::set_tool_zone(args.time_zone);
     let mut addresses = Vec::new();
     for address in args.address.split(',') {
         addresses.push(super::server_address(address).await?);
@@ -74,9 +81,9 @@ pub(crate) async fn run(args: ClientArgs) -> anyhow::Result<ExitCode> {
     // One listener for the whole loop: a Ctrl-C between two events is not lost.
     let mut interrupt = crate::interrupt::Interrupt::listen();
     let (client, mut events) = spawn_client(config);
-    let deadline = args.duration.map(|seconds| {
-        tokio::time::Instant::now() + Duration::from_secs_f64(seconds.clamp(0.0, 1e9))
-    });
+    let deadline = args
+        .duration
+        .map(|duration| tokio::time::Instant::now() + duration);
     let mut exit = ExitCode::SUCCESS;
     // Whether the server was ever reached, and the last reason it was not.
     let mut reached = false;

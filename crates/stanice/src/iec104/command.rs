@@ -21,8 +21,8 @@ use super::LinkOptions;
 pub(crate) struct CommandArgs {
     /// Server address `HOST:PORT`.
     address: String,
-    /// Common address of the station.
-    #[arg(long)]
+    /// Common address of the station (1 unless given, as for `client`).
+    #[arg(long, default_value_t = 1)]
     ca: u16,
     /// Address of the command point.
     #[arg(long)]
@@ -44,9 +44,10 @@ pub(crate) struct CommandArgs {
     /// or of set-point (QL 0..=127).
     #[arg(long, default_value_t = 0)]
     qualifier: u8,
-    /// Seconds to wait for the connection, the confirmation and the termination.
-    #[arg(long, default_value_t = 10.0)]
-    timeout: f64,
+    /// How long to wait for the connection, the confirmation and the termination (`10s`;
+    /// a plain number is seconds).
+    #[arg(long, value_name = "TIME", default_value = "10s", value_parser = crate::duration_arg::seconds)]
+    timeout: Duration,
     /// Also print every other ASDU that arrives meanwhile (spontaneous data, the
     /// interrogation a server may send at start); by default only the command's
     /// confirmation, termination and return information are shown.
@@ -62,7 +63,9 @@ pub(crate) async fn run(args: CommandArgs) -> anyhow::Result<ExitCode> {
     }
     let ioa = Ioa::try_new(args.ioa).map_err(|error| anyhow::anyhow!("--ioa: {error}"))?;
     let execute = parse_command(args.type_id, &args.value, false, args.qualifier)?;
-    let timeout = Duration::from_secs_f64(args.timeout.clamp(0.1, 3600.0));
+    let timeout = args
+        .timeout
+        .clamp(Duration::from_millis(100), Duration::from_secs(3600));
     let address = super::server_address(&args.address).await?;
     let mut config = ClientConfig::new(address, CommonAddress::new(args.ca));
     config.apci = args.link.apci()?;

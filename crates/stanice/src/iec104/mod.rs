@@ -22,15 +22,18 @@ use clap::{Args, Subcommand};
 /// Options shared by the tool's network commands.
 #[derive(Args, Clone, Debug)]
 pub(crate) struct LinkOptions {
-    /// t1: seconds to wait for an acknowledgement or a confirmation.
-    #[arg(long, default_value_t = 15.0)]
-    pub(crate) t1: f64,
-    /// t2: seconds before acknowledging received frames when there is nothing to send.
-    #[arg(long, default_value_t = 10.0)]
-    pub(crate) t2: f64,
-    /// t3: seconds of silence before a test frame.
-    #[arg(long, default_value_t = 20.0)]
-    pub(crate) t3: f64,
+    /// t1: how long to wait for an acknowledgement or a confirmation (`15s`; a plain
+    /// number is seconds).
+    #[arg(long, value_name = "TIME", default_value = "15s", value_parser = crate::duration_arg::seconds)]
+    pub(crate) t1: std::time::Duration,
+    /// t2: how long before acknowledging received frames when there is nothing to send
+    /// (`10s`; a plain number is seconds).
+    #[arg(long, value_name = "TIME", default_value = "10s", value_parser = crate::duration_arg::seconds)]
+    pub(crate) t2: std::time::Duration,
+    /// t3: how long a silence lasts before a test frame (`20s`; a plain number is
+    /// seconds).
+    #[arg(long, value_name = "TIME", default_value = "20s", value_parser = crate::duration_arg::seconds)]
+    pub(crate) t3: std::time::Duration,
     /// k: unacknowledged frames sent at most.
     #[arg(long, default_value_t = 12)]
     pub(crate) k: u16,
@@ -50,12 +53,12 @@ pub(crate) struct LinkOptions {
 
 impl LinkOptions {
     pub(crate) fn apci(&self) -> anyhow::Result<iec60870::cs104::config::ApciConfig> {
-        let seconds = |value: f64, name: &str| {
-            if value.is_finite() && value > 0.0 && value < 86_400.0 {
-                Ok(std::time::Duration::from_secs_f64(value))
+        let seconds = |value: std::time::Duration, name: &str| {
+            if !value.is_zero() && value < std::time::Duration::from_secs(86_400) {
+                Ok(value)
             } else {
                 Err(anyhow::anyhow!(
-                    "{name} must be a positive number of seconds"
+                    "{name} must be longer than 0 and shorter than a day"
                 ))
             }
         };

@@ -5,15 +5,18 @@
 //! `negative`, `test`, `originator`, `ca`, `ioa`, `value` (bool for single points and
 //! commands; integer DPI 0..3 for double points; fraction for normalized values, with
 //! `raw`; number otherwise), `quality` (list of the set flags: IV, NT, SB, BL, OV),
-//! `time` (ISO 8601 of the time tag, or null), `time_invalid`, `summer_time`, `text`
-//! (the element as the analyser prints it).
+//! `time` (the time tag as RFC 3339 with the offset of `--time-zone`, the zone the tag
+//! is read in; or null), `time_invalid`, `summer_time`, `text` (the element as the
+//! analyser prints it), `received` (when it arrived, RFC 3339 in the same zone).
 
 use iec60870::asdu::{Asdu, Element, InformationObject, Quality, TimeTag};
 use iec60870::cs104::client::ClientEvent;
 use serde_json::{json, Value};
 
+/// When something was received: RFC 3339 with the offset of the tool's zone
+/// (`--time-zone`), the zone its time tags are read in too, so that the two agree.
 pub(crate) fn receipt_time() -> String {
-    chrono::Local::now().format("%H:%M:%S%.3f").to_string()
+    crate::printed_time::now_stamp()
 }
 
 /// One event as analyser text (several lines for an ASDU with several objects).
@@ -82,8 +85,8 @@ fn object_json(asdu: &Asdu, object: &InformationObject) -> Value {
     }
     let (time, time_invalid, summer_time) = match &object.time {
         Some(TimeTag::Cp56(time)) => (
-            time.to_naive()
-                .map(|naive| json!(naive.format("%Y-%m-%dT%H:%M:%S%.3f").to_string()))
+            crate::printed_time::tag_stamp(time)
+                .map(|stamp| json!(stamp))
                 .unwrap_or(Value::Null),
             json!(time.is_invalid()),
             json!(time.is_summer_time()),
@@ -115,6 +118,7 @@ fn object_json(asdu: &Asdu, object: &InformationObject) -> Value {
         "time_invalid": time_invalid,
         "summer_time": summer_time,
         "text": object.element.to_string(),
+        "received": receipt_time(),
     });
     if let (Some(raw), Some(map)) = (raw, line.as_object_mut()) {
         map.insert("raw".to_owned(), raw);

@@ -36,12 +36,13 @@ pub(crate) struct ServerArgs {
     /// Change values over time and send them spontaneously.
     #[arg(long)]
     simulate: bool,
-    /// Seconds between simulated changes.
-    #[arg(long, default_value_t = 1.0)]
-    simulate_interval: f64,
-    /// Stop after this many seconds (runs until Ctrl-C or SIGTERM otherwise).
-    #[arg(long)]
-    duration: Option<f64>,
+    /// The time between simulated changes (`1s`, `100ms`; a plain number is seconds).
+    #[arg(long, value_name = "TIME", default_value = "1s", value_parser = crate::duration_arg::seconds)]
+    simulate_interval: Duration,
+    /// Stop after this long (`30s`, `10m`; a plain number is seconds); runs until Ctrl-C
+    /// or SIGTERM otherwise.
+    #[arg(long, value_name = "TIME", value_parser = crate::duration_arg::seconds)]
+    duration: Option<std::time::Duration>,
     /// Connections served at once.
     #[arg(long, default_value_t = 64)]
     max_connections: usize,
@@ -56,10 +57,11 @@ pub(crate) struct ServerArgs {
     /// for a group that takes every client no other group names. Repeatable.
     #[arg(long = "group", value_name = "NAME=IPS")]
     groups: Vec<String>,
-    /// Refuse time-tagged commands older than this many seconds, or further in the
-    /// future (the maximum command delay); not checked unless given.
-    #[arg(long, value_name = "SECONDS")]
-    max_command_age: Option<f64>,
+    /// Refuse time-tagged commands older than this, or further in the future (the
+    /// maximum command delay: `30s`; a plain number is seconds); not checked unless given
+    /// (a project's servers check 30 s by default).
+    #[arg(long, value_name = "TIME", value_parser = crate::duration_arg::seconds)]
+    max_command_age: Option<Duration>,
     /// Connections from one client address at once (no limit unless given).
     #[arg(long, value_name = "N")]
     max_per_address: Option<usize>,
@@ -69,10 +71,11 @@ pub(crate) struct ServerArgs {
     /// Slots kept for each `--group` that names addresses: other clients never take them.
     #[arg(long, value_name = "N", default_value_t = 0)]
     reserve_per_group: usize,
-    /// Close a connection that has not started data transfer (STARTDT) within this many
-    /// seconds, unless a `--group` names its address (a standby may wait).
-    #[arg(long, value_name = "SECONDS")]
-    start_timeout: Option<f64>,
+    /// Close a connection that has not started data transfer (STARTDT) within this long
+    /// (`30s`; a plain number is seconds), unless a `--group` names its address (a
+    /// standby may wait).
+    #[arg(long, value_name = "TIME", value_parser = crate::duration_arg::seconds)]
+    start_timeout: Option<Duration>,
     /// The zone of time tags: `UTC` or a zone name such as `Europe/Prague` (SU set in
     /// summer time).
     #[arg(long, default_value = "UTC")]
@@ -164,15 +167,6 @@ impl StationHandler for CommandLogger {
 }
 
 /// An optional option in seconds as a duration.
-fn seconds_option(option: &str, seconds: Option<f64>) -> anyhow::Result<Option<Duration>> {
-    seconds
-        .map(|seconds| {
-            Duration::try_from_secs_f64(seconds)
-                .map_err(|_| anyhow::anyhow!("{option} {seconds}: not a duration"))
-        })
-        .transpose()
-}
-
 /// The redundancy mode of `--mode` with the groups of `--group`.
 fn redundancy_mode(mode: &str, groups: &[String]) -> anyhow::Result<RedundancyMode> {
     let groups = groups
@@ -229,10 +223,10 @@ pub(crate) async fn run(args: ServerArgs) -> anyhow::Result<ExitCode> {
     config.max_connections_per_address = args.max_per_address;
     config.max_connections_per_group = args.max_per_group;
     config.reserved_per_group = args.reserve_per_group;
-    config.start_timeout = seconds_option("--start-timeout", args.start_timeout)?;
+    config.start_timeout = args.start_timeout;
     config.outstation.redundancy = redundancy_mode(&args.mode, &args.groups)?;
     config.outstation.time_zone = args.time_zone;
-    config.outstation.max_command_age = seconds_option("--max-command-age", args.max_command_age)?;
+    config.outstation.max_command_age = args.max_command_age;
     if let Some(pem) = args.link.tls()? {
         config.tls = Some(iec60870::cs104::tls::server_config(&pem)?);
     }
@@ -251,7 +245,7 @@ pub(crate) async fn run(args: ServerArgs) -> anyhow::Result<ExitCode> {
         args.ca
     );
     if args.simulate {
-        let interval = Duration::from_secs_f64(args.simulate_interval.clamp(0.001, 3600.0));
+        let interval = args.simulate_interval.max(Duration::from_millis(1));
         tokio::spawn(super::simulate::run(
             Arc::clone(server.outstation()),
             monitor_rows,
@@ -260,9 +254,7 @@ pub(crate) async fn run(args: ServerArgs) -> anyhow::Result<ExitCode> {
     }
     let stop = async {
         match args.duration {
-            Some(seconds) => {
-                tokio::time::sleep(Duration::from_secs_f64(seconds.clamp(0.0, 1e9))).await
-            }
+            Some(duration) => tokio::time::sleep(duration).await,
             None => interrupt.recv().await,
         }
     };

@@ -16,7 +16,7 @@ use serde_json::json;
 use tokio::sync::mpsc;
 
 use super::CodecArgs;
-use crate::serial_line::{millis, LineArgs};
+use crate::serial_line::{within, LineArgs};
 
 /// Arguments of `stanice lift poll`.
 #[derive(Args, Debug)]
@@ -28,19 +28,22 @@ pub(crate) struct PollArgs {
     /// One JSON object a line: kind (status, counters, fault, comm) and its fields.
     #[arg(long)]
     json: bool,
-    /// Stop after this many seconds (runs until Ctrl-C or SIGTERM otherwise).
-    #[arg(long)]
-    duration: Option<f64>,
-    /// Milliseconds from one poll cycle (status, counters when due, new faults) to the
-    /// next.
-    #[arg(long, default_value_t = 1000)]
-    poll_period: u64,
-    /// Seconds between two reads of the trip counters.
-    #[arg(long, default_value_t = 60)]
-    counters_period: u64,
-    /// Milliseconds to wait for a reply after the query has left.
-    #[arg(long, default_value_t = 500)]
-    timeout: u64,
+    /// Stop after this long (`30s`, `10m`; a plain number is seconds); runs until Ctrl-C
+    /// or SIGTERM otherwise.
+    #[arg(long, value_name = "TIME", value_parser = crate::duration_arg::seconds)]
+    duration: Option<std::time::Duration>,
+    /// The time from one poll cycle (status, counters when due, new faults) to the next
+    /// (`1s`, `250ms`; a plain number is milliseconds).
+    #[arg(long, value_name = "TIME", default_value = "1s", value_parser = crate::duration_arg::millis)]
+    poll_period: Duration,
+    /// The time between two reads of the trip counters (`60s`, `5m`; a plain number is
+    /// seconds).
+    #[arg(long, value_name = "TIME", default_value = "60s", value_parser = crate::duration_arg::seconds)]
+    counters_period: Duration,
+    /// How long to wait for a reply after the query has left (`500ms`; a plain number is
+    /// milliseconds).
+    #[arg(long, value_name = "TIME", default_value = "500ms", value_parser = crate::duration_arg::millis)]
+    timeout: Duration,
     /// Repeats of an unanswered query before the lift counts as lost.
     #[arg(long, default_value_t = 3)]
     retries: u8,
@@ -61,9 +64,17 @@ pub(crate) async fn run(args: PollArgs) -> anyhow::Result<ExitCode> {
     let mut config = PollerConfig::default();
     config.line = args.line.settings()?;
     config.codec = args.codec.codec()?;
-    config.poll_period = millis(args.poll_period, 10..=3_600_000, "--poll-period")?;
-    config.counters_period = Duration::from_secs(args.counters_period.max(1));
-    config.reply_timeout = millis(args.timeout, 5..=60_000, "--timeout")?;
+    config.poll_period = within(
+        args.poll_period,
+        Duration::from_millis(10)..=Duration::from_secs(3600),
+        "--poll-period",
+    )?;
+    config.counters_period = args.counters_period.max(Duration::from_secs(1));
+    config.reply_timeout = within(
+        args.timeout,
+        Duration::from_millis(5)..=Duration::from_secs(60),
+        "--timeout",
+    )?;
     config.retries = args.retries;
     config.index_base = match args.index_base.as_str() {
         "0" => IndexBase::Zero,

@@ -49,9 +49,10 @@ pub(crate) struct SimulateArgs {
     /// Print every query answered and every arrival.
     #[arg(long)]
     verbose: bool,
-    /// Stop after this many seconds (runs until Ctrl-C or SIGTERM otherwise).
-    #[arg(long)]
-    duration: Option<f64>,
+    /// Stop after this long (`30s`, `10m`; a plain number is seconds); runs until Ctrl-C
+    /// or SIGTERM otherwise.
+    #[arg(long, value_name = "TIME", value_parser = crate::duration_arg::seconds)]
+    duration: Option<std::time::Duration>,
 }
 
 pub(crate) async fn run(args: SimulateArgs) -> anyhow::Result<ExitCode> {
