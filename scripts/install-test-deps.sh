@@ -13,6 +13,10 @@
 #                  through chromedriver over WebDriver)
 #   * aiosmtpd    (PyPI; the loopback SMTP server the notify crate's e-mail
 #                  tests start, tests/support/smtp_sink.py)
+#   * hat-drivers (PyPI; its IEC 60870-5-103 master, FT1.2 link layer and
+#                  serial driver are the independent 103 peer of
+#                  tests/peer/hat103_master.py, used by
+#                  crates/stanice/tests/iec103_hat.rs against our relay)
 #
 # Choice of Python environment: c104 is installed with pip into the machine's
 # own python3 (no venv). c104 ships a manylinux wheel for CPython 3.11 on
@@ -30,6 +34,7 @@ set -euo pipefail
 
 C104_VERSION="2.2.1"   # verified against tests/peer/*.py (see tests/peer/README.md)
 AIOSMTPD_VERSION="1.4.6"   # verified against tests/support/smtp_sink.py
+HAT_DRIVERS_VERSION="0.10.10"   # verified against tests/peer/hat103_master.py
 PYTHON="${PYTHON:-python3}"
 
 export DEBIAN_FRONTEND=noninteractive
@@ -139,6 +144,37 @@ else
     log "aiosmtpd $have installed"
 fi
 
+# ---------------------------------------------------------------- hat-drivers
+# An abi3 manylinux wheel (CPython >= 3.10, x86_64) with its native serial module
+# (hat/drivers/serial/_native_serial.abi3.so): nothing to compile. It pulls in its
+# pure-Python dependencies (hat-aio, hat-json, pyserial, aiohttp, ...). The driver
+# itself only as a wheel: its sdist would need a C toolchain and its build system.
+hat_drivers_installed_version() {
+    "$PYTHON" - <<'EOF' 2>/dev/null || true
+import importlib.metadata as m
+try:
+    # the import itself must work, not only the metadata
+    import hat.drivers.iec103, hat.drivers.iec60870.link, hat.drivers.serial  # noqa: F401
+    print(m.version("hat-drivers"))
+except Exception:
+    pass
+EOF
+}
+
+have="$(hat_drivers_installed_version)"
+if [ "$have" = "$HAT_DRIVERS_VERSION" ]; then
+    log "hat-drivers $have present"
+else
+    log "hat-drivers present: '${have:-none}', want $HAT_DRIVERS_VERSION"
+    "$PYTHON" -m pip install -q --only-binary=hat-drivers "hat-drivers==$HAT_DRIVERS_VERSION"
+    have="$(hat_drivers_installed_version)"
+    if [ "$have" != "$HAT_DRIVERS_VERSION" ]; then
+        log "ERROR: hat-drivers $HAT_DRIVERS_VERSION did not install (found '${have:-none}')"
+        exit 1
+    fi
+    log "hat-drivers $have installed"
+fi
+
 # ---------------------------------------------------------------- postgresql
 # Only the server binaries under /usr/lib/postgresql/*/bin are used. The package
 # may create and start a system cluster on port 5432; that is harmless, the
@@ -170,6 +206,7 @@ log "chromium: $(chromium --version 2>/dev/null | head -n1)"
 # compiled module c104._c104 carries it.
 log "verify: $("$PYTHON" -c 'import c104, c104._c104 as m; print("c104", m.__version__)')"
 log "verify: aiosmtpd $("$PYTHON" -c 'import importlib.metadata as m, aiosmtpd.smtp; print(m.version("aiosmtpd"))')"
+log "verify: hat-drivers $("$PYTHON" -c 'import importlib.metadata as m, hat.drivers.iec103, hat.drivers.serial; print(m.version("hat-drivers"))')"
 log "verify: $(tshark --version 2>/dev/null | head -n1)"
 log "verify: $("$(ls -d /usr/lib/postgresql/*/bin | sort -V | tail -n1)/initdb" --version)"
 log "verify: $(chromedriver --version 2>/dev/null | head -n1)"
