@@ -4,13 +4,14 @@ serial line, for interop tests against `stanice iec103 relay`.
 
     python3 tests/peer/hat103_master.py /dev/pts/N [--address 1]
         [--baud 9600] [--parity none|even] [--timeout 20]
-        [--measurands 1] [--time-sync] [--command FUN,INF,on|off] [--verbose]
+        [--measurands 1] [--time-sync] [--command FUN,INF,on|off]
+        [--wait-disturbance] [--verbose]
 
 On the serial port PORT (8 data bits, 1 stop bit, parity --parity; a Linux
 pseudo-terminal keeps no parity, so the default is none), in this order:
   1. opens the link to --address (hat's unbalanced master sends RESET of the
-     remote link until the station acknowledges it) and polls class 1 (on ACD)
-     and class 2 (every 0.1 s),
+     remote link until the station acknowledges it) and polls class 1 (every
+     second and on ACD) and class 2 (every 0.1 s),
   2. with --time-sync: clock synchronisation (ASDU 6, the host's local time),
   3. general interrogation of common address --address; waits for its
      termination (ASDU 8 with our scan number),
@@ -19,20 +20,27 @@ pseudo-terminal keeps no parity, so the default is none), in this order:
      positive or negative confirmation (ASDU 1 with cause 20 / 21 and our
      return identifier as SIN) and then for the indication at the same FUN/INF
      with cause 12 (remote operation) and the commanded position,
-  6. closes the line and exits.
+  6. with --wait-disturbance: prints {"event":"waiting",...} and waits for an
+     ASDU 23 (list of recorded disturbances; the relay sends one on its
+     console's `fault`) and then one more ASDU 9, proof that hat decoded the
+     23 and kept the connection,
+  7. closes the line and exits.
 
 Everything is bounded by --timeout seconds in total. One JSON object per line
 on stdout, flushed:
 
   {"event":"ready","port":"/dev/pts/3","address":1,"hat_drivers":"0.10.10"}
   {"event":"connected","address":1}
+  {"event":"time_sync_sent","seconds":0.02}
   {"event":"asdu","type":9,"vsq":9,"cause":2,"ca":1,"fun":1,"inf":148,"hex":"0909..."}
   {"event":"data","asdu":1,"cause":"GENERAL_INTERROGATION","ca":1,"fun":1,"inf":160,"value":"ON","sin":0}
   {"event":"data","asdu":9,"cause":"CYCLIC","ca":1,"fun":1,"inf":148,"values":[0.41,...],"invalid":[false,...],"overflow":[false,...]}
-  {"event":"time_sync_sent","seconds":0.02}
   {"event":"gi_done","seconds":0.31}
   {"event":"command","fun":1,"inf":160,"value":"OFF","success":true,"seconds":0.12}
   {"event":"feedback","fun":1,"inf":160,"value":"OFF","seconds":0.25}
+  {"event":"waiting","for":"disturbance"}
+  {"event":"data","asdu":2,"cause":"SPONTANEOUS","ca":1,"fun":160,"inf":92,"value":"ON","fault_number":1,"relative_time":40,"sin":0}
+  {"event":"disturbance_seen","seconds":3.2}
   {"event":"done","asdus":14,"measurands":2}
   {"event":"error","reason":"timeout"|"disconnected"|"refused"|..., "message":"..."}
 
@@ -75,8 +83,9 @@ class RawTap:
     """The link connection, passed to hat's master unchanged, printing every
     received ASDU's raw octets first."""
 
-    def __init__(self, conn):
+    def __init__(self, conn, on_asdu):
         self._conn = conn
+        self._on_asdu = on_asdu
         self.count = 0
 
     @property
@@ -102,6 +111,8 @@ class RawTap:
             line.update(type=data[0], vsq=data[1], cause=data[2], ca=data[3],
                         fun=data[4], inf=data[5])
         emit(line)
+        if data:
+            self._on_asdu(data[0])
         return data
 
     def close(self):
@@ -135,6 +146,13 @@ class Session:
         self.measurand_event = asyncio.Event()
         self.feedback = None  # (fun, inf, value) awaited with cause REMOTE_OPERATION
         self.feedback_event = asyncio.Event()
+        self.asdu_events = {}  # ASDU type -> Event, set when one arrives
+
+    def arrived(self, asdu_type):
+        self.asdu_events.setdefault(asdu_type, asyncio.Event()).set()
+
+    async def wait_asdu(self, asdu_type):
+        await self.asdu_events.setdefault(asdu_type, asyncio.Event()).wait()
 
     def seconds(self):
         return round(time.monotonic() - self.start, 3)
@@ -209,7 +227,7 @@ class Session:
         try:
             conn = await link_open(master_link, ca)
             emit({"event": "connected", "address": ca, "seconds": self.seconds()})
-            tap = RawTap(conn)
+            tap = RawTap(conn, self.arrived)
             master = iec103.MasterConnection(tap, data_cb=self.on_data)
             try:
                 await self.exchange(master, tap, ca)
@@ -249,6 +267,18 @@ class Session:
             emit({"event": "feedback", "fun": fun, "inf": inf, "value": value.name,
                   "seconds": round(time.monotonic() - started, 3)})
 
+        if args.wait_disturbance:
+            # The relay's fault (typed on its console by whoever runs this):
+            # ASDU 2 trips, then ASDU 23 announcing the new record; one more
+            # ASDU 9 after it shows hat decoded the 23 and kept the connection.
+            self.asdu_events.pop(9, None)
+            self.asdu_events.pop(23, None)
+            emit({"event": "waiting", "for": "disturbance"})
+            await self.until(self.wait_asdu(23), master, "ASDU 23")
+            self.asdu_events.pop(9, None)
+            await self.until(self.wait_asdu(9), master, "an ASDU 9 after the ASDU 23")
+            emit({"event": "disturbance_seen", "seconds": self.seconds()})
+
         if not master.is_open:
             raise Failure("disconnected", "the connection closed", 2)
         emit({"event": "done", "asdus": tap.count, "measurands": self.measurands})
@@ -283,6 +313,9 @@ def main():
                         help="a general command after the GI, e.g. 1,160,off")
     parser.add_argument("--time-sync", action="store_true",
                         help="synchronise the relay's clock (ASDU 6) before the GI")
+    parser.add_argument("--wait-disturbance", action="store_true",
+                        help="at the end, print a 'waiting' line and wait for an ASDU 23 "
+                             "(list of recorded disturbances) and one more ASDU 9")
     parser.add_argument("--verbose", action="store_true",
                         help="hat's logs (every frame) on stderr")
     try:

@@ -1,9 +1,10 @@
 //! Interoperability of the relay simulator with an IEC 103 master that is not ours:
 //! hat-drivers' (`hat.drivers.iec103` over its FT1.2 link layer and serial driver, from
 //! PyPI) opens `stanice iec103 relay --pty` as a serial port, synchronises the relay's
-//! clock, runs a general interrogation, reads the cyclic measurands and opens the breaker
-//! by a general command (issue 22: ASDU 9 with SQ = 1 made an independent master drop the
-//! connection; the relay now sends SQ = 0, VSQ 0x09 for nine measurands).
+//! clock, runs a general interrogation, reads the cyclic measurands, opens the breaker by a
+//! general command and reads the announcement of a disturbance record after an earth fault
+//! (issue 22: ASDU 9 with SQ = 1 made an independent master drop the connection; the relay
+//! now sends ASDUs 9 and 23 with SQ = 0, VSQ 0x09 for nine measurands).
 //!
 //! The master runs in `tests/peer/hat103_master.py`. Without hat-drivers the test says so
 //! and passes, unless `STANICE_REQUIRE_PEERS=1` (set by `scripts/test.sh`, hence in CI),
@@ -18,7 +19,7 @@
 
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
-use std::process::{Child, ChildStdin, Command, Output, Stdio};
+use std::process::{Child, ChildStdin, Command, ExitStatus, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -50,137 +51,143 @@ fn hat_available() -> bool {
     false
 }
 
-/// `stanice iec103 relay --pty`, killed when dropped. Its stdout and stderr are drained
-/// all the time (a full pipe would block it) and kept for the assertions and failure
-/// messages; its console stays open on a pipe.
-struct Relay {
+/// A child process, killed when dropped. Its stdout and stderr are drained all the time
+/// (a full pipe would block it) into lines kept for the assertions and failure messages;
+/// its stdin is a pipe (the relay's console) or null.
+struct Process {
     child: Child,
-    output: Arc<Mutex<Vec<String>>>,
-    _console: ChildStdin,
-    path: String,
+    stdout: Arc<Mutex<Vec<String>>>,
+    stderr: Arc<Mutex<Vec<String>>>,
+    console: Option<ChildStdin>,
 }
 
-impl Relay {
-    fn start(args: &[&str]) -> Relay {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_stanice"))
-            .args(["iec103", "relay", "--pty"])
-            .args(args)
-            .stdin(Stdio::piped())
+impl Process {
+    fn spawn(mut command: Command, console: bool) -> Process {
+        let mut child = command
+            .stdin(if console {
+                Stdio::piped()
+            } else {
+                Stdio::null()
+            })
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
             .spawn()
             .unwrap();
-        let output = Arc::new(Mutex::new(Vec::new()));
-        for pipe in [
-            Box::new(child.stdout.take().unwrap()) as Box<dyn Read + Send>,
-            Box::new(child.stderr.take().unwrap()),
-        ] {
-            let sink = Arc::clone(&output);
+        let drain = |pipe: Box<dyn Read + Send>| {
+            let sink = Arc::new(Mutex::new(Vec::new()));
+            let lines = Arc::clone(&sink);
             std::thread::spawn(move || {
                 for line in BufReader::new(pipe).lines().map_while(Result::ok) {
-                    sink.lock().unwrap().push(line);
+                    lines.lock().unwrap().push(line);
                 }
             });
-        }
-        let console = child.stdin.take().unwrap();
-        let mut relay = Relay {
-            child,
-            output,
-            _console: console,
-            path: String::new(),
+            sink
         };
-        let deadline = Instant::now() + Duration::from_secs(30);
-        while Instant::now() < deadline {
-            if let Some(path) = relay.lines().iter().find_map(|line| {
-                line.strip_prefix("pty: ")
-                    .map(|path| path.trim().to_owned())
-            }) {
-                relay.path = path;
-                return relay;
-            }
-            if let Ok(Some(status)) = relay.child.try_wait() {
-                // Exited: let the pipes drain its last words.
-                std::thread::sleep(Duration::from_millis(200));
-                panic!(
-                    "the relay exited ({status}) before its pty:\n{}",
-                    relay.tail()
-                );
-            }
-            std::thread::sleep(Duration::from_millis(20));
+        let stdout = drain(Box::new(child.stdout.take().unwrap()));
+        let stderr = drain(Box::new(child.stderr.take().unwrap()));
+        let console = child.stdin.take();
+        Process {
+            child,
+            stdout,
+            stderr,
+            console,
         }
-        panic!("the relay printed no pty within 30 s:\n{}", relay.tail());
     }
 
-    fn lines(&self) -> Vec<String> {
-        self.output.lock().unwrap().clone()
+    fn stdout(&self) -> Vec<String> {
+        self.stdout.lock().unwrap().clone()
     }
 
-    /// Waits up to `seconds` for a line of the relay's log containing `needle`.
-    fn wait_for_line(&self, needle: &str, seconds: u64) -> bool {
+    /// Waits up to `seconds` for a line on stdout containing `needle`; false if none
+    /// came or the process ended without one.
+    fn wait_for_line(&mut self, needle: &str, seconds: u64) -> bool {
         let deadline = Instant::now() + Duration::from_secs(seconds);
         loop {
-            if self.lines().iter().any(|line| line.contains(needle)) {
+            if self.stdout().iter().any(|line| line.contains(needle)) {
                 return true;
             }
-            if Instant::now() >= deadline {
-                return false;
+            if Instant::now() >= deadline || self.exited() {
+                // Its last lines may still be in the pipe.
+                std::thread::sleep(Duration::from_millis(200));
+                return self.stdout().iter().any(|line| line.contains(needle));
             }
             std::thread::sleep(Duration::from_millis(20));
         }
     }
 
-    /// The last lines it printed, for failure messages.
+    fn exited(&mut self) -> bool {
+        self.child.try_wait().unwrap().is_some()
+    }
+
+    /// Waits up to `seconds` for the process to end (killing it then); its status, and
+    /// whether it ended by itself. Its output is read to the end.
+    fn wait_exit(&mut self, seconds: u64) -> (ExitStatus, bool) {
+        let deadline = Instant::now() + Duration::from_secs(seconds);
+        let mut finished = false;
+        while Instant::now() < deadline {
+            if self.exited() {
+                finished = true;
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        if !finished {
+            let _ = self.child.kill();
+        }
+        let status = self.child.wait().unwrap();
+        // The drain threads end at the pipes' EOF, right after the exit.
+        let drained = Instant::now() + Duration::from_secs(2);
+        while Arc::strong_count(&self.stdout) > 1 || Arc::strong_count(&self.stderr) > 1 {
+            if Instant::now() >= drained {
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        (status, finished)
+    }
+
+    /// Types a line on its console.
+    fn type_line(&mut self, line: &str) {
+        use std::io::Write as _;
+        let console = self.console.as_mut().unwrap();
+        writeln!(console, "{line}").unwrap();
+        console.flush().unwrap();
+    }
+
+    /// Its last lines, for failure messages.
     fn tail(&self) -> String {
-        let lines = self.lines();
-        lines[lines.len().saturating_sub(40)..].join("\n")
+        let mut lines = self.stdout();
+        lines.extend(self.stderr.lock().unwrap().iter().cloned());
+        lines[lines.len().saturating_sub(60)..].join("\n")
     }
 }
 
-impl Drop for Relay {
+impl Drop for Process {
     fn drop(&mut self) {
         let _ = self.child.kill();
         let _ = self.child.wait();
     }
 }
 
-/// Runs a command to completion, killing it after `seconds`. Its output is drained while
-/// it runs, so a chatty command never blocks on a full pipe. Returns its output and
-/// whether it finished by itself.
-fn run_bounded(mut command: Command, seconds: u64) -> (Output, bool) {
-    let mut child = command
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let drain = |mut pipe: Box<dyn Read + Send>| {
-        std::thread::spawn(move || {
-            let mut bytes = Vec::new();
-            let _ = pipe.read_to_end(&mut bytes);
-            bytes
+/// `stanice iec103 relay --pty ARGS`, its console on a pipe, and the pty's path.
+fn start_relay(args: &[&str]) -> (Process, String) {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_stanice"));
+    command.args(["iec103", "relay", "--pty"]).args(args);
+    let mut relay = Process::spawn(command, true);
+    assert!(
+        relay.wait_for_line("pty: ", 30),
+        "the relay printed no pty:\n{}",
+        relay.tail()
+    );
+    let path = relay
+        .stdout()
+        .iter()
+        .find_map(|line| {
+            line.strip_prefix("pty: ")
+                .map(|path| path.trim().to_owned())
         })
-    };
-    let stdout = drain(Box::new(child.stdout.take().unwrap()));
-    let stderr = drain(Box::new(child.stderr.take().unwrap()));
-    let deadline = Instant::now() + Duration::from_secs(seconds);
-    let mut finished = false;
-    while Instant::now() < deadline {
-        if child.try_wait().unwrap().is_some() {
-            finished = true;
-            break;
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    if !finished {
-        let _ = child.kill();
-    }
-    let status = child.wait().unwrap();
-    let output = Output {
-        status,
-        stdout: stdout.join().unwrap(),
-        stderr: stderr.join().unwrap(),
-    };
-    (output, finished)
+        .unwrap();
+    (relay, path)
 }
 
 /// The REF630's general interrogation (FUN, INF, position) as the relay starts: truck in
@@ -195,9 +202,11 @@ const GI_POSITIONS: [(u64, u64, &str); 5] = [
 
 /// hat-drivers' master on the relay's pseudo-terminal (8N1: a pty keeps no parity):
 /// link reset, clock sync, GI to its termination, two cyclic ASDUs 9 of nine measurands
-/// at FUN 1 INF 148 with SQ = 0, and the breaker (FUN 1 INF 160) opened by a general
-/// command, confirmed positively and followed by its new position; the master never drops
-/// the connection and the relay logs every step.
+/// at FUN 1 INF 148 with SQ = 0, the breaker (FUN 1 INF 160) opened by a general command,
+/// confirmed positively and followed by its new position, then an earth fault typed on the
+/// relay's console: the trip (ASDU 2) and the list of recorded disturbances (ASDU 23,
+/// SQ = 0) and one more ASDU 9. The master never drops the connection and the relay logs
+/// every step.
 #[test]
 fn hat_drivers_master_interrogates_and_commands_the_relay() {
     if !hat_available() {
@@ -205,28 +214,33 @@ fn hat_drivers_master_interrogates_and_commands_the_relay() {
     }
     // Measurands every second, at rated current and voltage (I = 1/2.4, U = 1/1.2 of the
     // REF630's limits).
-    let mut relay = Relay::start(&["--address", "1", "--cycle", "1", "--inject", "1,1"]);
-    let mut master = Command::new("python3");
-    master
+    let (mut relay, path) = start_relay(&["--address", "1", "--cycle", "1", "--inject", "1,1"]);
+    let mut command = Command::new("python3");
+    command
         .arg(hat_master_script())
-        .arg(&relay.path)
-        .args(["--address", "1", "--parity", "none", "--timeout", "30"])
-        .args(["--measurands", "2", "--time-sync", "--command", "1,160,off"]);
-    let (output, finished) = run_bounded(master, 60);
-    let stdout = String::from_utf8_lossy(&output.stdout).into_owned();
-    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
-    let context = format!(
-        "master stdout:\n{stdout}\nmaster stderr:\n{stderr}\nrelay:\n{}",
-        relay.tail()
-    );
-    assert!(finished, "the master ran past its own timeout\n{context}");
+        .arg(&path)
+        .args(["--address", "1", "--parity", "none", "--timeout", "40"])
+        .args(["--measurands", "2", "--time-sync", "--command", "1,160,off"])
+        .arg("--wait-disturbance");
+    let mut master = Process::spawn(command, false);
+    let context = |master: &Process, relay: &Process| {
+        format!("master:\n{}\nrelay:\n{}", master.tail(), relay.tail())
+    };
+    // After the GI, the measurands and the command, the master waits for a disturbance:
+    // an earth fault on the relay's console.
     assert!(
-        output.status.success(),
-        "the master failed ({})\n{context}",
-        output.status
+        master.wait_for_line(r#""event":"waiting""#, 50),
+        "the master never got to wait for the fault\n{}",
+        context(&master, &relay)
     );
+    relay.type_line("fault");
+    let (status, finished) = master.wait_exit(30);
+    let context = context(&master, &relay);
+    assert!(finished, "the master ran past its own timeout\n{context}");
+    assert!(status.success(), "the master failed ({status})\n{context}");
+    let stdout = master.stdout();
     let events: Vec<Value> = stdout
-        .lines()
+        .iter()
         .map(|line| {
             serde_json::from_str(line)
                 .unwrap_or_else(|error| panic!("not JSON ({error}): {line}\n{context}"))
@@ -335,6 +349,35 @@ fn hat_drivers_master_interrogates_and_commands_the_relay() {
                 && data["value"] == "OFF"),
         "{context}"
     );
+
+    // The earth fault: the trip with relative time and fault number 1 (ASDU 2, FUN 160
+    // INF 92, ON then OFF), then the list of recorded disturbances (ASDU 23, cause 31)
+    // with SQ = 0 and one record; hat read on (one more ASDU 9 after it).
+    let trips: Vec<(&str, u64, u64)> = of("data")
+        .into_iter()
+        .filter(|data| data["asdu"] == 2)
+        .map(|data| {
+            assert_eq!((&data["fun"], &data["inf"]), (&160.into(), &92.into()));
+            assert_eq!(data["cause"], "SPONTANEOUS", "{data}");
+            (
+                data["value"].as_str().unwrap(),
+                data["fault_number"].as_u64().unwrap(),
+                data["relative_time"].as_u64().unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(trips, [("ON", 1, 40), ("OFF", 1, 120)], "{context}");
+    let lists: Vec<&Value> = of("asdu")
+        .into_iter()
+        .filter(|asdu| asdu["type"] == 23)
+        .collect();
+    assert_eq!(lists.len(), 1, "{context}");
+    assert_eq!(lists[0]["vsq"], 0x01, "{context}");
+    assert_eq!(lists[0]["cause"], 31, "{context}");
+    assert_eq!(lists[0]["fun"], 160, "{context}");
+    // Six octets of header, one entry of FAN, SOF and CP56Time2a.
+    assert_eq!(lists[0]["hex"].as_str().unwrap().len(), 2 * (6 + 10));
+    assert_eq!(of("disturbance_seen").len(), 1, "{context}");
     assert_eq!(of("done").len(), 1, "{context}");
 
     // The relay saw it all the same way and is still running.
@@ -344,14 +387,12 @@ fn hat_drivers_master_interrogates_and_commands_the_relay() {
         "general interrogation, scan number",
         "general command FUN 1 INF 160 OFF: accepted",
         "FUN 1 INF 160 -> Off (remote operation (12))",
+        "earth fault number 1: trip, breaker open",
     ] {
         assert!(
             relay.wait_for_line(needle, 10),
             "the relay never logged {needle:?}\n{context}"
         );
     }
-    assert!(
-        relay.child.try_wait().unwrap().is_none(),
-        "the relay stopped\n{context}"
-    );
+    assert!(!relay.exited(), "the relay stopped\n{context}");
 }
