@@ -85,6 +85,7 @@ pub mod check;
 pub mod compile;
 pub mod diagnostics;
 pub mod stdlib;
+pub mod suggest;
 pub mod syntax;
 pub mod task;
 pub mod vm;

@@ -21,9 +21,12 @@ pub(crate) struct PointsArgs {
 pub(crate) fn run(args: PointsArgs) -> anyhow::Result<ExitCode> {
     let project = load_project(&args.project)?;
     let node = match &args.node {
-        Some(name) => project
-            .node(name)
-            .ok_or_else(|| anyhow::anyhow!("no node `{name}` in the project"))?,
+        Some(name) => project.node(name).ok_or_else(|| {
+            anyhow::anyhow!(
+                "no node `{name}` in the project{}",
+                plc::suggest::did_you_mean(name, project.nodes.iter().map(|n| n.name.as_str()))
+            )
+        })?,
         None => project
             .top_node()
             .ok_or_else(|| anyhow::anyhow!("the project has no nodes"))?,

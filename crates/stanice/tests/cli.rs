@@ -2356,6 +2356,79 @@ fn options_follow_one_convention() {
     assert!(assert_success(&run_bounded(help, 30)).contains("--hmi-listen"));
 }
 
+/// Messages a newcomer reads: `plc check` says what it checked, a mistyped name gets a
+/// "did you mean", a missing `;` is shown where it goes, and `stanice run` shows an ST
+/// error with its excerpt and code as `plc check` does.
+#[test]
+fn messages_say_what_was_meant() {
+    let ok = write_source(
+        "ok.st",
+        "PROGRAM Main\nVAR Lamp : BOOL; END_VAR\nLamp := TRUE;\nEND_PROGRAM\n",
+    );
+    let mut check = stanice();
+    check.args(["plc", "check"]).arg(&ok);
+    let text = assert_success(&run_bounded(check, 30));
+    assert!(text.contains("checked 1 file(s): 1 program(s)"), "{text}");
+
+    let typo = write_source(
+        "typo.st",
+        "PROGRAM Main\nVAR Lamp : BOOL; END_VAR\nLmap := TRUE\nLamp := FALSE;\nEND_PROGRAM\n",
+    );
+    let mut check = stanice();
+    check.args(["plc", "check"]).arg(&typo);
+    let output = run_bounded(check, 30);
+    assert!(!output.status.success());
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        text.contains(":3:13: error: expected ';' at the end of this statement"),
+        "{text}"
+    );
+
+    let typo = write_source(
+        "typo2.st",
+        "PROGRAM Main\nVAR Lamp : BOOL; END_VAR\nLmap := TRUE;\nEND_PROGRAM\n",
+    );
+    let mut check = stanice();
+    check.args(["plc", "check"]).arg(&typo);
+    let text = String::from_utf8_lossy(&run_bounded(check, 30).stdout).into_owned();
+    assert!(text.contains("did you mean `Lamp`?"), "{text}");
+
+    let mut run = stanice();
+    run.args(["plc", "run"])
+        .arg(&ok)
+        .args(["--program", "Mian", "--cycles", "1"]);
+    let output = run_bounded(run, 30);
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("did you mean `Main`?"), "{stderr}");
+
+    let mut run = stanice();
+    run.arg("run")
+        .arg(vsetin())
+        .args(["--node", "RDRTX", "--store", "none"]);
+    let output = run_bounded(run, 60);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("did you mean `RDRT`?"), "{stderr}");
+
+    // An ST error in a project: the excerpt and the code, as plc check shows them.
+    let dir = fresh_dir("st-error");
+    let project = copy_vsetin(&dir, "proj");
+    let file = project.join("plc/rdrt_io.st");
+    let text = std::fs::read_to_string(&file).unwrap();
+    let text = text.replacen("END_PROGRAM", "Lmapx := TRUE;\nEND_PROGRAM", 1);
+    std::fs::write(&file, text).unwrap();
+    let mut run = stanice();
+    run.arg("run")
+        .arg(&project)
+        .args(["--store", "none", "--duration", "1"]);
+    let output = run_bounded(run, 60);
+    assert!(!output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("undeclared name 'Lmapx'"), "{stderr}");
+    assert!(stderr.contains("| Lmapx := TRUE;"), "the excerpt: {stderr}");
+    assert!(stderr.contains("= code: E0101"), "the code: {stderr}");
+}
+
 #[test]
 fn every_help_has_examples() {
     fn visit(path: &[String], visited: &mut Vec<String>) {

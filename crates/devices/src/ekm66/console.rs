@@ -72,8 +72,13 @@ pub fn operate(simulator: &mut Simulator, words: &[&str]) -> Result<String, Stri
             let status = simulator.status();
             let memory = simulator.memory();
             let stored = memory.slots.iter().filter(|slot| slot.is_some()).count();
+            // In words, not Rust structures ("last at slot Some(1)" was shown).
+            let last = memory
+                .last
+                .map_or_else(|| "none".to_owned(), |slot| format!("slot {slot}"));
+            let trips: Vec<String> = memory.counters.iter().map(u32::to_string).collect();
             Ok(format!(
-                "status {} {}, floor {}, target {}, {}, doors {:?}, board time {}, {} faults stored, last at slot {:?}, trips {:?}",
+                "status {} {}, floor {}, target {}, {}, doors {}, board time {} (the board's clock, no zone), {} faults stored, the last in {last}, trips per floor {}",
                 status.code,
                 status_text(status.code),
                 status.position,
@@ -82,8 +87,7 @@ pub fn operate(simulator: &mut Simulator, words: &[&str]) -> Result<String, Stri
                 simulator.doors(),
                 simulator.board_time().format("%Y-%m-%d %H:%M:%S"),
                 stored,
-                memory.last,
-                memory.counters
+                trips.join(" ")
             ))
         }
         _ => Err(format!(

@@ -220,6 +220,36 @@ impl Parser<'_> {
             self.expected(&format!("'{p}'"))
         }
     }
+    /// A `;` that ends a statement or declaration. When it is missing the error points
+    /// at the end of what lacks it, not at the next token (often on the next line):
+    /// that is where the `;` goes.
+    fn expect_semicolon(&mut self, what: &str) -> PResult<()> {
+        if self.eat_p(";") {
+            return Ok(());
+        }
+        let found = describe(self.tok());
+        let previous = self.prev_span();
+        let next = self.span();
+        // A character the lexer refused between the two is the real mistake, and is
+        // reported already.
+        let explained = self.diags.iter().any(|d| {
+            d.primary.file == previous.file
+                && (previous.end..=next.start).contains(&d.primary.start)
+        });
+        if explained {
+            return Err(());
+        }
+        let at = Span {
+            start: previous.end,
+            ..previous
+        };
+        self.diags.push(Diagnostic::error(
+            Code::Syntax,
+            at,
+            format!("expected ';' at the end of this {what}, found {found} after it"),
+        ));
+        Err(())
+    }
     fn expect_kw(&mut self, kw: &str) -> PResult<()> {
         if self.eat_kw(kw) {
             Ok(())
@@ -363,7 +393,7 @@ impl Parser<'_> {
                 }
                 self.expect_p(")")?;
             }
-            self.expect_p(";")?;
+            self.expect_semicolon("declaration")?;
             return Ok(vec![Item::Task(TaskDecl {
                 name,
                 interval,
@@ -392,7 +422,7 @@ impl Parser<'_> {
                     self.bump();
                 }
             }
-            self.expect_p(";")?;
+            self.expect_semicolon("declaration")?;
             return Ok(vec![Item::ProgramConfig(ProgramConfig {
                 instance,
                 task,
@@ -554,7 +584,7 @@ impl Parser<'_> {
             None
         };
         let span = start.to(self.prev_span());
-        self.expect_p(";")?;
+        self.expect_semicolon("declaration")?;
         Ok(VarDecl {
             names,
             at,
@@ -901,7 +931,7 @@ impl Parser<'_> {
         ) {
             self.eat_p(";");
         } else {
-            self.expect_p(";")?;
+            self.expect_semicolon("statement")?;
         }
         Ok(Stmt { kind, span })
     }

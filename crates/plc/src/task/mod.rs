@@ -87,8 +87,13 @@ pub enum PlcError {
         ty: String,
     },
     /// Unknown program name.
-    #[error("no program '{0}'")]
-    UnknownProgram(String),
+    #[error("no program '{name}'{suggestion}")]
+    UnknownProgram {
+        /// The name given.
+        name: String,
+        /// `; did you mean ...?` when a program's name is close, else empty.
+        suggestion: String,
+    },
     /// Malformed direct address.
     #[error("malformed direct address '{0}'")]
     BadAddress(String),

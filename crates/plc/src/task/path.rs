@@ -73,7 +73,7 @@ impl Plc {
             .get(&program.to_uppercase())
             .copied()
             .filter(|p| c.pou(*p).map(|p| p.kind) == Some(PouKind::Program))
-            .ok_or_else(|| PlcError::UnknownProgram(program.to_string()))?;
+            .ok_or_else(|| self.unknown_program(program))?;
         let prefix = format!(
             "{}.",
             c.pou(pid).map(|p| p.name.clone()).unwrap_or_default()

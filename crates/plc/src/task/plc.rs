@@ -117,6 +117,21 @@ impl Plc {
         self.stopwatch = s;
     }
 
+    /// The error for a program name that names none, with the nearest program's name.
+    pub(super) fn unknown_program(&self, name: &str) -> PlcError {
+        let programs = self
+            .compiled
+            .checked
+            .pous
+            .iter()
+            .filter(|p| p.kind == PouKind::Program && !p.stdlib)
+            .map(|p| p.name.as_str());
+        PlcError::UnknownProgram {
+            name: name.to_owned(),
+            suggestion: crate::suggest::did_you_mean(name, programs),
+        }
+    }
+
     /// Adds a task.
     pub fn add_task(&mut self, config: TaskConfig) -> Result<(), PlcError> {
         let mut programs = Vec::new();
@@ -128,7 +143,7 @@ impl Plc {
                 .get(&key)
                 .copied()
                 .filter(|p| c.pou(*p).map(|p| p.kind) == Some(PouKind::Program))
-                .ok_or_else(|| PlcError::UnknownProgram(name.clone()))?;
+                .ok_or_else(|| self.unknown_program(name))?;
             let base = c.pou(pid).and_then(|p| p.base).unwrap_or_default();
             programs.push((pid.0, base));
         }

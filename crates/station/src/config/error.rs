@@ -50,7 +50,14 @@ impl fmt::Display for ConfigError {
         if !self.key.is_empty() {
             write!(f, "{}: ", self.key)?;
         }
-        write!(f, "{}", self.problem)
+        write!(f, "{}", self.problem)?;
+        #[cfg(feature = "runtime")]
+        if let ConfigProblem::StDiagnostic { excerpt, .. } = &self.problem {
+            if !excerpt.is_empty() {
+                write!(f, "\n{excerpt}")?;
+            }
+        }
+        Ok(())
     }
 }
 

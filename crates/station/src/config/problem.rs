@@ -218,6 +218,10 @@ pub enum ConfigProblem {
         code: plc::Code,
         /// The compiler's headline.
         message: String,
+        /// The compiler's excerpt of the source under the headline (the line with the
+        /// place marked, notes such as "did you mean", the code), as `stanice plc check`
+        /// prints it; shown after the error's line.
+        excerpt: String,
     },
     /// The node's compiled PLC program does not start (its initial values fault).
     #[error("the PLC does not start: {detail}")]

@@ -255,14 +255,11 @@ impl Runtime {
                     .iter()
                     .position(|n| &n.name == name)
                     .ok_or_else(|| {
+                        let names = project.nodes.iter().map(|n| n.name.as_str());
                         RuntimeError::Setup(format!(
-                            "no node `{name}` in the project (nodes: {})",
-                            project
-                                .nodes
-                                .iter()
-                                .map(|n| n.name.as_str())
-                                .collect::<Vec<_>>()
-                                .join(", ")
+                            "no node `{name}` in the project{} (nodes: {})",
+                            plc::suggest::did_you_mean(name, names.clone()),
+                            names.collect::<Vec<_>>().join(", ")
                         ))
                     })?;
                 selected.push(index);

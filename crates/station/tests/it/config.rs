@@ -2317,7 +2317,7 @@ fn st_compile_errors_are_typed_with_the_compiler_code() {
         matches!(
             &errors[..],
             [ConfigError {
-                problem: ConfigProblem::StDiagnostic { code: plc::Code::Undeclared, message },
+                problem: ConfigProblem::StDiagnostic { code: plc::Code::Undeclared, message, .. },
                 ..
             }] if message.contains("nope")
         ),

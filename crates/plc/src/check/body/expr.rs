@@ -149,11 +149,22 @@ impl BodyCx<'_> {
                 .max(DEFAULT_STRING_LEN);
             return Ty::WString(n);
         }
-        self.err(
+        let mut known: Vec<&str> = self
+            .pou
+            .and_then(|p| self.c.pou(p))
+            .map(|p| p.vars.iter().map(|v| v.name.as_str()).collect())
+            .unwrap_or_default();
+        known.extend(self.c.globals.iter().map(|g| g.name.as_str()));
+        let suggestion = crate::suggest::closest(&ident.name, known.iter().copied());
+        let diagnostic = Diagnostic::error(
             Code::Undeclared,
             e.span,
             format!("undeclared name '{}'", ident.name),
         );
+        self.diags.push(match suggestion {
+            Some(name) => diagnostic.with_note(format!("did you mean `{name}`?")),
+            None => diagnostic,
+        });
         Ty::Void
     }
 

@@ -985,6 +985,14 @@ impl Ctx<'_> {
                         problem: ConfigProblem::StDiagnostic {
                             code: diagnostic.code,
                             message: diagnostic.message.clone(),
+                            // The rendering's first line is the headline this error's
+                            // own line repeats.
+                            excerpt: diagnostic
+                                .render(&sources)
+                                .lines()
+                                .skip(1)
+                                .collect::<Vec<_>>()
+                                .join("\n"),
                         },
                     });
                 }
