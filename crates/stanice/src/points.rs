@@ -16,6 +16,9 @@ pub(crate) struct PointsArgs {
     /// The node; default: the top node (the one no other node links to).
     #[arg(long)]
     node: Option<String>,
+    /// One JSON object per point (`ioa`, `type`, `name`, `description`) instead of CSV.
+    #[arg(long)]
+    json: bool,
 }
 
 pub(crate) fn run(args: PointsArgs) -> anyhow::Result<ExitCode> {
@@ -52,6 +55,17 @@ pub(crate) fn run(args: PointsArgs) -> anyhow::Result<ExitCode> {
         }))
         .collect();
     rows.sort_by(|a, b| a.0.cmp(&b.0).then_with(|| a.1.cmp(&b.1)));
+    if args.json {
+        let lines: Vec<String> = rows
+            .into_iter()
+            .map(|(ioa, type_id, name, description)| {
+                serde_json::json!({"ioa": ioa, "type": type_id, "name": name, "description": description})
+                    .to_string()
+            })
+            .collect();
+        crate::console::print_lines(&lines);
+        return Ok(ExitCode::SUCCESS);
+    }
     let mut out = csv::Writer::from_writer(std::io::stdout());
     let written = (|| -> Result<(), csv::Error> {
         out.write_record(["ioa", "type", "name", "description"])?;

@@ -2429,6 +2429,60 @@ fn messages_say_what_was_meant() {
     assert!(stderr.contains("= code: E0101"), "the code: {stderr}");
 }
 
+/// `--json` on every command that prints data: command, points and decode print one
+/// JSON object a line (events and the client are checked above).
+#[test]
+fn commands_that_print_data_take_json() {
+    let port = free_port();
+    let _server = outstation(port, &[]);
+    let mut command = stanice();
+    command.args([
+        "iec104",
+        "command",
+        &format!("127.0.0.1:{port}"),
+        "--ca",
+        "7",
+    ]);
+    command.args([
+        "--ioa",
+        "2100",
+        "--type",
+        "C_DC_NA_1",
+        "--value",
+        "ON",
+        "--json",
+    ]);
+    let text = assert_success(&run_bounded(command, 30));
+    let lines: Vec<Value> = text
+        .lines()
+        .map(|line| serde_json::from_str(line).unwrap_or_else(|e| panic!("{e}: {line}")))
+        .collect();
+    assert!(lines.iter().any(|l| l["event"] == "sent"), "{text}");
+    assert!(
+        lines.iter().any(|l| l["event"] == "command_result"
+            && l["confirmation"] == "positive"
+            && l["terminated"] == true),
+        "{text}"
+    );
+
+    let mut points = stanice();
+    points.arg("points").arg(vsetin()).arg("--json");
+    let text = assert_success(&run_bounded(points, 30));
+    let first: Value = serde_json::from_str(text.lines().next().unwrap()).unwrap();
+    assert!(
+        first["ioa"].is_number() && first["name"].is_string(),
+        "{first}"
+    );
+
+    let mut decode = stanice();
+    decode.args(["iec104", "decode", "--json"]);
+    decode.args(["68 15 00 00 00 00 1F 01 03 00 01 00 D0 07 00 01 D8 76 BB 09 1A 04 11"]);
+    let text = assert_success(&run_bounded(decode, 30));
+    let apdu: Value = serde_json::from_str(text.trim()).unwrap();
+    assert_eq!(apdu["apci"]["format"], "I");
+    assert_eq!(apdu["asdu"]["objects"][0]["ioa"], 2000);
+}
+
 #[test]
 fn every_help_has_examples() {
     fn visit(path: &[String], visited: &mut Vec<String>) {

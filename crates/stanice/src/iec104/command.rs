@@ -53,6 +53,11 @@ pub(crate) struct CommandArgs {
     /// confirmation, termination and return information are shown.
     #[arg(long)]
     verbose: bool,
+    /// One JSON object a line: what was sent (`{"event": "sent", ...}`), each received
+    /// object as the client prints it, and each step's result (`{"event":
+    /// "command_result", "step", "confirmation", "cause", "terminated"}`).
+    #[arg(long)]
+    json: bool,
     #[command(flatten)]
     link: LinkOptions,
 }
@@ -119,9 +124,17 @@ pub(crate) async fn run(args: CommandArgs) -> anyhow::Result<ExitCode> {
         type_id: args.type_id,
         ioa,
         verbose: args.verbose,
+        json: args.json,
     };
     for (step, element) in steps {
-        println!("-> {step} {} ioa={} {}", args.type_id, ioa, element);
+        if args.json {
+            println!(
+                "{}",
+                serde_json::json!({"event": "sent", "step": step, "type": args.type_id.mnemonic(), "ioa": ioa.get(), "text": element.to_string()})
+            );
+        } else {
+            println!("-> {step} {} ioa={} {}", args.type_id, ioa, element);
+        }
         let outcome = exchange(
             &client,
             &mut events,
@@ -130,7 +143,7 @@ pub(crate) async fn run(args: CommandArgs) -> anyhow::Result<ExitCode> {
             command_time(args.type_id),
         )
         .await;
-        if !report(step, &outcome) {
+        if !report(step, &outcome, args.json) {
             code = match outcome {
                 Ok(_) => ExitCode::from(1),
                 Err(_) => ExitCode::from(2),
@@ -213,6 +226,8 @@ struct Shown {
     ioa: Ioa,
     /// Everything else too.
     verbose: bool,
+    /// As JSON lines.
+    json: bool,
 }
 
 impl Shown {
@@ -232,6 +247,10 @@ fn print_received(event: &ClientEvent, shown: Shown) {
         if !shown.shows(asdu) {
             return;
         }
+        if shown.json {
+            crate::console::print_lines(&render::json_lines(event));
+            return;
+        }
         let arrow = if asdu.type_id.is_command() {
             "<-"
         } else {
@@ -249,7 +268,28 @@ fn command_time(type_id: TypeId) -> Option<iec60870::time::Cp56Time2a> {
 }
 
 /// Prints the confirmation sequence; returns whether it was positive and complete.
-fn report(step: &str, outcome: &Result<RequestOutcome, ClientError>) -> bool {
+fn report(step: &str, outcome: &Result<RequestOutcome, ClientError>, json: bool) -> bool {
+    if json {
+        let line = match outcome {
+            Ok(outcome) => serde_json::json!({
+                "event": "command_result", "step": step,
+                "confirmation": if outcome.positive { "positive" } else { "negative" },
+                "cause": outcome.cause.name(), "terminated": outcome.terminated,
+            }),
+            Err(error) => serde_json::json!({
+                "event": "command_result", "step": step, "error": error.to_string(),
+            }),
+        };
+        println!("{line}");
+        let positive = outcome.as_ref().is_ok_and(|outcome| outcome.positive);
+        if outcome.as_ref().is_ok_and(|outcome| !outcome.positive) {
+            eprintln!(
+                "the station refused the command; a Stanice station records why in its \
+                 command audit: stanice events PROJECT --commands"
+            );
+        }
+        return positive;
+    }
     match outcome {
         Ok(outcome) => {
             if outcome.positive {

@@ -31,12 +31,31 @@ pub(crate) struct DecodeArgs {
     /// Octets of the information object address (1, 2 or 3).
     #[arg(long, default_value_t = 3)]
     ioa_size: u8,
+    /// One JSON object per APDU (`offset`, `hex`, `apci`, `objects` as the client prints
+    /// them, or `error`) instead of the analysis text.
+    #[arg(long)]
+    json: bool,
 }
 
 pub(crate) fn run(args: &DecodeArgs) -> anyhow::Result<ExitCode> {
     let bytes = parse_hex(&args.hex.join(" "))?;
     let params = AsduParams::try_new(args.cot_size, args.ca_size, args.ioa_size, 255)
         .map_err(|error| anyhow::anyhow!("field sizes: {error}"))?;
+    if args.json {
+        let (lines, clean) = if args.asdu {
+            let (value, clean) = asdu_json(&bytes, &params);
+            (vec![value], clean)
+        } else {
+            apdus_json(&bytes, &params)
+        };
+        let lines: Vec<String> = lines.iter().map(serde_json::Value::to_string).collect();
+        crate::console::print_lines(&lines);
+        return Ok(if clean {
+            ExitCode::SUCCESS
+        } else {
+            ExitCode::from(1)
+        });
+    }
     let mut out = String::new();
     let clean = if args.asdu {
         describe_asdu(&bytes, &params, &mut out)
@@ -141,6 +160,85 @@ pub(crate) fn describe_apdus(bytes: &[u8], params: &AsduParams, out: &mut String
         }
     }
     clean
+}
+
+/// The APDUs of `bytes` as JSON objects (as [`describe_apdus`] walks them, resynchronising
+/// after a broken one); returns whether all were well formed.
+fn apdus_json(bytes: &[u8], params: &AsduParams) -> (Vec<serde_json::Value>, bool) {
+    use serde_json::json;
+    let mut clean = true;
+    let mut position = 0usize;
+    let mut out = Vec::new();
+    while position < bytes.len() {
+        let rest = bytes.get(position..).unwrap_or_default();
+        let length = rest.get(1).map(|length| usize::from(*length) + 2);
+        let frame_bytes = match length {
+            Some(length) if rest.first() == Some(&0x68) && rest.len() >= length => {
+                rest.get(..length).unwrap_or(rest)
+            }
+            _ => rest,
+        };
+        let mut line = json!({"offset": position, "hex": hex(frame_bytes)});
+        match Frame::decode(frame_bytes) {
+            Ok(frame) => {
+                line["apci"] = match frame.apci {
+                    Apci::I { send_seq, recv_seq } => json!({
+                        "format": "I", "send_seq": send_seq.value(), "recv_seq": recv_seq.value()
+                    }),
+                    Apci::S { recv_seq } => json!({"format": "S", "recv_seq": recv_seq.value()}),
+                    Apci::U(function) => json!({"format": "U", "function": function.to_string()}),
+                };
+                if !frame.asdu.is_empty() {
+                    let (asdu, asdu_clean) = asdu_json(frame.asdu, params);
+                    clean &= asdu_clean;
+                    line["asdu"] = asdu;
+                }
+                position += frame_bytes.len();
+            }
+            Err(error) => {
+                clean = false;
+                line["error"] = json!(error.to_string());
+                let skip = rest
+                    .iter()
+                    .skip(1)
+                    .position(|byte| *byte == 0x68)
+                    .map_or(rest.len(), |offset| offset + 1);
+                position += skip;
+            }
+        }
+        out.push(line);
+    }
+    (out, clean)
+}
+
+/// One ASDU as JSON: its objects as the client prints them, or the error; and whether
+/// it decoded cleanly.
+fn asdu_json(bytes: &[u8], params: &AsduParams) -> (serde_json::Value, bool) {
+    use serde_json::json;
+    match Asdu::decode(bytes, params) {
+        Ok(asdu) => {
+            let objects: Vec<serde_json::Value> = asdu
+                .objects
+                .iter()
+                .map(|object| {
+                    let mut value = super::render::object_json(&asdu, object);
+                    // Decoded from a log: no receipt of ours to tell.
+                    if let Some(map) = value.as_object_mut() {
+                        map.remove("received");
+                    }
+                    value
+                })
+                .collect();
+            (
+                json!({"type": asdu.type_id.mnemonic(), "cot": asdu.cot.cause.name(), "ca": asdu.common_address.get(), "objects": objects}),
+                true,
+            )
+        }
+        Err(error) => (
+            json!({"error": error.to_string(), "hex": hex(bytes)}),
+            false,
+        ),
+    }
 }
 
 /// Writes the analysis of one ASDU; returns whether it decoded cleanly.

@@ -75,7 +75,7 @@ pub(crate) fn element_value(element: &Element) -> (Value, Option<Value>, Option<
     }
 }
 
-fn object_json(asdu: &Asdu, object: &InformationObject) -> Value {
+pub(crate) fn object_json(asdu: &Asdu, object: &InformationObject) -> Value {
     let (value, raw, quality) = element_value(&object.element);
     let mut quality = quality.map(Quality::set_flags).unwrap_or_default();
     if let Element::IntegratedTotal(reading) = &object.element {
