@@ -163,6 +163,8 @@ struct RawConfig {
     local_address: Option<std::net::IpAddr>,
     #[serde(default)]
     time_zone: Option<String>,
+    #[serde(default)]
+    sign_in_note: Option<String>,
     #[serde(default = "default_level")]
     default_control_level: u8,
     #[serde(default)]
@@ -201,6 +203,9 @@ pub struct HmiConfig {
     /// The zone of the station's time tags (`time_zone`: an IANA name, `UTC` or
     /// `local`), as its project's `time_zone` says; `None`: not given (UTC then).
     pub time_zone: Option<::store::pointdb::TimeZonePolicy>,
+    /// What the station's banner tells about signing in (`sign_in_note`: an example's
+    /// users and passwords, say); `None`: nothing.
+    pub sign_in_note: Option<String>,
     /// Screens, in navigation order.
     pub screens: Vec<ScreenConfig>,
     /// Controls.
@@ -241,6 +246,7 @@ impl HmiConfig {
             title: raw.title,
             default_control_level: raw.default_control_level.min(9),
             local_address: raw.local_address,
+            sign_in_note: raw.sign_in_note,
             time_zone: match &raw.time_zone {
                 None => None,
                 Some(name) => Some(name.parse().map_err(|_| {

@@ -296,12 +296,12 @@ async fn start_hmi(
         Ok(hmi) => hmi,
         Err(error) => return not_started(error.to_string()),
     };
-    // The Vsetín example's users are named; another project's are in its users file.
-    let users = if project.folder.ends_with("vsetin") {
-        ": the demo's are operator / operator-vsetin, admin / admin-vsetin, viewer / viewer-vsetin"
-    } else {
-        ""
-    };
+    // The users belong to the project: what its hmi.toml says about signing in.
+    let users = hmi::config::HmiConfig::load(&screens)
+        .ok()
+        .and_then(|config| config.sign_in_note)
+        .map(|note| format!(": {note}"))
+        .unwrap_or_default();
     println!(
         "  HMI      {scheme}://{}/  (users in {}{users})",
         hmi.address,
