@@ -542,23 +542,10 @@ async fn console(runtime: &Runtime, hmi: Option<&hmi::Hmi>) {
                 }
                 None => println!("error: no web HMI runs here"),
             },
-            _ if line.starts_with("lift ") => {
-                // A simulated board's answer (`lift L1 show`) is worth printing.
-                let words: Vec<&str> = line.split_whitespace().skip(1).collect();
-                let answer = match words.split_first() {
-                    Some((name, operation)) => match runtime.lift(name) {
-                        Some(lift) => lift.operate(operation).await,
-                        None => Err(format!("no lift `{name}` runs here")),
-                    },
-                    None => Err("expected `lift NAME OPERATION`".to_owned()),
-                };
-                match answer {
-                    Ok(text) => println!("ok: {text}"),
-                    Err(error) => println!("error: {error}"),
-                }
-            }
+            // A simulated board's or device's answer (`lift L1 show`) is worth printing.
             _ => match runtime.operate(line).await {
-                Ok(()) => println!("ok: {line}"),
+                Ok(answer) if answer.is_empty() => println!("ok: {line}"),
+                Ok(answer) => println!("ok: {answer}"),
                 Err(error) => println!("error: {error}"),
             },
         }

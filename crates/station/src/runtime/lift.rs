@@ -22,6 +22,7 @@
 //!   dropped, a serial adapter unplugged) is opened again after [`REOPEN_AFTER`] with the
 //!   cursor where it stood.
 
+use super::operation::OperationError;
 use std::collections::HashMap;
 use std::ops::ControlFlow;
 use std::sync::Arc;
@@ -155,10 +156,11 @@ impl LiftHandle {
 
     /// An operation on the simulated board (`fault 3C`, `silent`, `trip 4` ...:
     /// [`devices::ekm66::console::HELP`]); what happened, or why not.
-    pub async fn operate(&self, words: &[&str]) -> Result<String, String> {
+    pub async fn operate(&self, words: &[&str]) -> Result<String, OperationError> {
         let Some(simulated) = &self.simulated else {
-            return Err(format!("lift {} has a real board", self.name));
+            return Err(OperationError::RealBoard(self.name.clone()));
         };
+        let stopped = || OperationError::Stopped(format!("lift {}", self.name));
         let words: Vec<String> = words.iter().map(|word| (*word).to_owned()).collect();
         let (done, answer) = tokio::sync::oneshot::channel();
         simulated
@@ -166,10 +168,11 @@ impl LiftHandle {
                 let words: Vec<&str> = words.iter().map(String::as_str).collect();
                 let _ = done.send(devices::ekm66::console::operate(board, &words));
             }))
-            .map_err(|_| format!("lift {} stopped", self.name))?;
+            .map_err(|_| stopped())?;
         answer
             .await
-            .map_err(|_| format!("lift {} stopped", self.name))?
+            .map_err(|_| stopped())?
+            .map_err(OperationError::Refused)
     }
 }
 

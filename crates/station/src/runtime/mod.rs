@@ -39,6 +39,7 @@ pub mod line;
 pub mod link;
 pub mod node;
 pub mod notification;
+pub mod operation;
 pub mod simulation;
 pub mod sink;
 
@@ -69,6 +70,7 @@ pub use sink::{Iec104Sink, PointSink};
 
 use command::{NodeHandler, Route, RoutedCommand};
 use link::LinkSpec;
+pub use operation::{Operation, OperationError};
 use simulation::SimRequest;
 
 /// Why the runtime could not start or a request failed.
@@ -735,70 +737,58 @@ impl Runtime {
         answer.await.map_err(|_| RuntimeError::Stopped)
     }
 
-    /// Injects a fault or performs a hand operation on the plant ([`Simulation::operate`]),
-    /// cuts/restores a link (`link-cut NODE/LINK`, `link-restore NODE/LINK`), stops or
-    /// starts a node's PLC (`plc-stop NODE`, `plc-start NODE`: [`Simulation::run_plc`]), or
-    /// operates a simulated lift board (`lift L1 fault 3C`).
-    pub async fn operate(&self, text: &str) -> Result<(), String> {
-        let text = text.trim();
-        for (prefix, cut) in [("link-cut ", true), ("link-restore ", false)] {
-            if let Some(rest) = text.strip_prefix(prefix) {
-                let (node, link) = rest
-                    .trim()
-                    .split_once('/')
-                    .ok_or_else(|| format!("expected NODE/LINK after `{}`", prefix.trim()))?;
+    /// Reads one console line ([`Operation::parse`]) and performs it ([`Runtime::perform`]).
+    pub async fn operate(&self, text: &str) -> Result<String, OperationError> {
+        self.perform(Operation::parse(text)?).await
+    }
+
+    /// Performs an operation: injects a fault or a hand operation on the plant
+    /// ([`Simulation::operate`]), cuts or restores a link, stops or starts a node's PLC
+    /// ([`Simulation::run_plc`]), or operates a simulated lift board or line device.
+    /// Returns what the simulated board or device answered (empty for the others).
+    pub async fn perform(&self, operation: Operation) -> Result<String, OperationError> {
+        let stopped = |_| OperationError::Stopped("the simulation".to_owned());
+        match operation {
+            Operation::Link { node, link, cut } => {
                 let handle = self
-                    .link(node, link)
-                    .ok_or_else(|| format!("no link `{link}` at node `{node}`"))?;
+                    .link(&node, &link)
+                    .ok_or(OperationError::NoLink { node, link })?;
                 if cut {
                     handle.cut();
                 } else {
                     handle.restore();
                 }
-                return Ok(());
+                Ok(String::new())
             }
-        }
-        for (prefix, run) in [("plc-stop ", false), ("plc-start ", true)] {
-            if let Some(node) = text.strip_prefix(prefix) {
-                let node = node.trim().to_owned();
-                return self
-                    .with_simulation(move |sim| sim.run_plc(&node, run))
+            Operation::Plc { node, run } => {
+                self.with_simulation(move |sim| sim.run_plc(&node, run))
                     .await
-                    .map_err(|e| e.to_string())?;
+                    .map_err(stopped)??;
+                Ok(String::new())
             }
-        }
-        if let Some(rest) = text.strip_prefix("lift ") {
-            // A simulated lift board: `lift L1 fault 3C`.
-            let words: Vec<&str> = rest.split_whitespace().collect();
-            let Some((name, operation)) = words.split_first() else {
-                return Err("expected `lift NAME OPERATION`".to_owned());
-            };
-            let lift = self
-                .lift(name)
-                .ok_or_else(|| format!("no lift `{name}` runs here"))?;
-            return lift.operate(operation).await.map(|_| ());
-        }
-        if let Some(rest) = text.strip_prefix("relay ") {
-            // A simulated protection device on a serial line: `relay F1 local`.
-            let words: Vec<&str> = rest.split_whitespace().collect();
-            let Some((device, operation)) = words.split_first() else {
-                return Err("expected `relay DEVICE OPERATION`".to_owned());
-            };
-            let mut last_error = format!("no simulated device `{device}` on any line");
-            for line in self.nodes.iter().flat_map(|node| &node.lines) {
-                match line.operate(device, operation) {
-                    Ok(_) => return Ok(()),
-                    Err(error)
-                        if error.contains("has no device") || error.contains("no simulated") => {}
-                    Err(error) => last_error = error,
+            Operation::Lift { lift, words } => {
+                let handle = self.lift(&lift).ok_or(OperationError::NoLift(lift))?;
+                let words: Vec<&str> = words.iter().map(String::as_str).collect();
+                handle.operate(&words).await
+            }
+            Operation::Device { device, words } => {
+                let words: Vec<&str> = words.iter().map(String::as_str).collect();
+                for line in self.nodes.iter().flat_map(|node| &node.lines) {
+                    match line.operate(&device, &words) {
+                        // Another line's device, perhaps.
+                        Err(OperationError::NoDevice(_)) => {}
+                        done => return done,
+                    }
                 }
+                Err(OperationError::NoDevice(device))
             }
-            return Err(last_error);
+            Operation::Plant(text) => {
+                self.with_simulation(move |sim| sim.operate(&text))
+                    .await
+                    .map_err(stopped)??;
+                Ok(String::new())
+            }
         }
-        let text = text.to_owned();
-        self.with_simulation(move |sim| sim.operate(&text))
-            .await
-            .map_err(|e| e.to_string())?
     }
 
     /// Stops everything: links, servers, the simulation thread; waits until the store

@@ -20,6 +20,7 @@
 //! cyclic transmission. [`Pacing::RealTime`] maps steps onto the wall clock times a
 //! speed factor; [`Pacing::Manual`] moves only on request, as fast as the CPU allows.
 
+use super::operation::OperationError;
 use std::collections::HashMap;
 use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
@@ -246,7 +247,7 @@ impl Simulation {
     /// `{attribute 'safe_value' := ...}`, else FALSE / 0), the points it feeds turn
     /// invalid, commands to it are refused and the stop is recorded as `plc-task:NAME`
     /// events; started, its tasks run again from their next cycle.
-    pub fn run_plc(&mut self, node: &str, run: bool) -> Result<(), String> {
+    pub fn run_plc(&mut self, node: &str, run: bool) -> Result<(), OperationError> {
         let now = self.now;
         let Simulation {
             plant,
@@ -254,11 +255,15 @@ impl Simulation {
             observers,
             ..
         } = self;
-        let node = nodes
+        let names: Vec<String> = nodes.iter().map(|n| n.points.name().to_owned()).collect();
+        let found = nodes
             .iter_mut()
             .find(|candidate| candidate.points.name().eq_ignore_ascii_case(node))
-            .ok_or_else(|| format!("no node `{node}` runs here"))?;
-        node.run_plc(run, now, plant.as_deref_mut(), observers)
+            .ok_or_else(|| OperationError::NoNode {
+                node: node.to_owned(),
+                suggestion: plc::suggest::did_you_mean(node, names.iter().map(String::as_str)),
+            })?;
+        found.run_plc(run, now, plant.as_deref_mut(), observers)
     }
 
     /// Stops every PLC (the station is shutting down): outputs to their safe values, the
@@ -280,11 +285,13 @@ impl Simulation {
 
     /// Passes one line of the plant's console language (faults, `clear ...`, hand
     /// operations: [`Plant::console`]) to the plant.
-    pub fn operate(&mut self, text: &str) -> Result<(), String> {
+    pub fn operate(&mut self, text: &str) -> Result<(), OperationError> {
         let Some(plant) = self.plant.as_mut() else {
-            return Err("the project has no plant simulation".into());
+            return Err(OperationError::NoPlant);
         };
-        plant.console(text).map_err(|error| error.to_string())
+        plant
+            .console(text)
+            .map_err(|error| OperationError::Refused(error.to_string()))
     }
 
     /// The earliest time something is due after `self.now` (or at it, before the first
@@ -489,9 +496,9 @@ impl SimNode {
         now: Duration,
         plant: Option<&mut (dyn Plant + Send + 'static)>,
         observers: &[mpsc::Sender<OutputChange>],
-    ) -> Result<(), String> {
+    ) -> Result<(), OperationError> {
         let Some(plc) = self.plc.as_mut() else {
-            return Err(format!("node {} has no PLC", self.points.name()));
+            return Err(OperationError::NoPlc(self.points.name().to_owned()));
         };
         let clock = self.points.clock();
         let utc = clock.at(now);

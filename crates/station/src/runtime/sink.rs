@@ -10,11 +10,15 @@ use iec60870::cs104::server::ServerHandle;
 
 use crate::pointdb::{PointChange, TimeZonePolicy};
 
+/// Why a sink did not take a change: its own error (a sink is another crate's protocol,
+/// whose error type the node does not know).
+pub type SinkError = Box<dyn std::error::Error + Send + Sync>;
+
 /// A consumer of a node's point changes.
 pub trait PointSink: Send + Sync + std::fmt::Debug {
     /// Takes one change; an error is logged with the sink's name and the point, and the
     /// other sinks and the store still get the change.
-    fn publish(&self, change: &PointChange) -> Result<(), String>;
+    fn publish(&self, change: &PointChange) -> Result<(), SinkError>;
 
     /// What the sink is, for logs (`IEC 104 server 127.0.0.1:2404`).
     fn describe(&self) -> String;
@@ -31,10 +35,8 @@ pub struct Iec104Sink {
 }
 
 impl PointSink for Iec104Sink {
-    fn publish(&self, change: &PointChange) -> Result<(), String> {
-        change
-            .publish(&self.server, self.zone)
-            .map_err(|error| error.to_string())
+    fn publish(&self, change: &PointChange) -> Result<(), SinkError> {
+        Ok(change.publish(&self.server, self.zone)?)
     }
 
     fn describe(&self) -> String {

@@ -17,6 +17,7 @@
 mod iec101;
 mod iec103;
 
+use super::operation::OperationError;
 use std::collections::{HashMap, HashSet};
 use std::ops::ControlFlow;
 use std::sync::{Arc, Mutex, PoisonError};
@@ -236,12 +237,10 @@ impl LineHandle {
 
     /// A console operation on a simulated device ([`Device::operate`]: `local`,
     /// `remote`, `inject I U`, `open`, `close`, `fault` ...). Errors name what is wrong.
-    pub fn operate(&self, device: &str, words: &[&str]) -> Result<String, String> {
-        let Some(simulated) = &self.simulated else {
-            return Err(format!("line {} has no simulated devices", self.name));
-        };
-        let Some(entry) = self.device(device) else {
-            return Err(format!("line {} has no device {device}", self.name));
+    pub fn operate(&self, device: &str, words: &[&str]) -> Result<String, OperationError> {
+        // Not this line's (or not simulated here): the caller tries the other lines.
+        let (Some(simulated), Some(entry)) = (&self.simulated, self.device(device)) else {
+            return Err(OperationError::NoDevice(device.to_owned()));
         };
         let address = u16::from(entry.address);
         let words: Vec<String> = words.iter().map(|word| (*word).to_owned()).collect();
@@ -257,12 +256,13 @@ impl LineHandle {
                 };
                 let _ = done.send(result);
             }))
-            .map_err(|_| format!("line {} stopped", self.name))?;
+            .map_err(|_| OperationError::Stopped(format!("line {}", self.name)))?;
         // The line's loop runs the operation at once; a line being reopened may take
         // a moment.
         answer
             .recv_timeout(Duration::from_secs(5))
-            .map_err(|_| format!("line {} did not take the operation", self.name))?
+            .map_err(|_| OperationError::Stopped(format!("line {}", self.name)))?
+            .map_err(OperationError::Refused)
     }
 }
 
