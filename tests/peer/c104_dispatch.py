@@ -307,16 +307,7 @@ class Dispatch(Station):
         dt = time.perf_counter() - t0
         confirm, terminated, cots = self._wire_result(key, spec.select)
         if confirm == "positive" and not terminated:
-            # A direct command returns at its ACT_CON: wait (bounded) for the termination,
-            # so that the wire order of return information and ACT_TERM is seen whole.
-            dl = Deadline(8.0)
-            while not dl.expired():
-                with self.lock:
-                    if any(cot == 10 for cot, _, _ in self.cmd_wire.get(key, [])):
-                        terminated = True
-                        break
-                self.cmd_wire_event.wait(0.05)
-                self.cmd_wire_event.clear()
+            terminated = self._await_termination(key)
         with self.lock:
             self.cmd_wire.pop(key, None)
             sequence = list(self.cmd_sequence)

@@ -138,6 +138,23 @@ impl Reach {
         ))
     }
 
+    /// Follows an unbalanced master's link event: a link up, or the sentence for a
+    /// station that does not answer ([`Reach::timed_out`]).
+    pub(crate) fn observe(&mut self, event: &PrimaryEvent) -> Option<String> {
+        match event {
+            PrimaryEvent::LinkUp { address } => {
+                self.link_up(*address);
+                None
+            }
+            PrimaryEvent::Timeout {
+                address,
+                request,
+                attempt,
+            } => self.timed_out(*address, *request, *attempt),
+            _ => None,
+        }
+    }
+
     /// The command's exit: success when every station was reached, else [`NOT_REACHED`]
     /// after saying which were not.
     pub(crate) fn verdict(&self, line: &str) -> ExitCode {

@@ -2187,7 +2187,7 @@ fn a_positively_confirmed_command_is_in_the_audit_even_after_kill_9() {
 #[test]
 fn idle_clients_do_not_lock_dispatch_out_of_the_station() {
     use iec60870::asdu::CommonAddress;
-    use iec60870::cs104::client::{spawn_client, ClientConfig, ClientEvent};
+    use iec60870::cs104::client::{spawn_client, ClientConfig};
     let port = ports::free_port_range(23);
     let mut run = stanice();
     run.stdin(Stdio::piped()).arg("run").arg(vsetin()).args([
@@ -2214,23 +2214,10 @@ fn idle_clients_do_not_lock_dispatch_out_of_the_station() {
         config.local_address = Some("127.0.0.3".parse().unwrap());
         config.interrogate_on_start = true;
         config.reconnect = false;
-        let (_client, mut events) = spawn_client(config);
-        tokio::time::timeout(Duration::from_secs(20), async {
-            let mut objects = 0;
-            while let Some(event) = events.recv().await {
-                match event {
-                    ClientEvent::Asdu(asdu) if asdu.cot.cause.value() == 20 => {
-                        objects += asdu.objects.len();
-                    }
-                    ClientEvent::Asdu(asdu) if asdu.cot.cause.value() == 10 => return objects,
-                    ClientEvent::Disconnected { reason } => panic!("ED lost: {reason}"),
-                    _ => {}
-                }
-            }
-            objects
-        })
-        .await
-        .expect("the interrogation ends")
+        let (_client, events) = spawn_client(config);
+        tokio::time::timeout(Duration::from_secs(20), interrogated_objects(events, "ED"))
+            .await
+            .expect("the interrogation ends")
     });
     assert!(answers > 400, "{answers} objects interrogated");
     drop(idle);
@@ -2238,6 +2225,27 @@ fn idle_clients_do_not_lock_dispatch_out_of_the_station() {
 
 /// The `--help` of `stanice` and of every subcommand (found by walking the Commands lists
 /// of the help texts themselves) ends with an Examples section (issue 11).
+/// The objects a client's general interrogation brings, counted until its termination;
+/// a lost connection fails the test naming `who`.
+async fn interrogated_objects(
+    mut events: tokio::sync::mpsc::Receiver<iec60870::cs104::client::ClientEvent>,
+    who: &str,
+) -> usize {
+    use iec60870::cs104::client::ClientEvent;
+    let mut objects = 0;
+    while let Some(event) = events.recv().await {
+        match event {
+            ClientEvent::Asdu(asdu) if asdu.cot.cause.value() == 20 => {
+                objects += asdu.objects.len();
+            }
+            ClientEvent::Asdu(asdu) if asdu.cot.cause.value() == 10 => return objects,
+            ClientEvent::Disconnected { reason } => panic!("{who} lost: {reason}"),
+            _ => {}
+        }
+    }
+    objects
+}
+
 /// Idle clients from other addresses fill the demo's catch-all `dispatch` group (70
 /// connections that never start data transfer); a fresh dispatch client still gets its
 /// general interrogation at once: a newcomer evicts the longest-idle connection that never
@@ -2246,7 +2254,7 @@ fn idle_clients_do_not_lock_dispatch_out_of_the_station() {
 #[test]
 fn idle_clients_from_other_addresses_do_not_lock_out_a_fresh_dispatch_client() {
     use iec60870::asdu::CommonAddress;
-    use iec60870::cs104::client::{spawn_client, ClientConfig, ClientEvent};
+    use iec60870::cs104::client::{spawn_client, ClientConfig};
     let port = ports::free_port_range(23);
     let mut run = stanice();
     run.stdin(Stdio::piped()).arg("run").arg(vsetin()).args([
@@ -2280,21 +2288,11 @@ fn idle_clients_from_other_addresses_do_not_lock_out_a_fresh_dispatch_client() {
         let mut config = ClientConfig::new(server.to_string(), CommonAddress::new(1));
         config.interrogate_on_start = true;
         config.reconnect = false;
-        let (_client, mut events) = spawn_client(config);
-        let objects = tokio::time::timeout(Duration::from_secs(10), async {
-            let mut objects = 0;
-            while let Some(event) = events.recv().await {
-                match event {
-                    ClientEvent::Asdu(asdu) if asdu.cot.cause.value() == 20 => {
-                        objects += asdu.objects.len();
-                    }
-                    ClientEvent::Asdu(asdu) if asdu.cot.cause.value() == 10 => return objects,
-                    ClientEvent::Disconnected { reason } => panic!("dispatch lost: {reason}"),
-                    _ => {}
-                }
-            }
-            objects
-        })
+        let (_client, events) = spawn_client(config);
+        let objects = tokio::time::timeout(
+            Duration::from_secs(10),
+            interrogated_objects(events, "dispatch"),
+        )
         .await
         .expect("dispatch's interrogation ends while the idle clients hold on");
         assert!(objects > 400, "{objects} objects interrogated");

@@ -138,15 +138,7 @@ pub(crate) async fn run(args: MasterArgs) -> anyhow::Result<ExitCode> {
                 }
                 MasterEvent::Link(event) => {
                     let mut lines = link_lines(event, args.json, args.polling.verbose);
-                    match event {
-                        PrimaryEvent::LinkUp { address } => reach.link_up(*address),
-                        PrimaryEvent::Timeout {
-                            address,
-                            request,
-                            attempt,
-                        } => lines.extend(reach.timed_out(*address, *request, *attempt)),
-                        _ => {}
-                    }
+                    lines.extend(reach.observe(event));
                     lines
                 }
                 MasterEvent::Balanced(event) => {

@@ -306,15 +306,7 @@ fn observe(
             MasterEvent::Link(event) => {
                 let mut lines = link_lines(event, args, progress);
                 if let Some(reach) = &mut progress.reach {
-                    match event {
-                        PrimaryEvent::LinkUp { address } => reach.link_up(*address),
-                        PrimaryEvent::Timeout {
-                            address,
-                            request,
-                            attempt,
-                        } => lines.extend(reach.timed_out(*address, *request, *attempt)),
-                        _ => {}
-                    }
+                    lines.extend(reach.observe(event));
                 }
                 lines
             }

@@ -102,6 +102,25 @@ fn hex(bytes: &[u8]) -> String {
         .join(" ")
 }
 
+/// The bytes of the APDU `rest` starts with, as its length octet says (all of `rest`
+/// when it is no complete APDU: the decoder then says why).
+fn frame_at(rest: &[u8]) -> &[u8] {
+    match rest.get(1).map(|length| usize::from(*length) + 2) {
+        Some(length) if rest.first() == Some(&0x68) && rest.len() >= length => {
+            rest.get(..length).unwrap_or(rest)
+        }
+        _ => rest,
+    }
+}
+
+/// How far to skip after a broken APDU: to the next start byte, to resynchronise.
+fn next_start(rest: &[u8]) -> usize {
+    rest.iter()
+        .skip(1)
+        .position(|byte| *byte == 0x68)
+        .map_or(rest.len(), |offset| offset + 1)
+}
+
 /// Writes the analysis of a run of APDUs; returns whether all were well formed.
 pub(crate) fn describe_apdus(bytes: &[u8], params: &AsduParams, out: &mut String) -> bool {
     use std::fmt::Write;
@@ -111,13 +130,7 @@ pub(crate) fn describe_apdus(bytes: &[u8], params: &AsduParams, out: &mut String
     while position < bytes.len() {
         let rest = bytes.get(position..).unwrap_or_default();
         number += 1;
-        let length = rest.get(1).map(|length| usize::from(*length) + 2);
-        let frame_bytes = match length {
-            Some(length) if rest.first() == Some(&0x68) && rest.len() >= length => {
-                rest.get(..length).unwrap_or(rest)
-            }
-            _ => rest,
-        };
+        let frame_bytes = frame_at(rest);
         let _ = writeln!(
             out,
             "APDU {number} at offset {position}: {}",
@@ -149,13 +162,7 @@ pub(crate) fn describe_apdus(bytes: &[u8], params: &AsduParams, out: &mut String
             Err(error) => {
                 clean = false;
                 let _ = writeln!(out, "  malformed: {error}");
-                // Resynchronise on the next start byte.
-                let skip = rest
-                    .iter()
-                    .skip(1)
-                    .position(|byte| *byte == 0x68)
-                    .map_or(rest.len(), |offset| offset + 1);
-                position += skip;
+                position += next_start(rest);
             }
         }
     }
@@ -171,13 +178,7 @@ fn apdus_json(bytes: &[u8], params: &AsduParams) -> (Vec<serde_json::Value>, boo
     let mut out = Vec::new();
     while position < bytes.len() {
         let rest = bytes.get(position..).unwrap_or_default();
-        let length = rest.get(1).map(|length| usize::from(*length) + 2);
-        let frame_bytes = match length {
-            Some(length) if rest.first() == Some(&0x68) && rest.len() >= length => {
-                rest.get(..length).unwrap_or(rest)
-            }
-            _ => rest,
-        };
+        let frame_bytes = frame_at(rest);
         let mut line = json!({"offset": position, "hex": hex(frame_bytes)});
         match Frame::decode(frame_bytes) {
             Ok(frame) => {
@@ -198,12 +199,7 @@ fn apdus_json(bytes: &[u8], params: &AsduParams) -> (Vec<serde_json::Value>, boo
             Err(error) => {
                 clean = false;
                 line["error"] = json!(error.to_string());
-                let skip = rest
-                    .iter()
-                    .skip(1)
-                    .position(|byte| *byte == 0x68)
-                    .map_or(rest.len(), |offset| offset + 1);
-                position += skip;
+                position += next_start(rest);
             }
         }
         out.push(line);
