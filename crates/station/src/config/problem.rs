@@ -14,7 +14,7 @@
 //! | values                       | [`OutOfRange`], [`InvalidNumber`], [`EmptyRange`], [`Empty`], [`Malformed`], [`StoreUrl`], [`Invalid`] |
 //! | IEC types                    | [`WrongType`]                                                    |
 //! | keys that need or exclude each other | [`Missing`], [`Conflict`], [`Republish`]                  |
-//! | the node's PLC               | `StDiagnostic` (with the `runtime` feature), [`PlcStart`], [`PlcVariable`] |
+//! | the node's PLC               | `StDiagnostic` (with the `runtime` feature), [`PlcStart`], [`PlcVariable`], [`UnknownVariable`] |
 //!
 //! Where a problem is another crate's (toml's parser, serde, the store address parser, the
 //! PLC compiler), its own words travel in a `detail` or its own error type: they are the
@@ -42,6 +42,7 @@
 //! [`Republish`]: ConfigProblem::Republish
 //! [`PlcStart`]: ConfigProblem::PlcStart
 //! [`PlcVariable`]: ConfigProblem::PlcVariable
+//! [`UnknownVariable`]: ConfigProblem::UnknownVariable
 
 use std::fmt;
 use std::path::PathBuf;
@@ -223,6 +224,15 @@ pub enum ConfigProblem {
         /// prints it; shown after the error's line.
         excerpt: String,
     },
+    /// A PLC variable the project names that the node's program lacks, with the nearest
+    /// variable the program has when one is clearly meant.
+    #[error("no variable '{name}' in the node's PLC program{suggestion}")]
+    UnknownVariable {
+        /// The path given (`Main.Typo`).
+        name: String,
+        /// `; did you mean `Main.Type`?`, or empty.
+        suggestion: String,
+    },
     /// The node's compiled PLC program does not start (its initial values fault).
     #[error("the PLC does not start: {detail}")]
     PlcStart {
@@ -230,7 +240,7 @@ pub enum ConfigProblem {
         detail: String,
     },
     /// A PLC variable the node names exists but cannot be used (e.g. it is not a
-    /// scalar); one that does not exist is [`Reference::PlcVariable`].
+    /// scalar); one that does not exist is [`ConfigProblem::UnknownVariable`].
     #[error("{detail} in the node's PLC program")]
     PlcVariable {
         /// What the PLC says.

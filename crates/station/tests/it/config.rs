@@ -2,7 +2,7 @@
 //! exact `line:col` and key of its error.
 
 use std::net::SocketAddr;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Duration;
 
 use iec60870::asdu::{CommonAddress, Ioa, TypeId};
@@ -200,13 +200,9 @@ fn station_only_loads() {
     assert_eq!(project.station.store, "postgres://u@h/db");
 }
 
-fn example_folder() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/vsetin")
-}
-
 #[test]
 fn vsetin_example_loads() {
-    let project = match Project::load(&example_folder()) {
+    let project = match Project::load(&testkit::projects::vsetin()) {
         Ok(p) => p,
         Err(e) => panic!("{e}"),
     };
@@ -1030,7 +1026,7 @@ proptest! {
         drop_lines in proptest::collection::vec(0usize..600, 0..8),
         cut in 0usize..20_000,
     ) {
-        let original = std::fs::read_to_string(example_folder().join("station.toml")).unwrap();
+        let original = std::fs::read_to_string(testkit::projects::vsetin().join("station.toml")).unwrap();
         let kept: String = original
             .lines()
             .enumerate()
@@ -1044,7 +1040,7 @@ proptest! {
         let dir = folder(&kept[..end], &[]);
         std::fs::create_dir_all(dir.path().join("plc")).unwrap();
         std::fs::copy(
-            example_folder().join("plc/rh2_logic.st"),
+            testkit::projects::vsetin().join("plc/rh2_logic.st"),
             dir.path().join("plc/rh2_logic.st"),
         )
         .unwrap();
@@ -1311,7 +1307,7 @@ proptest::proptest! {
     fn mutated_example_never_panics_and_errors_have_positions(
         cuts in proptest::collection::vec((0usize..6000, 0usize..40, "\\PC{0,12}"), 1..4)
     ) {
-        let original = std::fs::read_to_string(example_folder().join("station.toml")).unwrap();
+        let original = std::fs::read_to_string(testkit::projects::vsetin().join("station.toml")).unwrap();
         let mut text: Vec<char> = original.chars().take(6000).collect();
         for (at, len, insert) in cuts {
             let at = at.min(text.len());
@@ -1319,7 +1315,7 @@ proptest::proptest! {
             text.splice(at..end, insert.chars());
         }
         let text: String = text.into_iter().collect();
-        let folder = example_folder();
+        let folder = testkit::projects::vsetin();
         if let Err(errors) = Project::parse(&folder, &folder.join("station.toml"), &text) {
             let lines = text.lines().count().max(1);
             for error in errors.errors() {
@@ -1379,7 +1375,7 @@ fn one_unclosed_bracket_is_one_error() {
     assert_eq!(errors.len(), 1, "{errors:#?}");
     expect(&errors, 8, 1, "", "missing comma");
 
-    let vsetin = std::fs::read_to_string(example_folder().join("station.toml")).unwrap();
+    let vsetin = std::fs::read_to_string(testkit::projects::vsetin().join("station.toml")).unwrap();
     let (line, _) = vsetin
         .lines()
         .enumerate()
@@ -1396,8 +1392,9 @@ fn one_unclosed_bracket_is_one_error() {
             }
         })
         .collect();
-    let file = example_folder().join("station.toml");
-    let errors = Project::parse(&example_folder(), &file, &broken.join("\n")).unwrap_err();
+    let file = testkit::projects::vsetin().join("station.toml");
+    let errors =
+        Project::parse(&testkit::projects::vsetin(), &file, &broken.join("\n")).unwrap_err();
     assert_eq!(errors.errors().len(), 1, "{errors}");
     assert_eq!(errors.total(), 1);
 }
@@ -1683,7 +1680,7 @@ port_offset = 1
 /// commands.
 #[test]
 fn com600_gateway_example_loads() {
-    let project = Project::load(&example_folder().join("../com600-gateway")).unwrap();
+    let project = Project::load(&testkit::projects::vsetin().join("../com600-gateway")).unwrap();
     let node = &project.nodes[0];
     let line = &node.lines[0];
     assert_eq!(line.name, "relays");
@@ -1744,7 +1741,7 @@ fn com600_gateway_example_loads() {
 /// The IEC 101 gateway example: its line, device and the forwarded command.
 #[test]
 fn iec101_gateway_example_loads() {
-    let project = Project::load(&example_folder().join("../iec101-gateway")).unwrap();
+    let project = Project::load(&testkit::projects::vsetin().join("../iec101-gateway")).unwrap();
     let node = &project.nodes[0];
     let line = &node.lines[0];
     assert!(matches!(line.protocol, LineProtocol::Iec101(_)));
@@ -2330,10 +2327,18 @@ fn st_compile_errors_are_typed_with_the_compiler_code() {
     );
     assert_eq!(
         problems(&toml, &[PLC]),
-        [ConfigProblem::Unknown {
-            what: Reference::PlcVariable,
+        [ConfigProblem::UnknownVariable {
             name: "Main.Typo".into(),
-            within: "A".into(),
+            suggestion: String::new(),
+        }]
+    );
+    // a near miss gets a "did you mean"
+    let toml = toml.replace("Main.Typo", "Mian.X");
+    assert_eq!(
+        problems(&toml, &[PLC]),
+        [ConfigProblem::UnknownVariable {
+            name: "Mian.X".into(),
+            suggestion: "; did you mean `Main.X`?".into(),
         }]
     );
 }

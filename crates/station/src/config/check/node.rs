@@ -1054,11 +1054,17 @@ impl Ctx<'_> {
                 let mut path = vec![K("node"), I(n)];
                 path.extend(rest);
                 let problem = match error {
-                    plc::PlcError::UnknownPath(name) => ConfigProblem::Unknown {
-                        what: Reference::PlcVariable,
-                        name,
-                        within: raw.name.clone(),
-                    },
+                    plc::PlcError::UnknownPath(name) => {
+                        let paths: Vec<String> =
+                            plc.leaves().into_iter().map(|leaf| leaf.path).collect();
+                        ConfigProblem::UnknownVariable {
+                            suggestion: plc::suggest::did_you_mean(
+                                &name,
+                                paths.iter().map(String::as_str),
+                            ),
+                            name,
+                        }
+                    }
                     other => ConfigProblem::PlcVariable {
                         detail: other.to_string(),
                     },
