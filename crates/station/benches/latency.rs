@@ -23,7 +23,6 @@
 //! RH1.1, so the one-hop baseline is taken inside the process instead.)
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-use std::path::PathBuf;
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
@@ -117,13 +116,9 @@ fn main() {
 }
 
 async fn run(samples: usize) {
-    let folder = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/vsetin");
-    let project = Project::load(&folder).unwrap_or_else(|e| panic!("{e}"));
-    let base = {
-        let probe = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
-        probe.local_addr().unwrap().port().clamp(20_000, 40_000)
-    };
-    let project = project.with_port_base(base);
+    let project = Project::load(&testkit::projects::vsetin()).unwrap_or_else(|e| panic!("{e}"));
+    // The Vsetín station's nodes listen on 23 ports from the base.
+    let project = project.with_port_base(testkit::ports::free_port_range(23));
     let station = Runtime::start(
         project,
         RuntimeOptions {

@@ -34,10 +34,10 @@ use iec60870::asdu::CommonAddress;
 use iec60870::cs104::client::{spawn_client, ClientConfig, ClientEvent};
 use station::config::Project;
 use station::runtime::{Pacing, Runtime, RuntimeOptions, StoreChoice};
+use testkit::ports::free_port;
+use testkit::projects::{LiftBoard, LiftFleet};
 use tokio::sync::mpsc;
 
-/// IOAs per lift: the common signals and up to 24 floors' counters.
-const IOA_STRIDE: u32 = 40;
 /// The offset of a lift's `faults` point (`LiftSignal::Faults`).
 const FAULTS_OFFSET: u32 = 11;
 
@@ -48,10 +48,6 @@ fn arg(name: &str, default: u64) -> u64 {
         .and_then(|i| args.get(i + 1))
         .and_then(|v| v.parse().ok())
         .unwrap_or(default)
-}
-
-fn floors(lift: usize) -> u8 {
-    u8::try_from(3 + lift % 18).unwrap()
 }
 
 fn percentile<T: Copy + Ord>(sorted: &[T], p: f64) -> T {
@@ -92,7 +88,7 @@ fn boards(lifts: usize) {
             let (operations, mut inbox) = mpsc::unbounded_channel::<EndpointAction<Simulator>>();
             consoles.push(operations);
             let mut config = SimulatorConfig::default();
-            config.floors = floors(lift);
+            config.floors = LiftFleet::floors(lift);
             config.seed = lift as u64;
             config.stack_size = 64;
             config.fault_probability = 0.0;
@@ -173,22 +169,12 @@ async fn node(lifts: usize, seconds: u64, faults: usize) {
     let ports: Vec<u16> = serde_json::from_str(&first).unwrap();
 
     let dir = tempfile::tempdir().unwrap();
-    let server_port = std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port();
-    let mut toml = format!(
-        "[station]\nname = \"fleet\"\ntime_zone = \"Europe/Prague\"\nstore = \"sqlite:events.sqlite\"\nport_base = {server_port}\n\n[[node]]\nname = \"FLEET\"\ncommon_address = 1\nserver = {{ port_offset = 0 }}\n"
-    );
-    for (lift, port) in ports.iter().enumerate() {
-        toml.push_str(&format!(
-            "\n[[node.lift]]\nname = \"L{lift}\"\nfloors = {}\nioa_base = {}\ntcp = \"127.0.0.1:{port}\"\n",
-            floors(lift),
-            1 + IOA_STRIDE * u32::try_from(lift).unwrap()
-        ));
-    }
-    std::fs::write(dir.path().join("station.toml"), toml).unwrap();
+    let fleet = LiftFleet {
+        time_zone: "Europe/Prague".to_owned(),
+        port_base: free_port(),
+        boards: ports.iter().map(|port| LiftBoard::Tcp(*port)).collect(),
+    };
+    fleet.write(dir.path());
     let project = Project::load(dir.path()).unwrap_or_else(|e| panic!("{e}"));
     let runtime = Runtime::start(
         project,
@@ -257,7 +243,7 @@ async fn node(lifts: usize, seconds: u64, faults: usize) {
 
     // Fault latency: to the archive, and to an IEC 104 client of the node.
     let (client, mut events) = spawn_client(ClientConfig::new(
-        format!("127.0.0.1:{server_port}"),
+        format!("127.0.0.1:{}", fleet.port_base),
         CommonAddress::new(1),
     ));
     loop {
@@ -270,12 +256,7 @@ async fn node(lifts: usize, seconds: u64, faults: usize) {
     let _client = client;
     let mut archived = runtime.archived_faults();
     let faults_ioa: HashMap<u32, usize> = (0..lifts)
-        .map(|lift| {
-            (
-                1 + IOA_STRIDE * u32::try_from(lift).unwrap() + FAULTS_OFFSET,
-                lift,
-            )
-        })
+        .map(|lift| (LiftFleet::ioa_base(lift) + FAULTS_OFFSET, lift))
         .collect();
     let mut injected: HashMap<usize, Instant> = HashMap::new();
     let mut to_archive = Vec::new();

@@ -94,11 +94,7 @@ async fn archived(runtime: &Runtime, lift: &str, count: usize) -> Vec<LiftFaultR
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn simulated_lifts_become_points_served_over_iec104_and_archive_their_faults() {
     let dir = tempfile::tempdir().unwrap();
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port();
+    let port = testkit::ports::free_port();
     std::fs::write(
         dir.path().join("station.toml"),
         format!(
@@ -406,10 +402,10 @@ async fn the_archive_has_every_fault_once_across_restarts_and_wrap_around_over_a
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_new_fault_is_mailed_to_the_technician_and_recorded() {
-    if !crate::smtp_sink::smtp_peer_available() {
+    if !testkit::smtp::smtp_peer_available() {
         return;
     }
-    let sink = crate::smtp_sink::SmtpSink::start();
+    let sink = testkit::smtp::SmtpSink::start();
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(
         dir.path().join("station.toml"),

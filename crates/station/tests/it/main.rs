@@ -13,6 +13,5 @@ mod lift;
 #[path = "../../../store/tests/it/pg.rs"]
 mod pg;
 mod runtime_store;
-#[path = "../../../../tests/support/smtp_sink.rs"]
-mod smtp_sink;
+mod sink;
 mod task_isolation;

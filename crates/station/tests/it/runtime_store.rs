@@ -1,7 +1,6 @@
 //! The station runtime records into either backend: a board run alone, a command from a
 //! controlling station, and what the store then holds — on SQLite and on PostgreSQL.
 
-use std::path::PathBuf;
 use std::time::Duration;
 
 use iec60870::asdu::{CommandQualifier, CommonAddress, Element, Ioa, TypeId};
@@ -11,13 +10,8 @@ use station::runtime::{Pacing, Runtime, RuntimeOptions, StoreChoice};
 use station::store::{CommandOutcome, CommandQuery, EventQuery};
 
 async fn board_records_a_command_and_its_effects(store_url: String) {
-    let folder = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/vsetin");
-    let project = Project::load(&folder).unwrap();
-    let base = std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port();
+    let project = Project::load(&testkit::projects::vsetin()).unwrap();
+    let base = testkit::ports::free_port();
     // RH2 listens on port_base + 2; the other nodes do not run here.
     let project = project.with_port_base(base.saturating_sub(2).max(1024));
     let runtime = Runtime::start(

@@ -14,7 +14,7 @@ use station::config::Project;
 use station::runtime::{Runtime, StoreChoice};
 use station::store::{CommandOutcome, CommandQuery};
 
-use crate::harness::{eventually, free_port_base, links_up, project_folder, start, start_at};
+use crate::harness::{eventually, free_port_range, links_up, project_folder, start, start_at};
 
 const QF1_CLOSED: u32 = 100;
 const QF2_CLOSED: u32 = 101;
@@ -118,7 +118,7 @@ range = [0, 1439]
 fn project() -> (tempfile::TempDir, Project) {
     let dir = project_folder(&[("station.toml", STATION_TOML), ("plc/board.st", BOARD_ST)]);
     let project = Project::load(dir.path()).unwrap_or_else(|errors| panic!("{errors}"));
-    let project = project.with_port_base(free_port_base(2));
+    let project = project.with_port_base(free_port_range(2));
     (dir, project)
 }
 

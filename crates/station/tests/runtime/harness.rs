@@ -1,9 +1,7 @@
 //! Shared pieces of the runtime scenario tests: the Vsetín project on free loopback ports,
 //! and a dispatch client that records everything it receives.
 
-use std::net::{Ipv4Addr, SocketAddr, TcpListener};
-use std::path::PathBuf;
-use std::sync::atomic::{AtomicU16, Ordering};
+use std::net::SocketAddr;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -13,46 +11,12 @@ use iec60870::cs104::client::{spawn_client, ClientConfig, ClientEvent, ClientHan
 use station::config::Project;
 use station::runtime::{Pacing, Runtime, RuntimeOptions, StoreChoice};
 
-/// The example project shipped in the repository.
-pub(crate) fn vsetin_folder() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/vsetin")
-}
-
-/// A port base whose next `count` ports are free on loopback.
-pub(crate) fn free_port_base(count: u16) -> u16 {
-    static NEXT: AtomicU16 = AtomicU16::new(0);
-    let _ = NEXT.compare_exchange(
-        0,
-        20_000 + (std::process::id() % 400) as u16 * 50,
-        Ordering::SeqCst,
-        Ordering::SeqCst,
-    );
-    for _ in 0..200 {
-        let base = NEXT.fetch_add(count + 1, Ordering::SeqCst);
-        let all_free = (0..count)
-            .all(|i| TcpListener::bind(SocketAddr::from((Ipv4Addr::LOCALHOST, base + i))).is_ok());
-        if all_free {
-            return base;
-        }
-    }
-    panic!("no free port range found");
-}
+pub(crate) use testkit::ports::free_port_range;
+pub(crate) use testkit::projects::{folder as project_folder, vsetin as vsetin_folder};
 
 /// Winter evening 2025-01-15 16:00 UTC, unless a test needs another start.
 pub(crate) fn default_start() -> DateTime<Utc> {
     Utc.with_ymd_and_hms(2025, 1, 15, 10, 0, 0).unwrap()
-}
-
-/// A project folder in a temporary directory with the given files (`station.toml`, ST
-/// sources, ...), their folders made as needed.
-pub(crate) fn project_folder(files: &[(&str, &str)]) -> tempfile::TempDir {
-    let dir = tempfile::tempdir().unwrap();
-    for (path, text) in files {
-        let path = dir.path().join(path);
-        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
-        std::fs::write(path, text).unwrap();
-    }
-    dir
 }
 
 /// Loads the Vsetín project on free ports.
@@ -65,7 +29,7 @@ pub(crate) fn vsetin_project() -> Project {
         .max()
         .unwrap_or(0)
         + 1;
-    project.with_port_base(free_port_base(ports))
+    project.with_port_base(free_port_range(ports))
 }
 
 /// Starts `project` with manual pacing and the given store.

@@ -10,7 +10,7 @@ use iec60870::cs104::tls::self_signed::{write, Authority, Usage};
 use station::config::Project;
 use station::runtime::StoreChoice;
 
-use crate::harness::{eventually, free_port_base, links_up, project_folder, start};
+use crate::harness::{eventually, free_port_range, links_up, project_folder, start};
 
 const BOARD_ST: &str = "PROGRAM Board\nVAR Lamp : BOOL := TRUE; END_VAR\nEND_PROGRAM\n";
 
@@ -64,7 +64,7 @@ async fn nodes_talk_over_mutually_authenticated_tls_and_refuse_plain_clients() {
         write(&pem, &dir.path().join("tls"), node).unwrap();
     }
     let project = Project::load(dir.path()).unwrap_or_else(|errors| panic!("{errors}"));
-    let project = project.with_port_base(free_port_base(2));
+    let project = project.with_port_base(free_port_range(2));
     let top = project
         .node("TOP")
         .unwrap()
