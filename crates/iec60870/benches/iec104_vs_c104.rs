@@ -165,10 +165,6 @@ impl Peer {
     }
 }
 
-fn repository_root() -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
 /// Starts a server process and waits for its ready line.
 fn start_server(
     peer: Peer,
@@ -190,21 +186,11 @@ fn start_server(
             command
         }
         Peer::C104 => {
-            let script = repository_root().join("tests/peer/c104_server.py");
-            if !script.exists() {
+            if !testkit::peers::peer_script("c104_server.py").exists() {
                 return None;
             }
-            let mut command = Command::new("python3");
+            let mut command = testkit::peers::c104("c104_server.py", port);
             command
-                .arg(script)
-                .args([
-                    "--host",
-                    "127.0.0.1",
-                    "--port",
-                    &port.to_string(),
-                    "--ca",
-                    "1",
-                ])
                 .args([
                     "--stdin",
                     "ignore",

@@ -20,10 +20,8 @@
     clippy::disallowed_methods
 )]
 
-#[path = "../../../tests/peer/harness.rs"]
-mod peer;
-
-use peer::{peer_script, peers_available, Capture};
+use testkit::peers::{c104, peers_available, Capture};
+use testkit::ports::free_port;
 
 use std::collections::HashMap;
 use std::io::{BufRead, BufReader};
@@ -43,15 +41,6 @@ use iec60870::cs104::server::{
 };
 use serde_json::Value;
 use tokio::sync::mpsc;
-
-/// A free loopback port (bound and released; the peers bind it right after).
-fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port()
-}
 
 /// A peer process whose JSON lines are collected as they come.
 struct Peer {
@@ -103,17 +92,8 @@ impl Drop for Peer {
 }
 
 fn c104_server(port: u16, extra: &[&str]) -> Peer {
-    let mut command = Command::new("python3");
+    let mut command = c104("c104_server.py", port);
     command
-        .arg(peer_script("c104_server.py"))
-        .args([
-            "--host",
-            "127.0.0.1",
-            "--port",
-            &port.to_string(),
-            "--ca",
-            "1",
-        ])
         .args(["--max-seconds", "120", "--tick-rate-ms", "50"])
         .args(extra);
     Peer::spawn(command)
@@ -522,17 +502,8 @@ const ATTEMPTS: usize = 3;
 /// Runs c104's controlling station against our outstation: GI, nine commands (one must be
 /// refused), then 50 spontaneous events.
 async fn run_c104_client(port: u16) -> std::process::Output {
-    let mut command = Command::new("python3");
+    let mut command = c104("c104_client.py", port);
     command
-        .arg(peer_script("c104_client.py"))
-        .args([
-            "--host",
-            "127.0.0.1",
-            "--port",
-            &port.to_string(),
-            "--ca",
-            "1",
-        ])
         .args(["--gi", "--expect-points", "21"])
         .args(["--command", "C_SC_NA_1:2021:1"])
         .args(["--command", "C_SC_NA_1:2023:1:select"])

@@ -7,144 +7,22 @@
     clippy::indexing_slicing
 )]
 
-#[path = "../../../tests/support/ports.rs"]
-mod ports;
 use std::io::{BufRead, BufReader, Read};
 use std::path::PathBuf;
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 use serde_json::Value;
+use testkit::ports::{self, free_port};
+use testkit::process::{
+    assert_success, run_bounded, start_until, start_until_line, start_until_with_log, Background,
+};
+use testkit::projects::{copy_project, fresh_dir, vsetin};
 
 fn stanice() -> Command {
     let mut command = Command::new(env!("CARGO_BIN_EXE_stanice"));
     command.stdin(Stdio::null());
     command
-}
-
-fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port()
-}
-
-/// Runs a command to completion, killing it after `seconds`. Its output is drained while
-/// it runs, so a chatty command never blocks on a full pipe.
-fn run_bounded(mut command: Command, seconds: u64) -> Output {
-    let mut child = command
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let drain = |mut pipe: Box<dyn Read + Send>| {
-        std::thread::spawn(move || {
-            let mut bytes = Vec::new();
-            let _ = pipe.read_to_end(&mut bytes);
-            bytes
-        })
-    };
-    let stdout = drain(Box::new(child.stdout.take().unwrap()));
-    let stderr = drain(Box::new(child.stderr.take().unwrap()));
-    let deadline = Instant::now() + Duration::from_secs(seconds);
-    let mut status = None;
-    while Instant::now() < deadline {
-        if let Some(done) = child.try_wait().unwrap() {
-            status = Some(done);
-            break;
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let finished = status.is_some();
-    if !finished {
-        let _ = child.kill();
-    }
-    let status = child.wait().unwrap();
-    let output = Output {
-        status,
-        stdout: stdout.join().unwrap(),
-        stderr: stderr.join().unwrap(),
-    };
-    assert!(
-        finished,
-        "command did not finish within {seconds} s; stdout:\n{}",
-        String::from_utf8_lossy(&output.stdout)
-    );
-    output
-}
-
-/// A long-running process (outstation, demo), killed when dropped.
-struct Background(Child);
-
-impl Drop for Background {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
-
-/// Starts a process and waits until a stdout line contains `marker`.
-fn start_until(command: Command, marker: &str) -> Background {
-    start_until_line(command, marker).0
-}
-
-/// Starts a process and waits until a stdout line contains `marker`; returns the line.
-fn start_until_line(mut command: Command, marker: &str) -> (Background, String) {
-    let child = command
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    wait_for_marker(child, marker)
-}
-
-/// Starts a process and waits until a stdout line contains `marker`; its standard error
-/// is collected until it ends (the thread's result).
-fn start_until_with_log(
-    mut command: Command,
-    marker: &str,
-) -> (Background, std::thread::JoinHandle<String>) {
-    let mut child = command
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut stderr = child.stderr.take().unwrap();
-    let log = std::thread::spawn(move || {
-        let mut text = String::new();
-        let _ = stderr.read_to_string(&mut text);
-        text
-    });
-    (wait_for_marker(child, marker).0, log)
-}
-
-/// Waits until a stdout line of `child` contains `marker`; returns the line.
-fn wait_for_marker(mut child: Child, marker: &str) -> (Background, String) {
-    let stdout = child.stdout.take().unwrap();
-    let (sender, receiver) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
-            if sender.send(line).is_err() {
-                break;
-            }
-        }
-    });
-    let deadline = Instant::now() + Duration::from_secs(20);
-    let mut seen = Vec::new();
-    while Instant::now() < deadline {
-        if let Ok(line) = receiver.recv_timeout(Duration::from_millis(100)) {
-            if line.contains(marker) {
-                // Keep draining so the child never blocks on a full pipe.
-                std::thread::spawn(move || for _ in receiver {});
-                return (Background(child), line);
-            }
-            seen.push(line);
-        }
-    }
-    let _ = child.kill();
-    let _ = child.wait();
-    panic!("never saw '{marker}'; saw {seen:?}");
 }
 
 fn write_points(text: &str) -> PathBuf {
@@ -1231,10 +1109,6 @@ fn plc_check_reports_file_line_col_and_fails() {
     );
 }
 
-fn vsetin() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/vsetin")
-}
-
 #[test]
 fn points_lists_what_the_top_controller_serves() {
     let mut command = stanice();
@@ -1335,42 +1209,7 @@ fn run_records_events_that_events_lists() {
 /// A copy of the Vsetín project in `parent/name`, without its event stores, so that a test
 /// runs it from a folder of its own with a relative path.
 fn copy_vsetin(parent: &std::path::Path, name: &str) -> PathBuf {
-    fn copy(from: &std::path::Path, to: &std::path::Path) {
-        std::fs::create_dir_all(to).unwrap();
-        for entry in std::fs::read_dir(from).unwrap() {
-            let entry = entry.unwrap();
-            let file_name = entry.file_name();
-            if file_name.to_string_lossy().contains(".sqlite") {
-                continue;
-            }
-            if entry.file_type().unwrap().is_dir() {
-                copy(&entry.path(), &to.join(&file_name));
-            } else {
-                std::fs::copy(entry.path(), to.join(&file_name)).unwrap();
-            }
-        }
-    }
-    let project = parent.join(name);
-    let _ = std::fs::remove_dir_all(&project);
-    copy(&vsetin(), &project);
-    project
-}
-
-fn fresh_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("stanice-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn assert_success(output: &Output) -> String {
-    assert!(
-        output.status.success(),
-        "{}\n{}",
-        String::from_utf8_lossy(&output.stdout),
-        String::from_utf8_lossy(&output.stderr)
-    );
-    String::from_utf8_lossy(&output.stdout).into_owned()
+    copy_project(&vsetin(), parent, name)
 }
 
 /// The project's files are resolved against a relative project folder once: `run` reads

@@ -15,68 +15,21 @@
     clippy::indexing_slicing
 )]
 
-#[path = "../../../tests/peer/harness.rs"]
-mod peer;
-
-#[path = "../../../tests/support/ports.rs"]
-mod ports;
-use peer::{peer_script, peers_available, repository_root, Capture};
-
 use std::collections::BTreeSet;
 use std::io::{BufRead, BufReader, Read};
-use std::path::PathBuf;
 use std::process::{Child, Command, Output, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use serde_json::{json, Value};
+use testkit::peers::{c104, peers_available, Capture};
+use testkit::ports;
+use testkit::process::run_within;
+use testkit::projects::{example, fresh_dir, vsetin};
 
 /// Simulated start of the demo: a June morning, so that the lighting boards' automatic
 /// modes keep the lamps off and only the manual command lights them.
 const DEMO_START: &str = "2025-06-16T09:00:00Z";
-
-fn vsetin() -> PathBuf {
-    repository_root().join("examples/vsetin")
-}
-
-/// Runs a command to completion, killing it after `seconds`. Its output is drained while
-/// it runs, so a chatty command never blocks on a full pipe.
-fn run_bounded(mut command: Command, seconds: u64) -> (Output, bool) {
-    let mut child = command
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let drain = |mut pipe: Box<dyn Read + Send>| {
-        std::thread::spawn(move || {
-            let mut bytes = Vec::new();
-            let _ = pipe.read_to_end(&mut bytes);
-            bytes
-        })
-    };
-    let stdout = drain(Box::new(child.stdout.take().unwrap()));
-    let stderr = drain(Box::new(child.stderr.take().unwrap()));
-    let deadline = Instant::now() + Duration::from_secs(seconds);
-    let mut finished = false;
-    while Instant::now() < deadline {
-        if child.try_wait().unwrap().is_some() {
-            finished = true;
-            break;
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    if !finished {
-        let _ = child.kill();
-    }
-    let status = child.wait().unwrap();
-    let output = Output {
-        status,
-        stdout: stdout.join().unwrap(),
-        stderr: stderr.join().unwrap(),
-    };
-    (output, finished)
-}
 
 /// `stanice demo`, killed when dropped. Its stdout and stderr are drained all the time (a
 /// full pipe would block it) and kept for the failure messages.
@@ -199,7 +152,7 @@ impl Drop for Demo {
 fn monitor_ioas() -> BTreeSet<u64> {
     let mut command = Command::new(env!("CARGO_BIN_EXE_stanice"));
     command.arg("points").arg(vsetin());
-    let (output, finished) = run_bounded(command, 30);
+    let (output, finished) = run_within(command, 30);
     let text = String::from_utf8_lossy(&output.stdout);
     assert!(
         finished && output.status.success(),
@@ -328,22 +281,13 @@ fn c104_dispatch_reads_the_station_and_operates_it() {
     let (demo, port) = Demo::start_on_free_ports();
     let capture = Capture::start("dispatch", port);
 
-    let mut command = Command::new("python3");
+    let mut command = c104("c104_dispatch.py", port);
     command
-        .arg(peer_script("c104_dispatch.py"))
-        .args([
-            "--host",
-            "127.0.0.1",
-            "--port",
-            &port.to_string(),
-            "--ca",
-            "1",
-        ])
         .args(["--connect-timeout", "10", "--gi-timeout", "5"])
         .args(["--command-timeout", "3"])
         .arg("--steps")
         .arg(scenario().to_string());
-    let (output, finished) = run_bounded(command, 90);
+    let (output, finished) = run_within(command, 90);
     let transcript = Transcript::new(&output, finished, &demo);
     let summary = transcript.events("summary").first().copied().cloned();
     transcript.check(
@@ -476,12 +420,9 @@ fn c104_dispatch_reads_the_station_and_operates_it() {
 /// c104's controlling station against `port` (CA 1), bounded by `seconds`: its JSON lines,
 /// whether it finished, and its standard error.
 fn c104_run(port: u16, args: &[&str], seconds: u64) -> (Vec<Value>, bool, String) {
-    let mut command = Command::new("python3");
-    command
-        .arg(peer_script("c104_client.py"))
-        .args(["--port", &port.to_string(), "--ca", "1"])
-        .args(args);
-    let (output, finished) = run_bounded(command, seconds);
+    let mut command = c104("c104_client.py", port);
+    command.args(args);
+    let (output, finished) = run_within(command, seconds);
     let lines = String::from_utf8_lossy(&output.stdout)
         .lines()
         .filter_map(|line| serde_json::from_str(line).ok())
@@ -645,7 +586,7 @@ fn c104_reads_the_com600_gateway_and_commands_the_relay() {
     if !peers_available() {
         return;
     }
-    let project = repository_root().join("examples/com600-gateway");
+    let project = example("com600-gateway");
     let (mut gateway, port) = start_gateway(&project);
     gateway_scenario(port, |operation| {
         gateway.type_line(&format!("relay REF630 {operation}"))
@@ -675,19 +616,18 @@ fn c104_reads_the_com600_gateway_with_the_relay_on_a_pseudo_terminal() {
         .expect("the relay prints its pty first");
     // Keep draining the relay's log so it never blocks on a full pipe.
     std::thread::spawn(move || for _ in relay_output {});
-    let project = tempfile_dir("com600-pty");
-    let text =
-        std::fs::read_to_string(repository_root().join("examples/com600-gateway/station.toml"))
-            .unwrap()
-            // A pseudo-terminal keeps no parity: the line is opened 8N1.
-            .replace(
-                "\nsimulate = \"ref630\"\n",
-                &format!("\nport = \"{path}\"\nparity = \"none\"\n"),
-            )
-            .replace(
-                "store = \"sqlite:events.sqlite\"",
-                "store = \"sqlite::memory:\"",
-            );
+    let project = fresh_dir("com600-pty");
+    let text = std::fs::read_to_string(example("com600-gateway").join("station.toml"))
+        .unwrap()
+        // A pseudo-terminal keeps no parity: the line is opened 8N1.
+        .replace(
+            "\nsimulate = \"ref630\"\n",
+            &format!("\nport = \"{path}\"\nparity = \"none\"\n"),
+        )
+        .replace(
+            "store = \"sqlite:events.sqlite\"",
+            "store = \"sqlite::memory:\"",
+        );
     assert!(text.contains(&path), "the project names the pty");
     std::fs::write(project.join("station.toml"), text).unwrap();
     let (gateway, port) = start_gateway(&project);
@@ -712,7 +652,7 @@ fn c104_reads_an_iec101_outstation_through_the_gateway() {
     if !peers_available() {
         return;
     }
-    let dir = tempfile_dir("iec101-gateway");
+    let dir = fresh_dir("iec101-gateway");
     let points = dir.join("rtu.csv");
     std::fs::write(
         &points,
@@ -860,14 +800,6 @@ target = "line:rtus/RTU/4050"
         "IV while the outstation is silent: {feeder}"
     );
     drop(gateway);
-}
-
-/// A fresh folder in the temp dir.
-fn tempfile_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("stanice-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 /// `stanice run PROJECT` on a free port.

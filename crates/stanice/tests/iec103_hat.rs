@@ -18,36 +18,22 @@
 )]
 
 use std::io::{BufRead, BufReader, Read};
-use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdin, Command, ExitStatus, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use serde_json::Value;
-
-/// The peer script.
-fn hat_master_script() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/peer/hat103_master.py")
-}
+use testkit::peers;
 
 /// Whether hat-drivers' IEC 103 master and serial driver import; panics when they must
 /// (CI) and do not.
 fn hat_available() -> bool {
-    let imported = Command::new("python3")
-        .args(["-c", "import hat.drivers.iec103, hat.drivers.serial"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|status| status.success());
-    if imported {
+    if peers::python_imports("hat.drivers.iec103, hat.drivers.serial") {
         return true;
     }
-    let message =
-        "interoperability peer missing (hat-drivers for python3); run scripts/install-test-deps.sh";
-    if std::env::var("STANICE_REQUIRE_PEERS").as_deref() == Ok("1") {
-        panic!("{message}");
-    }
-    eprintln!("SKIPPED: {message}");
+    peers::skip_or_fail(
+        "interoperability peer missing (hat-drivers for python3); run scripts/install-test-deps.sh",
+    );
     false
 }
 
@@ -217,7 +203,7 @@ fn hat_drivers_master_interrogates_and_commands_the_relay() {
     let (mut relay, path) = start_relay(&["--address", "1", "--cycle", "1", "--inject", "1,1"]);
     let mut command = Command::new("python3");
     command
-        .arg(hat_master_script())
+        .arg(peers::peer_script("hat103_master.py"))
         .arg(&path)
         .args(["--address", "1", "--parity", "none", "--timeout", "40"])
         .args(["--measurands", "2", "--time-sync", "--command", "1,160,off"])

@@ -6,12 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-fn repository_root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .canonicalize()
-        .unwrap()
-}
+use testkit::repository_root;
 
 /// Every text file under `folder`, skipping build output and hidden folders.
 fn text_files(folder: &Path, out: &mut Vec<PathBuf>) {

@@ -24,6 +24,8 @@ use std::process::{Child, Command, ExitStatus, Stdio};
 use std::sync::mpsc::{channel, Receiver};
 use std::time::{Duration, Instant};
 
+use testkit::repository_root;
+
 /// README lines that are not run, each with the reason.
 const SKIPPED: &[(&str, &str)] = &[
     (
@@ -73,13 +75,6 @@ const START_TIMEOUT: Duration = Duration::from_secs(180);
 const ONE_SHOT_TIMEOUT: Duration = Duration::from_secs(120);
 const STOP_TIMEOUT: Duration = Duration::from_secs(30);
 const PORT_FREE_TIMEOUT: Duration = Duration::from_secs(60);
-
-fn repository_root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .canonicalize()
-        .unwrap()
-}
 
 /// Splits a command line into words as a POSIX shell does for the simple lines of the
 /// README: blanks separate words, single and double quotes group, a `#` starting a word

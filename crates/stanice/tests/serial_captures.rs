@@ -9,71 +9,17 @@
     clippy::indexing_slicing
 )]
 
-#[path = "../../../tests/peer/harness.rs"]
-mod peer;
+use std::process::{Command, Stdio};
+use std::time::Duration;
 
-use std::process::{Child, Command, Stdio};
-use std::time::{Duration, Instant};
+use testkit::peers;
+use testkit::ports::{free_port, listening_within};
+use testkit::process::{assert_success, run_bounded, Background};
 
 fn stanice() -> Command {
     let mut command = Command::new(env!("CARGO_BIN_EXE_stanice"));
     command.stdin(Stdio::null());
     command
-}
-
-fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port()
-}
-
-/// A child killed when dropped.
-struct Background(Child);
-
-impl Drop for Background {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
-
-/// Waits until something listens on the port (at most 20 s).
-fn wait_listening(port: u16) {
-    let deadline = Instant::now() + Duration::from_secs(20);
-    while Instant::now() < deadline {
-        if std::net::TcpStream::connect(("127.0.0.1", port)).is_ok() {
-            return;
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    panic!("nothing listens on port {port}");
-}
-
-/// Runs a command to its end (at most `seconds`) and returns its stdout.
-fn run_to_end(command: &mut Command, seconds: u64) -> String {
-    let mut child = command
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let deadline = Instant::now() + Duration::from_secs(seconds);
-    while Instant::now() < deadline {
-        if child.try_wait().unwrap().is_some() {
-            let output = child.wait_with_output().unwrap();
-            assert!(
-                output.status.success(),
-                "failed: {}",
-                String::from_utf8_lossy(&output.stderr)
-            );
-            return String::from_utf8_lossy(&output.stdout).into_owned();
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    let _ = child.kill();
-    let _ = child.wait();
-    panic!("did not finish within {seconds} s");
 }
 
 const POINTS: &str = "ioa,type,value,name\n\
@@ -85,14 +31,14 @@ const POINTS: &str = "ioa,type,value,name\n\
 
 #[test]
 fn iec101_over_tcp_dissects_cleanly() {
-    if !peer::peers_available() {
+    if !peers::peers_available() {
         return;
     }
     let port = free_port();
     let points =
         std::env::temp_dir().join(format!("stanice-101-capture-{}.csv", std::process::id()));
     std::fs::write(&points, POINTS).unwrap();
-    let capture = peer::Capture::start_ft12("iec101", port, "iec60870_101");
+    let capture = peers::Capture::start_ft12("iec101", port, "iec60870_101");
     let _slave = Background(
         stanice()
             .args([
@@ -111,24 +57,26 @@ fn iec101_over_tcp_dissects_cleanly() {
             .spawn()
             .unwrap(),
     );
-    wait_listening(port);
-    let out = run_to_end(
-        stanice().args([
-            "iec101",
-            "master",
-            "--tcp",
-            &format!("127.0.0.1:{port}"),
-            "--address",
-            "3",
-            "--ca",
-            "7",
-            "--gi",
-            "--clock-sync",
-            "--exit-after-gi",
-            "--json",
-        ]),
-        60,
+    assert!(
+        listening_within(port, Duration::from_secs(20)),
+        "nothing listens on port {port}"
     );
+    let mut master = stanice();
+    master.args([
+        "iec101",
+        "master",
+        "--tcp",
+        &format!("127.0.0.1:{port}"),
+        "--address",
+        "3",
+        "--ca",
+        "7",
+        "--gi",
+        "--clock-sync",
+        "--exit-after-gi",
+        "--json",
+    ]);
+    let out = assert_success(&run_bounded(master, 60));
     assert!(out.contains("\"actterm\""), "{out}");
     let report = capture.stop_and_check();
     eprintln!("capture report: {report}");
@@ -138,11 +86,11 @@ fn iec101_over_tcp_dissects_cleanly() {
 
 #[test]
 fn iec103_over_tcp_dissects_cleanly() {
-    if !peer::peers_available() {
+    if !peers::peers_available() {
         return;
     }
     let port = free_port();
-    let capture = peer::Capture::start_ft12("iec103", port, "iec60870_5_103");
+    let capture = peers::Capture::start_ft12("iec103", port, "iec60870_5_103");
     let _relay = Background(
         stanice()
             .args([
@@ -159,22 +107,24 @@ fn iec103_over_tcp_dissects_cleanly() {
             .spawn()
             .unwrap(),
     );
-    wait_listening(port);
-    let out = run_to_end(
-        stanice().args([
-            "iec103",
-            "master",
-            "--tcp",
-            &format!("127.0.0.1:{port}"),
-            "--gi",
-            "--clock-sync",
-            "--command",
-            "1:160:OFF",
-            "--exit-after-commands",
-            "--json",
-        ]),
-        60,
+    assert!(
+        listening_within(port, Duration::from_secs(20)),
+        "nothing listens on port {port}"
     );
+    let mut master = stanice();
+    master.args([
+        "iec103",
+        "master",
+        "--tcp",
+        &format!("127.0.0.1:{port}"),
+        "--gi",
+        "--clock-sync",
+        "--command",
+        "1:160:OFF",
+        "--exit-after-commands",
+        "--json",
+    ]);
+    let out = assert_success(&run_bounded(master, 60));
     assert!(out.contains("\"positive\":true"), "{out}");
     let report = capture.stop_and_check();
     eprintln!("capture report: {report}");
