@@ -17,8 +17,6 @@
 
 #[path = "support/browser.rs"]
 mod browser;
-#[path = "../tests/support/chromium.rs"]
-mod chromium;
 use browser::{js, now_ms, report};
 
 use std::collections::HashMap;
@@ -29,6 +27,7 @@ use iec60870::asdu::CommonAddress;
 use station::config::Project;
 use station::pointdb::TimeZonePolicy;
 use station::runtime::{Pacing, Runtime, RuntimeOptions, StoreChoice};
+use testkit::projects::{LiftBoard, LiftFleet};
 
 fn arg(name: &str, default: usize) -> usize {
     std::env::args()
@@ -42,7 +41,7 @@ fn main() {
     let lifts = arg("--lifts", 200);
     let faults = arg("--faults", 200).min(lifts);
     // Says SKIPPED without chromium and chromedriver (scripts/install-test-deps.sh).
-    if chromium::browser_available().is_none() {
+    if testkit::chromium::browser_available().is_none() {
         return;
     }
     tokio::runtime::Builder::new_multi_thread()
@@ -55,22 +54,12 @@ fn main() {
 
 /// The project (one node, `lifts` simulated boards) and the HMI's screens folder for it.
 fn project(dir: &std::path::Path, lifts: usize) -> Project {
-    let port = chromium::free_port();
-    let mut toml = format!(
-        "[station]\nname = \"fleet\"\ntime_zone = \"UTC\"\nstore = \"sqlite:events.sqlite\"\nport_base = {port}\n\n[[node]]\nname = \"FLEET\"\ncommon_address = 1\nserver = {{ port_offset = 0 }}\n"
-    );
-    let mut hmi = String::from("title = \"Lift fleet\"\n");
-    for lift in 0..lifts {
-        let floors = 3 + lift % 18;
-        toml.push_str(&format!(
-            "\n[[node.lift]]\nname = \"L{lift}\"\nfloors = {floors}\nioa_base = {}\nsimulate = \"ekm66\"\nfault_probability = 0.0\n",
-            1 + 40 * lift
-        ));
-        hmi.push_str(&format!(
-            "\n[[lift]]\nname = \"L{lift}\"\ndescription = \"lift {lift}\"\nfloors = {floors}\n"
-        ));
-    }
-    std::fs::write(dir.join("station.toml"), toml).unwrap();
+    let fleet = LiftFleet {
+        time_zone: "UTC".to_owned(),
+        port_base: testkit::ports::free_port(),
+        boards: vec![LiftBoard::Simulated; lifts],
+    };
+    fleet.write(dir);
     let project = Project::load(dir).unwrap_or_else(|e| panic!("{e}"));
     let screens = dir.join("hmi");
     std::fs::create_dir_all(&screens).unwrap();
@@ -82,7 +71,7 @@ fn project(dir: &std::path::Path, lifts: usize) -> Project {
         ));
     }
     std::fs::write(screens.join("points.csv"), csv).unwrap();
-    std::fs::write(screens.join("hmi.toml"), hmi).unwrap();
+    std::fs::write(screens.join("hmi.toml"), fleet.hmi_toml("Lift fleet")).unwrap();
     let mut users = hmi::users::Users::load(&screens.join("users.toml")).unwrap();
     users.add("bench", 9, "bench-password").unwrap();
     project

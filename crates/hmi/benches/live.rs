@@ -16,8 +16,6 @@
 
 #[path = "support/browser.rs"]
 mod browser;
-#[path = "../tests/support/chromium.rs"]
-mod chromium;
 use browser::{js, now_ms, report};
 
 use std::path::Path;
@@ -71,7 +69,7 @@ fn main() {
         .and_then(|n| n.parse().ok())
         .unwrap_or(200);
     // Says SKIPPED without chromium and chromedriver (scripts/install-test-deps.sh).
-    if chromium::browser_available().is_none() {
+    if testkit::chromium::browser_available().is_none() {
         return;
     }
     tokio::runtime::Builder::new_multi_thread()

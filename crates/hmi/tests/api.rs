@@ -11,11 +11,9 @@
 
 #[path = "support/http.rs"]
 mod http_client;
-#[path = "../../../tests/support/ports.rs"]
-mod ports;
 use http_client::{request as http, Reply};
 use std::net::SocketAddr;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Duration;
 
 use futures_util::StreamExt as _;
@@ -24,10 +22,8 @@ use serde_json::{json, Value};
 use station::config::Project;
 use station::pointdb::TimeZonePolicy;
 use station::runtime::{Pacing, Runtime, RuntimeOptions, StoreChoice};
-
-fn vsetin() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/vsetin")
-}
+use testkit::ports::free_port_range;
+use testkit::projects::vsetin;
 
 /// A screens folder for the test: the top node's points, three users, one screen, and
 /// `extra` appended to hmi.toml. QF1 of RH2 needs the control authority, as in Vsetín's
@@ -100,7 +96,7 @@ async fn setup() -> Setup {
 
 async fn setup_with(extra_toml: &str) -> Setup {
     let project = Project::load(&vsetin()).unwrap();
-    let base = ports::free_port_range(23);
+    let base = free_port_range(23);
     let project = project.with_port_base(base);
     let dir = tempfile::tempdir().unwrap();
     screens(&project, dir.path(), extra_toml);

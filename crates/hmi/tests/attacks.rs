@@ -42,10 +42,7 @@ async fn start(serve: ServeConfig) -> Site {
     let dir = tempfile::tempdir().unwrap();
     screens(dir.path());
     // A closed port: the link retries in the background, the web side works regardless.
-    let closed = std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap();
+    let closed = SocketAddr::from(([127, 0, 0, 1], testkit::ports::free_port()));
     let hmi = Hmi::start_with(
         HmiOptions {
             screens: dir.path().to_path_buf(),

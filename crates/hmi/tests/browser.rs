@@ -34,11 +34,9 @@
 
 #[path = "support/chromium.rs"]
 mod chromium;
-#[path = "../../../tests/support/ports.rs"]
-mod ports;
 use chromium::{browser_available, click, js, until, Driver};
 use std::net::SocketAddr;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use chrono::{DateTime, Utc};
@@ -48,14 +46,9 @@ use serde_json::{json, Value};
 use station::config::Project;
 use station::pointdb::TimeZonePolicy;
 use station::runtime::{Pacing, Runtime, RuntimeOptions, StoreChoice};
-
-fn repository_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn vsetin() -> PathBuf {
-    repository_root().join("examples/vsetin")
-}
+use testkit::ports::free_port_range;
+use testkit::projects::vsetin;
+use testkit::repository_root;
 
 // ---------------------------------------------------------------------------- station + HMI
 
@@ -77,7 +70,7 @@ impl Site {
         let folder = vsetin();
         let project = Project::load(&folder)
             .unwrap_or_else(|e| panic!("{:?}", e.errors()))
-            .with_port_base(ports::free_port_range(23));
+            .with_port_base(free_port_range(23));
         let zone = project.station.time_zone;
         let runtime = Runtime::start(
             project,

@@ -18,10 +18,8 @@
 mod chromium;
 #[path = "support/http.rs"]
 mod http;
-use http::{request, Reply};
-#[path = "../../../tests/support/ports.rs"]
-mod ports;
 use chromium::{browser_available, js, until, Driver};
+use http::{request, Reply};
 
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
@@ -35,6 +33,7 @@ use station::config::Project;
 use station::pointdb::TimeZonePolicy;
 use station::runtime::{Pacing, Runtime, RuntimeOptions, StoreChoice};
 use store::LiftFaultRecord;
+use testkit::ports::free_port_range;
 
 fn fleet_points() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/lift-fleet/hmi/points.csv")
@@ -592,7 +591,7 @@ async fn lift_screens_in_a_real_browser() {
     std::fs::write(project_dir.path().join("station.toml"), PROJECT).unwrap();
     let project = Project::load(project_dir.path())
         .unwrap_or_else(|e| panic!("{:?}", e.errors()))
-        .with_port_base(ports::free_port_range(3));
+        .with_port_base(free_port_range(3));
     let top = project.top_node().unwrap().clone();
     let mut csv = String::from("ioa,type,name,description\n");
     for p in &top.points {
@@ -919,7 +918,7 @@ async fn lift_screenshots() {
     .unwrap();
     let project = Project::load(project_dir.path())
         .unwrap_or_else(|e| panic!("{:?}", e.errors()))
-        .with_port_base(ports::free_port_range(3));
+        .with_port_base(free_port_range(3));
     let (runtime, hmi) = start_station_and_hmi(project, &example.join("hmi")).await;
     // Some history: trips for a while, faults of several kinds, one lift not answering.
     for (lift, code) in [

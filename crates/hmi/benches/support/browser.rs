@@ -1,7 +1,6 @@
-//! What the HMI's browser benchmarks share beyond the tests' Chromium support
-//! (`tests/support/chromium.rs`, included beside this as `crate::chromium`): a session
-//! logged in through the API, the wall clock the browser stamps with, and the p50/p99
-//! report.
+//! What the HMI's browser benchmarks share beyond the workspace's Chromium support
+//! (`testkit::chromium`): a session logged in through the API, the wall clock the browser
+//! stamps with, and the p50/p99 report.
 #![allow(dead_code)]
 
 use std::time::{SystemTime, UNIX_EPOCH};
@@ -9,8 +8,8 @@ use std::time::{SystemTime, UNIX_EPOCH};
 use fantoccini::Client;
 use serde_json::json;
 
-pub(crate) use crate::chromium::js;
-use crate::chromium::{browser_available, Driver};
+pub(crate) use testkit::chromium::js;
+use testkit::chromium::{browser_available, Driver};
 
 /// chromedriver and a browser session through it, or `None` (SKIPPED printed) without
 /// them; the driver lives as long as the caller keeps it.
