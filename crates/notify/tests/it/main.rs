@@ -1,5 +1,5 @@
 //! The notify crate against real servers on loopback: an aiosmtpd SMTP server
-//! (`tests/support/smtp_sink.py` of the workspace), axum webhook receivers, a refused port; and the TOML
+//! (`testkit::smtp`), axum webhook receivers, a refused port; and the TOML
 //! configuration.
 //!
 //! Without python3 and aiosmtpd (installed by `scripts/install-test-deps.sh`) the SMTP
@@ -17,7 +17,5 @@
 mod config;
 mod notifier;
 mod smtp;
-#[path = "../../../../tests/support/smtp_sink.rs"]
-mod smtp_sink;
 mod support;
 mod webhook;

@@ -4,8 +4,9 @@ use std::time::{Duration, Instant};
 
 use notify::{Notifier, Outcome};
 
-use crate::smtp_sink::{smtp_peer_available, SmtpSink};
-use crate::support::{config, email, notice, refused_port, rule, smtp_plain, t0};
+use crate::support::{config, email, notice, rule, smtp_plain, t0};
+use testkit::ports::free_port;
+use testkit::smtp::{smtp_peer_available, SmtpSink};
 
 #[tokio::test]
 async fn delivers_czech_plain_text_mail() {
@@ -72,7 +73,7 @@ async fn delivers_czech_plain_text_mail() {
 
 #[tokio::test]
 async fn refused_connection_is_a_failed_delivery_within_the_timeout() {
-    let port = refused_port();
+    let port = free_port(); // nobody listens on it
     let mut notifier = Notifier::new(config(
         Some(smtp_plain(port, 3)),
         vec![("technicians", email(&["novak@example.cz"]))],

@@ -1,5 +1,5 @@
-//! Shared by the tests: notices, configurations, webhook servers (the SMTP sink is
-//! `tests/support/smtp_sink.rs` of the workspace).
+//! Shared by the tests: notices, configurations, webhook servers (the SMTP sink and free
+//! ports are the workspace's `testkit`).
 
 use std::collections::BTreeMap;
 use std::net::SocketAddr;
@@ -70,13 +70,4 @@ pub(crate) async fn serve(router: Router) -> SocketAddr {
         axum::serve(listener, router).await.unwrap();
     });
     address
-}
-
-/// A loopback port nobody listens on (bound, then released).
-pub(crate) fn refused_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port()
 }

@@ -96,7 +96,7 @@ async fn server_error_is_a_failed_delivery() {
 
 #[tokio::test]
 async fn unreachable_webhook_is_a_failed_delivery() {
-    let port = crate::support::refused_port();
+    let port = testkit::ports::free_port();
     let mut notifier = Notifier::new(config(
         None,
         vec![("tickets", webhook(&format!("http://127.0.0.1:{port}/hook")))],

@@ -45,11 +45,7 @@ async fn bad_urls_give_clear_errors() {
 #[tokio::test]
 async fn postgres_unreachable_server_fails_at_open() {
     // A port nobody listens on (bound and released just now).
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port();
+    let port = testkit::ports::free_port();
     let err = open_store(&format!("postgres://postgres@127.0.0.1:{port}/x"))
         .await
         .err()
