@@ -183,6 +183,25 @@ async fn drive_client(
     timer.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
     loop {
         tokio::select! {
+            // Control first: a stop is sent before the runtime closes the client and the
+            // servers, so a connection that ends at shutdown is never reported as lost.
+            biased;
+            request = control.recv() => match request {
+                Some(Control::Cut) => {
+                    *lock(&state.client) = None;
+                    client.close().await;
+                    state.up.store(false, Ordering::Release);
+                    observer.down(&LinkDown::Cut);
+                    return ClientEnd::Cut;
+                }
+                Some(Control::Restore) => {}
+                Some(Control::Stop) | None => {
+                    *lock(&state.client) = None;
+                    client.close().await;
+                    state.up.store(false, Ordering::Release);
+                    return ClientEnd::Stop;
+                }
+            },
             event = events.recv() => match event {
                 None => {
                     *lock(&state.client) = None;
@@ -208,22 +227,6 @@ async fn drive_client(
                     observer.every_period(&client);
                 }
             }
-            request = control.recv() => match request {
-                Some(Control::Cut) => {
-                    *lock(&state.client) = None;
-                    client.close().await;
-                    state.up.store(false, Ordering::Release);
-                    observer.down(&LinkDown::Cut);
-                    return ClientEnd::Cut;
-                }
-                Some(Control::Restore) => {}
-                Some(Control::Stop) | None => {
-                    *lock(&state.client) = None;
-                    client.close().await;
-                    state.up.store(false, Ordering::Release);
-                    return ClientEnd::Stop;
-                }
-            },
         }
     }
 }
