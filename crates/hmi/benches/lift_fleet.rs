@@ -24,8 +24,8 @@ use std::time::{Duration, Instant};
 
 use hmi::{Hmi, HmiOptions};
 use iec60870::asdu::CommonAddress;
+use iec60870::time::TimeZonePolicy;
 use station::config::Project;
-use station::pointdb::TimeZonePolicy;
 use station::runtime::{Pacing, Runtime, RuntimeOptions, StoreChoice};
 use testkit::projects::{LiftBoard, LiftFleet};
 
@@ -67,7 +67,9 @@ fn project(dir: &std::path::Path, lifts: usize) -> Project {
     for point in &project.nodes[0].points {
         csv.push_str(&format!(
             "{},{},{},\n",
-            point.ioa, point.type_id, point.name
+            point.ioa,
+            points_iec::type_id(point.point_type),
+            point.name
         ));
     }
     std::fs::write(screens.join("points.csv"), csv).unwrap();

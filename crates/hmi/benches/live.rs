@@ -28,7 +28,7 @@ use iec60870::asdu::{CommonAddress, Element, Ioa, Quality, TypeId};
 use iec60870::cs104::server::{
     spawn_server, MonitorPoint, ProcessImage, ReadOnlyStation, ServerConfig,
 };
-use store::pointdb::TimeZonePolicy;
+use iec60870::time::TimeZonePolicy;
 
 const POINTS: u32 = 10_000;
 

@@ -202,7 +202,7 @@ pub struct HmiConfig {
     pub local_address: Option<std::net::IpAddr>,
     /// The zone of the station's time tags (`time_zone`: an IANA name, `UTC` or
     /// `local`), as its project's `time_zone` says; `None`: not given (UTC then).
-    pub time_zone: Option<::store::pointdb::TimeZonePolicy>,
+    pub time_zone: Option<iec60870::time::TimeZonePolicy>,
     /// What the station's banner tells about signing in (`sign_in_note`: an example's
     /// users and passwords, say); `None`: nothing.
     pub sign_in_note: Option<String>,

@@ -61,10 +61,10 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, RwLock};
 use std::time::Duration;
 
-use ::store::pointdb::TimeZonePolicy;
 use ::store::Recorder;
 use ::store::{open_store, EventStore};
 use iec60870::asdu::CommonAddress;
+use iec60870::time::TimeZonePolicy;
 
 /// Why the HMI could not start or a request failed.
 #[derive(Debug, thiserror::Error)]

@@ -19,13 +19,12 @@ use iec60870::asdu::{
 };
 use iec60870::cs104::client::{ClientConfig, ClientError, ClientHandle};
 use iec60870::cs104::link::{Link, LinkDown, LinkObserver};
+use iec60870::time::TimeZonePolicy;
 use serde::Serialize;
 use serde_json::{json, Value};
-use store::pointdb::TimeZonePolicy;
 use store::Recorder;
 use store::{
-    Actor, CommandOutcome, CommandPhase, CommandRecord, EventCause, EventRecord, PointValue,
-    SourceTime,
+    Actor, CommandOutcome, CommandPhase, CommandRecord, EventRecord, PointValue, SourceTime,
 };
 use tokio::sync::broadcast;
 
@@ -344,15 +343,15 @@ impl Station {
         if asdu.cot.negative || !asdu.type_id.is_monitor() {
             return;
         }
-        let Some(event_cause) = EventCause::of_received(asdu.cot.cause) else {
+        let Some(event_cause) = points_iec::event_cause(asdu.cot.cause) else {
             return;
         };
-        let is_event = EventCause::received_as_event(asdu.cot.cause);
+        let is_event = points_iec::received_as_event(asdu.cot.cause);
         for object in &asdu.objects {
             let Some(&index) = self.by_ioa.get(&object.ioa.get()) else {
                 continue;
             };
-            let Ok((value, quality, source)) = store::pointdb::from_element(
+            let Ok((value, quality, source)) = points_iec::from_element(
                 asdu.type_id,
                 &object.element,
                 object.time.as_ref(),

@@ -18,9 +18,9 @@ use std::time::Duration;
 
 use futures_util::StreamExt as _;
 use hmi::{Hmi, HmiOptions};
+use iec60870::time::TimeZonePolicy;
 use serde_json::{json, Value};
 use station::config::Project;
-use station::pointdb::TimeZonePolicy;
 use station::runtime::{Pacing, Runtime, RuntimeOptions, StoreChoice};
 use testkit::ports::free_port_range;
 use testkit::projects::vsetin;
@@ -34,7 +34,10 @@ fn screens(project: &Project, dir: &Path, extra: &str) {
     for p in &top.points {
         csv.push_str(&format!(
             "{},{},{},\"{}\"\n",
-            p.ioa, p.type_id, p.name, p.description
+            p.ioa,
+            points_iec::type_id(p.point_type),
+            p.name,
+            p.description
         ));
     }
     for c in &top.commands {

@@ -17,8 +17,8 @@ use std::time::{Duration, Instant};
 
 use futures_util::StreamExt as _;
 use hmi::{Hmi, HmiOptions, ServeConfig};
+use iec60870::time::TimeZonePolicy;
 use serde_json::{json, Value};
-use station::pointdb::TimeZonePolicy;
 use tokio::io::{AsyncRead, AsyncReadExt as _, AsyncWrite, AsyncWriteExt as _};
 
 fn screens(dir: &Path) {

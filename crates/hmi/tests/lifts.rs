@@ -28,9 +28,9 @@ use std::time::{Duration, Instant};
 use chrono::{NaiveDate, TimeDelta, Utc};
 use fantoccini::Client;
 use hmi::{Hmi, HmiOptions};
+use iec60870::time::TimeZonePolicy;
 use serde_json::{json, Value};
 use station::config::Project;
-use station::pointdb::TimeZonePolicy;
 use station::runtime::{Pacing, Runtime, RuntimeOptions, StoreChoice};
 use store::LiftFaultRecord;
 use testkit::ports::free_port_range;
@@ -151,7 +151,13 @@ fn lift_fleet_example_screens_load() {
         .unwrap()
         .points
         .iter()
-        .map(|p| (p.ioa.get(), p.type_id.to_string(), p.name.clone()))
+        .map(|p| {
+            (
+                p.ioa.get(),
+                points_iec::type_id(p.point_type).to_string(),
+                p.name.clone(),
+            )
+        })
         .collect();
     served.sort();
     let mut listed: Vec<(u32, String, String)> = config
@@ -597,7 +603,10 @@ async fn lift_screens_in_a_real_browser() {
     for p in &top.points {
         csv.push_str(&format!(
             "{},{},{},\"{}\"\n",
-            p.ioa, p.type_id, p.name, p.description
+            p.ioa,
+            points_iec::type_id(p.point_type),
+            p.name,
+            p.description
         ));
     }
     let screens_dir = tempfile::tempdir().unwrap();

@@ -9,7 +9,7 @@ use anyhow::Context as _;
 use clap::{Args, Subcommand};
 use hmi::{Hmi, HmiOptions, ServeConfig};
 use iec60870::asdu::CommonAddress;
-use station::pointdb::TimeZonePolicy;
+use iec60870::time::TimeZonePolicy;
 
 /// Arguments of `stanice hmi`.
 #[derive(Args, Debug)]

@@ -40,7 +40,7 @@ pub(crate) fn run(args: PointsArgs) -> anyhow::Result<ExitCode> {
         .map(|p| {
             (
                 p.ioa.get(),
-                p.type_id.to_string(),
+                points_iec::type_id(p.point_type).to_string(),
                 p.name.clone(),
                 p.description.clone(),
             )

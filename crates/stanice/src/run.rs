@@ -285,7 +285,7 @@ async fn start_hmi(
             listen,
             store: Some(store),
             archive,
-            zone: station::pointdb::TimeZonePolicy::Zone(project.station.time_zone),
+            zone: iec60870::time::TimeZonePolicy::Zone(project.station.time_zone),
             // hmi.toml's `local_address`: the project gives its HMI a group by address.
             local_address: None,
         },

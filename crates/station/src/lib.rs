@@ -9,8 +9,9 @@
 //! | [`config`]    | the project folder: `station.toml`, nodes, points, links, tables; its errors: where ([`config::ConfigError`], file:line:col and key) and what, typed ([`config::ConfigProblem`]) |
 //! | [`runtime`]   | runs a project: simulated clock, plant and PLCs, servers, links (concentration, commands down the hierarchy), recording |
 //!
-//! The point database, the event store and store addresses are the crate [`store`]'s,
-//! re-exported here under their old paths ([`pointdb`], [`store`], [`store_url`]). The
+//! Points are the `points` crate's (the point model) and meet IEC 60870-5 in `points-iec`;
+//! the event store and store addresses are the crate [`store`]'s, re-exported here
+//! ([`store`], [`store_url`]). The
 //! feature `store` turns on its backends, recorder and retention (what a controlling station
 //! such as the HMI needs, without the soft PLC and the plant); `runtime` (the default)
 //! brings the PLC and the plant as well.
@@ -24,4 +25,4 @@ pub mod config;
 #[cfg(feature = "runtime")]
 pub mod runtime;
 
-pub use ::store::{self, pointdb, url as store_url};
+pub use ::store::{self, url as store_url};

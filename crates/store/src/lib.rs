@@ -1,15 +1,15 @@
-//! The Stanice event store: a node's point database, the record of every value change and
-//! command, and the backends that keep them (SQLite, PostgreSQL).
+//! The Stanice event store: the record of every value change and command, and the
+//! backends that keep them (SQLite, PostgreSQL).
 //!
-//! It is its own crate so that a controlling station such as the HMI, or a tool, can keep
-//! points and record events without linking the soft PLC, its compiler and Cranelift.
+//! It is its own crate so that a controlling station such as the HMI, or a tool, can
+//! record events without linking the soft PLC, its compiler and Cranelift. It stores the
+//! point model's values (the `points` crate) and knows nothing of any protocol.
 //!
 //! # What it owns
 //!
 //! | module        | what it does                                                         |
 //! |---------------|----------------------------------------------------------------------|
-//! | [`pointdb`]   | a node's points: typed values with quality and source time, report by exception |
-//! | `model`       | the records: [`EventRecord`], [`CommandRecord`], [`PointValue`] and their codes |
+//! | `model`       | the records: [`EventRecord`], [`CommandRecord`] and their codes (values, quality and causes are the point model's) |
 //! | `query`       | filters, ordering and keyset pages: [`EventQuery`], [`CommandQuery`], [`Page`]; offset pages with a total: [`CountedPage`] |
 //! | `lift`        | the lift fault archive: [`LiftFaultRecord`], [`LiftFaultQuery`], [`LiftFaultOrder`] |
 //! | `notification` | the record of e-mails and webhook calls sent or suppressed: [`NotificationRecord`], [`NotificationQuery`] |
@@ -20,14 +20,14 @@
 //! | `retention`   | [`spawn_retention`]: the periodic purge of old history |
 //!
 //! The backends, the recorder and retention are the feature `database` (on by default);
-//! without it the crate is the point database, the record and query types and store
-//! addresses, which is what the project loader needs.
+//! without it the crate is the record and query types and store addresses, which is
+//! what the project loader needs.
 //!
 //! # Data flow
 //!
 //! ```text
 //!  value in (PLC, I/O, link) --> PointDb::update --> PointChange (report by exception)
-//!                                                        | to_event_record
+//!  (the points crate)                                    | EventRecord::of_change
 //!  command audit (CommandRecord) -----------------+      v
 //!                                                 +--> Recorder: bounded channel
 //!                                                      (full: events dropped and counted,
@@ -108,7 +108,6 @@ mod error;
 mod lift;
 mod model;
 mod notification;
-pub mod pointdb;
 #[cfg(feature = "database")]
 mod postgres;
 mod query;
@@ -129,8 +128,8 @@ use std::pin::Pin;
 pub use error::StoreError;
 pub use lift::{LiftFaultOrder, LiftFaultQuery, LiftFaultRecord};
 pub use model::{
-    quality_from_bits, quality_to_bits, Actor, CommandOutcome, CommandPhase, CommandRecord,
-    EventCause, EventRecord, PointValue, Quality, RecordId, SourceTime,
+    quality_from_bits, quality_to_bits, value_kind_code, Actor, CommandOutcome, CommandPhase,
+    CommandRecord, EventCause, EventRecord, PointValue, Quality, RecordId, SourceTime,
 };
 pub use notification::{NotificationOutcome, NotificationQuery, NotificationRecord};
 #[cfg(feature = "database")]

@@ -8,60 +8,24 @@
 use chrono::{DateTime, Utc};
 use std::fmt;
 
+use points::PointChange;
+
 /// Identifier of a stored row, assigned by the store in increasing order of insertion.
 pub type RecordId = i64;
 
-/// A typed point value, as the point database holds it.
-#[derive(Debug, Clone, PartialEq)]
-pub enum PointValue {
-    /// Single-point information or a single command (on/off).
-    Bool(bool),
-    /// Double-point information or a double command: 0 and 3 indeterminate, 1 off, 2 on.
-    DoublePoint(u8),
-    /// Step position, scaled value, integrated total or any other integer.
-    Int(i64),
-    /// Normalized or short floating-point value.
-    Float(f64),
-    /// Bitstring of 32 bits.
-    Bits(u32),
-    /// Free text (device messages, fault descriptions).
-    Text(String),
-}
+pub use points::{EventCause, PointValue, Quality, SourceTime};
 
-impl PointValue {
-    /// The stable code of the value's kind as stored in the `value_kind` column.
-    pub fn kind_code(&self) -> i16 {
-        match self {
-            PointValue::Bool(_) => 1,
-            PointValue::DoublePoint(_) => 2,
-            PointValue::Int(_) => 3,
-            PointValue::Float(_) => 4,
-            PointValue::Bits(_) => 5,
-            PointValue::Text(_) => 6,
-        }
+/// The stable code of a value's kind as stored in the `value_kind` column.
+pub fn value_kind_code(value: &PointValue) -> i16 {
+    match value {
+        PointValue::Bool(_) => 1,
+        PointValue::DoublePoint(_) => 2,
+        PointValue::Int(_) => 3,
+        PointValue::Float(_) => 4,
+        PointValue::Bits(_) => 5,
+        PointValue::Text(_) => 6,
     }
 }
-
-impl fmt::Display for PointValue {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            PointValue::Bool(b) => write!(f, "{}", if *b { "ON" } else { "OFF" }),
-            PointValue::DoublePoint(0) => f.write_str("INTERMEDIATE"),
-            PointValue::DoublePoint(1) => f.write_str("OFF"),
-            PointValue::DoublePoint(2) => f.write_str("ON"),
-            PointValue::DoublePoint(_) => f.write_str("INDETERMINATE"),
-            PointValue::Int(i) => write!(f, "{i}"),
-            PointValue::Float(x) => write!(f, "{x}"),
-            PointValue::Bits(b) => write!(f, "0x{b:08X}"),
-            PointValue::Text(t) => f.write_str(t),
-        }
-    }
-}
-
-/// Quality descriptor of a value: the IEC 60870-5 flags IV, NT, SB, BL and OV, the same
-/// type the protocol stack uses, so values pass between link, point database and store
-/// without conversion.
-pub use iec60870::asdu::Quality;
 
 /// The quality flags as the stored bit mask: IV = 1, NT = 2, SB = 4, BL = 8, OV = 16 (both
 /// backends; the on-the-wire octet differs and is the protocol's business).
@@ -81,85 +45,6 @@ pub fn quality_from_bits(bits: u8) -> Quality {
         substituted: bits & 4 != 0,
         blocked: bits & 8 != 0,
         overflow: bits & 16 != 0,
-    }
-}
-
-/// The source time stamp of an event, as the outstation tagged it (the instant its
-/// CP56Time2a stands for under the link's time zone policy, with the tag's IV bit).
-pub use iec60870::time::SourceTime;
-
-/// Why an event was produced (the cause of transmission, as the station sees it).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum EventCause {
-    /// A spontaneous change (COT 3).
-    Spontaneous,
-    /// An answer to a (general or group) interrogation (COT 20..36).
-    Interrogated,
-    /// A cyclic or periodic transmission (COT 1).
-    Cyclic,
-    /// The result of a command (COT 11/12 as seen by the point database).
-    Command,
-    /// A local change at the node itself (local operation, PLC logic).
-    Local,
-    /// Return information caused by a remote command (COT 11).
-    ReturnRemote,
-    /// Return information caused by a local command (COT 12).
-    ReturnLocal,
-}
-
-impl EventCause {
-    /// Every cause, in code order.
-    pub const ALL: [EventCause; 7] = [
-        EventCause::Spontaneous,
-        EventCause::Interrogated,
-        EventCause::Cyclic,
-        EventCause::Command,
-        EventCause::Local,
-        EventCause::ReturnRemote,
-        EventCause::ReturnLocal,
-    ];
-
-    /// The stable stored code.
-    pub fn code(self) -> i16 {
-        match self {
-            EventCause::Spontaneous => 1,
-            EventCause::Interrogated => 2,
-            EventCause::Cyclic => 3,
-            EventCause::Command => 4,
-            EventCause::Local => 5,
-            EventCause::ReturnRemote => 6,
-            EventCause::ReturnLocal => 7,
-        }
-    }
-
-    /// The cause with this stored code, if any.
-    pub fn from_code(code: i16) -> Option<EventCause> {
-        EventCause::ALL.into_iter().find(|c| c.code() == code)
-    }
-
-    /// Why a monitor value received from an outstation was sent, by its cause of
-    /// transmission; `None` for causes that carry no process value (activation,
-    /// confirmations, the negative mirrors 44..47, initialisation).
-    ///
-    /// Every receiver of monitor data (a concentrator's link, the HMI, a gateway's line)
-    /// classifies with this one table.
-    pub fn of_received(cause: iec60870::asdu::Cause) -> Option<EventCause> {
-        match cause.value() {
-            1 => Some(EventCause::Cyclic),
-            2 | 3 | 5 => Some(EventCause::Spontaneous),
-            11 => Some(EventCause::ReturnRemote),
-            12 => Some(EventCause::ReturnLocal),
-            20..=36 => Some(EventCause::Interrogated),
-            _ => None,
-        }
-    }
-
-    /// Whether a monitor value received with this cause of transmission is an event in
-    /// its own right, to be passed on even when equal to the last value: a spontaneous
-    /// change (3) or return information (11, 12). An interrogated, cyclic, background or
-    /// read value that did not change is no news.
-    pub fn received_as_event(cause: iec60870::asdu::Cause) -> bool {
-        matches!(cause.value(), 3 | 11 | 12)
     }
 }
 
@@ -190,6 +75,23 @@ pub struct EventRecord {
 }
 
 impl EventRecord {
+    /// The record of a point database's change: `node` owns the point, `origin` is the
+    /// link or node it came over.
+    pub fn of_change(change: &PointChange, node: &str, origin: &str) -> EventRecord {
+        EventRecord {
+            id: None,
+            node: node.to_owned(),
+            point: change.name.clone(),
+            ioa: Some(change.address),
+            value: change.value.clone(),
+            quality: change.quality,
+            source_time: change.source_time,
+            received_time: change.received,
+            cause: change.cause,
+            origin: origin.to_owned(),
+        }
+    }
+
     /// A spontaneous good-quality event without IOA or source time; adjust the fields as
     /// needed.
     pub fn new(
@@ -355,4 +257,37 @@ pub struct CommandRecord {
     pub outcome: CommandOutcome,
     /// Free text: the reason of a refusal, the device's answer, anything for the auditor.
     pub detail: String,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use chrono::TimeZone;
+    use points::{PointKind, PointType, TimeStamp};
+
+    #[test]
+    fn a_change_becomes_its_event_record() {
+        let at = |s| Utc.with_ymd_and_hms(2026, 1, 15, 12, 0, s).unwrap();
+        let change = PointChange {
+            name: "nb".into(),
+            address: 6,
+            point_type: PointType::new(PointKind::Scaled, TimeStamp::Full),
+            value: PointValue::Int(7),
+            quality: Quality::GOOD,
+            source_time: Some(SourceTime::at(at(1))),
+            received: at(2),
+            cause: EventCause::ReturnRemote,
+            send: true,
+        };
+        let r = EventRecord::of_change(&change, "RH1.1", "link:RH2");
+        assert_eq!(r.node, "RH1.1");
+        assert_eq!(r.origin, "link:RH2");
+        assert_eq!(r.point, "nb");
+        assert_eq!(r.ioa, Some(6));
+        assert_eq!(r.value, PointValue::Int(7));
+        assert_eq!(r.source_time, Some(SourceTime::at(at(1))));
+        assert_eq!(r.received_time, at(2));
+        assert_eq!(r.cause, EventCause::ReturnRemote);
+        assert_eq!(r.id, None);
+    }
 }

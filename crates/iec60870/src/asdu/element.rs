@@ -39,61 +39,36 @@ fn write_flag(f: &mut fmt::Formatter<'_>, set: bool, name: &str) -> fmt::Result 
 
 /// Quality descriptor: IV, NT, SB, BL (all point types) and OV (measured values, QDS).
 ///
-/// SIQ and DIQ have no OV bit (bit 0 holds the value there): `overflow` is not sent with
-/// single and double points and decodes as `false`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub struct Quality {
-    /// IV: the value is invalid (e.g. the source failed).
-    pub invalid: bool,
-    /// NT: not topical, the value was not updated successfully at the last refresh.
-    pub not_topical: bool,
-    /// SB: substituted by an operator or an automatic source.
-    pub substituted: bool,
-    /// BL: blocked for transmission.
-    pub blocked: bool,
-    /// OV: overflow, the value is beyond its predefined range.
-    pub overflow: bool,
+/// The point model's type: values cross between the protocol and the station's points
+/// without conversion. SIQ and DIQ have no OV bit (bit 0 holds the value there):
+/// `overflow` is not sent with single and double points and decodes as `false`.
+pub use points::Quality;
+
+/// How the quality flags sit in the protocol's octets (SIQ, DIQ, QDS, SEP, QDP).
+pub trait QualityOctets {
+    /// Decodes a QDS octet (bits 1-3 are reserved and ignored).
+    fn from_qds(octet: u8) -> Quality;
+    /// The QDS octet.
+    fn to_qds(&self) -> u8;
+    /// Decodes bits 4-7 (BL, SB, NT, IV) shared by SIQ, DIQ, QDS, SEP and QDP.
+    fn from_status_bits(octet: u8) -> Quality;
+    /// Bits 4-7 (BL, SB, NT, IV); OV is left out.
+    fn status_bits(&self) -> u8;
 }
 
-impl Quality {
-    /// All flags clear.
-    pub const GOOD: Quality = Quality {
-        invalid: false,
-        not_topical: false,
-        substituted: false,
-        blocked: false,
-        overflow: false,
-    };
-
-    /// Only IV set, as used for bulk invalidation when a source fails.
-    pub const INVALID: Quality = Quality {
-        invalid: true,
-        not_topical: false,
-        substituted: false,
-        blocked: false,
-        overflow: false,
-    };
-
-    /// Whether no flag is set.
-    pub fn is_good(&self) -> bool {
-        *self == Self::GOOD
-    }
-
-    /// Decodes a QDS octet (bits 1-3 are reserved and ignored).
-    pub fn from_qds(octet: u8) -> Quality {
+impl QualityOctets for Quality {
+    fn from_qds(octet: u8) -> Quality {
         Quality {
             overflow: octet & OV != 0,
             ..Self::from_status_bits(octet)
         }
     }
 
-    /// The QDS octet.
-    pub fn to_qds(&self) -> u8 {
+    fn to_qds(&self) -> u8 {
         self.status_bits() | bit(self.overflow, OV)
     }
 
-    /// Decodes bits 4-7 (BL, SB, NT, IV) shared by SIQ, DIQ, QDS, SEP and QDP.
-    pub fn from_status_bits(octet: u8) -> Quality {
+    fn from_status_bits(octet: u8) -> Quality {
         Quality {
             invalid: octet & IV != 0,
             not_topical: octet & NT != 0,
@@ -103,55 +78,11 @@ impl Quality {
         }
     }
 
-    /// Bits 4-7 (BL, SB, NT, IV); OV is left out.
-    pub fn status_bits(&self) -> u8 {
+    fn status_bits(&self) -> u8 {
         bit(self.invalid, IV)
             | bit(self.not_topical, NT)
             | bit(self.substituted, SB)
             | bit(self.blocked, BL)
-    }
-
-    /// The names of the flags that are set, in the standard's order (`IV NT SB BL OV`):
-    /// how every tool and screen of the project lists a quality.
-    pub fn set_flags(&self) -> Vec<&'static str> {
-        [
-            (self.invalid, "IV"),
-            (self.not_topical, "NT"),
-            (self.substituted, "SB"),
-            (self.blocked, "BL"),
-            (self.overflow, "OV"),
-        ]
-        .into_iter()
-        .filter_map(|(set, name)| set.then_some(name))
-        .collect()
-    }
-
-    /// Writes `[iv nt sb bl]` or, with `with_overflow`, `[iv nt sb bl ov]`.
-    pub(crate) fn write_flags(
-        &self,
-        f: &mut fmt::Formatter<'_>,
-        with_overflow: bool,
-    ) -> fmt::Result {
-        f.write_str("[")?;
-        write_flag(f, self.invalid, "iv")?;
-        f.write_str(" ")?;
-        write_flag(f, self.not_topical, "nt")?;
-        f.write_str(" ")?;
-        write_flag(f, self.substituted, "sb")?;
-        f.write_str(" ")?;
-        write_flag(f, self.blocked, "bl")?;
-        if with_overflow {
-            f.write_str(" ")?;
-            write_flag(f, self.overflow, "ov")?;
-        }
-        f.write_str("]")
-    }
-}
-
-impl fmt::Display for Quality {
-    /// `[iv nt sb bl ov]`: lower case clear, upper case set.
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        self.write_flags(f, true)
     }
 }
 

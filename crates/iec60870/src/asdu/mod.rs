@@ -87,7 +87,7 @@ pub use cause::{Cause, Cot};
 pub use element::{
     BinaryCounterReading, CommandQualifier, CounterInterrogationQualifier, DoublePointState,
     FileQualifier, InitialisationCause, InterrogationQualifier, OutputCircuits,
-    ParameterActivationQualifier, ParameterQualifier, ProtectionQuality, Quality,
+    ParameterActivationQualifier, ParameterQualifier, ProtectionQuality, Quality, QualityOctets,
     RegulatingStepState, ResetProcessQualifier, SetpointQualifier, StartEvents, StepPosition,
 };
 pub use frame::{mirror_with_cause, object_len, Asdu, AsduHeader};

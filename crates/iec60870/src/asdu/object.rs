@@ -4,8 +4,8 @@ use std::fmt;
 
 use super::element::{
     BinaryCounterReading, CommandQualifier, CounterInterrogationQualifier, DoublePointState,
-    OutputCircuits, ProtectionQuality, Quality, QualityNoOverflow, RegulatingStepState,
-    SetpointQualifier, StartEvents, StepPosition,
+    OutputCircuits, ProtectionQuality, Quality, QualityNoOverflow, QualityOctets,
+    RegulatingStepState, SetpointQualifier, StartEvents, StepPosition,
 };
 use super::{AsduError, Ioa, RangeError, TimeTagKind, TypeId};
 use crate::time::{Cp16Time2a, Cp24Time2a, Cp56Time2a};

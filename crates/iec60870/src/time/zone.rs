@@ -12,15 +12,9 @@ use chrono_tz::{OffsetComponents, Tz};
 
 use super::Cp56Time2a;
 
-/// The instant a time tag stands for, with the tag's IV bit (the source's clock was not
-/// synchronised or failed, or the local time could not exist).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct SourceTime {
-    /// The time, UTC.
-    pub time: DateTime<Utc>,
-    /// The time tag's IV bit.
-    pub invalid: bool,
-}
+/// The instant a time tag stands for, with the tag's IV bit: the point model's
+/// [`points::SourceTime`].
+pub use points::SourceTime;
 
 /// The time zone CP56Time2a tags are written and read in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

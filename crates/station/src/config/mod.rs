@@ -438,7 +438,8 @@ pub struct IoBinding {
 
 /// Where a point's value comes from (the point database's type, so a source stays one
 /// type from the project to the database).
-pub use crate::pointdb::{LineSignal, PointSource};
+pub use points::{LineSignal, PointSource};
+use points::{PointKind, PointType, TimeStamp};
 
 /// Where a command goes.
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
@@ -499,8 +500,9 @@ pub enum Transmission {
 pub struct PointConfig {
     /// Unique per node.
     pub name: String,
-    /// A monitor type ([`TypeId::is_monitor`]).
-    pub type_id: TypeId,
+    /// The point's type (the project names it by its IEC monitor type, `M_SP_TB_1`;
+    /// `points_iec::type_id` gives it back).
+    pub point_type: PointType,
     /// Unique per node among points.
     pub ioa: Ioa,
     /// Where the value comes from.
@@ -678,7 +680,7 @@ pub enum LiftTransport {
 
 /// A lift watched through its EKM66 controller board, `[[node.lift]]`: read-only, the
 /// lift is never controlled. Its points are generated: `NAME.status`, `NAME.position`
-/// ... at `ioa_base` + [`LiftSignal::offset`](crate::pointdb::LiftSignal::offset).
+/// ... at `ioa_base` + [`LiftSignal::offset`](points::LiftSignal::offset).
 #[derive(Debug, Clone, PartialEq)]
 pub struct LiftConfig {
     /// Unique per node; the prefix of its points' names.

@@ -717,7 +717,7 @@ fn malformed_text(text: &str, form: &Form) -> String {
 fn wrong_type_text(type_id: &str, usage: &TypeUse) -> String {
     const SINGLE: &str = "must be M_SP_NA_1 or M_SP_TB_1";
     match usage {
-        TypeUse::Point => format!("{type_id} is not a monitor-direction process type"),
+        TypeUse::Point => format!("{type_id} is not a type a point can be declared with (single, double, step, bitstring, measured values, integrated totals: M_SP_*, M_DP_*, M_ST_*, M_BO_*, M_ME_*, M_IT_*)"),
         TypeUse::Command => format!("{type_id} is not a command type"),
         TypeUse::LinkStatus { link } => format!("the status point of link `{link}` {SINGLE}"),
         TypeUse::GroupStatus { group } => {

@@ -37,8 +37,8 @@ use devices::ekm66::tables::{self, ColourClass, StatusColours};
 use tokio::sync::{broadcast, mpsc, watch};
 
 use crate::config::{LiftConfig, LiftTransport};
-use crate::pointdb::{LiftSignal, PointId, PointSource};
 use crate::store::{EventCause, EventStore, LiftFaultQuery, LiftFaultRecord, PointValue, Quality};
+use points::{LiftSignal, PointId, PointSource};
 
 use super::node::NodePoints;
 use super::notification::Notifications;

@@ -23,7 +23,7 @@ use iec60870::asdu::{Asdu, CommonAddress, Ioa, TypeId};
 use iec60870::cs104::client::{ClientConfig, ClientHandle};
 use iec60870::cs104::link::{Link, LinkDown, LinkObserver};
 
-use crate::pointdb::PointId;
+use points::PointId;
 
 use super::clock::NodeClock;
 use super::forwarded::{CommandAnswers, CommandWatches};

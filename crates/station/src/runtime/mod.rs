@@ -56,10 +56,11 @@ use tokio::sync::oneshot;
 use crate::config::{
     CommandTarget, NodeConfig, PointSource, Project, Transmission as ConfigTransmission,
 };
-use crate::pointdb::{LineSignal, PointDb, PointSpec, TimeZonePolicy, Transmission};
 use crate::store::{
     open_store, spawn_retention, EventStore, Retention, RetentionHandle, StoreError,
 };
+use iec60870::time::TimeZonePolicy;
+use points::{LineSignal, PointDb, PointSpec, Transmission};
 
 pub use crate::store::Recorder;
 pub use clock::{NodeClock, Pacing, SimClock};
@@ -225,8 +226,8 @@ pub fn point_specs(node: &NodeConfig) -> Vec<PointSpec> {
         .iter()
         .map(|point| PointSpec {
             name: point.name.clone(),
-            type_id: point.type_id,
-            ioa: point.ioa,
+            point_type: point.point_type,
+            address: point.ioa.get(),
             transmission: match point.transmission {
                 ConfigTransmission::Spontaneous => Transmission::Spontaneous,
                 ConfigTransmission::Cyclic { period } => Transmission::Cyclic(period),
@@ -444,9 +445,10 @@ impl Runtime {
                             })?;
                         server.tls = Some(tls);
                     }
-                    let mut image = points.lock().process_image(zone).map_err(|error| {
-                        RuntimeError::Setup(format!("node `{}`: {error}", config.name))
-                    })?;
+                    let mut image =
+                        points_iec::process_image(&points.lock(), zone).map_err(|error| {
+                            RuntimeError::Setup(format!("node `{}`: {error}", config.name))
+                        })?;
                     for command in &config.commands {
                         image
                             .add_command(CommandPoint {
@@ -517,14 +519,14 @@ impl Runtime {
                         config.name, link.name
                     )));
                 };
-                let mut map: HashMap<u32, Vec<crate::pointdb::PointId>> = HashMap::new();
+                let mut map: HashMap<u32, Vec<points::PointId>> = HashMap::new();
                 {
                     let db = points.lock();
                     for point in &config.points {
                         if let PointSource::Link { link: name, ioa } = &point.source {
                             if name == &link.name {
                                 if let Some(id) = db.id(point.name.as_str()) {
-                                    map.entry(ioa.get()).or_default().push(id);
+                                    map.entry(*ioa).or_default().push(id);
                                 }
                             }
                         }
@@ -597,11 +599,11 @@ impl Runtime {
                                 .or_default()
                                 .push(line::LinePoint {
                                     id,
-                                    type_id: point.type_id,
+                                    kind: point.point_type.kind,
                                     scaling: point.scaling,
                                 }),
                             LineSignal::Iec101 { ioa } => {
-                                objects.entry((address, ioa.get())).or_default().push(id)
+                                objects.entry((address, *ioa)).or_default().push(id)
                             }
                         }
                     }

@@ -16,15 +16,16 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use chrono::{DateTime, Utc};
 
 use iec60870::asdu::Asdu;
-
-use crate::pointdb::{
-    from_element, Point, PointChange, PointDb, PointDbError, PointId, PointKey, TimeZonePolicy,
+use iec60870::time::TimeZonePolicy;
+use points::{
+    EventCause, Point, PointChange, PointDb, PointDbError, PointId, PointKey, PointValue, Quality,
+    SourceTime,
 };
-use crate::store::{EventCause, PointValue, Quality, SourceTime};
+use points_iec::{event_cause, from_element, received_as_event};
 
 use super::clock::NodeClock;
 use super::sink::PointSink;
-use crate::store::Recorder;
+use crate::store::{EventRecord, Recorder};
 
 /// One node's points, server and recorder.
 #[derive(Debug)]
@@ -56,7 +57,7 @@ impl NodePoints {
         let storage_intervals = db
             .points()
             .filter_map(|point| match &point.spec.source {
-                crate::pointdb::PointSource::Lift { signal, .. } => signal
+                points::PointSource::Lift { signal, .. } => signal
                     .storage_interval()
                     .map(|interval| (point.spec.name.clone(), interval)),
                 _ => None,
@@ -221,10 +222,10 @@ impl NodePoints {
         if asdu.cot.negative || asdu.cot.test || !asdu.type_id.is_monitor() {
             return;
         }
-        let Some(received) = EventCause::of_received(asdu.cot.cause) else {
+        let Some(received) = event_cause(asdu.cot.cause) else {
             return;
         };
-        let event = EventCause::received_as_event(asdu.cot.cause);
+        let event = received_as_event(asdu.cot.cause);
         let cause = match received {
             EventCause::Interrogated | EventCause::Cyclic => EventCause::Spontaneous,
             other => other,
@@ -299,7 +300,7 @@ impl NodePoints {
         }
         if self.to_store(change) {
             self.recorder
-                .event(change.to_event_record(&self.name, origin));
+                .event(EventRecord::of_change(change, &self.name, origin));
         }
         for waiter in waiters {
             let _ = waiter.send(());

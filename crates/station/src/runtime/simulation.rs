@@ -25,7 +25,6 @@ use std::collections::HashMap;
 use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
 
-use iec60870::asdu::TypeId;
 use plant::registry::{PlantStart, PLANTS};
 use plant::{Direction, Plant, Value, ValueKind};
 use plc::check::{Lane, Ty};
@@ -35,8 +34,7 @@ use plc::Plc;
 use tokio::sync::oneshot;
 
 use crate::config::{CommandTarget, NodeConfig, PointSource, Project};
-use crate::pointdb::PointId;
-use crate::store::{EventCause, PointValue, Quality};
+use points::{EventCause, PointId, PointKind, PointValue, Quality};
 
 use super::clock::{Pacing, SimClock};
 use super::node::NodePoints;
@@ -103,7 +101,7 @@ struct OutputBinding {
 
 struct SourcedPoint {
     id: PointId,
-    type_id: TypeId,
+    kind: PointKind,
     leaf: Leaf,
     /// The input binding feeding this variable, whose module validity is the point's.
     input: Option<usize>,
@@ -609,7 +607,7 @@ impl SimNode {
                     .input
                     .and_then(|i| self.inputs.get(i))
                     .is_none_or(|input| input.valid);
-            let Some(value) = point_value(point.type_id, &point.leaf.ty, &v) else {
+            let Some(value) = point_value(point.kind, &point.leaf.ty, &v) else {
                 continue;
             };
             let current = Some((value.clone(), valid));
@@ -678,9 +676,9 @@ fn to_val(ty: &Ty, value: Value) -> Val {
     }
 }
 
-/// The point value of a PLC variable for a point of `type_id`.
-fn point_value(type_id: TypeId, ty: &Ty, v: &Val) -> Option<PointValue> {
-    use TypeId::*;
+/// The point value of a PLC variable for a point of `kind`.
+fn point_value(kind: PointKind, ty: &Ty, v: &Val) -> Option<PointValue> {
+    use PointKind::*;
     let int = match v {
         Val::Int(x) => *x,
         Val::Real(x) => x.round() as i64,
@@ -691,10 +689,10 @@ fn point_value(type_id: TypeId, ty: &Ty, v: &Val) -> Option<PointValue> {
         Val::Real(x) => *x,
         Val::Str(_) => return None,
     };
-    Some(match type_id {
-        M_SP_NA_1 | M_SP_TA_1 | M_SP_TB_1 => PointValue::Bool(int != 0),
+    Some(match kind {
+        Single => PointValue::Bool(int != 0),
         // A BOOL drives a double point as OFF (1) / ON (2); an integer gives the state.
-        M_DP_NA_1 | M_DP_TA_1 | M_DP_TB_1 => PointValue::DoublePoint(if *ty == Ty::Bool {
+        Double => PointValue::DoublePoint(if *ty == Ty::Bool {
             if int != 0 {
                 2
             } else {
@@ -703,13 +701,12 @@ fn point_value(type_id: TypeId, ty: &Ty, v: &Val) -> Option<PointValue> {
         } else {
             u8::try_from(int.clamp(0, 3)).unwrap_or(0)
         }),
-        M_ST_NA_1 | M_ST_TA_1 | M_ST_TB_1 => PointValue::Int(int.clamp(-64, 63)),
-        M_BO_NA_1 | M_BO_TA_1 | M_BO_TB_1 => PointValue::Bits(int as u32),
-        M_ME_NA_1 | M_ME_TA_1 | M_ME_TD_1 | M_ME_ND_1 => PointValue::Float(real.clamp(-1.0, 1.0)),
-        M_ME_NB_1 | M_ME_TB_1 | M_ME_TE_1 => PointValue::Int(int.clamp(-32768, 32767)),
-        M_ME_NC_1 | M_ME_TC_1 | M_ME_TF_1 => PointValue::Float(real),
-        M_IT_NA_1 | M_IT_TA_1 | M_IT_TB_1 => PointValue::Int(int),
-        _ => return None,
+        Step => PointValue::Int(int.clamp(-64, 63)),
+        Bitstring => PointValue::Bits(int as u32),
+        Normalized => PointValue::Float(real.clamp(-1.0, 1.0)),
+        Scaled => PointValue::Int(int.clamp(-32768, 32767)),
+        Float => PointValue::Float(real),
+        Total => PointValue::Int(int),
     })
 }
 
@@ -861,7 +858,7 @@ fn build_node(
                 .transpose()?;
             sim.sourced.push(SourcedPoint {
                 id,
-                type_id: point.type_id,
+                kind: point.point_type.kind,
                 leaf: target,
                 input,
                 invalid_when,

@@ -8,7 +8,8 @@
 
 use iec60870::cs104::server::ServerHandle;
 
-use crate::pointdb::{PointChange, TimeZonePolicy};
+use iec60870::time::TimeZonePolicy;
+use points::PointChange;
 
 /// Why a sink did not take a change: its own error (a sink is another crate's protocol,
 /// whose error type the node does not know).
@@ -36,7 +37,7 @@ pub struct Iec104Sink {
 
 impl PointSink for Iec104Sink {
     fn publish(&self, change: &PointChange) -> Result<(), SinkError> {
-        Ok(change.publish(&self.server, self.zone)?)
+        Ok(points_iec::publish(change, &self.server, self.zone)?)
     }
 
     fn describe(&self) -> String {

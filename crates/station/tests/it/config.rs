@@ -135,7 +135,7 @@ target = "Main.A"
     assert_eq!(a.tasks[0].interval, Duration::from_millis(50));
     assert_eq!(a.tasks[0].watchdog, None);
     let p = &a.points[0];
-    assert_eq!(p.type_id, TypeId::M_ME_NC_1);
+    assert_eq!(points_iec::type_id(p.point_type), TypeId::M_ME_NC_1);
     assert_eq!(p.ioa, Ioa::from(1u8));
     assert_eq!(p.source, PointSource::Variable("Main.X".into()));
     assert_eq!(
@@ -216,14 +216,14 @@ fn vsetin_example_loads() {
     let single: Vec<u32> = rh2
         .points
         .iter()
-        .filter(|p| p.type_id == TypeId::M_SP_TB_1)
+        .filter(|p| points_iec::type_id(p.point_type) == TypeId::M_SP_TB_1)
         .map(|p| p.ioa.get())
         .collect();
     assert_eq!(single, (281..=298).collect::<Vec<_>>());
     let meter: Vec<u32> = rh2
         .points
         .iter()
-        .filter(|p| p.type_id == TypeId::M_ME_TF_1)
+        .filter(|p| points_iec::type_id(p.point_type) == TypeId::M_ME_TF_1)
         .map(|p| p.ioa.get())
         .collect();
     assert_eq!(meter, [271, 272, 273, 274]);
@@ -251,7 +251,7 @@ fn vsetin_example_loads() {
         rh11.points[1].source,
         PointSource::Link {
             link: "RH2".into(),
-            ioa: Ioa::from(281u16)
+            ioa: 281
         }
     );
     assert_eq!(
@@ -282,7 +282,7 @@ fn vsetin_example_loads() {
         rdrt.point("RH2_V1_FA1_Zapnut").unwrap().source,
         PointSource::Link {
             link: "RH".into(),
-            ioa: Ioa::from(281u16)
+            ioa: 281
         }
     );
     assert_eq!(rdrt.point("RZZ_V1_FA1_Zapnut").unwrap().ioa.get(), 381);
@@ -574,7 +574,7 @@ target = "M.C"
         9,
         8,
         "node[0].point[0].type",
-        "C_SC_NA_1 is not a monitor",
+        "C_SC_NA_1 is not a type a point can be declared with",
     );
     expect(
         &errors,
@@ -1145,7 +1145,7 @@ republish = { ioa_offset = 1000 }
         point.source,
         PointSource::Link {
             link: "L".into(),
-            ioa: Ioa::from(10u16)
+            ioa: 10
         }
     );
     assert_eq!(top.commands.len(), 1);
@@ -1919,9 +1919,7 @@ target = "line:rtus/RTU1/4101"
         PointSource::Line {
             line: "rtus".into(),
             device: "RTU1".into(),
-            signal: LineSignal::Iec101 {
-                ioa: Ioa::try_new(5000).unwrap()
-            }
+            signal: LineSignal::Iec101 { ioa: 5000 }
         }
     );
     assert_eq!(
@@ -2530,7 +2528,13 @@ direction = [0, 2, 1]
     let names: Vec<(&str, u32, TypeId)> = node
         .points
         .iter()
-        .map(|p| (p.name.as_str(), p.ioa.get(), p.type_id))
+        .map(|p| {
+            (
+                p.name.as_str(),
+                p.ioa.get(),
+                points_iec::type_id(p.point_type),
+            )
+        })
         .collect();
     assert_eq!(names.len(), 13 + 3);
     assert_eq!(names[0], ("L2.status", 500, TypeId::M_ME_TE_1));

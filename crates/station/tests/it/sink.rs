@@ -6,8 +6,8 @@
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
+use points::PointChange;
 use station::config::Project;
-use station::pointdb::PointChange;
 use station::runtime::sink::{PointSink, SinkError};
 use station::runtime::{Pacing, Runtime, RuntimeOptions, StoreChoice};
 use station::store::EventQuery;

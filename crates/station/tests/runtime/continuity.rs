@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use iec60870::asdu::{CommonAddress, Element, TimeTag};
 use iec60870::cs104::client::{spawn_client, ClientConfig, ClientEvent};
-use station::pointdb::TimeZonePolicy;
+use iec60870::time::TimeZonePolicy;
 use station::runtime::StoreChoice;
 use station::store::{EventQuery, Order};
 

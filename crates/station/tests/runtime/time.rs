@@ -4,7 +4,7 @@
 use std::time::Duration;
 
 use iec60870::asdu::TimeTag;
-use station::pointdb::TimeZonePolicy;
+use iec60870::time::TimeZonePolicy;
 use station::runtime::StoreChoice;
 
 use crate::harness::*;

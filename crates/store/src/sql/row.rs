@@ -278,7 +278,7 @@ pub(crate) fn stats_from_row(r: &dyn Columns) -> Result<StoreStats, StoreError> 
 
 /// The value as the `(value_kind, value_int, value_float, value_text)` columns.
 fn value_params(value: &PointValue) -> [Param; 4] {
-    let kind = Param::int(i64::from(value.kind_code()));
+    let kind = Param::int(i64::from(crate::model::value_kind_code(value)));
     let (int, float, text) = match value {
         PointValue::Bool(b) => (Some(i64::from(*b)), None, None),
         PointValue::DoublePoint(d) => (Some(i64::from(*d)), None, None),

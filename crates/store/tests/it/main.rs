@@ -1,7 +1,7 @@
 //! Integration tests of the event store: one suite run against both backends (SQLite on a
 //! temp file, PostgreSQL on the server named by `STANICE_TEST_POSTGRES_URL`, which
 //! `scripts/with-postgres.sh` provides), plus backend-specific, recorder and retention
-//! tests; and the point database's tests.
+//! tests.
 #![allow(
     clippy::unwrap_used,
     clippy::expect_used,
@@ -11,7 +11,6 @@
 
 mod fixture;
 mod pg;
-mod pointdb;
 mod recorder;
 mod retention;
 mod specific;

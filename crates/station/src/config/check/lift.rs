@@ -6,10 +6,10 @@
 //! six lines; the IOAs still have to be free, and are checked like written ones.
 
 use super::*;
-use crate::pointdb::LiftSignal;
 use devices::ekm66::codec::{CounterWidth, DirectionCoding, StatusLayout, TimeEncoding};
 use devices::ekm66::poller::{IndexBase, PollerConfig};
 use devices::ekm66::simulator::SimulatorConfig;
+use points::LiftSignal;
 
 /// The only simulated lift board.
 const SIMULATED_BOARD: &str = "ekm66";
@@ -253,7 +253,7 @@ impl Ctx<'_> {
                 taken.ioas.insert(address, name.clone());
                 points.push(PointConfig {
                     name,
-                    type_id: signal.type_id(),
+                    point_type: signal.point_type(),
                     ioa: address,
                     source: PointSource::Lift {
                         lift: lift.name.clone(),

@@ -61,7 +61,7 @@ pub(in crate::config) fn parse_line_ref(text: &str) -> Result<Option<LineRef>, C
                         given: ioa.to_owned(),
                     },
                 })?;
-            (line, device, LineSignal::Iec101 { ioa })
+            (line, device, LineSignal::Iec101 { ioa: ioa.get() })
         }
         [line, device, fun, inf] => (
             line,
@@ -472,9 +472,7 @@ mod tests {
             Ok(Some(LineRef {
                 line: "rtus".into(),
                 device: "RTU1".into(),
-                signal: LineSignal::Iec101 {
-                    ioa: Ioa::try_new(4001).unwrap()
-                }
+                signal: LineSignal::Iec101 { ioa: 4001 }
             }))
         );
         assert!(parse_line_ref("line:rtus/RTU1/16777216").is_err());

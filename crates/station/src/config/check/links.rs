@@ -142,7 +142,8 @@ impl Ctx<'_> {
                 }
                 // link: references into a project node must name what that node serves
                 if let Some(lower) = target_node.and_then(|t| nodes.get(t)) {
-                    let lower_points: HashSet<Ioa> = lower.points.iter().map(|p| p.ioa).collect();
+                    let lower_points: HashSet<u32> =
+                        lower.points.iter().map(|p| p.ioa.get()).collect();
                     let lower_commands: HashSet<Ioa> =
                         lower.commands.iter().map(|c| c.ioa).collect();
                     let mut problems = Vec::new();
@@ -306,11 +307,11 @@ impl Ctx<'_> {
                     }
                     this.points.push(PointConfig {
                         name: point.name.clone(),
-                        type_id: point.type_id,
+                        point_type: point.point_type,
                         ioa,
                         source: PointSource::Link {
                             link: raw_link.name.clone(),
-                            ioa: point.ioa,
+                            ioa: point.ioa.get(),
                         },
                         transmission: Transmission::Spontaneous,
                         groups: point.groups.clone(),

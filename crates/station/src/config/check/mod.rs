@@ -234,7 +234,10 @@ impl Ctx<'_> {
                         },
                     );
                 }
-                PointSource::Link { link, ioa }
+                PointSource::Link {
+                    link,
+                    ioa: ioa.get(),
+                }
             }
             Err(problem) => {
                 self.err(path, problem);

@@ -248,18 +248,22 @@ impl Ctx<'_> {
                     },
                 );
             }
-            let type_id = match point.type_id.parse::<TypeId>() {
-                Ok(t) if t.is_monitor() && t != TypeId::M_EI_NA_1 => t,
-                Ok(t) => {
-                    self.err(
-                        &at("type"),
-                        ConfigProblem::WrongType {
-                            type_id: t.to_string(),
-                            usage: TypeUse::Point,
-                        },
-                    );
-                    TypeId::M_SP_NA_1
-                }
+            // A fallback after an error, so that checking goes on.
+            let single = PointType::new(PointKind::Single, TimeStamp::None);
+            let (type_id, point_type) = match point.type_id.parse::<TypeId>() {
+                Ok(t) => match points_iec::point_type(t) {
+                    Some(point_type) => (t, point_type),
+                    None => {
+                        self.err(
+                            &at("type"),
+                            ConfigProblem::WrongType {
+                                type_id: t.to_string(),
+                                usage: TypeUse::Point,
+                            },
+                        );
+                        (TypeId::M_SP_NA_1, single)
+                    }
+                },
                 Err(_) => {
                     self.err(
                         &at("type"),
@@ -268,7 +272,7 @@ impl Ctx<'_> {
                             value: point.type_id.clone(),
                         },
                     );
-                    TypeId::M_SP_NA_1
+                    (TypeId::M_SP_NA_1, single)
                 }
             };
             let address = match ioa(point.ioa) {
@@ -585,7 +589,7 @@ impl Ctx<'_> {
             }
             points.push(PointConfig {
                 name: point.name.clone(),
-                type_id,
+                point_type,
                 ioa: address,
                 source,
                 transmission,
@@ -727,7 +731,8 @@ impl Ctx<'_> {
                             Some(CommandTarget::LineObject {
                                 line: reference.line,
                                 device: reference.device,
-                                ioa,
+                                // In range: `parse_line_ref` checked it.
+                                ioa: Ioa::try_new(ioa).unwrap_or(Ioa::IRRELEVANT),
                             })
                         }
                     }

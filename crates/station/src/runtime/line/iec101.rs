@@ -32,8 +32,8 @@ use iec60870::outstation::{Command, TerminationFuture};
 use tokio::sync::mpsc;
 
 use crate::config::Iec101Settings;
-use crate::pointdb::PointId;
 use crate::store::CommandOutcome;
+use points::PointId;
 
 use super::super::forwarded::CommandWatches;
 use super::super::node::NodePoints;

@@ -16,14 +16,13 @@ use std::ops::ControlFlow;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use iec60870::asdu::{Quality, TypeId};
 use iec60870::ft12::io::{drive, EndpointAction};
 use iec60870::ft12::{PrimaryEvent, SharedLine};
 use iec60870::iec103::{self, Body, Cause, Device, MasterEvent, StartUp};
+use points::Quality;
 use tokio::sync::{mpsc, oneshot};
 
-use crate::store::EventCause;
-use crate::store::{PointValue, SourceTime};
+use points::{normalized, EventCause, PointKind, PointValue, SourceTime};
 
 use super::super::node::NodePoints;
 use super::{
@@ -276,8 +275,8 @@ fn apply(
                 _ => (EventCause::Spontaneous, false),
             };
             for point in points {
-                let value = match point.type_id {
-                    TypeId::M_DP_NA_1 | TypeId::M_DP_TB_1 => PointValue::DoublePoint(*dpi & 0x03),
+                let value = match point.kind {
+                    PointKind::Double => PointValue::DoublePoint(*dpi & 0x03),
                     _ => PointValue::Bool(*dpi & 0x03 == 2),
                 };
                 if let Err(error) = node.update(
@@ -309,22 +308,18 @@ fn apply(
                         continue;
                     };
                     let physical = value.to_physical(scaling.limit);
-                    let converted = match point.type_id {
-                        TypeId::M_ME_NB_1 | TypeId::M_ME_TB_1 | TypeId::M_ME_TE_1 => {
-                            let scaled = physical * scaling.factor.unwrap_or(1.0);
-                            PointValue::Int(scaled.round().clamp(-32768.0, 32767.0) as i64)
-                        }
-                        TypeId::M_ME_NA_1
-                        | TypeId::M_ME_TA_1
-                        | TypeId::M_ME_TD_1
-                        | TypeId::M_ME_ND_1 => {
+                    let converted = match point.kind {
+                        PointKind::Scaled => PointValue::Int(i64::from(saturating_i16(
+                            physical * scaling.factor.unwrap_or(1.0),
+                        ))),
+                        PointKind::Normalized => {
                             let fraction = match scaling.full_scale {
                                 Some(full_scale) => physical / full_scale,
                                 // The engineering value as the raw integer, as the COM600
                                 // sent it (100 A -> 100).
-                                None => physical.round() / 32768.0,
+                                None => normalized::from_raw(saturating_i16(physical)),
                             };
-                            PointValue::Float(fraction.clamp(-1.0, 32767.0 / 32768.0))
+                            PointValue::Float(fraction.clamp(-1.0, normalized::from_raw(i16::MAX)))
                         }
                         _ => PointValue::Float(physical),
                     };
@@ -349,4 +344,12 @@ fn apply(
         }
         _ => {}
     }
+}
+
+/// `x` rounded to the nearest 16-bit integer, saturating at its ends.
+fn saturating_i16(x: f64) -> i16 {
+    // The clamp makes the cast exact (NaN casts to 0).
+    #[allow(clippy::cast_possible_truncation)]
+    let value = x.round().clamp(f64::from(i16::MIN), f64::from(i16::MAX)) as i16;
+    value
 }

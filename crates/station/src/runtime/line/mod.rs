@@ -23,7 +23,7 @@ use std::ops::ControlFlow;
 use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Duration;
 
-use iec60870::asdu::{Ioa, TypeId};
+use iec60870::asdu::Ioa;
 use iec60870::ft12::io::{drive, EndpointAction, Transport};
 use iec60870::ft12::{
     AddressSize, Primary, PrimaryConfig, Secondary, SecondaryConfig, SecondaryStation, SharedLine,
@@ -33,8 +33,8 @@ use iec60870::outstation::{Command, TerminationFuture};
 use tokio::sync::mpsc;
 
 use crate::config::{LineConfig, LineProtocol, LineTransport, MeasurandScaling};
-use crate::pointdb::{PointId, PointSource};
 use crate::store::CommandOutcome;
+use points::{PointId, PointKind, PointSource};
 
 use super::node::NodePoints;
 pub(crate) use iec101::ObjectPoints;
@@ -49,7 +49,7 @@ const REOPEN_AFTER: Duration = Duration::from_secs(5);
 #[derive(Debug, Clone)]
 pub(crate) struct LinePoint {
     pub id: PointId,
-    pub type_id: TypeId,
+    pub kind: PointKind,
     pub scaling: Option<MeasurandScaling>,
 }
 

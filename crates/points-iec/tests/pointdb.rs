@@ -1,27 +1,42 @@
 //! Tests of the point database: type checks, report by exception, deadbands, invalidation,
-//! element conversions, the process image, cyclic points and communication status.
+//! element conversions, the process image, cyclic points and communication status: the
+//! point model as a node's IEC 104 server sees it.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
 
 use std::collections::HashMap;
 use std::time::Duration;
 
 use chrono::{DateTime, TimeZone, Utc};
 use iec60870::asdu::{Element, Ioa, TimeTag, TypeId};
-use proptest::prelude::*;
-use store::pointdb::{
-    from_element, PointChange, PointDb, PointDbError, PointSource, PointSpec, TimeZonePolicy,
-    Transmission,
+use iec60870::time::TimeZonePolicy;
+use points::{
+    EventCause, PointChange, PointDb, PointDbError, PointSource, PointSpec, PointValue, Quality,
+    SourceTime, Transmission,
 };
-use store::{quality_from_bits, EventCause, PointValue, Quality, SourceTime};
+use points_iec::{
+    from_element, point_type, process_image, time_tag, to_element, transmission_cause, type_id,
+};
+use proptest::prelude::*;
 
 fn ioa(n: u32) -> Ioa {
     Ioa::try_new(n).unwrap()
 }
 
+/// The element a change is sent as.
+fn element_of(c: &PointChange) -> Element {
+    to_element(c.point_type, &c.value, c.quality)
+}
+
 fn spec(name: &str, type_id: TypeId, n: u32) -> PointSpec {
     PointSpec {
         name: name.into(),
-        type_id,
-        ioa: ioa(n),
+        point_type: point_type(type_id).unwrap(),
+        address: n,
         transmission: Transmission::Spontaneous,
         groups: 1,
         deadband: None,
@@ -78,13 +93,9 @@ fn construction_refuses_duplicates_and_bad_specs() {
     assert!(
         matches!(dup_ioa, Err(PointDbError::DuplicateIoa { ref first, ref second, .. }) if first == "a" && second == "b")
     );
-    let unsupported = PointDb::new("N", vec![spec("a", TypeId::M_EP_TD_1, 1)]);
-    assert!(matches!(
-        unsupported,
-        Err(PointDbError::UnsupportedType { .. })
-    ));
-    let command = PointDb::new("N", vec![spec("a", TypeId::C_SC_NA_1, 1)]);
-    assert!(matches!(command, Err(PointDbError::UnsupportedType { .. })));
+    // Protection events and commands are no point types.
+    assert_eq!(point_type(TypeId::M_EP_TD_1), None);
+    assert_eq!(point_type(TypeId::C_SC_NA_1), None);
     let mut sp_band = spec("a", TypeId::M_SP_NA_1, 1);
     sp_band.deadband = Some(1.0);
     assert!(matches!(
@@ -114,8 +125,8 @@ fn lookups_by_name_ioa_source_and_id() {
     let db = all_types_db();
     assert_eq!(db.node(), "N");
     assert_eq!(db.len(), 8);
-    assert_eq!(db.get("dp").unwrap().spec.ioa, ioa(2));
-    assert_eq!(db.get(ioa(3)).unwrap().spec.name, "st");
+    assert_eq!(db.get("dp").unwrap().spec.address, 2);
+    assert_eq!(db.get(3u32).unwrap().spec.name, "st");
     let id = db.id("nc").unwrap();
     assert_eq!(db.get(id).unwrap().spec.name, "nc");
     assert_eq!(
@@ -125,7 +136,7 @@ fn lookups_by_name_ioa_source_and_id() {
         ["bo"]
     );
     assert!(db.get("nope").is_none());
-    assert!(db.get(ioa(99)).is_none());
+    assert!(db.get(99u32).is_none());
     assert_eq!(
         db.by_source(&PointSource::Variable("nope".into())).count(),
         0
@@ -364,14 +375,14 @@ fn bulk_invalidation_of_a_link_and_recovery() {
         let mut s = spec(&format!("RH2_{n}"), TypeId::M_SP_TB_1, n);
         s.source = PointSource::Link {
             link: "RH2".into(),
-            ioa: ioa(n),
+            ioa: n,
         };
         specs.push(s);
     }
     let mut other = spec("RZS_1", TypeId::M_SP_TB_1, 400);
     other.source = PointSource::Link {
         link: "RZS".into(),
-        ioa: ioa(1),
+        ioa: 1,
     };
     specs.push(other);
     let mut db = PointDb::new("RDRT", specs).unwrap();
@@ -420,7 +431,7 @@ fn bulk_invalidation_of_a_link_and_recovery() {
         EventCause::Spontaneous,
     )
     .unwrap();
-    let changes = db.invalidate_where(|s| s.ioa.get() >= 400, t(13));
+    let changes = db.invalidate_where(|s| s.address >= 400, t(13));
     assert_eq!(changes.len(), 1);
     assert_eq!(
         changes[0].quality,
@@ -453,7 +464,7 @@ fn link_status_points_are_true_on_failure() {
         .set_link_status("PorKom_RH", false, t(2))
         .unwrap()
         .is_none());
-    let c = db.set_link_status(ioa(32), true, t(3)).unwrap().unwrap();
+    let c = db.set_link_status(32u32, true, t(3)).unwrap().unwrap();
     assert_eq!(c.value, PointValue::Bool(false));
     assert!(db.set_link_status("m", true, t(3)).is_err());
 }
@@ -470,8 +481,8 @@ fn change(
 ) -> PointChange {
     PointChange {
         name: "p".into(),
-        ioa: ioa(1),
-        type_id,
+        address: 1,
+        point_type: point_type(type_id).unwrap(),
         value,
         quality,
         source_time: Some(SourceTime {
@@ -531,9 +542,9 @@ fn element_round_trips_for_every_family() {
             (prague(), summer, 13, true),
         ] {
             let c = change(type_id, value.clone(), quality, time);
-            let element = c.to_element();
+            let element = element_of(&c);
             assert!(element.family_matches(type_id));
-            let tag = c.time_tag(zone).unwrap();
+            let tag = time_tag(&c, zone).unwrap();
             assert_eq!(tag.hour(), hour);
             assert_eq!(tag.is_summer_time(), su);
             assert!(!tag.is_invalid());
@@ -574,11 +585,11 @@ fn time_tag_iv_and_dst_edges() {
         time: t(0),
         invalid: true,
     });
-    let tag = c.time_tag(TimeZonePolicy::Utc).unwrap();
+    let tag = time_tag(&c, TimeZonePolicy::Utc).unwrap();
     assert!(tag.is_invalid());
     let (_, _, st) = from_element(
-        c.type_id,
-        &c.to_element(),
+        type_id(c.point_type),
+        &element_of(&c),
         Some(&TimeTag::Cp56(tag)),
         TimeZonePolicy::Utc,
     )
@@ -591,7 +602,7 @@ fn time_tag_iv_and_dst_edges() {
         })
     );
     c.source_time = None;
-    assert!(c.time_tag(TimeZonePolicy::Utc).is_none());
+    assert!(time_tag(&c, TimeZonePolicy::Utc).is_none());
     // The repeated hour of 2026-10-25 in Prague: 00:30 UTC (summer, 02:30 CEST) and
     // 01:30 UTC (winter, 02:30 CET) read back apart thanks to the SU bit.
     for (utc_hour, su) in [(0, true), (1, false)] {
@@ -609,7 +620,7 @@ fn time_tag_iv_and_dst_edges() {
 }
 
 #[test]
-fn change_to_event_record_and_cause() {
+fn a_change_keeps_its_cause_for_the_wire() {
     let mut db = all_types_db();
     let st = Some(SourceTime {
         time: t(1),
@@ -626,17 +637,12 @@ fn change_to_event_record_and_cause() {
         )
         .unwrap()
         .unwrap();
-    assert_eq!(c.iec_cause(), iec60870::asdu::Cause::RETURN_REMOTE);
-    let r = c.to_event_record("RH1.1", "link:RH2");
-    assert_eq!(r.node, "RH1.1");
-    assert_eq!(r.origin, "link:RH2");
-    assert_eq!(r.point, "nb");
-    assert_eq!(r.ioa, Some(6));
-    assert_eq!(r.value, PointValue::Int(7));
-    assert_eq!(r.source_time, st);
-    assert_eq!(r.received_time, t(2));
-    assert_eq!(r.cause, EventCause::ReturnRemote);
-    assert_eq!(r.id, None);
+    assert_eq!(
+        transmission_cause(c.cause),
+        iec60870::asdu::Cause::RETURN_REMOTE
+    );
+    assert_eq!(c.address, 6);
+    assert_eq!(c.source_time, st);
 }
 
 #[test]
@@ -660,7 +666,7 @@ fn process_image_matches_the_database() {
         EventCause::Spontaneous,
     )
     .unwrap();
-    let image = db.process_image(TimeZonePolicy::Utc).unwrap();
+    let image = process_image(&db, TimeZonePolicy::Utc).unwrap();
     assert_eq!(image.monitor_len(), 2);
     let sp = image.monitor(ioa(281)).unwrap();
     assert_eq!(sp.event_type, TypeId::M_SP_TB_1);
@@ -692,7 +698,7 @@ fn process_image_matches_the_database() {
         EventCause::Spontaneous,
     )
     .unwrap();
-    let image = db.process_image(TimeZonePolicy::Utc).unwrap();
+    let image = process_image(&db, TimeZonePolicy::Utc).unwrap();
     let nc = image.monitor(ioa(300)).unwrap();
     assert_eq!(
         nc.element,
@@ -731,7 +737,10 @@ fn cyclic_points_and_their_due_times() {
     );
     assert!(due[0].send);
     assert_eq!(due[0].cause, EventCause::Cyclic);
-    assert_eq!(due[0].iec_cause(), iec60870::asdu::Cause::PERIODIC);
+    assert_eq!(
+        transmission_cause(due[0].cause),
+        iec60870::asdu::Cause::PERIODIC
+    );
     assert_eq!(db.next_cyclic_due(t(0)), Some(t(10)));
     good(&mut db, "b", PointValue::Float(2.0)).unwrap();
     assert!(db.due_cyclic(t(9)).is_empty());
@@ -764,7 +773,22 @@ fn arb_value() -> impl Strategy<Value = PointValue> {
 }
 
 fn arb_quality() -> impl Strategy<Value = Quality> {
-    (0u8..32).prop_map(quality_from_bits)
+    (
+        any::<bool>(),
+        any::<bool>(),
+        any::<bool>(),
+        any::<bool>(),
+        any::<bool>(),
+    )
+        .prop_map(
+            |(invalid, not_topical, substituted, blocked, overflow)| Quality {
+                invalid,
+                not_topical,
+                substituted,
+                blocked,
+                overflow,
+            },
+        )
 }
 
 proptest! {
@@ -790,7 +814,7 @@ proptest! {
                 // A link failure: bulk invalidation of everything.
                 for c in db.invalidate_where(|_| true, time) {
                     prop_assert_ne!(last.get(&c.name), Some(&(c.value.clone(), c.quality)));
-                    let _ = c.to_element();
+                    let _ = element_of(&c);
                     last.insert(c.name.clone(), (c.value, c.quality));
                 }
                 continue;
@@ -798,13 +822,13 @@ proptest! {
             match db.update(name, value, quality, None, time, EventCause::Spontaneous) {
                 Ok(Some(c)) => {
                     prop_assert_ne!(last.get(name), Some(&(c.value.clone(), c.quality)));
-                    let element = c.to_element();
+                    let element = element_of(&c);
                     let (v, q, _) =
-                        from_element(c.type_id, &element, None, TimeZonePolicy::Utc).unwrap();
+                        from_element(type_id(c.point_type), &element, None, TimeZonePolicy::Utc).unwrap();
                     prop_assert_eq!(&v, &c.value);
-                    if c.type_id != TypeId::M_IT_TB_1 {
+                    if type_id(c.point_type) != TypeId::M_IT_TB_1 {
                         let mut expect = c.quality;
-                        if matches!(c.type_id, TypeId::M_SP_TB_1 | TypeId::M_DP_TB_1) {
+                        if matches!(type_id(c.point_type), TypeId::M_SP_TB_1 | TypeId::M_DP_TB_1) {
                             expect.overflow = false;
                         }
                         prop_assert_eq!(q, expect);
@@ -824,7 +848,7 @@ proptest! {
                 Err(_) => {}
             }
         }
-        prop_assert!(db.process_image(prague()).is_ok());
+        prop_assert!(process_image(&db, prague()).is_ok());
         let _ = db.due_cyclic(t(10_000));
     }
 }
@@ -836,7 +860,7 @@ async fn changes_publish_to_a_server() {
     let mut gi = spec("gi", TypeId::M_ME_NB_1, 2);
     gi.transmission = Transmission::InterrogationOnly;
     let mut db = PointDb::new("N", vec![spec("sp", TypeId::M_SP_TB_1, 1), gi]).unwrap();
-    let image = db.process_image(prague()).unwrap();
+    let image = process_image(&db, prague()).unwrap();
     let config = ServerConfig::new("127.0.0.1:0".parse().unwrap(), CommonAddress::new(1));
     let server = spawn_server(config, image, std::sync::Arc::new(ReadOnlyStation))
         .await
@@ -857,14 +881,14 @@ async fn changes_publish_to_a_server() {
         .unwrap()
         .unwrap();
     let queued = server.stats().groups[0].queued;
-    c.publish(&server, prague()).unwrap();
+    points_iec::publish(&c, &server, prague()).unwrap();
     let p = server.get(ioa(1)).unwrap();
-    assert_eq!(p.element, c.to_element());
+    assert_eq!(p.element, element_of(&c));
     assert_eq!(p.time.unwrap().as_cp56().unwrap().hour(), 13);
     assert_eq!(server.stats().groups[0].queued, queued + 1);
     let c = good(&mut db, "gi", PointValue::Int(-7)).unwrap().unwrap();
-    c.publish(&server, prague()).unwrap();
-    assert_eq!(server.get(ioa(2)).unwrap().element, c.to_element());
+    points_iec::publish(&c, &server, prague()).unwrap();
+    assert_eq!(server.get(ioa(2)).unwrap().element, element_of(&c));
     assert_eq!(server.stats().groups[0].queued, queued + 1);
     server.shutdown();
 }
