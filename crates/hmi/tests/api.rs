@@ -110,6 +110,7 @@ async fn setup_with(extra_toml: &str) -> Setup {
             pacing: Pacing::Manual,
             start: chrono::Utc::now(),
             store: StoreChoice::Disabled,
+            device_kinds: station::device::DeviceKinds::builtin(),
         },
     )
     .await

@@ -79,6 +79,7 @@ impl Site {
                 pacing: Pacing::RealTime { speed },
                 start,
                 store: StoreChoice::Disabled,
+                device_kinds: station::device::DeviceKinds::builtin(),
             },
         )
         .await

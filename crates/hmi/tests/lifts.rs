@@ -514,6 +514,7 @@ async fn start_station_and_hmi(project: Project, screens: &Path) -> (Runtime, Hm
             pacing: Pacing::RealTime { speed: 1.0 },
             start: Utc::now(),
             store: StoreChoice::Project,
+            device_kinds: station::device::DeviceKinds::builtin(),
         },
     )
     .await

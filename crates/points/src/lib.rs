@@ -16,6 +16,7 @@
 //! | [`kind`]    | [`PointKind`] (the value family), [`TimeStamp`], [`PointType`]; range checks and wire precision |
 //! | [`cause`]   | [`EventCause`], why a change happened                                    |
 //! | [`spec`]    | [`PointSpec`], [`PointSource`], [`Transmission`], the device signals     |
+//! | [`profile`] | [`DeviceProfile`]: the points a kind of device brings, as data          |
 //! | [`db`]      | [`PointDb`]: a node's points, report by exception, invalidation, cyclic points; [`PointChange`] |
 //!
 //! # Data flow
@@ -37,6 +38,7 @@
 pub mod cause;
 pub mod db;
 pub mod kind;
+pub mod profile;
 pub mod quality;
 pub mod spec;
 pub mod value;
@@ -44,6 +46,7 @@ pub mod value;
 pub use cause::EventCause;
 pub use db::{Point, PointChange, PointDb, PointDbError, PointId, PointKey};
 pub use kind::{normalized, PointKind, PointType, TimeStamp};
+pub use profile::{DeviceProfile, ProfileError, SignalProfile};
 pub use quality::{Quality, SourceTime};
 pub use spec::{LiftSignal, LineSignal, PointSource, PointSpec, Transmission};
 pub use value::PointValue;

@@ -46,6 +46,20 @@ pub enum PointSource {
         /// The device's name.
         device: String,
     },
+    /// A signal of a profiled device (`[[node.device]]`): the points its kind's
+    /// [`DeviceProfile`](crate::DeviceProfile) brings.
+    Device {
+        /// The device's name.
+        device: String,
+        /// The signal's name in the profile.
+        signal: String,
+    },
+    /// The communication status of a profiled device (TRUE = it does not answer), for a
+    /// point named by the device's `status_point`.
+    DeviceComm {
+        /// The device's name.
+        device: String,
+    },
     /// A value of a watched lift (`[[node.lift]]`): the points each lift brings.
     Lift {
         /// The lift's name.
@@ -254,6 +268,10 @@ pub struct PointSpec {
     /// Where the value comes from (a PLC variable, a point over a link, a status), typed
     /// as the project says it: invalidation on a link's loss picks its points by it.
     pub source: PointSource,
+    /// The least time between two stored changes of the point (see
+    /// [`SignalProfile::storage_interval`](crate::SignalProfile::storage_interval));
+    /// `None` stores every change. Every change is still sent.
+    pub storage_interval: Option<Duration>,
     /// Free description.
     pub description: String,
 }

@@ -161,6 +161,7 @@ pub(crate) async fn run_project(
             },
             start: options.start.unwrap_or_else(Utc::now),
             store,
+            device_kinds: station::device::DeviceKinds::builtin(),
         },
     )
     .await

@@ -22,6 +22,7 @@
 #![cfg_attr(not(test), deny(clippy::indexing_slicing))]
 
 pub mod config;
+pub mod device;
 #[cfg(feature = "runtime")]
 pub mod runtime;
 

@@ -336,6 +336,9 @@ pub struct NodeConfig {
     /// Lifts the node watches through their controller boards (`[[node.lift]]`); their
     /// points are among [`NodeConfig::points`].
     pub lifts: Vec<LiftConfig>,
+    /// Devices of registered kinds (`[[node.device]]`); their points are among
+    /// [`NodeConfig::points`].
+    pub devices: Vec<FieldDeviceConfig>,
     /// Who is told of what its lifts report (`[node.notify]`: SMTP server, channels,
     /// rules), checked.
     pub notify: Option<notify::NotifyConfig>,
@@ -436,6 +439,7 @@ pub struct IoBinding {
     pub variable: String,
 }
 
+use crate::device::DeviceKinds;
 /// Where a point's value comes from (the point database's type, so a source stays one
 /// type from the project to the database).
 pub use points::{LineSignal, PointSource};
@@ -518,6 +522,9 @@ pub struct PointConfig {
     pub invalid_when: Option<String>,
     /// For a measurand from a serial-line device: how its fraction becomes the value.
     pub scaling: Option<MeasurandScaling>,
+    /// The least time between two stored changes (a device signal that changes on every
+    /// poll while something is wrong); `None` stores every change.
+    pub storage_interval: Option<Duration>,
     /// Free text.
     pub description: String,
 }
@@ -697,6 +704,23 @@ pub struct LiftConfig {
     pub poller: devices::ekm66::poller::PollerConfig,
 }
 
+/// A device of a registered kind, `[[node.device]]` (see [`crate::device`]). Its points
+/// are generated from the kind's profile: `NAME.SIGNAL` at `ioa_base` + the signal's
+/// offset, and `NAME.not_answering`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FieldDeviceConfig {
+    /// Unique per node among devices and lifts; the prefix of its points' names.
+    pub name: String,
+    /// The kind's name.
+    pub kind: String,
+    /// Free text.
+    pub description: String,
+    /// The IOA of its points' offset 0.
+    pub ioa_base: Ioa,
+    /// The kind's own settings (`[node.device.settings]`), read by its driver.
+    pub settings: toml::Table,
+}
+
 /// An IEC 104 client link to a lower node, `[[node.link]]`.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct LinkConfig {
@@ -723,6 +747,12 @@ pub struct LinkConfig {
 impl Project {
     /// Reads and checks `folder/station.toml` and the files it names.
     pub fn load(folder: &Path) -> Result<Project, ConfigErrors> {
+        Project::load_with(folder, &DeviceKinds::builtin())
+    }
+
+    /// [`Project::load`] with the device kinds `kinds` (the built-in ones and any a
+    /// program adds) for `[[node.device]]`.
+    pub fn load_with(folder: &Path, kinds: &DeviceKinds) -> Result<Project, ConfigErrors> {
         let file = folder.join(PROJECT_FILE);
         let bytes = std::fs::read(&file).map_err(|e| {
             ConfigErrors::single(ConfigError::unpositioned(
@@ -736,16 +766,27 @@ impl Project {
         })?;
         let text = String::from_utf8(bytes)
             .map_err(|e| ConfigErrors::single(not_utf8(&file, e.as_bytes())))?;
-        Project::parse(folder, &file, &text)
+        Project::parse_with(folder, &file, &text, kinds)
     }
 
     /// Checks `text` as the project file `file` of `folder` (files it names are resolved
     /// against `folder`). [`Project::load`] reads the file and calls this; also useful for editors that check unsaved text.
     pub fn parse(folder: &Path, file: &Path, text: &str) -> Result<Project, ConfigErrors> {
+        Project::parse_with(folder, file, text, &DeviceKinds::builtin())
+    }
+
+    /// [`Project::parse`] with the device kinds `kinds`.
+    pub fn parse_with(
+        folder: &Path,
+        file: &Path,
+        text: &str,
+        kinds: &DeviceKinds,
+    ) -> Result<Project, ConfigErrors> {
         let (tree, syntax) = DeTable::parse_recoverable(text);
         let mut ctx = Ctx {
             file: file.to_path_buf(),
             text,
+            kinds,
             tree,
             errors: Vec::new(),
             omitted: Vec::new(),

@@ -187,6 +187,14 @@ pub enum ConfigProblem {
         /// What it says.
         detail: String,
     },
+    /// A `[[node.device]]` of a kind nobody registered.
+    #[error("no device kind `{kind}` (known: {})", if known.is_empty() { "none in this build".to_owned() } else { known.join(", ") })]
+    UnknownDeviceKind {
+        /// The kind given.
+        kind: String,
+        /// The kinds registered.
+        known: Vec<String>,
+    },
     /// An IEC 60870-5 type that does not fit its use.
     #[error("{}", wrong_type_text(type_id, usage))]
     WrongType {
@@ -340,6 +348,8 @@ pub enum Unique {
     DeviceAddress,
     /// Lift names in a node.
     LiftName,
+    /// Field device (and lift) names in a node.
+    FieldDeviceName,
 }
 
 /// A fixed vocabulary a value must come from.
@@ -649,6 +659,9 @@ fn duplicate_text(what: Unique, value: &str, other: &str) -> String {
         Unique::CommandOnPointIoa => format!("IOA {value} is also the address of point `{other}`"),
         Unique::DeviceAddress => format!("address {value} is used twice on line `{other}`"),
         Unique::LiftName => format!("duplicate lift name `{value}`"),
+        Unique::FieldDeviceName => {
+            format!("duplicate device name `{value}` (devices and lifts of a node need their own)")
+        }
     }
 }
 

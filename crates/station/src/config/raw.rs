@@ -53,6 +53,8 @@ pub(in crate::config) struct RawNode {
     pub(in crate::config) line: Vec<RawLine>,
     #[serde(default)]
     pub(in crate::config) lift: Vec<RawLift>,
+    #[serde(default)]
+    pub(in crate::config) device: Vec<RawFieldDevice>,
     pub(in crate::config) notify: Option<notify::NotifyConfig>,
     #[serde(default)]
     pub(in crate::config) set: std::collections::BTreeMap<String, String>,
@@ -262,4 +264,18 @@ pub(in crate::config) struct RawLift {
     pub(in crate::config) seed: Option<i64>,
     pub(in crate::config) speed: Option<f64>,
     pub(in crate::config) fault_probability: Option<f64>,
+}
+
+/// `[[node.device]]`: a device of a registered kind (see `crate::device`).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(in crate::config) struct RawFieldDevice {
+    pub(in crate::config) name: String,
+    pub(in crate::config) kind: String,
+    #[serde(default)]
+    pub(in crate::config) description: String,
+    pub(in crate::config) ioa_base: i64,
+    /// The kind's own settings (address, port, simulation), read by its driver.
+    #[serde(default)]
+    pub(in crate::config) settings: toml::Table,
 }

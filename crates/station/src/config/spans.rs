@@ -33,6 +33,8 @@ pub(in crate::config) fn key_string(path: &[Seg]) -> String {
 pub(in crate::config) struct Ctx<'a> {
     pub(in crate::config) file: PathBuf,
     pub(in crate::config) text: &'a str,
+    /// The kinds `[[node.device]]` may name.
+    pub(in crate::config) kinds: &'a crate::device::DeviceKinds,
     pub(in crate::config) tree: Spanned<DeTable<'a>>,
     pub(in crate::config) errors: Vec<ConfigError>,
     /// Problems past [`MAX_ERRORS_PER_FILE`], per file.

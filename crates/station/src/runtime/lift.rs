@@ -19,8 +19,8 @@
 //!   points `LIFT.last_fault` and `LIFT.faults` change once it is committed.
 //! - A board that stops answering turns the lift's points invalid and `LIFT.not_answering`
 //!   TRUE (the communication alarm); a line that closes (a converter's TCP connection
-//!   dropped, a serial adapter unplugged) is opened again after [`REOPEN_AFTER`] with the
-//!   cursor where it stood.
+//!   dropped, a serial adapter unplugged) is opened again with the cursor where it stood,
+//!   after the field-source supervisor's pause ([`super::field::Reopen`]).
 
 use super::operation::OperationError;
 use std::collections::HashMap;
@@ -40,11 +40,9 @@ use crate::config::{LiftConfig, LiftTransport};
 use crate::store::{EventCause, EventStore, LiftFaultQuery, LiftFaultRecord, PointValue, Quality};
 use points::{LiftSignal, PointId, PointSource};
 
+use super::field::Reopen;
 use super::node::NodePoints;
 use super::notification::Notifications;
-
-/// The pause before a closed or unopenable line is opened again.
-pub const REOPEN_AFTER: Duration = Duration::from_secs(5);
 
 /// How many archived records rebuild the cursor: more than the largest fault stack, so
 /// that every record still on the board is recognised.
@@ -278,12 +276,13 @@ async fn run(
             }
         }
     };
+    let mut reopen = Reopen::new();
     loop {
         let stream = match open(&lift.spec.config, &mut simulated_board, &mut board).await {
             Ok(stream) => stream,
             Err(error) => {
                 tracing::warn!(node = %node.name(), lift = %lift.spec.config.name, %error, "cannot open the lift's line; trying again");
-                tokio::time::sleep(REOPEN_AFTER).await;
+                reopen.pause().await;
                 continue;
             }
         };
@@ -327,12 +326,15 @@ async fn run(
         })
         .await;
         cursor = poller.cursor().clone();
+        if answering {
+            reopen.answered();
+        }
         lift.down();
         // A converter's connection dropped or an adapter unplugged: the board is lost as
         // surely as one that stopped answering.
         lost(&mut answering);
         tracing::warn!(node = %node.name(), lift = %lift.spec.config.name, ?end, "the lift's line closed; opening it again");
-        tokio::time::sleep(REOPEN_AFTER).await;
+        reopen.pause().await;
     }
 }
 

@@ -33,6 +33,7 @@
 
 pub mod clock;
 mod command;
+pub mod field;
 mod forwarded;
 pub mod lift;
 pub mod line;
@@ -56,6 +57,7 @@ use tokio::sync::oneshot;
 use crate::config::{
     CommandTarget, NodeConfig, PointSource, Project, Transmission as ConfigTransmission,
 };
+use crate::device::DeviceKinds;
 use crate::store::{
     open_store, spawn_retention, EventStore, Retention, RetentionHandle, StoreError,
 };
@@ -155,6 +157,9 @@ pub struct RuntimeOptions {
     pub start: DateTime<Utc>,
     /// The event store.
     pub store: StoreChoice,
+    /// The kinds of device `[[node.device]]` may name: give the ones the project was
+    /// loaded with ([`Project::load_with`]).
+    pub device_kinds: DeviceKinds,
 }
 
 impl Default for RuntimeOptions {
@@ -164,6 +169,7 @@ impl Default for RuntimeOptions {
             pacing: Pacing::RealTime { speed: 1.0 },
             start: Utc::now(),
             store: StoreChoice::Project,
+            device_kinds: DeviceKinds::builtin(),
         }
     }
 }
@@ -181,6 +187,8 @@ pub struct NodeRuntime {
     pub lines: Vec<line::LineHandle>,
     /// The lifts it watches.
     pub lifts: Vec<lift::LiftHandle>,
+    /// Its profiled devices (`[[node.device]]`).
+    pub devices: Vec<field::FieldDeviceHandle>,
 }
 
 impl NodeRuntime {
@@ -240,7 +248,39 @@ pub fn point_specs(node: &NodeConfig) -> Vec<PointSpec> {
                 .fold(0u16, |bits, g| bits | (1 << (g - 1))),
             deadband: point.deadband,
             source: point.source.clone(),
+            storage_interval: point.storage_interval,
             description: point.description.clone(),
+        })
+        .collect()
+}
+
+/// Starts the node's profiled devices (`[[node.device]]`) under the field-source
+/// supervisor.
+fn start_devices(
+    config: &NodeConfig,
+    points: &Arc<NodePoints>,
+    kinds: &DeviceKinds,
+) -> Result<Vec<field::FieldDeviceHandle>, RuntimeError> {
+    let setup = |device: &str, why: String| {
+        RuntimeError::Setup(format!("node `{}`: device `{device}`: {why}", config.name))
+    };
+    config
+        .devices
+        .iter()
+        .map(|device| {
+            let kind = kinds.get(&device.kind).ok_or_else(|| {
+                setup(
+                    &device.name,
+                    format!(
+                        "no device kind `{}` here (start the runtime with the kinds the project was loaded with)",
+                        device.kind
+                    ),
+                )
+            })?;
+            let driver = kind
+                .driver(device)
+                .map_err(|error| setup(&device.name, error.to_string()))?;
+            Ok(field::spawn_device(device, driver, Arc::clone(points)))
         })
         .collect()
 }
@@ -502,6 +542,7 @@ impl Runtime {
                 links: Vec::new(),
                 lines: Vec::new(),
                 lifts: Vec::new(),
+                devices: Vec::new(),
             });
         }
 
@@ -637,6 +678,7 @@ impl Runtime {
                     notifications.clone(),
                 ));
             }
+            node.devices = start_devices(config, points, &options.device_kinds)?;
         }
         requests
             .send(SimRequest::Go)
@@ -796,6 +838,9 @@ impl Runtime {
     /// Stops everything: links, servers, the simulation thread; waits until the store
     /// has every record.
     pub async fn shutdown(mut self) {
+        for device in self.nodes.iter().flat_map(|node| &node.devices) {
+            device.stop();
+        }
         // Links first, so that no node reports its lower nodes lost while stopping.
         for node in &self.nodes {
             for link in &node.links {

@@ -56,11 +56,11 @@ impl NodePoints {
     ) -> Arc<NodePoints> {
         let storage_intervals = db
             .points()
-            .filter_map(|point| match &point.spec.source {
-                points::PointSource::Lift { signal, .. } => signal
-                    .storage_interval()
-                    .map(|interval| (point.spec.name.clone(), interval)),
-                _ => None,
+            .filter_map(|point| {
+                point
+                    .spec
+                    .storage_interval
+                    .map(|interval| (point.spec.name.clone(), interval))
             })
             .collect();
         Arc::new(NodePoints {

@@ -8,6 +8,7 @@
 )]
 
 mod config;
+mod field_device;
 mod lift;
 /// The store tests' throwaway PostgreSQL helpers, one file for both crates.
 #[path = "../../../store/tests/it/pg.rs"]

@@ -21,6 +21,7 @@ async fn board_records_a_command_and_its_effects(store_url: String) {
             pacing: Pacing::Manual,
             start: chrono::Utc::now(),
             store: StoreChoice::Url(store_url),
+            device_kinds: station::device::DeviceKinds::builtin(),
         },
     )
     .await

@@ -17,6 +17,7 @@ async fn nodes_in_two_processes_work_as_one_station() {
         pacing: Pacing::Manual,
         start: default_start(),
         store: StoreChoice::Disabled,
+        device_kinds: station::device::DeviceKinds::builtin(),
     };
     let board = Runtime::start(project.clone(), options(&["RH2"]))
         .await

@@ -50,6 +50,7 @@ pub(crate) async fn start_at(
             pacing: Pacing::Manual,
             start,
             store,
+            device_kinds: station::device::DeviceKinds::builtin(),
         },
     )
     .await

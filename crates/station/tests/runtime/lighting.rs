@@ -70,6 +70,7 @@ async fn a_year_of_lighting_follows_the_calendar_in_local_time_across_dst() {
             pacing: Pacing::Manual,
             start,
             store: StoreChoice::Url("sqlite::memory:".into()),
+            device_kinds: station::device::DeviceKinds::builtin(),
         },
     )
     .await

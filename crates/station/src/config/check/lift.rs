@@ -17,12 +17,6 @@ const SIMULATED_BOARD: &str = "ekm66";
 /// The floors a board reports (the simulator's and the counters' range).
 const FLOORS: std::ops::RangeInclusive<i64> = 2..=60;
 
-/// The names and IOAs the node's points already use, for the generated ones to avoid.
-pub(in crate::config) struct TakenPoints<'a> {
-    pub(in crate::config) names: &'a mut HashSet<String>,
-    pub(in crate::config) ioas: &'a mut HashMap<Ioa, String>,
-}
-
 /// Every signal of a lift with `floors` floors, in IOA order.
 pub(crate) fn lift_signals(floors: u8) -> impl Iterator<Item = LiftSignal> {
     LiftSignal::COMMON
@@ -42,7 +36,7 @@ impl Ctx<'_> {
         &mut self,
         n: usize,
         raw: &RawNode,
-        taken: TakenPoints<'_>,
+        mut taken: TakenPoints<'_>,
     ) -> (Vec<LiftConfig>, Vec<PointConfig>) {
         let mut lifts = Vec::new();
         let mut points = Vec::new();
@@ -216,56 +210,22 @@ impl Ctx<'_> {
                 format!(" ({})", lift.description)
             };
             for signal in lift_signals(floors) {
-                let name = lift_point_name(&lift.name, signal);
-                if !taken.names.insert(name.clone()) {
-                    self.err(
-                        &at("name"),
-                        ConfigProblem::Duplicate {
-                            what: Unique::PointName,
-                            value: name.clone(),
-                            other: raw.name.clone(),
-                        },
-                    );
-                }
-                let Some(address) = shifted(ioa_base, signal.offset()) else {
-                    self.err(
-                        &at("ioa_base"),
-                        ConfigProblem::OutOfRange {
-                            what: "IOA",
-                            value: i64::from(ioa_base.get()) + i64::from(signal.offset()),
-                            min: 1,
-                            max: Some(Ioa::MAX.get().into()),
-                        },
-                    );
-                    break;
-                };
-                if let Some(other) = taken.ioas.get(&address) {
-                    self.err(
-                        &at("ioa_base"),
-                        ConfigProblem::Duplicate {
-                            what: Unique::PointIoa,
-                            value: address.to_string(),
-                            other: other.clone(),
-                        },
-                    );
-                    break;
-                }
-                taken.ioas.insert(address, name.clone());
-                points.push(PointConfig {
-                    name,
+                let generated = GeneratedPoint {
+                    name: lift_point_name(&lift.name, signal),
+                    base: ioa_base,
+                    offset: signal.offset(),
                     point_type: signal.point_type(),
-                    ioa: address,
                     source: PointSource::Lift {
                         lift: lift.name.clone(),
                         signal,
                     },
-                    transmission: Transmission::Spontaneous,
-                    groups: Vec::new(),
-                    deadband: None,
-                    invalid_when: None,
-                    scaling: None,
+                    storage_interval: signal.storage_interval(),
                     description: format!("{} {}{description}", lift.name, signal.description()),
-                });
+                };
+                match self.generated_point(generated, &raw.name, &mut taken, &at) {
+                    Some(point) => points.push(point),
+                    None => break,
+                }
             }
             lifts.push(LiftConfig {
                 name: lift.name.clone(),

@@ -318,6 +318,7 @@ impl Ctx<'_> {
                         deadband: None,
                         invalid_when: None,
                         scaling: point.scaling,
+                        storage_interval: point.storage_interval,
                         description: point.description.clone(),
                     });
                 }

@@ -1,12 +1,14 @@
 //! The checks of a project: the station, each node, the links between them.
 
+mod device;
+mod generated;
 mod lift;
 mod line;
 mod links;
 mod node;
 mod serial;
 
-use lift::TakenPoints;
+use generated::{GeneratedPoint, TakenPoints};
 use serial::SerialKeys;
 
 use super::*;

@@ -597,6 +597,7 @@ impl Ctx<'_> {
                 deadband: point.deadband,
                 invalid_when: point.invalid_when.clone(),
                 scaling,
+                storage_interval: None,
                 description: point.description.clone(),
             });
         }
@@ -610,6 +611,15 @@ impl Ctx<'_> {
             },
         );
         points.extend(lift_points);
+        let (devices, device_points) = self.check_devices(
+            n,
+            raw,
+            TakenPoints {
+                names: &mut point_names,
+                ioas: &mut point_ioas,
+            },
+        );
+        points.extend(device_points);
 
         // commands
         let mut commands = Vec::new();
@@ -921,6 +931,7 @@ impl Ctx<'_> {
             links: Vec::new(),
             lines: self.check_lines(n, raw),
             lifts,
+            devices,
             notify: raw.notify.as_ref().map(|config| {
                 if let Err(errors) = config.validate() {
                     for error in errors {

@@ -38,7 +38,7 @@ use points::PointId;
 use super::super::forwarded::CommandWatches;
 use super::super::node::NodePoints;
 use super::{all_down, device_link, open_when_ready, LineSpec};
-use super::{Answering, COMMAND_TIMEOUT, REOPEN_AFTER};
+use super::{Answering, Reopen, COMMAND_TIMEOUT};
 
 /// How long an executed command waits for the outstation's termination, which the
 /// standard leaves to the outstation, before it is terminated here.
@@ -84,8 +84,9 @@ async fn run(
     let name = spec.config.name.clone();
     all_down(&spec, &node);
     let mut no_simulation = None;
+    let mut reopen = Reopen::new();
     loop {
-        let stream = open_when_ready(&spec, &node, &mut no_simulation).await;
+        let stream = open_when_ready(&spec, &node, &mut no_simulation, &mut reopen).await;
         let now = tokio::time::Instant::now().into_std();
         let primary = spec.primary(settings.address_size, now);
         let clock_node = Arc::clone(&node);
@@ -112,9 +113,11 @@ async fn run(
         .await;
         tracing::warn!(node = %node.name(), line = %name, ?end, "line closed; opening it again");
         commands.abandon_all();
-        answering_now.clear();
+        if answering_now.clear() {
+            reopen.answered();
+        }
         all_down(&spec, &node);
-        tokio::time::sleep(REOPEN_AFTER).await;
+        reopen.pause().await;
     }
 }
 

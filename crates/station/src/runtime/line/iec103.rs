@@ -26,8 +26,8 @@ use points::{normalized, EventCause, PointKind, PointValue, SourceTime};
 
 use super::super::node::NodePoints;
 use super::{
-    all_down, device_link, open_when_ready, Answering, CommandProblem, LineSpec, COMMAND_TIMEOUT,
-    REOPEN_AFTER,
+    all_down, device_link, open_when_ready, Answering, CommandProblem, LineSpec, Reopen,
+    COMMAND_TIMEOUT,
 };
 
 /// The running IEC 103 part of a line: what a general command needs.
@@ -124,8 +124,9 @@ async fn run(
 ) {
     let name = spec.config.name.clone();
     all_down(&spec, &node);
+    let mut reopen = Reopen::new();
     loop {
-        let stream = open_when_ready(&spec, &node, &mut simulated).await;
+        let stream = open_when_ready(&spec, &node, &mut simulated, &mut reopen).await;
         let now = tokio::time::Instant::now().into_std();
         // IEC 103 link addresses are one octet.
         let mut primary = spec.primary(iec60870::ft12::AddressSize::One, now);
@@ -162,9 +163,11 @@ async fn run(
         for reply in pending {
             let _ = reply.send(Err(CommandProblem::NoAnswer("the line closed".to_owned())));
         }
-        answering_now.clear();
+        if answering_now.clear() {
+            reopen.answered();
+        }
         all_down(&spec, &node);
-        tokio::time::sleep(REOPEN_AFTER).await;
+        reopen.pause().await;
     }
 }
 

@@ -36,14 +36,13 @@ use crate::config::{LineConfig, LineProtocol, LineTransport, MeasurandScaling};
 use crate::store::CommandOutcome;
 use points::{PointId, PointKind, PointSource};
 
+use super::field::Reopen;
 use super::node::NodePoints;
 pub(crate) use iec101::ObjectPoints;
 use iec103::Simulated;
 
 /// How long a command waits for the device's acknowledgement or confirmation.
 const COMMAND_TIMEOUT: Duration = Duration::from_secs(10);
-/// The pause before a failed transport is opened again.
-const REOPEN_AFTER: Duration = Duration::from_secs(5);
 
 /// A point fed by an IEC 103 device, with what its conversion needs.
 #[derive(Debug, Clone)]
@@ -141,12 +140,12 @@ impl Answering {
             .contains(&address)
     }
 
-    /// None answers (the line closed).
-    fn clear(&self) {
-        self.0
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner)
-            .clear();
+    /// None answers (the line closed); whether any did.
+    fn clear(&self) -> bool {
+        let mut answering = self.0.lock().unwrap_or_else(PoisonError::into_inner);
+        let any = !answering.is_empty();
+        answering.clear();
+        any
     }
 }
 
@@ -305,19 +304,20 @@ pub(crate) fn spawn_line(spec: LineSpec, node: Arc<NodePoints>) -> LineHandle {
     }
 }
 
-/// Opens the line, trying again every [`REOPEN_AFTER`] while it cannot be opened (a
+/// Opens the line, trying again after `reopen`'s pauses while it cannot be opened (a
 /// serial adapter unplugged, a terminal server down).
 async fn open_when_ready(
     spec: &LineSpec,
     node: &NodePoints,
     simulated: &mut Option<mpsc::UnboundedReceiver<EndpointAction<Simulated>>>,
+    reopen: &mut Reopen,
 ) -> std::pin::Pin<Box<dyn iec60870::ft12::io::LineStream>> {
     loop {
         match open(&spec.config, simulated).await {
             Ok(stream) => return stream,
             Err(error) => {
                 tracing::warn!(node = %node.name(), line = %spec.config.name, %error, "cannot open the line; trying again");
-                tokio::time::sleep(REOPEN_AFTER).await;
+                reopen.pause().await;
             }
         }
     }

@@ -1,0 +1,232 @@
+//! The field-source supervisor: what every source of field data (a profiled device, a
+//! lift board, a serial line of relays or outstations) needs around its protocol.
+//!
+//! - **Open, and open again.** A source that cannot be opened, or whose line closes, is
+//!   opened again after a pause ([`Reopen`]): 1 s, doubling to [`REOPEN_MAX`], back to
+//!   1 s once the source answered. A dead converter is not hammered; a cable plugged back
+//!   in is read again within seconds.
+//! - **Communication status.** While a device does not answer, its points are invalid
+//!   (IV, last value kept) and its status point is TRUE (`NOT CommEnabled`, the TC700's
+//!   convention); its next reading clears both.
+//! - **Readings to points.** A driver reports by signal name ([`Readings`]); the
+//!   supervisor finds the point and hands it to the node (sinks, recorder).
+//!
+//! Profiled devices (`[[node.device]]`, [`crate::device`]) run entirely on it
+//! ([`spawn_device`]); the lift and line tasks use its [`Reopen`] pacing. IEC 104 links
+//! keep the client's own reconnection (the 104 link layer's T0 and back-off), which
+//! follows the same rule.
+//!
+//! ```text
+//!  DeviceDriver::open --ok--> DeviceDriver::run(&readings) --ended--> all invalid, status TRUE
+//!        ^   \--error--> log                                               |
+//!        +--------------------- Reopen::pause (1 s .. 5 s) <----------------+
+//! ```
+
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Duration;
+
+use points::{EventCause, PointId, PointSource, PointValue, Quality};
+
+use super::node::NodePoints;
+use crate::config::FieldDeviceConfig;
+use crate::device::{DeviceDriver, Readings};
+
+/// The first pause before a source is opened again.
+pub const REOPEN_FIRST: Duration = Duration::from_secs(1);
+/// The longest pause before a source is opened again.
+pub const REOPEN_MAX: Duration = Duration::from_secs(5);
+
+/// The pauses between attempts to open a source: doubling from [`REOPEN_FIRST`] to
+/// [`REOPEN_MAX`]; [`Reopen::answered`] starts over.
+#[derive(Debug, Clone)]
+pub(crate) struct Reopen {
+    next: Duration,
+}
+
+impl Reopen {
+    pub(crate) fn new() -> Reopen {
+        Reopen { next: REOPEN_FIRST }
+    }
+
+    /// Waits before the next attempt.
+    pub(crate) async fn pause(&mut self) {
+        tokio::time::sleep(self.next).await;
+        self.next = (self.next * 2).min(REOPEN_MAX);
+    }
+
+    /// The source answered: the next failure waits [`REOPEN_FIRST`] again.
+    pub(crate) fn answered(&mut self) {
+        self.next = REOPEN_FIRST;
+    }
+}
+
+/// A running profiled device.
+#[derive(Debug)]
+pub struct FieldDeviceHandle {
+    name: String,
+    task: tokio::task::AbortHandle,
+    answering: Arc<AtomicBool>,
+}
+
+impl FieldDeviceHandle {
+    /// The device's name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Whether the device answers now.
+    pub fn is_answering(&self) -> bool {
+        self.answering.load(Ordering::Acquire)
+    }
+
+    /// Stops reading the device.
+    pub fn stop(&self) {
+        self.task.abort();
+    }
+}
+
+/// Starts supervising `driver`, the driver of `config`, feeding `node`'s points.
+pub(crate) fn spawn_device(
+    config: &FieldDeviceConfig,
+    driver: Box<dyn DeviceDriver>,
+    node: Arc<NodePoints>,
+) -> FieldDeviceHandle {
+    let readings = DeviceReadings::new(config, node);
+    let answering = Arc::clone(&readings.answering);
+    let task = tokio::spawn(supervise(driver, readings)).abort_handle();
+    FieldDeviceHandle {
+        name: config.name.clone(),
+        task,
+        answering,
+    }
+}
+
+async fn supervise(mut driver: Box<dyn DeviceDriver>, readings: DeviceReadings) {
+    readings.down();
+    let mut reopen = Reopen::new();
+    loop {
+        match driver.open().await {
+            Ok(()) => {
+                let end = driver.run(&readings).await;
+                if readings.answered.swap(false, Ordering::AcqRel) {
+                    reopen.answered();
+                }
+                readings.answering(false);
+                tracing::warn!(node = %readings.node.name(), device = %readings.device, reason = %end, "the device's line closed; opening it again");
+            }
+            Err(error) => {
+                tracing::warn!(node = %readings.node.name(), device = %readings.device, %error, "cannot open the device; trying again");
+            }
+        }
+        reopen.pause().await;
+    }
+}
+
+/// A profiled device's points, as its driver's readings reach them.
+struct DeviceReadings {
+    node: Arc<NodePoints>,
+    device: String,
+    /// `device NAME`, the origin of its changes.
+    origin: String,
+    /// Signal name -> point.
+    points: HashMap<String, PointId>,
+    status: Option<PointId>,
+    answering: Arc<AtomicBool>,
+    /// Whether it answered since the line was last opened.
+    answered: AtomicBool,
+}
+
+impl DeviceReadings {
+    fn new(config: &FieldDeviceConfig, node: Arc<NodePoints>) -> DeviceReadings {
+        let (points, status) = {
+            let db = node.lock();
+            let mut points = HashMap::new();
+            let mut status = None;
+            for point in db.points() {
+                let id = db.id(point.spec.name.as_str());
+                match (&point.spec.source, id) {
+                    (PointSource::Device { device, signal }, Some(id))
+                        if *device == config.name =>
+                    {
+                        points.insert(signal.clone(), id);
+                    }
+                    (PointSource::DeviceComm { device }, Some(id)) if *device == config.name => {
+                        status = Some(id);
+                    }
+                    _ => {}
+                }
+            }
+            (points, status)
+        };
+        DeviceReadings {
+            node,
+            device: config.name.clone(),
+            origin: format!("device {}", config.name),
+            points,
+            status,
+            answering: Arc::new(AtomicBool::new(false)),
+            answered: AtomicBool::new(false),
+        }
+    }
+
+    /// Every point invalid and the status point TRUE.
+    fn down(&self) {
+        let device = self.device.as_str();
+        self.node.change_with(&self.origin, |db, now| {
+            let mut changes = db.invalidate_where(
+                |spec| matches!(&spec.source, PointSource::Device { device: d, .. } if d == device),
+                now,
+            );
+            if let Some(status) = self.status {
+                changes.extend(db.set_link_status(status, false, now).ok().flatten());
+            }
+            changes
+        });
+    }
+}
+
+impl Readings for DeviceReadings {
+    fn value(&self, signal: &str, value: PointValue, quality: Quality) {
+        let Some(&id) = self.points.get(signal) else {
+            tracing::warn!(device = %self.device, signal, "the driver reports a signal its profile does not have");
+            return;
+        };
+        if let Err(error) = self.node.update(
+            id,
+            value,
+            quality,
+            None,
+            EventCause::Spontaneous,
+            &self.origin,
+            false,
+        ) {
+            tracing::warn!(device = %self.device, signal, %error, "value refused");
+        }
+    }
+
+    fn answering(&self, answering: bool) {
+        if answering {
+            self.answered.store(true, Ordering::Release);
+        }
+        if self.answering.swap(answering, Ordering::AcqRel) == answering {
+            return;
+        }
+        if answering {
+            tracing::info!(node = %self.node.name(), device = %self.device, "device answering");
+            if let Some(status) = self.status {
+                self.node.change_with(&self.origin, |db, now| {
+                    db.set_link_status(status, true, now)
+                        .ok()
+                        .flatten()
+                        .into_iter()
+                        .collect()
+                });
+            }
+        } else {
+            tracing::warn!(node = %self.node.name(), device = %self.device, "device not answering");
+            self.down();
+        }
+    }
+}
