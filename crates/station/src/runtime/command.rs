@@ -503,22 +503,26 @@ async fn forward(
         tokio::spawn(async move { client.command(type_id, ioa, element, time).await });
     let mut confirmed = answers.confirmed;
     let mut terminated = answers.terminated;
+    // The answers count as the link task meets them in the lower node's stream, after the
+    // data before them: the request (the client's view of the same answers) only decides
+    // when it fails. Whatever the request saw, the link task meets too, or the link goes
+    // down and drops the watch: no wait needs a bound of its own.
+    let mut finished = None;
     let positive = tokio::select! {
         seen = &mut confirmed => seen.ok(),
-        result = &mut request => {
-            // Answered before the link task met the confirmation: for a terminated
-            // execute, let the link task catch up with the termination (and the return
-            // information before it) first.
-            if !command.select && matches!(result, Ok(Ok(ref outcome)) if outcome.terminated) {
-                let _ = tokio::time::timeout(Duration::from_secs(2), terminated).await;
-            }
-            let (outcome, detail) = request_outcome(result, name, ioa);
-            return (outcome, detail, None);
+        done = &mut request => {
+            let answered = matches!(done, Ok(Ok(_)));
+            finished = Some(done);
+            if answered { (&mut confirmed).await.ok() } else { None }
         }
     };
     if positive != Some(true) {
         // Refused (or the link went away): the request's own result says why.
-        let (outcome, detail) = request_outcome(request.await, name, ioa);
+        let done = match finished {
+            Some(done) => done,
+            None => request.await,
+        };
+        let (outcome, detail) = request_outcome(done, name, ioa);
         return (outcome, detail, None);
     }
     let detail = format!("confirmed by {name} (IOA {ioa})");
@@ -526,28 +530,43 @@ async fn forward(
         request.abort();
         return (CommandOutcome::Executed, detail, None);
     }
-    let termination: TerminationFuture = Box::pin(async move {
-        tokio::select! {
-            _ = &mut terminated => {}
-            result = &mut request => {
-                // The request ends on the termination too, maybe before the link task
-                // got there: wait (bounded) for the link task, which publishes the return
-                // information before it.
-                if matches!(result, Ok(Ok(ref outcome)) if outcome.terminated) {
-                    let _ = tokio::time::timeout(Duration::from_secs(2), terminated).await;
+    let terminated_already =
+        |done: &RequestResult| matches!(done, Ok(Ok(outcome)) if outcome.terminated);
+    let termination: TerminationFuture = match finished {
+        // The request ended with the termination: the link task meets it too.
+        Some(done) => {
+            let wait = terminated_already(&done);
+            Box::pin(async move {
+                if wait {
+                    let _ = terminated.await;
+                }
+            })
+        }
+        None => Box::pin(async move {
+            tokio::select! {
+                _ = &mut terminated => {}
+                done = &mut request => {
+                    // A request that ended without the termination (its own time-out)
+                    // ends the wait; one that ended with it waits for the link task.
+                    if terminated_already(&done) {
+                        let _ = terminated.await;
+                    }
                 }
             }
-        }
-    });
+        }),
+    };
     (CommandOutcome::Executed, detail, Some(termination))
 }
 
+/// What a forwarded command's request task ended with.
+type RequestResult = Result<
+    Result<iec60870::cs104::client::RequestOutcome, iec60870::cs104::client::ClientError>,
+    tokio::task::JoinError,
+>;
+
 /// The audit outcome of a forwarded command's request.
 fn request_outcome(
-    result: Result<
-        Result<iec60870::cs104::client::RequestOutcome, iec60870::cs104::client::ClientError>,
-        tokio::task::JoinError,
-    >,
+    result: RequestResult,
     name: &str,
     ioa: iec60870::asdu::Ioa,
 ) -> (CommandOutcome, String) {

@@ -155,6 +155,8 @@ impl LinkObserver for Concentrator {
 
     fn down(&self, why: &LinkDown) {
         tracing::warn!(node = %self.node.name(), link = %self.spec.name, reason = %why, "link down");
+        // No answer to a forwarded command comes over a lost connection.
+        self.commands.abandon_all();
         set_down(&self.spec, &self.node, &self.origin);
     }
 
