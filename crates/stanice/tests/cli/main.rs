@@ -1,0 +1,20 @@
+//! The `stanice` binary as a user runs it: real processes on loopback.
+
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
+
+mod support;
+
+mod dispatch;
+mod iec104;
+mod messages;
+mod plc;
+mod points_and_events;
+mod run;
+mod serial;
+mod shutdown;
+mod users;
