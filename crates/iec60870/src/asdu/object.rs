@@ -562,22 +562,18 @@ impl Element {
     }
 
     /// The fraction of a normalized value: `raw / 32768`, in -1.0 ..= 1 - 2^-15
-    /// (0x2AE5 = 10981 gives 0.335114).
+    /// (0x2AE5 = 10981 gives 0.335114). The scale is the point model's
+    /// ([`points::normalized`]), written once.
     pub fn normalized_value(raw: i16) -> f32 {
-        f32::from(raw) / 32768.0
+        // Exact: a 16-bit raw value over a power of two fits an f32's 24-bit mantissa.
+        #[allow(clippy::cast_possible_truncation)]
+        let fraction = points::normalized::from_raw(raw) as f32;
+        fraction
     }
 
     /// The raw normalized value closest to a fraction, saturating at -1.0 and 1 - 2^-15.
     pub fn normalized_raw(fraction: f32) -> i16 {
-        let scaled = (f64::from(fraction) * 32768.0).round();
-        if scaled.is_nan() {
-            0
-        } else {
-            // The clamp makes the cast exact.
-            #[allow(clippy::cast_possible_truncation)]
-            let raw = scaled.clamp(f64::from(i16::MIN), f64::from(i16::MAX)) as i16;
-            raw
-        }
+        points::normalized::to_raw(f64::from(fraction))
     }
 
     fn family(&self) -> Family {
