@@ -1,7 +1,8 @@
 //! Information elements to point values and back, and point addresses to IOAs.
 
 use iec60870::asdu::{
-    BinaryCounterReading, DoublePointState, Element, Ioa, RangeError, StepPosition, TimeTag, TypeId,
+    BinaryCounterReading, DoublePointState, Element, Ioa, RangeError, RegulatingStepState,
+    StepPosition, TimeTag, TypeId,
 };
 use iec60870::time::TimeZonePolicy;
 use points::{normalized, PointKind, PointType, PointValue, Quality, SourceTime};
@@ -145,4 +146,99 @@ pub fn from_element(
         .and_then(TimeTag::as_cp56)
         .and_then(|tag| zone.from_cp56(tag));
     Ok((value, quality, source_time))
+}
+
+/// The value of a command element, and the qualifier of its output (QU of SCO, DCO and
+/// RCO: 0 the target's own, 1 short pulse, 2 long pulse, 3 persistent): ON/OFF as a
+/// single or double point, a regulating step as +1 (higher) or -1 (lower), set-points as
+/// their value (a normalized one as its fraction), a bitstring as its bits. `None` for an
+/// element that carries no value to write (a not-permitted double or step state, a
+/// monitor or system element).
+pub fn command_value(element: &Element) -> Option<(PointValue, Option<u8>)> {
+    Some(match element {
+        Element::SingleCommand { on, qualifier } => {
+            (PointValue::Bool(*on), Some(qualifier.qualifier()))
+        }
+        Element::DoubleCommand { state, qualifier } => match state {
+            DoublePointState::On | DoublePointState::Off => (
+                PointValue::DoublePoint(state.bits()),
+                Some(qualifier.qualifier()),
+            ),
+            _ => return None,
+        },
+        Element::RegulatingStep { state, qualifier } => match state {
+            RegulatingStepState::Higher => (PointValue::Int(1), Some(qualifier.qualifier())),
+            RegulatingStepState::Lower => (PointValue::Int(-1), Some(qualifier.qualifier())),
+            _ => return None,
+        },
+        Element::SetpointNormalized { raw, .. } => {
+            (PointValue::Float(normalized::from_raw(*raw)), None)
+        }
+        Element::SetpointScaled { value, .. } => (PointValue::Int(i64::from(*value)), None),
+        Element::SetpointFloat { value, .. } => (PointValue::Float(f64::from(*value)), None),
+        Element::BitstringCommand { bits } => (PointValue::Bits(*bits), None),
+        _ => return None,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use iec60870::asdu::{CommandQualifier, SetpointQualifier};
+
+    #[test]
+    fn command_elements_carry_their_value_and_output_qualifier() {
+        let long = CommandQualifier::new(CommandQualifier::QU_LONG_PULSE, false).unwrap();
+        let cases = [
+            (
+                Element::SingleCommand {
+                    on: true,
+                    qualifier: long,
+                },
+                Some((PointValue::Bool(true), Some(2))),
+            ),
+            (
+                Element::DoubleCommand {
+                    state: DoublePointState::Off,
+                    qualifier: CommandQualifier::EXECUTE,
+                },
+                Some((PointValue::DoublePoint(1), Some(0))),
+            ),
+            (
+                Element::DoubleCommand {
+                    state: DoublePointState::Indeterminate,
+                    qualifier: CommandQualifier::EXECUTE,
+                },
+                None,
+            ),
+            (
+                Element::RegulatingStep {
+                    state: RegulatingStepState::Lower,
+                    qualifier: CommandQualifier::EXECUTE,
+                },
+                Some((PointValue::Int(-1), Some(0))),
+            ),
+            (
+                Element::SetpointNormalized {
+                    raw: -16384,
+                    qualifier: SetpointQualifier::new(0, false).unwrap(),
+                },
+                Some((PointValue::Float(-0.5), None)),
+            ),
+            (
+                Element::BitstringCommand { bits: 0xA5 },
+                Some((PointValue::Bits(0xA5), None)),
+            ),
+            (
+                Element::SinglePoint {
+                    on: true,
+                    quality: Quality::GOOD,
+                },
+                None,
+            ),
+        ];
+        for (element, expected) in cases {
+            assert_eq!(command_value(&element), expected, "{element:?}");
+        }
+    }
 }

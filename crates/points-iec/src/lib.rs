@@ -31,7 +31,7 @@ mod server;
 pub mod types;
 
 pub use cause::{event_cause, received_as_event, transmission_cause};
-pub use element::{from_element, ioa, to_element, ElementMismatch};
+pub use element::{command_value, from_element, ioa, to_element, ElementMismatch};
 #[cfg(feature = "tokio")]
 pub use server::{process_image, publish, time_tag, PublishError};
 pub use types::{point_type, type_id};

@@ -18,11 +18,10 @@ use std::collections::HashMap;
 use std::sync::{mpsc, Arc};
 use std::time::Duration;
 
-use iec60870::asdu::{DoublePointState, Element, RegulatingStepState, TimeTag};
+use iec60870::asdu::{DoublePointState, Element, TimeTag};
 use iec60870::cs104::server::{self, CommandFuture, StationHandler, TerminationFuture};
 use iec60870::outstation::Peer;
 use iec60870::time::Cp56Time2a;
-use plc::vm::Val;
 use tokio::sync::oneshot;
 
 use crate::store::{Actor, CommandOutcome, CommandPhase, CommandRecord, PointValue};
@@ -368,7 +367,7 @@ async fn execute_on_plc(
     command: &server::Command,
     configured_pulse: Option<Duration>,
 ) -> (CommandOutcome, String) {
-    let Some((value, qualifier)) = plc_value(&command.element) else {
+    let Some((value, qualifier)) = points_iec::command_value(&command.element) else {
         return (
             CommandOutcome::Refused,
             format!(
@@ -593,60 +592,25 @@ fn request_outcome(
     }
 }
 
-/// The value a command writes to a PLC variable, and its QU (single, double and
-/// regulating-step commands).
-fn plc_value(element: &Element) -> Option<(Val, Option<u8>)> {
-    Some(match element {
-        Element::SingleCommand { on, qualifier } => {
-            (Val::Int(i64::from(*on)), Some(qualifier.qualifier()))
-        }
-        Element::DoubleCommand { state, qualifier } => match state {
-            DoublePointState::On => (Val::Int(1), Some(qualifier.qualifier())),
-            DoublePointState::Off => (Val::Int(0), Some(qualifier.qualifier())),
-            _ => return None,
-        },
-        // Higher = +1, lower = -1 (an INT target steps; a BOOL target sees TRUE).
-        Element::RegulatingStep { state, qualifier } => match state {
-            RegulatingStepState::Higher => (Val::Int(1), Some(qualifier.qualifier())),
-            RegulatingStepState::Lower => (Val::Int(-1), Some(qualifier.qualifier())),
-            _ => return None,
-        },
-        Element::SetpointNormalized { raw, .. } => {
-            (Val::Real(f64::from(Element::normalized_value(*raw))), None)
-        }
-        Element::SetpointScaled { value, .. } => (Val::Int(i64::from(*value)), None),
-        Element::SetpointFloat { value, .. } => (Val::Real(f64::from(*value)), None),
-        Element::BitstringCommand { bits } => (Val::Int(i64::from(*bits)), None),
-        _ => return None,
-    })
-}
-
 /// A set-point's value in engineering units (as the project's `range` is written).
 fn setpoint_value(element: &Element) -> Option<f64> {
     match element {
-        Element::SetpointNormalized { raw, .. } => Some(f64::from(Element::normalized_value(*raw))),
-        Element::SetpointScaled { value, .. } => Some(f64::from(*value)),
-        Element::SetpointFloat { value, .. } => Some(f64::from(*value)),
+        Element::SetpointNormalized { .. }
+        | Element::SetpointScaled { .. }
+        | Element::SetpointFloat { .. } => match points_iec::command_value(element)?.0 {
+            PointValue::Float(x) => Some(x),
+            #[allow(clippy::cast_precision_loss)]
+            PointValue::Int(i) => Some(i as f64),
+            _ => None,
+        },
         _ => None,
     }
 }
 
 /// The audited value of a command.
 fn command_value(element: &Element) -> PointValue {
-    match element {
-        Element::SingleCommand { on, .. } => PointValue::Bool(*on),
-        Element::DoubleCommand { state, .. } => PointValue::DoublePoint(state.bits()),
-        Element::RegulatingStep { state, .. } => PointValue::Int(match state {
-            RegulatingStepState::Higher => 1,
-            RegulatingStepState::Lower => -1,
-            _ => 0,
-        }),
-        Element::SetpointNormalized { raw, .. } => {
-            PointValue::Float(f64::from(Element::normalized_value(*raw)))
-        }
-        Element::SetpointScaled { value, .. } => PointValue::Int(i64::from(*value)),
-        Element::SetpointFloat { value, .. } => PointValue::Float(f64::from(*value)),
-        Element::BitstringCommand { bits } => PointValue::Bits(*bits),
-        other => PointValue::Text(other.short_name().to_owned()),
-    }
+    points_iec::command_value(element).map_or_else(
+        || PointValue::Text(element.short_name().to_owned()),
+        |(value, _)| value,
+    )
 }

@@ -52,11 +52,11 @@ pub(crate) enum SimRequest {
         by: Duration,
         reply: oneshot::Sender<Duration>,
     },
-    /// A command on a PLC variable of node `node`.
+    /// A command on a PLC variable of node `node`, with the value the command carries.
     Command {
         node: usize,
         ioa: u32,
-        value: Val,
+        value: PointValue,
         pulse: Option<Duration>,
         select: bool,
         reply: oneshot::Sender<Result<(), CommandRefusal>>,
@@ -385,7 +385,7 @@ impl Simulation {
         &mut self,
         node: usize,
         ioa: u32,
-        value: Val,
+        value: PointValue,
         pulse: Option<Duration>,
         select: bool,
     ) -> Result<(), CommandRefusal> {
@@ -411,6 +411,21 @@ impl Simulation {
         if select {
             return Ok(());
         }
+        // A command's value as the PLC holds it: ON (and a double ON) is 1, OFF 0, a
+        // step +1 or -1, a set-point its number, a bitstring its bits.
+        let value = match value {
+            PointValue::Bool(on) => Val::Int(i64::from(on)),
+            PointValue::DoublePoint(2) => Val::Int(1),
+            PointValue::DoublePoint(1) => Val::Int(0),
+            PointValue::Int(x) => Val::Int(x),
+            PointValue::Bits(bits) => Val::Int(i64::from(bits)),
+            PointValue::Float(x) => Val::Real(x),
+            other @ (PointValue::DoublePoint(_) | PointValue::Text(_)) => {
+                return Err(CommandRefusal::BadValue(format!(
+                    "{other} cannot be written to a PLC variable"
+                )))
+            }
+        };
         let value = match (command.target.ty.lane(), value) {
             (Some(Lane::Int), Val::Int(x)) => Val::Int(x),
             (Some(Lane::Int), Val::Real(x)) => Val::Int(x.round() as i64),
