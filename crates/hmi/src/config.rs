@@ -447,6 +447,7 @@ fn load_points(file: &Path) -> Result<Vec<PointRow>, HmiError> {
     let rows = iec60870::point_list::parse(&text)
         .map_err(|e| HmiError::Config(format!("{}:{e}", file.display())))?;
     let mut seen = HashSet::new();
+    let mut monitor_ioas = HashSet::new();
     let mut points = Vec::with_capacity(rows.len());
     for row in rows {
         if row.name.is_empty() || !seen.insert(row.name.clone()) {
@@ -456,6 +457,28 @@ fn load_points(file: &Path) -> Result<Vec<PointRow>, HmiError> {
                 row.line,
                 row.name
             )));
+        }
+        // The monitor rows become the HMI's point database: one point per IOA, of a
+        // type a point can have.
+        if row.type_id.is_monitor() {
+            if points_iec::point_type(row.type_id).is_none() {
+                return Err(HmiError::Config(format!(
+                    "{}:{}: `{}`: {} is not a type the HMI shows (single, double, step, bitstring, measured values, totals)",
+                    file.display(),
+                    row.line,
+                    row.name,
+                    row.type_id
+                )));
+            }
+            if !monitor_ioas.insert(row.ioa.get()) {
+                return Err(HmiError::Config(format!(
+                    "{}:{}: `{}`: IOA {} is another point's too",
+                    file.display(),
+                    row.line,
+                    row.name,
+                    row.ioa
+                )));
+            }
         }
         points.push(PointRow {
             ioa: row.ioa.get(),

@@ -7,7 +7,6 @@
 //! [`cs104::link::Link`](iec60870::cs104::link::Link), the same loop the station's
 //! concentrator links use; [`Station`] is what observes it.
 
-use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, OnceLock, RwLock};
 use std::time::Duration;
@@ -20,6 +19,7 @@ use iec60870::asdu::{
 use iec60870::cs104::client::{ClientConfig, ClientError, ClientHandle};
 use iec60870::cs104::link::{Link, LinkDown, LinkObserver};
 use iec60870::time::TimeZonePolicy;
+use points::{Point, PointDb, PointSource, PointSpec, Transmission};
 use serde::Serialize;
 use serde_json::{json, Value};
 use store::Recorder;
@@ -91,9 +91,9 @@ impl ControlOutcome {
 /// The station as the HMI knows it.
 pub struct Station {
     config: HmiConfig,
-    points: RwLock<Vec<PointView>>,
-    by_ioa: HashMap<u32, usize>,
-    by_name: HashMap<String, usize>,
+    /// The station's points as the HMI last received them (the point model's database,
+    /// report by exception).
+    points: RwLock<PointDb>,
     up: AtomicBool,
     addresses: Vec<String>,
     common_address: CommonAddress,
@@ -116,17 +116,52 @@ impl std::fmt::Debug for Station {
     }
 }
 
-fn view_of(row: &PointRow) -> PointView {
-    PointView {
-        name: row.name.clone(),
-        ioa: row.ioa,
-        type_name: row.type_id.to_string(),
-        description: row.description.clone(),
-        value: Value::Null,
-        invalid: true,
-        quality: vec!["IV"],
-        time: None,
+impl PointView {
+    /// How the browsers see a point: before its first value, null and invalid.
+    fn of(point: &Point) -> PointView {
+        PointView {
+            name: point.spec.name.clone(),
+            ioa: point.spec.address,
+            type_name: points_iec::type_id(point.spec.point_type).to_string(),
+            description: point.spec.description.clone(),
+            value: if point.has_value() {
+                json_value(&point.value)
+            } else {
+                Value::Null
+            },
+            invalid: point.quality.invalid,
+            quality: point.quality.set_flags(),
+            time: point.source_time.map(|time| time.time),
+        }
     }
+}
+
+/// The point database of `points.csv`'s monitor rows (the loader checked their types and
+/// addresses).
+fn point_db(rows: &[PointRow]) -> PointDb {
+    let specs = rows
+        .iter()
+        .filter_map(|row| {
+            Some(PointSpec {
+                name: row.name.clone(),
+                point_type: points_iec::point_type(row.type_id)?,
+                address: row.ioa,
+                transmission: Transmission::Spontaneous,
+                groups: 0,
+                deadband: None,
+                source: PointSource::Link {
+                    link: "station".to_owned(),
+                    ioa: row.ioa,
+                },
+                storage_interval: None,
+                description: row.description.clone(),
+            })
+        })
+        .collect();
+    PointDb::new("station", specs).unwrap_or_else(|error| {
+        tracing::error!(%error, "the point list cannot make a point database; no point is shown");
+        PointDb::empty("station")
+    })
 }
 
 fn json_value(value: &PointValue) -> Value {
@@ -152,30 +187,13 @@ impl Station {
         zone: TimeZonePolicy,
         local_address: Option<std::net::IpAddr>,
     ) -> Arc<Station> {
-        let monitor: Vec<&PointRow> = config
-            .points
-            .iter()
-            .filter(|p| p.type_id.is_monitor())
-            .collect();
-        let by_ioa = monitor
-            .iter()
-            .enumerate()
-            .map(|(i, p)| (p.ioa, i))
-            .collect();
-        let by_name = monitor
-            .iter()
-            .enumerate()
-            .map(|(i, p)| (p.name.clone(), i))
-            .collect();
-        let points = monitor.iter().map(|p| view_of(p)).collect();
+        let points = point_db(&config.points);
         let (live, _) = broadcast::channel(4096);
         let alarms = Alarms::new(&config.alarms);
         let station = Arc::new(Station {
             node_label: format!("CA{}", ca.get()),
             config,
             points: RwLock::new(points),
-            by_ioa,
-            by_name,
             up: AtomicBool::new(false),
             addresses,
             common_address: ca,
@@ -211,20 +229,16 @@ impl Station {
 
     /// Every point.
     pub fn points(&self) -> Vec<PointView> {
-        self.points
-            .read()
-            .unwrap_or_else(|p| p.into_inner())
-            .clone()
+        self.db().points().map(PointView::of).collect()
     }
 
     /// One point by name.
     pub fn point(&self, name: &str) -> Option<PointView> {
-        let index = *self.by_name.get(name)?;
-        self.points
-            .read()
-            .unwrap_or_else(|p| p.into_inner())
-            .get(index)
-            .cloned()
+        self.db().get(name).map(PointView::of)
+    }
+
+    fn db(&self) -> std::sync::RwLockReadGuard<'_, PointDb> {
+        self.points.read().unwrap_or_else(|p| p.into_inner())
     }
 
     /// Subscribes to the live messages (JSON text).
@@ -321,17 +335,11 @@ impl Station {
         }
         // Every value is invalid at once: the operator must not act on stale values.
         let changed: Vec<PointView> = {
-            let mut points = self.points.write().unwrap_or_else(|p| p.into_inner());
-            points
-                .iter_mut()
-                .filter(|p| !p.invalid)
-                .map(|p| {
-                    p.invalid = true;
-                    if !p.quality.contains(&"IV") {
-                        p.quality.insert(0, "IV");
-                    }
-                    p.clone()
-                })
+            let mut db = self.points.write().unwrap_or_else(|p| p.into_inner());
+            let changes = db.invalidate_where(|_| true, Utc::now());
+            changes
+                .iter()
+                .filter_map(|change| db.get(change.name.as_str()).map(PointView::of))
                 .collect()
         };
         for point in &changed {
@@ -348,9 +356,6 @@ impl Station {
         };
         let is_event = points_iec::received_as_event(asdu.cot.cause);
         for object in &asdu.objects {
-            let Some(&index) = self.by_ioa.get(&object.ioa.get()) else {
-                continue;
-            };
             let Ok((value, quality, source)) = points_iec::from_element(
                 asdu.type_id,
                 &object.element,
@@ -360,39 +365,45 @@ impl Station {
                 continue;
             };
             let received = Utc::now();
-            let time = source.map(|s| s.time).or(Some(received));
-            let view = {
-                let mut points = self.points.write().unwrap_or_else(|p| p.into_inner());
-                let Some(point) = points.get_mut(index) else {
+            // A value without a time of its own is stamped when the HMI took it.
+            let source = source.or(Some(SourceTime::at(received)));
+            let (change, view) = {
+                let mut db = self.points.write().unwrap_or_else(|p| p.into_inner());
+                let address = object.ioa.get();
+                let updated = if is_event {
+                    db.update_event(
+                        address,
+                        value.clone(),
+                        quality,
+                        source,
+                        received,
+                        event_cause,
+                    )
+                } else {
+                    db.update(
+                        address,
+                        value.clone(),
+                        quality,
+                        source,
+                        received,
+                        event_cause,
+                    )
+                };
+                // Not a point of the list, or not of its type: not shown.
+                let Ok(Some(change)) = updated else {
                     continue;
                 };
-                let new_value = json_value(&value);
-                let changed = point.value != new_value || point.invalid != quality.invalid;
-                point.value = new_value;
-                point.invalid = quality.invalid;
-                point.quality = quality.set_flags();
-                point.time = time;
-                if !changed && !is_event {
+                let Some(view) = db.get(address).map(PointView::of) else {
                     continue;
-                }
-                point.clone()
+                };
+                (change, view)
             };
             self.broadcast_point(&view);
-            self.recorder.event(EventRecord {
-                id: None,
-                node: self.node_label.clone(),
-                point: view.name.clone(),
-                ioa: Some(view.ioa),
-                value: value.clone(),
-                quality,
-                source_time: source.or(Some(SourceTime {
-                    time: received,
-                    invalid: false,
-                })),
-                received_time: received,
-                cause: event_cause,
-                origin: self.addresses.join(","),
-            });
+            self.recorder.event(EventRecord::of_change(
+                &change,
+                &self.node_label,
+                &self.addresses.join(","),
+            ));
             if let PointValue::Bool(on) = value {
                 let changed = self.alarms.lock().unwrap_or_else(|p| p.into_inner()).point(
                     &view.name,

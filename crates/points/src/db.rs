@@ -300,6 +300,17 @@ impl PointDb {
         Ok(db)
     }
 
+    /// A database of `node` with no point.
+    pub fn empty(node: &str) -> PointDb {
+        PointDb {
+            node: node.to_owned(),
+            points: Vec::new(),
+            by_name: HashMap::new(),
+            by_address: HashMap::new(),
+            by_source: HashMap::new(),
+        }
+    }
+
     /// The node's name.
     pub fn node(&self) -> &str {
         &self.node
