@@ -780,7 +780,7 @@ fn build_node(
             .map_err(|error| setup(format!("set `{path}` = `{value}`: {error}")))?;
     }
     for table in &config.tables {
-        load_table(&mut plc, table).map_err(setup)?;
+        load_table(&mut plc, table).map_err(|error| setup(error.to_string()))?;
     }
     for group in config.server.iter().flat_map(|s| &s.redundancy_groups) {
         if let Some(path) = &group.refuse_commands_when {
@@ -909,41 +909,86 @@ fn build_node(
     Ok(sim)
 }
 
+/// Why a table could not be loaded into the PLC.
+#[derive(Debug, thiserror::Error)]
+enum TableError {
+    #[error("{file}: {source}")]
+    Unreadable {
+        file: String,
+        source: std::io::Error,
+    },
+    #[error("{file}: no header row")]
+    NoHeader { file: String },
+    #[error("{file}: no column `{column}` in the header")]
+    NoColumn { file: String, column: String },
+    #[error("{file}:{line}: {problem}")]
+    Row {
+        file: String,
+        line: usize,
+        problem: RowProblem,
+    },
+}
+
+/// What is wrong with a row of a table.
+#[derive(Debug, thiserror::Error)]
+enum RowProblem {
+    #[error("`{0}` is not an index")]
+    NotAnIndex(String),
+    #[error("missing cell")]
+    MissingCell,
+    #[error("{target} := {literal}: {reason}")]
+    Refused {
+        target: String,
+        literal: String,
+        reason: String,
+    },
+}
+
 /// Loads a CSV table into PLC arrays; errors name the file and line.
-fn load_table(plc: &mut Plc, table: &crate::config::TableConfig) -> Result<(), String> {
-    let file = table.file.display();
-    let text = std::fs::read_to_string(&table.file).map_err(|e| format!("{file}: {e}"))?;
+fn load_table(plc: &mut Plc, table: &crate::config::TableConfig) -> Result<(), TableError> {
+    let file = table.file.display().to_string();
+    let text = std::fs::read_to_string(&table.file).map_err(|source| TableError::Unreadable {
+        file: file.clone(),
+        source,
+    })?;
     let mut rows = text
         .lines()
         .enumerate()
         .filter(|(_, line)| !line.trim_start().starts_with('#') && !line.trim().is_empty());
     let Some((_, header)) = rows.next() else {
-        return Err(format!("{file}: no header row"));
+        return Err(TableError::NoHeader { file });
     };
     let header: Vec<&str> = header.split(',').map(str::trim).collect();
     let position = |name: &str| {
         header
             .iter()
             .position(|h| *h == name)
-            .ok_or_else(|| format!("{file}: no column `{name}` in the header"))
+            .ok_or_else(|| TableError::NoColumn {
+                file: file.clone(),
+                column: name.to_owned(),
+            })
     };
     let index_column = position(&table.index)?;
     let columns = table
         .columns
         .iter()
         .map(|(column, path)| Ok((position(column)?, path)))
-        .collect::<Result<Vec<_>, String>>()?;
+        .collect::<Result<Vec<_>, TableError>>()?;
     for (number, line) in rows {
         let cells: Vec<&str> = line.split(',').map(str::trim).collect();
-        let at = |message: String| format!("{file}:{}: {message}", number + 1);
+        let at = |problem: RowProblem| TableError::Row {
+            file: file.clone(),
+            line: number + 1,
+            problem,
+        };
         let index: i64 = cells
             .get(index_column)
             .and_then(|c| c.parse().ok())
-            .ok_or_else(|| at(format!("`{}` is not an index", line.trim())))?;
+            .ok_or_else(|| at(RowProblem::NotAnIndex(line.trim().to_owned())))?;
         for (column, path) in &columns {
             let cell = cells
                 .get(*column)
-                .ok_or_else(|| at("missing cell".to_owned()))?;
+                .ok_or_else(|| at(RowProblem::MissingCell))?;
             let literal = if !cell.contains('#')
                 && cell.split(':').count() >= 2
                 && cell
@@ -962,8 +1007,13 @@ fn load_table(plc: &mut Plc, table: &crate::config::TableConfig) -> Result<(), S
                 (*cell).to_owned()
             };
             let target = format!("{path}[{index}]");
-            plc.write(&target, &literal)
-                .map_err(|error| at(format!("{target} := {literal}: {error}")))?;
+            plc.write(&target, &literal).map_err(|error| {
+                at(RowProblem::Refused {
+                    target: target.clone(),
+                    literal: literal.clone(),
+                    reason: error.to_string(),
+                })
+            })?;
         }
     }
     Ok(())
