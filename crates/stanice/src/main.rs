@@ -32,6 +32,7 @@ mod port_in_use;
 mod printed_time;
 mod run;
 mod serial_line;
+mod verbosity;
 
 use clap::{CommandFactory as _, FromArgMatches as _, Parser, Subcommand};
 use tracing_subscriber::EnvFilter;
@@ -46,6 +47,10 @@ struct Cli {
     /// Log filter (tracing syntax, e.g. `info`, `iec60870=debug`); also `RUST_LOG`.
     #[arg(long, global = true)]
     log: Option<String>,
+    /// More of what happens: the test tools print every frame, ASDU and link event in
+    /// words; every tool logs at `info` (unless `--log` says otherwise).
+    #[arg(long, short = 'v', global = true)]
+    verbose: bool,
     #[command(subcommand)]
     command: Command,
 }
@@ -89,8 +94,10 @@ fn main() -> std::process::ExitCode {
     // Parsed through the command with every subcommand's Examples section added.
     let matches = examples::with_examples(Cli::command()).get_matches();
     let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|error| error.exit());
+    verbosity::set(cli.verbose);
+    let quiet = if cli.verbose { "info" } else { "warn" };
     let filter = cli.log.clone().map(EnvFilter::new).unwrap_or_else(|| {
-        EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new("warn"))
+        EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(quiet))
     });
     tracing_subscriber::fmt()
         .with_env_filter(filter)

@@ -113,9 +113,6 @@ pub(crate) struct PollingArgs {
     /// milliseconds).
     #[arg(long, value_name = "TIME", default_value = "100ms", value_parser = crate::duration_arg::millis)]
     pub(crate) poll_interval: Duration,
-    /// Also print the link layer: every request and answer, timeouts, line errors.
-    #[arg(long)]
-    pub(crate) verbose: bool,
 }
 
 impl PollingArgs {

@@ -137,14 +137,14 @@ pub(crate) async fn run(args: MasterArgs) -> anyhow::Result<ExitCode> {
                     }
                 }
                 MasterEvent::Link(event) => {
-                    let mut lines = link_lines(event, args.json, args.polling.verbose);
+                    let mut lines = link_lines(event, args.json, crate::verbosity::is_on());
                     lines.extend(reach.observe(event));
                     lines
                 }
                 MasterEvent::Balanced(event) => {
                     let address = args.address.first().copied().unwrap_or_default();
                     let mut lines =
-                        balanced_lines(event, &args.address, args.json, args.polling.verbose);
+                        balanced_lines(event, &args.address, args.json, crate::verbosity::is_on());
                     match event {
                         BalancedEvent::LinkUp => reach.link_up(address),
                         BalancedEvent::Timeout { request, attempt } => {

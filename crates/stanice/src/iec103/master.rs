@@ -548,10 +548,12 @@ fn link_lines(event: &PrimaryEvent, args: &MasterArgs, progress: &mut Progress) 
                 )]
             }
         }
-        PrimaryEvent::LineError(LineError::Frame(error)) if args.polling.verbose && !args.json => {
+        PrimaryEvent::LineError(LineError::Frame(error))
+            if crate::verbosity::is_on() && !args.json =>
+        {
             vec![format!("{} line error: {error}", receipt_time())]
         }
-        _ if args.polling.verbose && !args.json => {
+        _ if crate::verbosity::is_on() && !args.json => {
             vec![format!(
                 "{} link: {}",
                 receipt_time(),

@@ -48,11 +48,6 @@ pub(crate) struct CommandArgs {
     /// a plain number is seconds).
     #[arg(long, value_name = "TIME", default_value = "10s", value_parser = crate::duration_arg::seconds)]
     timeout: Duration,
-    /// Also print every other ASDU that arrives meanwhile (spontaneous data, the
-    /// interrogation a server may send at start); by default only the command's
-    /// confirmation, termination and return information are shown.
-    #[arg(long)]
-    verbose: bool,
     /// One JSON object a line: what was sent (`{"event": "sent", ...}`), each received
     /// object as the client prints it, and each step's result (`{"event":
     /// "command_result", "step", "confirmation", "cause", "terminated"}`).
@@ -123,7 +118,10 @@ pub(crate) async fn run(args: CommandArgs) -> anyhow::Result<ExitCode> {
     let shown = Shown {
         type_id: args.type_id,
         ioa,
-        verbose: args.verbose,
+        // `--verbose`: every other ASDU that arrives meanwhile (spontaneous data, the
+        // interrogation a server may send at start) too; by default only the command's
+        // confirmation, termination and return information are shown.
+        verbose: crate::verbosity::is_on(),
         json: args.json,
     };
     for (step, element) in steps {

@@ -46,9 +46,6 @@ pub(crate) struct SimulateArgs {
     /// Appendix A, so every status shows in turn).
     #[arg(long, default_value_t = 0.1)]
     status_probability: f64,
-    /// Print every query answered and every arrival.
-    #[arg(long)]
-    verbose: bool,
     /// Stop after this long (`30s`, `10m`; a plain number is seconds); runs until Ctrl-C
     /// or SIGTERM otherwise.
     #[arg(long, value_name = "TIME", value_parser = crate::duration_arg::seconds)]
@@ -84,7 +81,8 @@ pub(crate) async fn run(args: SimulateArgs) -> anyhow::Result<ExitCode> {
     let mut simulator = Simulator::new(config, now);
 
     let mut inbox = crate::console::device_operations(&CONSOLE_HELP, operate);
-    let verbose = args.verbose;
+    // `--verbose`: every query answered and every arrival too.
+    let verbose = crate::verbosity::is_on();
     let serve = async {
         let mut lines = ServedLines::new(&args.line).await?;
         while let Some(line) = lines.next().await? {

@@ -298,6 +298,12 @@ fn every_help_has_examples() {
             "`stanice {} --help` has no examples:\n{text}",
             path.join(" ")
         );
+        // `--verbose` and `--log` alike on every tool.
+        assert!(
+            text.contains("-v, --verbose") && text.contains("--log <LOG>"),
+            "`stanice {} --help` lacks --verbose or --log:\n{text}",
+            path.join(" ")
+        );
         visited.push(path.join(" "));
         let Some((_, commands)) = text.split_once("\nCommands:\n") else {
             return;
