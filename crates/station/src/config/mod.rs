@@ -484,20 +484,8 @@ pub enum CommandTarget {
     },
 }
 
-/// How a point is transmitted.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Transmission {
-    /// On every change (COT 3), the default.
-    #[default]
-    Spontaneous,
-    /// Periodically (COT 1).
-    Cyclic {
-        /// The period.
-        period: Duration,
-    },
-    /// Only in interrogation responses.
-    InterrogationOnly,
-}
+/// How a point is transmitted: the point model's.
+pub use points::Transmission;
 
 /// A monitor-direction data point, `[[node.point]]`.
 #[derive(Debug, Clone, PartialEq)]

@@ -54,15 +54,13 @@ use iec60870::cs104::server::{
 };
 use tokio::sync::oneshot;
 
-use crate::config::{
-    CommandTarget, NodeConfig, PointSource, Project, Transmission as ConfigTransmission,
-};
+use crate::config::{CommandTarget, NodeConfig, PointSource, Project};
 use crate::device::DeviceKinds;
 use crate::store::{
     open_store, spawn_retention, EventStore, Retention, RetentionHandle, StoreError,
 };
 use iec60870::time::TimeZonePolicy;
-use points::{LineSignal, PointDb, PointSpec, Transmission};
+use points::{LineSignal, PointDb, PointSpec};
 
 pub use crate::store::Recorder;
 pub use clock::{NodeClock, Pacing, SimClock};
@@ -236,11 +234,7 @@ pub fn point_specs(node: &NodeConfig) -> Vec<PointSpec> {
             name: point.name.clone(),
             point_type: point.point_type,
             address: point.ioa.get(),
-            transmission: match point.transmission {
-                ConfigTransmission::Spontaneous => Transmission::Spontaneous,
-                ConfigTransmission::Cyclic { period } => Transmission::Cyclic(period),
-                ConfigTransmission::InterrogationOnly => Transmission::InterrogationOnly,
-            },
+            transmission: point.transmission,
             groups: point
                 .groups
                 .iter()

@@ -519,9 +519,9 @@ impl Ctx<'_> {
                 }
             };
             let transmission = match (point.transmission, point.cycle_ms) {
-                (RawTransmission::Cyclic, Some(ms)) if ms > 0 => Transmission::Cyclic {
-                    period: Duration::from_millis(ms),
-                },
+                (RawTransmission::Cyclic, Some(ms)) if ms > 0 => {
+                    Transmission::Cyclic(Duration::from_millis(ms))
+                }
                 (RawTransmission::Cyclic, Some(_)) => {
                     self.err(
                         &at("cycle_ms"),

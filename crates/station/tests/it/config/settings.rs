@@ -76,9 +76,7 @@ target = "Main.A"
     assert_eq!(p.source, PointSource::Variable("Main.X".into()));
     assert_eq!(
         p.transmission,
-        Transmission::Cyclic {
-            period: Duration::from_millis(1000)
-        }
+        Transmission::Cyclic(Duration::from_millis(1000))
     );
     assert_eq!(p.groups, vec![1, 16]);
     assert_eq!(p.deadband, Some(0.5));
