@@ -159,6 +159,29 @@ impl LiftSignal {
         }
     }
 
+    /// The signal of a point name's suffix after `LIFT.` (the reverse of
+    /// [`LiftSignal::suffix`]).
+    pub fn from_suffix(suffix: &str) -> Option<LiftSignal> {
+        if let Some(floor) = suffix
+            .strip_prefix("floor")
+            .and_then(|rest| rest.strip_suffix("_trips"))
+        {
+            return floor
+                .parse::<u8>()
+                .ok()
+                .filter(|floor| *floor >= 1)
+                .map(LiftSignal::FloorTrips);
+        }
+        LiftSignal::COMMON
+            .into_iter()
+            .find(|signal| signal.suffix() == suffix)
+    }
+
+    /// The name of lift `lift`'s point of this signal: `L1.status`.
+    pub fn point_name(self, lift: &str) -> String {
+        format!("{lift}.{}", self.suffix())
+    }
+
     /// The point name's suffix after `LIFT.`: `status`, `floor3_trips` ...
     pub fn suffix(self) -> String {
         match self {
@@ -274,4 +297,22 @@ pub struct PointSpec {
     pub storage_interval: Option<Duration>,
     /// Free description.
     pub description: String,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lift_signals_are_found_by_their_suffix() {
+        for signal in LiftSignal::COMMON
+            .into_iter()
+            .chain([LiftSignal::FloorTrips(1), LiftSignal::FloorTrips(60)])
+        {
+            assert_eq!(LiftSignal::from_suffix(&signal.suffix()), Some(signal));
+        }
+        assert_eq!(LiftSignal::from_suffix("floor0_trips"), None);
+        assert_eq!(LiftSignal::from_suffix("colour "), None);
+        assert_eq!(LiftSignal::Faults.point_name("L1"), "L1.faults");
+    }
 }

@@ -598,24 +598,24 @@ async fn print_status(runtime: &Runtime) {
 /// One lift's line of `status`: its status text, floor and direction, or the
 /// communication alarm, from its points.
 fn lift_status(points: &station::runtime::NodePoints, lift: &str) -> String {
-    use station::store::PointValue;
-    let value = |signal: &str| {
+    use points::{LiftSignal, PointValue};
+    let value = |signal: LiftSignal| {
         points
-            .point(format!("{lift}.{signal}").as_str())
+            .point(signal.point_name(lift).as_str())
             .filter(|point| point.has_value() && !point.quality.invalid)
             .map(|point| point.value)
     };
-    let number = |signal: &str| match value(signal) {
+    let number = |signal: LiftSignal| match value(signal) {
         Some(PointValue::Int(n)) => Some(n),
         _ => None,
     };
-    if value("not_answering") == Some(PointValue::Bool(true)) {
+    if value(LiftSignal::NotAnswering) == Some(PointValue::Bool(true)) {
         return format!("lift {lift}: NOT ANSWERING");
     }
-    let Some(status) = number("status").and_then(|code| u8::try_from(code).ok()) else {
+    let Some(status) = number(LiftSignal::Status).and_then(|code| u8::try_from(code).ok()) else {
         return format!("lift {lift}: no status yet");
     };
-    let direction = match number("direction") {
+    let direction = match number(LiftSignal::Direction) {
         Some(1) => "up",
         Some(2) => "down",
         _ => "stopped",
@@ -623,9 +623,9 @@ fn lift_status(points: &station::runtime::NodePoints, lift: &str) -> String {
     format!(
         "lift {lift}: {} ({status}), floor {}, {direction}, {} fault(s) archived, last 0x{:02X}",
         devices::ekm66::tables::status_text(status),
-        number("position").unwrap_or_default(),
-        number("faults").unwrap_or_default(),
-        number("last_fault").unwrap_or_default()
+        number(LiftSignal::Position).unwrap_or_default(),
+        number(LiftSignal::Faults).unwrap_or_default(),
+        number(LiftSignal::LastFault).unwrap_or_default()
     )
 }
 

@@ -38,9 +38,6 @@ use testkit::ports::free_port;
 use testkit::projects::{LiftBoard, LiftFleet};
 use tokio::sync::mpsc;
 
-/// The offset of a lift's `faults` point (`LiftSignal::Faults`).
-const FAULTS_OFFSET: u32 = 11;
-
 fn arg(name: &str, default: u64) -> u64 {
     let args: Vec<String> = std::env::args().collect();
     args.iter()
@@ -256,7 +253,12 @@ async fn node(lifts: usize, seconds: u64, faults: usize) {
     let _client = client;
     let mut archived = runtime.archived_faults();
     let faults_ioa: HashMap<u32, usize> = (0..lifts)
-        .map(|lift| (LiftFleet::ioa_base(lift) + FAULTS_OFFSET, lift))
+        .map(|lift| {
+            (
+                LiftFleet::ioa_base(lift) + points::LiftSignal::Faults.offset(),
+                lift,
+            )
+        })
         .collect();
     let mut injected: HashMap<usize, Instant> = HashMap::new();
     let mut to_archive = Vec::new();

@@ -30,6 +30,7 @@ use devices::ekm66::figures::{
 use devices::ekm66::tables::{
     fault_group, fault_text, fault_text_czech, StatusColours, FAULT_CODES, STATUS_CODES,
 };
+use points::LiftSignal;
 use serde::Deserialize;
 use serde_json::{json, Value};
 use store::{
@@ -649,27 +650,21 @@ fn observe(
 ) -> Option<Observed> {
     let n = number(value)?;
     let byte = || u8::try_from(n).ok();
-    match suffix {
-        "not_answering" => Some(Observed::Answering(n == 0)),
+    match LiftSignal::from_suffix(suffix)? {
+        LiftSignal::NotAnswering => Some(Observed::Answering(n == 0)),
         _ if invalid => None,
-        "status" => byte().map(Observed::Status),
-        "position" => byte().map(Observed::Position),
-        "direction" => Some(Observed::Direction(match n {
+        LiftSignal::Status => byte().map(Observed::Status),
+        LiftSignal::Position => byte().map(Observed::Position),
+        LiftSignal::Direction => Some(Observed::Direction(match n {
             0 => Direction::Stopped,
             1 => Direction::Up,
             2 => Direction::Down,
             other => Direction::Unknown(u8::try_from(other).unwrap_or(u8::MAX)),
         })),
-        _ => {
-            let floor: usize = suffix
-                .strip_prefix("floor")?
-                .strip_suffix("_trips")?
-                .parse()
-                .ok()?;
-            counters
-                .set(floor, n)
-                .then(|| Observed::Counters(counters.0.clone()))
-        }
+        LiftSignal::FloorTrips(floor) => counters
+            .set(usize::from(floor), n)
+            .then(|| Observed::Counters(counters.0.clone())),
+        _ => None,
     }
 }
 
@@ -684,11 +679,16 @@ async fn lift_figures_of(
     let mut counters = Counters(vec![0; usize::from(lift.floors)]);
     let mut observations = Vec::new();
     // The state at the start: the newest value of each signal before the period.
-    let mut before: Vec<String> = ["status", "position", "direction", "not_answering"]
-        .iter()
-        .map(|s| (*s).to_owned())
-        .collect();
-    before.extend((1..=lift.floors).map(|f| format!("floor{f}_trips")));
+    let mut before: Vec<String> = [
+        LiftSignal::Status,
+        LiftSignal::Position,
+        LiftSignal::Direction,
+        LiftSignal::NotAnswering,
+    ]
+    .iter()
+    .map(|signal| signal.suffix())
+    .collect();
+    before.extend((1..=lift.floors).map(|floor| LiftSignal::FloorTrips(floor).suffix()));
     for suffix in &before {
         let page = archive
             .query_events(
