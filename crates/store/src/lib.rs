@@ -11,8 +11,8 @@
 //! |---------------|----------------------------------------------------------------------|
 //! | `model`       | the records: [`EventRecord`], [`CommandRecord`] and their codes (values, quality and causes are the point model's) |
 //! | `query`       | filters, ordering and keyset pages: [`EventQuery`], [`CommandQuery`], [`Page`]; offset pages with a total: [`CountedPage`] |
-//! | `lift`        | the lift fault archive: [`LiftFaultRecord`], [`LiftFaultQuery`], [`LiftFaultOrder`] |
-//! | `notification` | the record of e-mails and webhook calls sent or suppressed: [`NotificationRecord`], [`NotificationQuery`] |
+//! | `lift`        | the lift fault archive: [`LiftFaultArchive`] (a trait of its own), [`LiftFaultRecord`], [`LiftFaultQuery`], [`LiftFaultOrder`] |
+//! | `notification` | the record of e-mails and webhook calls sent or suppressed: [`NotificationLog`] (a trait of its own), [`NotificationRecord`], [`NotificationQuery`] |
 //! | [`url`]       | store addresses: [`url::StoreUrl`] (`sqlite:PATH`, `sqlite::memory:`, `postgres://...`) |
 //! | `sql`         | what both backends share: the migrations, the queries' SQL, purge, stats, row mapping, and the `EventStore` behaviour itself |
 //! | `sqlite`, `postgres` | the backends, differing only in how they reach their database |
@@ -172,7 +172,12 @@ pub enum Backend {
 
 /// The event and command-audit store. Implementations are cheap to share (`Arc<dyn
 /// EventStore>`) and safe to call from many tasks at once.
-pub trait EventStore: Send + Sync {
+///
+/// The domain archives kept in the same database are traits of their own
+/// ([`LiftFaultArchive`], [`NotificationLog`]), each one module: a new domain is a new
+/// trait and its implementation, named here only as a supertrait, so that whoever holds
+/// the store reaches them (`Arc<dyn EventStore>` coerces to `Arc<dyn LiftFaultArchive>`).
+pub trait EventStore: LiftFaultArchive + NotificationLog + Send + Sync {
     /// The database behind this store.
     fn backend(&self) -> Backend;
 
@@ -193,6 +198,24 @@ pub trait EventStore: Send + Sync {
         query: &'a CommandQuery,
     ) -> StoreFuture<'a, Page<CommandRecord>>;
 
+    /// Deletes events received before `cutoff`, and command and notification records
+    /// older than `cutoff`; returns how many rows went. The lift fault archive is never
+    /// purged: it is kept for years (faults per year, MTBF).
+    fn purge_older_than(&self, cutoff: DateTime<Utc>) -> StoreFuture<'_, u64>;
+
+    /// Row counts and time span.
+    fn stats(&self) -> StoreFuture<'_, StoreStats>;
+
+    /// Closes the store at a shutdown, after the last write: SQLite checkpoints its
+    /// write-ahead log into the database file (no `-wal`/`-shm` files left behind),
+    /// PostgreSQL returns its connections. Calls after it fail with
+    /// [`StoreError::Closed`].
+    fn close(&self) -> StoreFuture<'_, ()>;
+}
+
+/// The lift fault archive: the records of lift boards' fault stacks, kept for years
+/// (faults per year, MTBF; retention never purges it).
+pub trait LiftFaultArchive: Send + Sync {
     /// Appends records of lift boards' fault stacks in one transaction (all or nothing) and
     /// returns the ids the store assigned, in the order of `faults`. Ids grow with
     /// insertion order, which is the archive's order ([`LiftFaultOrder::Archived`]).
@@ -207,7 +230,10 @@ pub trait EventStore: Send + Sync {
         &'a self,
         query: &'a LiftFaultQuery,
     ) -> StoreFuture<'a, CountedPage<LiftFaultRecord>>;
+}
 
+/// The record of notifications sent, failed or suppressed (e-mail, webhook).
+pub trait NotificationLog: Send + Sync {
     /// Appends one notification record and returns its id.
     fn append_notification<'a>(
         &'a self,
@@ -219,20 +245,6 @@ pub trait EventStore: Send + Sync {
         &'a self,
         query: &'a NotificationQuery,
     ) -> StoreFuture<'a, CountedPage<NotificationRecord>>;
-
-    /// Deletes events received before `cutoff`, and command and notification records
-    /// older than `cutoff`; returns how many rows went. The lift fault archive is never
-    /// purged: it is kept for years (faults per year, MTBF).
-    fn purge_older_than(&self, cutoff: DateTime<Utc>) -> StoreFuture<'_, u64>;
-
-    /// Row counts and time span.
-    fn stats(&self) -> StoreFuture<'_, StoreStats>;
-
-    /// Closes the store at a shutdown, after the last write: SQLite checkpoints its
-    /// write-ahead log into the database file (no `-wal`/`-shm` files left behind),
-    /// PostgreSQL returns its connections. Calls after it fail with
-    /// [`StoreError::Closed`].
-    fn close(&self) -> StoreFuture<'_, ()>;
 }
 
 /// Opens (and migrates) the store named by `url`:

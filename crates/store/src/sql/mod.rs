@@ -17,8 +17,8 @@ use chrono::{DateTime, Utc};
 
 use crate::{
     Backend, CommandQuery, CommandRecord, CountedPage, EventQuery, EventRecord, EventStore,
-    LiftFaultQuery, LiftFaultRecord, NotificationQuery, NotificationRecord, Page, RecordId,
-    StoreError, StoreFuture, StoreStats,
+    LiftFaultArchive, LiftFaultQuery, LiftFaultRecord, NotificationLog, NotificationQuery,
+    NotificationRecord, Page, RecordId, StoreError, StoreFuture, StoreStats,
 };
 use row::{
     check_command, check_event, check_lift_fault, check_notification, command_from_row,
@@ -226,65 +226,6 @@ impl<D: Database> EventStore for D {
         })
     }
 
-    fn append_lift_faults<'a>(
-        &'a self,
-        faults: &'a [LiftFaultRecord],
-    ) -> StoreFuture<'a, Vec<RecordId>> {
-        Box::pin(async move {
-            if faults.is_empty() {
-                return Ok(Vec::new());
-            }
-            faults.iter().try_for_each(check_lift_fault)?;
-            let rows = faults.iter().map(lift_fault_params).collect();
-            self.insert_rows("lift_faults", LIFT_FAULT_INSERT, rows)
-                .await
-        })
-    }
-
-    fn query_lift_faults<'a>(
-        &'a self,
-        query: &'a LiftFaultQuery,
-    ) -> StoreFuture<'a, CountedPage<LiftFaultRecord>> {
-        Box::pin(async move {
-            counted(
-                self,
-                lift_fault_sql(query, D::BACKEND)?,
-                lift_fault_from_row,
-            )
-            .await
-        })
-    }
-
-    fn append_notification<'a>(
-        &'a self,
-        record: &'a NotificationRecord,
-    ) -> StoreFuture<'a, RecordId> {
-        Box::pin(async move {
-            check_notification(record)?;
-            let run = insert(
-                D::BACKEND,
-                "notifications",
-                NOTIFICATION_INSERT,
-                notification_params(record),
-            );
-            one(self, run, id_from_row).await
-        })
-    }
-
-    fn query_notifications<'a>(
-        &'a self,
-        query: &'a NotificationQuery,
-    ) -> StoreFuture<'a, CountedPage<NotificationRecord>> {
-        Box::pin(async move {
-            counted(
-                self,
-                notification_sql(query, D::BACKEND)?,
-                notification_from_row,
-            )
-            .await
-        })
-    }
-
     fn purge_older_than(&self, cutoff: DateTime<Utc>) -> StoreFuture<'_, u64> {
         Box::pin(async move {
             let (cutoff, limit) = (Param::int(to_ms(cutoff)), Param::int(PURGE_CHUNK));
@@ -332,6 +273,69 @@ impl<D: Database> EventStore for D {
                 params: Vec::new(),
             };
             one(self, run, stats_from_row).await
+        })
+    }
+}
+
+impl<D: Database> LiftFaultArchive for D {
+    fn append_lift_faults<'a>(
+        &'a self,
+        faults: &'a [LiftFaultRecord],
+    ) -> StoreFuture<'a, Vec<RecordId>> {
+        Box::pin(async move {
+            if faults.is_empty() {
+                return Ok(Vec::new());
+            }
+            faults.iter().try_for_each(check_lift_fault)?;
+            let rows = faults.iter().map(lift_fault_params).collect();
+            self.insert_rows("lift_faults", LIFT_FAULT_INSERT, rows)
+                .await
+        })
+    }
+
+    fn query_lift_faults<'a>(
+        &'a self,
+        query: &'a LiftFaultQuery,
+    ) -> StoreFuture<'a, CountedPage<LiftFaultRecord>> {
+        Box::pin(async move {
+            counted(
+                self,
+                lift_fault_sql(query, D::BACKEND)?,
+                lift_fault_from_row,
+            )
+            .await
+        })
+    }
+}
+
+impl<D: Database> NotificationLog for D {
+    fn append_notification<'a>(
+        &'a self,
+        record: &'a NotificationRecord,
+    ) -> StoreFuture<'a, RecordId> {
+        Box::pin(async move {
+            check_notification(record)?;
+            let run = insert(
+                D::BACKEND,
+                "notifications",
+                NOTIFICATION_INSERT,
+                notification_params(record),
+            );
+            one(self, run, id_from_row).await
+        })
+    }
+
+    fn query_notifications<'a>(
+        &'a self,
+        query: &'a NotificationQuery,
+    ) -> StoreFuture<'a, CountedPage<NotificationRecord>> {
+        Box::pin(async move {
+            counted(
+                self,
+                notification_sql(query, D::BACKEND)?,
+                notification_from_row,
+            )
+            .await
         })
     }
 }

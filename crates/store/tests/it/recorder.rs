@@ -7,8 +7,8 @@ use chrono::{DateTime, Utc};
 use store::Recorder;
 use store::{
     open_store, Backend, CommandQuery, CommandRecord, CountedPage, EventQuery, EventRecord,
-    EventStore, LiftFaultQuery, LiftFaultRecord, NotificationQuery, NotificationRecord, Page,
-    PointValue, RecordId, StoreFuture, StoreStats,
+    EventStore, LiftFaultArchive, LiftFaultQuery, LiftFaultRecord, NotificationLog,
+    NotificationQuery, NotificationRecord, Page, PointValue, RecordId, StoreFuture, StoreStats,
 };
 use tokio::sync::Semaphore;
 
@@ -45,6 +45,19 @@ impl EventStore for Stalled {
     ) -> StoreFuture<'a, Page<CommandRecord>> {
         self.inner.query_commands(query)
     }
+    fn purge_older_than(&self, cutoff: DateTime<Utc>) -> StoreFuture<'_, u64> {
+        self.inner.purge_older_than(cutoff)
+    }
+    fn stats(&self) -> StoreFuture<'_, StoreStats> {
+        self.inner.stats()
+    }
+
+    fn close(&self) -> StoreFuture<'_, ()> {
+        self.inner.close()
+    }
+}
+
+impl LiftFaultArchive for Stalled {
     fn append_lift_faults<'a>(
         &'a self,
         faults: &'a [LiftFaultRecord],
@@ -57,6 +70,9 @@ impl EventStore for Stalled {
     ) -> StoreFuture<'a, CountedPage<LiftFaultRecord>> {
         self.inner.query_lift_faults(query)
     }
+}
+
+impl NotificationLog for Stalled {
     fn append_notification<'a>(
         &'a self,
         record: &'a NotificationRecord,
@@ -68,16 +84,6 @@ impl EventStore for Stalled {
         query: &'a NotificationQuery,
     ) -> StoreFuture<'a, CountedPage<NotificationRecord>> {
         self.inner.query_notifications(query)
-    }
-    fn purge_older_than(&self, cutoff: DateTime<Utc>) -> StoreFuture<'_, u64> {
-        self.inner.purge_older_than(cutoff)
-    }
-    fn stats(&self) -> StoreFuture<'_, StoreStats> {
-        self.inner.stats()
-    }
-
-    fn close(&self) -> StoreFuture<'_, ()> {
-        self.inner.close()
     }
 }
 
