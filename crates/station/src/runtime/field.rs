@@ -62,6 +62,67 @@ impl Reopen {
     }
 }
 
+/// A field source's communication status in its node's points: its status point (TRUE
+/// while it does not answer, `NOT CommEnabled`) and the points it feeds (invalid while it
+/// does not answer, last value kept). Profiled devices, lift boards, the devices and
+/// lines of a serial line and the IEC 104 links each keep one.
+pub(crate) struct CommunicationStatus {
+    /// The origin of the changes it makes (`line L1`, `link:RH`, ...).
+    origin: String,
+    status_point: Option<String>,
+    feeds: Box<dyn Fn(&PointSource) -> bool + Send + Sync>,
+}
+
+impl std::fmt::Debug for CommunicationStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CommunicationStatus")
+            .field("origin", &self.origin)
+            .field("status_point", &self.status_point)
+            .finish_non_exhaustive()
+    }
+}
+
+impl CommunicationStatus {
+    /// The status of a source whose changes come from `origin`, shown by `status_point`,
+    /// feeding the points whose source `feeds` selects.
+    pub(crate) fn new(
+        origin: impl Into<String>,
+        status_point: Option<String>,
+        feeds: impl Fn(&PointSource) -> bool + Send + Sync + 'static,
+    ) -> CommunicationStatus {
+        CommunicationStatus {
+            origin: origin.into(),
+            status_point,
+            feeds: Box::new(feeds),
+        }
+    }
+
+    /// It answers: its status point FALSE (its points turn valid with their next value).
+    pub(crate) fn up(&self, node: &NodePoints) {
+        let Some(point) = self.status_point.as_deref() else {
+            return;
+        };
+        node.change_with(&self.origin, |db, now| {
+            db.set_link_status(point, true, now)
+                .ok()
+                .flatten()
+                .into_iter()
+                .collect()
+        });
+    }
+
+    /// It does not answer: its points invalid and its status point TRUE, in one batch.
+    pub(crate) fn down(&self, node: &NodePoints) {
+        node.change_with(&self.origin, |db, now| {
+            let mut changes = db.invalidate_where(|spec| (self.feeds)(&spec.source), now);
+            if let Some(point) = self.status_point.as_deref() {
+                changes.extend(db.set_link_status(point, false, now).ok().flatten());
+            }
+            changes
+        });
+    }
+}
+
 /// A running profiled device.
 #[derive(Debug)]
 pub struct FieldDeviceHandle {
@@ -132,7 +193,7 @@ struct DeviceReadings {
     origin: String,
     /// Signal name -> point.
     points: HashMap<String, PointId>,
-    status: Option<PointId>,
+    comm: CommunicationStatus,
     answering: Arc<AtomicBool>,
     /// Whether it answered since the line was last opened.
     answered: AtomicBool,
@@ -152,20 +213,27 @@ impl DeviceReadings {
                     {
                         points.insert(signal.clone(), id);
                     }
-                    (PointSource::DeviceComm { device }, Some(id)) if *device == config.name => {
-                        status = Some(id);
+                    (PointSource::DeviceComm { device }, _) if *device == config.name => {
+                        status = Some(point.spec.name.clone());
                     }
                     _ => {}
                 }
             }
             (points, status)
         };
+        let origin = format!("device {}", config.name);
+        let device = config.name.clone();
+        let comm = CommunicationStatus::new(
+            origin.clone(),
+            status,
+            move |source| matches!(source, PointSource::Device { device: d, .. } if *d == device),
+        );
         DeviceReadings {
             node,
             device: config.name.clone(),
-            origin: format!("device {}", config.name),
+            origin,
             points,
-            status,
+            comm,
             answering: Arc::new(AtomicBool::new(false)),
             answered: AtomicBool::new(false),
         }
@@ -173,17 +241,7 @@ impl DeviceReadings {
 
     /// Every point invalid and the status point TRUE.
     fn down(&self) {
-        let device = self.device.as_str();
-        self.node.change_with(&self.origin, |db, now| {
-            let mut changes = db.invalidate_where(
-                |spec| matches!(&spec.source, PointSource::Device { device: d, .. } if d == device),
-                now,
-            );
-            if let Some(status) = self.status {
-                changes.extend(db.set_link_status(status, false, now).ok().flatten());
-            }
-            changes
-        });
+        self.comm.down(&self.node);
     }
 }
 
@@ -215,15 +273,7 @@ impl Readings for DeviceReadings {
         }
         if answering {
             tracing::info!(node = %self.node.name(), device = %self.device, "device answering");
-            if let Some(status) = self.status {
-                self.node.change_with(&self.origin, |db, now| {
-                    db.set_link_status(status, true, now)
-                        .ok()
-                        .flatten()
-                        .into_iter()
-                        .collect()
-                });
-            }
+            self.comm.up(&self.node);
         } else {
             tracing::warn!(node = %self.node.name(), device = %self.device, "device not answering");
             self.down();

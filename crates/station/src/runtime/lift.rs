@@ -40,7 +40,7 @@ use crate::config::{LiftConfig, LiftTransport};
 use crate::store::{EventCause, EventStore, LiftFaultQuery, LiftFaultRecord, PointValue, Quality};
 use points::{LiftSignal, PointId, PointSource};
 
-use super::field::Reopen;
+use super::field::{CommunicationStatus, Reopen};
 use super::node::NodePoints;
 use super::notification::Notifications;
 
@@ -614,18 +614,19 @@ impl Lift {
     }
 
     /// The board does not answer: its values invalid, the communication alarm on.
+    /// The board does not answer: its readings invalid (the monitor's own counts, the
+    /// archive's points and the alarm itself stay valid), the communication alarm on.
     fn down(&self) {
-        self.set(LiftSignal::NotAnswering, PointValue::Bool(true));
         let lift = self.spec.config.name.clone();
-        self.node.change_with(&self.origin, |db, now| {
-            db.invalidate_where(
-                |point| {
-                    matches!(&point.source, PointSource::Lift { lift: l, signal }
-                        if *l == lift && !matches!(signal, LiftSignal::NotAnswering | LiftSignal::Errors | LiftSignal::Faults | LiftSignal::LastFault))
-                },
-                now,
-            )
-        });
+        let comm = CommunicationStatus::new(
+            self.origin.to_string(),
+            Some(LiftSignal::NotAnswering.point_name(&lift)),
+            move |source| {
+                matches!(source, PointSource::Lift { lift: l, signal }
+                    if *l == lift && !matches!(signal, LiftSignal::NotAnswering | LiftSignal::Errors | LiftSignal::Faults | LiftSignal::LastFault))
+            },
+        );
+        comm.down(&self.node);
     }
 }
 

@@ -23,9 +23,10 @@ use iec60870::asdu::{Asdu, CommonAddress, Ioa, TypeId};
 use iec60870::cs104::client::{ClientConfig, ClientHandle};
 use iec60870::cs104::link::{Link, LinkDown, LinkObserver};
 
-use points::PointId;
+use points::{PointId, PointSource};
 
 use super::clock::NodeClock;
+use super::field::CommunicationStatus;
 use super::forwarded::{CommandAnswers, CommandWatches};
 use super::node::NodePoints;
 
@@ -108,13 +109,20 @@ pub(crate) fn spawn_link(spec: LinkSpec, node: Arc<NodePoints>) -> LinkHandle {
     config.reconnect_delay_max = Duration::from_secs(5);
     config.tls = spec.tls.clone();
     let origin = format!("link:{}", spec.name);
-    set_down(&spec, &node, &origin);
+    let link = spec.name.clone();
+    let comm = CommunicationStatus::new(
+        origin.clone(),
+        spec.status_point.clone(),
+        move |source| matches!(source, PointSource::Link { link: name, .. } if *name == link),
+    );
+    comm.down(&node);
     let commands = Arc::new(CommandWatches::default());
     let name = spec.name.clone();
     let observer = Concentrator {
         spec,
         node,
         origin,
+        comm,
         commands: Arc::clone(&commands),
     };
     LinkHandle {
@@ -132,6 +140,8 @@ struct Concentrator {
     node: Arc<NodePoints>,
     /// `link:NAME`, the origin of the changes the link makes.
     origin: String,
+    /// Its status point and the points it feeds.
+    comm: CommunicationStatus,
     commands: Arc<CommandWatches>,
 }
 
@@ -139,15 +149,7 @@ impl LinkObserver for Concentrator {
     fn started(&self, client: &ClientHandle) {
         let (spec, node) = (&self.spec, &self.node);
         tracing::info!(node = %node.name(), link = %spec.name, address = %spec.address, "link up");
-        if let Some(point) = &spec.status_point {
-            node.change_with(&self.origin, |db, now| {
-                db.set_link_status(point.as_str(), true, now)
-                    .ok()
-                    .flatten()
-                    .into_iter()
-                    .collect()
-            });
-        }
+        self.comm.up(node);
         if spec.clock_sync {
             synchronise(spec, node, client);
         }
@@ -157,7 +159,7 @@ impl LinkObserver for Concentrator {
         tracing::warn!(node = %self.node.name(), link = %self.spec.name, reason = %why, "link down");
         // No answer to a forwarded command comes over a lost connection.
         self.commands.abandon_all();
-        set_down(&self.spec, &self.node, &self.origin);
+        self.comm.down(&self.node);
     }
 
     fn asdu(&self, asdu: &Asdu) {
@@ -174,21 +176,6 @@ impl LinkObserver for Concentrator {
     fn every_period(&self, client: &ClientHandle) {
         synchronise(&self.spec, &self.node, client);
     }
-}
-
-/// Invalidates the link's points and reports the link as failed.
-fn set_down(spec: &LinkSpec, node: &NodePoints, origin: &str) {
-    node.change_with(origin, |db, now| {
-        let mut changes = db.invalidate_link(&spec.name, now);
-        if let Some(point) = &spec.status_point {
-            changes.extend(
-                db.set_link_status(point.as_str(), false, now)
-                    .ok()
-                    .flatten(),
-            );
-        }
-        changes
-    });
 }
 
 fn synchronise(spec: &LinkSpec, node: &NodePoints, client: &ClientHandle) {

@@ -36,7 +36,7 @@ use crate::config::{LineConfig, LineProtocol, LineTransport, MeasurandScaling};
 use crate::store::CommandOutcome;
 use points::{PointId, PointKind, PointSource};
 
-use super::field::Reopen;
+use super::field::{CommunicationStatus, Reopen};
 use super::node::NodePoints;
 pub(crate) use iec101::ObjectPoints;
 use iec103::Simulated;
@@ -400,52 +400,46 @@ fn device_link(spec: &LineSpec, node: &NodePoints, answering: &Answering, addres
 }
 
 fn set_line_status(spec: &LineSpec, node: &NodePoints, up: bool) {
-    set_status_point(spec, node, spec.config.status_point.as_deref(), up);
+    // The line's status point shows whether any device answers; the points are the
+    // devices' own.
+    let line = CommunicationStatus::new(
+        format!("line {}", spec.config.name),
+        spec.config.status_point.clone(),
+        |_| false,
+    );
+    if up {
+        line.up(node);
+    } else {
+        line.down(node);
+    }
 }
 
-/// A line's or device's status point: FALSE while it answers (`up`), TRUE while not.
-fn set_status_point(spec: &LineSpec, node: &NodePoints, point: Option<&str>, up: bool) {
-    let Some(point) = point else {
-        return;
-    };
-    node.change_with(&format!("line {}", spec.config.name), |db, now| {
-        db.set_link_status(point, up, now)
-            .ok()
-            .flatten()
-            .into_iter()
-            .collect()
-    });
-}
-
-fn device_name(spec: &LineSpec, address: u8) -> Option<&str> {
-    spec.config
-        .devices
-        .iter()
-        .find(|device| device.address == address)
-        .map(|device| device.name.as_str())
-}
-
-fn set_device_status(spec: &LineSpec, node: &NodePoints, address: u8, up: bool) {
-    let point = spec
+/// A device's status point and the points it feeds.
+fn device_comm(spec: &LineSpec, address: u8) -> Option<CommunicationStatus> {
+    let device = spec
         .config
         .devices
         .iter()
-        .find(|device| device.address == address)
-        .and_then(|device| device.status_point.as_deref());
-    set_status_point(spec, node, point, up);
+        .find(|device| device.address == address)?;
+    let (line, name) = (spec.config.name.clone(), device.name.clone());
+    Some(CommunicationStatus::new(
+        format!("line {line}"),
+        device.status_point.clone(),
+        move |source| matches!(source, PointSource::Line { line: l, device: d, .. } if *l == line && *d == name),
+    ))
+}
+
+fn set_device_status(spec: &LineSpec, node: &NodePoints, address: u8, up: bool) {
+    if let Some(comm) = device_comm(spec, address) {
+        if up {
+            comm.up(node);
+        } else {
+            comm.down(node);
+        }
+    }
 }
 
 /// Invalidates a device's points and reports it as not answering.
 fn set_device_down(spec: &LineSpec, node: &NodePoints, address: u8) {
-    let Some(device) = device_name(spec, address).map(str::to_owned) else {
-        return;
-    };
-    let line = spec.config.name.clone();
-    node.change_with(&format!("line {line}"), |db, now| {
-        db.invalidate_where(
-            |point| matches!(&point.source, PointSource::Line { line: l, device: d, .. } if *l == line && *d == device),
-            now,
-        )
-    });
     set_device_status(spec, node, address, false);
 }
