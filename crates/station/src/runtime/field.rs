@@ -12,9 +12,11 @@
 //!   supervisor finds the point and hands it to the node (sinks, recorder).
 //!
 //! Profiled devices (`[[node.device]]`, [`crate::device`]) run entirely on it
-//! ([`spawn_device`]); the lift and line tasks use its [`Reopen`] pacing. IEC 104 links
-//! keep the client's own reconnection (the 104 link layer's T0 and back-off), which
-//! follows the same rule.
+//! ([`spawn_device`]); the lift and line tasks use its [`Reopen`] pacing, and every
+//! source (devices, lift boards, the devices and the status of a serial line, IEC 104
+//! links) shows its state through one [`CommunicationStatus`]. IEC 104 links keep the
+//! client's own reconnection (the 104 link layer's T0 and back-off), which follows the
+//! same rule.
 //!
 //! ```text
 //!  DeviceDriver::open --ok--> DeviceDriver::run(&readings) --ended--> all invalid, status TRUE
