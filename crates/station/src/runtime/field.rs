@@ -2,7 +2,7 @@
 //! lift board, a serial line of relays or outstations) needs around its protocol.
 //!
 //! - **Open, and open again.** A source that cannot be opened, or whose line closes, is
-//!   opened again after a pause ([`Reopen`]): 1 s, doubling to [`REOPEN_MAX`], back to
+//!   opened again after a pause (`Reopen`): 1 s, doubling to [`REOPEN_MAX`], back to
 //!   1 s once the source answered. A dead converter is not hammered; a cable plugged back
 //!   in is read again within seconds.
 //! - **Communication status.** While a device does not answer, its points are invalid
@@ -12,9 +12,9 @@
 //!   supervisor finds the point and hands it to the node (sinks, recorder).
 //!
 //! Profiled devices (`[[node.device]]`, [`crate::device`]) run entirely on it
-//! ([`spawn_device`]); the lift and line tasks use its [`Reopen`] pacing, and every
+//! (`spawn_device`); the lift and line tasks use its `Reopen` pacing, and every
 //! source (devices, lift boards, the devices and the status of a serial line, IEC 104
-//! links) shows its state through one [`CommunicationStatus`]. IEC 104 links keep the
+//! links) shows its state through one `CommunicationStatus`. IEC 104 links keep the
 //! client's own reconnection (the 104 link layer's T0 and back-off), which follows the
 //! same rule.
 //!

@@ -20,7 +20,7 @@
 //! - A board that stops answering turns the lift's points invalid and `LIFT.not_answering`
 //!   TRUE (the communication alarm); a line that closes (a converter's TCP connection
 //!   dropped, a serial adapter unplugged) is opened again with the cursor where it stood,
-//!   after the field-source supervisor's pause ([`super::field::Reopen`]).
+//!   after the field-source supervisor's pause (`field::Reopen`).
 
 use super::operation::OperationError;
 use std::collections::HashMap;
