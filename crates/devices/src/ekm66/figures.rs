@@ -2,8 +2,8 @@
 //! availability, failures and callbacks, MTBF and MTTR, trips and door cycles per
 //! floor, the suggested parking floor and the minimum fault log.
 //!
-//! Sans-IO and clock-free: the history and the period come in as data (the station
-//! runtime reads them from its event store), the figures go out as a value that
+//! Sans-IO and clock-free: the history and the period come in as data (the HMI reads
+//! them from the station's event store, `hmi::web::lifts`), the figures go out as a value that
 //! serialises to the HMI's JSON. Times are station time ([`DateTime<Utc>`]), not the
 //! board's clock. Every figure is defined in `docs/LIFT.md`, "Service figures".
 //!
@@ -14,7 +14,8 @@
 //!                                         ServiceFigures of each lift ─> FleetFigures::new
 //! ```
 //!
-//! The history is the runtime's per-point event history: one [`Observation`] per change
+//! The history is the lift's per-point event history as the store keeps it (the lift's
+//! points by `LiftSignal`): one [`Observation`] per change
 //! of the status, the car position, the direction, the communication or the trip
 //! counters. Include the last observation of each kind at or before `from` (the state at
 //! the start of the period); observations at or after `to` are ignored. The input need
