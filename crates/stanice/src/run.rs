@@ -518,10 +518,22 @@ async fn help_text(runtime: &Runtime) -> String {
         .filter(|lift| lift.is_simulated())
         .map(|lift| lift.name().to_owned())
         .collect();
-    if !lifts.is_empty() {
+    if let (false, Some(board)) = (lifts.is_empty(), simulators::registry::find("ekm66")) {
         out.push("simulated lift boards: lift NAME OPERATION, the operations:".to_owned());
-        out.push(devices::ekm66::console::HELP.to_owned());
+        out.push(board.console_help.to_owned());
         out.push(wrapped("      NAME: ", &lifts, " "));
+    }
+    let relays: Vec<String> = runtime
+        .nodes()
+        .iter()
+        .flat_map(|node| &node.lines)
+        .flat_map(|line| line.simulated_devices())
+        .map(str::to_owned)
+        .collect();
+    if let (false, Some(relay)) = (relays.is_empty(), simulators::registry::find("ref630")) {
+        out.push("simulated relays: relay DEVICE OPERATION, the operations:".to_owned());
+        out.push(relay.console_help.trim_end().to_owned());
+        out.push(wrapped("      DEVICE: ", &relays, " "));
     }
     out.push(CONSOLE_HELP.to_owned());
     out.join("\n")

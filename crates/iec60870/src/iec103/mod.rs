@@ -7,7 +7,6 @@
 //! | `asdu` | [`Asdu`] = [`Header`] (`TYP VSQ COT CA FUN INF`) + [`Body`]: the standard messages of both directions (time-tagged messages, measurands, identification, time sync, GI, general command, disturbance data transfer 23-31), generic services (10, 11, 21) passed through |
 //! | `cause` | [`Cause`]: the 103 causes of transmission |
 //! | `measurand` | [`Measurand`]: the 13-bit fraction of a configured limit with OV and ER |
-//! | `device` | [`Device`]: a protection device's side (identification on reset, GI, cyclic measurands in class 2, events and command acknowledgements in class 1, LOCAL/REMOTE, an unsynchronised clock, faults) for a [`DeviceProfile`] such as [`DeviceProfile::ref630`]; the relay simulator |
 //! | `disturbance` | transmission of disturbance data (ASDU 23-31): [`DisturbanceRecord`], the device's [`DisturbanceSender`] and the master's [`DisturbanceReceiver`] |
 //! | `master` | [`Master`]: the control system's side over an [`crate::ft12::Primary`]: start-up (clock sync, GI), general commands followed to their acknowledgement, every ASDU decoded |
 //!
@@ -16,8 +15,8 @@
 //! ```text
 //! master: Master::general_command -> ASDU 20 -> Primary (send/confirm) -> line
 //!         line -> Primary -> class 1/2 user data -> Asdu::decode -> MasterEvent
-//! device: line -> Secondary -> Device::user_data -> class 1 queue (acks, events, GI)
-//!         clock -> Device::handle_timeout -> class 2 (measurands every cycle)
+//! device: line -> Secondary -> a SecondaryApplication (the simulated REF630 of the
+//!         `simulators` crate: class 1 acks, events, GI; class 2 measurands every cycle)
 //! ```
 //!
 //! The link layer is [`crate::ft12`] (unbalanced only, one-octet link address); the
@@ -45,7 +44,6 @@
 
 mod asdu;
 mod cause;
-mod device;
 mod disturbance;
 mod master;
 mod measurand;
@@ -56,7 +54,6 @@ pub use asdu::{
     INF_RESET_CU, INF_RESET_FCB, INF_START_RESTART,
 };
 pub use cause::Cause;
-pub use device::{CommandPoint, Device, DeviceEvent, DeviceProfile, Indication, MeasurandChannel};
 pub use disturbance::{
     DisturbanceReceiver, DisturbanceRecord, DisturbanceSender, ReceiverStep, RecordChannel,
     RecordTag, SOF_TRANSMITTED, SOF_TRIP, TOO_ABORT_DATA, TOO_CHANNEL_RECEIVED, TOO_DATA_RECEIVED,

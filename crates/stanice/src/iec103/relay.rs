@@ -8,7 +8,8 @@ use std::time::Duration;
 use clap::Args;
 use iec60870::ft12::io::drive;
 use iec60870::ft12::{Secondary, SecondaryConfig, SecondaryStation};
-use iec60870::iec103::{dpi_text, Device, DeviceEvent, DeviceProfile};
+use iec60870::iec103::dpi_text;
+use simulators::ref630::{Device, DeviceEvent, DeviceProfile};
 
 use crate::iec104::render::receipt_time;
 use crate::serial_line::{report_end, LineArgs, ServedLines};

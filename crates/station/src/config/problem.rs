@@ -678,13 +678,15 @@ fn unknown_value_text(what: Vocabulary, value: &str) -> String {
         Vocabulary::Protocol => format!(
             "protocol `{value}`: a line is \"iec103\" (protection relays) or \"iec101\" (outstations)"
         ),
-        Vocabulary::SimulatedDevice => {
-            format!("no simulated device `{value}`; known: \"ref630\"")
-        }
+        Vocabulary::SimulatedDevice => format!(
+            "no simulated IEC 103 device `{value}`; known: {}",
+            quoted(&simulators::registry::names(simulators::registry::Speaks::Iec103))
+        ),
         Vocabulary::Parity => format!("parity `{value}`: expected even, odd or none"),
-        Vocabulary::SimulatedLift => {
-            format!("no simulated lift board `{value}`; known: \"ekm66\"")
-        }
+        Vocabulary::SimulatedLift => format!(
+            "no simulated lift board `{value}`; known: {}",
+            quoted(&simulators::registry::names(simulators::registry::Speaks::Ekm66))
+        ),
         Vocabulary::StatusLayout => format!(
             "status layout `{value}`: expected \"any\" (both, by the length octet), \"adopted\" (20 octets) or \"alternative\" (21 octets)"
         ),
@@ -766,4 +768,13 @@ fn missing_text(what: &str, needed_by: &str, hint: &str) -> String {
         text.push_str(&format!(" ({hint})"));
     }
     text
+}
+
+/// `"a", "b"`: names as a message lists them.
+fn quoted(names: &[&str]) -> String {
+    names
+        .iter()
+        .map(|name| format!("\"{name}\""))
+        .collect::<Vec<_>>()
+        .join(", ")
 }

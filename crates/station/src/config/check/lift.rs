@@ -10,9 +10,7 @@ use devices::ekm66::codec::{CounterWidth, DirectionCoding, StatusLayout, TimeEnc
 use devices::ekm66::poller::{IndexBase, PollerConfig};
 use devices::ekm66::simulator::SimulatorConfig;
 use points::LiftSignal;
-
-/// The only simulated lift board.
-const SIMULATED_BOARD: &str = "ekm66";
+use simulators::registry::Speaks;
 
 /// The floors a board reports (the simulator's and the counters' range).
 const FLOORS: std::ops::RangeInclusive<i64> = 2..=60;
@@ -174,7 +172,9 @@ impl Ctx<'_> {
                 (Some(port), None, None) => LiftTransport::Serial(port.clone()),
                 (None, Some(tcp), None) => LiftTransport::Tcp(tcp.clone()),
                 (None, None, Some(board)) => {
-                    if board != SIMULATED_BOARD {
+                    if simulators::registry::find(board)
+                        .is_none_or(|device| device.speaks != Speaks::Ekm66)
+                    {
                         self.err(
                             &at("simulate"),
                             ConfigProblem::UnknownValue {

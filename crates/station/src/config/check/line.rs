@@ -2,6 +2,7 @@
 //! of its points and commands.
 
 use super::*;
+use simulators::registry::Speaks;
 
 /// A signal named by `line:LINE/DEVICE/FUN/INF[/INDEX]` (IEC 103) or
 /// `line:LINE/DEVICE/IOA` (IEC 101).
@@ -224,7 +225,9 @@ impl Ctx<'_> {
                                 protocol: IEC101,
                             },
                         );
-                    } else if profile != "ref630" {
+                    } else if simulators::registry::find(profile)
+                        .is_none_or(|device| device.speaks != Speaks::Iec103)
+                    {
                         self.err(
                             &at("simulate"),
                             ConfigProblem::UnknownValue {

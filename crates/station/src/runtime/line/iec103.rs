@@ -18,8 +18,9 @@ use std::time::Duration;
 
 use iec60870::ft12::io::{drive, EndpointAction};
 use iec60870::ft12::{PrimaryEvent, SharedLine};
-use iec60870::iec103::{self, Body, Cause, Device, MasterEvent, StartUp};
+use iec60870::iec103::{self, Body, Cause, MasterEvent, StartUp};
 use points::Quality;
+use simulators::ref630::Device;
 use tokio::sync::{mpsc, oneshot};
 
 use points::{normalized, EventCause, PointKind, PointValue, SourceTime};

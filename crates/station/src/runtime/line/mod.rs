@@ -28,8 +28,8 @@ use iec60870::ft12::io::{drive, EndpointAction, Transport};
 use iec60870::ft12::{
     AddressSize, Primary, PrimaryConfig, Secondary, SecondaryConfig, SecondaryStation, SharedLine,
 };
-use iec60870::iec103::{Device, DeviceProfile};
 use iec60870::outstation::{Command, TerminationFuture};
+use simulators::ref630::{Device, DeviceProfile};
 use tokio::sync::mpsc;
 
 use crate::config::{LineConfig, LineProtocol, LineTransport, MeasurandScaling};
@@ -161,6 +161,17 @@ impl LineHandle {
     /// The line's name.
     pub fn name(&self) -> &str {
         &self.name
+    }
+
+    /// The names of the line's devices simulated in this process (none for a real line).
+    pub fn simulated_devices(&self) -> Vec<&str> {
+        if self.simulated.is_none() {
+            return Vec::new();
+        }
+        self.devices
+            .iter()
+            .map(|device| device.name.as_str())
+            .collect()
     }
 
     fn device(&self, name: &str) -> Option<&DeviceEntry> {

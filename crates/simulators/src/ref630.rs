@@ -1,22 +1,22 @@
-//! A protection device's IEC 103 side, sans-IO: what a relay answers on its serial
-//! port. The relay simulator of `stanice iec103 relay` and the gateway's test devices
-//! are this with a [`DeviceProfile`] (the REF630 of the thesis: [`DeviceProfile::ref630`]).
+//! A simulated protection relay's IEC 103 side, sans-IO: what a relay answers on its
+//! serial port, with its measurands, indications, commands, faults and the relay
+//! tester's console ([`Device::operate`]). The relay simulator of `stanice iec103 relay`
+//! and the gateway's simulated devices (`simulate = "ref630"`) are this with a
+//! [`DeviceProfile`] (the REF630 of the thesis: [`DeviceProfile::ref630`]). It speaks the
+//! protocol through the `iec60870` crate (the FT1.2 secondary's `SecondaryApplication`),
+//! which holds no simulator.
 
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use chrono::NaiveDateTime;
 
-use super::asdu::{
-    Asdu, Body, Direction, FUN_GLOBAL, INF_POWER_ON, INF_RESET_CU, INF_RESET_FCB, INF_START_RESTART,
+use iec60870::ft12::{PrimaryFunction, SecondaryApplication, TimedApplication};
+use iec60870::iec103::{
+    Asdu, Body, Cause, Direction, DisturbanceRecord, DisturbanceSender, Measurand, RecordChannel,
+    RecordTag, FUN_GLOBAL, INF_POWER_ON, INF_RESET_CU, INF_RESET_FCB, INF_START_RESTART, SOF_TRIP,
 };
-use super::cause::Cause;
-use super::disturbance::{
-    DisturbanceRecord, DisturbanceSender, RecordChannel, RecordTag, SOF_TRIP,
-};
-use super::measurand::Measurand;
-use crate::ft12::{PrimaryFunction, SecondaryApplication, TimedApplication};
-use crate::time::{Cp32Time2a, Cp56Time2a};
+use iec60870::time::{Cp32Time2a, Cp56Time2a};
 
 /// Class 1 messages kept at most; beyond, the oldest is dropped (and counted) and DFC
 /// is reported from three quarters on.
@@ -147,7 +147,7 @@ impl DeviceProfile {
                 },
             ],
             measurand_fun: 1,
-            measurand_inf: super::asdu::INF_MEASURANDS_II,
+            measurand_inf: iec60870::iec103::INF_MEASURANDS_II,
             measurands: vec![
                 channel("IL1", 100.0, 2.4, "A"),
                 channel("IL2", 100.0, 2.4, "A"),
@@ -486,7 +486,7 @@ impl Device {
         }
         let tag = |position: usize, fun: u8, inf: u8, dpi: u8| RecordTag {
             position: u16::try_from(position).unwrap_or(u16::MAX),
-            tag: super::asdu::DisturbanceTag { fun, inf, dpi },
+            tag: iec60870::iec103::DisturbanceTag { fun, inf, dpi },
         };
         let (fun, inf) = self.profile.earth_fault;
         let now = self.clock();
@@ -565,7 +565,7 @@ impl Device {
                 Ok("warm restart: reported at the next reset of the communication unit".to_owned())
             }
             "status" => {
-                let position = |fun, inf| self.indication(fun, inf).map(super::asdu::dpi_text).unwrap_or("?");
+                let position = |fun, inf| self.indication(fun, inf).map(iec60870::iec103::dpi_text).unwrap_or("?");
                 Ok(format!(
                     "breaker {}, earth switch {}, truck TEST {} SERVICE {}, switch {}, clock {} ({})",
                     position(1, 160),
