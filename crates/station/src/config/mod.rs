@@ -187,6 +187,14 @@
 //! speed = 1.0                          # simulate only: board seconds per second
 //! fault_probability = 0.05             # simulate only: chance of a fault after a trip
 //!
+//! [[node.device]]                      # a device of a registered kind (crate::device)
+//! name = "B1"                          # unique among the node's devices and lifts
+//! kind = "balance"                     # a kind the loader was given (DeviceKinds)
+//! description = "sorting lab scale"    # optional
+//! ioa_base = 500                       # its points: B1.SIGNAL at ioa_base + the profile's
+//!                                      # offsets, and B1.not_answering
+//! settings = { port = "/dev/ttyUSB1" } # the kind's own settings, read by its driver
+//!
 //! [node.notify.smtp]                   # optional: notifications of the node's lifts
 //! host = "smtp.example.cz"             # (the notify crate's format, docs/LIFT.md):
 //! security = "starttls"                # none | starttls (default) | tls; port follows
