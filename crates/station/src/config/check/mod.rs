@@ -1,5 +1,6 @@
 //! The checks of a project: the station, each node, the links between them.
 
+mod command;
 mod device;
 mod generated;
 mod lift;
@@ -8,7 +9,9 @@ mod links;
 mod node;
 mod serial;
 
+use command::CommandContext;
 use generated::{GeneratedPoint, TakenPoints};
+use node::Entry;
 use serial::SerialKeys;
 
 use super::*;

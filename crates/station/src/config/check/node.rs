@@ -1,6 +1,40 @@
-//! The checks of one node: server, tasks, I/O, points, commands, PLC variables.
+//! The checks of one node: server, tasks, I/O, points, commands (`command`), PLC
+//! variables.
 
 use super::*;
+
+/// The key path `node[n]` followed by `rest`.
+pub(in crate::config) fn node_path(n: usize, rest: &[Seg]) -> Vec<Seg> {
+    let mut p = vec![K("node"), I(n)];
+    p.extend_from_slice(rest);
+    p
+}
+
+/// One entry of an array of tables in a node (`node[n].point[p]`, `node[n].command[c]`,
+/// ...): the key paths its problems are reported at.
+#[derive(Clone, Copy)]
+pub(in crate::config) struct Entry {
+    n: usize,
+    table: &'static str,
+    i: usize,
+}
+
+impl Entry {
+    /// Entry `i` of the node `n`'s `table`.
+    pub(in crate::config) fn new(n: usize, table: &'static str, i: usize) -> Entry {
+        Entry { n, table, i }
+    }
+
+    /// Its key `key`.
+    pub(in crate::config) fn key(self, key: &'static str) -> Vec<Seg> {
+        node_path(self.n, &[K(self.table), I(self.i), K(key)])
+    }
+
+    /// Element `e` of its array `key`.
+    pub(in crate::config) fn element(self, key: &'static str, e: usize) -> Vec<Seg> {
+        node_path(self.n, &[K(self.table), I(self.i), K(key), I(e)])
+    }
+}
 
 impl Ctx<'_> {
     pub(in crate::config) fn check_node(
@@ -621,297 +655,16 @@ impl Ctx<'_> {
         );
         points.extend(device_points);
 
-        // commands
-        let mut commands = Vec::new();
-        let mut command_names = HashSet::new();
-        let mut command_ioas: HashMap<Ioa, String> = HashMap::new();
-        for (c, command) in raw.command.iter().enumerate() {
-            let at = |key: &'static str| node(&[K("command"), I(c), K(key)]);
-            if !command_names.insert(command.name.clone()) {
-                self.err(
-                    &at("name"),
-                    ConfigProblem::Duplicate {
-                        what: Unique::CommandName,
-                        value: command.name.clone(),
-                        other: raw.name.clone(),
-                    },
-                );
-            }
-            let type_id = match command.type_id.parse::<TypeId>() {
-                Ok(t) if t.is_command() => t,
-                Ok(t) => {
-                    self.err(
-                        &at("type"),
-                        ConfigProblem::WrongType {
-                            type_id: t.to_string(),
-                            usage: TypeUse::Command,
-                        },
-                    );
-                    TypeId::C_SC_NA_1
-                }
-                Err(_) => {
-                    self.err(
-                        &at("type"),
-                        ConfigProblem::UnknownValue {
-                            what: Vocabulary::TypeId,
-                            value: command.type_id.clone(),
-                        },
-                    );
-                    TypeId::C_SC_NA_1
-                }
-            };
-            let address = match ioa(command.ioa) {
-                Ok(a) => {
-                    if let Some(other) = command_ioas.get(&a) {
-                        self.err(
-                            &at("ioa"),
-                            ConfigProblem::Duplicate {
-                                what: Unique::CommandIoa,
-                                value: a.to_string(),
-                                other: other.clone(),
-                            },
-                        );
-                    } else if let Some(point) = point_ioas.get(&a) {
-                        // Many controlling stations (lib60870, most SCADA) keep one
-                        // information object per address: a command and a point on one
-                        // IOA would clash there.
-                        self.err(
-                            &at("ioa"),
-                            ConfigProblem::Duplicate {
-                                what: Unique::CommandOnPointIoa,
-                                value: a.to_string(),
-                                other: point.clone(),
-                            },
-                        );
-                    } else {
-                        command_ioas.insert(a, command.name.clone());
-                    }
-                    a
-                }
-                Err(problem) => {
-                    self.err(&at("ioa"), problem);
-                    Ioa::IRRELEVANT
-                }
-            };
-            let (reference_text, fixed_value) = match command.target.rsplit_once('=') {
-                Some((reference, "ON")) if reference.starts_with("line:") => {
-                    (reference, Some(true))
-                }
-                Some((reference, "OFF")) if reference.starts_with("line:") => {
-                    (reference, Some(false))
-                }
-                _ => (command.target.as_str(), None),
-            };
-            let line_target = match line::parse_line_ref(reference_text) {
-                Ok(Some(reference)) => {
-                    self.line_ref_exists(&raw.name, &raw.line, &reference, &at("target"));
-                    match reference.signal {
-                        LineSignal::Iec103 { fun, inf, index } => {
-                            if index.is_some() {
-                                self.err(&at("target"), Conflict::LineCommandWithIndex);
-                            }
-                            if !matches!(type_id, TypeId::C_SC_NA_1 | TypeId::C_DC_NA_1) {
-                                self.err(
-                                    &at("type"),
-                                    ConfigProblem::WrongType {
-                                        type_id: type_id.to_string(),
-                                        usage: TypeUse::LineCommand,
-                                    },
-                                );
-                            }
-                            Some(CommandTarget::Line {
-                                line: reference.line,
-                                device: reference.device,
-                                fun,
-                                inf,
-                                value: fixed_value,
-                            })
-                        }
-                        // Forwarded as it came: the command's own type and value.
-                        LineSignal::Iec101 { ioa } => {
-                            if fixed_value.is_some() {
-                                self.err(
-                                    &at("target"),
-                                    Conflict::NotForProtocol {
-                                        key: "=ON/=OFF",
-                                        protocol: "iec101",
-                                    },
-                                );
-                            }
-                            Some(CommandTarget::LineObject {
-                                line: reference.line,
-                                device: reference.device,
-                                // In range: `parse_line_ref` checked it.
-                                ioa: Ioa::try_new(ioa).unwrap_or(Ioa::IRRELEVANT),
-                            })
-                        }
-                    }
-                }
-                Ok(None) => None,
-                Err(problem) => {
-                    self.err(&at("target"), problem);
-                    Some(CommandTarget::Variable(command.target.clone()))
-                }
-            };
-            let target = match line_target.map(Ok).unwrap_or_else(|| {
-                parse_link_ref(&command.target).map(|link| {
-                    link.map_or_else(
-                        || CommandTarget::Variable(command.target.clone()),
-                        |(link, ioa)| CommandTarget::Link { link, ioa },
-                    )
-                })
-            }) {
-                Ok(CommandTarget::Link { link, ioa }) => {
-                    if !raw.link.iter().any(|l| l.name == link) {
-                        self.err(
-                            &at("target"),
-                            ConfigProblem::Unknown {
-                                what: Reference::Link,
-                                name: link.clone(),
-                                within: raw.name.clone(),
-                            },
-                        );
-                    }
-                    CommandTarget::Link { link, ioa }
-                }
-                Ok(target) => target,
-                Err(problem) => {
-                    self.err(&at("target"), problem);
-                    CommandTarget::Variable(command.target.clone())
-                }
-            };
-            for (g, group) in command.from_groups.iter().enumerate() {
-                let known = server.as_ref().is_some_and(|s: &ServerConfig| {
-                    s.redundancy_groups.iter().any(|r| &r.name == group)
-                });
-                if !known {
-                    self.err(
-                        &[K("node"), I(n), K("command"), I(c), K("from_groups"), I(g)],
-                        ConfigProblem::Unknown {
-                            what: Reference::RedundancyGroup,
-                            name: group.clone(),
-                            within: raw.name.clone(),
-                        },
-                    );
-                }
-            }
-            let pulse = match command.pulse_ms {
-                None => None,
-                Some(ms) if (1..=3_600_000).contains(&ms) => {
-                    if matches!(target, CommandTarget::Link { .. }) {
-                        self.err(&at("pulse_ms"), Conflict::ForwardedPulse);
-                    }
-                    Some(Duration::from_millis(ms.unsigned_abs()))
-                }
-                Some(ms) => {
-                    self.err(
-                        &at("pulse_ms"),
-                        ConfigProblem::OutOfRange {
-                            what: "pulse_ms",
-                            value: ms,
-                            min: 1,
-                            max: Some(3_600_000),
-                        },
-                    );
-                    None
-                }
-            };
-            let max_age = command
-                .max_age_ms
-                .and_then(|ms| self.duration_ms(ms, &at("max_age_ms"), "max_age_ms"));
-            let range = command.range.and_then(|[low, high]| {
-                let setpoint = matches!(
-                    type_id,
-                    TypeId::C_SE_NA_1
-                        | TypeId::C_SE_NB_1
-                        | TypeId::C_SE_NC_1
-                        | TypeId::C_SE_TA_1
-                        | TypeId::C_SE_TB_1
-                        | TypeId::C_SE_TC_1
-                );
-                if !setpoint {
-                    self.err(
-                        &at("range"),
-                        ConfigProblem::WrongType {
-                            type_id: type_id.to_string(),
-                            usage: TypeUse::Range,
-                        },
-                    );
-                    None
-                } else if !(low.is_finite() && high.is_finite() && low <= high) {
-                    self.err(
-                        &at("range"),
-                        ConfigProblem::EmptyRange {
-                            low: low.to_string(),
-                            high: high.to_string(),
-                        },
-                    );
-                    None
-                } else {
-                    Some(low..=high)
-                }
-            });
-            let feedback = match &command.feedback {
-                // A relay reports a general command's effect at the command's own FUN/INF:
-                // the point read from there is the command's return information, so that
-                // ACT_TERM follows it (it left before the position changed).
-                None if command.feedback_timeout_ms.is_none() => {
-                    implied_line_feedback(&target, &points)
-                }
-                None => {
-                    if command.feedback_timeout_ms.is_some() {
-                        self.err(
-                            &at("feedback_timeout_ms"),
-                            ConfigProblem::Missing {
-                                what: "feedback",
-                                needed_by: "feedback_timeout_ms",
-                                hint: "",
-                            },
-                        );
-                    }
-                    None
-                }
-                Some(point) => {
-                    if !point_names.contains(point) {
-                        self.err(
-                            &at("feedback"),
-                            ConfigProblem::Unknown {
-                                what: Reference::Point,
-                                name: point.clone(),
-                                within: raw.name.clone(),
-                            },
-                        );
-                    }
-                    if matches!(target, CommandTarget::Link { .. }) {
-                        self.err(&at("feedback"), Conflict::ForwardedFeedback);
-                    }
-                    let timeout = match command.feedback_timeout_ms {
-                        None => DEFAULT_FEEDBACK_TIMEOUT,
-                        Some(ms) => self
-                            .duration_ms(ms, &at("feedback_timeout_ms"), "feedback_timeout_ms")
-                            .unwrap_or(DEFAULT_FEEDBACK_TIMEOUT),
-                    };
-                    Some(Feedback {
-                        point: point.clone(),
-                        timeout,
-                    })
-                }
-            };
-            commands.push(CommandConfig {
-                max_age,
-                feedback,
-                range,
-                name: command.name.clone(),
-                type_id,
-                ioa: address,
-                target,
-                select_required: command.select_required,
-                remote_enable: command.remote_enable.clone(),
-                pulse,
-                from_groups: command.from_groups.clone(),
-                description: command.description.clone(),
-            });
-        }
+        let commands = self.check_commands(
+            n,
+            raw,
+            &CommandContext {
+                points: &points,
+                point_names: &point_names,
+                point_ioas: &point_ioas,
+                server: server.as_ref(),
+            },
+        );
 
         #[cfg(feature = "runtime")]
         if all_sources_read && !files.is_empty() {
@@ -1089,32 +842,4 @@ impl Ctx<'_> {
             }
         }
     }
-}
-
-/// The return information of a general command to an IEC 103 device when the project
-/// names none: the indication the device reports at the command's FUN/INF.
-fn implied_line_feedback(target: &CommandTarget, points: &[PointConfig]) -> Option<Feedback> {
-    let CommandTarget::Line {
-        line,
-        device,
-        fun,
-        inf,
-        ..
-    } = target
-    else {
-        return None;
-    };
-    points
-        .iter()
-        .find(|point| {
-            matches!(&point.source, PointSource::Line {
-                line: point_line,
-                device: point_device,
-                signal: LineSignal::Iec103 { fun: f, inf: i, index: None },
-            } if point_line == line && point_device == device && f == fun && i == inf)
-        })
-        .map(|point| Feedback {
-            point: point.name.clone(),
-            timeout: DEFAULT_FEEDBACK_TIMEOUT,
-        })
 }
