@@ -7,6 +7,7 @@ mod lift;
 mod line;
 mod links;
 mod node;
+mod point;
 mod serial;
 
 use command::CommandContext;
