@@ -1,5 +1,7 @@
-//! The checks of one node: server, tasks, I/O, points (`point`), commands (`command`),
-//! PLC variables.
+//! The checks of one node (`[[node]]`), in the order `Ctx::check_node` runs them: its
+//! common address, ST sources, server (`server`), tasks, I/O bindings, points (`point`;
+//! the points lifts and devices bring in `lift` and `device`), commands (`command`), the
+//! PLC variables they all name (here), serial lines (`line`), notifications and tables.
 
 use super::*;
 
@@ -41,227 +43,34 @@ impl Entry {
     }
 }
 
+/// A node's ST sources: every path (checked to exist) and the text of each one read.
+struct Sources {
+    paths: Vec<PathBuf>,
+    /// (file name as diagnostics show it, text) of each source read.
+    files: Vec<(String, String)>,
+    /// Whether every source was read (else programs and variables are not looked up).
+    all_read: bool,
+}
+
 impl Ctx<'_> {
+    /// Checks node `n` (`raw`), each part in turn; the node's links are checked with the
+    /// other nodes (`links`).
     pub(in crate::config) fn check_node(
         &mut self,
         folder: &Path,
         n: usize,
         raw: &RawNode,
     ) -> NodeConfig {
-        let node = |rest: &[Seg]| -> Vec<Seg> {
-            let mut p = vec![K("node"), I(n)];
-            p.extend_from_slice(rest);
-            p
-        };
         let common = common_address(raw.common_address).unwrap_or_else(|problem| {
-            self.err(&node(&[K("common_address")]), problem);
+            self.err(&node_path(n, &[K("common_address")]), problem);
             CommonAddress::new(0)
         });
-
-        // sources
-        let mut sources = Vec::new();
-        // (file name as diagnostics show it, text) of each source read
-        let mut files: Vec<(String, String)> = Vec::new();
-        for (s, source) in raw.sources.iter().enumerate() {
-            let path = node(&[K("sources"), I(s)]);
-            let resolved = self.existing_file(folder, source, &path);
-            if resolved.is_file() {
-                match std::fs::read(&resolved) {
-                    Ok(bytes) => match String::from_utf8(bytes) {
-                        Ok(text) => files.push((resolved.display().to_string(), text)),
-                        Err(e) => self.push(not_utf8(&resolved, e.as_bytes())),
-                    },
-                    Err(e) => self.err(
-                        &path,
-                        ConfigProblem::Unreadable {
-                            file: Some(resolved.clone()),
-                            kind: e.kind(),
-                            detail: e.to_string(),
-                        },
-                    ),
-                }
-            }
-            sources.push(resolved);
-        }
-        let all_sources_read = files.len() == raw.sources.len();
-        let texts: Vec<&str> = files.iter().map(|(_, text)| text.as_str()).collect();
-
-        // server
-        let server = raw.server.as_ref().map(|s| {
-            let port_offset = u16::try_from(s.port_offset).unwrap_or_else(|_| {
-                self.err(
-                    &node(&[K("server"), K("port_offset")]),
-                    ConfigProblem::OutOfRange {
-                        what: "port_offset",
-                        value: s.port_offset,
-                        min: 0,
-                        max: Some(u16::MAX.into()),
-                    },
-                );
-                0
-            });
-            let allowed_clients = self.ips(
-                &s.allowed_clients,
-                &node(&[K("server"), K("allowed_clients")]),
-            );
-            let redundancy_groups = match &s.redundancy_groups {
-                None => vec![RedundancyGroup {
-                    name: "default".to_owned(),
-                    clients: Vec::new(),
-                    refuse_commands_when: None,
-                    status_point: None,
-                }],
-                Some(groups) => {
-                    let mut out = Vec::new();
-                    if groups.is_empty() {
-                        self.err(
-                            &node(&[K("server"), K("redundancy_groups")]),
-                            ConfigProblem::Missing {
-                                what: "redundancy group",
-                                needed_by: "",
-                                hint: "at least one is needed; leave redundancy_groups out for one catch-all group",
-                            },
-                        );
-                    }
-                    let mut names = HashSet::new();
-                    for (g, group) in groups.iter().enumerate() {
-                        if !names.insert(group.name.clone()) {
-                            self.err(
-                                &node(&[K("server"), K("redundancy_groups"), I(g), K("name")]),
-                                ConfigProblem::Duplicate {
-                                    what: Unique::RedundancyGroup,
-                                    value: group.name.clone(),
-                                    other: raw.name.clone(),
-                                },
-                            );
-                        }
-                        let clients = self.ips(
-                            &group.clients,
-                            &node(&[K("server"), K("redundancy_groups"), I(g), K("clients")]),
-                        );
-                        out.push(RedundancyGroup {
-                            name: group.name.clone(),
-                            clients,
-                            refuse_commands_when: group.refuse_commands_when.clone(),
-                            status_point: group.status_point.clone(),
-                        });
-                    }
-                    out
-                }
-            };
-            let tls = s
-                .tls
-                .as_ref()
-                .map(|t| self.tls_files(folder, t, &node(&[K("server"), K("tls")])));
-            let group_configs = redundancy_groups
-                .iter()
-                .map(|g| {
-                    iec60870::cs104::server::RedundancyGroupConfig::new(
-                        g.name.clone(),
-                        g.clients.clone(),
-                    )
-                })
-                .collect();
-            let mode_name = s.redundancy.as_deref().unwrap_or("groups-by-address");
-            let redundancy =
-                iec60870::cs104::server::RedundancyMode::from_name(mode_name, group_configs)
-                    .unwrap_or_else(|| {
-                        self.err(
-                            &node(&[K("server"), K("redundancy")]),
-                            ConfigProblem::UnknownValue {
-                                what: Vocabulary::RedundancyMode,
-                                value: mode_name.to_owned(),
-                            },
-                        );
-                        iec60870::cs104::server::RedundancyMode::SingleGroup
-                    });
-            let age_path = node(&[K("server"), K("max_command_age_ms")]);
-            let max_command_age = match &s.max_command_age_ms {
-                None => Some(DEFAULT_MAX_COMMAND_AGE),
-                Some(RawCommandAge::Millis(ms)) => {
-                    self.duration_ms(*ms, &age_path, "max_command_age_ms")
-                }
-                Some(RawCommandAge::Word(word)) if word == "off" => None,
-                Some(RawCommandAge::Word(word)) => {
-                    self.err(
-                        &age_path,
-                        ConfigProblem::UnknownValue {
-                            what: Vocabulary::CommandAge,
-                            value: word.clone(),
-                        },
-                    );
-                    None
-                }
-            };
-            ServerConfig {
-                port_offset,
-                allowed_clients,
-                redundancy_groups,
-                tls,
-                redundancy,
-                max_command_age,
-            }
-        });
-
-        // tasks
-        let mut tasks = Vec::new();
-        let mut task_names = HashSet::new();
-        for (t, task) in raw.task.iter().enumerate() {
-            if !task_names.insert(task.name.clone()) {
-                self.err(
-                    &node(&[K("task"), I(t), K("name")]),
-                    ConfigProblem::Duplicate {
-                        what: Unique::TaskName,
-                        value: task.name.clone(),
-                        other: raw.name.clone(),
-                    },
-                );
-            }
-            if task.interval_ms == 0 {
-                self.err(
-                    &node(&[K("task"), I(t), K("interval_ms")]),
-                    ConfigProblem::OutOfRange {
-                        what: "interval_ms",
-                        value: 0,
-                        min: 1,
-                        max: None,
-                    },
-                );
-            }
-            if task.watchdog_ms == Some(0) {
-                self.err(
-                    &node(&[K("task"), I(t), K("watchdog_ms")]),
-                    ConfigProblem::OutOfRange {
-                        what: "watchdog_ms",
-                        value: 0,
-                        min: 1,
-                        max: None,
-                    },
-                );
-            }
-            if all_sources_read {
-                for (p, program) in task.programs.iter().enumerate() {
-                    if !texts.iter().any(|text| declares_program(text, program)) {
-                        self.err(
-                            &node(&[K("task"), I(t), K("programs"), I(p)]),
-                            ConfigProblem::Unknown {
-                                what: Reference::Program,
-                                name: program.clone(),
-                                within: raw.name.clone(),
-                            },
-                        );
-                    }
-                }
-            }
-            tasks.push(TaskConfig {
-                name: task.name.clone(),
-                interval: Duration::from_millis(task.interval_ms),
-                priority: task.priority,
-                programs: task.programs.clone(),
-                watchdog: task.watchdog_ms.map(Duration::from_millis),
-            });
-        }
-
+        let sources = self.check_sources(folder, n, raw);
+        let server = raw
+            .server
+            .as_ref()
+            .map(|s| self.check_server(folder, n, raw, s));
+        let tasks = self.check_tasks(n, raw, &sources);
         let io = raw
             .io
             .iter()
@@ -281,7 +90,6 @@ impl Ctx<'_> {
                 ioas: &mut point_ioas,
             },
         );
-
         let (lifts, lift_points) = self.check_lifts(
             n,
             raw,
@@ -313,63 +121,176 @@ impl Ctx<'_> {
         );
 
         #[cfg(feature = "runtime")]
-        if all_sources_read && !files.is_empty() {
-            self.check_plc_variables(n, raw, &files);
+        if sources.all_read && !sources.files.is_empty() {
+            self.check_plc_variables(n, raw, &sources.files);
         }
 
+        let lines = self.check_lines(n, raw);
+        let notify = self.check_notify(n, raw);
+        let tables = self.check_tables(folder, n, raw);
         NodeConfig {
             name: raw.name.clone(),
             description: raw.description.clone(),
             common_address: common,
-            sources,
+            sources: sources.paths,
             server,
             tasks,
             io,
             points,
             commands,
             links: Vec::new(),
-            lines: self.check_lines(n, raw),
+            lines,
             lifts,
             devices,
-            notify: raw.notify.as_ref().map(|config| {
-                if let Err(errors) = config.validate() {
-                    for error in errors {
-                        self.err(
-                            &node(&[K("notify")]),
-                            ConfigProblem::Invalid {
-                                detail: error.to_string(),
-                            },
-                        );
-                    }
-                }
-                config.clone()
-            }),
+            notify,
             initial_values: raw
                 .set
                 .iter()
                 .map(|(path, value)| (path.clone(), value.clone()))
                 .collect(),
-            tables: raw
-                .table
-                .iter()
-                .enumerate()
-                .map(|(t, table)| TableConfig {
-                    file: self.existing_file(
-                        folder,
-                        &table.file,
-                        &[K("node"), I(n), K("table"), I(t), K("file")],
-                    ),
-                    index: table.index.clone(),
-                    columns: table
-                        .columns
-                        .iter()
-                        .map(|(column, path)| (column.clone(), path.clone()))
-                        .collect(),
-                })
-                .collect(),
+            tables,
         }
     }
 
+    /// The node's ST sources: each must exist and be UTF-8 text.
+    fn check_sources(&mut self, folder: &Path, n: usize, raw: &RawNode) -> Sources {
+        let mut paths = Vec::new();
+        let mut files: Vec<(String, String)> = Vec::new();
+        for (s, source) in raw.sources.iter().enumerate() {
+            let path = node_path(n, &[K("sources"), I(s)]);
+            let resolved = self.existing_file(folder, source, &path);
+            if resolved.is_file() {
+                match std::fs::read(&resolved) {
+                    Ok(bytes) => match String::from_utf8(bytes) {
+                        Ok(text) => files.push((resolved.display().to_string(), text)),
+                        Err(e) => self.push(not_utf8(&resolved, e.as_bytes())),
+                    },
+                    Err(e) => self.err(
+                        &path,
+                        ConfigProblem::Unreadable {
+                            file: Some(resolved.clone()),
+                            kind: e.kind(),
+                            detail: e.to_string(),
+                        },
+                    ),
+                }
+            }
+            paths.push(resolved);
+        }
+        let all_read = files.len() == raw.sources.len();
+        Sources {
+            paths,
+            files,
+            all_read,
+        }
+    }
+
+    /// The node's PLC tasks: names unique, intervals and watchdogs above 0, each program
+    /// declared in the sources (when all of them were read).
+    fn check_tasks(&mut self, n: usize, raw: &RawNode, sources: &Sources) -> Vec<TaskConfig> {
+        let texts: Vec<&str> = sources
+            .files
+            .iter()
+            .map(|(_, text)| text.as_str())
+            .collect();
+        let mut tasks = Vec::new();
+        let mut task_names = HashSet::new();
+        for (t, task) in raw.task.iter().enumerate() {
+            let entry = Entry::new(n, "task", t);
+            if !task_names.insert(task.name.clone()) {
+                self.err(
+                    &entry.key("name"),
+                    ConfigProblem::Duplicate {
+                        what: Unique::TaskName,
+                        value: task.name.clone(),
+                        other: raw.name.clone(),
+                    },
+                );
+            }
+            if task.interval_ms == 0 {
+                self.err(
+                    &entry.key("interval_ms"),
+                    ConfigProblem::OutOfRange {
+                        what: "interval_ms",
+                        value: 0,
+                        min: 1,
+                        max: None,
+                    },
+                );
+            }
+            if task.watchdog_ms == Some(0) {
+                self.err(
+                    &entry.key("watchdog_ms"),
+                    ConfigProblem::OutOfRange {
+                        what: "watchdog_ms",
+                        value: 0,
+                        min: 1,
+                        max: None,
+                    },
+                );
+            }
+            if sources.all_read {
+                for (p, program) in task.programs.iter().enumerate() {
+                    if !texts.iter().any(|text| declares_program(text, program)) {
+                        self.err(
+                            &entry.element("programs", p),
+                            ConfigProblem::Unknown {
+                                what: Reference::Program,
+                                name: program.clone(),
+                                within: raw.name.clone(),
+                            },
+                        );
+                    }
+                }
+            }
+            tasks.push(TaskConfig {
+                name: task.name.clone(),
+                interval: Duration::from_millis(task.interval_ms),
+                priority: task.priority,
+                programs: task.programs.clone(),
+                watchdog: task.watchdog_ms.map(Duration::from_millis),
+            });
+        }
+        tasks
+    }
+
+    /// The node's `[node.notify]` settings, each problem its validation finds reported.
+    fn check_notify(&mut self, n: usize, raw: &RawNode) -> Option<notify::NotifyConfig> {
+        raw.notify.as_ref().map(|config| {
+            if let Err(errors) = config.validate() {
+                for error in errors {
+                    self.err(
+                        &node_path(n, &[K("notify")]),
+                        ConfigProblem::Invalid {
+                            detail: error.to_string(),
+                        },
+                    );
+                }
+            }
+            config.clone()
+        })
+    }
+
+    /// The node's tables (`[[node.table]]`), each file checked to exist.
+    fn check_tables(&mut self, folder: &Path, n: usize, raw: &RawNode) -> Vec<TableConfig> {
+        raw.table
+            .iter()
+            .enumerate()
+            .map(|(t, table)| TableConfig {
+                file: self.existing_file(
+                    folder,
+                    &table.file,
+                    &[K("node"), I(n), K("table"), I(t), K("file")],
+                ),
+                index: table.index.clone(),
+                columns: table
+                    .columns
+                    .iter()
+                    .map(|(column, path)| (column.clone(), path.clone()))
+                    .collect(),
+            })
+            .collect()
+    }
     /// Compiles the node's ST sources as the runtime will and looks up every PLC variable
     /// the node names (point sources and `invalid_when`, command targets and
     /// `remote_enable`, I/O variables, `refuse_commands_when`): a typo is then reported at
