@@ -5,13 +5,21 @@
 //! own [`NodeClock`] = simulated UTC + an offset that clock synchronisation (C_CS_NA_1
 //! from the node above) sets, as a controller's real-time clock would be set. PLC
 //! cycles, time tags and store records of a node read its node clock.
+//!
+//! The nodes running in one process know each other's clocks ([`LocalClocks`]): a link
+//! to a lower node of the same process sets its clock directly.
 
+use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, AtomicI64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use chrono::{DateTime, Offset as _, TimeZone as _, Utc};
 use chrono_tz::Tz;
+
+use crate::config::{LinkConfig, LinkTarget};
+
+use super::node::NodePoints;
 
 /// Simulated time shared by every node of the process.
 #[derive(Debug)]
@@ -129,6 +137,30 @@ impl NodeClock {
     /// The offset against simulated UTC that synchronisation set.
     pub fn offset(&self) -> chrono::Duration {
         chrono::Duration::nanoseconds(self.offset_ns.load(Ordering::Acquire))
+    }
+}
+
+/// The clocks of the nodes in this process, by name, for links that set them directly.
+#[derive(Debug)]
+pub(crate) struct LocalClocks(HashMap<String, Arc<NodeClock>>);
+
+impl LocalClocks {
+    /// The clocks of `nodes` (the running nodes with their project index).
+    pub(crate) fn of(nodes: &[(usize, Arc<NodePoints>)]) -> LocalClocks {
+        LocalClocks(
+            nodes
+                .iter()
+                .map(|(_, points)| (points.name().to_owned(), Arc::clone(points.clock())))
+                .collect(),
+        )
+    }
+
+    /// The clock of the node `link` leads to, when that node runs in this process.
+    pub(crate) fn lower(&self, link: &LinkConfig) -> Option<Arc<NodeClock>> {
+        match &link.target {
+            LinkTarget::Node(name) => self.0.get(name).cloned(),
+            LinkTarget::Address(_) => None,
+        }
     }
 }
 

@@ -13,6 +13,9 @@
 //! the point's next change went out as return information (or its wait ran out); a
 //! forwarded command is confirmed when the lower node confirmed it and terminated when
 //! the lower node's termination arrived, after the data that came before it.
+//!
+//! A node's handler is built from its configuration here ([`NodeHandler::new`]): each
+//! command routed by its target, the links whose lower node takes the node's time.
 
 use std::collections::HashMap;
 use std::sync::{mpsc, Arc};
@@ -24,8 +27,10 @@ use iec60870::outstation::Peer;
 use iec60870::time::Cp56Time2a;
 use tokio::sync::oneshot;
 
+use crate::config::{CommandConfig, CommandTarget, NodeConfig};
 use crate::store::{Actor, CommandOutcome, CommandPhase, CommandRecord, PointValue};
 
+use super::clock::LocalClocks;
 use super::link::LinkHandle;
 use super::node::NodePoints;
 use super::simulation::{CommandRefusal, SimRequest};
@@ -63,6 +68,41 @@ pub(crate) enum Route {
     },
 }
 
+impl Route {
+    /// Where `command` goes by its target; `sim_node` is the node's index on the
+    /// simulation thread.
+    fn of(command: &CommandConfig, sim_node: usize) -> Route {
+        match &command.target {
+            CommandTarget::Variable(_) => Route::Plc {
+                node: sim_node,
+                pulse: command.pulse,
+            },
+            CommandTarget::Link { link, ioa } => Route::Link {
+                link: link.clone(),
+                ioa: *ioa,
+            },
+            CommandTarget::Line {
+                line,
+                device,
+                fun,
+                inf,
+                value,
+            } => Route::Line {
+                line: line.clone(),
+                device: device.clone(),
+                fun: *fun,
+                inf: *inf,
+                value: *value,
+            },
+            CommandTarget::LineObject { line, device, ioa } => Route::LineObject {
+                line: line.clone(),
+                device: device.clone(),
+                ioa: *ioa,
+            },
+        }
+    }
+}
+
 #[derive(Debug, Clone)]
 pub(crate) struct RoutedCommand {
     pub name: String,
@@ -96,11 +136,63 @@ pub(crate) struct NodeHandler {
 }
 
 impl NodeHandler {
+    /// The handler of the node `config`'s server: `sim_node` is the node's index on the
+    /// simulation thread, `clocks` those of the nodes in this process (the lower clocks of
+    /// its clock-synchronised links). Its links and lines are set once they are started.
+    pub(crate) fn new(
+        config: &NodeConfig,
+        sim_node: usize,
+        points: &Arc<NodePoints>,
+        simulation: mpsc::Sender<SimRequest>,
+        clocks: &LocalClocks,
+    ) -> NodeHandler {
+        NodeHandler {
+            points: Arc::clone(points),
+            commands: routed_commands(config, sim_node),
+            links: std::sync::OnceLock::new(),
+            lines: std::sync::OnceLock::new(),
+            sync_links: config
+                .links
+                .iter()
+                .filter(|l| l.clock_sync)
+                .map(|l| (l.name.clone(), clocks.lower(l)))
+                .collect(),
+            simulation,
+            groups: config
+                .server
+                .as_ref()
+                .map(|s| s.redundancy_groups.clone())
+                .unwrap_or_default(),
+            sim_node,
+            connected: std::sync::Mutex::default(),
+        }
+    }
+
     /// The redundancy group a client belongs to, chosen as the server chooses it: the
     /// first group naming its address, else the first catch-all group.
     fn group_of(&self, peer: &Peer) -> Option<&crate::config::RedundancyGroup> {
         crate::config::RedundancyGroup::of_client(&self.groups, peer.ip())
     }
+}
+
+/// The node's commands by IOA, each with its route.
+fn routed_commands(config: &NodeConfig, sim_node: usize) -> HashMap<u32, RoutedCommand> {
+    config
+        .commands
+        .iter()
+        .map(|command| {
+            (
+                command.ioa.get(),
+                RoutedCommand {
+                    name: command.name.clone(),
+                    route: Route::of(command, sim_node),
+                    from_groups: command.from_groups.clone(),
+                    feedback: command.feedback.clone(),
+                    range: command.range.clone(),
+                },
+            )
+        })
+        .collect()
 }
 
 impl StationHandler for NodeHandler {

@@ -13,6 +13,9 @@
 //! and termination as it meets them in the lower node's stream
 //! ([`LinkHandle::watch_command`]), after the data received before them, so a forwarded
 //! command's return information is published here before its termination.
+//!
+//! A link's spec follows from the project ([`LinkSpec::new`]): the lower node's address,
+//! the points its IOAs feed, its TLS, the lower clock when that node runs in this process.
 
 use std::collections::HashMap;
 use std::net::SocketAddr;
@@ -25,10 +28,13 @@ use iec60870::cs104::link::{Link, LinkDown, LinkObserver};
 
 use points::{PointId, PointSource};
 
-use super::clock::NodeClock;
+use crate::config::{LinkConfig, NodeConfig, Project};
+
+use super::clock::{LocalClocks, NodeClock};
 use super::field::CommunicationStatus;
 use super::forwarded::{CommandAnswers, CommandWatches};
 use super::node::NodePoints;
+use super::RuntimeError;
 
 /// How often a node re-synchronises the clocks of the nodes below it.
 pub const CLOCK_SYNC_PERIOD: Duration = Duration::from_secs(60);
@@ -51,6 +57,84 @@ pub(crate) struct LinkSpec {
     /// clock, so it is set directly. (A C_CS_NA_1 would arrive late by the network delay
     /// times the simulation speed, and skew the lower clock by that much.)
     pub local_clock: Option<Arc<NodeClock>>,
+}
+
+impl LinkSpec {
+    /// The spec of the node `config`'s `link`: the points of `node` whose source is
+    /// `link:NAME/IOA` by remote IOA, the TLS client configuration, the lower node's clock
+    /// among `clocks`.
+    pub(crate) fn new(
+        project: &Project,
+        config: &NodeConfig,
+        link: &LinkConfig,
+        node: &NodePoints,
+        clocks: &LocalClocks,
+    ) -> Result<LinkSpec, RuntimeError> {
+        let Some(address) = project.link_address(link) else {
+            return Err(RuntimeError::Setup(format!(
+                "node `{}`: link `{}` has no address",
+                config.name, link.name
+            )));
+        };
+        let points = fed_points(config, link, node);
+        let tls = client_tls(config, link, address)?;
+        Ok(LinkSpec {
+            tls,
+            name: link.name.clone(),
+            address,
+            common_address: link.common_address,
+            interrogate_on_start: link.interrogate_on_start,
+            clock_sync: link.clock_sync,
+            status_point: link.status_point.clone(),
+            points,
+            local_clock: clocks.lower(link),
+        })
+    }
+}
+
+/// Remote IOA -> the points of `node` it feeds (those whose source is `link:NAME/IOA`).
+fn fed_points(
+    config: &NodeConfig,
+    link: &LinkConfig,
+    node: &NodePoints,
+) -> HashMap<u32, Vec<PointId>> {
+    let mut map: HashMap<u32, Vec<PointId>> = HashMap::new();
+    let db = node.lock();
+    for point in &config.points {
+        if let PointSource::Link { link: name, ioa } = &point.source {
+            if name == &link.name {
+                if let Some(id) = db.id(point.name.as_str()) {
+                    map.entry(*ioa).or_default().push(id);
+                }
+            }
+        }
+    }
+    map
+}
+
+/// The link's TLS client configuration and the name the lower node's certificate must
+/// carry, if it uses TLS.
+fn client_tls(
+    config: &NodeConfig,
+    link: &LinkConfig,
+    address: SocketAddr,
+) -> Result<Option<iec60870::cs104::tls::ClientTls>, RuntimeError> {
+    let Some(files) = &link.tls else {
+        return Ok(None);
+    };
+    let setup = |error: iec60870::cs104::tls::TlsError| {
+        RuntimeError::Setup(format!(
+            "node `{}`: link `{}`: TLS: {error}",
+            config.name, link.name
+        ))
+    };
+    let client = files
+        .load()
+        .and_then(|pem| iec60870::cs104::tls::client_config(&pem))
+        .map_err(setup)?;
+    // The lower node's certificate names the address it is reached at.
+    let name = iec60870::cs104::tls::server_name(&address.ip().to_string()).map_err(setup)?;
+    Ok(Some((client, name)))
 }
 
 /// A running link: its state, its client (for forwarded commands), cut and restore.

@@ -25,11 +25,19 @@
 //!   recorded.
 //! - `command`: the server hooks — commands routed to a PLC variable (refused in local
 //!   mode) or down a link, each audited; clock synchronisation passed down.
+//! - `server`: a node's IEC 104 server (settings, TLS, process image with the commands,
+//!   the sink feeding it, its redundancy groups' status points).
 //!
-//! [`Runtime::start`] brings a project (or some of its nodes) up: store, point databases,
-//! PLCs (compiled on the simulation thread, errors with file:line:col), one server per
-//! node (its image holds the values of the first PLC scan), then the links, then the
-//! clock starts.
+//! [`Runtime::start`] brings a project (or some of its nodes) up, one step a function
+//! here: the event store and recorder (`open_event_store`), the point databases
+//! (`node_points`), the PLCs (compiled on the simulation thread, errors with
+//! file:line:col: `start_simulation`, then `first_scan`), one server per node
+//! (`start_servers`: its image holds the values of the first PLC scan, see `server`; its
+//! handler is `command`'s `NodeHandler::new`), then the links (`start_links`, each spec
+//! from [`link`]'s `LinkSpec::new`), the serial lines (`start_lines`, their point maps
+//! from [`line`]'s `LineSpec::new`), notifications and lifts (`start_notifications`,
+//! `start_lifts`), the profiled devices (`start_devices`), then the clock starts and
+//! retention runs (`start_retention`).
 
 pub mod clock;
 mod command;
@@ -41,6 +49,7 @@ pub mod link;
 pub mod node;
 pub mod notification;
 pub mod operation;
+mod server;
 pub mod simulation;
 pub mod sink;
 
@@ -49,18 +58,16 @@ use std::sync::{mpsc, Arc};
 use std::time::Duration;
 
 use chrono::{DateTime, Utc};
-use iec60870::cs104::server::{
-    spawn_server, CommandPoint, ServerConfig, ServerError, ServerHandle,
-};
+use iec60870::cs104::server::{ServerError, ServerHandle};
 use tokio::sync::oneshot;
 
-use crate::config::{CommandTarget, NodeConfig, PointSource, Project};
+use crate::config::{NodeConfig, Project};
 use crate::device::DeviceKinds;
 use crate::store::{
     open_store, spawn_retention, EventStore, Retention, RetentionHandle, StoreError,
 };
 use iec60870::time::TimeZonePolicy;
-use points::{LineSignal, PointDb, PointSpec};
+use points::{PointDb, PointSpec};
 
 pub use crate::store::Recorder;
 pub use clock::{NodeClock, Pacing, SimClock};
@@ -69,7 +76,8 @@ pub use node::NodePoints;
 pub use simulation::{CommandRefusal, OutputChange, Simulation};
 pub use sink::{Iec104Sink, PointSink};
 
-use command::{NodeHandler, Route, RoutedCommand};
+use clock::LocalClocks;
+use command::NodeHandler;
 use link::LinkSpec;
 pub use operation::{Operation, OperationError};
 use simulation::SimRequest;
@@ -248,6 +256,249 @@ pub fn point_specs(node: &NodeConfig) -> Vec<PointSpec> {
         .collect()
 }
 
+/// The project indices of the nodes `names` (all of them when it is empty).
+fn select_nodes(project: &Project, names: &[String]) -> Result<Vec<usize>, RuntimeError> {
+    if names.is_empty() {
+        return Ok((0..project.nodes.len()).collect());
+    }
+    names
+        .iter()
+        .map(|name| {
+            project
+                .nodes
+                .iter()
+                .position(|n| &n.name == name)
+                .ok_or_else(|| {
+                    let names = project.nodes.iter().map(|n| n.name.as_str());
+                    RuntimeError::Setup(format!(
+                        "no node `{name}` in the project{} (nodes: {})",
+                        plc::suggest::did_you_mean(name, names.clone()),
+                        names.collect::<Vec<_>>().join(", ")
+                    ))
+                })
+        })
+        .collect()
+}
+
+/// Opens the event store `choice` names, if any.
+async fn open_event_store(
+    project: &Project,
+    choice: &StoreChoice,
+) -> Result<Option<Arc<dyn EventStore>>, RuntimeError> {
+    let url = match choice {
+        StoreChoice::Disabled => return Ok(None),
+        StoreChoice::Url(url) => url.clone(),
+        StoreChoice::Project => project.station.store.clone(),
+    };
+    Ok(Some(Arc::from(open_store(&url).await?)))
+}
+
+/// The point database of each selected node (by project index), with its recorder and
+/// its clock on `clock`.
+fn node_points(
+    project: &Project,
+    selected: &[usize],
+    clock: &Arc<SimClock>,
+    recorder: &Recorder,
+) -> Result<Vec<(usize, Arc<NodePoints>)>, RuntimeError> {
+    let zone = zone_of(project);
+    let mut shared = Vec::new();
+    for &index in selected {
+        let Some(node) = project.nodes.get(index) else {
+            continue;
+        };
+        let db = PointDb::new(&node.name, point_specs(node))
+            .map_err(|error| RuntimeError::Setup(format!("node `{}`: {error}", node.name)))?;
+        let node_clock = NodeClock::new(Arc::clone(clock), project.station.time_zone);
+        shared.push((
+            index,
+            NodePoints::new(&node.name, db, zone, recorder.clone(), node_clock),
+        ));
+    }
+    Ok(shared)
+}
+
+/// Starts the simulation thread, which builds the plant and the PLCs of `nodes` and runs
+/// the first scan; returns once they are built (or why they could not be), with the
+/// channel of its requests.
+async fn start_simulation(
+    project: &Project,
+    nodes: &[(usize, Arc<NodePoints>)],
+    clock: &Arc<SimClock>,
+    pacing: Pacing,
+) -> Result<(mpsc::Sender<SimRequest>, std::thread::JoinHandle<()>), RuntimeError> {
+    let (requests, receiver) = mpsc::channel();
+    let (built, built_answer) = oneshot::channel();
+    let thread = {
+        let project = project.clone();
+        let shared = nodes.to_vec();
+        let clock = Arc::clone(clock);
+        std::thread::Builder::new()
+            .name("stanice-simulation".into())
+            .spawn(move || match Simulation::build(&project, &shared, clock) {
+                Ok(simulation) => {
+                    let _ = built.send(Ok(()));
+                    simulation::run(simulation, pacing, receiver);
+                }
+                Err(error) => {
+                    let _ = built.send(Err(error));
+                }
+            })
+            .map_err(|error| {
+                RuntimeError::Setup(format!("cannot start the simulation thread: {error}"))
+            })?
+    };
+    built_answer.await.map_err(|_| RuntimeError::Stopped)??;
+    Ok((requests, thread))
+}
+
+/// Waits for the first scan (the thread runs it before reading requests).
+async fn first_scan(requests: &mpsc::Sender<SimRequest>) -> Result<(), RuntimeError> {
+    let (scanned, scan_answer) = oneshot::channel();
+    requests
+        .send(SimRequest::With(Box::new(move |sim: &mut Simulation| {
+            let _ = scanned.send(sim.now());
+        })))
+        .map_err(|_| RuntimeError::Stopped)?;
+    scan_answer.await.map_err(|_| RuntimeError::Stopped)?;
+    Ok(())
+}
+
+/// Makes the clock of each lower node in this process follow the node above it, over the
+/// links that synchronise clocks.
+fn follow_lower_clocks(
+    project: &Project,
+    nodes: &[(usize, Arc<NodePoints>)],
+    clocks: &LocalClocks,
+) {
+    for (index, points) in nodes {
+        let Some(config) = project.nodes.get(*index) else {
+            continue;
+        };
+        for link in config.links.iter().filter(|l| l.clock_sync) {
+            if let Some(lower) = clocks.lower(link) {
+                points.clock().add_follower(lower);
+            }
+        }
+    }
+}
+
+/// Starts each node's server (if it has one) with its command handler; returns the
+/// nodes, their links, lines, lifts and devices still to start, and the handlers.
+async fn start_servers(
+    project: &Project,
+    nodes: &[(usize, Arc<NodePoints>)],
+    requests: &mpsc::Sender<SimRequest>,
+    clocks: &LocalClocks,
+    zone: TimeZonePolicy,
+) -> Result<(Vec<NodeRuntime>, Vec<Arc<NodeHandler>>), RuntimeError> {
+    let mut started = Vec::new();
+    let mut handlers = Vec::new();
+    for (sim_index, (index, points)) in nodes.iter().enumerate() {
+        let Some(config) = project.nodes.get(*index) else {
+            continue;
+        };
+        let handler = Arc::new(NodeHandler::new(
+            config,
+            sim_index,
+            points,
+            requests.clone(),
+            clocks,
+        ));
+        let server = server::start_server(project, config, points, &handler, zone).await?;
+        handlers.push(handler);
+        started.push(NodeRuntime {
+            points: Arc::clone(points),
+            server,
+            links: Vec::new(),
+            lines: Vec::new(),
+            lifts: Vec::new(),
+            devices: Vec::new(),
+        });
+    }
+    Ok((started, handlers))
+}
+
+/// Starts the node's links to lower nodes (once every server of this process listens).
+fn start_links(
+    project: &Project,
+    config: &NodeConfig,
+    points: &Arc<NodePoints>,
+    clocks: &LocalClocks,
+) -> Result<Vec<LinkHandle>, RuntimeError> {
+    config
+        .links
+        .iter()
+        .map(|link| {
+            let spec = LinkSpec::new(project, config, link, points, clocks)?;
+            Ok(link::spawn_link(spec, Arc::clone(points)))
+        })
+        .collect()
+}
+
+/// Starts the node's serial lines to protection devices.
+fn start_lines(config: &NodeConfig, points: &Arc<NodePoints>) -> Vec<line::LineHandle> {
+    config
+        .lines
+        .iter()
+        .map(|line| {
+            let spec = line::LineSpec::new(line, &config.points, points);
+            line::spawn_line(spec, Arc::clone(points))
+        })
+        .collect()
+}
+
+/// The handles by name, for the server's hooks.
+fn by_name<H: Clone>(handles: &[H], name: impl Fn(&H) -> &str) -> HashMap<String, H> {
+    handles
+        .iter()
+        .map(|handle| (name(handle).to_owned(), handle.clone()))
+        .collect()
+}
+
+/// Starts the sender of the node's notices, if it has lifts to report on and a `notify`
+/// setting.
+fn start_notifications(
+    config: &NodeConfig,
+    store: Option<&Arc<dyn EventStore>>,
+) -> Result<Option<notification::Notifications>, RuntimeError> {
+    match (&config.notify, config.lifts.is_empty()) {
+        (Some(notify), false) => {
+            notification::Notifications::spawn(&config.name, notify.clone(), store.cloned())
+                .map(Some)
+                .map_err(|error| {
+                    RuntimeError::Setup(format!("node `{}`: notify: {error}", config.name))
+                })
+        }
+        _ => Ok(None),
+    }
+}
+
+/// Starts the node's lifts; their archived faults go to `archived_faults` and to
+/// `notifications`.
+fn start_lifts(
+    config: &NodeConfig,
+    points: &Arc<NodePoints>,
+    store: Option<&Arc<dyn EventStore>>,
+    archived_faults: &tokio::sync::broadcast::Sender<lift::ArchivedFault>,
+    notifications: Option<notification::Notifications>,
+) -> Vec<lift::LiftHandle> {
+    config
+        .lifts
+        .iter()
+        .map(|lift| {
+            let spec = lift::LiftSpec::new(lift, points);
+            lift::spawn_lift(
+                spec,
+                Arc::clone(points),
+                store.cloned(),
+                archived_faults.clone(),
+                notifications.clone(),
+            )
+        })
+        .collect()
+}
+
 /// Starts the node's profiled devices (`[[node.device]]`) under the field-source
 /// supervisor.
 fn start_devices(
@@ -279,39 +530,29 @@ fn start_devices(
         .collect()
 }
 
+/// Starts the deletion of records older than the project's retention, if there is a
+/// store.
+fn start_retention(
+    project: &Project,
+    clock: &Arc<SimClock>,
+    store: Option<&Arc<dyn EventStore>>,
+) -> Option<RetentionHandle> {
+    store.map(|store| {
+        let days = u64::from(project.station.retention_days.max(1));
+        let node_clock = NodeClock::new(Arc::clone(clock), project.station.time_zone);
+        spawn_retention(
+            Arc::clone(store),
+            Retention::new(Duration::from_secs(days * 86_400)),
+            move || node_clock.now(),
+        )
+    })
+}
+
 impl Runtime {
     /// Starts `project` (or the nodes `options.nodes` of it) on the current tokio runtime.
     pub async fn start(project: Project, options: RuntimeOptions) -> Result<Runtime, RuntimeError> {
-        let selected: Vec<usize> = if options.nodes.is_empty() {
-            (0..project.nodes.len()).collect()
-        } else {
-            let mut selected = Vec::new();
-            for name in &options.nodes {
-                let index = project
-                    .nodes
-                    .iter()
-                    .position(|n| &n.name == name)
-                    .ok_or_else(|| {
-                        let names = project.nodes.iter().map(|n| n.name.as_str());
-                        RuntimeError::Setup(format!(
-                            "no node `{name}` in the project{} (nodes: {})",
-                            plc::suggest::did_you_mean(name, names.clone()),
-                            names.collect::<Vec<_>>().join(", ")
-                        ))
-                    })?;
-                selected.push(index);
-            }
-            selected
-        };
-        let store_url = match &options.store {
-            StoreChoice::Disabled => None,
-            StoreChoice::Url(url) => Some(url.clone()),
-            StoreChoice::Project => Some(project.station.store.clone()),
-        };
-        let store: Option<Arc<dyn EventStore>> = match store_url {
-            Some(url) => Some(Arc::from(open_store(&url).await?)),
-            None => None,
-        };
+        let selected = select_nodes(&project, &options.nodes)?;
+        let store = open_event_store(&project, &options.store).await?;
         let recorder = match &store {
             Some(store) => Recorder::spawn(Arc::clone(store)),
             None => Recorder::disabled(),
@@ -319,226 +560,17 @@ impl Runtime {
         let clock = SimClock::new(options.start);
         let zone = zone_of(&project);
         let (archived_faults, _) = tokio::sync::broadcast::channel(ARCHIVED_FAULTS_BACKLOG);
-        let mut shared = Vec::new();
-        for &index in &selected {
-            let Some(node) = project.nodes.get(index) else {
-                continue;
-            };
-            let db = PointDb::new(&node.name, point_specs(node))
-                .map_err(|error| RuntimeError::Setup(format!("node `{}`: {error}", node.name)))?;
-            let node_clock = NodeClock::new(Arc::clone(&clock), project.station.time_zone);
-            shared.push((
-                index,
-                NodePoints::new(&node.name, db, zone, recorder.clone(), node_clock),
-            ));
-        }
-
+        let shared = node_points(&project, &selected, &clock, &recorder)?;
         // The simulation thread builds the PLCs (they cannot leave it) and runs the first
         // scan, so that each server starts with real values in its image.
-        let (requests, receiver) = mpsc::channel();
-        let (built, built_answer) = oneshot::channel();
-        let thread = {
-            let project = project.clone();
-            let shared = shared.clone();
-            let clock = Arc::clone(&clock);
-            let pacing = options.pacing;
-            std::thread::Builder::new()
-                .name("stanice-simulation".into())
-                .spawn(move || match Simulation::build(&project, &shared, clock) {
-                    Ok(simulation) => {
-                        let _ = built.send(Ok(()));
-                        simulation::run(simulation, pacing, receiver);
-                    }
-                    Err(error) => {
-                        let _ = built.send(Err(error));
-                    }
-                })
-                .map_err(|error| {
-                    RuntimeError::Setup(format!("cannot start the simulation thread: {error}"))
-                })?
-        };
-        built_answer.await.map_err(|_| RuntimeError::Stopped)??;
-        // Wait for the first scan (the thread runs it before reading requests).
-        let (scanned, scan_answer) = oneshot::channel();
-        requests
-            .send(SimRequest::With(Box::new(move |sim: &mut Simulation| {
-                let _ = scanned.send(sim.now());
-            })))
-            .map_err(|_| RuntimeError::Stopped)?;
-        scan_answer.await.map_err(|_| RuntimeError::Stopped)?;
+        let (requests, thread) =
+            start_simulation(&project, &shared, &clock, options.pacing).await?;
+        first_scan(&requests).await?;
 
-        // The clocks of the nodes in this process, for links that set them directly.
-        let local_clocks: HashMap<String, Arc<NodeClock>> = shared
-            .iter()
-            .map(|(_, points)| (points.name().to_owned(), Arc::clone(points.clock())))
-            .collect();
-        let lower_clock = |link: &crate::config::LinkConfig| match &link.target {
-            crate::config::LinkTarget::Node(name) => local_clocks.get(name).cloned(),
-            crate::config::LinkTarget::Address(_) => None,
-        };
-        for (index, points) in &shared {
-            let Some(config) = project.nodes.get(*index) else {
-                continue;
-            };
-            for link in config.links.iter().filter(|l| l.clock_sync) {
-                if let Some(lower) = lower_clock(link) {
-                    points.clock().add_follower(lower);
-                }
-            }
-        }
-        let mut nodes = Vec::new();
-        let mut handlers = Vec::new();
-        for (sim_index, (index, points)) in shared.iter().enumerate() {
-            let Some(config) = project.nodes.get(*index) else {
-                continue;
-            };
-            let commands = config
-                .commands
-                .iter()
-                .map(|command| {
-                    let route = match &command.target {
-                        CommandTarget::Variable(_) => Route::Plc {
-                            node: sim_index,
-                            pulse: command.pulse,
-                        },
-                        CommandTarget::Link { link, ioa } => Route::Link {
-                            link: link.clone(),
-                            ioa: *ioa,
-                        },
-                        CommandTarget::Line {
-                            line,
-                            device,
-                            fun,
-                            inf,
-                            value,
-                        } => Route::Line {
-                            line: line.clone(),
-                            device: device.clone(),
-                            fun: *fun,
-                            inf: *inf,
-                            value: *value,
-                        },
-                        CommandTarget::LineObject { line, device, ioa } => Route::LineObject {
-                            line: line.clone(),
-                            device: device.clone(),
-                            ioa: *ioa,
-                        },
-                    };
-                    (
-                        command.ioa.get(),
-                        RoutedCommand {
-                            name: command.name.clone(),
-                            route,
-                            from_groups: command.from_groups.clone(),
-                            feedback: command.feedback.clone(),
-                            range: command.range.clone(),
-                        },
-                    )
-                })
-                .collect();
-            let handler = Arc::new(NodeHandler {
-                points: Arc::clone(points),
-                commands,
-                links: std::sync::OnceLock::new(),
-                lines: std::sync::OnceLock::new(),
-                sync_links: config
-                    .links
-                    .iter()
-                    .filter(|l| l.clock_sync)
-                    .map(|l| (l.name.clone(), lower_clock(l)))
-                    .collect(),
-                simulation: requests.clone(),
-                groups: config
-                    .server
-                    .as_ref()
-                    .map(|s| s.redundancy_groups.clone())
-                    .unwrap_or_default(),
-                sim_node: sim_index,
-                connected: std::sync::Mutex::default(),
-            });
-            let server = match (&config.server, config.server_address(&project.station)) {
-                (Some(server_config), Some(address)) => {
-                    let mut server = ServerConfig::new(address, config.common_address);
-                    server.allowed_clients = server_config.allowed_clients.clone();
-                    server.outstation.redundancy = server_config.redundancy.clone();
-                    // Slots for the controlling stations they are meant for: idle clients
-                    // cannot hold every connection (iec60870::cs104::server, admission).
-                    server.max_connections_per_address = Some(NODE_SERVER_SLOTS.per_address);
-                    server.max_connections_per_group = Some(NODE_SERVER_SLOTS.per_group);
-                    server.reserved_per_group = NODE_SERVER_SLOTS.reserved_per_group;
-                    server.start_timeout = Some(NODE_SERVER_SLOTS.start_timeout);
-                    server.outstation.max_command_age = server_config.max_command_age;
-                    server.outstation.time_zone = zone;
-                    if let Some(files) = &server_config.tls {
-                        // Already resolved against the project folder by the configuration.
-                        let tls = files
-                            .load()
-                            .and_then(|pem| iec60870::cs104::tls::server_config(&pem))
-                            .map_err(|error| {
-                                RuntimeError::Setup(format!("node `{}`: TLS: {error}", config.name))
-                            })?;
-                        server.tls = Some(tls);
-                    }
-                    let mut image =
-                        points_iec::process_image(&points.lock(), zone).map_err(|error| {
-                            RuntimeError::Setup(format!("node `{}`: {error}", config.name))
-                        })?;
-                    for command in &config.commands {
-                        image
-                            .add_command(CommandPoint {
-                                ioa: command.ioa,
-                                command_type: command.type_id,
-                                select_required: command.select_required,
-                                max_age: command.max_age,
-                            })
-                            .map_err(|error| {
-                                RuntimeError::Setup(format!("node `{}`: {error}", config.name))
-                            })?;
-                    }
-                    let handle = spawn_server(server, image, handler.clone() as Arc<_>)
-                        .await
-                        .map_err(|error| match error {
-                            ServerError::Listen { address, source }
-                                if source.kind() == std::io::ErrorKind::AddrInUse =>
-                            {
-                                RuntimeError::PortInUse {
-                                    node: config.name.clone(),
-                                    address,
-                                }
-                            }
-                            error => RuntimeError::Server {
-                                node: config.name.clone(),
-                                error,
-                            },
-                        })?;
-                    points.attach_sink(Arc::new(sink::Iec104Sink {
-                        server: handle.clone(),
-                        zone,
-                    }));
-                    // No controlling station is connected yet.
-                    let origin = config.name.clone();
-                    points.change_with(&origin, |db, now| {
-                        server_config
-                            .redundancy_groups
-                            .iter()
-                            .filter_map(|g| g.status_point.as_deref())
-                            .filter_map(|p| db.set_link_status(p, false, now).ok().flatten())
-                            .collect()
-                    });
-                    Some(handle)
-                }
-                _ => None,
-            };
-            handlers.push(handler);
-            nodes.push(NodeRuntime {
-                points: Arc::clone(points),
-                server,
-                links: Vec::new(),
-                lines: Vec::new(),
-                lifts: Vec::new(),
-                devices: Vec::new(),
-            });
-        }
+        let local_clocks = LocalClocks::of(&shared);
+        follow_lower_clocks(&project, &shared, &local_clocks);
+        let (mut nodes, handlers) =
+            start_servers(&project, &shared, &requests, &local_clocks, zone).await?;
 
         // Links, once every server of this process listens.
         for ((index, points), (node, handler)) in shared.iter().zip(nodes.iter_mut().zip(&handlers))
@@ -546,147 +578,27 @@ impl Runtime {
             let Some(config) = project.nodes.get(*index) else {
                 continue;
             };
-            let mut by_name = HashMap::new();
-            for link in &config.links {
-                let Some(address) = project.link_address(link) else {
-                    return Err(RuntimeError::Setup(format!(
-                        "node `{}`: link `{}` has no address",
-                        config.name, link.name
-                    )));
-                };
-                let mut map: HashMap<u32, Vec<points::PointId>> = HashMap::new();
-                {
-                    let db = points.lock();
-                    for point in &config.points {
-                        if let PointSource::Link { link: name, ioa } = &point.source {
-                            if name == &link.name {
-                                if let Some(id) = db.id(point.name.as_str()) {
-                                    map.entry(*ioa).or_default().push(id);
-                                }
-                            }
-                        }
-                    }
-                }
-                let tls = match &link.tls {
-                    None => None,
-                    Some(files) => {
-                        let setup = |error: iec60870::cs104::tls::TlsError| {
-                            RuntimeError::Setup(format!(
-                                "node `{}`: link `{}`: TLS: {error}",
-                                config.name, link.name
-                            ))
-                        };
-                        let client = files
-                            .load()
-                            .and_then(|pem| iec60870::cs104::tls::client_config(&pem))
-                            .map_err(setup)?;
-                        // The lower node's certificate names the address it is reached at.
-                        let name = iec60870::cs104::tls::server_name(&address.ip().to_string())
-                            .map_err(setup)?;
-                        Some((client, name))
-                    }
-                };
-                let spec = LinkSpec {
-                    tls,
-                    name: link.name.clone(),
-                    address,
-                    common_address: link.common_address,
-                    interrogate_on_start: link.interrogate_on_start,
-                    clock_sync: link.clock_sync,
-                    status_point: link.status_point.clone(),
-                    points: map,
-                    local_clock: lower_clock(link),
-                };
-                let handle = link::spawn_link(spec, Arc::clone(points));
-                by_name.insert(link.name.clone(), handle.clone());
-                node.links.push(handle);
-            }
-            let _ = handler.links.set(by_name);
-            let mut lines_by_name = HashMap::new();
-            for line in &config.lines {
-                let mut signals: HashMap<(u8, u8, u8, Option<u8>), Vec<line::LinePoint>> =
-                    HashMap::new();
-                let mut objects = line::ObjectPoints::new();
-                {
-                    let db = points.lock();
-                    for point in &config.points {
-                        let PointSource::Line {
-                            line: name,
-                            device,
-                            signal,
-                        } = &point.source
-                        else {
-                            continue;
-                        };
-                        let address = line
-                            .devices
-                            .iter()
-                            .find(|d| &d.name == device)
-                            .map(|d| d.address);
-                        let (true, Some(address), Some(id)) =
-                            (name == &line.name, address, db.id(point.name.as_str()))
-                        else {
-                            continue;
-                        };
-                        match signal {
-                            LineSignal::Iec103 { fun, inf, index } => signals
-                                .entry((address, *fun, *inf, *index))
-                                .or_default()
-                                .push(line::LinePoint {
-                                    id,
-                                    kind: point.point_type.kind,
-                                    scaling: point.scaling,
-                                }),
-                            LineSignal::Iec101 { ioa } => {
-                                objects.entry((address, *ioa)).or_default().push(id)
-                            }
-                        }
-                    }
-                }
-                let spec = line::LineSpec {
-                    config: line.clone(),
-                    signals,
-                    objects,
-                };
-                let handle = line::spawn_line(spec, Arc::clone(points));
-                lines_by_name.insert(line.name.clone(), handle.clone());
-                node.lines.push(handle);
-            }
-            let _ = handler.lines.set(lines_by_name);
-            let notifications = match (&config.notify, config.lifts.is_empty()) {
-                (Some(notify), false) => Some(
-                    notification::Notifications::spawn(&config.name, notify.clone(), store.clone())
-                        .map_err(|error| {
-                            RuntimeError::Setup(format!("node `{}`: notify: {error}", config.name))
-                        })?,
-                ),
-                _ => None,
-            };
-            for lift in &config.lifts {
-                let spec = lift::LiftSpec::new(lift, points);
-                node.lifts.push(lift::spawn_lift(
-                    spec,
-                    Arc::clone(points),
-                    store.clone(),
-                    archived_faults.clone(),
-                    notifications.clone(),
-                ));
-            }
+            node.links = start_links(&project, config, points, &local_clocks)?;
+            let _ = handler.links.set(by_name(&node.links, LinkHandle::name));
+            node.lines = start_lines(config, points);
+            let _ = handler
+                .lines
+                .set(by_name(&node.lines, line::LineHandle::name));
+            let notifications = start_notifications(config, store.as_ref())?;
+            node.lifts = start_lifts(
+                config,
+                points,
+                store.as_ref(),
+                &archived_faults,
+                notifications,
+            );
             node.devices = start_devices(config, points, &options.device_kinds)?;
         }
         requests
             .send(SimRequest::Go)
             .map_err(|_| RuntimeError::Stopped)?;
 
-        let retention = store.as_ref().map(|store| {
-            let days = u64::from(project.station.retention_days.max(1));
-            let node_clock = NodeClock::new(Arc::clone(&clock), project.station.time_zone);
-            spawn_retention(
-                Arc::clone(store),
-                Retention::new(Duration::from_secs(days * 86_400)),
-                move || node_clock.now(),
-            )
-        });
+        let retention = start_retention(&project, &clock, store.as_ref());
         tracing::info!(station = %project.station.name, nodes = nodes.len(), "station running");
         Ok(Runtime {
             project,

@@ -1,14 +1,21 @@
-//! The checks of a project: the station, each node, the links between them.
+//! The checks of a project: the station (here), each node (`node`, which runs the checks
+//! of its parts: `server`, `point`, `lift`, `device` and `generated`, `command`, `line`
+//! and `serial`), the links between the nodes (`links`).
 
+mod command;
 mod device;
 mod generated;
 mod lift;
 mod line;
 mod links;
 mod node;
+mod point;
 mod serial;
+mod server;
 
+use command::CommandContext;
 use generated::{GeneratedPoint, TakenPoints};
+use node::{node_path, Entry};
 use serial::SerialKeys;
 
 use super::*;

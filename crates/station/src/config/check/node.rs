@@ -1,228 +1,76 @@
-//! The checks of one node: server, tasks, I/O, points, commands, PLC variables.
+//! The checks of one node (`[[node]]`), in the order `Ctx::check_node` runs them: its
+//! common address, ST sources, server (`server`), tasks, I/O bindings, points (`point`;
+//! the points lifts and devices bring in `lift` and `device`), commands (`command`), the
+//! PLC variables they all name (here), serial lines (`line`), notifications and tables.
 
 use super::*;
 
+/// The key path `node[n]` followed by `rest`.
+pub(in crate::config) fn node_path(n: usize, rest: &[Seg]) -> Vec<Seg> {
+    let mut p = vec![K("node"), I(n)];
+    p.extend_from_slice(rest);
+    p
+}
+
+/// One entry of an array of tables in a node (`node[n].point[p]`, `node[n].command[c]`,
+/// ...): the key paths its problems are reported at.
+#[derive(Clone, Copy)]
+pub(in crate::config) struct Entry {
+    n: usize,
+    table: &'static str,
+    i: usize,
+}
+
+impl Entry {
+    /// Entry `i` of the node `n`'s `table`.
+    pub(in crate::config) fn new(n: usize, table: &'static str, i: usize) -> Entry {
+        Entry { n, table, i }
+    }
+
+    /// The entry as a whole.
+    pub(in crate::config) fn path(self) -> Vec<Seg> {
+        node_path(self.n, &[K(self.table), I(self.i)])
+    }
+
+    /// Its key `key`.
+    pub(in crate::config) fn key(self, key: &'static str) -> Vec<Seg> {
+        node_path(self.n, &[K(self.table), I(self.i), K(key)])
+    }
+
+    /// Element `e` of its array `key`.
+    pub(in crate::config) fn element(self, key: &'static str, e: usize) -> Vec<Seg> {
+        node_path(self.n, &[K(self.table), I(self.i), K(key), I(e)])
+    }
+}
+
+/// A node's ST sources: every path (checked to exist) and the text of each one read.
+struct Sources {
+    paths: Vec<PathBuf>,
+    /// (file name as diagnostics show it, text) of each source read.
+    files: Vec<(String, String)>,
+    /// Whether every source was read (else programs and variables are not looked up).
+    all_read: bool,
+}
+
 impl Ctx<'_> {
+    /// Checks node `n` (`raw`), each part in turn; the node's links are checked with the
+    /// other nodes (`links`).
     pub(in crate::config) fn check_node(
         &mut self,
         folder: &Path,
         n: usize,
         raw: &RawNode,
     ) -> NodeConfig {
-        let node = |rest: &[Seg]| -> Vec<Seg> {
-            let mut p = vec![K("node"), I(n)];
-            p.extend_from_slice(rest);
-            p
-        };
         let common = common_address(raw.common_address).unwrap_or_else(|problem| {
-            self.err(&node(&[K("common_address")]), problem);
+            self.err(&node_path(n, &[K("common_address")]), problem);
             CommonAddress::new(0)
         });
-
-        // sources
-        let mut sources = Vec::new();
-        // (file name as diagnostics show it, text) of each source read
-        let mut files: Vec<(String, String)> = Vec::new();
-        for (s, source) in raw.sources.iter().enumerate() {
-            let path = node(&[K("sources"), I(s)]);
-            let resolved = self.existing_file(folder, source, &path);
-            if resolved.is_file() {
-                match std::fs::read(&resolved) {
-                    Ok(bytes) => match String::from_utf8(bytes) {
-                        Ok(text) => files.push((resolved.display().to_string(), text)),
-                        Err(e) => self.push(not_utf8(&resolved, e.as_bytes())),
-                    },
-                    Err(e) => self.err(
-                        &path,
-                        ConfigProblem::Unreadable {
-                            file: Some(resolved.clone()),
-                            kind: e.kind(),
-                            detail: e.to_string(),
-                        },
-                    ),
-                }
-            }
-            sources.push(resolved);
-        }
-        let all_sources_read = files.len() == raw.sources.len();
-        let texts: Vec<&str> = files.iter().map(|(_, text)| text.as_str()).collect();
-
-        // server
-        let server = raw.server.as_ref().map(|s| {
-            let port_offset = u16::try_from(s.port_offset).unwrap_or_else(|_| {
-                self.err(
-                    &node(&[K("server"), K("port_offset")]),
-                    ConfigProblem::OutOfRange {
-                        what: "port_offset",
-                        value: s.port_offset,
-                        min: 0,
-                        max: Some(u16::MAX.into()),
-                    },
-                );
-                0
-            });
-            let allowed_clients = self.ips(
-                &s.allowed_clients,
-                &node(&[K("server"), K("allowed_clients")]),
-            );
-            let redundancy_groups = match &s.redundancy_groups {
-                None => vec![RedundancyGroup {
-                    name: "default".to_owned(),
-                    clients: Vec::new(),
-                    refuse_commands_when: None,
-                    status_point: None,
-                }],
-                Some(groups) => {
-                    let mut out = Vec::new();
-                    if groups.is_empty() {
-                        self.err(
-                            &node(&[K("server"), K("redundancy_groups")]),
-                            ConfigProblem::Missing {
-                                what: "redundancy group",
-                                needed_by: "",
-                                hint: "at least one is needed; leave redundancy_groups out for one catch-all group",
-                            },
-                        );
-                    }
-                    let mut names = HashSet::new();
-                    for (g, group) in groups.iter().enumerate() {
-                        if !names.insert(group.name.clone()) {
-                            self.err(
-                                &node(&[K("server"), K("redundancy_groups"), I(g), K("name")]),
-                                ConfigProblem::Duplicate {
-                                    what: Unique::RedundancyGroup,
-                                    value: group.name.clone(),
-                                    other: raw.name.clone(),
-                                },
-                            );
-                        }
-                        let clients = self.ips(
-                            &group.clients,
-                            &node(&[K("server"), K("redundancy_groups"), I(g), K("clients")]),
-                        );
-                        out.push(RedundancyGroup {
-                            name: group.name.clone(),
-                            clients,
-                            refuse_commands_when: group.refuse_commands_when.clone(),
-                            status_point: group.status_point.clone(),
-                        });
-                    }
-                    out
-                }
-            };
-            let tls = s
-                .tls
-                .as_ref()
-                .map(|t| self.tls_files(folder, t, &node(&[K("server"), K("tls")])));
-            let group_configs = redundancy_groups
-                .iter()
-                .map(|g| {
-                    iec60870::cs104::server::RedundancyGroupConfig::new(
-                        g.name.clone(),
-                        g.clients.clone(),
-                    )
-                })
-                .collect();
-            let mode_name = s.redundancy.as_deref().unwrap_or("groups-by-address");
-            let redundancy =
-                iec60870::cs104::server::RedundancyMode::from_name(mode_name, group_configs)
-                    .unwrap_or_else(|| {
-                        self.err(
-                            &node(&[K("server"), K("redundancy")]),
-                            ConfigProblem::UnknownValue {
-                                what: Vocabulary::RedundancyMode,
-                                value: mode_name.to_owned(),
-                            },
-                        );
-                        iec60870::cs104::server::RedundancyMode::SingleGroup
-                    });
-            let age_path = node(&[K("server"), K("max_command_age_ms")]);
-            let max_command_age = match &s.max_command_age_ms {
-                None => Some(DEFAULT_MAX_COMMAND_AGE),
-                Some(RawCommandAge::Millis(ms)) => {
-                    self.duration_ms(*ms, &age_path, "max_command_age_ms")
-                }
-                Some(RawCommandAge::Word(word)) if word == "off" => None,
-                Some(RawCommandAge::Word(word)) => {
-                    self.err(
-                        &age_path,
-                        ConfigProblem::UnknownValue {
-                            what: Vocabulary::CommandAge,
-                            value: word.clone(),
-                        },
-                    );
-                    None
-                }
-            };
-            ServerConfig {
-                port_offset,
-                allowed_clients,
-                redundancy_groups,
-                tls,
-                redundancy,
-                max_command_age,
-            }
-        });
-
-        // tasks
-        let mut tasks = Vec::new();
-        let mut task_names = HashSet::new();
-        for (t, task) in raw.task.iter().enumerate() {
-            if !task_names.insert(task.name.clone()) {
-                self.err(
-                    &node(&[K("task"), I(t), K("name")]),
-                    ConfigProblem::Duplicate {
-                        what: Unique::TaskName,
-                        value: task.name.clone(),
-                        other: raw.name.clone(),
-                    },
-                );
-            }
-            if task.interval_ms == 0 {
-                self.err(
-                    &node(&[K("task"), I(t), K("interval_ms")]),
-                    ConfigProblem::OutOfRange {
-                        what: "interval_ms",
-                        value: 0,
-                        min: 1,
-                        max: None,
-                    },
-                );
-            }
-            if task.watchdog_ms == Some(0) {
-                self.err(
-                    &node(&[K("task"), I(t), K("watchdog_ms")]),
-                    ConfigProblem::OutOfRange {
-                        what: "watchdog_ms",
-                        value: 0,
-                        min: 1,
-                        max: None,
-                    },
-                );
-            }
-            if all_sources_read {
-                for (p, program) in task.programs.iter().enumerate() {
-                    if !texts.iter().any(|text| declares_program(text, program)) {
-                        self.err(
-                            &node(&[K("task"), I(t), K("programs"), I(p)]),
-                            ConfigProblem::Unknown {
-                                what: Reference::Program,
-                                name: program.clone(),
-                                within: raw.name.clone(),
-                            },
-                        );
-                    }
-                }
-            }
-            tasks.push(TaskConfig {
-                name: task.name.clone(),
-                interval: Duration::from_millis(task.interval_ms),
-                priority: task.priority,
-                programs: task.programs.clone(),
-                watchdog: task.watchdog_ms.map(Duration::from_millis),
-            });
-        }
-
+        let sources = self.check_sources(folder, n, raw);
+        let server = raw
+            .server
+            .as_ref()
+            .map(|s| self.check_server(folder, n, raw, s));
+        let tasks = self.check_tasks(n, raw, &sources);
         let io = raw
             .io
             .iter()
@@ -232,376 +80,16 @@ impl Ctx<'_> {
             })
             .collect();
 
-        // points
-        let mut points = Vec::new();
         let mut point_names = HashSet::new();
         let mut point_ioas: HashMap<Ioa, String> = HashMap::new();
-        for (p, point) in raw.point.iter().enumerate() {
-            let at = |key: &'static str| node(&[K("point"), I(p), K(key)]);
-            if !point_names.insert(point.name.clone()) {
-                self.err(
-                    &at("name"),
-                    ConfigProblem::Duplicate {
-                        what: Unique::PointName,
-                        value: point.name.clone(),
-                        other: raw.name.clone(),
-                    },
-                );
-            }
-            // A fallback after an error, so that checking goes on.
-            let single = PointType::new(PointKind::Single, TimeStamp::None);
-            let (type_id, point_type) = match point.type_id.parse::<TypeId>() {
-                Ok(t) => match points_iec::point_type(t) {
-                    Some(point_type) => (t, point_type),
-                    None => {
-                        self.err(
-                            &at("type"),
-                            ConfigProblem::WrongType {
-                                type_id: t.to_string(),
-                                usage: TypeUse::Point,
-                            },
-                        );
-                        (TypeId::M_SP_NA_1, single)
-                    }
-                },
-                Err(_) => {
-                    self.err(
-                        &at("type"),
-                        ConfigProblem::UnknownValue {
-                            what: Vocabulary::TypeId,
-                            value: point.type_id.clone(),
-                        },
-                    );
-                    (TypeId::M_SP_NA_1, single)
-                }
-            };
-            let address = match ioa(point.ioa) {
-                Ok(a) => {
-                    if let Some(other) = point_ioas.get(&a) {
-                        self.err(
-                            &at("ioa"),
-                            ConfigProblem::Duplicate {
-                                what: Unique::PointIoa,
-                                value: a.to_string(),
-                                other: other.clone(),
-                            },
-                        );
-                    } else {
-                        point_ioas.insert(a, point.name.clone());
-                    }
-                    a
-                }
-                Err(problem) => {
-                    self.err(&at("ioa"), problem);
-                    Ioa::IRRELEVANT
-                }
-            };
-            let status_of = raw
-                .link
-                .iter()
-                .find(|l| l.status_point.as_deref() == Some(point.name.as_str()));
-            let group_of = raw
-                .server
-                .as_ref()
-                .and_then(|s| s.redundancy_groups.as_ref())
-                .and_then(|groups| {
-                    groups
-                        .iter()
-                        .find(|g| g.status_point.as_deref() == Some(point.name.as_str()))
-                });
-            if let (None, None, Some(group)) = (&point.source, status_of, group_of) {
-                if !matches!(type_id, TypeId::M_SP_NA_1 | TypeId::M_SP_TB_1) {
-                    self.err(
-                        &at("type"),
-                        ConfigProblem::WrongType {
-                            type_id: type_id.to_string(),
-                            usage: TypeUse::GroupStatus {
-                                group: group.name.clone(),
-                            },
-                        },
-                    );
-                }
-            }
-            let device_of = raw.line.iter().find_map(|line| {
-                line.device
-                    .iter()
-                    .find(|device| device.status_point.as_deref() == Some(point.name.as_str()))
-                    .map(|device| (line.name.clone(), device.name.clone()))
-            });
-            let line_of = raw
-                .line
-                .iter()
-                .find(|line| line.status_point.as_deref() == Some(point.name.as_str()))
-                .map(|line| line.name.clone());
-            let source = match (&point.source, status_of) {
-                (None, None) if line_of.is_some() => PointSource::LineStatus {
-                    line: line_of.clone().unwrap_or_default(),
-                },
-                (None, None) if device_of.is_some() => {
-                    let (line, device) = device_of.clone().unwrap_or_default();
-                    PointSource::DeviceStatus { line, device }
-                }
-                (None, None) if group_of.is_some() => {
-                    PointSource::ClientStatus(group_of.map(|g| g.name.clone()).unwrap_or_default())
-                }
-                (None, Some(link)) => {
-                    if !matches!(type_id, TypeId::M_SP_NA_1 | TypeId::M_SP_TB_1) {
-                        self.err(
-                            &at("type"),
-                            ConfigProblem::WrongType {
-                                type_id: type_id.to_string(),
-                                usage: TypeUse::LinkStatus {
-                                    link: link.name.clone(),
-                                },
-                            },
-                        );
-                    }
-                    PointSource::LinkStatus(link.name.clone())
-                }
-                (None, None) => {
-                    self.err(
-                        &node(&[K("point"), I(p)]),
-                        ConfigProblem::Missing {
-                            what: "source",
-                            needed_by: "",
-                            hint: "only the status point of a link, a redundancy group, a line or a device has none",
-                        },
-                    );
-                    PointSource::Variable(String::new())
-                }
-                (Some(_), Some(link)) => {
-                    self.err(
-                        &at("source"),
-                        Conflict::LinkStatusWithSource {
-                            link: link.name.clone(),
-                        },
-                    );
-                    PointSource::LinkStatus(link.name.clone())
-                }
-                (Some(source), None) => match line::parse_line_ref(source) {
-                    Ok(Some(reference)) => {
-                        self.line_ref_exists(&raw.name, &raw.line, &reference, &at("source"));
-                        let indication = matches!(
-                            type_id,
-                            TypeId::M_SP_NA_1
-                                | TypeId::M_SP_TB_1
-                                | TypeId::M_DP_NA_1
-                                | TypeId::M_DP_TB_1
-                        );
-                        let iec103 = matches!(reference.signal, LineSignal::Iec103 { .. });
-                        match (reference.index(), indication, is_measurement(type_id)) {
-                            // An IEC 101 object carries its own type: any monitor type
-                            // (checked with the point's type) takes it.
-                            _ if !iec103 => {}
-                            (None, false, _) => self.err(
-                                &at("type"),
-                                ConfigProblem::WrongType {
-                                    type_id: type_id.to_string(),
-                                    usage: TypeUse::LineIndication,
-                                },
-                            ),
-                            (Some(_), _, false) => self.err(
-                                &at("type"),
-                                ConfigProblem::WrongType {
-                                    type_id: type_id.to_string(),
-                                    usage: TypeUse::LineMeasurand,
-                                },
-                            ),
-                            (Some(_), _, true) if point.measurand_limit.is_none() => self.err(
-                                &node(&[K("point"), I(p)]),
-                                ConfigProblem::Missing {
-                                    what: "measurand_limit",
-                                    needed_by: "a measurand of a line device",
-                                    hint: "the engineering value at fraction 1.0",
-                                },
-                            ),
-                            _ => {}
-                        }
-                        PointSource::Line {
-                            line: reference.line,
-                            device: reference.device,
-                            signal: reference.signal,
-                        }
-                    }
-                    Ok(None) => self.point_source(&raw.name, &raw.link, source, &at("source")),
-                    Err(problem) => {
-                        self.err(&at("source"), problem);
-                        PointSource::Variable(source.clone())
-                    }
-                },
-            };
-            let line_measurand = matches!(
-                &source,
-                PointSource::Line {
-                    signal: LineSignal::Iec103 { index: Some(_), .. },
-                    ..
-                }
-            );
-            if point.scale_factor.is_some() && point.measurand_limit.is_none() {
-                self.err(
-                    &at("scale_factor"),
-                    ConfigProblem::Missing {
-                        what: "measurand_limit",
-                        needed_by: "scale_factor",
-                        hint: "",
-                    },
-                );
-            }
-            if let Some(factor) = point.scale_factor {
-                if !matches!(
-                    type_id,
-                    TypeId::M_ME_NB_1 | TypeId::M_ME_TB_1 | TypeId::M_ME_TE_1
-                ) {
-                    self.err(
-                        &at("scale_factor"),
-                        ConfigProblem::WrongType {
-                            type_id: type_id.to_string(),
-                            usage: TypeUse::ScaleFactor,
-                        },
-                    );
-                } else if !(factor.is_finite() && factor != 0.0) {
-                    self.err(
-                        &at("scale_factor"),
-                        ConfigProblem::InvalidNumber {
-                            what: "scale_factor",
-                            value: factor.to_string(),
-                            expected: "a finite number other than 0",
-                        },
-                    );
-                }
-            }
-            let scaling = match (point.measurand_limit, point.full_scale) {
-                (None, None) => None,
-                (Some(limit), full_scale) if line_measurand => {
-                    if !(limit.is_finite() && limit > 0.0) {
-                        self.err(
-                            &at("measurand_limit"),
-                            ConfigProblem::InvalidNumber {
-                                what: "measurand_limit",
-                                value: limit.to_string(),
-                                expected: "a positive number",
-                            },
-                        );
-                    }
-                    if let Some(f) = full_scale.filter(|f| !(f.is_finite() && *f > 0.0)) {
-                        self.err(
-                            &at("full_scale"),
-                            ConfigProblem::InvalidNumber {
-                                what: "full_scale",
-                                value: f.to_string(),
-                                expected: "a positive number",
-                            },
-                        );
-                    }
-                    Some(MeasurandScaling {
-                        limit,
-                        full_scale,
-                        factor: point.scale_factor,
-                    })
-                }
-                (Some(_), _) => {
-                    self.err(
-                        &at("measurand_limit"),
-                        Conflict::MeasurandLimitWithoutMeasurand,
-                    );
-                    None
-                }
-                (None, Some(_)) => {
-                    self.err(
-                        &at("full_scale"),
-                        ConfigProblem::Missing {
-                            what: "measurand_limit",
-                            needed_by: "full_scale",
-                            hint: "",
-                        },
-                    );
-                    None
-                }
-            };
-            let transmission = match (point.transmission, point.cycle_ms) {
-                (RawTransmission::Cyclic, Some(ms)) if ms > 0 => {
-                    Transmission::Cyclic(Duration::from_millis(ms))
-                }
-                (RawTransmission::Cyclic, Some(_)) => {
-                    self.err(
-                        &at("cycle_ms"),
-                        ConfigProblem::OutOfRange {
-                            what: "cycle_ms",
-                            value: 0,
-                            min: 1,
-                            max: None,
-                        },
-                    );
-                    Transmission::Spontaneous
-                }
-                (RawTransmission::Cyclic, None) => {
-                    self.err(
-                        &at("transmission"),
-                        ConfigProblem::Missing {
-                            what: "cycle_ms",
-                            needed_by: "cyclic transmission",
-                            hint: "",
-                        },
-                    );
-                    Transmission::Spontaneous
-                }
-                (_, Some(_)) => {
-                    self.err(&at("cycle_ms"), Conflict::CycleWithoutCyclic);
-                    Transmission::Spontaneous
-                }
-                (RawTransmission::Spontaneous, None) => Transmission::Spontaneous,
-                (RawTransmission::InterrogationOnly, None) => Transmission::InterrogationOnly,
-            };
-            let mut groups = Vec::new();
-            for (g, group) in point.groups.iter().enumerate() {
-                match u8::try_from(*group) {
-                    Ok(v) if (1..=16).contains(&v) => groups.push(v),
-                    _ => self.err(
-                        &node(&[K("point"), I(p), K("groups"), I(g)]),
-                        ConfigProblem::OutOfRange {
-                            what: "interrogation group",
-                            value: *group,
-                            min: 1,
-                            max: Some(16),
-                        },
-                    ),
-                }
-            }
-            if let Some(deadband) = point.deadband {
-                if !is_measurement(type_id) {
-                    self.err(
-                        &at("deadband"),
-                        ConfigProblem::WrongType {
-                            type_id: type_id.to_string(),
-                            usage: TypeUse::Deadband,
-                        },
-                    );
-                } else if !(deadband >= 0.0 && deadband.is_finite()) {
-                    self.err(
-                        &at("deadband"),
-                        ConfigProblem::InvalidNumber {
-                            what: "deadband",
-                            value: deadband.to_string(),
-                            expected: "a finite value >= 0",
-                        },
-                    );
-                }
-            }
-            points.push(PointConfig {
-                name: point.name.clone(),
-                point_type,
-                ioa: address,
-                source,
-                transmission,
-                groups,
-                deadband: point.deadband,
-                invalid_when: point.invalid_when.clone(),
-                scaling,
-                storage_interval: None,
-                description: point.description.clone(),
-            });
-        }
-
+        let mut points = self.check_points(
+            n,
+            raw,
+            TakenPoints {
+                names: &mut point_names,
+                ioas: &mut point_ioas,
+            },
+        );
         let (lifts, lift_points) = self.check_lifts(
             n,
             raw,
@@ -621,356 +109,188 @@ impl Ctx<'_> {
         );
         points.extend(device_points);
 
-        // commands
-        let mut commands = Vec::new();
-        let mut command_names = HashSet::new();
-        let mut command_ioas: HashMap<Ioa, String> = HashMap::new();
-        for (c, command) in raw.command.iter().enumerate() {
-            let at = |key: &'static str| node(&[K("command"), I(c), K(key)]);
-            if !command_names.insert(command.name.clone()) {
-                self.err(
-                    &at("name"),
-                    ConfigProblem::Duplicate {
-                        what: Unique::CommandName,
-                        value: command.name.clone(),
-                        other: raw.name.clone(),
-                    },
-                );
-            }
-            let type_id = match command.type_id.parse::<TypeId>() {
-                Ok(t) if t.is_command() => t,
-                Ok(t) => {
-                    self.err(
-                        &at("type"),
-                        ConfigProblem::WrongType {
-                            type_id: t.to_string(),
-                            usage: TypeUse::Command,
-                        },
-                    );
-                    TypeId::C_SC_NA_1
-                }
-                Err(_) => {
-                    self.err(
-                        &at("type"),
-                        ConfigProblem::UnknownValue {
-                            what: Vocabulary::TypeId,
-                            value: command.type_id.clone(),
-                        },
-                    );
-                    TypeId::C_SC_NA_1
-                }
-            };
-            let address = match ioa(command.ioa) {
-                Ok(a) => {
-                    if let Some(other) = command_ioas.get(&a) {
-                        self.err(
-                            &at("ioa"),
-                            ConfigProblem::Duplicate {
-                                what: Unique::CommandIoa,
-                                value: a.to_string(),
-                                other: other.clone(),
-                            },
-                        );
-                    } else if let Some(point) = point_ioas.get(&a) {
-                        // Many controlling stations (lib60870, most SCADA) keep one
-                        // information object per address: a command and a point on one
-                        // IOA would clash there.
-                        self.err(
-                            &at("ioa"),
-                            ConfigProblem::Duplicate {
-                                what: Unique::CommandOnPointIoa,
-                                value: a.to_string(),
-                                other: point.clone(),
-                            },
-                        );
-                    } else {
-                        command_ioas.insert(a, command.name.clone());
-                    }
-                    a
-                }
-                Err(problem) => {
-                    self.err(&at("ioa"), problem);
-                    Ioa::IRRELEVANT
-                }
-            };
-            let (reference_text, fixed_value) = match command.target.rsplit_once('=') {
-                Some((reference, "ON")) if reference.starts_with("line:") => {
-                    (reference, Some(true))
-                }
-                Some((reference, "OFF")) if reference.starts_with("line:") => {
-                    (reference, Some(false))
-                }
-                _ => (command.target.as_str(), None),
-            };
-            let line_target = match line::parse_line_ref(reference_text) {
-                Ok(Some(reference)) => {
-                    self.line_ref_exists(&raw.name, &raw.line, &reference, &at("target"));
-                    match reference.signal {
-                        LineSignal::Iec103 { fun, inf, index } => {
-                            if index.is_some() {
-                                self.err(&at("target"), Conflict::LineCommandWithIndex);
-                            }
-                            if !matches!(type_id, TypeId::C_SC_NA_1 | TypeId::C_DC_NA_1) {
-                                self.err(
-                                    &at("type"),
-                                    ConfigProblem::WrongType {
-                                        type_id: type_id.to_string(),
-                                        usage: TypeUse::LineCommand,
-                                    },
-                                );
-                            }
-                            Some(CommandTarget::Line {
-                                line: reference.line,
-                                device: reference.device,
-                                fun,
-                                inf,
-                                value: fixed_value,
-                            })
-                        }
-                        // Forwarded as it came: the command's own type and value.
-                        LineSignal::Iec101 { ioa } => {
-                            if fixed_value.is_some() {
-                                self.err(
-                                    &at("target"),
-                                    Conflict::NotForProtocol {
-                                        key: "=ON/=OFF",
-                                        protocol: "iec101",
-                                    },
-                                );
-                            }
-                            Some(CommandTarget::LineObject {
-                                line: reference.line,
-                                device: reference.device,
-                                // In range: `parse_line_ref` checked it.
-                                ioa: Ioa::try_new(ioa).unwrap_or(Ioa::IRRELEVANT),
-                            })
-                        }
-                    }
-                }
-                Ok(None) => None,
-                Err(problem) => {
-                    self.err(&at("target"), problem);
-                    Some(CommandTarget::Variable(command.target.clone()))
-                }
-            };
-            let target = match line_target.map(Ok).unwrap_or_else(|| {
-                parse_link_ref(&command.target).map(|link| {
-                    link.map_or_else(
-                        || CommandTarget::Variable(command.target.clone()),
-                        |(link, ioa)| CommandTarget::Link { link, ioa },
-                    )
-                })
-            }) {
-                Ok(CommandTarget::Link { link, ioa }) => {
-                    if !raw.link.iter().any(|l| l.name == link) {
-                        self.err(
-                            &at("target"),
-                            ConfigProblem::Unknown {
-                                what: Reference::Link,
-                                name: link.clone(),
-                                within: raw.name.clone(),
-                            },
-                        );
-                    }
-                    CommandTarget::Link { link, ioa }
-                }
-                Ok(target) => target,
-                Err(problem) => {
-                    self.err(&at("target"), problem);
-                    CommandTarget::Variable(command.target.clone())
-                }
-            };
-            for (g, group) in command.from_groups.iter().enumerate() {
-                let known = server.as_ref().is_some_and(|s: &ServerConfig| {
-                    s.redundancy_groups.iter().any(|r| &r.name == group)
-                });
-                if !known {
-                    self.err(
-                        &[K("node"), I(n), K("command"), I(c), K("from_groups"), I(g)],
-                        ConfigProblem::Unknown {
-                            what: Reference::RedundancyGroup,
-                            name: group.clone(),
-                            within: raw.name.clone(),
-                        },
-                    );
-                }
-            }
-            let pulse = match command.pulse_ms {
-                None => None,
-                Some(ms) if (1..=3_600_000).contains(&ms) => {
-                    if matches!(target, CommandTarget::Link { .. }) {
-                        self.err(&at("pulse_ms"), Conflict::ForwardedPulse);
-                    }
-                    Some(Duration::from_millis(ms.unsigned_abs()))
-                }
-                Some(ms) => {
-                    self.err(
-                        &at("pulse_ms"),
-                        ConfigProblem::OutOfRange {
-                            what: "pulse_ms",
-                            value: ms,
-                            min: 1,
-                            max: Some(3_600_000),
-                        },
-                    );
-                    None
-                }
-            };
-            let max_age = command
-                .max_age_ms
-                .and_then(|ms| self.duration_ms(ms, &at("max_age_ms"), "max_age_ms"));
-            let range = command.range.and_then(|[low, high]| {
-                let setpoint = matches!(
-                    type_id,
-                    TypeId::C_SE_NA_1
-                        | TypeId::C_SE_NB_1
-                        | TypeId::C_SE_NC_1
-                        | TypeId::C_SE_TA_1
-                        | TypeId::C_SE_TB_1
-                        | TypeId::C_SE_TC_1
-                );
-                if !setpoint {
-                    self.err(
-                        &at("range"),
-                        ConfigProblem::WrongType {
-                            type_id: type_id.to_string(),
-                            usage: TypeUse::Range,
-                        },
-                    );
-                    None
-                } else if !(low.is_finite() && high.is_finite() && low <= high) {
-                    self.err(
-                        &at("range"),
-                        ConfigProblem::EmptyRange {
-                            low: low.to_string(),
-                            high: high.to_string(),
-                        },
-                    );
-                    None
-                } else {
-                    Some(low..=high)
-                }
-            });
-            let feedback = match &command.feedback {
-                // A relay reports a general command's effect at the command's own FUN/INF:
-                // the point read from there is the command's return information, so that
-                // ACT_TERM follows it (it left before the position changed).
-                None if command.feedback_timeout_ms.is_none() => {
-                    implied_line_feedback(&target, &points)
-                }
-                None => {
-                    if command.feedback_timeout_ms.is_some() {
-                        self.err(
-                            &at("feedback_timeout_ms"),
-                            ConfigProblem::Missing {
-                                what: "feedback",
-                                needed_by: "feedback_timeout_ms",
-                                hint: "",
-                            },
-                        );
-                    }
-                    None
-                }
-                Some(point) => {
-                    if !point_names.contains(point) {
-                        self.err(
-                            &at("feedback"),
-                            ConfigProblem::Unknown {
-                                what: Reference::Point,
-                                name: point.clone(),
-                                within: raw.name.clone(),
-                            },
-                        );
-                    }
-                    if matches!(target, CommandTarget::Link { .. }) {
-                        self.err(&at("feedback"), Conflict::ForwardedFeedback);
-                    }
-                    let timeout = match command.feedback_timeout_ms {
-                        None => DEFAULT_FEEDBACK_TIMEOUT,
-                        Some(ms) => self
-                            .duration_ms(ms, &at("feedback_timeout_ms"), "feedback_timeout_ms")
-                            .unwrap_or(DEFAULT_FEEDBACK_TIMEOUT),
-                    };
-                    Some(Feedback {
-                        point: point.clone(),
-                        timeout,
-                    })
-                }
-            };
-            commands.push(CommandConfig {
-                max_age,
-                feedback,
-                range,
-                name: command.name.clone(),
-                type_id,
-                ioa: address,
-                target,
-                select_required: command.select_required,
-                remote_enable: command.remote_enable.clone(),
-                pulse,
-                from_groups: command.from_groups.clone(),
-                description: command.description.clone(),
-            });
-        }
+        let commands = self.check_commands(
+            n,
+            raw,
+            &CommandContext {
+                points: &points,
+                point_names: &point_names,
+                point_ioas: &point_ioas,
+                server: server.as_ref(),
+            },
+        );
 
         #[cfg(feature = "runtime")]
-        if all_sources_read && !files.is_empty() {
-            self.check_plc_variables(n, raw, &files);
+        if sources.all_read && !sources.files.is_empty() {
+            self.check_plc_variables(n, raw, &sources.files);
         }
 
+        let lines = self.check_lines(n, raw);
+        let notify = self.check_notify(n, raw);
+        let tables = self.check_tables(folder, n, raw);
         NodeConfig {
             name: raw.name.clone(),
             description: raw.description.clone(),
             common_address: common,
-            sources,
+            sources: sources.paths,
             server,
             tasks,
             io,
             points,
             commands,
             links: Vec::new(),
-            lines: self.check_lines(n, raw),
+            lines,
             lifts,
             devices,
-            notify: raw.notify.as_ref().map(|config| {
-                if let Err(errors) = config.validate() {
-                    for error in errors {
-                        self.err(
-                            &node(&[K("notify")]),
-                            ConfigProblem::Invalid {
-                                detail: error.to_string(),
-                            },
-                        );
-                    }
-                }
-                config.clone()
-            }),
+            notify,
             initial_values: raw
                 .set
                 .iter()
                 .map(|(path, value)| (path.clone(), value.clone()))
                 .collect(),
-            tables: raw
-                .table
-                .iter()
-                .enumerate()
-                .map(|(t, table)| TableConfig {
-                    file: self.existing_file(
-                        folder,
-                        &table.file,
-                        &[K("node"), I(n), K("table"), I(t), K("file")],
-                    ),
-                    index: table.index.clone(),
-                    columns: table
-                        .columns
-                        .iter()
-                        .map(|(column, path)| (column.clone(), path.clone()))
-                        .collect(),
-                })
-                .collect(),
+            tables,
         }
     }
 
+    /// The node's ST sources: each must exist and be UTF-8 text.
+    fn check_sources(&mut self, folder: &Path, n: usize, raw: &RawNode) -> Sources {
+        let mut paths = Vec::new();
+        let mut files: Vec<(String, String)> = Vec::new();
+        for (s, source) in raw.sources.iter().enumerate() {
+            let path = node_path(n, &[K("sources"), I(s)]);
+            let resolved = self.existing_file(folder, source, &path);
+            if resolved.is_file() {
+                match std::fs::read(&resolved) {
+                    Ok(bytes) => match String::from_utf8(bytes) {
+                        Ok(text) => files.push((resolved.display().to_string(), text)),
+                        Err(e) => self.push(not_utf8(&resolved, e.as_bytes())),
+                    },
+                    Err(e) => self.err(
+                        &path,
+                        ConfigProblem::Unreadable {
+                            file: Some(resolved.clone()),
+                            kind: e.kind(),
+                            detail: e.to_string(),
+                        },
+                    ),
+                }
+            }
+            paths.push(resolved);
+        }
+        let all_read = files.len() == raw.sources.len();
+        Sources {
+            paths,
+            files,
+            all_read,
+        }
+    }
+
+    /// The node's PLC tasks: names unique, intervals and watchdogs above 0, each program
+    /// declared in the sources (when all of them were read).
+    fn check_tasks(&mut self, n: usize, raw: &RawNode, sources: &Sources) -> Vec<TaskConfig> {
+        let texts: Vec<&str> = sources
+            .files
+            .iter()
+            .map(|(_, text)| text.as_str())
+            .collect();
+        let mut tasks = Vec::new();
+        let mut task_names = HashSet::new();
+        for (t, task) in raw.task.iter().enumerate() {
+            let entry = Entry::new(n, "task", t);
+            if !task_names.insert(task.name.clone()) {
+                self.err(
+                    &entry.key("name"),
+                    ConfigProblem::Duplicate {
+                        what: Unique::TaskName,
+                        value: task.name.clone(),
+                        other: raw.name.clone(),
+                    },
+                );
+            }
+            if task.interval_ms == 0 {
+                self.err(
+                    &entry.key("interval_ms"),
+                    ConfigProblem::OutOfRange {
+                        what: "interval_ms",
+                        value: 0,
+                        min: 1,
+                        max: None,
+                    },
+                );
+            }
+            if task.watchdog_ms == Some(0) {
+                self.err(
+                    &entry.key("watchdog_ms"),
+                    ConfigProblem::OutOfRange {
+                        what: "watchdog_ms",
+                        value: 0,
+                        min: 1,
+                        max: None,
+                    },
+                );
+            }
+            if sources.all_read {
+                for (p, program) in task.programs.iter().enumerate() {
+                    if !texts.iter().any(|text| declares_program(text, program)) {
+                        self.err(
+                            &entry.element("programs", p),
+                            ConfigProblem::Unknown {
+                                what: Reference::Program,
+                                name: program.clone(),
+                                within: raw.name.clone(),
+                            },
+                        );
+                    }
+                }
+            }
+            tasks.push(TaskConfig {
+                name: task.name.clone(),
+                interval: Duration::from_millis(task.interval_ms),
+                priority: task.priority,
+                programs: task.programs.clone(),
+                watchdog: task.watchdog_ms.map(Duration::from_millis),
+            });
+        }
+        tasks
+    }
+
+    /// The node's `[node.notify]` settings, each problem its validation finds reported.
+    fn check_notify(&mut self, n: usize, raw: &RawNode) -> Option<notify::NotifyConfig> {
+        raw.notify.as_ref().map(|config| {
+            if let Err(errors) = config.validate() {
+                for error in errors {
+                    self.err(
+                        &node_path(n, &[K("notify")]),
+                        ConfigProblem::Invalid {
+                            detail: error.to_string(),
+                        },
+                    );
+                }
+            }
+            config.clone()
+        })
+    }
+
+    /// The node's tables (`[[node.table]]`), each file checked to exist.
+    fn check_tables(&mut self, folder: &Path, n: usize, raw: &RawNode) -> Vec<TableConfig> {
+        raw.table
+            .iter()
+            .enumerate()
+            .map(|(t, table)| TableConfig {
+                file: self.existing_file(
+                    folder,
+                    &table.file,
+                    &[K("node"), I(n), K("table"), I(t), K("file")],
+                ),
+                index: table.index.clone(),
+                columns: table
+                    .columns
+                    .iter()
+                    .map(|(column, path)| (column.clone(), path.clone()))
+                    .collect(),
+            })
+            .collect()
+    }
     /// Compiles the node's ST sources as the runtime will and looks up every PLC variable
     /// the node names (point sources and `invalid_when`, command targets and
     /// `remote_enable`, I/O variables, `refuse_commands_when`): a typo is then reported at
@@ -1089,32 +409,4 @@ impl Ctx<'_> {
             }
         }
     }
-}
-
-/// The return information of a general command to an IEC 103 device when the project
-/// names none: the indication the device reports at the command's FUN/INF.
-fn implied_line_feedback(target: &CommandTarget, points: &[PointConfig]) -> Option<Feedback> {
-    let CommandTarget::Line {
-        line,
-        device,
-        fun,
-        inf,
-        ..
-    } = target
-    else {
-        return None;
-    };
-    points
-        .iter()
-        .find(|point| {
-            matches!(&point.source, PointSource::Line {
-                line: point_line,
-                device: point_device,
-                signal: LineSignal::Iec103 { fun: f, inf: i, index: None },
-            } if point_line == line && point_device == device && f == fun && i == inf)
-        })
-        .map(|point| Feedback {
-            point: point.name.clone(),
-            timeout: DEFAULT_FEEDBACK_TIMEOUT,
-        })
 }

@@ -13,6 +13,9 @@
 //!
 //! A `simulate = "ref630"` line runs the thesis's relay at each device's address inside
 //! this process, on an in-memory line; the console operates it ([`LineHandle::operate`]).
+//!
+//! A line's spec follows from the node's points ([`LineSpec::new`]): which points each
+//! device's signals (IEC 103) or objects (IEC 101) feed.
 
 mod iec101;
 mod iec103;
@@ -32,9 +35,9 @@ use iec60870::outstation::{Command, TerminationFuture};
 use simulators::ref630::{Device, DeviceProfile};
 use tokio::sync::mpsc;
 
-use crate::config::{LineConfig, LineProtocol, LineTransport, MeasurandScaling};
+use crate::config::{LineConfig, LineProtocol, LineTransport, MeasurandScaling, PointConfig};
 use crate::store::CommandOutcome;
-use points::{PointId, PointKind, PointSource};
+use points::{LineSignal, PointId, PointKind, PointSource};
 
 use super::field::{CommunicationStatus, Reopen};
 use super::node::NodePoints;
@@ -63,6 +66,54 @@ pub(crate) struct LineSpec {
 }
 
 impl LineSpec {
+    /// The spec of `line`: the points among `points` (the node's, in its database `node`)
+    /// whose source is one of its devices' signals or objects.
+    pub(crate) fn new(line: &LineConfig, points: &[PointConfig], node: &NodePoints) -> LineSpec {
+        let mut signals: HashMap<(u8, u8, u8, Option<u8>), Vec<LinePoint>> = HashMap::new();
+        let mut objects = ObjectPoints::new();
+        {
+            let db = node.lock();
+            for point in points {
+                let PointSource::Line {
+                    line: name,
+                    device,
+                    signal,
+                } = &point.source
+                else {
+                    continue;
+                };
+                let address = line
+                    .devices
+                    .iter()
+                    .find(|d| &d.name == device)
+                    .map(|d| d.address);
+                let (true, Some(address), Some(id)) =
+                    (name == &line.name, address, db.id(point.name.as_str()))
+                else {
+                    continue;
+                };
+                match signal {
+                    LineSignal::Iec103 { fun, inf, index } => signals
+                        .entry((address, *fun, *inf, *index))
+                        .or_default()
+                        .push(LinePoint {
+                            id,
+                            kind: point.point_type.kind,
+                            scaling: point.scaling,
+                        }),
+                    LineSignal::Iec101 { ioa } => {
+                        objects.entry((address, *ioa)).or_default().push(id)
+                    }
+                }
+            }
+        }
+        LineSpec {
+            config: line.clone(),
+            signals,
+            objects,
+        }
+    }
+
     /// The FT1.2 primary polling the line's devices, with the line's timing.
     fn primary(&self, address_size: AddressSize, now: std::time::Instant) -> Primary {
         Primary::new(
