@@ -115,7 +115,31 @@ pub fn start_until_with_log(
 
 /// Waits (at most [`START_WITHIN`]) until a stdout line of `child` contains `marker`;
 /// returns the line. The child is killed and the test fails when it never does.
-pub fn wait_for_marker(mut child: Child, marker: &str) -> (Background, String) {
+pub fn wait_for_marker(child: Child, marker: &str) -> (Background, String) {
+    let (child, line, lines) = wait_for_marker_keeping_output(child, marker);
+    // Keep draining so the child never blocks on a full pipe.
+    std::thread::spawn(move || for _ in lines {});
+    (child, line)
+}
+
+/// Starts a process and waits until a stdout line contains `marker`, keeping the lines
+/// after it for the test to wait on ([`wait_for_line`]): a simulator's console answers.
+pub fn start_until_line_keeping_output(
+    mut command: Command,
+    marker: &str,
+) -> (Background, String, mpsc::Receiver<String>) {
+    let child = command
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    wait_for_marker_keeping_output(child, marker)
+}
+
+fn wait_for_marker_keeping_output(
+    mut child: Child,
+    marker: &str,
+) -> (Background, String, mpsc::Receiver<String>) {
     let stdout = child.stdout.take().unwrap();
     let (sender, receiver) = mpsc::channel();
     std::thread::spawn(move || {
@@ -130,9 +154,7 @@ pub fn wait_for_marker(mut child: Child, marker: &str) -> (Background, String) {
     while Instant::now() < deadline {
         if let Ok(line) = receiver.recv_timeout(Duration::from_millis(100)) {
             if line.contains(marker) {
-                // Keep draining so the child never blocks on a full pipe.
-                std::thread::spawn(move || for _ in receiver {});
-                return (Background(child), line);
+                return (Background(child), line, receiver);
             }
             seen.push(line);
         }
@@ -140,6 +162,22 @@ pub fn wait_for_marker(mut child: Child, marker: &str) -> (Background, String) {
     let _ = child.kill();
     let _ = child.wait();
     panic!("never saw '{marker}'; saw {seen:?}");
+}
+
+/// Waits (at most [`START_WITHIN`]) for a line containing `text` among a process's
+/// output lines; returns it. The test fails, listing what came, when none does.
+pub fn wait_for_line(lines: &mpsc::Receiver<String>, text: &str) -> String {
+    let deadline = Instant::now() + START_WITHIN;
+    let mut seen = Vec::new();
+    while Instant::now() < deadline {
+        if let Ok(line) = lines.recv_timeout(Duration::from_millis(100)) {
+            if line.contains(text) {
+                return line;
+            }
+            seen.push(line);
+        }
+    }
+    panic!("never saw '{text}'; saw {seen:?}");
 }
 
 /// Fails the test, with the command's standard output and error, unless it succeeded;

@@ -7,7 +7,10 @@ use std::time::{Duration, Instant};
 
 use serde_json::Value;
 use testkit::ports::free_port;
-use testkit::process::{assert_success, run_bounded, start_until_line, Background};
+use testkit::process::{
+    assert_success, run_bounded, start_until_line, start_until_line_keeping_output, wait_for_line,
+    Background,
+};
 use testkit::projects::fresh_dir;
 
 use crate::support::*;
@@ -358,11 +361,17 @@ fn lift_poll_reads_the_simulator_over_a_pseudo_terminal() {
             "0",
         ])
         .stdin(Stdio::piped());
-    let (mut simulator, line) = start_until_line(simulator, "pty: ");
+    let (mut simulator, line, answers) = start_until_line_keeping_output(simulator, "pty: ");
     let mut console = simulator.0.stdin.take().unwrap();
     let path = line.trim_start_matches("pty: ").trim().to_owned();
-    writeln!(console, "status 18").unwrap();
-    writeln!(console, "fault 3C").unwrap();
+    // Each console operation is awaited by its answer, so no poll starts before the
+    // board has taken it.
+    let mut operate = |words: &str, answer: &str| {
+        writeln!(console, "{words}").unwrap();
+        wait_for_line(&answers, answer);
+    };
+    operate("status 18", "holding status 18");
+    operate("fault 3C", "injected fault 0x3C");
     let archive = std::env::temp_dir().join(format!(
         "stanice-lift-{}-{}.cursor",
         std::process::id(),
@@ -423,9 +432,9 @@ fn lift_poll_reads_the_simulator_over_a_pseudo_terminal() {
     assert_eq!(kind(&lines, "comm")[0]["status"], "ok");
 
     // A second monitor run with the stored cursor: only the new fault.
-    writeln!(console, "fault 11").unwrap();
-    writeln!(console, "status auto").unwrap();
-    let lines = lift_lines(&assert_success(&poll("2")));
+    operate("fault 11", "injected fault 0x11");
+    operate("status auto", "status from the lift's operation again");
+    let lines = lift_lines(&assert_success(&poll("3")));
     let faults = kind(&lines, "fault");
     assert_eq!(faults.len(), 1, "{lines:?}");
     assert_eq!(faults[0]["fault_code"], 0x11);
@@ -439,7 +448,7 @@ fn lift_poll_reads_the_simulator_over_a_pseudo_terminal() {
 
     // The board goes silent: communication lost, and a monitor that never heard it ends
     // with exit code 2 saying so.
-    writeln!(console, "silent").unwrap();
+    operate("silent", "not answering");
     let output = poll("3");
     assert_eq!(output.status.code(), Some(2), "{output:?}");
     let stderr = String::from_utf8_lossy(&output.stderr);
