@@ -4,6 +4,8 @@
 # tests against c104 with tshark capture checks, and a short fuzz smoke run.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# A clean clone builds once: incremental caches would only double the target folder's size.
+if [ "${CI:-}" = "true" ]; then export CARGO_INCREMENTAL=0; fi
 
 echo "== installing test dependencies"
 bash scripts/install-test-deps.sh
