@@ -11,20 +11,21 @@
 //! - **Readings to points.** A driver reports by signal name ([`Readings`]); the
 //!   supervisor finds the point and hands it to the node (sinks, recorder).
 //!
-//! Profiled devices (`[[node.device]]`, [`crate::device`]) run entirely on it
-//! (`spawn_device`); the lift and line tasks use its `Reopen` pacing, and every
-//! source (devices, lift boards, the devices and the status of a serial line, IEC 104
-//! links) shows its state through one `CommunicationStatus`. IEC 104 links keep the
-//! client's own reconnection (the 104 link layer's T0 and back-off), which follows the
-//! same rule.
+//! Every source runs on the one loop, [`supervise`], as a [`FieldSource`]: profiled
+//! devices (`[[node.device]]`, [`crate::device`], through `spawn_device`), lift boards
+//! (`runtime::lift`) and serial lines of IEC 101 outstations or IEC 103 relays
+//! (`runtime::line`). Each shows its state through one `CommunicationStatus` (a serial
+//! line keeps one per device and one for the line), as do the IEC 104 links, which keep
+//! the 104 client's own reconnection (the link layer's T0 and back-off, the same rule).
 //!
 //! ```text
-//!  DeviceDriver::open --ok--> DeviceDriver::run(&readings) --ended--> all invalid, status TRUE
-//!        ^   \--error--> log                                               |
-//!        +--------------------- Reopen::pause (1 s .. 5 s) <----------------+
+//!  lost() --> open() --ok--> run(line) --ended--> lost() --> Reopen::pause (1 s .. 5 s) --+
+//!               ^  \--error--> log --------------------------> Reopen::pause ----------+
+//!               +-------------------------------------------------------------------------+
 //! ```
 
 use std::collections::HashMap;
+use std::future::Future;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
@@ -33,7 +34,7 @@ use points::{EventCause, PointId, PointSource, PointValue, Quality};
 
 use super::node::NodePoints;
 use crate::config::FieldDeviceConfig;
-use crate::device::{DeviceDriver, Readings};
+use crate::device::{DeviceDriver, DeviceError, Readings};
 
 /// The first pause before a source is opened again.
 pub const REOPEN_FIRST: Duration = Duration::from_secs(1);
@@ -43,24 +44,77 @@ pub const REOPEN_MAX: Duration = Duration::from_secs(5);
 /// The pauses between attempts to open a source: doubling from [`REOPEN_FIRST`] to
 /// [`REOPEN_MAX`]; [`Reopen::answered`] starts over.
 #[derive(Debug, Clone)]
-pub(crate) struct Reopen {
+struct Reopen {
     next: Duration,
 }
 
 impl Reopen {
-    pub(crate) fn new() -> Reopen {
+    fn new() -> Reopen {
         Reopen { next: REOPEN_FIRST }
     }
 
     /// Waits before the next attempt.
-    pub(crate) async fn pause(&mut self) {
+    async fn pause(&mut self) {
         tokio::time::sleep(self.next).await;
         self.next = (self.next * 2).min(REOPEN_MAX);
     }
 
     /// The source answered: the next failure waits [`REOPEN_FIRST`] again.
-    pub(crate) fn answered(&mut self) {
+    fn answered(&mut self) {
         self.next = REOPEN_FIRST;
+    }
+}
+
+/// How reading an opened source ended.
+#[derive(Debug)]
+pub(crate) struct Ended {
+    /// Whether the source answered while its line was open: the next pause is the
+    /// shortest again.
+    pub answered: bool,
+    /// Why its line closed, for the log.
+    pub reason: String,
+}
+
+/// A source of field data as [`supervise`] drives it: opened, read until its line
+/// closes, reported lost, opened again after a pause.
+pub(crate) trait FieldSource: Send {
+    /// What an opened source is read from (a line, a connection).
+    type Line: Send;
+
+    /// Its name in the log (`lift L1`, `line L2`, `device D`).
+    fn describe(&self) -> String;
+
+    /// Opens its line or connection.
+    fn open(&mut self) -> impl Future<Output = Result<Self::Line, DeviceError>> + Send;
+
+    /// Reads it until its line closes or fails.
+    fn run(&mut self, line: Self::Line) -> impl Future<Output = Ended> + Send;
+
+    /// It is lost (before it is first opened and whenever its line closed): its points
+    /// invalid (last value kept), its status point TRUE, whoever is told so told.
+    fn lost(&mut self);
+}
+
+/// Runs `source` for as long as the task lives: the one open-read-reopen loop of every
+/// field source of the node called `node`.
+pub(crate) async fn supervise(node: &str, mut source: impl FieldSource) {
+    source.lost();
+    let mut reopen = Reopen::new();
+    loop {
+        match source.open().await {
+            Ok(line) => {
+                let ended = source.run(line).await;
+                if ended.answered {
+                    reopen.answered();
+                }
+                source.lost();
+                tracing::warn!(node, source = %source.describe(), reason = %ended.reason, "the line closed; opening it again");
+            }
+            Err(error) => {
+                tracing::warn!(node, source = %source.describe(), %error, "cannot open the line; trying again");
+            }
+        }
+        reopen.pause().await;
     }
 }
 
@@ -158,7 +212,11 @@ pub(crate) fn spawn_device(
 ) -> FieldDeviceHandle {
     let readings = DeviceReadings::new(config, node);
     let answering = Arc::clone(&readings.answering);
-    let task = tokio::spawn(supervise(driver, readings)).abort_handle();
+    let task = tokio::spawn(async move {
+        let node = Arc::clone(&readings.node);
+        supervise(node.name(), ProfiledDevice { driver, readings }).await;
+    })
+    .abort_handle();
     FieldDeviceHandle {
         name: config.name.clone(),
         task,
@@ -166,24 +224,34 @@ pub(crate) fn spawn_device(
     }
 }
 
-async fn supervise(mut driver: Box<dyn DeviceDriver>, readings: DeviceReadings) {
-    readings.down();
-    let mut reopen = Reopen::new();
-    loop {
-        match driver.open().await {
-            Ok(()) => {
-                let end = driver.run(&readings).await;
-                if readings.answered.swap(false, Ordering::AcqRel) {
-                    reopen.answered();
-                }
-                readings.answering(false);
-                tracing::warn!(node = %readings.node.name(), device = %readings.device, reason = %end, "the device's line closed; opening it again");
-            }
-            Err(error) => {
-                tracing::warn!(node = %readings.node.name(), device = %readings.device, %error, "cannot open the device; trying again");
-            }
+/// A profiled device under the supervisor: its driver and where its readings go.
+struct ProfiledDevice {
+    driver: Box<dyn DeviceDriver>,
+    readings: DeviceReadings,
+}
+
+impl FieldSource for ProfiledDevice {
+    type Line = ();
+
+    fn describe(&self) -> String {
+        self.readings.origin.clone()
+    }
+
+    async fn open(&mut self) -> Result<(), DeviceError> {
+        self.driver.open().await
+    }
+
+    async fn run(&mut self, (): ()) -> Ended {
+        let end = self.driver.run(&self.readings).await;
+        Ended {
+            answered: self.readings.answered.swap(false, Ordering::AcqRel),
+            reason: end.to_string(),
         }
-        reopen.pause().await;
+    }
+
+    fn lost(&mut self) {
+        self.readings.answering.store(false, Ordering::Release);
+        self.readings.down();
     }
 }
 

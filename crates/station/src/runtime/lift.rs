@@ -20,7 +20,7 @@
 //! - A board that stops answering turns the lift's points invalid and `LIFT.not_answering`
 //!   TRUE (the communication alarm); a line that closes (a converter's TCP connection
 //!   dropped, a serial adapter unplugged) is opened again with the cursor where it stood,
-//!   after the field-source supervisor's pause (`field::Reopen`).
+//!   after the field-source supervisor's pause (`field::supervise`).
 
 use super::operation::OperationError;
 use std::collections::HashMap;
@@ -40,9 +40,10 @@ use crate::config::{LiftConfig, LiftTransport};
 use crate::store::{EventCause, EventStore, LiftFaultQuery, LiftFaultRecord, PointValue, Quality};
 use points::{LiftSignal, PointId, PointSource};
 
-use super::field::{CommunicationStatus, Reopen};
+use super::field::{supervise, CommunicationStatus, Ended, FieldSource};
 use super::node::NodePoints;
 use super::notification::Notifications;
+use crate::device::DeviceError;
 
 /// How many archived records rebuild the cursor: more than the largest fault stack, so
 /// that every record still on the board is recognised.
@@ -229,7 +230,7 @@ async fn run(
     counts: Arc<PollCounts>,
     store: Option<Arc<dyn EventStore>>,
     outlets: Outlets,
-    mut board: Option<mpsc::UnboundedReceiver<EndpointAction<Simulator>>>,
+    board: Option<mpsc::UnboundedReceiver<EndpointAction<Simulator>>>,
     finished: watch::Sender<bool>,
 ) {
     let lift = Lift::new(spec, Arc::clone(&node));
@@ -242,7 +243,6 @@ async fn run(
     if let Some(code) = newest {
         lift.set(LiftSignal::LastFault, PointValue::Int(code.into()));
     }
-    lift.down();
     let (to_archive, queue) = mpsc::unbounded_channel();
     tokio::spawn(archive(
         queue,
@@ -253,19 +253,51 @@ async fn run(
         outlets.clone(),
         finished,
     ));
-    let mut cursor = cursor;
-    let mut simulated_board = match &lift.spec.config.transport {
+    let simulated_board = match &lift.spec.config.transport {
         LiftTransport::Simulated(config) => Some(Simulator::new(
             config.clone(),
             tokio::time::Instant::now().into_std(),
         )),
         _ => None,
     };
-    let mut errors: u64 = 0;
-    // Whether the board answered since it was last reported lost: a loss is notified
-    // once, not at every reopening of a dead line.
-    let mut answering = false;
-    let lost = |answering: &mut bool| {
+    let source = LiftSource {
+        lift,
+        node: Arc::clone(&node),
+        counts,
+        outlets,
+        to_archive,
+        cursor,
+        simulated_board,
+        board,
+        errors: 0,
+        answering: false,
+    };
+    supervise(node.name(), source).await;
+}
+
+/// A lift's board under the field-source supervisor.
+struct LiftSource {
+    lift: Lift,
+    node: Arc<NodePoints>,
+    counts: Arc<PollCounts>,
+    outlets: Outlets,
+    to_archive: mpsc::UnboundedSender<FaultRecord>,
+    /// Where the fault log was read to: kept across reopenings of the line.
+    cursor: ArchiveCursor,
+    /// The simulated board, until its line is first opened.
+    simulated_board: Option<Simulator>,
+    board: Option<mpsc::UnboundedReceiver<EndpointAction<Simulator>>>,
+    /// Line errors since the start.
+    errors: u64,
+    /// Whether the board answered since it was last reported lost: a loss is notified
+    /// once, not at every reopening of a dead line.
+    answering: bool,
+}
+
+impl LiftSource {
+    /// The board is lost: its points invalid and, if it had answered, the loss notified.
+    fn lost(lift: &Lift, node: &NodePoints, outlets: &Outlets, answering: &mut bool) {
+        lift.down();
         if std::mem::take(answering) {
             if let Some(notifications) = &outlets.notifications {
                 notifications.comm_lost(
@@ -275,27 +307,49 @@ async fn run(
                 );
             }
         }
-    };
-    let mut reopen = Reopen::new();
-    loop {
-        let stream = match open(&lift.spec.config, &mut simulated_board, &mut board).await {
-            Ok(stream) => stream,
-            Err(error) => {
-                tracing::warn!(node = %node.name(), lift = %lift.spec.config.name, %error, "cannot open the lift's line; trying again");
-                reopen.pause().await;
-                continue;
-            }
-        };
+    }
+}
+
+impl FieldSource for LiftSource {
+    type Line = std::pin::Pin<Box<dyn LineStream>>;
+
+    fn describe(&self) -> String {
+        format!("lift {}", self.lift.spec.config.name)
+    }
+
+    async fn open(&mut self) -> Result<Self::Line, DeviceError> {
+        Ok(open(
+            &self.lift.spec.config,
+            &mut self.simulated_board,
+            &mut self.board,
+        )
+        .await?)
+    }
+
+    async fn run(&mut self, stream: Self::Line) -> Ended {
+        let LiftSource {
+            lift,
+            node,
+            counts,
+            outlets,
+            to_archive,
+            cursor,
+            errors,
+            answering,
+            ..
+        } = self;
         let mut poller = Poller::new(
             lift.spec.config.poller.clone(),
             cursor.clone(),
             tokio::time::Instant::now().into_std(),
         );
+        let mut answered = false;
         let mut no_actions = mpsc::unbounded_channel().1;
         let end = run_poller(stream, &mut poller, &mut no_actions, |event, _| {
             match event {
                 Event::Status(status) => {
-                    answering = true;
+                    *answering = true;
+                    answered = true;
                     counts
                         .status_replies
                         .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
@@ -306,17 +360,16 @@ async fn run(
                     let _ = to_archive.send(record);
                 }
                 Event::Comm(CommStatus::Lost) => {
-                    lift.down();
-                    lost(&mut answering);
+                    LiftSource::lost(lift, node, outlets, answering);
                 }
                 Event::Comm(_) => {}
                 Event::Error(error) => {
-                    errors += 1;
+                    *errors += 1;
                     counts
                         .line_errors
                         .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                     tracing::debug!(lift = %lift.spec.config.name, %error, "line error");
-                    lift.set(LiftSignal::Errors, total(errors));
+                    lift.set(LiftSignal::Errors, total(*errors));
                 }
                 Event::Resync(reason) => {
                     tracing::info!(lift = %lift.spec.config.name, ?reason, "reading the fault log again");
@@ -325,16 +378,17 @@ async fn run(
             ControlFlow::Continue(())
         })
         .await;
-        cursor = poller.cursor().clone();
-        if answering {
-            reopen.answered();
+        *cursor = poller.cursor().clone();
+        Ended {
+            answered,
+            reason: format!("{end:?}"),
         }
-        lift.down();
+    }
+
+    fn lost(&mut self) {
         // A converter's connection dropped or an adapter unplugged: the board is lost as
         // surely as one that stopped answering.
-        lost(&mut answering);
-        tracing::warn!(node = %node.name(), lift = %lift.spec.config.name, ?end, "the lift's line closed; opening it again");
-        reopen.pause().await;
+        LiftSource::lost(&self.lift, &self.node, &self.outlets, &mut self.answering);
     }
 }
 

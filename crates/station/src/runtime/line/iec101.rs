@@ -35,10 +35,14 @@ use crate::config::Iec101Settings;
 use crate::store::CommandOutcome;
 use points::PointId;
 
+use super::super::field::{supervise, Ended, FieldSource};
 use super::super::forwarded::CommandWatches;
 use super::super::node::NodePoints;
-use super::{all_down, device_link, open_when_ready, LineSpec};
-use super::{Answering, Reopen, COMMAND_TIMEOUT};
+use super::{all_down, device_link, open, LineSpec};
+use super::{Answering, COMMAND_TIMEOUT};
+use crate::device::DeviceError;
+use iec60870::ft12::io::LineStream;
+use std::pin::Pin;
 
 /// How long an executed command waits for the outstation's termination, which the
 /// standard leaves to the outstation, before it is terminated here.
@@ -69,27 +73,53 @@ pub(super) fn spawn(
         commands: Arc::clone(&commands),
         params: settings.params,
     };
-    tokio::spawn(run(spec, settings, node, inbox, commands, answering));
+    tokio::spawn(async move {
+        let source = Iec101Source {
+            spec,
+            settings,
+            node: Arc::clone(&node),
+            inbox,
+            commands,
+            answering_now: answering,
+        };
+        supervise(node.name(), source).await;
+    });
     line
 }
 
-async fn run(
+/// An IEC 101 line under the field-source supervisor.
+struct Iec101Source {
     spec: LineSpec,
     settings: Iec101Settings,
     node: Arc<NodePoints>,
-    mut inbox: mpsc::UnboundedReceiver<EndpointAction<iec101::Master>>,
+    inbox: mpsc::UnboundedReceiver<EndpointAction<iec101::Master>>,
     commands: Arc<CommandWatches>,
     answering_now: Answering,
-) {
-    let name = spec.config.name.clone();
-    all_down(&spec, &node);
-    let mut no_simulation = None;
-    let mut reopen = Reopen::new();
-    loop {
-        let stream = open_when_ready(&spec, &node, &mut no_simulation, &mut reopen).await;
+}
+
+impl FieldSource for Iec101Source {
+    type Line = Pin<Box<dyn LineStream>>;
+
+    fn describe(&self) -> String {
+        format!("line {}", self.spec.config.name)
+    }
+
+    async fn open(&mut self) -> Result<Self::Line, DeviceError> {
+        Ok(open(&self.spec.config, &mut None).await?)
+    }
+
+    async fn run(&mut self, stream: Self::Line) -> Ended {
+        let Iec101Source {
+            spec,
+            settings,
+            node,
+            inbox,
+            commands,
+            answering_now,
+        } = self;
         let now = tokio::time::Instant::now().into_std();
         let primary = spec.primary(settings.address_size, now);
-        let clock_node = Arc::clone(&node);
+        let clock_node = Arc::clone(node);
         let mut master = iec101::Master::new(
             primary,
             settings.params,
@@ -103,21 +133,23 @@ async fn run(
         for device in &spec.config.devices {
             let common_address = CommonAddress::new(device.common_address);
             if let Err(error) = master.add_station(device.address.into(), common_address) {
-                tracing::warn!(line = %name, %error, "outstation not polled");
+                tracing::warn!(line = %spec.config.name, %error, "outstation not polled");
             }
         }
-        let end = drive(stream, &mut master, &mut inbox, |master| {
-            observe(master, &spec, &settings, &node, &commands, &answering_now);
+        let end = drive(stream, &mut master, inbox, |master| {
+            observe(master, spec, settings, node, commands, answering_now);
             ControlFlow::Continue(())
         })
         .await;
-        tracing::warn!(node = %node.name(), line = %name, ?end, "line closed; opening it again");
         commands.abandon_all();
-        if answering_now.clear() {
-            reopen.answered();
+        Ended {
+            answered: answering_now.clear(),
+            reason: format!("{end:?}"),
         }
-        all_down(&spec, &node);
-        reopen.pause().await;
+    }
+
+    fn lost(&mut self) {
+        all_down(&self.spec, &self.node);
     }
 }
 

@@ -25,11 +25,12 @@ use tokio::sync::{mpsc, oneshot};
 
 use points::{normalized, EventCause, PointKind, PointValue, SourceTime};
 
+use super::super::field::{supervise, Ended, FieldSource};
 use super::super::node::NodePoints;
-use super::{
-    all_down, device_link, open_when_ready, Answering, CommandProblem, LineSpec, Reopen,
-    COMMAND_TIMEOUT,
-};
+use super::{all_down, device_link, open, Answering, CommandProblem, LineSpec, COMMAND_TIMEOUT};
+use crate::device::DeviceError;
+use iec60870::ft12::io::LineStream;
+use std::pin::Pin;
 
 /// The running IEC 103 part of a line: what a general command needs.
 #[derive(Clone)]
@@ -63,14 +64,15 @@ pub(super) fn spawn(
 ) -> Iec103Line {
     let (actions, inbox) = mpsc::unbounded_channel();
     let shared = Arc::new(Mutex::new(Shared::default()));
-    tokio::spawn(run(
+    let source = Iec103Source {
         spec,
-        node,
+        node: Arc::clone(&node),
         inbox,
-        Arc::clone(&shared),
-        answering,
+        shared: Arc::clone(&shared),
+        answering_now: answering,
         simulated,
-    ));
+    };
+    tokio::spawn(async move { supervise(node.name(), source).await });
     Iec103Line { actions, shared }
 }
 
@@ -115,28 +117,46 @@ struct Shared {
     pending: HashMap<(u16, u8), oneshot::Sender<Result<(), CommandProblem>>>,
 }
 
-async fn run(
+/// An IEC 103 line under the field-source supervisor.
+struct Iec103Source {
     spec: LineSpec,
     node: Arc<NodePoints>,
-    mut inbox: mpsc::UnboundedReceiver<EndpointAction<iec103::Master>>,
+    inbox: mpsc::UnboundedReceiver<EndpointAction<iec103::Master>>,
     shared: Arc<Mutex<Shared>>,
     answering_now: Answering,
-    mut simulated: Option<mpsc::UnboundedReceiver<EndpointAction<Simulated>>>,
-) {
-    let name = spec.config.name.clone();
-    all_down(&spec, &node);
-    let mut reopen = Reopen::new();
-    loop {
-        let stream = open_when_ready(&spec, &node, &mut simulated, &mut reopen).await;
+    /// The simulated relays' operations, until the line is first opened.
+    simulated: Option<mpsc::UnboundedReceiver<EndpointAction<Simulated>>>,
+}
+
+impl FieldSource for Iec103Source {
+    type Line = Pin<Box<dyn LineStream>>;
+
+    fn describe(&self) -> String {
+        format!("line {}", self.spec.config.name)
+    }
+
+    async fn open(&mut self) -> Result<Self::Line, DeviceError> {
+        Ok(open(&self.spec.config, &mut self.simulated).await?)
+    }
+
+    async fn run(&mut self, stream: Self::Line) -> Ended {
+        let Iec103Source {
+            spec,
+            node,
+            inbox,
+            shared,
+            answering_now,
+            ..
+        } = self;
         let now = tokio::time::Instant::now().into_std();
         // IEC 103 link addresses are one octet.
         let mut primary = spec.primary(iec60870::ft12::AddressSize::One, now);
         for device in &spec.config.devices {
             if let Err(error) = primary.add_station(device.address.into()) {
-                tracing::warn!(line = %name, %error, "device not polled");
+                tracing::warn!(line = %spec.config.name, %error, "device not polled");
             }
         }
-        let clock_node = Arc::clone(&node);
+        let clock_node = Arc::clone(node);
         let mut master = iec103::Master::new(
             primary,
             StartUp {
@@ -148,12 +168,11 @@ async fn run(
             now,
         );
         master.set_command_timeout(COMMAND_TIMEOUT);
-        let end = drive(stream, &mut master, &mut inbox, |master| {
-            observe(master, &spec, &node, &shared, &answering_now);
+        let end = drive(stream, &mut master, inbox, |master| {
+            observe(master, spec, node, shared, answering_now);
             ControlFlow::Continue(())
         })
         .await;
-        tracing::warn!(node = %node.name(), line = %name, ?end, "line closed; opening it again");
         let pending: Vec<_> = shared
             .lock()
             .map(|mut shared| {
@@ -164,11 +183,14 @@ async fn run(
         for reply in pending {
             let _ = reply.send(Err(CommandProblem::NoAnswer("the line closed".to_owned())));
         }
-        if answering_now.clear() {
-            reopen.answered();
+        Ended {
+            answered: answering_now.clear(),
+            reason: format!("{end:?}"),
         }
-        all_down(&spec, &node);
-        reopen.pause().await;
+    }
+
+    fn lost(&mut self) {
+        all_down(&self.spec, &self.node);
     }
 }
 

@@ -39,7 +39,7 @@ use crate::config::{LineConfig, LineProtocol, LineTransport, MeasurandScaling, P
 use crate::store::CommandOutcome;
 use points::{LineSignal, PointId, PointKind, PointSource};
 
-use super::field::{CommunicationStatus, Reopen};
+use super::field::CommunicationStatus;
 use super::node::NodePoints;
 pub(crate) use iec101::ObjectPoints;
 use iec103::Simulated;
@@ -363,25 +363,6 @@ pub(crate) fn spawn_line(spec: LineSpec, node: Arc<NodePoints>) -> LineHandle {
         answering,
         driver,
         simulated,
-    }
-}
-
-/// Opens the line, trying again after `reopen`'s pauses while it cannot be opened (a
-/// serial adapter unplugged, a terminal server down).
-async fn open_when_ready(
-    spec: &LineSpec,
-    node: &NodePoints,
-    simulated: &mut Option<mpsc::UnboundedReceiver<EndpointAction<Simulated>>>,
-    reopen: &mut Reopen,
-) -> std::pin::Pin<Box<dyn iec60870::ft12::io::LineStream>> {
-    loop {
-        match open(&spec.config, simulated).await {
-            Ok(stream) => return stream,
-            Err(error) => {
-                tracing::warn!(node = %node.name(), line = %spec.config.name, %error, "cannot open the line; trying again");
-                reopen.pause().await;
-            }
-        }
     }
 }
 
