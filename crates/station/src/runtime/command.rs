@@ -1,10 +1,12 @@
 //! A node's IEC 104 server hooks: commands travel down the hierarchy and their outcome
 //! travels back; clock synchronisation sets the node's clock and is passed down.
 //!
-//! A command addressed to a PLC variable goes to the simulation thread, which refuses it
-//! while the board's `remote_enable` variable is FALSE (Local/Remote switch in local) and
-//! otherwise writes it (held for the pulse time, then reset). A command addressed to a
-//! link is sent to the lower node with the same qualifier (a select stays a select) and
+//! A command the node accepts (its sender's redundancy group may send it, a set-point is
+//! in range, the group's authority variable allows it) goes to its target
+//! (`runtime::target`): a PLC variable is written on the simulation thread, which refuses
+//! it while the board's `remote_enable` variable is FALSE (Local/Remote switch in local)
+//! and otherwise writes it (held for the pulse time, then reset); a command addressed to
+//! a link is sent to the lower node with the same qualifier (a select stays a select) and
 //! its confirmation becomes this node's. Each is audited in the store with the peer's
 //! address, the time on the node's clock, the target, the value and the outcome.
 //!
@@ -19,94 +21,27 @@
 
 use std::collections::HashMap;
 use std::sync::{mpsc, Arc};
-use std::time::Duration;
 
-use iec60870::asdu::{DoublePointState, Element, TimeTag};
-use iec60870::cs104::server::{self, CommandFuture, StationHandler, TerminationFuture};
+use iec60870::asdu::Element;
+use iec60870::cs104::server::{self, CommandFuture, StationHandler};
 use iec60870::outstation::Peer;
 use iec60870::time::Cp56Time2a;
 use tokio::sync::oneshot;
 
-use crate::config::{CommandConfig, CommandTarget, NodeConfig};
+use crate::config::NodeConfig;
 use crate::store::{Actor, CommandOutcome, CommandPhase, CommandRecord, PointValue};
 
 use super::clock::LocalClocks;
 use super::link::LinkHandle;
 use super::node::NodePoints;
-use super::simulation::{CommandRefusal, SimRequest};
-
-/// The pulse length of a command with QU 1 or 2 when the project sets none.
-pub(crate) const DEFAULT_PULSE: Duration = Duration::from_millis(500);
-
-/// Where a command of this node goes.
-#[derive(Debug, Clone)]
-pub(crate) enum Route {
-    /// A PLC variable of this node (simulation node index).
-    Plc {
-        node: usize,
-        pulse: Option<Duration>,
-    },
-    /// Down a link, as command `ioa` of the lower node.
-    Link {
-        link: String,
-        ioa: iec60870::asdu::Ioa,
-    },
-    /// To a device on a serial line, as a general command to FUN/INF (ON/OFF fixed by
-    /// `value`, or the command's own).
-    Line {
-        line: String,
-        device: String,
-        fun: u8,
-        inf: u8,
-        value: Option<bool>,
-    },
-    /// To an IEC 101 outstation on a serial line, forwarded as it came to its `ioa`.
-    LineObject {
-        line: String,
-        device: String,
-        ioa: iec60870::asdu::Ioa,
-    },
-}
-
-impl Route {
-    /// Where `command` goes by its target; `sim_node` is the node's index on the
-    /// simulation thread.
-    fn of(command: &CommandConfig, sim_node: usize) -> Route {
-        match &command.target {
-            CommandTarget::Variable(_) => Route::Plc {
-                node: sim_node,
-                pulse: command.pulse,
-            },
-            CommandTarget::Link { link, ioa } => Route::Link {
-                link: link.clone(),
-                ioa: *ioa,
-            },
-            CommandTarget::Line {
-                line,
-                device,
-                fun,
-                inf,
-                value,
-            } => Route::Line {
-                line: line.clone(),
-                device: device.clone(),
-                fun: *fun,
-                inf: *inf,
-                value: *value,
-            },
-            CommandTarget::LineObject { line, device, ioa } => Route::LineObject {
-                line: line.clone(),
-                device: device.clone(),
-                ioa: *ioa,
-            },
-        }
-    }
-}
+use super::simulation::SimRequest;
+use super::target::{self, Executed, Target, TargetContext};
 
 #[derive(Debug, Clone)]
 pub(crate) struct RoutedCommand {
     pub name: String,
-    pub route: Route,
+    /// Where it goes.
+    pub target: Arc<dyn Target>,
     /// Only clients of these redundancy groups may send it (empty: any).
     pub from_groups: Vec<String>,
     /// The point returning its effect (commands on a PLC variable).
@@ -185,7 +120,7 @@ fn routed_commands(config: &NodeConfig, sim_node: usize) -> HashMap<u32, RoutedC
                 command.ioa.get(),
                 RoutedCommand {
                     name: command.name.clone(),
-                    route: Route::of(command, sim_node),
+                    target: target::of(command, sim_node),
                     from_groups: command.from_groups.clone(),
                     feedback: command.feedback.clone(),
                     range: command.range.clone(),
@@ -246,54 +181,18 @@ impl StationHandler for NodeHandler {
                     }
                 }
             }
-            let (outcome, detail, termination) = match routed.route {
-                Route::Plc { node, pulse } => {
-                    // Asked before the PLC gets the command: its change may be quick.
-                    let feedback = routed
-                        .feedback
-                        .filter(|_| !command.select)
-                        .map(|feedback| (this.points.expect_return(&feedback.point), feedback));
-                    let (outcome, detail) =
-                        execute_on_plc(&simulation, node, &command, pulse).await;
-                    let termination = feedback.map(|(returned, feedback)| {
-                        await_return(returned, feedback, this.points.name().to_owned())
-                    });
-                    (outcome, detail, termination)
-                }
-                Route::Link { link, ioa } => {
-                    forward(handler_links.get(&link), &link, ioa, &command).await
-                }
-                Route::Line {
-                    line,
-                    device,
-                    fun,
-                    inf,
-                    value,
-                } => {
-                    // As for the PLC: the return information (the relay's indication at
-                    // the command's FUN/INF, or the project's `feedback`) goes out before
-                    // ACT_TERM; the relay reports it after its acknowledgement.
-                    let feedback = routed
-                        .feedback
-                        .filter(|_| !command.select)
-                        .map(|feedback| (this.points.expect_return(&feedback.point), feedback));
-                    let target = (device.as_str(), fun, inf, value);
-                    let (outcome, detail) =
-                        general_command(handler_lines.get(&line), &line, target, &command).await;
-                    let termination = feedback.map(|(returned, feedback)| {
-                        await_return(returned, feedback, this.points.name().to_owned())
-                    });
-                    (outcome, detail, termination)
-                }
-                Route::LineObject { line, device, ioa } => match handler_lines.get(&line) {
-                    Some(handle) => handle.forward(&device, ioa, &command).await,
-                    None => (
-                        CommandOutcome::Failed,
-                        format!("line {line} is not running"),
-                        None,
-                    ),
-                },
+            let context = TargetContext {
+                points: Arc::clone(&this.points),
+                links: handler_links,
+                lines: handler_lines,
+                simulation,
+                feedback: routed.feedback.filter(|_| !command.select),
             };
+            let Executed {
+                outcome,
+                detail,
+                termination,
+            } = routed.target.execute(&command, context).await;
             match (this.finish(outcome, detail).await, termination) {
                 (server::CommandOutcome::Executed, Some(termination)) => {
                     server::CommandOutcome::Confirmed(termination)
@@ -451,237 +350,6 @@ async fn read_bool(simulation: &mpsc::Sender<SimRequest>, node: usize, path: &st
     }));
     simulation.send(request).ok()?;
     answer.await.ok().flatten()
-}
-
-async fn execute_on_plc(
-    simulation: &mpsc::Sender<SimRequest>,
-    node: usize,
-    command: &server::Command,
-    configured_pulse: Option<Duration>,
-) -> (CommandOutcome, String) {
-    let Some((value, qualifier)) = points_iec::command_value(&command.element) else {
-        return (
-            CommandOutcome::Refused,
-            format!(
-                "{} cannot be written to a PLC variable",
-                command.element.short_name()
-            ),
-        );
-    };
-    let pulse = match qualifier {
-        Some(1 | 2) => Some(configured_pulse.unwrap_or(DEFAULT_PULSE)),
-        Some(3) => None,
-        Some(_) => configured_pulse,
-        None => None,
-    };
-    let (reply, answer) = oneshot::channel();
-    let request = SimRequest::Command {
-        node,
-        ioa: command.ioa.get(),
-        value,
-        pulse,
-        select: command.select,
-        reply,
-    };
-    if simulation.send(request).is_err() {
-        return (CommandOutcome::Failed, "the simulation has stopped".into());
-    }
-    match answer.await {
-        Ok(Ok(())) => (CommandOutcome::Executed, String::new()),
-        Ok(Err(CommandRefusal::LocalMode)) => (
-            CommandOutcome::RefusedLocalMode,
-            "the board is in local mode".into(),
-        ),
-        Ok(Err(refusal)) => (CommandOutcome::Refused, refusal.to_string()),
-        Err(_) => (CommandOutcome::Failed, "the simulation has stopped".into()),
-    }
-}
-
-/// Terminates a confirmed command once its feedback point's change has gone out as
-/// return information, or when the wait runs out.
-fn await_return(
-    returned: tokio::sync::oneshot::Receiver<()>,
-    feedback: crate::config::Feedback,
-    node: String,
-) -> TerminationFuture {
-    Box::pin(async move {
-        if tokio::time::timeout(feedback.timeout, returned)
-            .await
-            .is_err()
-        {
-            tracing::info!(
-                %node, point = %feedback.point, timeout_ms = feedback.timeout.as_millis(),
-                "no return information: the command is terminated without it"
-            );
-        }
-    })
-}
-
-/// A command to a line device: a general command ON/OFF, its acknowledgement the outcome.
-async fn general_command(
-    line: Option<&super::line::LineHandle>,
-    name: &str,
-    (device, fun, inf, fixed): (&str, u8, u8, Option<bool>),
-    command: &server::Command,
-) -> (CommandOutcome, String) {
-    use super::line::CommandProblem;
-    let Some(line) = line else {
-        return (
-            CommandOutcome::Failed,
-            format!("line {name} is not running"),
-        );
-    };
-    let on = match &command.element {
-        Element::SingleCommand { on, .. } => *on,
-        Element::DoubleCommand { state, .. } => *state == DoublePointState::On,
-        _ => {
-            return (
-                CommandOutcome::Refused,
-                "only single and double commands go to a line device".to_owned(),
-            )
-        }
-    };
-    let on = fixed.unwrap_or(on);
-    if command.select {
-        // IEC 103 has no select: the selection stays here, the execute goes to the device.
-        return (
-            CommandOutcome::Executed,
-            format!("selected ({device} on line {name})"),
-        );
-    }
-    match line.command(device, fun, inf, on).await {
-        Ok(()) => (
-            CommandOutcome::Executed,
-            format!("acknowledged by {device} (FUN {fun} INF {inf})"),
-        ),
-        Err(CommandProblem::Local) => (
-            CommandOutcome::RefusedLocalMode,
-            format!("{device} is in LOCAL: not sent"),
-        ),
-        Err(CommandProblem::Refused) => (
-            CommandOutcome::Refused,
-            format!("refused by {device} (negative acknowledgement)"),
-        ),
-        Err(CommandProblem::NoAnswer(why)) => (CommandOutcome::Failed, why),
-    }
-}
-
-/// Sends a command down a link. The confirmation is the lower node's, as the link task
-/// meets it; an executed command's termination waits for the lower node's termination to
-/// reach the link task too (the return information before it is then published here).
-async fn forward(
-    link: Option<&LinkHandle>,
-    name: &str,
-    ioa: iec60870::asdu::Ioa,
-    command: &server::Command,
-) -> (CommandOutcome, String, Option<TerminationFuture>) {
-    let Some(link) = link else {
-        return (CommandOutcome::Failed, format!("link {name} is cut"), None);
-    };
-    let Some(client) = link.client() else {
-        return (CommandOutcome::Failed, format!("link {name} is cut"), None);
-    };
-    if !link.is_up() {
-        return (CommandOutcome::Failed, format!("link {name} is down"), None);
-    }
-    let time = match &command.time {
-        Some(TimeTag::Cp56(tag)) => Some(*tag),
-        _ => None,
-    };
-    let answers = link.watch_command(command.type_id, ioa);
-    let (type_id, element) = (command.type_id, command.element.clone());
-    let mut request =
-        tokio::spawn(async move { client.command(type_id, ioa, element, time).await });
-    let mut confirmed = answers.confirmed;
-    let mut terminated = answers.terminated;
-    // The answers count as the link task meets them in the lower node's stream, after the
-    // data before them: the request (the client's view of the same answers) only decides
-    // when it fails. Whatever the request saw, the link task meets too, or the link goes
-    // down and drops the watch: no wait needs a bound of its own.
-    let mut finished = None;
-    let positive = tokio::select! {
-        seen = &mut confirmed => seen.ok(),
-        done = &mut request => {
-            let answered = matches!(done, Ok(Ok(_)));
-            finished = Some(done);
-            if answered { (&mut confirmed).await.ok() } else { None }
-        }
-    };
-    if positive != Some(true) {
-        // Refused (or the link went away): the request's own result says why.
-        let done = match finished {
-            Some(done) => done,
-            None => request.await,
-        };
-        let (outcome, detail) = request_outcome(done, name, ioa);
-        return (outcome, detail, None);
-    }
-    let detail = format!("confirmed by {name} (IOA {ioa})");
-    if command.select {
-        request.abort();
-        return (CommandOutcome::Executed, detail, None);
-    }
-    let terminated_already =
-        |done: &RequestResult| matches!(done, Ok(Ok(outcome)) if outcome.terminated);
-    let termination: TerminationFuture = match finished {
-        // The request ended with the termination: the link task meets it too.
-        Some(done) => {
-            let wait = terminated_already(&done);
-            Box::pin(async move {
-                if wait {
-                    let _ = terminated.await;
-                }
-            })
-        }
-        None => Box::pin(async move {
-            tokio::select! {
-                _ = &mut terminated => {}
-                done = &mut request => {
-                    // A request that ended without the termination (its own time-out)
-                    // ends the wait; one that ended with it waits for the link task.
-                    if terminated_already(&done) {
-                        let _ = terminated.await;
-                    }
-                }
-            }
-        }),
-    };
-    (CommandOutcome::Executed, detail, Some(termination))
-}
-
-/// What a forwarded command's request task ended with.
-type RequestResult = Result<
-    Result<iec60870::cs104::client::RequestOutcome, iec60870::cs104::client::ClientError>,
-    tokio::task::JoinError,
->;
-
-/// The audit outcome of a forwarded command's request.
-fn request_outcome(
-    result: RequestResult,
-    name: &str,
-    ioa: iec60870::asdu::Ioa,
-) -> (CommandOutcome, String) {
-    let Ok(result) = result else {
-        return (
-            CommandOutcome::Failed,
-            format!("{name}: the request was lost"),
-        );
-    };
-    match result {
-        Ok(outcome) if outcome.positive => (
-            CommandOutcome::Executed,
-            format!("confirmed by {name} (IOA {ioa})"),
-        ),
-        Ok(outcome) => (
-            CommandOutcome::Refused,
-            format!("refused by {name} (IOA {ioa}, cause {})", outcome.cause),
-        ),
-        Err(iec60870::cs104::client::ClientError::Timeout(what)) => (
-            CommandOutcome::TimedOut,
-            format!("no answer from {name}: timed out waiting for {what}"),
-        ),
-        Err(error) => (CommandOutcome::Failed, format!("{name}: {error}")),
-    }
 }
 
 /// A set-point's value in engineering units (as the project's `range` is written).

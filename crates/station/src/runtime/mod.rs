@@ -23,8 +23,11 @@
 //!   values become points, their fault logs go into the store's archive).
 //! - [`notification`]: e-mail and webhook notices of what the lifts report, each delivery
 //!   recorded.
-//! - `command`: the server hooks — commands routed to a PLC variable (refused in local
-//!   mode) or down a link, each audited; clock synchronisation passed down.
+//! - `command`: the server hooks — a command's authority, range and audit, then its
+//!   target executes it; clock synchronisation passed down.
+//! - `target`: where a command goes, one `Target` per kind (a PLC variable, refused in
+//!   local mode; an object down a link; a line device's general command; an IEC 101
+//!   outstation's object).
 //! - `server`: a node's IEC 104 server (settings, TLS, process image with the commands,
 //!   the sink feeding it, its redundancy groups' status points).
 //!
@@ -52,6 +55,7 @@ pub mod operation;
 mod server;
 pub mod simulation;
 pub mod sink;
+mod target;
 
 use std::collections::HashMap;
 use std::sync::{mpsc, Arc};
