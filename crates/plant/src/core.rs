@@ -166,6 +166,25 @@ pub enum PlantError {
     /// Text that does not parse as a fault.
     #[error("cannot parse fault `{0}`")]
     BadFault(String),
+    /// A console line names something this plant does not have (lab models): the error
+    /// lists what it takes.
+    #[error("no {kind} `{name}`; the {kind} names are {}", allowed.join(", "))]
+    UnknownName {
+        /// What was looked for (sensor, actuator, button).
+        kind: &'static str,
+        /// The name given.
+        name: String,
+        /// Every name allowed there.
+        allowed: Vec<String>,
+    },
+    /// A console line that is no operation of the plant's console language.
+    #[error("cannot read `{line}`; the operations are {expected}")]
+    BadConsoleLine {
+        /// The line.
+        line: String,
+        /// The operations, as usage text.
+        expected: String,
+    },
 }
 
 /// The shape every plant simulation has: a named I/O surface and a clock-free step.

@@ -212,6 +212,7 @@
 
 mod core;
 mod devices;
+pub mod lab;
 pub mod registry;
 pub mod sun;
 mod topology;

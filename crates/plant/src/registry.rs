@@ -12,8 +12,9 @@ pub struct PlantStart {
     pub unix_secs: i64,
 }
 
-/// The plants by name.
-pub const PLANTS: &[&str] = &["vsetin"];
+/// The plants by name: the Vsetín station and the teaching-lab models
+/// ([`crate::lab::MODELS`], opened with default options).
+pub const PLANTS: &[&str] = &["vsetin", "crossroad"];
 
 /// A new plant of the given name, or `None` for a name [`PLANTS`] does not hold.
 pub fn open(name: &str, start: PlantStart) -> Option<Box<dyn Plant + Send>> {
@@ -24,6 +25,9 @@ pub fn open(name: &str, start: PlantStart) -> Option<Box<dyn Plant + Send>> {
                 ..crate::vsetin::StationConfig::default()
             };
             Some(Box::new(crate::vsetin::VsetinPlant::with_config(config)))
+        }
+        "slide" | "crossroad" | "mixing" | "washing" => {
+            crate::lab::open_plant(name, &crate::lab::LabOptions::default()).ok()
         }
         _ => None,
     }

@@ -5,6 +5,7 @@
 mod control;
 mod devices;
 mod faults;
+mod lab;
 mod lighting;
 mod logo;
 mod prop;
