@@ -80,7 +80,6 @@ impl ErrorLog {
 
     /// A non-recoverable error at `now`: the model freezes until RESET; open recoverable
     /// errors close.
-    #[allow(dead_code)] // the slide comes in the next commit
     pub(crate) fn fail(&mut self, now: SimTime, kind: ErrorKind, detail: String) {
         while let Some(i) = self
             .entries

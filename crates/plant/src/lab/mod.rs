@@ -119,6 +119,7 @@
 mod addresses;
 mod crossroad;
 mod engine;
+mod slide;
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -127,6 +128,7 @@ use std::str::FromStr;
 use crate::core::{Plant, SimTime, Value};
 use crossroad::Crossroad;
 use engine::LabPlant;
+use slide::Slide;
 
 /// The models, by the names [`open`], [`bindings`] and the registry take.
 pub const MODELS: &[&str] = &["slide", "crossroad", "mixing", "washing"];
@@ -318,7 +320,6 @@ impl LabOptions {
     }
 
     /// The slide's sensor positions (`LAB-A1`).
-    #[allow(dead_code)] // the slide comes in the next commit
     pub(crate) fn sensors(&self) -> [u8; 4] {
         self.get("sensors")
             .and_then(parse_sensors)
@@ -365,6 +366,7 @@ pub fn open(model: &str, options: &LabOptions) -> Result<Box<dyn LabModel + Send
     }
     options.check_for(model)?;
     match model {
+        "slide" => Ok(Box::new(LabPlant::<Slide>::new(options))),
         "crossroad" => Ok(Box::new(LabPlant::<Crossroad>::new(options))),
         _ => Err(LabError::UnknownModel(format!("{model} (not built yet)"))),
     }
@@ -380,6 +382,7 @@ pub(crate) fn open_plant(
     }
     options.check_for(model)?;
     match model {
+        "slide" => Ok(Box::new(LabPlant::<Slide>::new(options))),
         "crossroad" => Ok(Box::new(LabPlant::<Crossroad>::new(options))),
         _ => Err(LabError::UnknownModel(format!("{model} (not built yet)"))),
     }
