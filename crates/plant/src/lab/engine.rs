@@ -36,12 +36,14 @@ pub(crate) const fn spec(name: &'static str, description: &'static str) -> Signa
 pub(crate) struct Cmd<'a> {
     effective: &'a [bool],
     commanded: &'a [bool],
+    frozen: bool,
 }
 
 impl Cmd<'_> {
-    /// The output at `index` of [`Sim::OUTPUTS`] as it acts (FALSE when broken).
+    /// The output at `index` of [`Sim::OUTPUTS`] as it acts: FALSE when broken or while
+    /// the model is frozen by a non-recoverable error.
     pub(crate) fn on(&self, index: usize) -> bool {
-        self.effective.get(index).copied().unwrap_or(false)
+        !self.frozen && self.effective.get(index).copied().unwrap_or(false)
     }
 
     /// The output at `index` as the PLC commands it.
@@ -352,6 +354,7 @@ impl<M: Sim> LabPlant<M> {
         let cmd = Cmd {
             effective: &self.effective,
             commanded: &self.commanded,
+            frozen: false,
         };
         self.sim.apply(self.now, cmd, &mut self.log);
         self.fire_due_timers();
@@ -368,6 +371,7 @@ impl<M: Sim> LabPlant<M> {
                     let cmd = Cmd {
                         effective: &self.effective,
                         commanded: &self.commanded,
+                        frozen: false,
                     };
                     self.sim.on_timer(self.now, cmd, &mut self.log);
                 }
@@ -386,6 +390,7 @@ impl<M: Sim> LabPlant<M> {
                 let cmd = Cmd {
                     effective: &self.effective,
                     commanded: &self.commanded,
+                    frozen: false,
                 };
                 self.sim.on_second(e, cmd, &mut self.log);
             }
@@ -659,6 +664,7 @@ impl<M: Sim> Plant for LabPlant<M> {
         let cmd = Cmd {
             effective: &self.effective,
             commanded: &self.commanded,
+            frozen: self.log.frozen(),
         };
         let or_none = |items: Vec<String>| {
             if items.is_empty() {
@@ -745,6 +751,7 @@ impl<M: Sim> LabModel for LabPlant<M> {
         let cmd = Cmd {
             effective: &self.effective,
             commanded: &self.commanded,
+            frozen: self.log.frozen(),
         };
         let mut state = self.sim.state(cmd);
         state.push(("err", Value::Bool(self.led() != ErrLed::Off)));

@@ -119,6 +119,7 @@
 mod addresses;
 mod crossroad;
 mod engine;
+mod mixing;
 mod slide;
 
 use std::collections::BTreeMap;
@@ -128,6 +129,7 @@ use std::str::FromStr;
 use crate::core::{Plant, SimTime, Value};
 use crossroad::Crossroad;
 use engine::LabPlant;
+use mixing::Mixing;
 use slide::Slide;
 
 /// The models, by the names [`open`], [`bindings`] and the registry take.
@@ -368,6 +370,7 @@ pub fn open(model: &str, options: &LabOptions) -> Result<Box<dyn LabModel + Send
     match model {
         "slide" => Ok(Box::new(LabPlant::<Slide>::new(options))),
         "crossroad" => Ok(Box::new(LabPlant::<Crossroad>::new(options))),
+        "mixing" => Ok(Box::new(LabPlant::<Mixing>::new(options))),
         _ => Err(LabError::UnknownModel(format!("{model} (not built yet)"))),
     }
 }
@@ -384,6 +387,7 @@ pub(crate) fn open_plant(
     match model {
         "slide" => Ok(Box::new(LabPlant::<Slide>::new(options))),
         "crossroad" => Ok(Box::new(LabPlant::<Crossroad>::new(options))),
+        "mixing" => Ok(Box::new(LabPlant::<Mixing>::new(options))),
         _ => Err(LabError::UnknownModel(format!("{model} (not built yet)"))),
     }
 }

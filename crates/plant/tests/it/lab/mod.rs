@@ -3,6 +3,7 @@
 
 mod bindings;
 mod crossroad;
+mod mixing;
 mod slide;
 
 use std::time::Duration;
