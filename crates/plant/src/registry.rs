@@ -14,7 +14,7 @@ pub struct PlantStart {
 
 /// The plants by name: the Vsetín station and the teaching-lab models
 /// ([`crate::lab::MODELS`], opened with default options).
-pub const PLANTS: &[&str] = &["vsetin", "slide", "crossroad", "mixing"];
+pub const PLANTS: &[&str] = &["vsetin", "slide", "crossroad", "mixing", "washing"];
 
 /// A new plant of the given name, or `None` for a name [`PLANTS`] does not hold.
 pub fn open(name: &str, start: PlantStart) -> Option<Box<dyn Plant + Send>> {

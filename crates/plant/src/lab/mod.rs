@@ -121,6 +121,7 @@ mod crossroad;
 mod engine;
 mod mixing;
 mod slide;
+mod washing;
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -131,6 +132,7 @@ use crossroad::Crossroad;
 use engine::LabPlant;
 use mixing::Mixing;
 use slide::Slide;
+use washing::Washing;
 
 /// The models, by the names [`open`], [`bindings`] and the registry take.
 pub const MODELS: &[&str] = &["slide", "crossroad", "mixing", "washing"];
@@ -329,7 +331,6 @@ impl LabOptions {
     }
 
     /// The washer's drum positions (`LAB-A9`).
-    #[allow(dead_code)] // the washer comes in a later commit
     pub(crate) fn drum_positions(&self) -> u8 {
         if self.get("drum") == Some("4") {
             4
@@ -339,7 +340,6 @@ impl LabOptions {
     }
 
     /// The washer heats by 1.5 × 100 / level (`LAB-A7`).
-    #[allow(dead_code)] // the washer comes in a later commit
     pub(crate) fn heating_by_level(&self) -> bool {
         self.get("heating") == Some("level")
     }
@@ -371,7 +371,8 @@ pub fn open(model: &str, options: &LabOptions) -> Result<Box<dyn LabModel + Send
         "slide" => Ok(Box::new(LabPlant::<Slide>::new(options))),
         "crossroad" => Ok(Box::new(LabPlant::<Crossroad>::new(options))),
         "mixing" => Ok(Box::new(LabPlant::<Mixing>::new(options))),
-        _ => Err(LabError::UnknownModel(format!("{model} (not built yet)"))),
+        "washing" => Ok(Box::new(LabPlant::<Washing>::new(options))),
+        _ => Err(LabError::UnknownModel(model.to_owned())),
     }
 }
 
@@ -388,7 +389,8 @@ pub(crate) fn open_plant(
         "slide" => Ok(Box::new(LabPlant::<Slide>::new(options))),
         "crossroad" => Ok(Box::new(LabPlant::<Crossroad>::new(options))),
         "mixing" => Ok(Box::new(LabPlant::<Mixing>::new(options))),
-        _ => Err(LabError::UnknownModel(format!("{model} (not built yet)"))),
+        "washing" => Ok(Box::new(LabPlant::<Washing>::new(options))),
+        _ => Err(LabError::UnknownModel(model.to_owned())),
     }
 }
 

@@ -5,6 +5,7 @@ mod bindings;
 mod crossroad;
 mod mixing;
 mod slide;
+mod washing;
 
 use std::time::Duration;
 
