@@ -168,7 +168,7 @@ pub enum PlantError {
     BadFault(String),
     /// A console line names something this plant does not have (lab models): the error
     /// lists what it takes.
-    #[error("no {kind} `{name}`; the {kind} names are {}", allowed.join(", "))]
+    #[error("no {kind} `{name}`; {}", names_allowed(kind, allowed))]
     UnknownName {
         /// What was looked for (sensor, actuator, button).
         kind: &'static str,
@@ -185,6 +185,15 @@ pub enum PlantError {
         /// The operations, as usage text.
         expected: String,
     },
+}
+
+/// "the sensor names are K1, K2" or "there is no sensor", for [`PlantError::UnknownName`].
+fn names_allowed(kind: &str, allowed: &[String]) -> String {
+    if allowed.is_empty() {
+        format!("there is no {kind}")
+    } else {
+        format!("the {kind} names are {}", allowed.join(", "))
+    }
 }
 
 /// The shape every plant simulation has: a named I/O surface and a clock-free step.

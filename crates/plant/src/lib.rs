@@ -5,7 +5,12 @@
 //! its own console language for fault injection and hand operations, described by the
 //! plant ([`Plant::console_operations`], [`Plant::status`]). The runtime finds a plant by
 //! the project's `plant = "..."` key in [`registry`] and knows no plant by name; adding
-//! one (the lab models, the ball sorter, a lift) is a module here and a registry entry.
+//! one (the ball sorter, a lift) is a module here and a registry entry.
+//!
+//! The four EDU-mod models of the PLC teaching lab (the teaching-lab thesis,
+//! docs/THESES.md: slide unit, crossroad, mixing unit, washing machine) are in [`lab`],
+//! with their ERR/RESET behaviour, error record and the address tables of the lab; the
+//! registry opens them as `slide`, `crossroad`, `mixing` and `washing`.
 //!
 //! The first plant, [`vsetin`], is the Vsetín railway station (the railway-station thesis,
 //! docs/THESES.md: the station's supply, lighting, boards and dispatch): its 6 kV feeds, transformers, distribution boards, diesel generator set,

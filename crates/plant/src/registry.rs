@@ -26,7 +26,7 @@ pub fn open(name: &str, start: PlantStart) -> Option<Box<dyn Plant + Send>> {
             };
             Some(Box::new(crate::vsetin::VsetinPlant::with_config(config)))
         }
-        "slide" | "crossroad" | "mixing" | "washing" => {
+        name if crate::lab::MODELS.contains(&name) => {
             crate::lab::open_plant(name, &crate::lab::LabOptions::default()).ok()
         }
         _ => None,
@@ -47,5 +47,14 @@ mod tests {
             );
         }
         assert!(open("nonexistent", PlantStart { unix_secs: 0 }).is_none());
+    }
+
+    #[test]
+    fn every_lab_model_is_listed_and_opens_as_that_model() {
+        for model in crate::lab::MODELS {
+            assert!(PLANTS.contains(model), "{model}");
+            let plant = open(model, PlantStart { unix_secs: 0 }).unwrap();
+            assert!(plant.modules().iter().any(|m| m.name == *model), "{model}");
+        }
     }
 }

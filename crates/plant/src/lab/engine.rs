@@ -448,8 +448,7 @@ impl<M: Sim> LabPlant<M> {
         let allowed = match kind {
             "sensor" => self.sensor_names(),
             "actuator" => Self::actuator_names(),
-            "button" => Self::button_names(),
-            _ => self.infos.iter().map(|s| s.name.clone()).collect(),
+            _ => Self::button_names(),
         };
         match self.locate(name) {
             Some((sig, canonical)) if allowed.iter().any(|a| a == canonical) => {
@@ -601,7 +600,18 @@ impl<M: Sim> Plant for LabPlant<M> {
                 self.settle();
             }
             (Some("clear"), [name]) => {
-                let (_, canonical) = self.resolve("signal", name)?;
+                let faulted = self
+                    .faults
+                    .keys()
+                    .copied()
+                    .find(|n| n.eq_ignore_ascii_case(name));
+                let Some(canonical) = faulted else {
+                    return Err(PlantError::UnknownName {
+                        kind: "faulted signal",
+                        name: (*name).to_owned(),
+                        allowed: self.faults.keys().map(|n| (*n).to_owned()).collect(),
+                    });
+                };
                 self.set_fault(canonical, None);
             }
             (Some("reset"), []) => self.do_reset(),

@@ -2,9 +2,12 @@
 //! step-size independence and random operation sequences.
 
 mod bindings;
+mod console;
 mod crossroad;
 mod mixing;
+mod prop;
 mod slide;
+mod timing;
 mod washing;
 
 use std::time::Duration;
