@@ -176,6 +176,42 @@ While it runs, type `help` for the faults and hand operations of the console.",
   stanice user list --users users.toml",
     ),
     (
+        "lab",
+        "  stanice lab run slide --program examples/lab/slide.st --duration 2m
+  stanice lab run mixing --program examples/lab/mixing.st --scenario examples/lab/scenarios/mixing.toml
+  stanice lab grade --scenario examples/lab/scenarios/slide.toml submissions/
+  stanice lab serve slide --program examples/lab/slide.st     # the front panel in a browser
+  stanice lab signals washing --profile lab",
+    ),
+    (
+        "lab run",
+        "  stanice lab run slide --program examples/lab/slide.st --duration 2m
+  stanice lab run slide --program examples/lab/slide.st --scenario examples/lab/scenarios/slide.toml
+  stanice lab run washing --program main.st lib.st --main Washing --profile lab --json
+  stanice lab run slide --program slide.st --option sensors=2,4,7,9 --speed 10
+The exit code is 0 when the run met its scenario (no model error, every property held),
+1 when it did not, 2 when the program does not compile.",
+    ),
+    (
+        "lab grade",
+        "  stanice lab grade --scenario examples/lab/scenarios/slide.toml submissions/
+  stanice lab grade --scenario crossroad.toml class-2b/ --profile lab --out results/crossroad
+Each .st file in the folder is one student, each subfolder of .st files one student;
+the table goes to FOLDER/grades.csv and FOLDER/grades.html unless --out says otherwise.",
+    ),
+    (
+        "lab serve",
+        "  stanice lab serve slide --program examples/lab/slide.st     # then open http://127.0.0.1:8090/
+  stanice lab serve mixing --program mixing.st --listen 127.0.0.1:8091 --paused
+  stanice lab serve slide --program examples/lab/wrong/slide_overtravel.st --speed 10",
+    ),
+    (
+        "lab signals",
+        "  stanice lab signals slide
+  stanice lab signals mixing --profile lab
+  stanice lab signals slide --option program-err=true     # with ERR and RESET for the program",
+    ),
+    (
         "plc",
         "  stanice plc check examples/vsetin/plc/rh2_logic.st
   stanice plc run counter.st --program Main --cycles 10",

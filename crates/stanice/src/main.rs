@@ -24,6 +24,7 @@ mod iec101;
 mod iec103;
 mod iec104;
 mod interrupt;
+mod lab;
 mod lift;
 mod link_report;
 mod plc;
@@ -88,6 +89,10 @@ enum Command {
     /// Soft PLC: check and run Structured Text.
     #[command(subcommand)]
     Plc(plc::PlcCommand),
+    /// PLC teaching lab: a student's program against a lab model (slide, crossroad,
+    /// mixing, washing), checked by a scenario; a class graded in one command.
+    #[command(subcommand)]
+    Lab(lab::LabCommand),
 }
 
 fn main() -> std::process::ExitCode {
@@ -127,6 +132,7 @@ fn main() -> std::process::ExitCode {
             Command::Hmi(args) => hmi::run(args).await,
             Command::User(command) => hmi::user(command),
             Command::Plc(command) => plc::run(command).await,
+            Command::Lab(command) => lab::run(command).await,
         }
     });
     match result {
