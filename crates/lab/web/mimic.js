@@ -177,8 +177,7 @@ function button(label, id, down, up) {
 }
 
 function buildButtons(s) {
-  const ops = s.operations.join(" ");
-  if (ops.includes("START")) button("START", "button-start", "press START", "release START");
+  if ("START" in s.signals) button("START", "button-start", "press START", "release START");
   if (s.model === "crossroad") button("Pedestrian button", "button-pedestrian", "press tlacitko_chodci", "release tlacitko_chodci");
   button("RESET", "button-reset", "reset");
   const input = document.createElement("input");
