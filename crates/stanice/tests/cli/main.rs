@@ -11,6 +11,7 @@ mod support;
 
 mod dispatch;
 mod iec104;
+mod lab;
 mod messages;
 mod plc;
 mod points_and_events;
