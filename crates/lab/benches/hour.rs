@@ -29,7 +29,10 @@ fn main() {
             speed: Speed::Max,
         };
         let started = Instant::now();
-        let report = Session::new(program, settings, None).unwrap().run().unwrap();
+        let report = Session::new(program, settings, None)
+            .unwrap()
+            .run()
+            .unwrap();
         let wall = started.elapsed().as_secs_f64();
         println!(
             "{model:<10}  {:>7.0} s  {wall:>6.3}  {:>8.0}x  {:>9.0}  {:>10}",

@@ -33,7 +33,7 @@ pub enum ProgramError {
     #[error("{0}")]
     Read(String),
     /// The compiler refused it: every diagnostic, rendered.
-    #[error("{} error(s):\n{}", .0.len(), .0.join("\n"))]
+    #[error("{}", .0.join("\n"))]
     Compile(Vec<String>),
     /// No PROGRAM in the files.
     #[error("the files hold no PROGRAM")]

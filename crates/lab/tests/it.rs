@@ -74,7 +74,7 @@ fn the_washing_reference_runs_its_programme_without_error() {
 /// The first violation of a wrong program against its model's scenario.
 fn first_violation(model: &str, file: &str) -> (f64, ViolationKind, String) {
     let scenario = scenario(model);
-    let report = run(model, &format!("wrong/{file}"), Some(&scenario));
+    let report = run(model, file, Some(&scenario));
     assert!(!report.passed, "{file} passed:\n{}", report.text());
     let first = report.first_violation().unwrap();
     (first.time_s, first.kind.clone(), first.line())
@@ -82,13 +82,13 @@ fn first_violation(model: &str, file: &str) -> (f64, ViolationKind, String) {
 
 #[test]
 fn wrong_programs_fail_with_their_violation() {
-    let (time, kind, line) = first_violation("slide", "slide_overtravel.st");
+    let (time, kind, line) = first_violation("slide", "class/boris.st");
     assert_eq!(kind, ViolationKind::Model("overtravel".into()), "{line}");
     // nine rapid steps to K4 at 4.5 s, the tenth commanded step is past it at 5.0 s
     assert!((time - 5.0).abs() < 1e-9, "{line}");
     assert!(line.contains("EM1=1"), "{line}");
 
-    let (_, kind, line) = first_violation("slide", "slide_collision.st");
+    let (_, kind, line) = first_violation("slide", "class/carol.st");
     assert_eq!(
         kind,
         ViolationKind::Model("both-directions".into()),
@@ -96,12 +96,12 @@ fn wrong_programs_fail_with_their_violation() {
     );
     assert!(line.contains("EM1=1") && line.contains("EM2=1"), "{line}");
 
-    let (time, kind, line) = first_violation("mixing", "mixing_overflow.st");
+    let (time, kind, line) = first_violation("mixing", "wrong/mixing_overflow.st");
     assert_eq!(kind, ViolationKind::Model("overflow".into()), "{line}");
     // the valve opens at 0 s: 84 L at the 14th second, over at the 15th
     assert!((time - 15.0).abs() < 1e-9, "{line}");
 
-    let (_, kind, line) = first_violation("crossroad", "crossroad_no_interlock.st");
+    let (_, kind, line) = first_violation("crossroad", "wrong/crossroad_no_interlock.st");
     assert_eq!(
         kind,
         ViolationKind::Model("conflicting-greens".into()),
@@ -215,28 +215,11 @@ fn the_lab_profile_runs_a_program_written_for_the_lab_wiring() {
 }
 
 #[test]
-fn a_class_folder_grades_into_the_expected_table() {
-    let class = tempfile::tempdir().unwrap();
-    let copy = |from: &str, to: &str| {
-        std::fs::copy(examples().join(from), class.path().join(to)).unwrap();
-    };
-    copy("slide.st", "alice.st");
-    copy("wrong/slide_overtravel.st", "bob.st");
-    copy("wrong/slide_collision.st", "carol.st");
-    std::fs::write(
-        class.path().join("dave.st"),
-        "PROGRAM Dave\nx := 1;\nEND_PROGRAM\n",
-    )
-    .unwrap();
-    // a student with two files compiled together
-    let erin = class.path().join("erin");
-    std::fs::create_dir(&erin).unwrap();
-    std::fs::copy(examples().join("slide.st"), erin.join("main.st")).unwrap();
-    std::fs::write(erin.join("notes.txt"), "not ST").unwrap();
+fn the_example_class_grades_into_the_expected_table() {
     let scenario = scenario("slide");
     let mut settings = settings("slide", Some(&scenario));
     settings.duration = Duration::from_secs(120);
-    let grades = lab::grade::grade(class.path(), &scenario, &settings, None).unwrap();
+    let grades = lab::grade::grade(&examples().join("class"), &scenario, &settings, None).unwrap();
     let table: Vec<(&str, Verdict)> = grades
         .iter()
         .map(|g| (g.student.as_str(), g.verdict))
@@ -244,10 +227,11 @@ fn a_class_folder_grades_into_the_expected_table() {
     assert_eq!(
         table,
         vec![
-            ("alice", Verdict::Passed),
-            ("bob", Verdict::Failed),
+            ("anna", Verdict::Passed),
+            ("boris", Verdict::Failed),
             ("carol", Verdict::Failed),
             ("dave", Verdict::DoesNotCompile),
+            // two files compiled together: a FUNCTION_BLOCK and the PROGRAM
             ("erin", Verdict::Passed),
         ]
     );
@@ -262,7 +246,7 @@ fn a_class_folder_grades_into_the_expected_table() {
         grades[2]
     );
     assert!(
-        grades[3].diagnostics.contains("dave.st:2:"),
+        grades[3].diagnostics.contains("dave.st:8:"),
         "{:?}",
         grades[3]
     );
@@ -273,7 +257,7 @@ fn a_class_folder_grades_into_the_expected_table() {
     );
     assert_eq!(
         csv.lines()
-            .filter(|l| l.starts_with("alice,passed,0,"))
+            .filter(|l| l.starts_with("anna,passed,0,"))
             .count(),
         1,
         "{csv}"
@@ -281,6 +265,17 @@ fn a_class_folder_grades_into_the_expected_table() {
     let html = lab::grade::html("slide <class>", &grades);
     assert!(html.contains("<title>slide &lt;class&gt;</title>"));
     assert!(html.contains("2 of 5 passed"));
+}
+
+#[test]
+fn a_folder_of_loose_files_and_subfolders_is_a_class() {
+    let class = tempfile::tempdir().unwrap();
+    std::fs::copy(examples().join("slide.st"), class.path().join("zoe.st")).unwrap();
+    std::fs::write(class.path().join("notes.txt"), "not ST").unwrap();
+    std::fs::create_dir(class.path().join("empty")).unwrap();
+    let found = lab::grade::submissions(class.path()).unwrap();
+    assert_eq!(found.len(), 1);
+    assert_eq!(found[0].student, "zoe");
 }
 
 #[test]

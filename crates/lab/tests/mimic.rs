@@ -135,12 +135,12 @@ async fn the_four_mimics_in_a_real_browser() {
 
     // Collision: ERR blinks; RESET works; overtravel (the other wrong program) steady.
     client
-        .goto(&mimic("slide", "wrong/slide_collision.st", Speed::Times(1.0)).await)
+        .goto(&mimic("slide", "class/carol.st", Speed::Times(1.0)).await)
         .await
         .unwrap();
     err_blinks(&client).await;
     client
-        .goto(&mimic("slide", "wrong/slide_overtravel.st", Speed::Times(10.0)).await)
+        .goto(&mimic("slide", "class/boris.st", Speed::Times(10.0)).await)
         .await
         .unwrap();
     until(

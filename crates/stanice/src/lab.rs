@@ -152,6 +152,9 @@ async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
         eprintln!("{error}");
         return Ok(ExitCode::from(2));
     }
+    // Listening for Ctrl-C and SIGTERM from here on: one that comes right after the banner
+    // stops the mimic cleanly.
+    let mut interrupt = crate::interrupt::Interrupt::listen();
     let listener = tokio::net::TcpListener::bind(args.listen)
         .await
         .with_context(|| format!("cannot listen on {}", args.listen))?;
@@ -169,7 +172,7 @@ async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
     };
     tokio::select! {
         served = lab::serve::serve(listener, settings) => served?,
-        _ = tokio::signal::ctrl_c() => {}
+        () = interrupt.recv() => {}
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -57,6 +57,10 @@ const SKIPPED: &[(&str, &str)] = &[
         "a benchmark: a release build and minutes of measurement",
     ),
     (
+        "cargo bench -p lab --bench hour",
+        "a benchmark: a release build and a simulated hour of each lab model",
+    ),
+    (
         "cargo bench -p hmi --bench live",
         "a benchmark: a release build and headless Chromium",
     ),
@@ -180,7 +184,7 @@ enum Kind {
 fn kind(arguments: &[String]) -> Kind {
     let words: Vec<&str> = arguments.iter().map(String::as_str).collect();
     match words.as_slice() {
-        ["run" | "demo" | "hmi", ..] => Kind::LongRunning,
+        ["run" | "demo" | "hmi", ..] | ["lab", "serve", ..] => Kind::LongRunning,
         ["iec104", "server", ..] | ["lift", "simulate", ..] => Kind::Outstation,
         ["iec104", "client", ..] => Kind::Client,
         ["iec104", "command", ..] | ["lift", "poll", ..] => Kind::PeerOneShot,
@@ -196,6 +200,8 @@ fn listen_address(arguments: &[String]) -> Option<SocketAddr> {
     }
     match arguments.first().map(String::as_str) {
         Some("demo") => Some(SocketAddr::from(([127, 0, 0, 1], 2404))),
+        // `stanice lab serve`'s default
+        Some("lab") => Some(SocketAddr::from(([127, 0, 0, 1], 8090))),
         Some("run") => Some(SocketAddr::from((
             [127, 0, 0, 1],
             arguments.get(1).map_or(2404, |project| port_base(project)),

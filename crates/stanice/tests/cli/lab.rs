@@ -50,7 +50,7 @@ fn lab_run_exits_0_on_a_met_scenario_1_on_a_violation_2_on_a_compile_error() {
         "run",
         "slide",
         "--program",
-        "examples/lab/wrong/slide_overtravel.st",
+        "examples/lab/class/boris.st",
         "--duration",
         "20s",
     ]);
