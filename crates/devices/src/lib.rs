@@ -2,6 +2,9 @@
 //!
 //! # Layout
 //!
+//! - [`balance`]: the remote sorting lab's Sartorius balance (the remote-laboratory
+//!   thesis, sections 6-7): the 15-character record, a reader, a simulator with the
+//!   thesis's measured scatter.
 //! - [`ekm66`]: the Rekoba EKM66 lift controller board's RS-232 protocol
 //!   (the lift thesis, docs/THESES.md; docs/LIFT.md), read-only: the lift is never controlled.
 //!   - [`ekm66::codec`]: the three queries and the four replies, the FT1.2-style
@@ -56,4 +59,5 @@
 )]
 #![cfg_attr(not(test), deny(clippy::indexing_slicing))]
 
+pub mod balance;
 pub mod ekm66;

@@ -176,6 +176,26 @@ While it runs, type `help` for the faults and hand operations of the console.",
   stanice user list --users users.toml",
     ),
     (
+        "balance",
+        "  stanice balance simulate --pty --ball 'red 1'           # prints pty: /dev/pts/N
+  stanice balance read --serial /dev/pts/N --json
+  stanice balance read --serial /dev/ttyUSB0                # a real balance at 1200 Bd, no parity",
+    ),
+    (
+        "balance read",
+        "  stanice balance read --serial /dev/ttyUSB0
+  stanice balance read --serial /dev/pts/3 --json --duration 10s
+  stanice balance read --tcp 10.0.0.7:4001                  # behind a terminal server
+The exit code is 0 when at least one legal record arrived.",
+    ),
+    (
+        "balance simulate",
+        "  stanice balance simulate --pty
+  stanice balance simulate --pty --ball 'green 2' --seed 7
+  stanice balance simulate --listen 127.0.0.1:4002 --rate 4
+Console: ball red 1, ball 2.5, remove, blower, tare, dust 0.001, status, help.",
+    ),
+    (
         "lab",
         "  stanice lab run slide --program examples/lab/slide.st --duration 2m
   stanice lab run mixing --program examples/lab/mixing.st --scenario examples/lab/scenarios/mixing.toml

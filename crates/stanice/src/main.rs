@@ -13,6 +13,7 @@
 //! - `stanice plc ...`: checks and runs Structured Text.
 //! - `stanice hmi` / `stanice user`: the web HMI and its users.
 
+mod balance;
 mod comtrade;
 mod console;
 mod demo;
@@ -73,6 +74,10 @@ enum Command {
     /// board simulator; read-only).
     #[command(subcommand)]
     Lift(lift::LiftCommand),
+    /// The remote sorting lab's Sartorius balance on RS-232: read what it sends, or
+    /// simulate it with the thesis's measured scatter.
+    #[command(subcommand)]
+    Balance(balance::BalanceCommand),
     /// Run the railway-station demo (examples/vsetin).
     Demo(demo::DemoArgs),
     /// Run a station project: every node, or those named with --node.
@@ -125,6 +130,7 @@ fn main() -> std::process::ExitCode {
             Command::Iec101(command) => iec101::run(command).await,
             Command::Iec103(command) => iec103::run(command).await,
             Command::Lift(command) => lift::run(command).await,
+            Command::Balance(command) => balance::run(command).await,
             Command::Demo(args) => demo::run(args).await,
             Command::Run(args) => run::run(args).await,
             Command::Points(args) => points::run(args),

@@ -9,6 +9,7 @@
 
 mod support;
 
+mod balance;
 mod dispatch;
 mod iec104;
 mod lab;
