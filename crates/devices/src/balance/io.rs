@@ -8,7 +8,7 @@ use std::pin::Pin;
 
 use tokio::sync::mpsc;
 
-pub use serial_line::io::{drive, DriveEnd, EndpointAction, LineStream};
+pub use serial_line::io::{drive, DriveEnd, EndpointAction, LineStream, OpenError, Transport};
 
 use super::reader::{BalanceReader, ReaderEvent};
 use super::simulator::{BalanceEvent, BalanceSimulator};

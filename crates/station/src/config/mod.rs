@@ -189,11 +189,13 @@
 //!
 //! [[node.device]]                      # a device of a registered kind (crate::device)
 //! name = "B1"                          # unique among the node's devices and lifts
-//! kind = "balance"                     # a kind the loader was given (DeviceKinds)
+//! kind = "balance"                     # a kind the loader was given (DeviceKinds; built in:
+//!                                      # balance, crate::device::balance)
 //! description = "sorting lab scale"    # optional
 //! ioa_base = 500                       # its points: B1.SIGNAL at ioa_base + the profile's
 //!                                      # offsets, and B1.not_answering
-//! settings = { port = "/dev/ttyUSB1" } # the kind's own settings, read by its driver
+//! settings = { serial = "/dev/ttyUSB1" } # the kind's own settings, checked at load (a
+//!                                      # balance: serial, tcp or simulate = "red 1")
 //!
 //! [node.notify.smtp]                   # optional: notifications of the node's lifts
 //! host = "smtp.example.cz"             # (the notify crate's format, docs/LIFT.md):

@@ -7,6 +7,7 @@
     clippy::indexing_slicing
 )]
 
+mod balance;
 mod config;
 mod field_device;
 mod lift;

@@ -57,6 +57,21 @@ impl Ctx<'_> {
                 );
                 continue;
             };
+            let config = FieldDeviceConfig {
+                name: device.name.clone(),
+                kind: device.kind.clone(),
+                description: device.description.clone(),
+                ioa_base,
+                settings: device.settings.clone(),
+            };
+            if let Err(error) = kind.check(&config) {
+                self.err(
+                    &at("settings"),
+                    ConfigProblem::Invalid {
+                        detail: error.to_string(),
+                    },
+                );
+            }
             let profile = kind.profile().clone();
             let description = if device.description.is_empty() {
                 String::new()
@@ -95,13 +110,7 @@ impl Ctx<'_> {
                     None => break,
                 }
             }
-            devices.push(FieldDeviceConfig {
-                name: device.name.clone(),
-                kind: device.kind.clone(),
-                description: device.description.clone(),
-                ioa_base,
-                settings: device.settings.clone(),
-            });
+            devices.push(config);
         }
         (devices, points)
     }

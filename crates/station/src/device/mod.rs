@@ -21,6 +21,8 @@
 //! Drivers speak plain futures (no async runtime in this interface), so a kind can be
 //! declared where only the profile is needed (the project loader, its fuzz target).
 
+pub mod balance;
+
 use std::collections::BTreeMap;
 use std::fmt;
 use std::future::Future;
@@ -82,6 +84,12 @@ pub trait DeviceKind: Send + Sync {
     /// The points a device of this kind brings.
     fn profile(&self) -> &DeviceProfile;
 
+    /// Checks a device's settings when the project loads, so that a mistake is an error
+    /// with its place in the file rather than a driver failing at run time.
+    fn check(&self, _device: &crate::config::FieldDeviceConfig) -> Result<(), DeviceError> {
+        Ok(())
+    }
+
     /// A driver for the device `device` of the project.
     fn driver(
         &self,
@@ -102,10 +110,17 @@ impl fmt::Debug for DeviceKinds {
 }
 
 impl DeviceKinds {
-    /// The kinds built into the station. None yet: the field I/O and lab issues add
-    /// theirs here (S7, Modbus, the sorting lab's balance).
+    /// The kinds built into the station: the sorting lab's balance ([`balance`]); the
+    /// field I/O issue adds S7 and Modbus here.
     pub fn builtin() -> DeviceKinds {
-        DeviceKinds::default()
+        let mut kinds = DeviceKinds::default();
+        for kind in [Arc::new(balance::BalanceKind::new()) as Arc<dyn DeviceKind>] {
+            // A built-in profile that cannot make points is a bug the tests catch.
+            if let Err(error) = kinds.register(kind) {
+                tracing::error!(%error, "a built-in device kind is refused");
+            }
+        }
+        kinds
     }
 
     /// Adds (or replaces) a kind under its profile's name. A profile that cannot make
