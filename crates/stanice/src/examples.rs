@@ -324,18 +324,41 @@ mod tests {
         }
     }
 
+    /// The words of a command line as a shell splits them: at spaces, except inside
+    /// single quotes (`--ball 'red 1'` is two words).
+    fn shell_words(line: &str) -> Vec<String> {
+        let mut words = Vec::new();
+        let mut word: Option<String> = None;
+        let mut quoted = false;
+        for c in line.chars() {
+            match c {
+                '\'' => {
+                    quoted = !quoted;
+                    word.get_or_insert_with(String::new);
+                }
+                c if c.is_whitespace() && !quoted => words.extend(word.take()),
+                c => word.get_or_insert_with(String::new).push(c),
+            }
+        }
+        words.extend(word);
+        words
+    }
+
+    #[test]
+    fn example_lines_split_as_a_shell_splits_them() {
+        assert_eq!(
+            shell_words("  stanice balance simulate --ball 'red 1'  --json"),
+            ["stanice", "balance", "simulate", "--ball", "red 1", "--json"]
+        );
+        assert_eq!(shell_words("a '' b"), ["a", "", "b"]);
+    }
+
     /// Each example line is a command line the parser accepts.
     #[test]
     fn every_example_parses() {
         for (path, examples) in EXAMPLES {
             for line in examples.lines().filter(|l| l.starts_with("  stanice ")) {
-                let words: Vec<String> = line
-                    .split(" #")
-                    .next()
-                    .unwrap()
-                    .split_whitespace()
-                    .map(|w| w.trim_matches('\'').to_owned())
-                    .collect();
+                let words = shell_words(line.split(" #").next().unwrap());
                 let parsed = with_examples(Cli::command()).try_get_matches_from(&words);
                 if let Err(error) = parsed {
                     // `stanice help run` prints help by design
