@@ -1,6 +1,6 @@
-//! The teaching plot: each ball's weighings as a normal density (X̄, S) in its colour,
-//! the colours' unions as bars beneath, the decision and outer limits as vertical lines,
-//! and an axis in grams.
+//! The teaching plot: each ball's weighings as a normal density (X̄, S) in its colour
+//! (a colour's second ball dashed), the colours' unions as bars beneath, the decision
+//! and outer limits as vertical lines, an axis in grams and a legend of the balls.
 //!
 //! Written by hand as SVG text: it is a few paths, lines and labels. A plotting crate
 //! (plotters and the like) would bring a font and raster stack to draw what a browser
@@ -12,10 +12,11 @@ use std::fmt::Write as _;
 use super::limits::Thresholds;
 use super::Interval;
 
-const WIDTH: f64 = 960.0;
-const HEIGHT: f64 = 440.0;
-const LEFT: f64 = 60.0;
-const RIGHT: f64 = 20.0;
+const WIDTH: f64 = 1060.0;
+const HEIGHT: f64 = 420.0;
+const LEFT: f64 = 40.0;
+/// The right margin holds the legend.
+const RIGHT: f64 = 130.0;
 const TOP: f64 = 50.0;
 /// The plot area's bottom; below it the union bars, the axis and its labels.
 const BOTTOM: f64 = 340.0;
@@ -54,7 +55,7 @@ fn density(z: f64) -> f64 {
 
 /// The plot of `thresholds` as an SVG document: one `<path class="ball">` per ball, one
 /// `<line class="limit">` per decision limit and one `<line class="limit outer">` per
-/// outer limit, a `<rect class="union">` per colour.
+/// outer limit, a `<rect class="union">` per colour, a `<g class="legend">` per ball.
 #[must_use]
 pub fn svg(thresholds: &Thresholds) -> String {
     let range = x_range(thresholds);
@@ -66,7 +67,7 @@ pub fn svg(thresholds: &Thresholds) -> String {
         .iter()
         .map(|ball| density(0.0) / ball.statistics.sd_g.max(floor))
         .fold(0.0_f64, f64::max)
-        * 1.08;
+        * 1.05;
     let y = |value: f64| BOTTOM - value / peak * (BOTTOM - TOP);
     let mut out = String::new();
     let _ = writeln!(
@@ -92,46 +93,73 @@ pub fn svg(thresholds: &Thresholds) -> String {
             colour.union_g
         );
     }
-    // one density per ball; a colour's second and later balls dashed
+    let _ = writeln!(
+        out,
+        r##"<line class="baseline" x1="{LEFT}" y1="{BOTTOM}" x2="{:.1}" y2="{BOTTOM}" stroke="#bbb"/>"##,
+        WIDTH - RIGHT
+    );
+    // one density per ball over X̄ ± 5 S; a colour's second and later balls dashed
     for (index, ball) in thresholds.balls.iter().enumerate() {
         let statistics = &ball.statistics;
         let sd = statistics.sd_g.max(floor);
-        let earlier_of_colour = thresholds
+        let dashed = thresholds
             .balls
             .iter()
             .take(index)
             .any(|other| other.statistics.colour == statistics.colour);
+        let dash = if dashed {
+            r#" stroke-dasharray="6 3""#
+        } else {
+            ""
+        };
+        let from = (statistics.mean_g - 5.0 * sd).max(range.lower);
+        let to = (statistics.mean_g + 5.0 * sd).min(range.upper);
         let mut path = String::new();
         for step in 0..=CURVE_POINTS {
             #[allow(clippy::cast_precision_loss)] // a few hundred points
-            let grams = range.lower + range.width() * step as f64 / CURVE_POINTS as f64;
+            let grams = from + (to - from) * step as f64 / CURVE_POINTS as f64;
             let value = density((grams - statistics.mean_g) / sd) / sd;
             let command = if step == 0 { 'M' } else { 'L' };
             let _ = write!(path, "{command}{:.1} {:.1} ", x(grams), y(value));
         }
+        let colour = stroke(&statistics.colour);
+        let name = escape(&statistics.ball);
         let _ = writeln!(
             out,
-            r#"<path class="ball" d="{}" fill="none" stroke="{}" stroke-width="1.6"{}><title>{}: X̄ {:.3} g, S {:.3} g, n {}</title></path>"#,
+            r#"<path class="ball" d="{}" fill="none" stroke="{colour}" stroke-width="1.6"{dash}><title>{name}: X̄ {:.3} g, S {:.3} g, n {}</title></path>"#,
             path.trim_end(),
-            stroke(&statistics.colour),
-            if earlier_of_colour {
-                r#" stroke-dasharray="6 3""#
-            } else {
-                ""
-            },
-            escape(&statistics.ball),
             statistics.mean_g,
             statistics.sd_g,
             statistics.n
         );
-        let label_y = y(density(0.0) / sd) - 6.0 - if earlier_of_colour { 12.0 } else { 0.0 };
+        // the legend, in the right margin
+        #[allow(clippy::cast_precision_loss)] // a handful of balls
+        let legend_y = TOP + 10.0 + index as f64 * 18.0;
+        let legend_x = WIDTH - RIGHT + 16.0;
         let _ = writeln!(
             out,
-            r#"<text x="{:.1}" y="{:.1}" text-anchor="middle" fill="{}">{}</text>"#,
-            x(statistics.mean_g),
-            label_y.max(TOP - 12.0),
-            stroke(&statistics.colour),
-            escape(&statistics.ball)
+            r#"<g class="legend"><line x1="{legend_x}" y1="{legend_y}" x2="{}" y2="{legend_y}" stroke="{colour}" stroke-width="1.6"{dash}/><text x="{}" y="{}">{name}</text></g>"#,
+            legend_x + 24.0,
+            legend_x + 30.0,
+            legend_y + 4.0
+        );
+    }
+    #[allow(clippy::cast_precision_loss)] // a handful of balls
+    let notes_y = TOP + 10.0 + thresholds.balls.len() as f64 * 18.0 + 12.0;
+    for (line, note) in [
+        "bars: colour unions",
+        "- - decision limits",
+        "··· outer limits",
+    ]
+    .iter()
+    .enumerate()
+    {
+        #[allow(clippy::cast_precision_loss)] // three lines
+        let note_y = notes_y + line as f64 * 16.0;
+        let _ = writeln!(
+            out,
+            r##"<text class="note" x="{}" y="{note_y}" fill="#555">{note}</text>"##,
+            WIDTH - RIGHT + 16.0
         );
     }
     // the limits

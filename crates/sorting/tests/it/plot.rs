@@ -48,7 +48,13 @@ fn the_plot_has_a_density_per_ball_and_a_line_per_limit() {
     assert_eq!(svg.matches("<line class=\"limit outer\"").count(), 2);
     assert_eq!(svg.matches("<rect class=\"union\"").count(), 4);
     // coloured by colour; a colour's second ball dashed
-    assert_eq!(svg.matches("stroke=\"#d62728\"").count(), 2);
+    let red: Vec<&str> = svg
+        .lines()
+        .filter(|line| line.starts_with("<path class=\"ball\"") && line.contains("#d62728"))
+        .collect();
+    assert_eq!(red.len(), 2);
+    assert!(!red[0].contains("stroke-dasharray") && red[1].contains("stroke-dasharray"));
+    assert_eq!(svg.matches("<g class=\"legend\">").count(), 8);
     assert!(svg.contains("<title>blue 2: X̄ 3.105 g, S 0.048 g, n 16</title>"));
     assert!(svg.contains(">weight [g]<"));
 }
