@@ -196,6 +196,22 @@ The exit code is 0 when at least one legal record arrived.",
 Console: ball red 1, ball 2.5, remove, blower, tare, dust 0.001, status, help.",
     ),
     (
+        "stats",
+        "  stanice stats thresholds examples/sorting-lab/weighings.csv
+  stanice stats thresholds examples/sorting-lab/weighings.csv --confidence 0.95 --coverage 0.90 --plot limits.svg",
+    ),
+    (
+        "stats thresholds",
+        "  stanice stats thresholds examples/sorting-lab/weighings.csv     # table 5.1 at 99 %, 99 % coverage
+  stanice stats thresholds examples/sorting-lab/weighings.csv --confidence 0.95 --coverage 0.90
+  stanice stats thresholds weighings.csv --outer 1.9,4.1 --json
+  stanice stats thresholds weighings.csv --plot limits.svg           # densities and limits for a browser
+The CSV has the header ball,weight_g and a row per weighing (`red 1,2.29105`), at least 2 a ball;
+the colour is the ball name's first word. Reliability is the share of a ball's weighings (normal
+with its mean and S) that falls within its colour's decision interval, `expected`; `pessimistic`
+repeats it with the upper bound of sigma in place of S.",
+    ),
+    (
         "lab",
         "  stanice lab run slide --program examples/lab/slide.st --duration 2m
   stanice lab run mixing --program examples/lab/mixing.st --scenario examples/lab/scenarios/mixing.toml
