@@ -196,6 +196,22 @@ The exit code is 0 when at least one legal record arrived.",
 Console: ball red 1, ball 2.5, remove, blower, tare, dust 0.001, status, help.",
     ),
     (
+        "stats",
+        "  stanice stats thresholds examples/sorting-lab/weighings.csv
+  stanice stats thresholds examples/sorting-lab/weighings.csv --confidence 0.95 --coverage 0.90 --plot limits.svg",
+    ),
+    (
+        "stats thresholds",
+        "  stanice stats thresholds examples/sorting-lab/weighings.csv     # table 5.1 at 99 %, 99 % coverage
+  stanice stats thresholds examples/sorting-lab/weighings.csv --confidence 0.95 --coverage 0.90
+  stanice stats thresholds weighings.csv --outer 1.9,4.1 --json
+  stanice stats thresholds weighings.csv --plot limits.svg           # densities and limits for a browser
+The CSV has the header ball,weight_g and a row per weighing (`red 1,2.29105`), at least 2 a ball;
+the colour is the ball name's first word. Reliability is the share of a ball's weighings (normal
+with its mean and S) that falls within its colour's decision interval, `expected`; `pessimistic`
+repeats it with the upper bound of sigma in place of S.",
+    ),
+    (
         "lab",
         "  stanice lab run slide --program examples/lab/slide.st --duration 2m
   stanice lab run mixing --program examples/lab/mixing.st --scenario examples/lab/scenarios/mixing.toml
@@ -324,18 +340,41 @@ mod tests {
         }
     }
 
+    /// The words of a command line as a shell splits them: at spaces, except inside
+    /// single quotes (`--ball 'red 1'` is two words).
+    fn shell_words(line: &str) -> Vec<String> {
+        let mut words = Vec::new();
+        let mut word: Option<String> = None;
+        let mut quoted = false;
+        for c in line.chars() {
+            match c {
+                '\'' => {
+                    quoted = !quoted;
+                    word.get_or_insert_with(String::new);
+                }
+                c if c.is_whitespace() && !quoted => words.extend(word.take()),
+                c => word.get_or_insert_with(String::new).push(c),
+            }
+        }
+        words.extend(word);
+        words
+    }
+
+    #[test]
+    fn example_lines_split_as_a_shell_splits_them() {
+        assert_eq!(
+            shell_words("  stanice balance simulate --ball 'red 1'  --json"),
+            ["stanice", "balance", "simulate", "--ball", "red 1", "--json"]
+        );
+        assert_eq!(shell_words("a '' b"), ["a", "", "b"]);
+    }
+
     /// Each example line is a command line the parser accepts.
     #[test]
     fn every_example_parses() {
         for (path, examples) in EXAMPLES {
             for line in examples.lines().filter(|l| l.starts_with("  stanice ")) {
-                let words: Vec<String> = line
-                    .split(" #")
-                    .next()
-                    .unwrap()
-                    .split_whitespace()
-                    .map(|w| w.trim_matches('\'').to_owned())
-                    .collect();
+                let words = shell_words(line.split(" #").next().unwrap());
                 let parsed = with_examples(Cli::command()).try_get_matches_from(&words);
                 if let Err(error) = parsed {
                     // `stanice help run` prints help by design

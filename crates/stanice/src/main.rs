@@ -12,6 +12,7 @@
 //! - `stanice points` / `stanice events`: a node's data points; the event store.
 //! - `stanice plc ...`: checks and runs Structured Text.
 //! - `stanice hmi` / `stanice user`: the web HMI and its users.
+//! - `stanice stats thresholds FILE.csv`: the sorting lab's class limits from weighings.
 
 mod balance;
 mod comtrade;
@@ -34,6 +35,7 @@ mod port_in_use;
 mod printed_time;
 mod run;
 mod serial_line;
+mod stats;
 mod verbosity;
 
 use clap::{CommandFactory as _, FromArgMatches as _, Parser, Subcommand};
@@ -78,6 +80,10 @@ enum Command {
     /// simulate it with the thesis's measured scatter.
     #[command(subcommand)]
     Balance(balance::BalanceCommand),
+    /// Statistics for the labs: the sorting lab's class limits from weighings of its
+    /// balls (confidence intervals, coverage, decision limits, expected reliability).
+    #[command(subcommand)]
+    Stats(stats::StatsCommand),
     /// Run the railway-station demo (examples/vsetin).
     Demo(demo::DemoArgs),
     /// Run a station project: every node, or those named with --node.
@@ -131,6 +137,7 @@ fn main() -> std::process::ExitCode {
             Command::Iec103(command) => iec103::run(command).await,
             Command::Lift(command) => lift::run(command).await,
             Command::Balance(command) => balance::run(command).await,
+            Command::Stats(command) => stats::run(command),
             Command::Demo(args) => demo::run(args).await,
             Command::Run(args) => run::run(args).await,
             Command::Points(args) => points::run(args),

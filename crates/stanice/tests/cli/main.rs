@@ -19,4 +19,5 @@ mod points_and_events;
 mod run;
 mod serial;
 mod shutdown;
+mod stats;
 mod users;
