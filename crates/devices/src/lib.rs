@@ -2,7 +2,7 @@
 //!
 //! # Layout
 //!
-//! - [`balance`]: the remote sorting lab's Sartorius balance (the remote-laboratory
+//! - [`balance`]: the remote sorting lab's Sartorius balance (the sorting-lab
 //!   thesis, sections 6-7): the 15-character record, a reader, a simulator with the
 //!   thesis's measured scatter.
 //! - [`ekm66`]: the Rekoba EKM66 lift controller board's RS-232 protocol

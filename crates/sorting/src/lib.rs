@@ -1,4 +1,4 @@
-//! The remote ping-pong-ball sorting lab (the remote-laboratory thesis): a PLC weighs each
+//! The remote ping-pong-ball sorting lab (the sorting-lab thesis): a PLC weighs each
 //! ball on a Sartorius balance and routes it by weight into the shaft of its colour.
 //!
 //! For now the crate holds the lab's statistics; it will also hold the sorting lab's
@@ -7,7 +7,7 @@
 //!
 //! # Layout
 //!
-//! - [`statistics`]: from weighings to class limits (the remote-laboratory thesis,
+//! - [`statistics`]: from weighings to class limits (the sorting-lab thesis,
 //!   section 12): the sample statistics of each ball, the confidence interval of its mean
 //!   and the upper bound of its scatter, coverage intervals, the colours' unions, the
 //!   decision limits between neighbouring colours and the sorting reliability to expect;

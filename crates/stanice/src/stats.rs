@@ -1,5 +1,5 @@
 //! `stanice stats`: statistics for the labs. `stanice stats thresholds` derives the
-//! sorting lab's class limits from weighings of its balls (the remote-laboratory thesis,
+//! sorting lab's class limits from weighings of its balls (the sorting-lab thesis,
 //! section 12; the `sorting` crate's statistics module), as a table, as JSON or as an SVG
 //! plot.
 
@@ -23,7 +23,7 @@ pub(crate) enum StatsCommand {
     /// upper bound of sigma (chi-square) and a coverage interval. Per colour: the union
     /// of its balls' coverage intervals. Then the decision limits midway between
     /// neighbouring colours' unions, overlaps, and the sorting reliability to expect (the
-    /// remote-laboratory thesis, section 12).
+    /// sorting-lab thesis, section 12).
     Thresholds(ThresholdsArgs),
 }
 

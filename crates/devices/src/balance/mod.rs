@@ -1,4 +1,4 @@
-//! The remote sorting lab's balance, a Sartorius 1612MP8 (the remote-laboratory thesis,
+//! The remote sorting lab's balance, a Sartorius 1612MP8 (the sorting-lab thesis,
 //! sections 6 and 7), on a serial line at 1200 Bd sending a 15-character record 2-4 times
 //! a second; read only (its RxD is not connected; it is zeroed by a relay on its Tare
 //! key).

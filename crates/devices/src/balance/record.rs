@@ -1,4 +1,4 @@
-//! The Sartorius 1612MP8 balance's 15-character record (the remote-laboratory thesis,
+//! The Sartorius 1612MP8 balance's 15-character record (the sorting-lab thesis,
 //! section 7): its layout, the reference parsing (bit 7 masked, resynchronisation on LF,
 //! the sign, the decimal point, the digits, the stability flag), the character-class
 //! checks and the agreement of two parses the platform adds, and the record a simulator

@@ -1,4 +1,4 @@
-//! The balance without a line: the Sartorius 1612MP8 of the remote-laboratory thesis
+//! The balance without a line: the Sartorius 1612MP8 of the sorting-lab thesis
 //! with its measured behaviour (sections 6.1, 12.3 and 13), sans-IO on the caller's
 //! clock, sending a record 3 times a second (automatic output of unstable values).
 //!

@@ -1,4 +1,4 @@
-//! One ball's sample statistics and interval estimates (the remote-laboratory thesis,
+//! One ball's sample statistics and interval estimates (the sorting-lab thesis,
 //! section 12.2):
 //!
 //! - mean `X̄ = (1/n) Σ Xᵢ` (5.1);

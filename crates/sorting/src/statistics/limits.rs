@@ -1,4 +1,4 @@
-//! From the balls' interval estimates to class limits (the remote-laboratory thesis,
+//! From the balls' interval estimates to class limits (the sorting-lab thesis,
 //! section 12.4), and the sorting reliability they promise.
 //!
 //! 1. **Coverage** of each ball: `⟨μ_d − z·σ_upper, μ_h + z·σ_upper⟩`, where ⟨μ_d, μ_h⟩
@@ -12,7 +12,7 @@
 //!    upper end of the lighter colour's union and the lower end of the heavier one's
 //!    (the middle of the gap, or of the overlap when they overlap). The lowest and
 //!    highest (outer) limits are set by hand: 2.0 and 4.0 g by default (the
-//!    remote-laboratory thesis's note BS-A7; BS-A8: the lower one is red's, not
+//!    sorting-lab thesis's note BS-A7; BS-A8: the lower one is red's, not
 //!    yellow's). Each colour's decision interval runs from the limit below it to the
 //!    limit above it.
 //! 4. **Reliability**: for each ball the probability that a weighing falls within its
@@ -36,7 +36,7 @@ use super::quantile::{Confidence, Coverage, QuantileError};
 use super::samples::Samples;
 use super::Interval;
 
-/// The outer limits of the remote-laboratory thesis's note BS-A7: 2.0 and 4.0 g.
+/// The outer limits of the sorting-lab thesis's note BS-A7: 2.0 and 4.0 g.
 pub const DEFAULT_OUTER_G: Interval = Interval::new(2.0, 4.0);
 
 /// Why class limits could not be derived.

@@ -1,5 +1,5 @@
 //! The sorting lab's statistics: deriving the class limits from weighings (the
-//! remote-laboratory thesis, section 12).
+//! sorting-lab thesis, section 12).
 //!
 //! Each ball is weighed n times (the thesis: 16 times, the reading taken 3 s after the
 //! ball landed). The weighings of a ball are taken as normally distributed; its mean and
@@ -7,7 +7,7 @@
 //! (where a given share of its weighings falls even for the least favourable μ and σ
 //! within their confidence bounds), a colour the union of its balls' coverage intervals,
 //! and the decision limits lie midway between neighbouring colours' unions. The lowest
-//! and highest (outer) limits are set by hand (the remote-laboratory thesis's note BS-A7:
+//! and highest (outer) limits are set by hand (the sorting-lab thesis's note BS-A7:
 //! 2.0 and 4.0 g; BS-A8: the lower outer limit is red's).
 //!
 //! See the crate documentation for the data flow; [`limits::Thresholds::from_samples`]

@@ -1,5 +1,5 @@
 //! Confidence and coverage levels, and the quantiles behind formulas 5.3 and 5.4 of the
-//! remote-laboratory thesis (section 12.2): the Student t, chi-square and normal
+//! sorting-lab thesis (section 12.2): the Student t, chi-square and normal
 //! quantiles, from `statrs`.
 //!
 //! For n = 16 weighings: t₀.₉₉₅(15) = 2.9467, χ²₀.₀₁(15) = 5.2293, so the upper bound of σ

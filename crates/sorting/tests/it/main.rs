@@ -1,7 +1,7 @@
-//! The sorting crate's integration tests, one binary: table 5.1 of the remote-laboratory
+//! The sorting crate's integration tests, one binary: table 5.1 of the sorting-lab
 //! thesis reproduced from synthetic weighings, the 95 % reconstruction of its class
 //! limits, the 99 % overlap, the blue 2 discrepancy, CSV errors, the plot and the
-//! shipped example file.
+//! shipped example file; the supervisor's protection blocks on the soft PLC.
 #![allow(
     clippy::unwrap_used,
     clippy::expect_used,
@@ -12,6 +12,7 @@
 mod example;
 mod plot;
 mod samples;
+mod supervisor;
 mod table51;
 
 use sorting::statistics::estimate::synthetic_weighings;

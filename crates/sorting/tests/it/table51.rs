@@ -1,4 +1,4 @@
-//! Table 5.1 and section 12.4 of the remote-laboratory thesis, reproduced.
+//! Table 5.1 and section 12.4 of the sorting-lab thesis, reproduced.
 
 use sorting::statistics::estimate::BallStatistics;
 use sorting::statistics::limits::{coverage_interval, Thresholds, DEFAULT_OUTER_G};

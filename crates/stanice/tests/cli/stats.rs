@@ -16,7 +16,7 @@ fn close(json: &serde_json::Value, expected: f64, tolerance: f64) -> bool {
 }
 
 /// The shipped weighings reproduce table 5.1's 3-s columns at 99 % (the
-/// remote-laboratory thesis, section 12.3) and, at 95 % with 90 % coverage, the class
+/// sorting-lab thesis, section 12.3) and, at 95 % with 90 % coverage, the class
 /// limits of section 12.4.
 #[test]
 fn stats_thresholds_reproduces_table_5_1_from_the_shipped_weighings() {
