@@ -43,6 +43,20 @@ pub(crate) async fn run_for(duration: Option<std::time::Duration>) {
     }
 }
 
+/// Serves a simulated device until it stops by itself, `duration` (a `--duration` option)
+/// ends, or Ctrl-C or SIGTERM arrives: the end of every simulator command.
+pub(crate) async fn serve_until_stopped(
+    serve: impl std::future::Future<Output = anyhow::Result<()>>,
+    duration: Option<std::time::Duration>,
+) -> anyhow::Result<()> {
+    let mut interrupt = crate::interrupt::Interrupt::listen();
+    tokio::select! {
+        result = serve => result,
+        () = run_for(duration) => Ok(()),
+        () = interrupt.recv() => Ok(()),
+    }
+}
+
 /// The console of a simulated device: each line of standard input (lower-cased words) an
 /// operation on the device, run by its line's drive loop (between two exchanges, so an
 /// operation never cuts a frame); `help` prints `help` instead. Whatever `operate`

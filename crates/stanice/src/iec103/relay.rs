@@ -95,12 +95,7 @@ pub(crate) async fn run(args: RelayArgs) -> anyhow::Result<ExitCode> {
         }
         Ok::<(), anyhow::Error>(())
     };
-    let mut interrupt = crate::interrupt::Interrupt::listen();
-    tokio::select! {
-        result = serve => result?,
-        () = crate::console::run_for(args.duration) => {}
-        () = interrupt.recv() => {}
-    }
+    crate::console::serve_until_stopped(serve, args.duration).await?;
     Ok(ExitCode::SUCCESS)
 }
 
