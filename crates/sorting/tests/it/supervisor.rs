@@ -41,26 +41,39 @@ struct Bench {
 impl Bench {
     fn new() -> Bench {
         let supervisor = std::fs::read_to_string(
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/sorting-lab/plc/supervisor.st"),
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../../examples/sorting-lab/plc/supervisor.st"),
         )
         .unwrap();
         let (sources, result) = plc::build(&[
             ("supervisor.st".to_owned(), supervisor),
             ("bench.st".to_owned(), BENCH.to_owned()),
         ]);
-        let compiled = result.unwrap_or_else(|d| panic!("{:?}", d.iter().map(|d| d.render(&sources)).collect::<Vec<_>>()));
+        let compiled = result.unwrap_or_else(|d| {
+            panic!(
+                "{:?}",
+                d.iter().map(|d| d.render(&sources)).collect::<Vec<_>>()
+            )
+        });
         let mut plc = Plc::new(compiled, sources);
-        plc.add_task(TaskConfig::cyclic("main", SCAN_MS * 1_000_000, &["Bench"])).unwrap();
+        plc.add_task(TaskConfig::cyclic("main", SCAN_MS * 1_000_000, &["Bench"]))
+            .unwrap();
         Bench { plc, scans: 0 }
     }
 
     fn set(&mut self, name: &str, on: bool) {
-        self.plc.write(&format!("Bench.{name}"), if on { "TRUE" } else { "FALSE" }).unwrap();
+        self.plc
+            .write(&format!("Bench.{name}"), if on { "TRUE" } else { "FALSE" })
+            .unwrap();
     }
 
     fn scan(&mut self) {
         let t = self.scans * SCAN_MS * 1_000_000;
-        let faults = self.plc.run_cycle(ClockReading { monotonic_ns: t, utc_ns: t, utc_offset_ns: 0 });
+        let faults = self.plc.run_cycle(ClockReading {
+            monotonic_ns: t,
+            utc_ns: t,
+            utc_offset_ns: 0,
+        });
         assert!(faults.is_empty());
         self.scans += 1;
     }
@@ -73,7 +86,11 @@ impl Bench {
     }
 
     fn int(&self, path: &str) -> i64 {
-        self.plc.read_text(&format!("Bench.{path}")).unwrap().parse().unwrap()
+        self.plc
+            .read_text(&format!("Bench.{path}"))
+            .unwrap()
+            .parse()
+            .unwrap()
     }
 
     fn bool(&self, path: &str) -> bool {
@@ -118,12 +135,23 @@ fn single_control_rows() {
     b.run(1500);
     b.set("cmd", true);
     b.scan();
-    assert!(b.bool("gate.Refused"), "a command during the lock-out is refused");
+    assert!(
+        b.bool("gate.Refused"),
+        "a command during the lock-out is refused"
+    );
     b.run(5000);
-    assert_eq!((b.state("gate"), b.bool("gate.Output")), (SAFETY, false), "held high: the lock-out never ends");
+    assert_eq!(
+        (b.state("gate"), b.bool("gate.Output")),
+        (SAFETY, false),
+        "held high: the lock-out never ends"
+    );
     b.set("cmd", false);
     b.run(1990);
-    assert_eq!(b.state("gate"), SAFETY, "the whole Safety Time again after the release");
+    assert_eq!(
+        b.state("gate"),
+        SAFETY,
+        "the whole Safety Time again after the release"
+    );
     b.run(20);
     assert_eq!(b.state("gate"), READY);
     // ON, on-time >= MaxOnTime -> PENALTY, output forced 0 regardless of the input
@@ -137,7 +165,11 @@ fn single_control_rows() {
     }
     assert_eq!(b.state("gate"), PENALTY);
     assert!(b.bool("gate.LockedOut"));
-    assert_eq!((b.scans - on_at) * SCAN_MS, 2000, "off exactly at MaxOnTime");
+    assert_eq!(
+        (b.scans - on_at) * SCAN_MS,
+        2000,
+        "off exactly at MaxOnTime"
+    );
     // PENALTY, input 1 (still held) -> restarted: it lasts until 20 s after the release
     b.run(30_000);
     assert_eq!(b.state("gate"), PENALTY);
@@ -191,7 +223,11 @@ fn multiple_control_rows() {
     while b.bool("s4.Output") {
         b.scan();
     }
-    assert_eq!((b.scans - started) * SCAN_MS, 1000, "on for the Working Time");
+    assert_eq!(
+        (b.scans - started) * SCAN_MS,
+        1000,
+        "on for the Working Time"
+    );
     // WORKING, Working Time elapsed -> SAFETY
     assert_eq!(b.state("s4"), SAFETY);
     // SAFETY, rising edge -> restarted
@@ -236,7 +272,10 @@ fn the_light_stays_on_55_minutes_and_ignores_edges_while_lit() {
     b.scan();
     b.set("light_cmd", false);
     b.run(3_300_000 - 60_000 - 30);
-    assert!(b.bool("light.Output"), "the edge while lit did not retrigger nor end it");
+    assert!(
+        b.bool("light.Output"),
+        "the edge while lit did not retrigger nor end it"
+    );
     b.run(30);
     assert!(!b.bool("light.Output"));
     b.set("light_cmd", true);
