@@ -17,6 +17,7 @@
 //! ```
 //!
 //! - [`program`]: compiling a student's files and picking the PROGRAM.
+//! - [`project`]: a lab project, several models with their programs served together.
 //! - [`scenario`]: the TOML a teacher writes (inputs over time, faults, properties).
 //! - [`condition`]: the ST-like conditions of properties over the model's names.
 //! - [`run`]: the coupled run (one scan: model, scenario lines, inputs, PLC, outputs,
@@ -38,6 +39,7 @@
 pub mod condition;
 pub mod grade;
 pub mod program;
+pub mod project;
 pub mod report;
 pub mod run;
 pub mod scenario;

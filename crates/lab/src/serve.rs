@@ -16,13 +16,17 @@
 //! server only sees what that thread publishes. Pausing stops simulated time; one scan
 //! steps it by one PLC cycle; `max` runs as fast as the machine goes while the page
 //! keeps updating.
+//!
+//! A lab project (several models, each with its program: [`LabProject`]) is served by
+//! [`serve_many`]: an index at `/`, each mimic at `/m/N/` with its own session thread.
+//! The page addresses its API relative to itself, so one page serves both.
 
 use std::net::SocketAddr;
 use std::sync::mpsc;
 use std::sync::{Arc, Mutex, PoisonError};
 use std::time::{Duration, Instant};
 
-use axum::extract::{Query, State};
+use axum::extract::{Path, Query, State};
 use axum::http::{header, StatusCode};
 use axum::response::{Html, IntoResponse, Response};
 use axum::routing::{get, post};
@@ -99,11 +103,89 @@ pub enum ServeError {
 }
 
 /// Starts the simulation thread and serves the mimic on `listener` until the future is
-/// dropped. Returns once the session has started (or failed to).
+/// dropped. Fails if the session cannot start.
 pub async fn serve(
     listener: tokio::net::TcpListener,
     settings: ServeSettings,
 ) -> Result<(), ServeError> {
+    let app = start(settings).await?;
+    axum::serve(listener, routes().with_state(app)).await?;
+    Ok(())
+}
+
+/// Serves several mimics on `listener` (a lab project: one model and program each), an
+/// index at `/` and each mimic at `/m/N/`. Fails if any session cannot start.
+pub async fn serve_many(
+    listener: tokio::net::TcpListener,
+    mimics: Vec<(String, ServeSettings)>,
+) -> Result<(), ServeError> {
+    let mut apps = Vec::new();
+    let mut titles = Vec::new();
+    for (title, settings) in mimics {
+        let app = start(settings)
+            .await
+            .map_err(|error| ServeError::Start(format!("{title}: {error}")))?;
+        apps.push(app);
+        titles.push(title);
+    }
+    let index = index_page(&titles);
+    let apps = Arc::new(apps);
+    let app = Router::new()
+        .route("/", get(move || async move { Html(index) }))
+        .route("/m/{n}/", get(|| async { Html(PAGE) }))
+        .route(
+            "/m/{n}/mimic.js",
+            get(|| async { asset("text/javascript", SCRIPT) }),
+        )
+        .route(
+            "/m/{n}/mimic.css",
+            get(|| async { asset("text/css", STYLE) }),
+        )
+        .route("/m/{n}/api/state", get(many_state))
+        .route("/m/{n}/api/timeline", get(many_timeline))
+        .route("/m/{n}/api/control", post(many_control))
+        .with_state(apps);
+    axum::serve(listener, app).await?;
+    Ok(())
+}
+
+/// The index of a lab project's mimics.
+fn index_page(titles: &[String]) -> String {
+    let items: String = titles
+        .iter()
+        .enumerate()
+        .map(|(n, title)| {
+            let title = title
+                .replace('&', "&amp;")
+                .replace('<', "&lt;")
+                .replace('>', "&gt;");
+            format!("<li><a href=\"/m/{n}/\">{title}</a></li>")
+        })
+        .collect();
+    format!(
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\
+<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\
+<title>Stanice lab</title><link rel=\"stylesheet\" href=\"/m/0/mimic.css\"></head>\
+<body><header><h1>Stanice lab</h1></header><main><section><h2>Models</h2>\
+<ul id=\"models\">{items}</ul></section></main></body></html>\n"
+    )
+}
+
+fn routes() -> Router<AppState> {
+    Router::new()
+        .route("/", get(|| async { Html(PAGE) }))
+        .route(
+            "/mimic.js",
+            get(|| async { asset("text/javascript", SCRIPT) }),
+        )
+        .route("/mimic.css", get(|| async { asset("text/css", STYLE) }))
+        .route("/api/state", get(state))
+        .route("/api/timeline", get(timeline))
+        .route("/api/control", post(control))
+}
+
+/// Starts a mimic's simulation thread; its state once the session runs.
+async fn start(settings: ServeSettings) -> Result<AppState, ServeError> {
     let view = Arc::new(Mutex::new(View::default()));
     let (controls, inbox) = mpsc::channel();
     let (started, start_result) = tokio::sync::oneshot::channel();
@@ -117,19 +199,35 @@ pub async fn serve(
         .await
         .map_err(|_| ServeError::Start("the simulation thread ended".into()))?
         .map_err(ServeError::Start)?;
-    let app = Router::new()
-        .route("/", get(|| async { Html(PAGE) }))
-        .route(
-            "/mimic.js",
-            get(|| async { asset("text/javascript", SCRIPT) }),
-        )
-        .route("/mimic.css", get(|| async { asset("text/css", STYLE) }))
-        .route("/api/state", get(state))
-        .route("/api/timeline", get(timeline))
-        .route("/api/control", post(control))
-        .with_state(AppState { view, controls });
-    axum::serve(listener, app).await?;
-    Ok(())
+    Ok(AppState { view, controls })
+}
+
+/// The mimic numbered `n` of a project, or 404.
+fn nth(apps: &[AppState], n: usize) -> Result<AppState, StatusCode> {
+    apps.get(n).cloned().ok_or(StatusCode::NOT_FOUND)
+}
+
+async fn many_state(
+    State(apps): State<Arc<Vec<AppState>>>,
+    Path(n): Path<usize>,
+) -> Result<Json<Value>, StatusCode> {
+    Ok(state(State(nth(&apps, n)?)).await)
+}
+
+async fn many_timeline(
+    State(apps): State<Arc<Vec<AppState>>>,
+    Path(n): Path<usize>,
+    query: Query<TimelineQuery>,
+) -> Result<Json<Value>, StatusCode> {
+    Ok(timeline(State(nth(&apps, n)?), query).await)
+}
+
+async fn many_control(
+    State(apps): State<Arc<Vec<AppState>>>,
+    Path(n): Path<usize>,
+    control_body: Json<Control>,
+) -> Result<Response, StatusCode> {
+    Ok(control(State(nth(&apps, n)?), control_body).await)
 }
 
 /// The address a listener is on, for the banner.

@@ -8,7 +8,7 @@ use std::time::Duration;
 
 use fantoccini::Client;
 use lab::run::DEFAULT_SCAN;
-use lab::serve::{serve, ServeSettings};
+use lab::serve::{serve, serve_many, ServeSettings};
 use lab::{RunSettings, Speed};
 use plant::lab::{LabOptions, Profile};
 use testkit::chromium::{browser_available, click, js, until_or_show, Driver};
@@ -17,13 +17,10 @@ fn examples() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/lab")
 }
 
-/// Serves `file` against `model` on a free loopback port; the page's address.
-async fn mimic(model: &str, file: &str, speed: Speed) -> String {
+fn settings(model: &str, file: &str, speed: Speed) -> ServeSettings {
     let path = examples().join(file);
     let text = std::fs::read_to_string(&path).unwrap();
-    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let address = listener.local_addr().unwrap();
-    let settings = ServeSettings {
+    ServeSettings {
         run: RunSettings {
             model: model.to_owned(),
             profile: Profile::Model,
@@ -36,7 +33,14 @@ async fn mimic(model: &str, file: &str, speed: Speed) -> String {
         main: None,
         scenario: None,
         paused: false,
-    };
+    }
+}
+
+/// Serves `file` against `model` on a free loopback port; the page's address.
+async fn mimic(model: &str, file: &str, speed: Speed) -> String {
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let address = listener.local_addr().unwrap();
+    let settings = settings(model, file, speed);
     tokio::spawn(async move { serve(listener, settings).await.unwrap() });
     format!("http://{address}/")
 }
@@ -277,5 +281,40 @@ async fn the_four_mimics_in_a_real_browser() {
     .await;
     reset_clears_err(&client, "off").await;
     timeline_shows_past_violation(&client).await;
+
+    // --- A project of several models: an index, each mimic at its own address.
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let address = listener.local_addr().unwrap();
+    let mimics = vec![
+        (
+            "the slide".to_owned(),
+            settings("slide", "slide.st", Speed::Times(1.0)),
+        ),
+        (
+            "the crossroad".to_owned(),
+            settings("crossroad", "crossroad.st", Speed::Times(10.0)),
+        ),
+    ];
+    tokio::spawn(async move { serve_many(listener, mimics).await.unwrap() });
+    client.goto(&format!("http://{address}/")).await.unwrap();
+    until(
+        &client,
+        "document.querySelectorAll('#models a').length === 2",
+        "the index of two models",
+    )
+    .await;
+    click(&client, "#models li:nth-child(2) a").await;
+    until(
+        &client,
+        "location.pathname === '/m/1/' && LAB.state && LAB.state.model === 'crossroad'",
+        "the crossroad's mimic",
+    )
+    .await;
+    until(
+        &client,
+        &format!("{} && {}", led_on("zel_vrch"), led_on("cerv_spodek")),
+        "its heads following its program",
+    )
+    .await;
     let _ = client.close().await;
 }

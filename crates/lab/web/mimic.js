@@ -154,7 +154,7 @@ const PANELS = {
 };
 
 async function control(body) {
-  await fetch("/api/control", { method: "POST", headers: { "content-type": "application/json" }, body: JSON.stringify(body) });
+  await fetch("api/control", { method: "POST", headers: { "content-type": "application/json" }, body: JSON.stringify(body) });
 }
 
 function button(label, id, down, up) {
@@ -221,7 +221,7 @@ function showState(s) {
 
 async function pollState() {
   try {
-    const r = await fetch("/api/state");
+    const r = await fetch("api/state");
     if (r.ok) showState(await r.json());
   } catch (_) { /* the server went away: keep the last picture */ }
   setTimeout(pollState, 100);
@@ -229,7 +229,7 @@ async function pollState() {
 
 async function pollTimeline() {
   try {
-    const r = await fetch(`/api/timeline?from=${LAB.next}`);
+    const r = await fetch(`api/timeline?from=${LAB.next}`);
     if (r.ok) {
       const t = await r.json();
       LAB.channels = t.channels;

@@ -239,7 +239,8 @@ the table goes to FOLDER/grades.csv and FOLDER/grades.html unless --out says oth
         "lab serve",
         "  stanice lab serve slide --program examples/lab/slide.st     # then open http://127.0.0.1:8090/
   stanice lab serve mixing --program mixing.st --listen 127.0.0.1:8091 --paused
-  stanice lab serve slide --program examples/lab/class/boris.st --speed 10",
+  stanice lab serve slide --program examples/lab/class/boris.st --speed 10
+  stanice lab serve --project examples/lab/lab.toml          # the four models, an index at /",
     ),
     (
         "lab signals",

@@ -32,11 +32,16 @@ pub(crate) enum LabCommand {
 /// `stanice lab serve`
 #[derive(Debug, Args)]
 pub(crate) struct ServeArgs {
-    /// The model: slide, crossroad, mixing or washing.
-    model: String,
+    /// The model: slide, crossroad, mixing or washing (or --project).
+    #[arg(required_unless_present = "project", conflicts_with = "project")]
+    model: Option<String>,
     /// The program's ST files (compiled together).
-    #[arg(long = "program", value_name = "FILE.st", required = true, num_args = 1..)]
+    #[arg(long = "program", value_name = "FILE.st", num_args = 1.., required_unless_present = "project", conflicts_with = "project")]
     program: Vec<PathBuf>,
+    /// A lab project (TOML): several models, each with its program, served together at
+    /// /m/N/ with an index at /.
+    #[arg(long, value_name = "FILE.toml")]
+    project: Option<PathBuf>,
     #[command(flatten)]
     model_args: ModelArgs,
     /// Where the mimic listens.
@@ -137,9 +142,13 @@ pub(crate) async fn run(command: LabCommand) -> anyhow::Result<ExitCode> {
 }
 
 async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
-    known_model(&args.model)?;
+    if let Some(project) = &args.project {
+        return serve_project(project, &args).await;
+    }
+    let model = args.model.clone().unwrap_or_default();
+    known_model(&model)?;
     let scenario = args.scenario.as_deref().map(Scenario::load).transpose()?;
-    let run = settings(&args.model, &args.model_args, scenario.as_ref(), args.speed)?;
+    let run = settings(&model, &args.model_args, scenario.as_ref(), args.speed)?;
     let sources = match lab::program::read_files(&args.program) {
         Ok(sources) => sources,
         Err(error) => {
@@ -159,10 +168,7 @@ async fn serve(args: ServeArgs) -> anyhow::Result<ExitCode> {
         .await
         .with_context(|| format!("cannot listen on {}", args.listen))?;
     let address = lab::serve::address(&listener).unwrap_or(args.listen);
-    println!(
-        "the {} mimic is at http://{address}/ (Ctrl-C to stop)",
-        args.model
-    );
+    println!("the {model} mimic is at http://{address}/ (Ctrl-C to stop)");
     let settings = lab::serve::ServeSettings {
         run,
         sources,
@@ -334,6 +340,72 @@ fn grade(args: GradeArgs) -> anyhow::Result<ExitCode> {
         csv_path.display(),
         html_path.display()
     );
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Serves every model of a lab project, each with its program.
+async fn serve_project(path: &std::path::Path, args: &ServeArgs) -> anyhow::Result<ExitCode> {
+    let project = lab::project::LabProject::load(path)?;
+    let mut mimics = Vec::new();
+    for entry in &project.models {
+        known_model(&entry.model)?;
+        let scenario = entry.scenario.as_deref().map(Scenario::load).transpose()?;
+        let mut model_args = ModelArgs {
+            profile: args.model_args.profile,
+            options: entry
+                .options
+                .iter()
+                .map(|(key, value)| format!("{key}={value}"))
+                .chain(args.model_args.options.iter().cloned())
+                .collect(),
+            duration: args.model_args.duration,
+            scan: args.model_args.scan,
+            main: entry.main.clone(),
+        };
+        if model_args.profile.is_none() {
+            model_args.profile = entry
+                .profile
+                .as_deref()
+                .map(str::parse)
+                .transpose()
+                .map_err(|error| anyhow::anyhow!("{}: {error}", entry.title))?;
+        }
+        let run = settings(&entry.model, &model_args, scenario.as_ref(), args.speed)?;
+        let sources = match lab::program::read_files(&entry.program) {
+            Ok(sources) => sources,
+            Err(error) => {
+                eprintln!("{error}");
+                return Ok(ExitCode::from(2));
+            }
+        };
+        if let Err(error) = Program::compile(&sources, entry.main.as_deref()) {
+            eprintln!("{}: {error}", entry.title);
+            return Ok(ExitCode::from(2));
+        }
+        mimics.push((
+            entry.title.clone(),
+            lab::serve::ServeSettings {
+                run,
+                sources,
+                main: entry.main.clone(),
+                scenario,
+                paused: args.paused,
+            },
+        ));
+    }
+    let mut interrupt = crate::interrupt::Interrupt::listen();
+    let listener = tokio::net::TcpListener::bind(args.listen)
+        .await
+        .with_context(|| format!("cannot listen on {}", args.listen))?;
+    let address = lab::serve::address(&listener).unwrap_or(args.listen);
+    println!(
+        "the lab's {} mimics are at http://{address}/ (Ctrl-C to stop)",
+        mimics.len()
+    );
+    tokio::select! {
+        served = lab::serve::serve_many(listener, mimics) => served?,
+        () = interrupt.recv() => {}
+    }
     Ok(ExitCode::SUCCESS)
 }
 
