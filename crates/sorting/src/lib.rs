@@ -1,12 +1,16 @@
 //! The remote ping-pong-ball sorting lab (the sorting-lab thesis): a PLC weighs each
 //! ball on a Sartorius balance and routes it by weight into the shaft of its colour.
 //!
-//! For now the crate holds the lab's statistics; it will also hold the sorting lab's
-//! other parts (the classification of a weight into a colour, batching and routing, the
-//! mechanism's simulation), each a module of its own beside [`statistics`].
+//! The crate holds the lab's statistics, the classification of a weight into a colour
+//! and the reliability of sorting measured on the simulated balance; batching, routing
+//! and the mechanism's simulation are to come, each a module of its own.
 //!
 //! # Layout
 //!
+//! - [`classify`]: FC1, a weight to a colour by the printed limits (with their gaps) or
+//!   the default contiguous ones (BS-A7).
+//! - [`reliability`]: seeded sortings of the eight balls on the simulated balance, a
+//!   confusion matrix per colour.
 //! - [`statistics`]: from weighings to class limits (the sorting-lab thesis,
 //!   section 12): the sample statistics of each ball, the confidence interval of its mean
 //!   and the upper bound of its scatter, coverage intervals, the colours' unions, the
@@ -41,4 +45,6 @@
 )]
 #![cfg_attr(not(test), deny(clippy::indexing_slicing))]
 
+pub mod classify;
+pub mod reliability;
 pub mod statistics;
