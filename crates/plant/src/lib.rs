@@ -12,6 +12,10 @@
 //! with their ERR/RESET behaviour, error record and the address tables of the lab; the
 //! registry opens them as `slide`, `crossroad`, `mixing` and `washing`.
 //!
+//! The sorting lab's ball sorter (the sorting-lab thesis) is [`sorter`]: the mechanism
+//! behind its supervisor, with the balance simulator on its pan; the registry opens it as
+//! `sorter`.
+//!
 //! The first plant, [`vsetin`], is the Vsetín railway station (the railway-station thesis,
 //! docs/THESES.md: the station's supply, lighting, boards and dispatch): its 6 kV feeds, transformers, distribution boards, diesel generator set,
 //! lighting towers and their contacts, relays and meters. The transfer logic (RDA), the
@@ -219,6 +223,7 @@ mod core;
 mod devices;
 pub mod lab;
 pub mod registry;
+pub mod sorter;
 pub mod sun;
 mod topology;
 pub mod vsetin;

@@ -12,9 +12,17 @@ pub struct PlantStart {
     pub unix_secs: i64,
 }
 
-/// The plants by name: the Vsetín station and the teaching-lab models
-/// ([`crate::lab::MODELS`], opened with default options).
-pub const PLANTS: &[&str] = &["vsetin", "slide", "crossroad", "mixing", "washing"];
+/// The plants by name: the Vsetín station, the teaching-lab models
+/// ([`crate::lab::MODELS`], opened with default options) and the sorting lab's ball
+/// sorter (seed 0).
+pub const PLANTS: &[&str] = &[
+    "vsetin",
+    "slide",
+    "crossroad",
+    "mixing",
+    "washing",
+    "sorter",
+];
 
 /// A new plant of the given name, or `None` for a name [`PLANTS`] does not hold.
 pub fn open(name: &str, start: PlantStart) -> Option<Box<dyn Plant + Send>> {
@@ -26,6 +34,9 @@ pub fn open(name: &str, start: PlantStart) -> Option<Box<dyn Plant + Send>> {
             };
             Some(Box::new(crate::vsetin::VsetinPlant::with_config(config)))
         }
+        "sorter" => Some(Box::new(crate::sorter::SorterPlant::new(
+            crate::sorter::SorterConfig::default(),
+        ))),
         name if crate::lab::MODELS.contains(&name) => {
             crate::lab::open_plant(name, &crate::lab::LabOptions::default()).ok()
         }

@@ -9,6 +9,7 @@ mod lab;
 mod lighting;
 mod logo;
 mod prop;
+mod sorter;
 mod sun;
 mod topology;
 mod transfer;
