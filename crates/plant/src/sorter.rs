@@ -54,11 +54,13 @@
 //! | `miss SnN` | the light barrier misses every ball (reads FALSE) |
 //! | `double-dose` | the next ball S1 releases takes the one behind it along (once) |
 //! | `stuck DK` | deflector K (1-3) does not move |
-//! | `lose-pulse SX` | the next energisation of actuator SX does nothing (once) |
 //! | `balance-link-loss` | the gateway to the balance is silent: weight and stable invalid |
 //! | `dust G` | dust settles on the pan at G grams a minute (0 ends it) |
 //!
-//! `clear FAULT` and `clear all` end them; `status` shows where every ball is.
+//! `clear FAULT` and `clear all` end them; `status` shows where every ball is. A lost
+//! command pulse (shorter than two supervisor scans, section 4.5) is lost before the
+//! supervisor, not here: the sorting crate's rig samples commands with the supervisor's
+//! scan and can drop the next pulse of an actuator.
 
 use std::any::Any;
 use std::collections::BTreeMap;
@@ -230,7 +232,6 @@ pub struct SorterPlant {
     missed: [bool; 5],
     double_dose: bool,
     stuck: [bool; 3],
-    lose_pulse: [bool; ACTUATORS.len()],
     dust_g_per_min: f64,
     arrivals: Vec<Arrival>,
     notes: Vec<String>,
@@ -332,7 +333,6 @@ impl SorterPlant {
             missed: [false; 5],
             double_dose: false,
             stuck: [false; 3],
-            lose_pulse: [false; ACTUATORS.len()],
             dust_g_per_min: 0.0,
             arrivals: Vec::new(),
             notes: Vec::new(),
@@ -658,16 +658,6 @@ impl SorterPlant {
             }
             return;
         }
-        if let Some(lose) = self.lose_pulse.get_mut(output) {
-            if *lose {
-                *lose = false;
-                self.notes.push(format!(
-                    "{} lost a pulse",
-                    ACTUATORS.get(output).unwrap_or(&"?")
-                ));
-                return;
-            }
-        }
         if let Some(since) = self.energised_since.get_mut(output) {
             *since = Some(self.now);
         }
@@ -717,7 +707,7 @@ impl SorterPlant {
     fn bad_line(line: &str) -> PlantError {
         PlantError::BadConsoleLine {
             line: line.to_owned(),
-            expected: "miss SnN, double-dose, stuck DK, lose-pulse SX, balance-link-loss, \
+            expected: "miss SnN, double-dose, stuck DK, balance-link-loss, \
                        dust G, clear FAULT, clear all"
                 .to_owned(),
         }
@@ -745,17 +735,6 @@ impl SorterPlant {
             })
     }
 
-    fn actuator_index(name: &str) -> Result<usize, PlantError> {
-        ACTUATORS
-            .iter()
-            .position(|a| a.eq_ignore_ascii_case(name))
-            .ok_or_else(|| PlantError::UnknownName {
-                kind: "actuator",
-                name: name.to_owned(),
-                allowed: ACTUATORS.iter().map(|a| (*a).to_owned()).collect(),
-            })
-    }
-
     fn set_balance_link(&mut self, linked: bool) {
         if let Some(module) = self.modules.get_mut(2) {
             module.linked = linked;
@@ -777,12 +756,6 @@ impl SorterPlant {
                 let index = Self::deflector_index(deflector)?;
                 if let Some(stuck) = self.stuck.get_mut(index) {
                     *stuck = on;
-                }
-            }
-            (Some("lose-pulse"), [actuator]) => {
-                let index = Self::actuator_index(actuator)?;
-                if let Some(lose) = self.lose_pulse.get_mut(index) {
-                    *lose = on;
                 }
             }
             (Some("balance-link-loss"), []) => self.set_balance_link(!on),
@@ -936,7 +909,6 @@ impl Plant for SorterPlant {
             self.missed = [false; 5];
             self.double_dose = false;
             self.stuck = [false; 3];
-            self.lose_pulse = [false; ACTUATORS.len()];
             self.set_balance_link(true);
             self.dust_g_per_min = 0.0;
             self.balance.set_dust(0.0);
@@ -963,7 +935,6 @@ impl Plant for SorterPlant {
             ("miss SENSOR", names("sensor", &SENSORS)),
             ("double-dose", (None, Vec::new())),
             ("stuck DEFLECTOR", names("deflector", &["D1", "D2", "D3"])),
-            ("lose-pulse ACTUATOR", names("actuator", &ACTUATORS)),
             ("balance-link-loss", (None, Vec::new())),
         ] {
             operations.push(ConsoleOperation {
@@ -1031,11 +1002,6 @@ impl Plant for SorterPlant {
         for (k, stuck) in self.stuck.iter().enumerate() {
             if *stuck {
                 faults.push(format!("stuck D{}", k + 1));
-            }
-        }
-        for (actuator, lose) in ACTUATORS.iter().zip(self.lose_pulse) {
-            if lose {
-                faults.push(format!("lose-pulse {actuator}"));
             }
         }
         if !self.modules.get(2).is_some_and(Module::valid) {

@@ -47,4 +47,5 @@
 
 pub mod classify;
 pub mod reliability;
+pub mod rig;
 pub mod statistics;

@@ -263,16 +263,6 @@ fn the_faults_of_section_13() {
     assert_eq!(p.deflector_extended(2), Some(false));
     p.console("clear stuck D2").unwrap();
 
-    // A lost pulse: the next energisation of S2 does nothing.
-    p.console("lose-pulse S2").unwrap();
-    pulse(&mut p, "S1", s(1));
-    wait(&mut p, ms(200));
-    pulse(&mut p, "S2", s(1));
-    assert!(p.balls_at(Place::Pan).is_empty());
-    assert_eq!(p.balls_at(Place::BeforeS2).len(), 1);
-    pulse(&mut p, "S2", s(1));
-    assert_eq!(p.balls_at(Place::Pan).len(), 1);
-
     // The gateway to the balance falls silent: its values turn invalid.
     p.console("balance-link-loss").unwrap();
     assert!(!p.read("Balance_g").unwrap().valid);

@@ -11,6 +11,7 @@
 
 mod example;
 mod plot;
+mod rig;
 mod samples;
 mod supervisor;
 mod table51;
