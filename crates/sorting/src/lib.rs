@@ -1,14 +1,19 @@
 //! The remote ping-pong-ball sorting lab (the sorting-lab thesis): a PLC weighs each
 //! ball on a Sartorius balance and routes it by weight into the shaft of its colour.
 //!
-//! The crate holds the lab's statistics, the classification of a weight into a colour
-//! and the reliability of sorting measured on the simulated balance; batching, routing
-//! and the mechanism's simulation are to come, each a module of its own.
+//! The crate holds the lab's statistics, the classification of a weight into a colour,
+//! the reliability of sorting measured on the simulated balance, and the lab itself on
+//! one simulated clock: the supervisor and the sorting program on the soft PLC driving
+//! the mechanism (`plant::sorter`).
 //!
 //! # Layout
 //!
 //! - [`classify`]: FC1, a weight to a colour by the printed limits (with their gaps) or
 //!   the default contiguous ones (BS-A7).
+//! - [`programs`]: the supervisor and the reference sorting program, built in.
+//! - [`rig`]: the sorting PLC (10-ms scans) behind the supervisor (30-ms scans, sampling
+//!   its commands) driving the mechanism; the supervisor's refusals and lock-outs as
+//!   events; automatic sortings and their reliability over seeded mechanisms.
 //! - [`reliability`]: seeded sortings of the eight balls on the simulated balance, a
 //!   confusion matrix per colour.
 //! - [`statistics`]: from weighings to class limits (the sorting-lab thesis,
@@ -46,6 +51,7 @@
 #![cfg_attr(not(test), deny(clippy::indexing_slicing))]
 
 pub mod classify;
+pub mod programs;
 pub mod reliability;
 pub mod rig;
 pub mod statistics;

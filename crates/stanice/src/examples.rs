@@ -212,6 +212,27 @@ with its mean and S) that falls within its colour's decision interval, `expected
 repeats it with the upper bound of sigma in place of S.",
     ),
     (
+        "sorting",
+        "  stanice sorting run                                   # the reference program, seed 1
+  stanice sorting run --program my_sorter.st --fault double-dose
+  stanice sorting reliability --sortings 1000",
+    ),
+    (
+        "sorting run",
+        "  stanice sorting run                                   # the reference program, seed 1
+  stanice sorting run --program my_sorter.st --seed 7 --sortings 3
+  stanice sorting run --colours green,blue,yellow,red --fault double-dose --lose-pulse S4
+  stanice sorting run --program my_sorter.st --json
+The program reaches the actuators only through the built-in supervisor (section 5's rules):
+sensors %IX0.0-%IX0.4, weight in micrograms %ID4, commands %QX0.0-%QX1.5, the HMI's bytes
+MB200-MB217; see docs/SORTING.md and examples/sorting-lab/plc/sorter.st.",
+    ),
+    (
+        "sorting reliability",
+        "  stanice sorting reliability                           # 1,000 sortings, seeds 1..1000
+  stanice sorting reliability --sortings 100 --seed 500 --json",
+    ),
+    (
         "lab",
         "  stanice lab run slide --program examples/lab/slide.st --duration 2m
   stanice lab run mixing --program examples/lab/mixing.st --scenario examples/lab/scenarios/mixing.toml

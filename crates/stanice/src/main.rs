@@ -35,6 +35,7 @@ mod port_in_use;
 mod printed_time;
 mod run;
 mod serial_line;
+mod sorting;
 mod stats;
 mod verbosity;
 
@@ -84,6 +85,10 @@ enum Command {
     /// balls (confidence intervals, coverage, decision limits, expected reliability).
     #[command(subcommand)]
     Stats(stats::StatsCommand),
+    /// The remote sorting lab without the hardware: a sorting program behind the
+    /// supervisor against the simulated mechanism, and its reliability.
+    #[command(subcommand)]
+    Sorting(sorting::SortingCommand),
     /// Run the railway-station demo (examples/vsetin).
     Demo(demo::DemoArgs),
     /// Run a station project: every node, or those named with --node.
@@ -138,6 +143,7 @@ fn main() -> std::process::ExitCode {
             Command::Lift(command) => lift::run(command).await,
             Command::Balance(command) => balance::run(command).await,
             Command::Stats(command) => stats::run(command),
+            Command::Sorting(command) => sorting::run(command),
             Command::Demo(args) => demo::run(args).await,
             Command::Run(args) => run::run(args).await,
             Command::Points(args) => points::run(args),

@@ -19,5 +19,6 @@ mod points_and_events;
 mod run;
 mod serial;
 mod shutdown;
+mod sorting;
 mod stats;
 mod users;
