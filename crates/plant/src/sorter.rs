@@ -5,11 +5,18 @@
 //! into one of four shafts, a shutter over the lower reservoir and a blower that lifts
 //! the balls back up.
 //!
-//! The plant is the mechanism only. Its outputs are the actuators as the supervisor
-//! drives them (the student's program never reaches them directly); its inputs are the
-//! five light barriers and the balance as the DP/RS 232 gateway delivers it (weight and
-//! stable flag of the last record). The balance is the devices crate's simulator with the
-//! thesis's measured scatter, fed with the balls this mechanism puts on its pan.
+//! The plant is the mechanism and its field wiring. Its outputs are the actuators as the
+//! supervisor drives them (the student's program never reaches them directly); its inputs
+//! are the five light barriers and the balance as the DP/RS 232 gateway delivers it
+//! (weight and stable flag of the last record). The balance is the devices crate's
+//! simulator with the thesis's measured scatter, fed with the balls this mechanism puts on
+//! its pan.
+//!
+//! The Profibus DP exchange between the two PLCs (section 4.4: the EM 277's buffer) is
+//! wiring too, so it is here: the sorting PLC drives `Cmd_A` for each actuator `A`, the
+//! supervisor reads it as `DP_A` and the sorting PLC reads the actuator as driven back as
+//! `Fb_A`. The supervisor samples `DP_A` with its own scan, so a pulse shorter than two of
+//! its scans can be lost (section 4.5), as on the model.
 //!
 //! # Ball path
 //!
@@ -55,12 +62,11 @@
 //! | `double-dose` | the next ball S1 releases takes the one behind it along (once) |
 //! | `stuck DK` | deflector K (1-3) does not move |
 //! | `balance-link-loss` | the gateway to the balance is silent: weight and stable invalid |
+//! | `lose-pulse A` | the next command pulse `Cmd_A` does not reach the supervisor (once) |
+//! | `dp-link-loss` | the DP exchange between the PLCs fails: `DP_*` and `Fb_*` invalid |
 //! | `dust G` | dust settles on the pan at G grams a minute (0 ends it) |
 //!
-//! `clear FAULT` and `clear all` end them; `status` shows where every ball is. A lost
-//! command pulse (shorter than two supervisor scans, section 4.5) is lost before the
-//! supervisor, not here: the sorting crate's rig samples commands with the supervisor's
-//! scan and can drop the next pulse of an actuator.
+//! `clear FAULT` and `clear all` end them; `status` shows where every ball is.
 
 use std::any::Any;
 use std::collections::BTreeMap;
@@ -229,6 +235,11 @@ pub struct SorterPlant {
     next_record: SimTime,
     weight_g: f64,
     stable: bool,
+    /// The sorting PLC's commands on the DP bus.
+    dp_commands: [bool; ACTUATORS.len()],
+    /// Commands whose next pulse is to be lost, and those being lost until they fall.
+    dp_to_lose: [bool; ACTUATORS.len()],
+    dp_losing: [bool; ACTUATORS.len()],
     missed: [bool; 5],
     double_dose: bool,
     stuck: [bool; 3],
@@ -303,7 +314,31 @@ impl SorterPlant {
             unit: "",
             description: "the balance's last record: stable".to_owned(),
         });
-        let modules = ["ACTUATORS", "SENSORS", "BALANCE"]
+        for name in ACTUATORS {
+            for (prefix, direction, description) in [
+                ("Cmd_", Direction::Output, "the sorting PLC's command for"),
+                (
+                    "DP_",
+                    Direction::Input,
+                    "the supervisor's input: the command for",
+                ),
+                (
+                    "Fb_",
+                    Direction::Input,
+                    "back to the sorting PLC: the supervisor drives",
+                ),
+            ] {
+                signals.push(SignalInfo {
+                    name: format!("{prefix}{name}"),
+                    direction,
+                    kind: ValueKind::Bool,
+                    module: "DP".to_owned(),
+                    unit: "",
+                    description: format!("{description} {name} (Profibus DP)"),
+                });
+            }
+        }
+        let modules = ["ACTUATORS", "SENSORS", "BALANCE", "DP"]
             .into_iter()
             .map(|name| Module {
                 name: name.to_owned(),
@@ -330,6 +365,9 @@ impl SorterPlant {
             next_record: Duration::ZERO,
             weight_g: 0.0,
             stable: true,
+            dp_commands: [false; ACTUATORS.len()],
+            dp_to_lose: [false; ACTUATORS.len()],
+            dp_losing: [false; ACTUATORS.len()],
             missed: [false; 5],
             double_dose: false,
             stuck: [false; 3],
@@ -678,6 +716,30 @@ impl SorterPlant {
         self.gates();
     }
 
+    fn dp_command(&mut self, index: usize, on: bool) {
+        let was = self.dp_commands.get(index).copied().unwrap_or(false);
+        if let Some(command) = self.dp_commands.get_mut(index) {
+            *command = on;
+        }
+        if on && !was && self.dp_to_lose.get(index).copied().unwrap_or(false) {
+            if let Some(lose) = self.dp_to_lose.get_mut(index) {
+                *lose = false;
+            }
+            if let Some(losing) = self.dp_losing.get_mut(index) {
+                *losing = true;
+            }
+            self.notes.push(format!(
+                "a pulse of {} lost on its way to the supervisor",
+                ACTUATORS.get(index).unwrap_or(&"?")
+            ));
+        }
+        if !on {
+            if let Some(losing) = self.dp_losing.get_mut(index) {
+                *losing = false;
+            }
+        }
+    }
+
     fn record(&mut self) {
         let now = self.at(self.now);
         let reading = self.balance.reading(now);
@@ -707,9 +769,10 @@ impl SorterPlant {
     fn bad_line(line: &str) -> PlantError {
         PlantError::BadConsoleLine {
             line: line.to_owned(),
-            expected: "miss SnN, double-dose, stuck DK, balance-link-loss, \
+            expected:
+                "miss SnN, double-dose, stuck DK, balance-link-loss, lose-pulse A, dp-link-loss, \
                        dust G, clear FAULT, clear all"
-                .to_owned(),
+                    .to_owned(),
         }
     }
 
@@ -759,6 +822,24 @@ impl SorterPlant {
                 }
             }
             (Some("balance-link-loss"), []) => self.set_balance_link(!on),
+            (Some("dp-link-loss"), []) => {
+                if let Some(module) = self.modules.get_mut(3) {
+                    module.linked = !on;
+                }
+            }
+            (Some("lose-pulse"), [actuator]) => {
+                let index = ACTUATORS
+                    .iter()
+                    .position(|a| a.eq_ignore_ascii_case(actuator))
+                    .ok_or_else(|| PlantError::UnknownName {
+                        kind: "actuator",
+                        name: (*actuator).to_owned(),
+                        allowed: ACTUATORS.iter().map(|a| (*a).to_owned()).collect(),
+                    })?;
+                if let Some(lose) = self.dp_to_lose.get_mut(index) {
+                    *lose = on;
+                }
+            }
             (Some("dust"), [rate]) if on => {
                 let rate: f64 = rate
                     .parse()
@@ -866,6 +947,31 @@ impl Plant for SorterPlant {
                 valid: true,
             });
         }
+        let dp_valid = self.modules.get(3).is_some_and(Module::valid);
+        let dp = |prefix: &str| {
+            name.strip_prefix(prefix)
+                .and_then(|actuator| ACTUATORS.iter().position(|a| *a == actuator))
+        };
+        if let Some(index) = dp("Cmd_") {
+            return Ok(Reading {
+                value: Value::Bool(self.dp_commands.get(index).copied().unwrap_or(false)),
+                valid: true,
+            });
+        }
+        if let Some(index) = dp("DP_") {
+            let on = self.dp_commands.get(index).copied().unwrap_or(false)
+                && !self.dp_losing.get(index).copied().unwrap_or(false);
+            return Ok(Reading {
+                value: Value::Bool(on),
+                valid: dp_valid,
+            });
+        }
+        if let Some(index) = dp("Fb_") {
+            return Ok(Reading {
+                value: Value::Bool(self.commanded.get(index).copied().unwrap_or(false)),
+                valid: dp_valid,
+            });
+        }
         let valid = self.modules.get(2).is_some_and(Module::valid);
         match name {
             "Balance_g" => Ok(Reading {
@@ -881,6 +987,20 @@ impl Plant for SorterPlant {
     }
 
     fn set_output(&mut self, name: &str, value: Value) -> Result<(), PlantError> {
+        if let Some(index) = name
+            .strip_prefix("Cmd_")
+            .and_then(|actuator| ACTUATORS.iter().position(|a| *a == actuator))
+        {
+            let Value::Bool(on) = value else {
+                return Err(PlantError::WrongType {
+                    name: name.to_owned(),
+                    expected: ValueKind::Bool,
+                    got: value.kind(),
+                });
+            };
+            self.dp_command(index, on);
+            return Ok(());
+        }
         let Some(index) = ACTUATORS.iter().position(|a| *a == name) else {
             return Err(if self.signals.iter().any(|s| s.name == name) {
                 PlantError::NotAnOutput(name.to_owned())
@@ -910,6 +1030,10 @@ impl Plant for SorterPlant {
             self.double_dose = false;
             self.stuck = [false; 3];
             self.set_balance_link(true);
+            if let Some(module) = self.modules.get_mut(3) {
+                module.linked = true;
+            }
+            self.dp_to_lose = [false; ACTUATORS.len()];
             self.dust_g_per_min = 0.0;
             self.balance.set_dust(0.0);
             return Ok(());
@@ -936,6 +1060,8 @@ impl Plant for SorterPlant {
             ("double-dose", (None, Vec::new())),
             ("stuck DEFLECTOR", names("deflector", &["D1", "D2", "D3"])),
             ("balance-link-loss", (None, Vec::new())),
+            ("lose-pulse ACTUATOR", names("actuator", &ACTUATORS)),
+            ("dp-link-loss", (None, Vec::new())),
         ] {
             operations.push(ConsoleOperation {
                 usage,
@@ -1006,6 +1132,14 @@ impl Plant for SorterPlant {
         }
         if !self.modules.get(2).is_some_and(Module::valid) {
             faults.push("balance-link-loss".to_owned());
+        }
+        if !self.modules.get(3).is_some_and(Module::valid) {
+            faults.push("dp-link-loss".to_owned());
+        }
+        for (actuator, lose) in ACTUATORS.iter().zip(self.dp_to_lose) {
+            if lose {
+                faults.push(format!("lose-pulse {actuator}"));
+            }
         }
         if self.dust_g_per_min > 0.0 {
             faults.push(format!("dust {}", self.dust_g_per_min));

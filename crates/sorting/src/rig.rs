@@ -7,10 +7,14 @@
 //!   sorting PLC (10-ms scans)            supervisor PLC (30-ms scans)        mechanism
 //!   %IB0 Sn1-Sn5          ◀──────────────────────────────────────────────── sensors
 //!   %ID4 weight µg, %IX8.0 stable, %IX8.1 link ◀──────────────────────────── balance
-//!   %QB0-%QB1 commands ──(DP buffer)──▶ %IB0-%IB1 ── SingleControl ──▶ %QB0-%QB1 ──▶ actuators
-//!   %IB1-%IB2 actuators as driven ◀────────────────── MultipleControl    │
-//!   %IB10-%IB23 actuator states   ◀────────────────── %QB4-%QB17 ◀──────┘
+//!   %QB0-%QB1 ──▶ Cmd_A ─(DP)─ DP_A ──▶ %IB0-%IB1 ── SingleControl ──▶ %QB0-%QB1 ──▶ actuators
+//!   %IB1-%IB2 ◀── Fb_A ◀─(DP)────────────────────── MultipleControl       │
+//!   %IB10-%IB23 actuator states   ◀────────────────── %QB4-%QB17 ◀──────────┘
 //!   %MB200-%MB217 the HMI's bytes ◀── [`Rig::set_memory`]
+//!
+//! The DP exchange is the mechanism's wiring (`plant::sorter`'s `Cmd_A`, `DP_A`,
+//! `Fb_A`), so its faults (a lost pulse, a failed exchange) are the mechanism's console
+//! faults, as in a station project.
 //! ```
 //!
 //! One step is one sorting scan at simulated time `t`: the mechanism advances to `t`, the
@@ -114,12 +118,8 @@ pub struct Rig {
     next_supervisor: Duration,
     /// The actuators as last driven (bit i = ACTUATORS[i]).
     driven: u16,
-    /// The commands as the supervisor last took them (bit i = ACTUATORS[i]).
-    taken: u16,
-    /// Actuators whose next command pulse is lost before the supervisor.
-    to_lose: u16,
-    /// Commands being lost until they fall.
-    losing: u16,
+    /// The sorting PLC's commands as last put on the DP bus (bit i = ACTUATORS[i]).
+    commands: u16,
     /// Per actuator: the supervisor block's `Refused`, `LockedOut` (level-controlled
     /// blocks only) and `State`, resolved once.
     flags: Vec<(&'static str, Leaf, Option<Leaf>, Leaf)>,
@@ -217,9 +217,7 @@ impl Rig {
             now: Duration::ZERO,
             next_supervisor: Duration::ZERO,
             driven: 0,
-            taken: 0,
-            to_lose: 0,
-            losing: 0,
+            commands: 0,
             flags,
             events: Vec::new(),
             settings,
@@ -280,21 +278,21 @@ impl Rig {
             .unwrap_or(0)
     }
 
-    /// Loses the next command pulse of `actuator` before the supervisor sees it, as a
-    /// pulse shorter than two supervisor scans is lost (section 4.5 and 13).
+    /// Loses the next command pulse of `actuator` on the DP bus before the supervisor
+    /// sees it (the mechanism's console `lose-pulse A`).
     pub fn lose_next_pulse(&mut self, actuator: &str) -> Result<(), RigError> {
-        let index = ACTUATORS
-            .iter()
-            .position(|a| a.eq_ignore_ascii_case(actuator))
-            .ok_or_else(|| {
-                RigError::Plant(plant::PlantError::UnknownName {
-                    kind: "actuator",
-                    name: actuator.to_owned(),
-                    allowed: ACTUATORS.iter().map(|a| (*a).to_owned()).collect(),
-                })
-            })?;
-        self.to_lose |= 1 << index;
-        Ok(())
+        Ok(self.plant.console(&format!("lose-pulse {actuator}"))?)
+    }
+
+    /// Reads the DP signals `{prefix}A` of every actuator as actuator bits.
+    fn dp_bits(&self, prefix: &str) -> Result<u16, RigError> {
+        let mut bits = 0u16;
+        for (index, actuator) in ACTUATORS.iter().enumerate() {
+            if self.plant.bool(&format!("{prefix}{actuator}"))? {
+                bits |= 1 << index;
+            }
+        }
+        Ok(bits)
     }
 
     fn sorter_inputs(&mut self) -> Result<(), RigError> {
@@ -309,7 +307,7 @@ impl Rig {
         let micrograms = (weight.value.as_real().unwrap_or(0.0) * 1e6).round() as i64;
         let flags =
             i64::from(stable.value.as_bool().unwrap_or(false)) | (i64::from(weight.valid) << 1);
-        let feedback = to_word(self.driven);
+        let feedback = to_word(self.dp_bits("Fb_")?);
         let fail = |e: plc::PlcError| RigError::Plc {
             plc: "sorting PLC",
             message: e.to_string(),
@@ -322,13 +320,7 @@ impl Rig {
     }
 
     fn supervisor_scan(&mut self) -> Result<(), RigError> {
-        let mut commands = from_word(self.sorter.get_io("%QW0").unwrap_or(0));
-        let rising = commands & !self.taken;
-        self.losing |= rising & self.to_lose;
-        self.to_lose &= !rising;
-        self.losing &= commands;
-        commands &= !self.losing;
-        self.taken = commands;
+        let commands = self.dp_bits("DP_")?;
         self.supervisor
             .set_io("%IW0", to_word(commands))
             .map_err(|e| RigError::Plc {
@@ -405,6 +397,15 @@ impl Rig {
                 message: self.sorter.render(fault),
             });
         }
+        let commands = from_word(self.sorter.get_io("%QW0").unwrap_or(0));
+        for (index, actuator) in ACTUATORS.iter().enumerate() {
+            let on = commands & (1 << index) != 0;
+            if on != (self.commands & (1 << index) != 0) {
+                self.plant
+                    .set_output(&format!("Cmd_{actuator}"), Value::Bool(on))?;
+            }
+        }
+        self.commands = commands;
         if self.now >= self.next_supervisor {
             self.supervisor_scan()?;
             self.next_supervisor += self.settings.supervisor_scan;

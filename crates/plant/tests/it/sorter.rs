@@ -78,7 +78,7 @@ fn power_on_holds_the_balls_above_and_the_deflectors_where_the_seed_put_them() {
         .filter(|seed| sorter(*seed).deflector_extended(1) == Some(true))
         .count();
     assert!((1..16).contains(&extended), "{extended}");
-    assert_eq!(p.signals().len(), ACTUATORS.len() + 5 + 2);
+    assert_eq!(p.signals().len(), ACTUATORS.len() * 4 + 5 + 2);
 }
 
 #[test]
@@ -262,6 +262,27 @@ fn the_faults_of_section_13() {
     pulse(&mut p, "S6", s(1));
     assert_eq!(p.deflector_extended(2), Some(false));
     p.console("clear stuck D2").unwrap();
+
+    // The DP exchange: a command reaches the supervisor's input; a pulse marked lost
+    // does not, the next one does; the actuator comes back as driven.
+    set(&mut p, "Cmd_S3", true);
+    assert!(sensor(&p, "DP_S3"));
+    set(&mut p, "Cmd_S3", false);
+    p.console("lose-pulse S3").unwrap();
+    set(&mut p, "Cmd_S3", true);
+    assert!(!sensor(&p, "DP_S3"), "lost");
+    set(&mut p, "Cmd_S3", false);
+    set(&mut p, "Cmd_S3", true);
+    assert!(sensor(&p, "DP_S3"));
+    set(&mut p, "Cmd_S3", false);
+    set(&mut p, "S3", true);
+    assert!(sensor(&p, "Fb_S3"));
+    set(&mut p, "S3", false);
+    p.console("dp-link-loss").unwrap();
+    assert!(!p.read("DP_S3").unwrap().valid);
+    assert!(!p.read("Fb_S3").unwrap().valid);
+    p.console("clear dp-link-loss").unwrap();
+    assert!(p.read("Fb_S3").unwrap().valid);
 
     // The gateway to the balance falls silent: its values turn invalid.
     p.console("balance-link-loss").unwrap();
