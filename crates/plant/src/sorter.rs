@@ -307,6 +307,16 @@ impl SorterPlant {
             description: "the balance's last record: weight".to_owned(),
         });
         signals.push(SignalInfo {
+            name: "Balance_ug".to_owned(),
+            direction: Direction::Input,
+            kind: ValueKind::Real,
+            module: "BALANCE".to_owned(),
+            unit: "µg",
+            description: "the balance's last record: weight in micrograms, a whole number as \
+                          the gateway hands it to the PLC (a DINT)"
+                .to_owned(),
+        });
+        signals.push(SignalInfo {
             name: "Balance_stable".to_owned(),
             direction: Direction::Input,
             kind: ValueKind::Bool,
@@ -976,6 +986,10 @@ impl Plant for SorterPlant {
         match name {
             "Balance_g" => Ok(Reading {
                 value: Value::Real(self.weight_g),
+                valid,
+            }),
+            "Balance_ug" => Ok(Reading {
+                value: Value::Real((self.weight_g * 1e6).round()),
                 valid,
             }),
             "Balance_stable" => Ok(Reading {

@@ -9,9 +9,6 @@
 //!     cargo bench -p sorting --bench mechanism [-- SORTINGS]
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-use std::path::PathBuf;
-
-use lab::program::Program;
 use sorting::rig::mechanism_reliability;
 
 fn main() {
@@ -19,11 +16,10 @@ fn main() {
         .skip(1)
         .find_map(|a| a.parse().ok())
         .unwrap_or(1000);
-    let folder = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/sorting-lab/plc");
     let build = || {
         Ok((
-            Program::load(&[folder.join("sorter.st")], None).unwrap(),
-            Program::load(&[folder.join("supervisor.st")], Some("Supervisor")).unwrap(),
+            sorting::programs::reference_sorter().unwrap(),
+            sorting::programs::supervisor().unwrap(),
         ))
     };
     #[allow(clippy::disallowed_methods, reason = "a benchmark's wall time")]

@@ -9,8 +9,8 @@
 //!   %ID4 weight µg, %IX8.0 stable, %IX8.1 link ◀──────────────────────────── balance
 //!   %QB0-%QB1 ──▶ Cmd_A ─(DP)─ DP_A ──▶ %IB0-%IB1 ── SingleControl ──▶ %QB0-%QB1 ──▶ actuators
 //!   %IB1-%IB2 ◀── Fb_A ◀─(DP)────────────────────── MultipleControl       │
-//!   %IB10-%IB23 actuator states   ◀────────────────── %QB4-%QB17 ◀──────────┘
-//!   %MB200-%MB217 the HMI's bytes ◀── [`Rig::set_memory`]
+//!                                                     %QB4-%QB17 states ◀───┘
+//!   the globals of interface.st (the HMI's requests and what it shows) ◀── [`Rig::set`]
 //!
 //! The DP exchange is the mechanism's wiring (`plant::sorter`'s `Cmd_A`, `DP_A`,
 //! `Fb_A`), so its faults (a lost pulse, a failed exchange) are the mechanism's console
@@ -254,20 +254,23 @@ impl Rig {
         &self.events
     }
 
-    /// Writes the HMI's memory of the sorting PLC (`%MX200.1`, `%MB201`): what the HMI
-    /// does through MB200-MB217.
-    pub fn set_memory(&mut self, address: &str, value: i64) -> Result<(), RigError> {
-        self.sorter
-            .set_io(address, value)
-            .map_err(|e| RigError::Plc {
-                plc: "sorting PLC",
-                message: e.to_string(),
-            })
+    /// Writes a variable of the sorting PLC as the HMI does (`StartCmd` = `TRUE`,
+    /// `Colour1` = `3`): the globals of `interface.st`.
+    pub fn set(&mut self, path: &str, literal: &str) -> Result<(), RigError> {
+        self.sorter.write(path, literal).map_err(|e| RigError::Plc {
+            plc: "sorting PLC",
+            message: format!("{path}: {e}"),
+        })
     }
 
-    /// Reads the sorting PLC's process image or memory (`%MB205`, `%MW208`).
-    pub fn memory(&self, address: &str) -> i64 {
-        self.sorter.get_io(address).unwrap_or(0)
+    /// A number (or BOOL as 0/1) of the sorting PLC (`Sortings`, `StateOut`), 0 when
+    /// there is none.
+    pub fn value(&self, path: &str) -> f64 {
+        match self.sorter.read(path) {
+            Ok(plc::vm::Val::Int(x)) => x as f64,
+            Ok(plc::vm::Val::Real(x)) => x,
+            _ => 0.0,
+        }
     }
 
     /// The state byte of actuator `index` as the supervisor reports it (0 ready, 1 on,
@@ -343,11 +346,6 @@ impl Rig {
         }
         self.driven = driven;
         self.collect_events();
-        // The supervisor's states go to the sorting PLC through the DP buffer.
-        for index in 0..ACTUATORS.len() {
-            let state = self.actuator_state(index);
-            let _ = self.sorter.set_io(&format!("%IB{}", 10 + index), state);
-        }
         Ok(())
     }
 
@@ -436,7 +434,7 @@ impl Rig {
 /// power-on.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SortingOutcome {
-    /// The sorting program reported the sorting done (`%MW210` counted it).
+    /// The sorting program reported the sorting done (`Sortings` counted it).
     pub finished: bool,
     /// Simulated time from the start command to done (or to the limit).
     #[serde(with = "millis")]
@@ -456,15 +454,15 @@ impl Rig {
         colours: [u8; 4],
         limit: Duration,
     ) -> Result<SortingOutcome, RigError> {
-        self.set_memory("%MX200.0", 1)?;
+        self.set("Automatic", "TRUE")?;
         for (k, colour) in colours.iter().enumerate() {
-            self.set_memory(&format!("%MB{}", 201 + k), i64::from(*colour))?;
+            self.set(&format!("Colour{}", k + 1), &colour.to_string())?;
         }
-        let before = self.memory("%MW210");
-        self.set_memory("%MX200.1", 1)?;
+        let before = self.value("Sortings");
+        self.set("StartCmd", "TRUE")?;
         let started = self.now;
         let events_before = self.events.len();
-        let finished = self.run_until(limit, |rig| rig.memory("%MW210") != before)?;
+        let finished = self.run_until(limit, |rig| rig.value("Sortings") != before)?;
         let shafts = (0..self.plant.balls().len())
             .map(|ball| {
                 let name = self.plant.balls().get(ball).map_or("?", |b| b.name);

@@ -224,8 +224,8 @@ repeats it with the upper bound of sigma in place of S.",
   stanice sorting run --colours green,blue,yellow,red --fault double-dose --lose-pulse S4
   stanice sorting run --program my_sorter.st --json
 The program reaches the actuators only through the built-in supervisor (section 5's rules):
-sensors %IX0.0-%IX0.4, weight in micrograms %ID4, commands %QX0.0-%QX1.5, the HMI's bytes
-MB200-MB217; see docs/SORTING.md and examples/sorting-lab/plc/sorter.st.",
+sensors %IX0.0-%IX0.4, weight in micrograms %ID4, commands %QX0.0-%QX1.5, and the HMI's
+globals of examples/sorting-lab/plc/interface.st (compiled with it); see docs/SORTING.md.",
     ),
     (
         "sorting reliability",

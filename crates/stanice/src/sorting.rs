@@ -35,8 +35,9 @@ pub(crate) enum SortingCommand {
 /// `stanice sorting run`
 #[derive(Debug, Args)]
 pub(crate) struct RunArgs {
-    /// The sorting program's ST files (compiled together; default: the reference program
-    /// of examples/sorting-lab/plc/sorter.st, built in).
+    /// The sorting program's ST files (compiled together with the lab's interface.st, the
+    /// globals the HMI reads and writes; default: the reference program of
+    /// examples/sorting-lab/plc/sorter.st, built in).
     #[arg(long = "program", value_name = "FILE.st", num_args = 1..)]
     program: Vec<PathBuf>,
     /// The PROGRAM to run when the files hold several.
@@ -146,7 +147,8 @@ fn run_sortings(args: RunArgs) -> anyhow::Result<ExitCode> {
     let program = if args.program.is_empty() {
         sorting::programs::reference_sorter()
     } else {
-        Program::load(&args.program, args.main.as_deref())
+        lab::program::read_files(&args.program)
+            .and_then(|files| sorting::programs::sorting_program(files, args.main.as_deref()))
     };
     let program = match program {
         Ok(program) => program,

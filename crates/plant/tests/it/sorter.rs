@@ -78,7 +78,7 @@ fn power_on_holds_the_balls_above_and_the_deflectors_where_the_seed_put_them() {
         .filter(|seed| sorter(*seed).deflector_extended(1) == Some(true))
         .count();
     assert!((1..16).contains(&extended), "{extended}");
-    assert_eq!(p.signals().len(), ACTUATORS.len() * 4 + 5 + 2);
+    assert_eq!(p.signals().len(), ACTUATORS.len() * 4 + 5 + 3);
 }
 
 #[test]

@@ -1,7 +1,6 @@
 //! The sorting lab on the simulated clock: the reference sorting program behind the
 //! supervisor, driving the mechanism (`sorting::rig`).
 
-use std::path::PathBuf;
 use std::time::Duration;
 
 use lab::program::Program;
@@ -9,16 +8,12 @@ use plant::sorter::{Place, SorterConfig};
 use plant::Plant;
 use sorting::rig::{Rig, RigSettings, SupervisorAction};
 
-fn plc_folder() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/sorting-lab/plc")
-}
-
 fn supervisor() -> Program {
-    Program::load(&[plc_folder().join("supervisor.st")], Some("Supervisor")).unwrap()
+    sorting::programs::supervisor().unwrap()
 }
 
 fn reference_sorter() -> Program {
-    Program::load(&[plc_folder().join("sorter.st")], None).unwrap()
+    sorting::programs::reference_sorter().unwrap()
 }
 
 fn rig(seed: u64) -> Rig {
@@ -55,15 +50,20 @@ fn the_reference_program_sorts_the_eight_balls_by_colour_without_a_single_refusa
     // round that finds the pan empty.
     let took = outcome.took.as_secs_f64();
     assert!((90.0..130.0).contains(&took), "{took} s");
-    assert_eq!(rig.memory("%MW208"), 8, "balls sorted");
-    assert_eq!(rig.memory("%MB205"), 0, "idle again");
+    assert_eq!(rig.value("Sorted"), 8.0, "balls sorted");
+    assert_eq!(
+        [1, 2, 3, 4].map(|k| rig.value(&format!("Shaft{k}"))),
+        [2.0; 4],
+        "balls counted per shaft"
+    );
+    assert_eq!(rig.value("StateOut"), 0.0, "idle again");
 
     // Another colour assignment: the next sorting starts without blowing (the balls
     // are in the shafts, so the program initialises again only when told).
-    rig.set_memory("%MX200.4", 1).unwrap();
+    rig.set("InitCmd", "TRUE").unwrap();
     let initialised = rig
         .run_until(Duration::from_secs(60), |rig| {
-            rig.plant().upper().len() == 8 && rig.memory("%MB205") == 0
+            rig.plant().upper().len() == 8 && rig.value("StateOut") == 0.0
         })
         .unwrap();
     assert!(initialised);

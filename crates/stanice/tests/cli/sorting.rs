@@ -13,7 +13,6 @@ VAR
     cS1 AT %QX0.0 : BOOL;
     cS4 AT %QX0.3 : BOOL;
     cS5 AT %QX0.4 : BOOL;
-    Automatic AT %MX200.0 : BOOL;
 END_VAR
     cS1 := Automatic;
     cS4 := Automatic;

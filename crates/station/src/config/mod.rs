@@ -75,7 +75,10 @@
 //! [[node.io]]                          # plant signal <-> PLC variable; the pseudo-signal
 //! signal = "RH2_P1_SA1_Dalkove"         # "module-fault:MODULE" is TRUE while that I/O
 //!                                      # module is pulled or unreachable
-//! variable = "RH2Logic.SA1_Dalkove"
+//! variable = "RH2Logic.SA1_Dalkove"    # or a direct address of the process image
+//!                                      # (`%IX0.4`, `%ID4`, `%QX1.2`) for a program that
+//!                                      # reads its I/O through `AT` variables; a REAL
+//!                                      # signal is rounded into an integer address
 //!
 //! [[node.point]]
 //! name = "RH2_V1_FA1_Zapnut"           # unique per node

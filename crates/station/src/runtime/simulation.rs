@@ -84,9 +84,46 @@ pub enum CommandRefusal {
     BadValue(String),
 }
 
+/// Where a bound signal goes in the PLC: a variable, or the process image at a direct
+/// address (`%IX0.4`, `%ID4`, `%QX1.2`), as a program written with `AT` addresses for a
+/// real PLC's I/O expects (the image is copied to its `AT` variables at the cycle's start).
+enum IoTarget {
+    Variable(Leaf),
+    Image(String),
+}
+
+impl IoTarget {
+    fn path(&self) -> &str {
+        match self {
+            IoTarget::Variable(leaf) => &leaf.path,
+            IoTarget::Image(address) => address,
+        }
+    }
+
+    fn write(&self, plc: &mut Plc, value: Value) {
+        match self {
+            IoTarget::Variable(leaf) => plc.write_leaf(leaf, to_val(&leaf.ty, value)),
+            IoTarget::Image(address) => {
+                let x = match value {
+                    Value::Bool(b) => i64::from(b),
+                    Value::Real(x) => x.round() as i64,
+                };
+                let _ = plc.set_io(address, x);
+            }
+        }
+    }
+
+    fn read(&self, plc: &Plc) -> Option<Val> {
+        match self {
+            IoTarget::Variable(leaf) => plc.read_leaf(leaf).ok(),
+            IoTarget::Image(address) => plc.get_io(address).ok().map(Val::Int),
+        }
+    }
+}
+
 struct InputBinding {
     signal: String,
-    leaf: Leaf,
+    target: IoTarget,
     valid: bool,
     /// `module-fault:MODULE`: TRUE while the module is unavailable.
     module_fault: Option<String>,
@@ -94,7 +131,7 @@ struct InputBinding {
 
 struct OutputBinding {
     signal: String,
-    leaf: Leaf,
+    target: IoTarget,
     kind: ValueKind,
     last: Option<Value>,
 }
@@ -473,14 +510,14 @@ impl SimNode {
                         .modules()
                         .iter()
                         .any(|m| &m.name == module && m.valid());
-                    plc.write_leaf(&input.leaf, Val::Int(i64::from(fault)));
+                    input.target.write(plc, Value::Bool(fault));
                     continue;
                 }
                 match plant.read(&input.signal) {
                     Ok(reading) => {
                         input.valid = reading.valid;
                         if reading.valid {
-                            plc.write_leaf(&input.leaf, to_val(&input.leaf.ty, reading.value));
+                            input.target.write(plc, reading.value);
                         }
                     }
                     Err(_) => input.valid = false,
@@ -568,7 +605,7 @@ impl SimNode {
         }
         if let Some(plant) = plant {
             for output in &mut self.outputs {
-                let Ok(v) = plc.read_leaf(&output.leaf) else {
+                let Some(v) = output.target.read(plc) else {
                     continue;
                 };
                 let value = match output.kind {
@@ -817,14 +854,20 @@ fn build_node(
                 binding.signal
             )));
         };
-        let target = leaf(&plc, &binding.variable, "I/O variable")?;
+        let target = if binding.variable.starts_with('%') {
+            plc.get_io(&binding.variable)
+                .map_err(|error| setup(format!("I/O address `{}`: {error}", binding.variable)))?;
+            IoTarget::Image(binding.variable.clone())
+        } else {
+            IoTarget::Variable(leaf(&plc, &binding.variable, "I/O variable")?)
+        };
         if let Some(module) = binding.signal.strip_prefix("module-fault:") {
             if !plant.modules().iter().any(|m| m.name == module) {
                 return Err(setup(format!("the plant has no I/O module `{module}`")));
             }
             sim.inputs.push(InputBinding {
                 signal: binding.signal.clone(),
-                leaf: target,
+                target,
                 valid: true,
                 module_fault: Some(module.to_owned()),
             });
@@ -838,17 +881,21 @@ fn build_node(
         match info.direction {
             Direction::Input => sim.inputs.push(InputBinding {
                 signal: binding.signal.clone(),
-                leaf: target,
+                target,
                 valid: true,
                 module_fault: None,
             }),
             Direction::Output => {
-                // goes to its safe value (FALSE / 0 or declared) when its task stops
-                plc.bind_output(&binding.variable)
-                    .map_err(|error| setup(format!("output `{}`: {error}", binding.variable)))?;
+                // goes to its safe value (FALSE / 0 or declared) when its task stops; an
+                // image address's AT variables are the program's outputs already
+                if let IoTarget::Variable(_) = target {
+                    plc.bind_output(&binding.variable).map_err(|error| {
+                        setup(format!("output `{}`: {error}", binding.variable))
+                    })?;
+                }
                 sim.outputs.push(OutputBinding {
                     signal: binding.signal.clone(),
-                    leaf: target,
+                    target,
                     kind: info.kind,
                     last: None,
                 });
@@ -865,7 +912,10 @@ fn build_node(
                 continue;
             };
             let target = leaf(&plc, path, &format!("point `{}` source", point.name))?;
-            let input = sim.inputs.iter().position(|i| i.leaf.path == target.path);
+            let input = sim
+                .inputs
+                .iter()
+                .position(|i| i.target.path() == target.path);
             let invalid_when = point
                 .invalid_when
                 .as_deref()

@@ -366,6 +366,18 @@ impl Ctx<'_> {
             }
         }
         for (i, io) in raw.io.iter().enumerate() {
+            if io.variable.starts_with('%') {
+                // a direct address of the process image (`%IX0.4`, `%ID4`, `%QX1.2`)
+                if let Err(error) = plc.get_io(&io.variable) {
+                    self.err(
+                        &[K("node"), I(n), K("io"), I(i), K("variable")],
+                        ConfigProblem::PlcVariable {
+                            detail: error.to_string(),
+                        },
+                    );
+                }
+                continue;
+            }
             named.push((vec![K("io"), I(i), K("variable")], &io.variable));
         }
         let groups = raw
