@@ -15,5 +15,6 @@ mod harness;
 mod hierarchy;
 mod lighting;
 mod power;
+mod sorting_lab;
 mod time;
 mod tls;

@@ -1,0 +1,137 @@
+//! The sorting lab as a station project (`examples/sorting-lab`): the sorting PLC and the
+//! supervisor as two nodes on the plant `sorter`, the DP exchange through the plant's
+//! wiring; an automatic sorting commanded over IEC 104 as the HMI does, the manual
+//! switches refused in automatic mode, and the supervisor's lock-out recorded as an
+//! event of the station.
+
+use std::time::Duration;
+
+use station::config::Project;
+use station::runtime::{Runtime, StoreChoice};
+use station::store::{EventQuery, PointValue};
+
+use crate::harness::*;
+
+/// The command IOAs of SORTER (station.toml).
+const SORT_AUTOMATIC: u32 = 2001;
+const SORT_START: u32 = 2002;
+const MAN_S1: u32 = 2013;
+
+fn project() -> Project {
+    let project = Project::load(&testkit::projects::example("sorting-lab"))
+        .unwrap_or_else(|errors| panic!("{errors}"));
+    project.with_port_base(free_port_range(2))
+}
+
+fn number(runtime: &Runtime, node: &str, point: &str) -> Option<f64> {
+    let point = runtime.node(node)?.points.point(point)?;
+    match point.value {
+        PointValue::Int(n) => Some(n as f64),
+        PointValue::Float(x) => Some(x),
+        PointValue::Bool(b) => Some(f64::from(u8::from(b))),
+        _ => None,
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_automatic_sorting_through_the_station_and_the_supervisor_stepping_in() {
+    let runtime = start(project(), StoreChoice::Url("sqlite::memory:".into())).await;
+    links_up(&runtime).await;
+    let sorter = runtime.node("SORTER").unwrap();
+    let address = sorter.server.as_ref().unwrap().local_addr();
+    let hmi = Dispatch::connect(address, 1, true).await;
+
+    // Manual mode at power-on: a manual switch is carried out...
+    assert!(
+        hmi.single_command(MAN_S1, true, false).await,
+        "MAN_S1 in manual mode"
+    );
+    assert!(hmi.single_command(MAN_S1, false, false).await);
+    // ... and refused once the mode is automatic (the station refuses it: remote_enable).
+    assert!(
+        hmi.single_command(SORT_AUTOMATIC, true, false).await,
+        "SORT_Automatic"
+    );
+    advance_until(
+        &runtime,
+        Duration::from_millis(100),
+        "automatic mode",
+        || number(&runtime, "SORTER", "SORT_Automatic") == Some(1.0),
+    )
+    .await;
+    assert!(
+        !hmi.single_command(MAN_S1, true, false).await,
+        "manual switching is refused in automatic mode"
+    );
+
+    // Start: initialisation (about 37 s), then eight balls, each in its colour's shaft.
+    assert!(
+        hmi.single_command(SORT_START, true, false).await,
+        "SORT_Start"
+    );
+    advance_until(&runtime, Duration::from_secs(1), "one sorting done", || {
+        number(&runtime, "SORTER", "SORT_Sortings") == Some(1.0)
+    })
+    .await;
+    for k in 1..=4 {
+        assert_eq!(
+            number(&runtime, "SORTER", &format!("SORT_Shaft{k}")),
+            Some(2.0),
+            "shaft {k}"
+        );
+    }
+    let plant_shafts = runtime
+        .with_simulation(|sim| {
+            let plant = sim
+                .plant()
+                .unwrap()
+                .as_any()
+                .downcast_ref::<plant::sorter::SorterPlant>()
+                .unwrap();
+            (1..=4).map(|k| plant.shaft(k).len()).collect::<Vec<_>>()
+        })
+        .await
+        .unwrap();
+    assert_eq!(plant_shafts, vec![2, 2, 2, 2]);
+    // The supervisor republished through SORTER (IOA + 1000) and never stepped in.
+    assert_eq!(number(&runtime, "SORTER", "SUP_S1_State"), Some(0.0));
+
+    // Manual mode again: S1 held on for 3 s is cut off at its MaxOnTime, an event of
+    // the station naming the actuator and the rule.
+    assert!(hmi.single_command(SORT_AUTOMATIC, false, false).await);
+    advance_until(&runtime, Duration::from_millis(100), "manual mode", || {
+        number(&runtime, "SORTER", "SORT_Automatic") == Some(0.0)
+    })
+    .await;
+    assert!(hmi.single_command(MAN_S1, true, false).await, "MAN_S1 on");
+    advance_until(
+        &runtime,
+        Duration::from_millis(500),
+        "S1 in PENALTY",
+        || number(&runtime, "SUPERVISOR", "SUP_S1_State") == Some(3.0),
+    )
+    .await;
+    runtime.recorder().flush().await;
+    let events = runtime
+        .store()
+        .unwrap()
+        .query_events(&EventQuery::default().with_point("SUP_S1_LockedOut".to_owned()))
+        .await
+        .unwrap()
+        .items;
+    assert!(
+        events.iter().any(|e| e.value == PointValue::Bool(true)),
+        "{events:?}"
+    );
+    let description = runtime
+        .node("SUPERVISOR")
+        .unwrap()
+        .points
+        .point("SUP_S1_LockedOut")
+        .unwrap()
+        .spec
+        .description
+        .clone();
+    assert!(description.contains("MaxOnTime"), "{description}");
+    runtime.shutdown().await;
+}
