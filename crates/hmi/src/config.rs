@@ -67,6 +67,11 @@ pub struct AuthorityConfig {
     /// The state the point has while the authority is with this HMI (default TRUE).
     #[serde(default = "yes")]
     pub state: bool,
+    /// The refusal's words when the point does not have the state (default: the control
+    /// authority is not with this HMI), e.g. "manual switching is refused in automatic
+    /// mode".
+    #[serde(default)]
+    pub reason: Option<String>,
 }
 
 /// An alarm on a single point.
@@ -179,6 +184,10 @@ struct RawConfig {
     lift: Vec<LiftConfig>,
     #[serde(default)]
     lift_levels: LiftLevels,
+    #[serde(default)]
+    lease: Option<crate::lease::LeaseConfig>,
+    #[serde(default)]
+    camera: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -220,6 +229,11 @@ pub struct HmiConfig {
     pub lifts: Vec<LiftConfig>,
     /// The levels of the lift screens' elements.
     pub lift_levels: LiftLevels,
+    /// The operator lease (`[lease]`): one controlling user at a time.
+    pub lease: Option<crate::lease::LeaseConfig>,
+    /// A camera's picture or stream (`camera = "http://..."`, an MJPEG stream or a
+    /// still), shown beside the screens.
+    pub camera: Option<String>,
 }
 
 impl HmiConfig {
@@ -263,6 +277,8 @@ impl HmiConfig {
             points,
             lifts: raw.lift,
             lift_levels: raw.lift_levels,
+            lease: raw.lease,
+            camera: raw.camera,
         };
         config.check(&text)?;
         Ok(config)
@@ -418,7 +434,26 @@ impl HmiConfig {
                 ));
             }
         }
+        if let Some(camera) = &self.camera {
+            if camera_origin(camera).is_none() {
+                let line = text
+                    .lines()
+                    .position(|l| l.trim_start().starts_with("camera"))
+                    .map_or(0, |index| index + 1);
+                let column = 1;
+                return Err(HmiError::Config(format!(
+                    "{}:{line}:{column}: camera {camera:?} is no http:// or https:// URL",
+                    file.display()
+                )));
+            }
+        }
         Ok(())
+    }
+
+    /// The origin of the camera's URL (`http://host:port`), for the Content-Security-
+    /// Policy that lets the page show it.
+    pub fn camera_origin(&self) -> Option<String> {
+        self.camera.as_deref().and_then(camera_origin)
     }
 
     /// The control settings of a command (the defaults when it is not listed).
@@ -601,4 +636,19 @@ mod tests {
             "Local".to_owned()
         );
     }
+}
+
+/// `scheme://host[:port]` of an http(s) URL whose host is plain (letters, digits, `.`, `-`,
+/// `:` and brackets for IPv6): nothing that could end a CSP source or a header.
+pub fn camera_origin(url: &str) -> Option<String> {
+    let (scheme, rest) = url.split_once("://")?;
+    if scheme != "http" && scheme != "https" {
+        return None;
+    }
+    let host = rest.split(['/', '?', '#']).next().unwrap_or("");
+    let plain = |c: char| c.is_ascii_alphanumeric() || matches!(c, '.' | '-' | ':' | '[' | ']');
+    if host.is_empty() || !host.chars().all(plain) || url.chars().any(|c| c.is_whitespace() || c == '"' || c == '\'') {
+        return None;
+    }
+    Some(format!("{scheme}://{host}"))
 }

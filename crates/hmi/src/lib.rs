@@ -50,6 +50,7 @@
 pub mod alarms;
 pub mod auth;
 pub mod config;
+pub mod lease;
 pub mod link;
 pub mod live;
 pub mod tls;
@@ -198,6 +199,13 @@ impl Hmi {
     pub async fn start_with(options: HmiOptions, serve: ServeConfig) -> Result<Hmi, HmiError> {
         let config = config::HmiConfig::load(&options.screens)?;
         let local_address = config.local_address;
+        let lease = match &config.lease {
+            Some(lease) => Some(Arc::new(std::sync::Mutex::new(
+                lease::LeaseDesk::open(lease.clone(), Some(&config.folder.join("bookings.json")))
+                    .map_err(HmiError::Config)?,
+            ))),
+            None => None,
+        };
         let tls_config = match &serve.tls {
             Some(files) => Some(files.server_config()?),
             None => None,
@@ -235,6 +243,7 @@ impl Hmi {
             archive,
             audit_node: format!("CA{}", options.common_address.get()),
             secure_cookies: tls_config.is_some(),
+            lease,
         };
         let listener = tokio::net::TcpListener::bind(options.listen)
             .await

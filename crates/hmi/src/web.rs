@@ -25,6 +25,7 @@ mod alarms;
 pub mod error;
 mod events;
 pub mod extract;
+mod lease;
 mod lifts;
 mod live;
 mod pages;
@@ -83,6 +84,8 @@ pub struct AppState {
     pub audit_node: String,
     /// Cookies only over HTTPS (the HMI serves TLS itself).
     pub secure_cookies: bool,
+    /// The operator lease, when the screens folder has `[lease]`.
+    pub lease: Option<Arc<std::sync::Mutex<crate::lease::LeaseDesk>>>,
 }
 
 impl AppState {
@@ -94,6 +97,7 @@ impl AppState {
 
 /// The router: every area's routes, the 404 fallback, and the layers.
 pub fn router(state: AppState) -> Router {
+    let camera = state.station.config().camera_origin();
     Router::new()
         .merge(session::routes())
         .merge(pages::routes())
@@ -101,6 +105,8 @@ pub fn router(state: AppState) -> Router {
         .merge(events::routes())
         .merge(alarms::routes())
         .merge(trends::routes())
+        .merge(lease::routes())
+        .merge(pages::public_routes())
         .merge(lifts::routes())
         .merge(live::routes())
         .fallback(not_found)
@@ -108,7 +114,9 @@ pub fn router(state: AppState) -> Router {
         // the handlers. Outer: `harden` sees every response, the fallback's, the
         // extractors' rejections and refused WebSocket upgrades included.
         .layer(DefaultBodyLimit::max(MAX_BODY))
-        .layer(axum::middleware::map_response(harden))
+        .layer(axum::middleware::map_response(move |response| {
+            harden_with(response, camera.clone())
+        }))
         .with_state(state)
 }
 
@@ -119,6 +127,11 @@ async fn not_found() -> AppError {
 /// The security headers of every response, and a JSON body for every error that has
 /// none (axum's own rejections, such as 405, are plain text).
 pub async fn harden(response: Response) -> Response {
+    harden_with(response, None).await
+}
+
+/// [`harden`], letting pictures come from `camera` (an origin, `http://host:port`) too.
+async fn harden_with(response: Response, camera: Option<String>) -> Response {
     let status = response.status();
     let json = response
         .headers()
@@ -145,10 +158,16 @@ pub async fn harden(response: Response) -> Response {
         header::X_CONTENT_TYPE_OPTIONS,
         HeaderValue::from_static("nosniff"),
     );
-    headers.insert(
-        header::CONTENT_SECURITY_POLICY,
-        HeaderValue::from_static(CSP),
-    );
+    let csp = match camera.as_deref() {
+        // The origin was checked to hold only host characters (config::camera_origin).
+        Some(origin) => HeaderValue::from_str(&CSP.replace(
+            "img-src 'self' data:",
+            &format!("img-src 'self' data: {origin}"),
+        ))
+        .unwrap_or(HeaderValue::from_static(CSP)),
+        None => HeaderValue::from_static(CSP),
+    };
+    headers.insert(header::CONTENT_SECURITY_POLICY, csp);
     headers.insert(header::X_FRAME_OPTIONS, HeaderValue::from_static("DENY"));
     headers.insert(
         header::REFERRER_POLICY,

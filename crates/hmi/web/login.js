@@ -76,3 +76,12 @@
     }
   });
 })();
+
+// The public information pages, when the screens folder has them.
+document.addEventListener("DOMContentLoaded", () => {
+  fetch("/public/", { method: "HEAD", credentials: "same-origin" })
+    .then((response) => {
+      if (response.ok) document.getElementById("public").hidden = false;
+    })
+    .catch(() => {});
+});

@@ -41,6 +41,14 @@ pub enum AppError {
     /// not with this HMI (the detail says where it is).
     #[error("{0}")]
     NoAuthority(String),
+    /// The operator lease's refusal: 403 for a level too low, 404 for an unknown
+    /// booking, 500 when the bookings cannot be saved, else 409 (held, booked, not
+    /// holding it, a bad booking).
+    #[error("{0}")]
+    Lease(#[from] crate::lease::LeaseRefusal),
+    /// 404: the screens folder has no `[lease]`.
+    #[error("this HMI has no operator lease (no [lease] in hmi.toml)")]
+    NoLease,
     /// 403: the user's level is below the level of a lift screen element
     /// (`[lift_levels]` of hmi.toml).
     #[error("the {element} needs level {needed}, user has {has}")]
@@ -147,6 +155,18 @@ impl AppError {
             | AppError::LevelTooLow { .. }
             | AppError::ElementLevel { .. } => StatusCode::FORBIDDEN,
             AppError::NoAuthority(_) => StatusCode::CONFLICT,
+            AppError::Lease(refusal) => {
+                use crate::lease::LeaseRefusal as R;
+                match refusal {
+                    R::Level { .. } | R::NotAdmin { .. } => StatusCode::FORBIDDEN,
+                    R::NoBooking(_) => StatusCode::NOT_FOUND,
+                    R::Save(_) => StatusCode::INTERNAL_SERVER_ERROR,
+                    R::Held { .. } | R::Booked { .. } | R::NotHolder | R::BadBooking(_) => {
+                        StatusCode::CONFLICT
+                    }
+                }
+            }
+            AppError::NoLease => StatusCode::NOT_FOUND,
             AppError::NotFound
             | AppError::NoScreen(_)
             | AppError::NoCommand(_)

@@ -56,6 +56,53 @@ async fn static_file(Path(name): Path<String>) -> Result<Response, AppError> {
     file(&name)
 }
 
+/// The public information pages: the screens folder's `public/`, served to anyone, apart
+/// from the authenticated HMI (the sorting-lab thesis, section 11: anonymous pages lived
+/// on another server so as not to weaken the HMI's).
+pub(super) fn public_routes() -> Router<AppState> {
+    Router::new()
+        .route("/public", get(|| async { Redirect::permanent("/public/") }))
+        .route("/public/", get(public_index))
+        .route("/public/{file}", get(public_file))
+}
+
+async fn public_index(State(state): State<AppState>) -> Result<Response, AppError> {
+    public_file(State(state), Path("index.html".to_owned())).await
+}
+
+async fn public_file(
+    State(state): State<AppState>,
+    Path(name): Path<String>,
+) -> Result<Response, AppError> {
+    // One plain file name of a known kind: no directories, no hidden files.
+    let mime = match name.rsplit_once('.').map(|(_, ext)| ext.to_ascii_lowercase()) {
+        Some(ext) if ext == "html" => "text/html; charset=utf-8",
+        Some(ext) if ext == "css" => "text/css; charset=utf-8",
+        Some(ext) if ext == "txt" => "text/plain; charset=utf-8",
+        Some(ext) if ext == "png" => "image/png",
+        Some(ext) if ext == "jpg" || ext == "jpeg" => "image/jpeg",
+        Some(ext) if ext == "svg" => "image/svg+xml",
+        _ => return Err(AppError::NotFound),
+    };
+    let plain = !name.starts_with('.')
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '.' | '-' | '_'));
+    if !plain {
+        return Err(AppError::NotFound);
+    }
+    let path = state.station.config().folder.join("public").join(&name);
+    let bytes = tokio::fs::read(&path).await.map_err(|_| AppError::NotFound)?;
+    Ok((
+        [
+            (header::CONTENT_TYPE, HeaderValue::from_static(mime)),
+            (header::CACHE_CONTROL, HeaderValue::from_static("no-cache")),
+        ],
+        bytes,
+    )
+        .into_response())
+}
+
 async fn screens(State(state): State<AppState>, _: LoggedIn) -> Json<Value> {
     let list: Vec<Value> = state
         .station

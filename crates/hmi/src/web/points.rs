@@ -107,11 +107,36 @@ async fn command(
                 Some(p) if !p.invalid => p.value.to_string(),
                 _ => "unknown (invalid)".to_owned(),
             };
-            let detail = format!(
-                "the control authority is not with this HMI ({} is {now}, {} needed)",
-                authority.point, authority.state
-            );
+            let detail = match &authority.reason {
+                Some(reason) => format!("{reason} ({} is {now})", authority.point),
+                None => format!(
+                    "the control authority is not with this HMI ({} is {now}, {} needed)",
+                    authority.point, authority.state
+                ),
+            };
             tracing::warn!(%peer, user = %LogText(user), command = %row.name, "control refused: no control authority");
+            state.station.audit(
+                user,
+                &row.name,
+                row.ioa,
+                value,
+                ControlOutcome::RefusedAuthority,
+                &detail,
+            );
+            state.station.recorder().flush().await;
+            return Err(AppError::NoAuthority(detail));
+        }
+    }
+    // A lab with an operator lease: only its holder controls (the control renews it).
+    if let Some(desk) = &state.lease {
+        let refused = desk
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .control(user, Utc::now())
+            .err();
+        if let Some(refused) = refused {
+            let detail = format!("operator lease: {refused}");
+            tracing::warn!(%peer, user = %LogText(user), command = %row.name, "control refused: no operator lease");
             state.station.audit(
                 user,
                 &row.name,

@@ -128,5 +128,8 @@ async fn session_info(State(state): State<AppState>, user: LoggedIn) -> Json<Val
         "level": user.session.level,
         "csrf": user.session.csrf,
         "title": state.station.config().title,
+        "camera": state.station.config().camera,
+        "lease": state.lease.is_some(),
+        "public": state.station.config().folder.join("public").join("index.html").exists(),
     }))
 }
