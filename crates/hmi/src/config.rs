@@ -591,9 +591,51 @@ fn locate_key(text: &str, header: &str, key: &str) -> (usize, usize) {
     (1, 1)
 }
 
+/// `scheme://host[:port]` of an http(s) URL whose host is plain (letters, digits, `.`, `-`,
+/// `:` and brackets for IPv6): nothing that could end a CSP source or a header.
+pub fn camera_origin(url: &str) -> Option<String> {
+    let (scheme, rest) = url.split_once("://")?;
+    if scheme != "http" && scheme != "https" {
+        return None;
+    }
+    let host = rest.split(['/', '?', '#']).next().unwrap_or("");
+    let plain = |c: char| c.is_ascii_alphanumeric() || matches!(c, '.' | '-' | ':' | '[' | ']');
+    if host.is_empty()
+        || !host.chars().all(plain)
+        || url
+            .chars()
+            .any(|c| c.is_whitespace() || c == '"' || c == '\'')
+    {
+        return None;
+    }
+    Some(format!("{scheme}://{host}"))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_camera_url_gives_its_origin_and_nothing_that_could_break_a_header() {
+        assert_eq!(
+            camera_origin("http://192.0.2.20/mjpg/video.mjpg").as_deref(),
+            Some("http://192.0.2.20")
+        );
+        assert_eq!(
+            camera_origin("https://cam.lab.example:8443/still.jpg?size=640").as_deref(),
+            Some("https://cam.lab.example:8443")
+        );
+        for bad in [
+            "javascript:alert(1)",
+            "ftp://cam/x",
+            "http://",
+            "http://cam; script-src *",
+            "http://cam/x y",
+            "http://ca'm/",
+        ] {
+            assert_eq!(camera_origin(bad), None, "{bad}");
+        }
+    }
 
     fn folder(toml: &str) -> tempfile::TempDir {
         let dir = tempfile::tempdir().unwrap();
@@ -636,19 +678,4 @@ mod tests {
             "Local".to_owned()
         );
     }
-}
-
-/// `scheme://host[:port]` of an http(s) URL whose host is plain (letters, digits, `.`, `-`,
-/// `:` and brackets for IPv6): nothing that could end a CSP source or a header.
-pub fn camera_origin(url: &str) -> Option<String> {
-    let (scheme, rest) = url.split_once("://")?;
-    if scheme != "http" && scheme != "https" {
-        return None;
-    }
-    let host = rest.split(['/', '?', '#']).next().unwrap_or("");
-    let plain = |c: char| c.is_ascii_alphanumeric() || matches!(c, '.' | '-' | ':' | '[' | ']');
-    if host.is_empty() || !host.chars().all(plain) || url.chars().any(|c| c.is_whitespace() || c == '"' || c == '\'') {
-        return None;
-    }
-    Some(format!("{scheme}://{host}"))
 }

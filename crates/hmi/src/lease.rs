@@ -101,7 +101,8 @@ pub struct Lease {
 impl Lease {
     /// The instant it ends (the earlier of its end and its idle limit).
     pub fn until(&self) -> DateTime<Utc> {
-        self.ends.map_or(self.idle_until, |e| e.min(self.idle_until))
+        self.ends
+            .map_or(self.idle_until, |e| e.min(self.idle_until))
     }
 }
 
@@ -246,14 +247,24 @@ impl LeaseDesk {
             can_revoke: level >= self.config.admin_level && self.lease.is_some(),
             lease: self.lease.clone(),
             current_booking: current,
-            bookings: self.bookings.iter().filter(|b| b.end > now).cloned().collect(),
+            bookings: self
+                .bookings
+                .iter()
+                .filter(|b| b.end > now)
+                .cloned()
+                .collect(),
             slot_minutes: self.config.slot_minutes,
             max_slots: self.config.max_slots,
         }
     }
 
     /// `user` takes the lease at `now`.
-    pub fn take(&mut self, user: &str, level: u8, now: DateTime<Utc>) -> Result<Lease, LeaseRefusal> {
+    pub fn take(
+        &mut self,
+        user: &str,
+        level: u8,
+        now: DateTime<Utc>,
+    ) -> Result<Lease, LeaseRefusal> {
         self.expire(now);
         if level < self.config.level {
             return Err(LeaseRefusal::Level {
@@ -325,7 +336,11 @@ impl LeaseDesk {
     }
 
     /// An administrator ends the lease; whose it was.
-    pub fn revoke(&mut self, level: u8, now: DateTime<Utc>) -> Result<Option<String>, LeaseRefusal> {
+    pub fn revoke(
+        &mut self,
+        level: u8,
+        now: DateTime<Utc>,
+    ) -> Result<Option<String>, LeaseRefusal> {
         if level < self.config.admin_level {
             return Err(LeaseRefusal::NotAdmin {
                 needed: self.config.admin_level,
@@ -360,7 +375,9 @@ impl LeaseDesk {
             )));
         }
         if end <= start {
-            return Err(LeaseRefusal::BadBooking("a booking ends after it starts".into()));
+            return Err(LeaseRefusal::BadBooking(
+                "a booking ends after it starts".into(),
+            ));
         }
         if end <= now {
             return Err(LeaseRefusal::BadBooking("that time is over".into()));
@@ -439,8 +456,8 @@ mod tests {
     use super::*;
 
     fn at(minutes: i64) -> DateTime<Utc> {
-        DateTime::from_timestamp(1_800_000_000 - 1_800_000_000 % 1800, 0).unwrap()
-            + Duration::minutes(minutes)
+        // a whole half hour (1_800_000_000 is a multiple of 1800)
+        DateTime::from_timestamp(1_800_000_000, 0).unwrap() + Duration::minutes(minutes)
     }
 
     fn desk() -> LeaseDesk {
@@ -456,7 +473,10 @@ mod tests {
         ));
         desk.take("alice", 5, at(0)).unwrap();
         let refused = desk.take("bob", 5, at(1)).unwrap_err();
-        assert!(refused.to_string().contains("controlled by alice"), "{refused}");
+        assert!(
+            refused.to_string().contains("controlled by alice"),
+            "{refused}"
+        );
         assert!(desk.control("bob", at(1)).is_err());
         desk.control("alice", at(1)).unwrap();
         assert_eq!(desk.release("bob", at(2)), Err(LeaseRefusal::NotHolder));
@@ -485,7 +505,10 @@ mod tests {
         assert!(desk.book("alice", 5, at(30), at(30 + 150), at(0)).is_err());
         let booking = desk.book("alice", 5, at(30), at(90), at(0)).unwrap();
         let overlap = desk.book("bob", 5, at(60), at(120), at(0)).unwrap_err();
-        assert!(overlap.to_string().contains("alice has booked"), "{overlap}");
+        assert!(
+            overlap.to_string().contains("alice has booked"),
+            "{overlap}"
+        );
         assert!(desk.book("watcher", 1, at(120), at(150), at(0)).is_err());
         // Bob may control before alice's slot; his lease ends where it starts.
         let lease = desk.take("bob", 5, at(5)).unwrap();

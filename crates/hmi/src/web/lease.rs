@@ -65,7 +65,9 @@ async fn take(
     let desk = desk(&state)?;
     let taken = lock(desk).take(writer.user(), writer.0.session.level, Utc::now());
     match taken {
-        Ok(_) => tracing::info!(peer = %writer.peer(), user = %LogText(writer.user()), "operator lease taken"),
+        Ok(_) => {
+            tracing::info!(peer = %writer.peer(), user = %LogText(writer.user()), "operator lease taken")
+        }
         Err(refused) => {
             tracing::warn!(peer = %writer.peer(), user = %LogText(writer.user()), %refused, "operator lease refused");
             return Err(refused.into());

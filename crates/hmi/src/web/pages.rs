@@ -75,7 +75,10 @@ async fn public_file(
     Path(name): Path<String>,
 ) -> Result<Response, AppError> {
     // One plain file name of a known kind: no directories, no hidden files.
-    let mime = match name.rsplit_once('.').map(|(_, ext)| ext.to_ascii_lowercase()) {
+    let mime = match name
+        .rsplit_once('.')
+        .map(|(_, ext)| ext.to_ascii_lowercase())
+    {
         Some(ext) if ext == "html" => "text/html; charset=utf-8",
         Some(ext) if ext == "css" => "text/css; charset=utf-8",
         Some(ext) if ext == "txt" => "text/plain; charset=utf-8",
@@ -92,7 +95,9 @@ async fn public_file(
         return Err(AppError::NotFound);
     }
     let path = state.station.config().folder.join("public").join(&name);
-    let bytes = tokio::fs::read(&path).await.map_err(|_| AppError::NotFound)?;
+    let bytes = tokio::fs::read(&path)
+        .await
+        .map_err(|_| AppError::NotFound)?;
     Ok((
         [
             (header::CONTENT_TYPE, HeaderValue::from_static(mime)),
