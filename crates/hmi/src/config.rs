@@ -188,6 +188,8 @@ struct RawConfig {
     lease: Option<crate::lease::LeaseConfig>,
     #[serde(default)]
     camera: Option<String>,
+    #[serde(default)]
+    program: Option<crate::trial::ProgramConfig>,
 }
 
 #[derive(Deserialize)]
@@ -234,6 +236,8 @@ pub struct HmiConfig {
     /// A camera's picture or stream (`camera = "http://..."`, an MJPEG stream or a
     /// still), shown beside the screens.
     pub camera: Option<String>,
+    /// Students' programs tried from the browser (`[program]`).
+    pub program: Option<crate::trial::ProgramConfig>,
 }
 
 impl HmiConfig {
@@ -279,6 +283,7 @@ impl HmiConfig {
             lift_levels: raw.lift_levels,
             lease: raw.lease,
             camera: raw.camera,
+            program: raw.program,
         };
         config.check(&text)?;
         Ok(config)

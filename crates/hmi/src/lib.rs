@@ -54,6 +54,7 @@ pub mod lease;
 pub mod link;
 pub mod live;
 pub mod tls;
+pub mod trial;
 pub mod users;
 pub mod web;
 
@@ -129,6 +130,9 @@ pub struct ServeConfig {
     /// How often the users file is checked for changes (`stanice user remove`,
     /// `passwd`): a removed or changed user's sessions end.
     pub users_poll: Duration,
+    /// The program trial of a remote lab, for a folder with `[program]` (the application
+    /// picks it by the folder's `trial` name).
+    pub trial: Option<std::sync::Arc<dyn trial::ProgramTrial>>,
 }
 
 impl Default for ServeConfig {
@@ -137,6 +141,7 @@ impl Default for ServeConfig {
             tls: None,
             session_idle: auth::SESSION_IDLE,
             users_poll: Duration::from_secs(1),
+            trial: None,
         }
     }
 }
@@ -244,6 +249,8 @@ impl Hmi {
             audit_node: format!("CA{}", options.common_address.get()),
             secure_cookies: tls_config.is_some(),
             lease,
+            trial: serve.trial.clone(),
+            trial_running: Arc::new(tokio::sync::Semaphore::new(1)),
         };
         let listener = tokio::net::TcpListener::bind(options.listen)
             .await

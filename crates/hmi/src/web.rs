@@ -30,6 +30,7 @@ mod lifts;
 mod live;
 mod pages;
 mod points;
+mod program;
 mod session;
 mod trends;
 
@@ -86,6 +87,10 @@ pub struct AppState {
     pub secure_cookies: bool,
     /// The operator lease, when the screens folder has `[lease]`.
     pub lease: Option<Arc<std::sync::Mutex<crate::lease::LeaseDesk>>>,
+    /// The program trial, when the folder has `[program]` and the application gave one.
+    pub trial: Option<Arc<dyn crate::trial::ProgramTrial>>,
+    /// One trial runs at a time.
+    pub trial_running: Arc<tokio::sync::Semaphore>,
 }
 
 impl AppState {
@@ -106,6 +111,7 @@ pub fn router(state: AppState) -> Router {
         .merge(alarms::routes())
         .merge(trends::routes())
         .merge(lease::routes())
+        .merge(program::routes())
         .merge(pages::public_routes())
         .merge(lifts::routes())
         .merge(live::routes())

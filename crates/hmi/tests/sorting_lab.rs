@@ -4,7 +4,9 @@
 //! and cannot take control; an operator takes the lease, switches to automatic, starts
 //! the sorting and sees the balls counted into the shafts; a second operator is refused
 //! while the lease is held and takes it once it is released; manual switching is refused
-//! in automatic mode; when the PLC link is cut every element blinks.
+//! in automatic mode; the student tries a program on the Program page (its compile
+//! errors shown file:line:col, the supervisor's lock-out in the trial's report); when the
+//! PLC link is cut every element blinks.
 //!
 //! Chromium and chromedriver come from `scripts/install-test-deps.sh`; without them the
 //! test says SKIPPED and passes, unless `STANICE_REQUIRE_PEERS=1` (CI).
@@ -24,13 +26,61 @@ use chromium::{browser_available, click, js, until, Driver};
 use std::net::SocketAddr;
 
 use fantoccini::{Client, Locator};
-use hmi::{Hmi, HmiOptions};
+use hmi::trial::{CheckReport, ProgramTrial, SourceFile};
+use hmi::{Hmi, HmiOptions, ServeConfig};
 use iec60870::time::TimeZonePolicy;
 use serde_json::json;
 use station::config::Project;
 use station::runtime::{Pacing, Runtime, RuntimeOptions, StoreChoice};
 use testkit::ports::free_port_range;
 use testkit::projects::{copy_project, example};
+
+/// The sorting lab's trial behind the HMI's trait, as the `stanice` binary gives it.
+#[derive(Debug)]
+struct SortingTrial;
+
+impl ProgramTrial for SortingTrial {
+    fn check(&self, files: &[SourceFile]) -> CheckReport {
+        let files = files
+            .iter()
+            .map(|f| (f.name.clone(), f.text.clone()))
+            .collect();
+        match sorting::trial::compile(files, None) {
+            Ok(program) => CheckReport {
+                ok: true,
+                diagnostics: program.warnings.clone(),
+                main: Some(program.main),
+            },
+            Err(lab::program::ProgramError::Compile(diagnostics)) => CheckReport {
+                ok: false,
+                diagnostics,
+                main: None,
+            },
+            Err(other) => CheckReport {
+                ok: false,
+                diagnostics: vec![other.to_string()],
+                main: None,
+            },
+        }
+    }
+
+    fn run(&self, files: &[SourceFile], seed: u64) -> Result<serde_json::Value, String> {
+        let files = files
+            .iter()
+            .map(|f| (f.name.clone(), f.text.clone()))
+            .collect();
+        let program = sorting::trial::compile(files, None).map_err(|e| e.to_string())?;
+        let report = sorting::trial::Trial {
+            seed,
+            ..sorting::trial::Trial::default()
+        }
+        .run(program)
+        .map_err(|e| e.to_string())?;
+        let mut json = serde_json::to_value(&report).map_err(|e| e.to_string())?;
+        json["text"] = serde_json::Value::String(report.text());
+        Ok(json)
+    }
+}
 
 /// The lab (both PLCs, the mechanism) and its HMI, on free ports, the screens folder
 /// copied so that the bookings file lands in a temporary folder.
@@ -68,17 +118,22 @@ impl Lab {
             .unwrap()
             .local_addr();
         let screens = project_folder.join("hmi");
-        let hmi = Hmi::start(HmiOptions {
-            users: screens.join("users.toml"),
-            screens,
-            connect: vec![server.to_string()],
-            common_address: top.common_address,
-            listen: SocketAddr::from(([127, 0, 0, 1], 0)),
-            store: Some("sqlite::memory:".into()),
-            zone: TimeZonePolicy::Zone(zone),
-            local_address: None,
-            archive: None,
-        })
+        let mut serve = ServeConfig::default();
+        serve.trial = Some(std::sync::Arc::new(SortingTrial));
+        let hmi = Hmi::start_with(
+            HmiOptions {
+                users: screens.join("users.toml"),
+                screens,
+                connect: vec![server.to_string()],
+                common_address: top.common_address,
+                listen: SocketAddr::from(([127, 0, 0, 1], 0)),
+                store: Some("sqlite::memory:".into()),
+                zone: TimeZonePolicy::Zone(zone),
+                local_address: None,
+                archive: None,
+            },
+            serve,
+        )
         .await
         .unwrap();
         let url = format!("http://{}", hmi.address);
@@ -202,6 +257,31 @@ async fn post(client: &Client, path: &str, body: &str) -> serde_json::Value {
         )
         .await
         .unwrap()
+}
+
+/// Types a program into the Program page's text box.
+async fn type_program(client: &Client, name: &str, text: &str) {
+    client
+        .execute(
+            "document.getElementById('program-name').value = arguments[0]; \
+             document.getElementById('program-text').value = arguments[1];",
+            vec![json!(name), json!(text)],
+        )
+        .await
+        .unwrap();
+}
+
+async fn show_lab(client: &Client) {
+    client
+        .execute("location.hash = '#screen/lab';", Vec::new())
+        .await
+        .unwrap();
+    until(
+        client,
+        "document.querySelector('#mimic svg[data-screen=\"lab\"]')",
+        "the lab's mimic",
+    )
+    .await;
 }
 
 fn text(point: &str) -> String {
@@ -369,6 +449,49 @@ async fn observer_operator_lease_automatic_sorting_and_link_loss() {
         "the student holds the lease",
     )
     .await;
+
+    // --- The student tries a program on the Program page: one that does not compile is
+    // shown with its file:line:col; a careless one sorts nothing and meets the supervisor.
+    student
+        .execute("location.hash = '#program';", Vec::new())
+        .await
+        .unwrap();
+    until(
+        &student,
+        "document.body.dataset.current === 'program' && !document.getElementById('nav-program').hidden",
+        "the Program page",
+    )
+    .await;
+    let typed = "PROGRAM Broken\nVAR x : INT; END_VAR\nx := y;\nEND_PROGRAM\n";
+    type_program(&student, "broken.st", typed).await;
+    click(&student, "#program-check").await;
+    until(
+        &student,
+        "document.getElementById('program-verdict').dataset.verdict === 'refused' && document.getElementById('program-diagnostics').textContent.includes('broken.st:3:')",
+        "the compiler's diagnostics, file:line:col",
+    )
+    .await;
+    let careless = "PROGRAM Careless\nVAR\n    cS1 AT %QX0.0 : BOOL;\n    t : TON;\nEND_VAR\n    t(IN := TRUE, PT := T#1H);\n    cS1 := t.ET < T#5S;\nEND_PROGRAM\n";
+    type_program(&student, "careless.st", careless).await;
+    click(&student, "#program-run").await;
+    until(
+        &student,
+        "document.getElementById('program-verdict').dataset.verdict === 'failed'",
+        "the trial's verdict",
+    )
+    .await;
+    let report = js(
+        &student,
+        "document.getElementById('program-report').textContent",
+    )
+    .await;
+    let report = report.as_str().unwrap();
+    assert!(
+        report.contains("supervisor: S1 locked out: on longer than MaxOnTime"),
+        "{report}"
+    );
+    assert!(report.contains("NOT finished"), "{report}");
+    show_lab(&student).await;
 
     // --- The PLC link is cut: every element of the mimic blinks.
     lab.hmi().station.set_link(false);

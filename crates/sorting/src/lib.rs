@@ -14,6 +14,8 @@
 //! - [`rig`]: the sorting PLC (10-ms scans) behind the supervisor (30-ms scans, sampling
 //!   its commands) driving the mechanism; the supervisor's refusals and lock-outs as
 //!   events; automatic sortings and their reliability over seeded mechanisms.
+//! - [`trial`]: a student's program tried behind the supervisor: the report of
+//!   `stanice sorting run` and of the web HMI's Program page.
 //! - [`reliability`]: seeded sortings of the eight balls on the simulated balance, a
 //!   confusion matrix per colour.
 //! - [`statistics`]: from weighings to class limits (the sorting-lab thesis,
@@ -55,3 +57,4 @@ pub mod programs;
 pub mod reliability;
 pub mod rig;
 pub mod statistics;
+pub mod trial;

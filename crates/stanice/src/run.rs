@@ -276,6 +276,10 @@ async fn start_hmi(
     };
     let mut serve = hmi::ServeConfig::default();
     serve.tls = plan.tls.clone();
+    serve.trial = match crate::sorting::trial_for(&screens) {
+        Ok(trial) => trial,
+        Err(error) => return not_started(format!("{error:#}")),
+    };
     let scheme = if serve.tls.is_some() { "https" } else { "http" };
     let started = hmi::Hmi::start_with(
         hmi::HmiOptions {

@@ -11,11 +11,9 @@ use std::time::Duration;
 
 use clap::{Args, Subcommand};
 use lab::program::Program;
-use plant::sorter::SorterConfig;
-use plant::Plant as _;
-use serde::Serialize;
 use sorting::classify::Colour;
-use sorting::rig::{mechanism_reliability, Rig, RigSettings, SortingOutcome};
+use sorting::rig::mechanism_reliability;
+use sorting::trial::Trial;
 
 use crate::duration_arg::seconds;
 
@@ -54,7 +52,7 @@ pub(crate) struct RunArgs {
     #[arg(long, value_name = "C1,C2,C3,C4", default_value = "red,yellow,blue,green", value_parser = parse_colours)]
     colours: [u8; 4],
     /// The longest a sorting may take (simulated).
-    #[arg(long, value_name = "DURATION", default_value = "10m", value_parser = seconds)]
+    #[arg(long, value_name = "DURATION", default_value = "5m", value_parser = seconds)]
     limit: Duration,
     /// A fault of the mechanism's console at the start (`miss Sn5`, `double-dose`,
     /// `stuck D2`, `balance-link-loss`, `dust 0.01`); repeatable.
@@ -114,35 +112,6 @@ pub(crate) fn run(command: SortingCommand) -> anyhow::Result<ExitCode> {
     }
 }
 
-#[derive(Serialize)]
-struct RunReport {
-    seed: u64,
-    colours: [u8; 4],
-    sortings: Vec<SortingOutcome>,
-    passed: bool,
-}
-
-fn colour_name(code: u8) -> &'static str {
-    Colour::ALL
-        .iter()
-        .find(|c| c.code() == code)
-        .map_or("none", |c| c.name())
-}
-
-fn right(outcome: &SortingOutcome, colours: [u8; 4]) -> usize {
-    outcome
-        .shafts
-        .iter()
-        .filter(|(ball, shaft)| {
-            let shaft_colour = usize::from(*shaft)
-                .checked_sub(1)
-                .and_then(|k| colours.get(k))
-                .copied();
-            Colour::of_ball(ball).map(Colour::code) == shaft_colour
-        })
-        .count()
-}
-
 fn run_sortings(args: RunArgs) -> anyhow::Result<ExitCode> {
     let program = if args.program.is_empty() {
         sorting::programs::reference_sorter()
@@ -161,39 +130,20 @@ fn run_sortings(args: RunArgs) -> anyhow::Result<ExitCode> {
     for warning in &program.warnings {
         eprintln!("{warning}");
     }
-    let settings = RigSettings {
-        mechanism: SorterConfig {
-            seed: args.seed,
-            ..SorterConfig::default()
-        },
-        ..RigSettings::default()
-    };
-    let mut rig = Rig::new(program, sorting::programs::supervisor()?, settings)?;
-    for line in &args.fault {
-        rig.plant_mut()
-            .console(line)
-            .map_err(|e| anyhow::anyhow!("--fault {line:?}: {e}"))?;
-    }
-    for actuator in &args.lose_pulse {
-        rig.lose_next_pulse(actuator)?;
-    }
-    let mut sortings = Vec::new();
-    for _ in 0..args.sortings.max(1) {
-        sortings.push(rig.automatic_sorting(args.colours, args.limit)?);
-    }
-    let passed = sortings
-        .iter()
-        .all(|s| s.finished && s.events.is_empty() && right(s, args.colours) == s.shafts.len());
-    let report = RunReport {
+    let trial = Trial {
         seed: args.seed,
+        sortings: args.sortings,
         colours: args.colours,
-        sortings,
-        passed,
+        limit: args.limit,
+        faults: args.fault.clone(),
+        lost_pulses: args.lose_pulse.clone(),
     };
+    let report = trial.run(program)?;
+    let passed = report.passed;
     let text = if args.json {
         serde_json::to_string_pretty(&report)? + "\n"
     } else {
-        text(&report)
+        report.text()
     };
     // a closed pipe (`| head`) is not an error
     let _ = std::io::stdout().lock().write_all(text.as_bytes());
@@ -202,67 +152,6 @@ fn run_sortings(args: RunArgs) -> anyhow::Result<ExitCode> {
     } else {
         ExitCode::FAILURE
     })
-}
-
-fn text(report: &RunReport) -> String {
-    let mut out = format!(
-        "mechanism seed {}; shafts 1-4: {}\n",
-        report.seed,
-        report
-            .colours
-            .iter()
-            .map(|c| colour_name(*c))
-            .collect::<Vec<_>>()
-            .join(", ")
-    );
-    for (n, sorting) in report.sortings.iter().enumerate() {
-        out.push_str(&format!(
-            "sorting {}: {} in {:.1} s (simulated); {} of {} balls in their colour's shaft\n",
-            n + 1,
-            if sorting.finished {
-                "finished"
-            } else {
-                "NOT finished"
-            },
-            sorting.took.as_secs_f64(),
-            right(sorting, report.colours),
-            sorting.shafts.len()
-        ));
-        for (ball, shaft) in &sorting.shafts {
-            let place = match shaft {
-                0 => "in no shaft".to_owned(),
-                k => format!(
-                    "shaft {k} ({})",
-                    colour_name(
-                        report
-                            .colours
-                            .get(usize::from(*k) - 1)
-                            .copied()
-                            .unwrap_or(0)
-                    )
-                ),
-            };
-            out.push_str(&format!("  {ball:<9} {place}\n"));
-        }
-        for event in &sorting.events {
-            out.push_str(&format!(
-                "  {:>9.3} s  supervisor: {} {}: {}\n",
-                event.at.as_secs_f64(),
-                event.actuator,
-                match event.action {
-                    sorting::rig::SupervisorAction::Refused => "refused",
-                    sorting::rig::SupervisorAction::LockedOut => "locked out",
-                },
-                event.rule
-            ));
-        }
-    }
-    out.push_str(if report.passed {
-        "PASSED\n"
-    } else {
-        "FAILED: a ball astray, a sorting unfinished or the supervisor stepped in\n"
-    });
-    out
 }
 
 fn reliability(args: ReliabilityArgs) -> anyhow::Result<ExitCode> {
@@ -299,4 +188,73 @@ fn reliability(args: ReliabilityArgs) -> anyhow::Result<ExitCode> {
     };
     let _ = std::io::stdout().lock().write_all(text.as_bytes());
     Ok(ExitCode::SUCCESS)
+}
+
+/// The sorting lab's program trial for the web HMI (hmi.toml `[program] trial =
+/// "sorting"`): `sorting::trial` behind the HMI's trait.
+#[derive(Debug)]
+pub(crate) struct SortingTrial;
+
+impl hmi::trial::ProgramTrial for SortingTrial {
+    fn check(&self, files: &[hmi::trial::SourceFile]) -> hmi::trial::CheckReport {
+        let files = files
+            .iter()
+            .map(|f| (f.name.clone(), f.text.clone()))
+            .collect();
+        match sorting::trial::compile(files, None) {
+            Ok(program) => hmi::trial::CheckReport {
+                ok: true,
+                diagnostics: program.warnings.clone(),
+                main: Some(program.main),
+            },
+            Err(lab::program::ProgramError::Compile(diagnostics)) => hmi::trial::CheckReport {
+                ok: false,
+                diagnostics,
+                main: None,
+            },
+            Err(other) => hmi::trial::CheckReport {
+                ok: false,
+                diagnostics: vec![other.to_string()],
+                main: None,
+            },
+        }
+    }
+
+    fn run(
+        &self,
+        files: &[hmi::trial::SourceFile],
+        seed: u64,
+    ) -> Result<serde_json::Value, String> {
+        let files = files
+            .iter()
+            .map(|f| (f.name.clone(), f.text.clone()))
+            .collect();
+        let program = sorting::trial::compile(files, None).map_err(|e| e.to_string())?;
+        let report = Trial {
+            seed,
+            ..Trial::default()
+        }
+        .run(program)
+        .map_err(|e| e.to_string())?;
+        let mut json = serde_json::to_value(&report).map_err(|e| e.to_string())?;
+        if let Some(object) = json.as_object_mut() {
+            object.insert("text".into(), serde_json::Value::String(report.text()));
+        }
+        Ok(json)
+    }
+}
+
+/// The program trial a screens folder's `[program]` names, if it has one.
+pub(crate) fn trial_for(
+    screens: &std::path::Path,
+) -> anyhow::Result<Option<std::sync::Arc<dyn hmi::trial::ProgramTrial>>> {
+    let config = hmi::config::HmiConfig::load(screens)?;
+    match config.program.as_ref().map(|p| p.trial.as_str()) {
+        None => Ok(None),
+        Some("sorting") => Ok(Some(std::sync::Arc::new(SortingTrial))),
+        Some(other) => anyhow::bail!(
+            "{}: [program] trial {other:?}: the trials are: sorting",
+            screens.join("hmi.toml").display()
+        ),
+    }
 }

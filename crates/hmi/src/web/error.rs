@@ -46,6 +46,13 @@ pub enum AppError {
     /// holding it, a bad booking).
     #[error("{0}")]
     Lease(#[from] crate::lease::LeaseRefusal),
+    /// 404: no program trial here (no `[program]` in hmi.toml, or the application
+    /// offers none).
+    #[error("this HMI tries no programs (no [program] in hmi.toml)")]
+    NoTrial,
+    /// 500: the trial failed (not the program: the program's own faults are its report).
+    #[error("the trial failed: {0}")]
+    Trial(String),
     /// 404: the screens folder has no `[lease]`.
     #[error("this HMI has no operator lease (no [lease] in hmi.toml)")]
     NoLease,
@@ -166,7 +173,8 @@ impl AppError {
                     }
                 }
             }
-            AppError::NoLease => StatusCode::NOT_FOUND,
+            AppError::NoLease | AppError::NoTrial => StatusCode::NOT_FOUND,
+            AppError::Trial(_) => StatusCode::INTERNAL_SERVER_ERROR,
             AppError::NotFound
             | AppError::NoScreen(_)
             | AppError::NoCommand(_)

@@ -130,6 +130,7 @@ async fn session_info(State(state): State<AppState>, user: LoggedIn) -> Json<Val
         "title": state.station.config().title,
         "camera": state.station.config().camera,
         "lease": state.lease.is_some(),
+        "program": state.trial.is_some() && state.station.config().program.is_some(),
         "public": state.station.config().folder.join("public").join("index.html").exists(),
     }))
 }

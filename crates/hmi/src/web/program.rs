@@ -1,0 +1,101 @@
+//! A student's program from the browser (crate::trial): `POST /api/program/check` and
+//! `POST /api/program/run`, each `{files: [{name, text}], seed?}`, for users of the
+//! `[program]` level. Bodies up to [`MAX_PROGRAM`]; one trial at a time (another waits).
+
+use axum::extract::rejection::JsonRejection;
+use axum::extract::{DefaultBodyLimit, State};
+use axum::routing::post;
+use axum::{Json, Router};
+use serde::Deserialize;
+use serde_json::{json, Value};
+
+use super::{AppError, AppState, Writer};
+use crate::trial::SourceFile;
+use crate::LogText;
+
+/// Largest upload: a few ST files.
+pub(super) const MAX_PROGRAM: usize = 256 * 1024;
+
+pub(super) fn routes() -> Router<AppState> {
+    Router::new()
+        .route("/api/program/check", post(check))
+        .route("/api/program/run", post(run))
+        .layer(DefaultBodyLimit::max(MAX_PROGRAM))
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ProgramRequest {
+    files: Vec<SourceFile>,
+    #[serde(default)]
+    seed: Option<u64>,
+}
+
+fn allowed(state: &AppState, writer: &Writer) -> Result<(), AppError> {
+    let config = state.station.config();
+    let program = config.program.as_ref().ok_or(AppError::NoTrial)?;
+    state.trial.as_ref().ok_or(AppError::NoTrial)?;
+    writer.require_level(program.level)
+}
+
+fn files(request: &ProgramRequest) -> Result<(), AppError> {
+    if request.files.is_empty() || request.files.len() > 16 {
+        return Err(AppError::BadParameter {
+            name: "files",
+            message: "one to sixteen ST files".into(),
+        });
+    }
+    Ok(())
+}
+
+async fn check(
+    State(state): State<AppState>,
+    writer: Writer,
+    body: Result<Json<ProgramRequest>, JsonRejection>,
+) -> Result<Json<Value>, AppError> {
+    let Json(request) = body.map_err(AppError::body("bad program request: "))?;
+    allowed(&state, &writer)?;
+    files(&request)?;
+    let trial = state.trial.clone().ok_or(AppError::NoTrial)?;
+    let _turn = state
+        .trial_running
+        .acquire()
+        .await
+        .map_err(|_| AppError::NoTrial)?;
+    let report = tokio::task::spawn_blocking(move || trial.check(&request.files))
+        .await
+        .map_err(|e| AppError::Trial(e.to_string()))?;
+    tracing::info!(peer = %writer.peer(), user = %LogText(writer.user()), ok = report.ok, "program checked");
+    Ok(Json(json!(report)))
+}
+
+async fn run(
+    State(state): State<AppState>,
+    writer: Writer,
+    body: Result<Json<ProgramRequest>, JsonRejection>,
+) -> Result<Json<Value>, AppError> {
+    let Json(request) = body.map_err(AppError::body("bad program request: "))?;
+    allowed(&state, &writer)?;
+    files(&request)?;
+    let trial = state.trial.clone().ok_or(AppError::NoTrial)?;
+    let _turn = state
+        .trial_running
+        .acquire()
+        .await
+        .map_err(|_| AppError::NoTrial)?;
+    let seed = request.seed.unwrap_or(1);
+    let outcome = tokio::task::spawn_blocking(move || {
+        let check = trial.check(&request.files);
+        if !check.ok {
+            return Ok(json!({"check": check, "report": null}));
+        }
+        trial
+            .run(&request.files, seed)
+            .map(|report| json!({"check": check, "report": report}))
+    })
+    .await
+    .map_err(|e| AppError::Trial(e.to_string()))?
+    .map_err(AppError::Trial)?;
+    tracing::info!(peer = %writer.peer(), user = %LogText(writer.user()), seed, "program tried");
+    Ok(Json(outcome))
+}
