@@ -97,57 +97,23 @@ async fn command(
         );
         return Err(refused);
     }
-    if let Some(authority) = &control.authority {
-        let point = state.station.point(&authority.point);
-        let held = point
-            .as_ref()
-            .is_some_and(|p| !p.invalid && p.value == json!(authority.state));
-        if !held {
-            let now = match &point {
-                Some(p) if !p.invalid => p.value.to_string(),
-                _ => "unknown (invalid)".to_owned(),
-            };
-            let detail = match &authority.reason {
-                Some(reason) => format!("{reason} ({} is {now})", authority.point),
-                None => format!(
-                    "the control authority is not with this HMI ({} is {now}, {} needed)",
-                    authority.point, authority.state
-                ),
-            };
-            tracing::warn!(%peer, user = %LogText(user), command = %row.name, "control refused: no control authority");
-            state.station.audit(
-                user,
-                &row.name,
-                row.ioa,
-                value,
-                ControlOutcome::RefusedAuthority,
-                &detail,
-            );
-            state.station.recorder().flush().await;
-            return Err(AppError::NoAuthority(detail));
-        }
-    }
-    // A lab with an operator lease: only its holder controls (the control renews it).
-    if let Some(desk) = &state.lease {
-        let refused = desk
-            .lock()
-            .unwrap_or_else(|p| p.into_inner())
-            .control(user, Utc::now())
-            .err();
-        if let Some(refused) = refused {
-            let detail = format!("operator lease: {refused}");
-            tracing::warn!(%peer, user = %LogText(user), command = %row.name, "control refused: no operator lease");
-            state.station.audit(
-                user,
-                &row.name,
-                row.ioa,
-                value,
-                ControlOutcome::RefusedAuthority,
-                &detail,
-            );
-            state.station.recorder().flush().await;
-            return Err(AppError::NoAuthority(detail));
-        }
+    // The control authority, then (a lab with an operator lease) the lease: only its
+    // holder controls, and the control renews it.
+    let refusal = authority_refusal(&state, &control)
+        .map(|detail| (detail, "no control authority"))
+        .or_else(|| lease_refusal(&state, user).map(|detail| (detail, "no operator lease")));
+    if let Some((detail, why)) = refusal {
+        tracing::warn!(%peer, user = %LogText(user), command = %row.name, "control refused: {why}");
+        state.station.audit(
+            user,
+            &row.name,
+            row.ioa,
+            value,
+            ControlOutcome::RefusedAuthority,
+            &detail,
+        );
+        state.station.recorder().flush().await;
+        return Err(AppError::NoAuthority(detail));
     }
     // Write-ahead: the attempt is committed to the store before the command leaves, so
     // a command the station carried out is in the audit even if the HMI dies meanwhile.
@@ -173,4 +139,39 @@ async fn command(
     // The outcome's record is committed before the user hears of it.
     state.station.recorder().flush().await;
     Ok(Json(json!({"outcome": outcome, "detail": detail})))
+}
+
+/// Why `control` is refused for want of its control authority, if it is.
+fn authority_refusal(state: &AppState, control: &crate::config::ControlConfig) -> Option<String> {
+    let authority = control.authority.as_ref()?;
+    let point = state.station.point(&authority.point);
+    let held = point
+        .as_ref()
+        .is_some_and(|p| !p.invalid && p.value == json!(authority.state));
+    if held {
+        return None;
+    }
+    let now = match &point {
+        Some(p) if !p.invalid => p.value.to_string(),
+        _ => "unknown (invalid)".to_owned(),
+    };
+    Some(match &authority.reason {
+        Some(reason) => format!("{reason} ({} is {now})", authority.point),
+        None => format!(
+            "the control authority is not with this HMI ({} is {now}, {} needed)",
+            authority.point, authority.state
+        ),
+    })
+}
+
+/// Why `user`'s control is refused by the operator lease, if it is; a control of the
+/// holder renews the lease.
+fn lease_refusal(state: &AppState, user: &str) -> Option<String> {
+    let desk = state.lease.as_ref()?;
+    let refused = desk
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .control(user, Utc::now())
+        .err()?;
+    Some(format!("operator lease: {refused}"))
 }

@@ -10,7 +10,11 @@ use serde::Deserialize;
 use serde_json::{json, Value};
 
 use super::{AppError, AppState, Writer};
-use crate::trial::SourceFile;
+use std::sync::Arc;
+
+use tokio::sync::OwnedSemaphorePermit;
+
+use crate::trial::{ProgramTrial, SourceFile};
 use crate::LogText;
 
 /// Largest upload: a few ST files.
@@ -31,21 +35,33 @@ struct ProgramRequest {
     seed: Option<u64>,
 }
 
-fn allowed(state: &AppState, writer: &Writer) -> Result<(), AppError> {
-    let config = state.station.config();
-    let program = config.program.as_ref().ok_or(AppError::NoTrial)?;
-    state.trial.as_ref().ok_or(AppError::NoTrial)?;
-    writer.require_level(program.level)
-}
-
-fn files(request: &ProgramRequest) -> Result<(), AppError> {
+/// The trial, the request and this request's turn, once the user may try programs and
+/// the files are one to sixteen.
+async fn prepare(
+    state: &AppState,
+    writer: &Writer,
+    body: Result<Json<ProgramRequest>, JsonRejection>,
+) -> Result<(Arc<dyn ProgramTrial>, ProgramRequest, OwnedSemaphorePermit), AppError> {
+    let Json(request) = body.map_err(AppError::body("bad program request: "))?;
+    let program = state
+        .station
+        .config()
+        .program
+        .clone()
+        .ok_or(AppError::NoTrial)?;
+    let trial = state.trial.clone().ok_or(AppError::NoTrial)?;
+    writer.require_level(program.level)?;
     if request.files.is_empty() || request.files.len() > 16 {
         return Err(AppError::BadParameter {
             name: "files",
             message: "one to sixteen ST files".into(),
         });
     }
-    Ok(())
+    let turn = Arc::clone(&state.trial_running)
+        .acquire_owned()
+        .await
+        .map_err(|_| AppError::NoTrial)?;
+    Ok((trial, request, turn))
 }
 
 async fn check(
@@ -53,15 +69,7 @@ async fn check(
     writer: Writer,
     body: Result<Json<ProgramRequest>, JsonRejection>,
 ) -> Result<Json<Value>, AppError> {
-    let Json(request) = body.map_err(AppError::body("bad program request: "))?;
-    allowed(&state, &writer)?;
-    files(&request)?;
-    let trial = state.trial.clone().ok_or(AppError::NoTrial)?;
-    let _turn = state
-        .trial_running
-        .acquire()
-        .await
-        .map_err(|_| AppError::NoTrial)?;
+    let (trial, request, _turn) = prepare(&state, &writer, body).await?;
     let report = tokio::task::spawn_blocking(move || trial.check(&request.files))
         .await
         .map_err(|e| AppError::Trial(e.to_string()))?;
@@ -74,15 +82,7 @@ async fn run(
     writer: Writer,
     body: Result<Json<ProgramRequest>, JsonRejection>,
 ) -> Result<Json<Value>, AppError> {
-    let Json(request) = body.map_err(AppError::body("bad program request: "))?;
-    allowed(&state, &writer)?;
-    files(&request)?;
-    let trial = state.trial.clone().ok_or(AppError::NoTrial)?;
-    let _turn = state
-        .trial_running
-        .acquire()
-        .await
-        .map_err(|_| AppError::NoTrial)?;
+    let (trial, request, _turn) = prepare(&state, &writer, body).await?;
     let seed = request.seed.unwrap_or(1);
     let outcome = tokio::task::spawn_blocking(move || {
         let check = trial.check(&request.files);
