@@ -61,6 +61,10 @@ const SKIPPED: &[(&str, &str)] = &[
         "a benchmark: a release build and a simulated hour of each lab model",
     ),
     (
+        "cargo bench -p sorting --bench mechanism",
+        "a benchmark: a release build and 1,000 simulated sortings (`stanice sorting reliability --sortings 100`, run above, is the same measurement, shorter)",
+    ),
+    (
         "cargo bench -p hmi --bench live",
         "a benchmark: a release build and headless Chromium",
     ),
