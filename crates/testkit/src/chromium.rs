@@ -4,6 +4,7 @@
 //! would do. What a page is (the HMI's state for a failure message) is the caller's.
 
 use std::net::TcpStream;
+use std::os::unix::process::CommandExt as _;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -66,7 +67,11 @@ impl Driver {
         let mut failures = Vec::new();
         for attempt in 1..=3 {
             let port = free_port();
+            // A process group of its own: the browsers it starts are in it, and a test
+            // that fails (the Driver dropped while unwinding) kills them all, rather
+            // than leaving headless Chromiums to eat the CPU of the tests after it.
             let mut child = Command::new(driver)
+                .process_group(0)
                 .arg(format!("--port={port}"))
                 .arg("--allowed-ips=127.0.0.1")
                 .stdin(Stdio::null())
@@ -152,6 +157,13 @@ impl Driver {
 
 impl Drop for Driver {
     fn drop(&mut self) {
+        // The whole group (chromedriver and its browsers); `kill` the program rather
+        // than a libc binding for one call.
+        let _ = Command::new("kill")
+            .args(["-KILL", "--", &format!("-{}", self.child.id())])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .status();
         let _ = self.child.kill();
         let _ = self.child.wait();
     }
