@@ -74,6 +74,70 @@ pub struct AuthorityConfig {
     pub reason: Option<String>,
 }
 
+/// Several set-points chosen together in one dialog, with a rule on the combination
+/// (`[[choice]]`): the sorting lab's shaft colours, four different ones.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ChoiceConfig {
+    /// URL-safe id (`data-choice="ID"` on a mimic element opens it).
+    pub id: String,
+    /// The dialog's title.
+    pub title: String,
+    /// The set-point commands, one per field, sent in this order.
+    pub commands: Vec<String>,
+    /// The points showing each field's value now (optional, same order).
+    #[serde(default)]
+    pub points: Vec<String>,
+    /// Each field's label (default: the command's description).
+    #[serde(default)]
+    pub labels: Vec<String>,
+    /// The values a field may take.
+    pub options: Vec<ChoiceOption>,
+    /// Every field a different value.
+    #[serde(default)]
+    pub distinct: bool,
+    /// Said while the combination is allowed.
+    #[serde(default = "allowed_words")]
+    pub allowed: String,
+    /// Said while it is not (and the server's refusal).
+    #[serde(default = "forbidden_words")]
+    pub forbidden: String,
+}
+
+/// One value of a [`ChoiceConfig`] field.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ChoiceOption {
+    /// The number sent.
+    pub value: i64,
+    /// Its words.
+    pub text: String,
+}
+
+fn allowed_words() -> String {
+    "Allowed combination.".to_owned()
+}
+
+fn forbidden_words() -> String {
+    "Forbidden combination!".to_owned()
+}
+
+impl ChoiceConfig {
+    /// Whether `values` is a combination this choice allows: one known value per field,
+    /// all different when `distinct`.
+    pub fn allows(&self, values: &[i64]) -> bool {
+        values.len() == self.commands.len()
+            && values
+                .iter()
+                .all(|v| self.options.iter().any(|o| o.value == *v))
+            && (!self.distinct
+                || values
+                    .iter()
+                    .enumerate()
+                    .all(|(i, v)| !values.iter().skip(i + 1).any(|w| w == v)))
+    }
+}
+
 /// An alarm on a single point.
 #[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -190,6 +254,8 @@ struct RawConfig {
     camera: Option<String>,
     #[serde(default)]
     program: Option<crate::trial::ProgramConfig>,
+    #[serde(default)]
+    choice: Vec<ChoiceConfig>,
 }
 
 #[derive(Deserialize)]
@@ -238,6 +304,8 @@ pub struct HmiConfig {
     pub camera: Option<String>,
     /// Students' programs tried from the browser (`[program]`).
     pub program: Option<crate::trial::ProgramConfig>,
+    /// Set-points chosen together (`[[choice]]`).
+    pub choices: Vec<ChoiceConfig>,
 }
 
 impl HmiConfig {
@@ -284,6 +352,7 @@ impl HmiConfig {
             lease: raw.lease,
             camera: raw.camera,
             program: raw.program,
+            choices: raw.choice,
         };
         config.check(&text)?;
         Ok(config)
@@ -437,6 +506,55 @@ impl HmiConfig {
                     "point",
                     format!("trend of `{trend}`: no such point"),
                 ));
+            }
+        }
+        let mut choice_ids = HashSet::new();
+        for (index, choice) in self.choices.iter().enumerate() {
+            let bad = |key: &str, message: String| bad_at("choice", index, key, message);
+            if choice.id.is_empty()
+                || !choice
+                    .id
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+                || !choice_ids.insert(choice.id.as_str())
+            {
+                return Err(bad(
+                    "id",
+                    format!("choice id `{}` is not URL-safe or not unique", choice.id),
+                ));
+            }
+            if choice.commands.is_empty() {
+                return Err(bad("commands", "a choice needs its commands".into()));
+            }
+            if let Some(missing) = choice
+                .commands
+                .iter()
+                .find(|c| !commands.contains(c.as_str()))
+            {
+                return Err(bad(
+                    "commands",
+                    format!("choice of `{missing}`: no such command in points.csv"),
+                ));
+            }
+            if let Some(missing) = choice.points.iter().find(|p| !names.contains(p.as_str())) {
+                return Err(bad(
+                    "points",
+                    format!("choice of `{missing}`: no such point in points.csv"),
+                ));
+            }
+            for (key, count) in [
+                ("points", choice.points.len()),
+                ("labels", choice.labels.len()),
+            ] {
+                if count != 0 && count != choice.commands.len() {
+                    return Err(bad(
+                        key,
+                        format!("{count} {key} for {} commands", choice.commands.len()),
+                    ));
+                }
+            }
+            if choice.options.is_empty() {
+                return Err(bad("options", "a choice needs its options".into()));
             }
         }
         if let Some(camera) = &self.camera {
@@ -619,6 +737,35 @@ pub fn camera_origin(url: &str) -> Option<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_choice_allows_known_values_and_with_distinct_no_repeats() {
+        let choice = ChoiceConfig {
+            id: "colours".into(),
+            title: "Shaft colours".into(),
+            commands: (1..=4).map(|k| format!("SET_Colour{k}")).collect(),
+            points: Vec::new(),
+            labels: Vec::new(),
+            options: (1..=4)
+                .map(|value| ChoiceOption {
+                    value,
+                    text: value.to_string(),
+                })
+                .collect(),
+            distinct: true,
+            allowed: allowed_words(),
+            forbidden: forbidden_words(),
+        };
+        assert!(choice.allows(&[4, 3, 2, 1]));
+        assert!(!choice.allows(&[1, 1, 3, 4]), "a repeated colour");
+        assert!(!choice.allows(&[1, 2, 3, 5]), "an unknown value");
+        assert!(!choice.allows(&[1, 2, 3]), "a field missing");
+        let repeats = ChoiceConfig {
+            distinct: false,
+            ..choice
+        };
+        assert!(repeats.allows(&[1, 1, 1, 1]));
+    }
 
     #[test]
     fn a_camera_url_gives_its_origin_and_nothing_that_could_break_a_header() {

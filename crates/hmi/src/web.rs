@@ -22,6 +22,7 @@
 //!   security headers of [`harden`]; an error without a JSON body gets one.
 
 mod alarms;
+mod choices;
 pub mod error;
 mod events;
 pub mod extract;
@@ -111,6 +112,7 @@ pub fn router(state: AppState) -> Router {
         .merge(alarms::routes())
         .merge(trends::routes())
         .merge(lease::routes())
+        .merge(choices::routes())
         .merge(program::routes())
         .merge(pages::public_routes())
         .merge(lifts::routes())

@@ -428,6 +428,49 @@ async fn observer_operator_lease_automatic_sorting_and_link_loss() {
     .await;
     assert_eq!(colours, json!(["1", "2", "3", "4"]));
 
+    // --- The shafts' colours, chosen together: a repeated colour is forbidden in words and
+    // O.K. is not offered (the server refuses it too); four different ones are sent.
+    click(&operator, r#"[data-choice="colours"] rect"#).await;
+    until(
+        &operator,
+        "document.getElementById('choice-dialog').open && document.querySelectorAll('#choice-fields select').length === 4",
+        "the Choice! window",
+    )
+    .await;
+    assert_eq!(
+        js(&operator, "[document.getElementById('choice-message').textContent, [...document.querySelectorAll('#choice-fields select')].map(s => s.value)]").await,
+        json!(["Allowed colour combination.", ["1", "2", "3", "4"]])
+    );
+    let pick = |values: [u8; 4]| {
+        format!(
+            "(() => {{ const v = {values:?}; document.querySelectorAll('#choice-fields select').forEach((s, i) => {{ s.value = String(v[i]); s.dispatchEvent(new Event('change')); }}); return true; }})()"
+        )
+    };
+    js(&operator, &pick([1, 1, 3, 4])).await;
+    assert_eq!(
+        js(&operator, "[document.getElementById('choice-message').textContent, document.getElementById('choice-ok').disabled]").await,
+        json!(["Forbidden colour combination!", true])
+    );
+    let refused = post(&operator, "/api/choices/colours", "{values: [1, 1, 3, 4]}").await;
+    assert_eq!(refused[0], json!(409), "{refused}");
+    assert_eq!(
+        refused[1],
+        json!("Forbidden colour combination!"),
+        "{refused}"
+    );
+    js(&operator, &pick([4, 3, 2, 1])).await;
+    assert_eq!(
+        js(&operator, "document.getElementById('choice-ok').disabled").await,
+        json!(false)
+    );
+    click(&operator, "#choice-ok").await;
+    until(
+        &observer,
+        "[1,2,3,4].map(k => document.querySelector(`#mimic rect.shaft-colour[data-point=\"SORT_Colour${k}\"]`).getAttribute('data-value')).join() === '4,3,2,1'",
+        "the new colours in every browser",
+    )
+    .await;
+
     // --- The operator releases; the student takes the lab.
     click(&operator, "#lease-release").await;
     until(

@@ -53,6 +53,12 @@ pub enum AppError {
     /// 500: the trial failed (not the program: the program's own faults are its report).
     #[error("the trial failed: {0}")]
     Trial(String),
+    /// 404: no `[[choice]]` with this id.
+    #[error("no choice `{0}`")]
+    NoChoice(String),
+    /// 409: a combination the choice forbids, in its own words; nothing was sent.
+    #[error("{0}")]
+    Combination(String),
     /// 404: the screens folder has no `[lease]`.
     #[error("this HMI has no operator lease (no [lease] in hmi.toml)")]
     NoLease,
@@ -173,7 +179,8 @@ impl AppError {
                     }
                 }
             }
-            AppError::NoLease | AppError::NoTrial => StatusCode::NOT_FOUND,
+            AppError::NoLease | AppError::NoTrial | AppError::NoChoice(_) => StatusCode::NOT_FOUND,
+            AppError::Combination(_) => StatusCode::CONFLICT,
             AppError::Trial(_) => StatusCode::INTERNAL_SERVER_ERROR,
             AppError::NotFound
             | AppError::NoScreen(_)

@@ -74,17 +74,30 @@ async fn command(
     body: Result<Json<CommandRequest>, JsonRejection>,
 ) -> Result<Json<Value>, AppError> {
     let Json(request) = body.map_err(AppError::body("bad command request: "))?;
+    let value = command_value(&request.value)?;
+    let (outcome, detail) = control(&state, &writer, &request.command, value).await?;
+    Ok(Json(json!({"outcome": outcome, "detail": detail})))
+}
+
+/// Runs the control `name` with `value` for `writer`: its level, its control authority,
+/// the operator lease, the write-ahead audit record, the station's answer (committed to
+/// the audit before it is returned).
+pub(super) async fn control(
+    state: &AppState,
+    writer: &Writer,
+    name: &str,
+    value: f64,
+) -> Result<(ControlOutcome, String), AppError> {
     let (peer, user) = (writer.peer(), writer.user());
     let config = state.station.config();
     let Some(row) = config
         .points
         .iter()
-        .find(|p| p.name == request.command && p.type_id.is_command())
+        .find(|p| p.name == name && p.type_id.is_command())
     else {
-        tracing::warn!(%peer, user = %LogText(user), command = %LogText(&request.command), "unknown command refused");
-        return Err(AppError::NoCommand(request.command));
+        tracing::warn!(%peer, user = %LogText(user), command = %LogText(name), "unknown command refused");
+        return Err(AppError::NoCommand(name.to_owned()));
     };
-    let value = command_value(&request.value)?;
     let control = config.control(&row.name);
     if let Err(refused) = writer.require_level(control.level) {
         state.station.audit(
@@ -99,9 +112,9 @@ async fn command(
     }
     // The control authority, then (a lab with an operator lease) the lease: only its
     // holder controls, and the control renews it.
-    let refusal = authority_refusal(&state, &control)
+    let refusal = authority_refusal(state, &control)
         .map(|detail| (detail, "no control authority"))
-        .or_else(|| lease_refusal(&state, user).map(|detail| (detail, "no operator lease")));
+        .or_else(|| lease_refusal(state, user).map(|detail| (detail, "no operator lease")));
     if let Some((detail, why)) = refusal {
         tracing::warn!(%peer, user = %LogText(user), command = %row.name, "control refused: {why}");
         state.station.audit(
@@ -138,7 +151,7 @@ async fn command(
     let (outcome, detail) = state.station.operate(user, &row.name, value).await;
     // The outcome's record is committed before the user hears of it.
     state.station.recorder().flush().await;
-    Ok(Json(json!({"outcome": outcome, "detail": detail})))
+    Ok((outcome, detail))
 }
 
 /// Why `control` is refused for want of its control authority, if it is.
