@@ -15,7 +15,15 @@
   function time(text) {
     if (!text) return "";
     const date = new Date(text);
-    return date.toLocaleString(undefined, { dateStyle: "short", timeStyle: "short" });
+    // With its zone: a booking's time is read by people in other places.
+    return date.toLocaleString(undefined, {
+      year: "numeric",
+      month: "2-digit",
+      day: "2-digit",
+      hour: "2-digit",
+      minute: "2-digit",
+      timeZoneName: "short",
+    });
   }
 
   function render() {
