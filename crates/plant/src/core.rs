@@ -196,6 +196,20 @@ fn names_allowed(kind: &str, allowed: &[String]) -> String {
     }
 }
 
+/// The serial line of one of a plant's field devices (the sorting lab's balance on its
+/// RS-232): the device's octets come out of the plant on its simulated clock, and the
+/// runtime puts them on a pseudo-terminal, so the project's driver reads the device as it
+/// would read the one on the model, through a serial port.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SerialPortInfo {
+    /// The port's name, as a project names it (`plant = "balance"`).
+    pub name: String,
+    /// What is on it.
+    pub description: String,
+    /// The line's speed and character format, as the device is set.
+    pub line: serial_line::LineSettings,
+}
+
 /// The shape every plant simulation has: a named I/O surface and a clock-free step.
 ///
 /// Time advances only through [`Plant::advance_to`]; every internal event (operate
@@ -247,6 +261,24 @@ pub trait Plant {
     fn console_operations(&self) -> Vec<ConsoleOperation>;
     /// The state worth a glance, for the console's `status`.
     fn status(&self) -> Vec<StatusLine>;
+    /// The serial lines of the plant's field devices ([`SerialPortInfo`]); none by default.
+    fn serial_ports(&self) -> Vec<SerialPortInfo> {
+        Vec::new()
+    }
+    /// The octets the device on `port` sent since the last call, in order. A plant keeps
+    /// only its device's newest few messages for a reader that fell behind (a line has no
+    /// flow control either); an unknown port has none.
+    fn take_serial_output(&mut self, _port: &str) -> Vec<u8> {
+        Vec::new()
+    }
+    /// Octets sent to the device on `port` (from its driver, at the current time).
+    fn serial_input(&mut self, port: &str, _octets: &[u8]) -> Result<(), PlantError> {
+        Err(PlantError::UnknownName {
+            kind: "serial port",
+            name: port.to_owned(),
+            allowed: self.serial_ports().into_iter().map(|p| p.name).collect(),
+        })
+    }
     /// The plant as `Any`, for tests and tools that know which plant they run.
     fn as_any(&self) -> &dyn std::any::Any;
     /// The plant as `Any`, mutable.

@@ -230,7 +230,7 @@ pub mod vsetin;
 
 pub use crate::core::{
     signal_table_markdown, ConsoleOperation, Direction, Module, Plant, PlantError, Reading,
-    SignalInfo, SimTime, StatusLine, Value, ValueKind,
+    SerialPortInfo, SignalInfo, SimTime, StatusLine, Value, ValueKind,
 };
 pub use crate::devices::{GeneratorConfig, GeneratorState};
 pub use crate::topology::{

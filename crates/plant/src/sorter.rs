@@ -67,19 +67,28 @@
 //! | `dust G` | dust settles on the pan at G grams a minute (0 ends it) |
 //!
 //! `clear FAULT` and `clear all` end them; `status` shows where every ball is.
+//!
+//! # The balance's serial port
+//!
+//! Each record the balance sends is also put on the plant's serial port [`BALANCE_PORT`]
+//! (15 characters, 1200 Bd) as the balance's RS-232 would carry it, so a project can read
+//! the balance with its serial driver on a pseudo-terminal instead of the gateway's
+//! signals; a `balance-link-loss` silences both.
 
 use std::any::Any;
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
+use devices::balance::reader::BALANCE_LINE;
+use devices::balance::record;
 use devices::balance::simulator::{BalanceConfig, BalanceSimulator, Ball, BALLS};
 use rand::rngs::StdRng;
 use rand::seq::SliceRandom as _;
 use rand::{RngExt as _, SeedableRng as _};
 
 use crate::core::{
-    ConsoleOperation, Direction, Module, Plant, PlantError, Reading, SignalInfo, SimTime,
-    StatusLine, Value, ValueKind,
+    ConsoleOperation, Direction, Module, Plant, PlantError, Reading, SerialPortInfo, SignalInfo,
+    SimTime, StatusLine, Value, ValueKind,
 };
 
 /// The actuators, in the order of their outputs (and of the supervisor's table 3.2).
@@ -93,6 +102,11 @@ pub const ACTUATORS: [&str; 14] = [
 pub const SENSORS: [&str; 5] = ["Sn1", "Sn2", "Sn3", "Sn4", "Sn5"];
 
 /// The gates' and the ball path's times (see the module documentation).
+/// The balance's RS-232 as a serial port of the plant ([`Plant::serial_ports`]).
+pub const BALANCE_PORT: &str = "balance";
+/// Records kept on the balance's port for a reader that fell behind: its newest ones.
+const BALANCE_BACKLOG: usize = 4;
+
 const S1_TO_S2: Duration = Duration::from_millis(250);
 const S2_TO_PAN: Duration = Duration::from_millis(300);
 const OFF_THE_PAN: Duration = Duration::from_millis(200);
@@ -235,6 +249,9 @@ pub struct SorterPlant {
     next_record: SimTime,
     weight_g: f64,
     stable: bool,
+    /// The balance's records not yet taken from its serial port ([`BALANCE_PORT`]):
+    /// whole records, at most [`BALANCE_BACKLOG`] of them.
+    balance_line: Vec<u8>,
     /// The sorting PLC's commands on the DP bus.
     dp_commands: [bool; ACTUATORS.len()],
     /// Commands whose next pulse is to be lost, and those being lost until they fall.
@@ -375,6 +392,7 @@ impl SorterPlant {
             next_record: Duration::ZERO,
             weight_g: 0.0,
             stable: true,
+            balance_line: Vec::new(),
             dp_commands: [false; ACTUATORS.len()],
             dp_to_lose: [false; ACTUATORS.len()],
             dp_losing: [false; ACTUATORS.len()],
@@ -756,6 +774,13 @@ impl SorterPlant {
         if self.modules.get(2).is_some_and(Module::valid) {
             self.weight_g = reading.weight_g;
             self.stable = reading.stable;
+            // The same record on the balance's own RS-232 (a silent link sends nothing).
+            let record = record::format(reading.weight_g, reading.stable);
+            let excess = (self.balance_line.len() + record.len())
+                .saturating_sub(BALANCE_BACKLOG * record::RECORD_LEN);
+            self.balance_line
+                .drain(..excess.min(self.balance_line.len()));
+            self.balance_line.extend_from_slice(&record);
         }
     }
 
@@ -1035,6 +1060,35 @@ impl Plant for SorterPlant {
 
     fn modules(&self) -> &[Module] {
         &self.modules
+    }
+
+    fn serial_ports(&self) -> Vec<SerialPortInfo> {
+        vec![SerialPortInfo {
+            name: BALANCE_PORT.to_owned(),
+            description: "the balance's RS-232: its 15-character records, 2-4 a second".to_owned(),
+            line: BALANCE_LINE,
+        }]
+    }
+
+    fn take_serial_output(&mut self, port: &str) -> Vec<u8> {
+        if port == BALANCE_PORT {
+            std::mem::take(&mut self.balance_line)
+        } else {
+            Vec::new()
+        }
+    }
+
+    fn serial_input(&mut self, port: &str, _octets: &[u8]) -> Result<(), PlantError> {
+        if port == BALANCE_PORT {
+            // The balance's RxD is not connected (the thesis's balance only sends).
+            Ok(())
+        } else {
+            Err(PlantError::UnknownName {
+                kind: "serial port",
+                name: port.to_owned(),
+                allowed: vec![BALANCE_PORT.to_owned()],
+            })
+        }
     }
 
     fn console(&mut self, line: &str) -> Result<(), PlantError> {

@@ -346,6 +346,14 @@ fn print_banner(runtime: &Runtime, store: &str, speed: f64, demo: bool) {
             node.points.points().len()
         );
     }
+    for port in runtime.plant_ports() {
+        println!(
+            "  {:<8} on the plant's serial port `{}`: pseudo-terminal {}",
+            port.device(),
+            port.port(),
+            port.pty_path()
+        );
+    }
     println!("  events and command audit: {store}");
     let top = project
         .top_node()

@@ -356,3 +356,42 @@ fn a_run_does_not_depend_on_the_step_size() {
         .count();
     assert!(right >= 6, "{reference:?}");
 }
+
+#[test]
+fn the_balance_port_carries_the_records_the_gateway_reads_and_falls_silent_with_the_link() {
+    use devices::balance::record::{parse, RECORD_LEN};
+    use plant::sorter::BALANCE_PORT;
+
+    let mut p = sorter(5);
+    let ports = p.serial_ports();
+    assert_eq!(ports.len(), 1);
+    assert_eq!(ports[0].name, BALANCE_PORT);
+    assert_eq!(ports[0].line.baud, 1200);
+    dose(&mut p);
+    wait(&mut p, s(5));
+    let octets = p.take_serial_output(BALANCE_PORT);
+    // A reader that fell behind gets the newest records only, whole.
+    assert_eq!(octets.len(), 4 * RECORD_LEN, "{octets:?}");
+    let last = octets.chunks(RECORD_LEN).last().unwrap();
+    let reading = parse(last.try_into().unwrap()).unwrap();
+    assert_eq!(reading.weight_g, p.real("Balance_g").unwrap());
+    assert_eq!(reading.stable, p.bool("Balance_stable").unwrap());
+    assert!(reading.weight_g > 2.0, "a ball on the pan: {reading:?}");
+    // Taken: nothing until the next record.
+    assert!(p.take_serial_output(BALANCE_PORT).is_empty());
+    wait(&mut p, s(1));
+    let octets = p.take_serial_output(BALANCE_PORT);
+    assert!(!octets.is_empty() && octets.len() % RECORD_LEN == 0);
+    // The link lost: the port is silent.
+    p.console("balance-link-loss").unwrap();
+    p.take_serial_output(BALANCE_PORT);
+    wait(&mut p, s(3));
+    assert!(p.take_serial_output(BALANCE_PORT).is_empty());
+    p.console("clear balance-link-loss").unwrap();
+    wait(&mut p, s(1));
+    assert!(!p.take_serial_output(BALANCE_PORT).is_empty());
+    // Octets to the balance go nowhere; an unknown port is an error naming the ports.
+    assert!(p.serial_input(BALANCE_PORT, b"T\r\n").is_ok());
+    let error = p.serial_input("printer", b"x").unwrap_err();
+    assert!(error.to_string().contains("balance"), "{error}");
+}

@@ -74,7 +74,12 @@
 //!
 //! [[node.io]]                          # plant signal <-> PLC variable; the pseudo-signal
 //! signal = "RH2_P1_SA1_Dalkove"         # "module-fault:MODULE" is TRUE while that I/O
-//!                                      # module is pulled or unreachable
+//!                                      # module is pulled or unreachable; or instead
+//!                                      # point = "BAL.weight": a point of the node (a field
+//!                                      # device's) read into the PLC, an input invalid
+//!                                      # while the point is
+//! scale = 1e6                          # optional: inputs are multiplied by it (grams to
+//!                                      # micrograms for a DINT address)
 //! variable = "RH2Logic.SA1_Dalkove"    # or a direct address of the process image
 //!                                      # (`%IX0.4`, `%ID4`, `%QX1.2`) for a program that
 //!                                      # reads its I/O through `AT` variables; a REAL
@@ -198,7 +203,10 @@
 //! ioa_base = 500                       # its points: B1.SIGNAL at ioa_base + the profile's
 //!                                      # offsets, and B1.not_answering
 //! settings = { serial = "/dev/ttyUSB1" } # the kind's own settings, checked at load (a
-//!                                      # balance: serial, tcp or simulate = "red 1")
+//!                                      # balance: serial, tcp or simulate = "red 1"); or
+//!                                      # plant = "PORT": a serial port of the project's plant
+//!                                      # (the sorter's `balance`), on a pseudo-terminal the
+//!                                      # runtime opens, read as through `serial`
 //!
 //! [node.notify.smtp]                   # optional: notifications of the node's lifts
 //! host = "smtp.example.cz"             # (the notify crate's format, docs/LIFT.md):
@@ -443,13 +451,40 @@ pub struct TaskConfig {
     pub watchdog: Option<Duration>,
 }
 
-/// A plant signal bound to a PLC variable, `[[node.io]]`.
-#[derive(Debug, Clone, PartialEq, Eq)]
+/// A plant signal or a point of the node bound to a PLC variable, `[[node.io]]`.
+#[derive(Debug, Clone, PartialEq)]
 pub struct IoBinding {
-    /// The plant signal's name.
-    pub signal: String,
-    /// The PLC variable path, e.g. `RH2Logic.SA1_Dalkove`.
+    /// Where the value comes from (or, for a plant output, goes to).
+    pub source: IoSource,
+    /// The PLC variable path, e.g. `RH2Logic.SA1_Dalkove`, or a direct address of the
+    /// process image (`%ID4`).
     pub variable: String,
+    /// A factor an input's value is multiplied by before the PLC gets it.
+    pub scale: Option<f64>,
+}
+
+/// The device setting that puts a device on a serial port of the project's plant
+/// ([`FieldDeviceConfig::plant_port`]).
+pub const PLANT_PORT_KEY: &str = "plant";
+
+/// The other end of an I/O binding.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum IoSource {
+    /// A signal of the project's plant (its direction decides which way the value goes),
+    /// or the pseudo-signal `module-fault:MODULE`.
+    Signal(String),
+    /// A point of the node, read into the PLC (a field device's reading): the input is
+    /// invalid while the point is.
+    Point(String),
+}
+
+impl std::fmt::Display for IoSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            IoSource::Signal(name) => write!(f, "signal `{name}`"),
+            IoSource::Point(name) => write!(f, "point `{name}`"),
+        }
+    }
 }
 
 use crate::device::DeviceKinds;
@@ -720,6 +755,10 @@ pub struct FieldDeviceConfig {
     pub ioa_base: Ioa,
     /// The kind's own settings (`[node.device.settings]`), read by its driver.
     pub settings: toml::Table,
+    /// The serial port of the project's plant the device is on (`plant = "PORT"` in its
+    /// settings): the runtime opens a pseudo-terminal for the port and gives the driver
+    /// its path as `serial`.
+    pub plant_port: Option<String>,
 }
 
 /// An IEC 104 client link to a lower node, `[[node.link]]`.

@@ -451,6 +451,15 @@ pub enum Conflict {
     /// A line with not exactly one of `port`, `tcp` and `simulate`.
     #[error("give exactly one of port, tcp and simulate")]
     LineTransport,
+    /// An I/O binding with both `signal` and `point`.
+    #[error("give either signal (a plant signal) or point (a point of the node), not both")]
+    IoSignalAndPoint,
+    /// A device with `plant` and a line of its own in its settings.
+    #[error("a device on the plant's port (plant) takes no `{key}`")]
+    PlantPortAndLine {
+        /// The other key.
+        key: String,
+    },
     /// A link from a node to itself.
     #[error("a node cannot link to itself")]
     LinkToItself,

@@ -123,8 +123,10 @@ pub(in crate::config) struct RawTask {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(in crate::config) struct RawIo {
-    pub(in crate::config) signal: String,
+    pub(in crate::config) signal: Option<String>,
+    pub(in crate::config) point: Option<String>,
     pub(in crate::config) variable: String,
+    pub(in crate::config) scale: Option<f64>,
 }
 
 #[derive(Deserialize, Default, Clone, Copy, PartialEq, Eq)]

@@ -21,6 +21,8 @@
 //!   their signals become points, commands become general commands).
 //! - [`lift`]: the lifts watched through their EKM66 boards (lift monitoring: their
 //!   values become points, their fault logs go into the store's archive).
+//! - [`plant_port`]: the plant's serial ports (a device of the plant on its RS-232) on
+//!   pseudo-terminals, for the project's device drivers.
 //! - [`notification`]: e-mail and webhook notices of what the lifts report, each delivery
 //!   recorded.
 //! - `command`: the server hooks — a command's authority, range and audit, then its
@@ -39,7 +41,8 @@
 //! handler is `command`'s `NodeHandler::new`), then the links (`start_links`, each spec
 //! from [`link`]'s `LinkSpec::new`), the serial lines (`start_lines`, their point maps
 //! from [`line`]'s `LineSpec::new`), notifications and lifts (`start_notifications`,
-//! `start_lifts`), the profiled devices (`start_devices`), then the clock starts and
+//! `start_lifts`), the plant's serial ports on pseudo-terminals (`plant_port`) and the
+//! profiled devices on them or on lines of their own (`start_devices`), then the clock starts and
 //! retention runs (`start_retention`).
 
 pub mod clock;
@@ -52,6 +55,7 @@ pub mod link;
 pub mod node;
 pub mod notification;
 pub mod operation;
+pub mod plant_port;
 mod server;
 pub mod simulation;
 pub mod sink;
@@ -222,6 +226,7 @@ pub struct Runtime {
     recorder: Recorder,
     retention: Option<RetentionHandle>,
     archived_faults: tokio::sync::broadcast::Sender<lift::ArchivedFault>,
+    plant_ports: Vec<plant_port::PlantPortHandle>,
 }
 
 impl std::fmt::Debug for Runtime {
@@ -509,6 +514,7 @@ fn start_devices(
     config: &NodeConfig,
     points: &Arc<NodePoints>,
     kinds: &DeviceKinds,
+    plant_ports: &plant_port::PlantPorts,
 ) -> Result<Vec<field::FieldDeviceHandle>, RuntimeError> {
     let setup = |device: &str, why: String| {
         RuntimeError::Setup(format!("node `{}`: device `{device}`: {why}", config.name))
@@ -517,6 +523,7 @@ fn start_devices(
         .devices
         .iter()
         .map(|device| {
+            let device = &plant_ports.device(&config.name, device);
             let kind = kinds.get(&device.kind).ok_or_else(|| {
                 setup(
                     &device.name,
@@ -571,6 +578,9 @@ impl Runtime {
             start_simulation(&project, &shared, &clock, options.pacing).await?;
         first_scan(&requests).await?;
 
+        let selected_indices: Vec<usize> = shared.iter().map(|(index, _)| *index).collect();
+        let plant_ports = plant_port::open(&project, &selected_indices, &requests).await?;
+
         let local_clocks = LocalClocks::of(&shared);
         follow_lower_clocks(&project, &shared, &local_clocks);
         let (mut nodes, handlers) =
@@ -596,7 +606,7 @@ impl Runtime {
                 &archived_faults,
                 notifications,
             );
-            node.devices = start_devices(config, points, &options.device_kinds)?;
+            node.devices = start_devices(config, points, &options.device_kinds, &plant_ports)?;
         }
         requests
             .send(SimRequest::Go)
@@ -614,6 +624,7 @@ impl Runtime {
             recorder,
             retention,
             archived_faults,
+            plant_ports: plant_ports.handles,
         })
     }
 
@@ -629,6 +640,11 @@ impl Runtime {
             .iter()
             .flat_map(|node| &node.lifts)
             .find(|lift| lift.name().eq_ignore_ascii_case(name))
+    }
+
+    /// The plant's serial ports on pseudo-terminals, with the device on each.
+    pub fn plant_ports(&self) -> &[plant_port::PlantPortHandle] {
+        &self.plant_ports
     }
 
     /// The project.
@@ -751,6 +767,9 @@ impl Runtime {
         for device in self.nodes.iter().flat_map(|node| &node.devices) {
             device.stop();
         }
+        for port in &self.plant_ports {
+            port.stop();
+        }
         // Links first, so that no node reports its lower nodes lost while stopping.
         for node in &self.nodes {
             for link in &node.links {
@@ -787,6 +806,9 @@ impl Drop for Runtime {
     fn drop(&mut self) {
         for lift in self.nodes.iter().flat_map(|node| &node.lifts) {
             lift.stop();
+        }
+        for port in &self.plant_ports {
+            port.stop();
         }
         let _ = self.simulation.send(SimRequest::Stop);
         for node in &self.nodes {

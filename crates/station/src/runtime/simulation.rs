@@ -33,8 +33,8 @@ use plc::vm::Val;
 use plc::Plc;
 use tokio::sync::oneshot;
 
-use crate::config::{CommandTarget, NodeConfig, PointSource, Project};
-use points::{EventCause, PointId, PointKind, PointValue, Quality};
+use crate::config::{CommandTarget, IoSource, NodeConfig, PointSource, Project};
+use points::{EventCause, PointDb, PointId, PointKind, PointValue, Quality};
 
 use super::clock::{Pacing, SimClock};
 use super::node::NodePoints;
@@ -121,12 +121,69 @@ impl IoTarget {
     }
 }
 
+/// Where a PLC input comes from.
+enum InputFrom {
+    /// A plant input.
+    Signal(String),
+    /// `module-fault:MODULE`: TRUE while the plant's I/O module is unavailable.
+    ModuleFault(String),
+    /// A point of the node (a field device's reading).
+    Point(PointId),
+}
+
 struct InputBinding {
-    signal: String,
+    from: InputFrom,
     target: IoTarget,
+    /// Numbers are multiplied by it (`scale` of the binding).
+    scale: f64,
     valid: bool,
-    /// `module-fault:MODULE`: TRUE while the module is unavailable.
-    module_fault: Option<String>,
+}
+
+impl InputBinding {
+    /// Copies the input into the PLC; a value that is not valid now leaves the PLC's last
+    /// one and marks the input invalid.
+    fn copy(
+        &mut self,
+        plc: &mut Plc,
+        plant: Option<&(dyn Plant + Send + 'static)>,
+        db: Option<&PointDb>,
+    ) {
+        let reading = match &self.from {
+            InputFrom::ModuleFault(module) => plant.map(|plant| {
+                let fault = !plant
+                    .modules()
+                    .iter()
+                    .any(|m| &m.name == module && m.valid());
+                (Value::Bool(fault), true)
+            }),
+            InputFrom::Signal(signal) => plant
+                .and_then(|plant| plant.read(signal).ok())
+                .map(|reading| (reading.value, reading.valid)),
+            InputFrom::Point(id) => db.and_then(|db| db.get(*id)).and_then(|point| {
+                let valid = point.has_value() && !point.quality.invalid;
+                let value = match &point.value {
+                    PointValue::Bool(on) => Value::Bool(*on),
+                    PointValue::Float(x) => Value::Real(*x),
+                    PointValue::Int(n) => Value::Real(*n as f64),
+                    PointValue::DoublePoint(d) => Value::Real(f64::from(*d)),
+                    PointValue::Bits(bits) => Value::Real(f64::from(*bits)),
+                    PointValue::Text(_) => return None,
+                };
+                Some((value, valid))
+            }),
+        };
+        match reading {
+            Some((value, true)) => {
+                self.valid = true;
+                let value = match value {
+                    Value::Real(x) => Value::Real(x * self.scale),
+                    bool @ Value::Bool(_) => bool,
+                };
+                self.target.write(plc, value);
+            }
+            Some((_, false)) | None => self.valid = false,
+        }
+    }
 }
 
 struct OutputBinding {
@@ -203,6 +260,9 @@ pub struct Simulation {
     nodes: Vec<SimNode>,
     pulses: Vec<Pulse>,
     observers: Vec<mpsc::Sender<OutputChange>>,
+    /// The plant's serial ports on pseudo-terminals (`plant_port`): where each one's
+    /// octets go.
+    serial_ports: Vec<(String, tokio::sync::mpsc::Sender<Vec<u8>>)>,
 }
 
 impl Simulation {
@@ -240,6 +300,7 @@ impl Simulation {
             nodes: built,
             pulses: Vec::new(),
             observers: Vec::new(),
+            serial_ports: Vec::new(),
         })
     }
 
@@ -318,6 +379,29 @@ impl Simulation {
         }
     }
 
+    /// Sends what the plant's device on `port` sends from now on to `line` (a full
+    /// `line` drops it, as a line without flow control would).
+    pub(crate) fn attach_serial_port(
+        &mut self,
+        port: String,
+        line: tokio::sync::mpsc::Sender<Vec<u8>>,
+    ) {
+        if let Some(plant) = self.plant.as_mut() {
+            // what it sent before anyone listened is gone, as on an unplugged line
+            plant.take_serial_output(&port);
+        }
+        self.serial_ports.push((port, line));
+    }
+
+    /// Octets a driver sent to the plant's device on `port`.
+    pub(crate) fn serial_input(&mut self, port: &str, octets: &[u8]) {
+        if let Some(plant) = self.plant.as_mut() {
+            if let Err(error) = plant.serial_input(port, octets) {
+                tracing::warn!(port, %error, "octets to the plant's serial port dropped");
+            }
+        }
+    }
+
     /// Passes one line of the plant's console language (faults, `clear ...`, hand
     /// operations: [`Plant::console`]) to the plant.
     pub fn operate(&mut self, text: &str) -> Result<(), OperationError> {
@@ -376,6 +460,13 @@ impl Simulation {
             if let Some(plant) = self.plant.as_mut() {
                 if let Err(error) = plant.advance_to(t) {
                     tracing::error!(%error, "plant cannot advance");
+                }
+                for (port, line) in &self.serial_ports {
+                    let octets = plant.take_serial_output(port);
+                    if !octets.is_empty() {
+                        // full: nobody reads the line; the plant's newest come next time
+                        let _ = line.try_send(octets);
+                    }
                 }
             }
             self.now = t;
@@ -503,25 +594,14 @@ impl SimNode {
         if !due {
             return;
         }
-        if let Some(plant) = plant.as_deref() {
+        {
+            let reads_points = self
+                .inputs
+                .iter()
+                .any(|input| matches!(input.from, InputFrom::Point(_)));
+            let db = reads_points.then(|| self.points.lock());
             for input in &mut self.inputs {
-                if let Some(module) = &input.module_fault {
-                    let fault = !plant
-                        .modules()
-                        .iter()
-                        .any(|m| &m.name == module && m.valid());
-                    input.target.write(plc, Value::Bool(fault));
-                    continue;
-                }
-                match plant.read(&input.signal) {
-                    Ok(reading) => {
-                        input.valid = reading.valid;
-                        if reading.valid {
-                            input.target.write(plc, reading.value);
-                        }
-                    }
-                    Err(_) => input.valid = false,
-                }
+                input.copy(plc, plant.as_deref(), db.as_deref());
             }
         }
         let clock = self.points.clock();
@@ -848,12 +928,6 @@ fn build_node(
             .map_err(|error| setup(format!("{what} `{path}`: {error}")))
     };
     for binding in &config.io {
-        let Some(plant) = plant else {
-            return Err(setup(format!(
-                "I/O binding of `{}` but the project has no plant",
-                binding.signal
-            )));
-        };
         let target = if binding.variable.starts_with('%') {
             plc.get_io(&binding.variable)
                 .map_err(|error| setup(format!("I/O address `{}`: {error}", binding.variable)))?;
@@ -861,29 +935,51 @@ fn build_node(
         } else {
             IoTarget::Variable(leaf(&plc, &binding.variable, "I/O variable")?)
         };
-        if let Some(module) = binding.signal.strip_prefix("module-fault:") {
+        let scale = binding.scale.unwrap_or(1.0);
+        let signal = match &binding.source {
+            IoSource::Point(name) => {
+                let id = points
+                    .lock()
+                    .id(name.as_str())
+                    .ok_or_else(|| setup(format!("I/O binding of the unknown point `{name}`")))?;
+                sim.inputs.push(InputBinding {
+                    from: InputFrom::Point(id),
+                    target,
+                    scale,
+                    valid: false,
+                });
+                continue;
+            }
+            IoSource::Signal(signal) => signal,
+        };
+        let Some(plant) = plant else {
+            return Err(setup(format!(
+                "I/O binding of `{signal}` but the project has no plant"
+            )));
+        };
+        if let Some(module) = signal.strip_prefix("module-fault:") {
             if !plant.modules().iter().any(|m| m.name == module) {
                 return Err(setup(format!("the plant has no I/O module `{module}`")));
             }
             sim.inputs.push(InputBinding {
-                signal: binding.signal.clone(),
+                from: InputFrom::ModuleFault(module.to_owned()),
                 target,
+                scale: 1.0,
                 valid: true,
-                module_fault: Some(module.to_owned()),
             });
             continue;
         }
         let info = plant
             .signals()
             .iter()
-            .find(|s| s.name == binding.signal)
-            .ok_or_else(|| setup(format!("the plant has no signal `{}`", binding.signal)))?;
+            .find(|s| &s.name == signal)
+            .ok_or_else(|| setup(format!("the plant has no signal `{signal}`")))?;
         match info.direction {
             Direction::Input => sim.inputs.push(InputBinding {
-                signal: binding.signal.clone(),
+                from: InputFrom::Signal(signal.clone()),
                 target,
+                scale,
                 valid: true,
-                module_fault: None,
             }),
             Direction::Output => {
                 // goes to its safe value (FALSE / 0 or declared) when its task stops; an
@@ -893,8 +989,13 @@ fn build_node(
                         setup(format!("output `{}`: {error}", binding.variable))
                     })?;
                 }
+                if binding.scale.is_some() {
+                    return Err(setup(format!(
+                        "`scale` of the output `{signal}`: only inputs are scaled"
+                    )));
+                }
                 sim.outputs.push(OutputBinding {
-                    signal: binding.signal.clone(),
+                    signal: signal.clone(),
                     target,
                     kind: info.kind,
                     last: None,

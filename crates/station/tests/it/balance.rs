@@ -112,3 +112,86 @@ async fn a_simulated_balance_becomes_points() {
     );
     runtime.shutdown().await;
 }
+
+/// `plant = "PORT"`: the balance on a serial port of the project's plant, its settings
+/// checked as for a serial port; a second line, or no plant, is an error at the device.
+#[test]
+fn a_balance_on_the_plants_port_is_checked_at_load() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("station.toml");
+    let with_plant = |settings: &str| {
+        project(settings).replace(
+            "time_zone = \"UTC\"\n",
+            "time_zone = \"UTC\"\nplant = \"sorter\"\n",
+        )
+    };
+    let loaded = Project::parse(dir.path(), &file, &with_plant("plant = \"balance\"")).unwrap();
+    let device = &loaded.nodes[0].devices[0];
+    assert_eq!(device.plant_port.as_deref(), Some("balance"));
+    let errors = Project::parse(
+        dir.path(),
+        &file,
+        &with_plant("plant = \"balance\", tcp = \"h:1\""),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        errors.contains("node[0].device[0].settings")
+            && errors.contains("a device on the plant's port (plant) takes no `tcp`"),
+        "{errors}"
+    );
+    let errors = Project::parse(dir.path(), &file, &with_plant("plant = 3"))
+        .unwrap_err()
+        .to_string();
+    assert!(errors.contains("a serial port of the plant"), "{errors}");
+    let errors = Project::parse(dir.path(), &file, &project("plant = \"balance\""))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        errors.contains("node[0].device[0].settings")
+            && errors.contains("a device on the plant's serial port needs a plant"),
+        "{errors}"
+    );
+}
+
+/// `[[node.io]] point = ...`: a point of the node (a device's) into the PLC; exactly one
+/// of signal and point, a point the node has, a finite scale other than zero.
+#[test]
+fn io_bindings_of_points_are_checked_at_load() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("station.toml");
+    let with_io = |io: &str| format!("{}\n[[node.io]]\n{io}\n", project("simulate = \"red 1\""));
+    let loaded = Project::parse(
+        dir.path(),
+        &file,
+        &with_io("point = \"BAL.weight\"\nvariable = \"W\"\nscale = 1e6"),
+    )
+    .unwrap();
+    let io = &loaded.nodes[0].io[0];
+    assert_eq!(
+        io.source,
+        station::config::IoSource::Point("BAL.weight".to_owned())
+    );
+    assert_eq!(io.scale, Some(1e6));
+    for (io, message) in [
+        (
+            "point = \"BAL.wieght\"\nvariable = \"W\"",
+            "node[0].io[0].point",
+        ),
+        ("point = \"BAL.wieght\"\nvariable = \"W\"", "BAL.wieght"),
+        (
+            "signal = \"Sn1\"\npoint = \"BAL.weight\"\nvariable = \"W\"",
+            "give either signal (a plant signal) or point (a point of the node), not both",
+        ),
+        ("variable = \"W\"", "an I/O binding needs signal or point"),
+        (
+            "point = \"BAL.weight\"\nvariable = \"W\"\nscale = 0.0",
+            "scale must be a finite number other than 0",
+        ),
+    ] {
+        let errors = Project::parse(dir.path(), &file, &with_io(io))
+            .unwrap_err()
+            .to_string();
+        assert!(errors.contains(message), "{io}: {errors}");
+    }
+}

@@ -2,7 +2,8 @@
 //! supervisor as two nodes on the plant `sorter`, the DP exchange through the plant's
 //! wiring; an automatic sorting commanded over IEC 104 as the HMI does, the manual
 //! switches refused in automatic mode, and the supervisor's lock-out recorded as an
-//! event of the station.
+//! event of the station. The balance is read as on the model: the plant's balance port on
+//! a pseudo-terminal, the balance driver on it, its points into the program's inputs.
 
 use std::time::Duration;
 
@@ -33,10 +34,62 @@ fn number(runtime: &Runtime, node: &str, point: &str) -> Option<f64> {
     }
 }
 
+/// The balance's newest record as the plant sent it on its port (grams).
+async fn plant_balance(runtime: &Runtime) -> f64 {
+    runtime
+        .with_simulation(|sim| sim.plant().unwrap().real("Balance_g").unwrap())
+        .await
+        .unwrap()
+}
+
+/// Whether the balance's points show the newest record the plant sent: the driver has
+/// read everything the pseudo-terminal carried so far.
+fn balance_read(runtime: &Runtime, weight: f64) -> bool {
+    let Some(point) = runtime.node("SORTER").unwrap().points.point("BAL.weight") else {
+        return false;
+    };
+    !point.quality.invalid
+        && matches!(point.value, PointValue::Float(x) if (x - weight).abs() < 1e-4)
+}
+
+/// [`advance_until`] for the balance on its line: after each step, waits until the
+/// driver has read what the step sent, so the program weighs what the plant weighed
+/// however late the machine delivers the octets.
+async fn advance_until_weighed(
+    runtime: &Runtime,
+    step: Duration,
+    what: &str,
+    mut condition: impl FnMut() -> bool,
+) {
+    for _ in 0..400 {
+        if condition() {
+            return;
+        }
+        runtime.advance(step).await.unwrap();
+        let weight = plant_balance(runtime).await;
+        eventually("the balance's record read from the pseudo-terminal", || {
+            balance_read(runtime, weight)
+        })
+        .await;
+    }
+    panic!("timed out waiting until {what}");
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn an_automatic_sorting_through_the_station_and_the_supervisor_stepping_in() {
     let runtime = start(project(), StoreChoice::Url("sqlite::memory:".into())).await;
     links_up(&runtime).await;
+    let ports = runtime.plant_ports();
+    assert_eq!(ports.len(), 1);
+    assert_eq!(
+        (ports[0].port(), ports[0].device()),
+        ("balance", "SORTER/BAL")
+    );
+    assert!(
+        ports[0].pty_path().starts_with("/dev/"),
+        "{}",
+        ports[0].pty_path()
+    );
     let sorter = runtime.node("SORTER").unwrap();
     let address = sorter.server.as_ref().unwrap().local_addr();
     let hmi = Dispatch::connect(address, 1, true).await;
@@ -69,7 +122,7 @@ async fn an_automatic_sorting_through_the_station_and_the_supervisor_stepping_in
         hmi.single_command(SORT_START, true, false).await,
         "SORT_Start"
     );
-    advance_until(&runtime, Duration::from_secs(1), "one sorting done", || {
+    advance_until_weighed(&runtime, Duration::from_secs(1), "one sorting done", || {
         number(&runtime, "SORTER", "SORT_Sortings") == Some(1.0)
     })
     .await;
@@ -133,5 +186,29 @@ async fn an_automatic_sorting_through_the_station_and_the_supervisor_stepping_in
         .description
         .clone();
     assert!(description.contains("MaxOnTime"), "{description}");
+
+    // The balance's link lost: its line falls silent, the driver calls it not answering
+    // (2 s without a legal record) and its weight invalid; back, it answers again.
+    runtime.operate("balance-link-loss").await.unwrap();
+    runtime.advance(Duration::from_secs(1)).await.unwrap();
+    eventually("the balance not answering", || {
+        number(&runtime, "SORTER", "BAL.not_answering") == Some(1.0)
+    })
+    .await;
+    let weight = runtime
+        .node("SORTER")
+        .unwrap()
+        .points
+        .point("BAL.weight")
+        .unwrap();
+    assert!(weight.quality.invalid, "{weight:?}");
+    runtime.operate("clear balance-link-loss").await.unwrap();
+    advance_until_weighed(
+        &runtime,
+        Duration::from_secs(1),
+        "the balance answering",
+        || number(&runtime, "SORTER", "BAL.not_answering") == Some(0.0),
+    )
+    .await;
     runtime.shutdown().await;
 }

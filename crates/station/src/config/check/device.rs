@@ -57,14 +57,46 @@ impl Ctx<'_> {
                 );
                 continue;
             };
-            let config = FieldDeviceConfig {
+            let mut config = FieldDeviceConfig {
                 name: device.name.clone(),
                 kind: device.kind.clone(),
                 description: device.description.clone(),
                 ioa_base,
                 settings: device.settings.clone(),
+                plant_port: None,
             };
-            if let Err(error) = kind.check(&config) {
+            // A device on the plant's serial port: the kind checks its settings as for a
+            // serial port (the runtime puts the pseudo-terminal's path there).
+            let mut checked = config.clone();
+            if let Some(port) = config.settings.get(PLANT_PORT_KEY) {
+                let Some(port) = port.as_str() else {
+                    self.err(
+                        &at("settings"),
+                        ConfigProblem::Invalid {
+                            detail: format!("setting `{PLANT_PORT_KEY}`: the name of a serial port of the plant"),
+                        },
+                    );
+                    continue;
+                };
+                config.plant_port = Some(port.to_owned());
+                if let Some(key) = ["serial", "tcp", "simulate"]
+                    .into_iter()
+                    .find(|key| config.settings.contains_key(*key))
+                {
+                    self.err(
+                        &at("settings"),
+                        Conflict::PlantPortAndLine {
+                            key: key.to_owned(),
+                        },
+                    );
+                }
+                checked.settings.remove(PLANT_PORT_KEY);
+                checked.settings.insert(
+                    "serial".to_owned(),
+                    toml::Value::String(format!("(plant port {port})")),
+                );
+            }
+            if let Err(error) = kind.check(&checked) {
                 self.err(
                     &at("settings"),
                     ConfigProblem::Invalid {

@@ -157,6 +157,22 @@ impl Ctx<'_> {
             nodes.push(built);
         }
         self.check_links(folder, &raw, &mut nodes);
+        if station.plant.is_none() {
+            for (n, node) in nodes.iter().enumerate() {
+                for (d, device) in node.devices.iter().enumerate() {
+                    if device.plant_port.is_some() {
+                        self.err(
+                            &[K("node"), I(n), K("device"), I(d), K("settings")],
+                            ConfigProblem::Missing {
+                                what: "a plant",
+                                needed_by: "a device on the plant's serial port",
+                                hint: "[station] plant = \"...\"",
+                            },
+                        );
+                    }
+                }
+            }
+        }
         Project {
             folder: folder.to_path_buf(),
             station,

@@ -53,6 +53,62 @@ struct Sources {
 }
 
 impl Ctx<'_> {
+    /// The node's I/O bindings: each a plant signal or a point of the node (`points`, its
+    /// devices' among them), with a finite `scale`.
+    fn check_io(&mut self, n: usize, raw: &RawNode, points: &[PointConfig]) -> Vec<IoBinding> {
+        let mut bindings = Vec::new();
+        for (i, io) in raw.io.iter().enumerate() {
+            let at = |key: &'static str| vec![K("node"), I(n), K("io"), I(i), K(key)];
+            let source = match (&io.signal, &io.point) {
+                (Some(signal), None) => IoSource::Signal(signal.clone()),
+                (None, Some(point)) => {
+                    if !points.iter().any(|p| &p.name == point) {
+                        self.err(
+                            &at("point"),
+                            ConfigProblem::Unknown {
+                                what: Reference::Point,
+                                name: point.clone(),
+                                within: raw.name.clone(),
+                            },
+                        );
+                    }
+                    IoSource::Point(point.clone())
+                }
+                (Some(_), Some(_)) => {
+                    self.err(&at("point"), Conflict::IoSignalAndPoint);
+                    continue;
+                }
+                (None, None) => {
+                    self.err(
+                        &[K("node"), I(n), K("io"), I(i)],
+                        ConfigProblem::Missing {
+                            what: "signal or point",
+                            needed_by: "an I/O binding",
+                            hint: "",
+                        },
+                    );
+                    continue;
+                }
+            };
+            if let Some(scale) = io.scale.filter(|scale| !scale.is_finite() || *scale == 0.0) {
+                self.err(
+                    &at("scale"),
+                    ConfigProblem::InvalidNumber {
+                        what: "scale",
+                        value: scale.to_string(),
+                        expected: "a finite number other than 0",
+                    },
+                );
+            }
+            bindings.push(IoBinding {
+                source,
+                variable: io.variable.clone(),
+                scale: io.scale,
+            });
+        }
+        bindings
+    }
+
     /// Checks node `n` (`raw`), each part in turn; the node's links are checked with the
     /// other nodes (`links`).
     pub(in crate::config) fn check_node(
@@ -71,14 +127,6 @@ impl Ctx<'_> {
             .as_ref()
             .map(|s| self.check_server(folder, n, raw, s));
         let tasks = self.check_tasks(n, raw, &sources);
-        let io = raw
-            .io
-            .iter()
-            .map(|b| IoBinding {
-                signal: b.signal.clone(),
-                variable: b.variable.clone(),
-            })
-            .collect();
 
         let mut point_names = HashSet::new();
         let mut point_ioas: HashMap<Ioa, String> = HashMap::new();
@@ -108,6 +156,7 @@ impl Ctx<'_> {
             },
         );
         points.extend(device_points);
+        let io = self.check_io(n, raw, &points);
 
         let commands = self.check_commands(
             n,
