@@ -92,7 +92,9 @@
 //! source = "RH2Logic.FA1_Zapnut"       # a PLC variable path, or "link:LINK/IOA": the point
 //!                                      # IOA of the node behind the link LINK of this node;
 //!                                      # omitted for a link's status_point (M_SP_NA_1 or
-//!                                      # M_SP_TB_1, TRUE = link down)
+//!                                      # M_SP_TB_1, TRUE = link down); or a direct address
+//!                                      # of the process image (`%IX0.0`): the input, whatever
+//!                                      # program a lab loads into the node
 //! transmission = "spontaneous"         # spontaneous (default) | cyclic | interrogation-only
 //! cycle_ms = 1000                      # required with (and only with) cyclic
 //! groups = [1, 3]                      # interrogation groups 1..=16; default none

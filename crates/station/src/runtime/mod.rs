@@ -23,6 +23,8 @@
 //!   values become points, their fault logs go into the store's archive).
 //! - [`plant_port`]: the plant's serial ports (a device of the plant on its RS-232) on
 //!   pseudo-terminals, for the project's device drivers.
+//! - [`program`]: a new program loaded into a running node's PLC (a lab's student
+//!   program on the lab itself), and the project's own put back.
 //! - [`notification`]: e-mail and webhook notices of what the lifts report, each delivery
 //!   recorded.
 //! - `command`: the server hooks — a command's authority, range and audit, then its
@@ -56,6 +58,7 @@ pub mod node;
 pub mod notification;
 pub mod operation;
 pub mod plant_port;
+pub mod program;
 mod server;
 pub mod simulation;
 pub mod sink;
@@ -640,6 +643,12 @@ impl Runtime {
             .iter()
             .flat_map(|node| &node.lifts)
             .find(|lift| lift.name().eq_ignore_ascii_case(name))
+    }
+
+    /// Loads programs into the running nodes' PLCs (a remote lab's student program), from
+    /// any task.
+    pub fn program_loader(&self) -> program::ProgramLoader {
+        program::ProgramLoader::new(self.project.clone(), self.simulation.clone())
     }
 
     /// The plant's serial ports on pseudo-terminals, with the device on each.

@@ -196,7 +196,11 @@ struct OutputBinding {
 struct SourcedPoint {
     id: PointId,
     kind: PointKind,
-    leaf: Leaf,
+    /// A variable, or a direct address of the process image (`%IX0.0`): a point that
+    /// shows an input whatever program runs.
+    source: IoTarget,
+    /// The source's type.
+    ty: Ty,
     /// The input binding feeding this variable, whose module validity is the point's.
     input: Option<usize>,
     /// A BOOL variable that makes the point invalid while TRUE.
@@ -400,6 +404,67 @@ impl Simulation {
                 tracing::warn!(port, %error, "octets to the plant's serial port dropped");
             }
         }
+    }
+
+    /// Loads a new program into the running node `config.name` (`runtime::program`):
+    /// the new PLC is compiled and bound as `config` says first, so a program that does
+    /// not compile or bind leaves the old one running; then the old one stops (its
+    /// outputs to their safe values, the stop recorded), the new one cold-starts at the
+    /// next step, and `plc-program` records what was loaded and by whom.
+    pub(crate) fn load_program(
+        &mut self,
+        config: &NodeConfig,
+        files: Vec<(String, String)>,
+        description: String,
+    ) -> Result<(), RuntimeError> {
+        let now = self.now;
+        let index = self
+            .nodes
+            .iter()
+            .position(|node| node.points.name() == config.name)
+            .ok_or_else(|| RuntimeError::Setup(format!("no running node `{}`", config.name)))?;
+        let points = self
+            .nodes
+            .get(index)
+            .map(|node| Arc::clone(&node.points))
+            .ok_or_else(|| RuntimeError::Setup(format!("no running node `{}`", config.name)))?;
+        let files = if files.is_empty() {
+            project_sources(config)?
+        } else {
+            files
+        };
+        let fresh = build_node_from(config, files, Arc::clone(&points), self.plant.as_deref())?;
+        let Simulation {
+            plant,
+            nodes,
+            observers,
+            pulses,
+            ..
+        } = self;
+        let Some(old) = nodes.get_mut(index) else {
+            return Err(RuntimeError::Setup(format!(
+                "no running node `{}`",
+                config.name
+            )));
+        };
+        if old.plc.is_some() {
+            old.run_plc(false, now, plant.as_deref_mut(), observers)
+                .map_err(|error| RuntimeError::Setup(error.to_string()))?;
+        }
+        // A pulse's variable is the old program's.
+        pulses.retain(|pulse| pulse.node != index);
+        *old = fresh;
+        let utc = points.clock().at(now);
+        let mut record = crate::store::EventRecord::new(
+            points.name(),
+            "plc-program".to_owned(),
+            PointValue::Text(description),
+            utc,
+        );
+        record.cause = EventCause::Local;
+        points.recorder().event(record);
+        tracing::info!(node = %config.name, "program loaded");
+        Ok(())
     }
 
     /// Passes one line of the plant's console language (faults, `clear ...`, hand
@@ -719,7 +784,7 @@ impl SimNode {
         // Points: read everything first, then take the database lock once.
         let mut changes = Vec::new();
         for point in &mut self.sourced {
-            let Ok(v) = plc.read_leaf(&point.leaf) else {
+            let Some(v) = point.source.read(plc) else {
                 continue;
             };
             let forced_invalid = point
@@ -730,7 +795,7 @@ impl SimNode {
                 &self.stopped,
                 &self.task_of_program,
                 &self.tasks,
-                &point.leaf.path,
+                point.source.path(),
             )
             .is_some();
             let valid = !stopped
@@ -739,7 +804,7 @@ impl SimNode {
                     .input
                     .and_then(|i| self.inputs.get(i))
                     .is_none_or(|input| input.valid);
-            let Some(value) = point_value(point.kind, &point.leaf.ty, &v) else {
+            let Some(value) = point_value(point.kind, &point.ty, &v) else {
                 continue;
             };
             let current = Some((value.clone(), valid));
@@ -842,8 +907,54 @@ fn point_value(kind: PointKind, ty: &Ty, v: &Val) -> Option<PointValue> {
     })
 }
 
+/// The type of a direct address's datum (`%IX0.0` BOOL, `%IB1` BYTE, `%ID4` DWORD).
+fn image_type(address: &str) -> Ty {
+    match address.get(2..3) {
+        Some("X" | "x") => Ty::Bool,
+        Some("B" | "b") => Ty::Byte,
+        Some("W" | "w") => Ty::Word,
+        Some("D" | "d") => Ty::DWord,
+        Some("L" | "l") => Ty::LWord,
+        _ => Ty::Bool,
+    }
+}
+
+/// The node's source files as its project names them: (path, text).
+fn project_sources(config: &NodeConfig) -> Result<Vec<(String, String)>, RuntimeError> {
+    // The configuration resolved the sources against the project folder already: joining
+    // the folder again doubled a relative project path (`examples/vsetin/examples/vsetin`).
+    config
+        .sources
+        .iter()
+        .map(|path| {
+            std::fs::read_to_string(path)
+                .map(|text| (path.display().to_string(), text))
+                .map_err(|error| {
+                    RuntimeError::Setup(format!(
+                        "node `{}`: cannot read {}: {error}",
+                        config.name,
+                        path.display()
+                    ))
+                })
+        })
+        .collect()
+}
+
 fn build_node(
     config: &NodeConfig,
+    points: Arc<NodePoints>,
+    plant: Option<&(dyn Plant + Send + 'static)>,
+) -> Result<SimNode, RuntimeError> {
+    if config.sources.is_empty() && config.tasks.is_empty() {
+        return build_node_from(config, Vec::new(), points, plant);
+    }
+    build_node_from(config, project_sources(config)?, points, plant)
+}
+
+/// Builds the node's PLC from `files` (name, text) and binds it as `config` says.
+fn build_node_from(
+    config: &NodeConfig,
+    files: Vec<(String, String)>,
     points: Arc<NodePoints>,
     plant: Option<&(dyn Plant + Send + 'static)>,
 ) -> Result<SimNode, RuntimeError> {
@@ -869,16 +980,8 @@ fn build_node(
         sourced: Vec::new(),
         commands: HashMap::new(),
     };
-    if config.sources.is_empty() && config.tasks.is_empty() {
+    if files.is_empty() && config.tasks.is_empty() {
         return Ok(sim);
-    }
-    let mut files = Vec::new();
-    // The configuration resolved the sources against the project folder already: joining
-    // the folder again doubled a relative project path (`examples/vsetin/examples/vsetin`).
-    for path in &config.sources {
-        let text = std::fs::read_to_string(path)
-            .map_err(|error| setup(format!("cannot read {}: {error}", path.display())))?;
-        files.push((path.display().to_string(), text));
     }
     let (sources, result) = plc::build(&files);
     let compiled = result.map_err(|diagnostics| {
@@ -1012,11 +1115,20 @@ fn build_node(
             let Some(id) = db.id(point.name.as_str()) else {
                 continue;
             };
-            let target = leaf(&plc, path, &format!("point `{}` source", point.name))?;
+            let (source, ty) = if path.starts_with('%') {
+                plc.get_io(path).map_err(|error| {
+                    setup(format!("point `{}` source `{path}`: {error}", point.name))
+                })?;
+                (IoTarget::Image(path.clone()), image_type(path))
+            } else {
+                let target = leaf(&plc, path, &format!("point `{}` source", point.name))?;
+                let ty = target.ty.clone();
+                (IoTarget::Variable(target), ty)
+            };
             let input = sim
                 .inputs
                 .iter()
-                .position(|i| i.target.path() == target.path);
+                .position(|i| i.target.path() == source.path());
             let invalid_when = point
                 .invalid_when
                 .as_deref()
@@ -1025,7 +1137,8 @@ fn build_node(
             sim.sourced.push(SourcedPoint {
                 id,
                 kind: point.point_type.kind,
-                leaf: target,
+                source,
+                ty,
                 input,
                 invalid_when,
                 last: None,

@@ -212,3 +212,100 @@ async fn an_automatic_sorting_through_the_station_and_the_supervisor_stepping_in
     .await;
     runtime.shutdown().await;
 }
+
+/// A student's program loaded into the running SORTER node (the lab itself, not a
+/// simulation of its own): one that does not compile is refused with its place and the
+/// lab runs on; one that holds gate S1 open runs, and the supervisor locks S1 out; the
+/// lab's own program is put back. Each load is an event of the station.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_students_program_runs_on_the_lab_and_the_labs_own_comes_back() {
+    use station::runtime::program::ProgramDownload;
+
+    let runtime = start(project(), StoreChoice::Url("sqlite::memory:".into())).await;
+    links_up(&runtime).await;
+    let loader = runtime.program_loader();
+    let student = |text: &str| ProgramDownload {
+        files: vec![("student.st".to_owned(), text.to_owned())],
+        keep: vec!["interface.st".to_owned()],
+        tasks: vec![("main".to_owned(), vec!["Holder".to_owned()])],
+        by: "student".to_owned(),
+    };
+
+    let error = loader
+        .download(
+            "SORTER",
+            student("PROGRAM Holder\nVAR s1 AT %QX0.0 : BOOL; END_VAR\ns1 := TRUE\nEND_PROGRAM\n"),
+        )
+        .await
+        .unwrap_err()
+        .to_string();
+    assert!(error.contains("student.st:3:11"), "{error}");
+    // Refused: the lab's program runs on (it answers a mode change).
+    runtime.advance(Duration::from_millis(100)).await.unwrap();
+    assert_eq!(number(&runtime, "SORTER", "SORT_Automatic"), Some(0.0));
+
+    let loaded = loader
+        .download(
+            "SORTER",
+            student("PROGRAM Holder\nVAR s1 AT %QX0.0 : BOOL; END_VAR\ns1 := TRUE;\nEND_PROGRAM\n"),
+        )
+        .await
+        .unwrap();
+    assert_eq!(
+        loaded.tasks,
+        vec![("main".to_owned(), vec!["Holder".to_owned()])]
+    );
+    assert!(loaded.files[0].ends_with("interface.st") && loaded.files[1] == "student.st");
+    advance_until(
+        &runtime,
+        Duration::from_millis(500),
+        "S1 locked out by the supervisor",
+        || number(&runtime, "SUPERVISOR", "SUP_S1_State") == Some(3.0),
+    )
+    .await;
+
+    loader.restore("SORTER", "admin").await.unwrap();
+    advance_until(
+        &runtime,
+        Duration::from_millis(100),
+        "S1 released by the lab's own program",
+        || {
+            runtime
+                .node("SUPERVISOR")
+                .and_then(|node| node.points.point("SUP_S1_State"))
+                .is_some_and(|point| point.value != PointValue::Int(1))
+        },
+    )
+    .await;
+    let held = runtime
+        .with_simulation(|sim| sim.plant().unwrap().bool("Cmd_S1").unwrap())
+        .await
+        .unwrap();
+    assert!(
+        !held,
+        "the lab's own program does not hold S1 in manual mode"
+    );
+    runtime.recorder().flush().await;
+    let loads: Vec<String> = runtime
+        .store()
+        .unwrap()
+        .query_events(&EventQuery::default().with_point("plc-program".to_owned()))
+        .await
+        .unwrap()
+        .items
+        .into_iter()
+        .map(|event| event.value.to_string())
+        .collect();
+    assert_eq!(loads.len(), 2, "{loads:?}");
+    assert!(
+        loads.iter().any(|text| text.contains("loaded by student")
+            && text.contains("student.st")
+            && text.contains("task main: Holder")),
+        "{loads:?}"
+    );
+    assert!(
+        loads.iter().any(|text| text.contains("restored by admin")),
+        "{loads:?}"
+    );
+    runtime.shutdown().await;
+}

@@ -398,9 +398,15 @@ impl Ctx<'_> {
         };
         let is_variable = |text: &str| matches!(parse_link_ref(text), Ok(None));
         let mut named: Vec<(Vec<Seg>, &str)> = Vec::new();
+        let mut addresses: Vec<(Vec<Seg>, &str)> = Vec::new();
         for (p, point) in raw.point.iter().enumerate() {
             if let Some(source) = point.source.as_deref().filter(|s| is_variable(s)) {
-                named.push((vec![K("point"), I(p), K("source")], source));
+                if source.starts_with('%') {
+                    // a direct address of the process image: the input whatever program runs
+                    addresses.push((vec![K("point"), I(p), K("source")], source));
+                } else {
+                    named.push((vec![K("point"), I(p), K("source")], source));
+                }
             }
             if let Some(variable) = &point.invalid_when {
                 named.push((vec![K("point"), I(p), K("invalid_when")], variable));
@@ -417,17 +423,22 @@ impl Ctx<'_> {
         for (i, io) in raw.io.iter().enumerate() {
             if io.variable.starts_with('%') {
                 // a direct address of the process image (`%IX0.4`, `%ID4`, `%QX1.2`)
-                if let Err(error) = plc.get_io(&io.variable) {
-                    self.err(
-                        &[K("node"), I(n), K("io"), I(i), K("variable")],
-                        ConfigProblem::PlcVariable {
-                            detail: error.to_string(),
-                        },
-                    );
-                }
-                continue;
+                addresses.push((vec![K("io"), I(i), K("variable")], &io.variable));
+            } else {
+                named.push((vec![K("io"), I(i), K("variable")], &io.variable));
             }
-            named.push((vec![K("io"), I(i), K("variable")], &io.variable));
+        }
+        for (rest, address) in addresses {
+            if let Err(error) = plc.get_io(address) {
+                let mut path = vec![K("node"), I(n)];
+                path.extend(rest);
+                self.err(
+                    &path,
+                    ConfigProblem::PlcVariable {
+                        detail: error.to_string(),
+                    },
+                );
+            }
         }
         let groups = raw
             .server

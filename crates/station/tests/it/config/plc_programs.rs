@@ -190,3 +190,34 @@ source = "Main.A"
         )
     );
 }
+
+/// A point may show a direct address of the process image (`%IX0.0`: an input, whatever
+/// program runs); an address the image does not have is reported at the source.
+#[test]
+fn point_sources_may_be_image_addresses() {
+    let toml = |source: &str| {
+        format!(
+            r#"[station]
+name = "X"
+time_zone = "UTC"
+[[node]]
+name = "A"
+common_address = 1
+sources = ["plc/main.st"]
+[[node.point]]
+name = "P"
+type = "M_SP_NA_1"
+ioa = 1
+source = "{source}"
+"#
+        )
+    };
+    load(&toml("%IX0.0"), &[PLC]).unwrap_or_else(|errors| panic!("{errors:?}"));
+    let errors = errors(&toml("%IX0.9"), &[PLC]);
+    assert!(
+        errors
+            .iter()
+            .any(|e| e.to_string().contains("node[0].point[0].source")),
+        "{errors:?}"
+    );
+}
