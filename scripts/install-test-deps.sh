@@ -34,6 +34,9 @@ set -euo pipefail
 
 C104_VERSION="2.2.1"   # verified against tests/peer/*.py (see tests/peer/README.md)
 AIOSMTPD_VERSION="1.4.6"   # verified against tests/support/smtp_sink.py
+PYSERIAL_VERSION="3.5"   # pymodbus's RTU over a pseudo-terminal
+PYMODBUS_VERSION="3.16.1"   # the Modbus TCP/RTU peer of the field I/O tests
+PYTHON_SNAP7_VERSION="3.3.0"   # the S7 peer (Snap7 server and client) of the field I/O tests
 HAT_DRIVERS_VERSION="0.10.10"   # verified against tests/peer/hat103_master.py
 PYTHON="${PYTHON:-python3}"
 
@@ -174,6 +177,45 @@ else
     fi
     log "hat-drivers $have installed"
 fi
+
+# ---------------------------------------------------------------- pymodbus, python-snap7
+# The independent Modbus (TCP and RTU) and S7 peers of the field I/O tests. pymodbus is
+# pure Python, with pyserial for RTU over a pseudo-terminal; python-snap7 ships manylinux
+# wheels carrying the Snap7 library itself (server and client): nothing to compile.
+py_installed_version() { # DIST IMPORT...
+    local dist="$1"; shift
+    "$PYTHON" - "$dist" "$@" <<'EOF' 2>/dev/null || true
+import importlib, importlib.metadata as m, sys
+try:
+    for module in sys.argv[2:]:
+        importlib.import_module(module)  # the import itself must work, not only the metadata
+    print(m.version(sys.argv[1]))
+except Exception:
+    pass
+EOF
+}
+
+py_install() { # DIST VERSION IMPORT...
+    local dist="$1" want="$2"; shift 2
+    local have
+    have="$(py_installed_version "$dist" "$@")"
+    if [ "$have" = "$want" ]; then
+        log "$dist $have present"
+        return
+    fi
+    log "$dist present: '${have:-none}', want $want"
+    "$PYTHON" -m pip install -q --only-binary=:all: "$dist==$want"
+    have="$(py_installed_version "$dist" "$@")"
+    if [ "$have" != "$want" ]; then
+        log "ERROR: $dist $want did not install (found '${have:-none}')"
+        exit 1
+    fi
+    log "$dist $have installed"
+}
+
+py_install pyserial "$PYSERIAL_VERSION" serial
+py_install pymodbus "$PYMODBUS_VERSION" pymodbus.client pymodbus.server
+py_install python-snap7 "$PYTHON_SNAP7_VERSION" snap7.client snap7.server
 
 # ---------------------------------------------------------------- postgresql
 # Only the server binaries under /usr/lib/postgresql/*/bin are used. The package

@@ -7,6 +7,12 @@
 //! [`ProgramTrial`] for the trial the folder names (`trial = "sorting"`), through
 //! [`ServeConfig::trial`](crate::ServeConfig::trial). The trial's work runs on a blocking
 //! thread, one at a time: a run takes a CPU for a second or two.
+//!
+//! Where the HMI runs in the station's process (`stanice run --hmi`) and `[program]`
+//! names the lab's `node`, a trial can also load the program into the lab itself
+//! ([`ProgramTrial::load`]: the running node's PLC, behind the same supervisor) and put
+//! the lab's own program back ([`ProgramTrial::restore`]); only the holder of the operator
+//! lease may, as only they control the lab.
 
 use serde::{Deserialize, Serialize};
 
@@ -20,6 +26,17 @@ pub struct ProgramConfig {
     /// The lowest level that may upload and try a program (default 5).
     #[serde(default = "default_level")]
     pub level: u8,
+    /// The station's node that runs students' programs on the lab itself (the sorting
+    /// lab's `SORTER`); without it programs are only tried on a simulation.
+    #[serde(default)]
+    pub node: Option<String>,
+    /// The node's task whose program a student's replaces (default `main`).
+    #[serde(default = "default_task")]
+    pub task: String,
+}
+
+fn default_task() -> String {
+    "main".to_owned()
 }
 
 fn default_level() -> u8 {
@@ -47,6 +64,10 @@ pub struct CheckReport {
     pub main: Option<String>,
 }
 
+/// A boxed future a trial's live operations return.
+pub type TrialFuture =
+    std::pin::Pin<Box<dyn std::future::Future<Output = Result<serde_json::Value, String>> + Send>>;
+
 /// A lab's trial of a program: what the application gives the HMI.
 pub trait ProgramTrial: Send + Sync + std::fmt::Debug {
     /// Compiles `files` as the trial will.
@@ -54,4 +75,21 @@ pub trait ProgramTrial: Send + Sync + std::fmt::Debug {
     /// Runs `files` (with `seed` for the simulation), returning the report to show: a
     /// JSON object with at least `passed` (bool) and `text` (the report in words).
     fn run(&self, files: &[SourceFile], seed: u64) -> Result<serde_json::Value, String>;
+    /// Whether [`ProgramTrial::load`] reaches the lab itself here.
+    fn live(&self) -> bool {
+        false
+    }
+    /// Loads `files` into the lab itself for `user`: a JSON object with at least `text`
+    /// (what was loaded, in words), or why not (a compile error with its place).
+    fn load(&self, _files: Vec<SourceFile>, _user: String) -> TrialFuture {
+        Box::pin(async { Err(NOT_LIVE.to_owned()) })
+    }
+    /// Puts the lab's own program back, for `user`.
+    fn restore(&self, _user: String) -> TrialFuture {
+        Box::pin(async { Err(NOT_LIVE.to_owned()) })
+    }
 }
+
+/// Why a trial loads nothing into the lab.
+pub const NOT_LIVE: &str =
+    "programs are only tried on a simulation here (the HMI runs apart from the station, or [program] names no node)";

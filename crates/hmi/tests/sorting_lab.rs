@@ -5,8 +5,10 @@
 //! the sorting and sees the balls counted into the shafts; a second operator is refused
 //! while the lease is held and takes it once it is released; manual switching is refused
 //! in automatic mode; the student tries a program on the Program page (its compile
-//! errors shown file:line:col, the supervisor's lock-out in the trial's report); when the
-//! PLC link is cut every element blinks.
+//! errors shown file:line:col, the supervisor's lock-out in the trial's report), loads it
+//! into the lab itself with the lease (refused to a user without it), meets the
+//! supervisor there, and puts the lab's own program back; when the PLC link is cut every
+//! element blinks.
 //!
 //! Chromium and chromedriver come from `scripts/install-test-deps.sh`; without them the
 //! test says SKIPPED and passes, unless `STANICE_REQUIRE_PEERS=1` (CI).
@@ -26,7 +28,6 @@ use chromium::{browser_available, click, js, until, Driver};
 use std::net::SocketAddr;
 
 use fantoccini::{Client, Locator};
-use hmi::trial::{CheckReport, ProgramTrial, SourceFile};
 use hmi::{Hmi, HmiOptions, ServeConfig};
 use iec60870::time::TimeZonePolicy;
 use serde_json::json;
@@ -34,53 +35,6 @@ use station::config::Project;
 use station::runtime::{Pacing, Runtime, RuntimeOptions, StoreChoice};
 use testkit::ports::free_port_range;
 use testkit::projects::{copy_project, example};
-
-/// The sorting lab's trial behind the HMI's trait, as the `stanice` binary gives it.
-#[derive(Debug)]
-struct SortingTrial;
-
-impl ProgramTrial for SortingTrial {
-    fn check(&self, files: &[SourceFile]) -> CheckReport {
-        let files = files
-            .iter()
-            .map(|f| (f.name.clone(), f.text.clone()))
-            .collect();
-        match sorting::trial::compile(files, None) {
-            Ok(program) => CheckReport {
-                ok: true,
-                diagnostics: program.warnings.clone(),
-                main: Some(program.main),
-            },
-            Err(lab::program::ProgramError::Compile(diagnostics)) => CheckReport {
-                ok: false,
-                diagnostics,
-                main: None,
-            },
-            Err(other) => CheckReport {
-                ok: false,
-                diagnostics: vec![other.to_string()],
-                main: None,
-            },
-        }
-    }
-
-    fn run(&self, files: &[SourceFile], seed: u64) -> Result<serde_json::Value, String> {
-        let files = files
-            .iter()
-            .map(|f| (f.name.clone(), f.text.clone()))
-            .collect();
-        let program = sorting::trial::compile(files, None).map_err(|e| e.to_string())?;
-        let report = sorting::trial::Trial {
-            seed,
-            ..sorting::trial::Trial::default()
-        }
-        .run(program)
-        .map_err(|e| e.to_string())?;
-        let mut json = serde_json::to_value(&report).map_err(|e| e.to_string())?;
-        json["text"] = serde_json::Value::String(report.text());
-        Ok(json)
-    }
-}
 
 /// The lab (both PLCs, the mechanism) and its HMI, on free ports, the screens folder
 /// copied so that the bookings file lands in a temporary folder.
@@ -119,7 +73,12 @@ impl Lab {
             .local_addr();
         let screens = project_folder.join("hmi");
         let mut serve = ServeConfig::default();
-        serve.trial = Some(std::sync::Arc::new(SortingTrial));
+        // The trial the `stanice` binary gives its HMI, loading into the lab's SORTER.
+        serve.trial = Some(std::sync::Arc::new(sorting::hmi_trial::SortingTrial::live(
+            runtime.program_loader(),
+            "SORTER",
+            "main",
+        )));
         let hmi = Hmi::start_with(
             HmiOptions {
                 users: screens.join("users.toml"),
@@ -534,6 +493,57 @@ async fn observer_operator_lease_automatic_sorting_and_link_loss() {
         "{report}"
     );
     assert!(report.contains("NOT finished"), "{report}");
+
+    // --- Loaded into the lab itself: refused to the operator (no lease), carried out for
+    // the student who holds it; the lab's supervisor locks out S1, which the program
+    // holds on (a high command keeps the lock-out, BS-A2); the lab's own program comes
+    // back.
+    let holder =
+        "PROGRAM Holder\nVAR\n    cS1 AT %QX0.0 : BOOL;\nEND_VAR\n    cS1 := TRUE;\nEND_PROGRAM\n";
+    let body = json!({"files": [{"name": "holder.st", "text": holder}]}).to_string();
+    let refused = post(&operator, "/api/program/load", &body).await;
+    assert_eq!(refused[0], json!(409), "{refused:?}");
+    assert!(
+        refused[2].as_str().unwrap().contains("operator lease"),
+        "{refused:?}"
+    );
+    type_program(&student, "holder.st", holder).await;
+    click(&student, "#program-load").await;
+    until(
+        &student,
+        "document.getElementById('program-verdict').dataset.verdict === 'loaded' && document.getElementById('program-verdict').textContent.includes('PROGRAM Holder runs on the lab (SORTER, task main)')",
+        "the program loaded into the lab",
+    )
+    .await;
+    let runtime = lab.runtime.as_ref().unwrap();
+    let s1_state = || {
+        runtime
+            .node("SUPERVISOR")
+            .and_then(|node| node.points.point("SUP_S1_State"))
+            .map(|point| point.value)
+    };
+    for _ in 0..600 {
+        if s1_state() == Some(points::PointValue::Int(3)) {
+            break;
+        }
+        tokio::time::sleep(std::time::Duration::from_millis(50)).await;
+    }
+    assert_eq!(
+        s1_state(),
+        Some(points::PointValue::Int(3)),
+        "the lab's supervisor locks S1 out"
+    );
+    student
+        .execute("window.confirm = () => true;", Vec::new())
+        .await
+        .unwrap();
+    click(&student, "#program-restore").await;
+    until(
+        &student,
+        "document.getElementById('program-verdict').dataset.verdict === 'loaded' && document.getElementById('program-verdict').textContent.includes('own program runs on SORTER again')",
+        "the lab's own program restored",
+    )
+    .await;
     show_lab(&student).await;
 
     // --- The PLC link is cut: every element of the mimic blinks.

@@ -16,6 +16,9 @@
 //!   events; automatic sortings and their reliability over seeded mechanisms.
 //! - [`trial`]: a student's program tried behind the supervisor: the report of
 //!   `stanice sorting run` and of the web HMI's Program page.
+//! - `hmi_trial` (feature `hmi`): that trial behind the web HMI's `ProgramTrial`, and
+//!   the student's program loaded into the running lab's node (the station's
+//!   `ProgramLoader`).
 //! - [`reliability`]: seeded sortings of the eight balls on the simulated balance, a
 //!   confusion matrix per colour.
 //! - [`statistics`]: from weighings to class limits (the sorting-lab thesis,
@@ -53,6 +56,8 @@
 #![cfg_attr(not(test), deny(clippy::indexing_slicing))]
 
 pub mod classify;
+#[cfg(feature = "hmi")]
+pub mod hmi_trial;
 pub mod programs;
 pub mod reliability;
 pub mod rig;

@@ -72,7 +72,8 @@ pub(crate) async fn run(args: HmiArgs) -> anyhow::Result<ExitCode> {
         .clone()
         .unwrap_or_else(|| args.screens.join("users.toml"));
     let mut serve = ServeConfig::default();
-    serve.trial = crate::sorting::trial_for(&args.screens).context("the HMI does not start")?;
+    serve.trial =
+        sorting::hmi_trial::trial_for(&args.screens, None).context("the HMI does not start")?;
     if let (Some(certificate), Some(key)) = (&args.tls_cert, &args.tls_key) {
         serve.tls = Some(hmi::tls::TlsFiles {
             certificate: certificate.clone(),

@@ -276,7 +276,7 @@ async fn start_hmi(
     };
     let mut serve = hmi::ServeConfig::default();
     serve.tls = plan.tls.clone();
-    serve.trial = match crate::sorting::trial_for(&screens) {
+    serve.trial = match sorting::hmi_trial::trial_for(&screens, Some(runtime.program_loader())) {
         Ok(trial) => trial,
         Err(error) => return not_started(format!("{error:#}")),
     };

@@ -50,6 +50,9 @@ pub enum AppError {
     /// offers none).
     #[error("this HMI tries no programs (no [program] in hmi.toml)")]
     NoTrial,
+    /// 404: programs are tried on a simulation only here ([`crate::trial::NOT_LIVE`]).
+    #[error("{}", crate::trial::NOT_LIVE)]
+    NotLive,
     /// 500: the trial failed (not the program: the program's own faults are its report).
     #[error("the trial failed: {0}")]
     Trial(String),
@@ -179,7 +182,9 @@ impl AppError {
                     }
                 }
             }
-            AppError::NoLease | AppError::NoTrial | AppError::NoChoice(_) => StatusCode::NOT_FOUND,
+            AppError::NoLease | AppError::NoTrial | AppError::NotLive | AppError::NoChoice(_) => {
+                StatusCode::NOT_FOUND
+            }
             AppError::Combination(_) => StatusCode::CONFLICT,
             AppError::Trial(_) => StatusCode::INTERNAL_SERVER_ERROR,
             AppError::NotFound

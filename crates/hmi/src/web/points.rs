@@ -179,7 +179,7 @@ fn authority_refusal(state: &AppState, control: &crate::config::ControlConfig) -
 
 /// Why `user`'s control is refused by the operator lease, if it is; a control of the
 /// holder renews the lease.
-fn lease_refusal(state: &AppState, user: &str) -> Option<String> {
+pub(super) fn lease_refusal(state: &AppState, user: &str) -> Option<String> {
     let desk = state.lease.as_ref()?;
     let refused = desk
         .lock()

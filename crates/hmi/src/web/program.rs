@@ -1,6 +1,9 @@
 //! A student's program from the browser (crate::trial): `POST /api/program/check` and
 //! `POST /api/program/run`, each `{files: [{name, text}], seed?}`, for users of the
 //! `[program]` level. Bodies up to [`MAX_PROGRAM`]; one trial at a time (another waits).
+//! `POST /api/program/load` (`{files}`) loads the program into the lab itself and `POST
+//! /api/program/restore` (`{}`) puts the lab's own back: the level, and the operator
+//! lease where the lab has one (409 with the reason otherwise).
 
 use axum::extract::rejection::JsonRejection;
 use axum::extract::{DefaultBodyLimit, State};
@@ -24,6 +27,8 @@ pub(super) fn routes() -> Router<AppState> {
     Router::new()
         .route("/api/program/check", post(check))
         .route("/api/program/run", post(run))
+        .route("/api/program/load", post(load))
+        .route("/api/program/restore", post(restore))
         .layer(DefaultBodyLimit::max(MAX_PROGRAM))
 }
 
@@ -98,4 +103,73 @@ async fn run(
     .map_err(AppError::Trial)?;
     tracing::info!(peer = %writer.peer(), user = %LogText(writer.user()), seed, "program tried");
     Ok(Json(outcome))
+}
+
+/// The lease holder only: the live lab is controlled by one user at a time.
+fn require_lease(state: &AppState, writer: &Writer) -> Result<(), AppError> {
+    match super::points::lease_refusal(state, writer.user()) {
+        Some(refused) => Err(AppError::NoAuthority(refused)),
+        None => Ok(()),
+    }
+}
+
+async fn load(
+    State(state): State<AppState>,
+    writer: Writer,
+    body: Result<Json<ProgramRequest>, JsonRejection>,
+) -> Result<Json<Value>, AppError> {
+    let (trial, request, _turn) = prepare(&state, &writer, body).await?;
+    if !trial.live() {
+        return Err(AppError::NotLive);
+    }
+    require_lease(&state, &writer)?;
+    let files = request.files;
+    let check = {
+        let (trial, files) = (Arc::clone(&trial), files.clone());
+        tokio::task::spawn_blocking(move || trial.check(&files))
+            .await
+            .map_err(|e| AppError::Trial(e.to_string()))?
+    };
+    if !check.ok {
+        return Ok(Json(json!({"check": check, "loaded": null})));
+    }
+    // A program that compiles but does not fit the lab (a variable the station binds
+    // missing) is the student's to fix: said in words, not a server error.
+    let outcome = trial.load(files, writer.user().to_owned()).await;
+    tracing::info!(peer = %writer.peer(), user = %LogText(writer.user()), ok = outcome.is_ok(), "program loaded into the lab");
+    Ok(Json(match outcome {
+        Ok(loaded) => json!({"check": check, "loaded": loaded}),
+        Err(error) => json!({"check": check, "loaded": null, "error": error}),
+    }))
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RestoreRequest {}
+
+async fn restore(
+    State(state): State<AppState>,
+    writer: Writer,
+    body: Result<Json<RestoreRequest>, JsonRejection>,
+) -> Result<Json<Value>, AppError> {
+    let Json(RestoreRequest {}) = body.map_err(AppError::body("bad restore request: "))?;
+    let program = state
+        .station
+        .config()
+        .program
+        .clone()
+        .ok_or(AppError::NoTrial)?;
+    let trial = state.trial.clone().ok_or(AppError::NoTrial)?;
+    writer.require_level(program.level)?;
+    if !trial.live() {
+        return Err(AppError::NotLive);
+    }
+    require_lease(&state, &writer)?;
+    let _turn = Arc::clone(&state.trial_running)
+        .acquire_owned()
+        .await
+        .map_err(|_| AppError::NoTrial)?;
+    let outcome = trial.restore(writer.user().to_owned()).await;
+    tracing::info!(peer = %writer.peer(), user = %LogText(writer.user()), ok = outcome.is_ok(), "the lab's program restored");
+    outcome.map(Json).map_err(AppError::Trial)
 }

@@ -131,6 +131,8 @@ async fn session_info(State(state): State<AppState>, user: LoggedIn) -> Json<Val
         "camera": state.station.config().camera,
         "lease": state.lease.is_some(),
         "program": state.trial.is_some() && state.station.config().program.is_some(),
+        "program_live": state.trial.as_ref().is_some_and(|trial| trial.live())
+            && state.station.config().program.is_some(),
         "public": state.station.config().folder.join("public").join("index.html").exists(),
     }))
 }

@@ -74,6 +74,11 @@ impl ProgramLoader {
         }
     }
 
+    /// The project whose nodes it loads.
+    pub fn project(&self) -> &Project {
+        &self.project
+    }
+
     /// Loads `download` into `node` (see the module's description). A program that does
     /// not compile is [`RuntimeError::Plc`] with its diagnostics `file:line:col`; one
     /// that lacks what the project binds, [`RuntimeError::Setup`]; either way the node
