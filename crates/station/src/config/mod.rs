@@ -80,6 +80,9 @@
 //!                                      # while the point is
 //! scale = 1e6                          # optional: inputs are multiplied by it (grams to
 //!                                      # micrograms for a DINT address)
+//!                                      # or, real I/O: device = "LOGO_RH2" (a [[node.device]]
+//!                                      # with items, e.g. kind "s7"), item = "I0.1" and
+//!                                      # direction = "input" | "output"
 //! variable = "RH2Logic.SA1_Dalkove"    # or a direct address of the process image
 //!                                      # (`%IX0.4`, `%ID4`, `%QX1.2`) for a program that
 //!                                      # reads its I/O through `AT` variables; a REAL
@@ -208,7 +211,10 @@
 //!                                      # balance: serial, tcp or simulate = "red 1"); or
 //!                                      # plant = "PORT": a serial port of the project's plant
 //!                                      # (the sorter's `balance`), on a pseudo-terminal the
-//!                                      # runtime opens, read as through `serial`
+//!                                      # runtime opens, read as through `serial`; an `s7`
+//!                                      # device: connect = "host[:port]", rack/slot or tsap,
+//!                                      # cycle_ms, write_every_ms, timeout_ms; its items are
+//!                                      # bound by [[node.io]] device = ...
 //!
 //! [node.notify.smtp]                   # optional: notifications of the node's lifts
 //! host = "smtp.example.cz"             # (the notify crate's format, docs/LIFT.md):
@@ -478,6 +484,16 @@ pub enum IoSource {
     /// A point of the node, read into the PLC (a field device's reading): the input is
     /// invalid while the point is.
     Point(String),
+    /// An item of a field device of the node (real I/O in place of the plant's): read
+    /// into the PLC (invalid while the device does not answer) or driven by it.
+    Device {
+        /// The device's name.
+        device: String,
+        /// The item (an S7 address, ...).
+        item: String,
+        /// Driven by the PLC.
+        output: bool,
+    },
 }
 
 impl std::fmt::Display for IoSource {
@@ -485,6 +501,9 @@ impl std::fmt::Display for IoSource {
         match self {
             IoSource::Signal(name) => write!(f, "signal `{name}`"),
             IoSource::Point(name) => write!(f, "point `{name}`"),
+            IoSource::Device { device, item, .. } => {
+                write!(f, "item `{item}` of device `{device}`")
+            }
         }
     }
 }
@@ -761,6 +780,8 @@ pub struct FieldDeviceConfig {
     /// settings): the runtime opens a pseudo-terminal for the port and gives the driver
     /// its path as `serial`.
     pub plant_port: Option<String>,
+    /// The device's items the node's PLC reads and drives (`[[node.io]] device = ...`).
+    pub io: Vec<crate::device::DeviceItem>,
 }
 
 /// An IEC 104 client link to a lower node, `[[node.link]]`.

@@ -125,6 +125,9 @@ pub(in crate::config) struct RawTask {
 pub(in crate::config) struct RawIo {
     pub(in crate::config) signal: Option<String>,
     pub(in crate::config) point: Option<String>,
+    pub(in crate::config) device: Option<String>,
+    pub(in crate::config) item: Option<String>,
+    pub(in crate::config) direction: Option<String>,
     pub(in crate::config) variable: String,
     pub(in crate::config) scale: Option<f64>,
 }

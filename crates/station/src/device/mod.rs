@@ -22,6 +22,10 @@
 //! declared where only the profile is needed (the project loader, its fuzz target).
 
 pub mod balance;
+pub mod image;
+pub mod s7;
+
+pub use image::{DeviceItem, ImageValue, IoImage};
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -64,8 +68,15 @@ pub trait Readings: Send + Sync {
     fn value(&self, signal: &str, value: PointValue, quality: Quality);
 
     /// Whether the device answers now: `false` turns its points invalid and its status
-    /// point TRUE until it answers again.
+    /// point TRUE until it answers again (and its inputs in the PLC's image invalid).
     fn answering(&self, answering: bool);
+
+    /// The device's part of its node's PLC I/O image, if the project binds items of it
+    /// (`[[node.io]] device = ...`): the driver reads the inputs into it and writes its
+    /// outputs to the device.
+    fn image(&self) -> Option<&IoImage> {
+        None
+    }
 }
 
 /// One device's driver: opened, run until its line closes, opened again by the
@@ -90,6 +101,15 @@ pub trait DeviceKind: Send + Sync {
         Ok(())
     }
 
+    /// Checks an item of the device the project binds to a PLC variable (`[[node.io]]
+    /// device = ... item = ...`), when the project loads.
+    fn check_item(&self, _item: &DeviceItem) -> Result<(), String> {
+        Err(format!(
+            "a `{}` device has no I/O items (its readings are points)",
+            self.profile().kind
+        ))
+    }
+
     /// A driver for the device `device` of the project.
     fn driver(
         &self,
@@ -110,11 +130,14 @@ impl fmt::Debug for DeviceKinds {
 }
 
 impl DeviceKinds {
-    /// The kinds built into the station: the sorting lab's balance ([`balance`]); the
-    /// field I/O issue adds S7 and Modbus here.
+    /// The kinds built into the station: the sorting lab's balance ([`balance`]), a PLC
+    /// or LOGO! read and written over S7 ([`s7`]).
     pub fn builtin() -> DeviceKinds {
         let mut kinds = DeviceKinds::default();
-        for kind in [Arc::new(balance::BalanceKind::new()) as Arc<dyn DeviceKind>] {
+        for kind in [
+            Arc::new(balance::BalanceKind::new()) as Arc<dyn DeviceKind>,
+            Arc::new(s7::S7Kind::new()),
+        ] {
             // A built-in profile that cannot make points is a bug the tests catch.
             if let Err(error) = kinds.register(kind) {
                 tracing::error!(%error, "a built-in device kind is refused");

@@ -34,7 +34,7 @@ use points::{EventCause, PointId, PointSource, PointValue, Quality};
 
 use super::node::NodePoints;
 use crate::config::FieldDeviceConfig;
-use crate::device::{DeviceDriver, DeviceError, Readings};
+use crate::device::{DeviceDriver, DeviceError, IoImage, Readings};
 
 /// The first pause before a source is opened again.
 pub const REOPEN_FIRST: Duration = Duration::from_secs(1);
@@ -209,8 +209,10 @@ pub(crate) fn spawn_device(
     config: &FieldDeviceConfig,
     driver: Box<dyn DeviceDriver>,
     node: Arc<NodePoints>,
+    image: Option<Arc<IoImage>>,
 ) -> FieldDeviceHandle {
-    let readings = DeviceReadings::new(config, node);
+    let mut readings = DeviceReadings::new(config, node);
+    readings.image = image;
     let answering = Arc::clone(&readings.answering);
     let task = tokio::spawn(async move {
         let node = Arc::clone(&readings.node);
@@ -251,6 +253,9 @@ impl FieldSource for ProfiledDevice {
 
     fn lost(&mut self) {
         self.readings.answering.store(false, Ordering::Release);
+        if let Some(image) = &self.readings.image {
+            image.set_answering(false);
+        }
         self.readings.down();
     }
 }
@@ -267,6 +272,8 @@ struct DeviceReadings {
     answering: Arc<AtomicBool>,
     /// Whether it answered since the line was last opened.
     answered: AtomicBool,
+    /// Its part of the node's PLC I/O image, if the PLC is bound to items of it.
+    image: Option<Arc<IoImage>>,
 }
 
 impl DeviceReadings {
@@ -306,6 +313,7 @@ impl DeviceReadings {
             comm,
             answering: Arc::new(AtomicBool::new(false)),
             answered: AtomicBool::new(false),
+            image: None,
         }
     }
 
@@ -334,9 +342,16 @@ impl Readings for DeviceReadings {
         }
     }
 
+    fn image(&self) -> Option<&IoImage> {
+        self.image.as_deref()
+    }
+
     fn answering(&self, answering: bool) {
         if answering {
             self.answered.store(true, Ordering::Release);
+        }
+        if let Some(image) = &self.image {
+            image.set_answering(answering);
         }
         if self.answering.swap(answering, Ordering::AcqRel) == answering {
             return;

@@ -338,6 +338,7 @@ async fn start_simulation(
     nodes: &[(usize, Arc<NodePoints>)],
     clock: &Arc<SimClock>,
     pacing: Pacing,
+    images: simulation::DeviceImages,
 ) -> Result<(mpsc::Sender<SimRequest>, std::thread::JoinHandle<()>), RuntimeError> {
     let (requests, receiver) = mpsc::channel();
     let (built, built_answer) = oneshot::channel();
@@ -347,15 +348,17 @@ async fn start_simulation(
         let clock = Arc::clone(clock);
         std::thread::Builder::new()
             .name("stanice-simulation".into())
-            .spawn(move || match Simulation::build(&project, &shared, clock) {
-                Ok(simulation) => {
-                    let _ = built.send(Ok(()));
-                    simulation::run(simulation, pacing, receiver);
-                }
-                Err(error) => {
-                    let _ = built.send(Err(error));
-                }
-            })
+            .spawn(
+                move || match Simulation::build(&project, &shared, clock, images) {
+                    Ok(simulation) => {
+                        let _ = built.send(Ok(()));
+                        simulation::run(simulation, pacing, receiver);
+                    }
+                    Err(error) => {
+                        let _ = built.send(Err(error));
+                    }
+                },
+            )
             .map_err(|error| {
                 RuntimeError::Setup(format!("cannot start the simulation thread: {error}"))
             })?
@@ -513,11 +516,34 @@ fn start_lifts(
 
 /// Starts the node's profiled devices (`[[node.device]]`) under the field-source
 /// supervisor.
+/// An I/O image for each device of the selected nodes whose items a PLC is bound to.
+fn device_images(
+    project: &Project,
+    nodes: &[(usize, Arc<NodePoints>)],
+) -> simulation::DeviceImages {
+    nodes
+        .iter()
+        .filter_map(|(index, _)| project.nodes.get(*index))
+        .flat_map(|node| {
+            node.devices
+                .iter()
+                .filter(|device| !device.io.is_empty())
+                .map(|device| {
+                    (
+                        (node.name.clone(), device.name.clone()),
+                        Arc::new(crate::device::IoImage::new()),
+                    )
+                })
+        })
+        .collect()
+}
+
 fn start_devices(
     config: &NodeConfig,
     points: &Arc<NodePoints>,
     kinds: &DeviceKinds,
     plant_ports: &plant_port::PlantPorts,
+    images: &simulation::DeviceImages,
 ) -> Result<Vec<field::FieldDeviceHandle>, RuntimeError> {
     let setup = |device: &str, why: String| {
         RuntimeError::Setup(format!("node `{}`: device `{device}`: {why}", config.name))
@@ -539,7 +565,10 @@ fn start_devices(
             let driver = kind
                 .driver(device)
                 .map_err(|error| setup(&device.name, error.to_string()))?;
-            Ok(field::spawn_device(device, driver, Arc::clone(points)))
+            let image = images
+                .get(&(config.name.clone(), device.name.clone()))
+                .cloned();
+            Ok(field::spawn_device(device, driver, Arc::clone(points), image))
         })
         .collect()
 }
@@ -577,8 +606,9 @@ impl Runtime {
         let shared = node_points(&project, &selected, &clock, &recorder)?;
         // The simulation thread builds the PLCs (they cannot leave it) and runs the first
         // scan, so that each server starts with real values in its image.
+        let images = device_images(&project, &shared);
         let (requests, thread) =
-            start_simulation(&project, &shared, &clock, options.pacing).await?;
+            start_simulation(&project, &shared, &clock, options.pacing, images.clone()).await?;
         first_scan(&requests).await?;
 
         let selected_indices: Vec<usize> = shared.iter().map(|(index, _)| *index).collect();
@@ -609,7 +639,8 @@ impl Runtime {
                 &archived_faults,
                 notifications,
             );
-            node.devices = start_devices(config, points, &options.device_kinds, &plant_ports)?;
+            node.devices =
+                start_devices(config, points, &options.device_kinds, &plant_ports, &images)?;
         }
         requests
             .send(SimRequest::Go)

@@ -36,6 +36,8 @@ use tokio::sync::oneshot;
 use crate::config::{CommandTarget, IoSource, NodeConfig, PointSource, Project};
 use points::{EventCause, PointDb, PointId, PointKind, PointValue, Quality};
 
+use crate::device::{ImageValue, IoImage};
+
 use super::clock::{Pacing, SimClock};
 use super::node::NodePoints;
 use super::RuntimeError;
@@ -129,6 +131,8 @@ enum InputFrom {
     ModuleFault(String),
     /// A point of the node (a field device's reading).
     Point(PointId),
+    /// An input item of a field device (`[[node.io]] device = ...`).
+    Device { image: Arc<IoImage>, item: String },
 }
 
 struct InputBinding {
@@ -171,6 +175,11 @@ impl InputBinding {
                 };
                 Some((value, valid))
             }),
+            InputFrom::Device { image, item } => Some(match image.input(item) {
+                Some(ImageValue::Bool(on)) => (Value::Bool(on), true),
+                Some(ImageValue::Number(x)) => (Value::Real(x), true),
+                None => (Value::Bool(false), false),
+            }),
         };
         match reading {
             Some((value, true)) => {
@@ -186,8 +195,30 @@ impl InputBinding {
     }
 }
 
+/// Where a PLC output goes.
+enum OutputTo {
+    /// A plant output (coil, command).
+    Signal(String),
+    /// An output item of a field device (`[[node.io]] device = ...`).
+    Device {
+        image: Arc<IoImage>,
+        /// `DEVICE.ITEM`, for observers and the log.
+        name: String,
+        item: String,
+    },
+}
+
+impl OutputTo {
+    fn name(&self) -> &str {
+        match self {
+            OutputTo::Signal(signal) => signal,
+            OutputTo::Device { name, .. } => name,
+        }
+    }
+}
+
 struct OutputBinding {
-    signal: String,
+    to: OutputTo,
     target: IoTarget,
     kind: ValueKind,
     last: Option<Value>,
@@ -267,7 +298,12 @@ pub struct Simulation {
     /// The plant's serial ports on pseudo-terminals (`plant_port`): where each one's
     /// octets go.
     serial_ports: Vec<(String, tokio::sync::mpsc::Sender<Vec<u8>>)>,
+    /// The I/O images of the field devices the PLCs are bound to.
+    images: DeviceImages,
 }
+
+/// The I/O image of each field device with items bound to a PLC, by (node, device).
+pub(crate) type DeviceImages = HashMap<(String, String), Arc<IoImage>>;
 
 impl Simulation {
     /// Builds the PLCs of `nodes` (index into `project.nodes`, with their shared points)
@@ -276,6 +312,7 @@ impl Simulation {
         project: &Project,
         nodes: &[(usize, Arc<NodePoints>)],
         clock: Arc<SimClock>,
+        images: DeviceImages,
     ) -> Result<Simulation, RuntimeError> {
         let start = PlantStart {
             unix_secs: clock.start().timestamp(),
@@ -294,7 +331,12 @@ impl Simulation {
             let Some(config) = project.nodes.get(*index) else {
                 continue;
             };
-            built.push(build_node(config, Arc::clone(points), plant.as_deref())?);
+            built.push(build_node(
+                config,
+                Arc::clone(points),
+                plant.as_deref(),
+                &images,
+            )?);
         }
         Ok(Simulation {
             clock,
@@ -305,6 +347,7 @@ impl Simulation {
             pulses: Vec::new(),
             observers: Vec::new(),
             serial_ports: Vec::new(),
+            images,
         })
     }
 
@@ -433,7 +476,13 @@ impl Simulation {
         } else {
             files
         };
-        let fresh = build_node_from(config, files, Arc::clone(&points), self.plant.as_deref())?;
+        let fresh = build_node_from(
+            config,
+            files,
+            Arc::clone(&points),
+            self.plant.as_deref(),
+            &self.images,
+        )?;
         let Simulation {
             plant,
             nodes,
@@ -748,7 +797,8 @@ impl SimNode {
             record.cause = EventCause::Local;
             self.points.recorder().event(record);
         }
-        if let Some(plant) = plant {
+        let mut plant = plant;
+        {
             for output in &mut self.outputs {
                 let Some(v) = output.target.read(plc) else {
                     continue;
@@ -762,14 +812,27 @@ impl SimNode {
                     }),
                 };
                 if output.last != Some(value) {
-                    if let Err(error) = plant.set_output(&output.signal, value) {
-                        tracing::warn!(signal = %output.signal, %error, "output not driven");
+                    match &output.to {
+                        OutputTo::Signal(signal) => {
+                            if let Some(plant) = plant.as_deref_mut() {
+                                if let Err(error) = plant.set_output(signal, value) {
+                                    tracing::warn!(signal = %signal, %error, "output not driven");
+                                }
+                            }
+                        }
+                        OutputTo::Device { image, item, .. } => image.set_output(
+                            item,
+                            match value {
+                                Value::Bool(on) => ImageValue::Bool(on),
+                                Value::Real(x) => ImageValue::Number(x),
+                            },
+                        ),
                     }
                     output.last = Some(value);
                     for observer in observers.iter() {
                         let _ = observer.send(OutputChange {
                             node: self.points.name().to_owned(),
-                            signal: output.signal.clone(),
+                            signal: output.to.name().to_owned(),
                             value,
                             time: now,
                             at: Instant::now(),
@@ -944,11 +1007,12 @@ fn build_node(
     config: &NodeConfig,
     points: Arc<NodePoints>,
     plant: Option<&(dyn Plant + Send + 'static)>,
+    images: &DeviceImages,
 ) -> Result<SimNode, RuntimeError> {
     if config.sources.is_empty() && config.tasks.is_empty() {
-        return build_node_from(config, Vec::new(), points, plant);
+        return build_node_from(config, Vec::new(), points, plant, images);
     }
-    build_node_from(config, project_sources(config)?, points, plant)
+    build_node_from(config, project_sources(config)?, points, plant, images)
 }
 
 /// Builds the node's PLC from `files` (name, text) and binds it as `config` says.
@@ -957,6 +1021,7 @@ fn build_node_from(
     files: Vec<(String, String)>,
     points: Arc<NodePoints>,
     plant: Option<&(dyn Plant + Send + 'static)>,
+    images: &DeviceImages,
 ) -> Result<SimNode, RuntimeError> {
     let node = &config.name;
     let setup = |message: String| RuntimeError::Setup(format!("node `{node}`: {message}"));
@@ -1053,6 +1118,52 @@ fn build_node_from(
                 });
                 continue;
             }
+            IoSource::Device {
+                device,
+                item,
+                output,
+            } => {
+                let image = images
+                    .get(&(config.name.clone(), device.clone()))
+                    .cloned()
+                    .ok_or_else(|| setup(format!("no I/O image of device `{device}`")))?;
+                if *output {
+                    if let IoTarget::Variable(_) = target {
+                        plc.bind_output(&binding.variable).map_err(|error| {
+                            setup(format!("output `{}`: {error}", binding.variable))
+                        })?;
+                    }
+                    let bit = match &target {
+                        IoTarget::Variable(leaf) => leaf.ty == Ty::Bool,
+                        IoTarget::Image(address) => image_type(address) == Ty::Bool,
+                    };
+                    sim.outputs.push(OutputBinding {
+                        to: OutputTo::Device {
+                            image,
+                            name: format!("{device}.{item}"),
+                            item: item.clone(),
+                        },
+                        target,
+                        kind: if bit {
+                            ValueKind::Bool
+                        } else {
+                            ValueKind::Real
+                        },
+                        last: None,
+                    });
+                } else {
+                    sim.inputs.push(InputBinding {
+                        from: InputFrom::Device {
+                            image,
+                            item: item.clone(),
+                        },
+                        target,
+                        scale,
+                        valid: false,
+                    });
+                }
+                continue;
+            }
             IoSource::Signal(signal) => signal,
         };
         let Some(plant) = plant else {
@@ -1098,7 +1209,7 @@ fn build_node_from(
                     )));
                 }
                 sim.outputs.push(OutputBinding {
-                    signal: signal.clone(),
+                    to: OutputTo::Signal(signal.clone()),
                     target,
                     kind: info.kind,
                     last: None,

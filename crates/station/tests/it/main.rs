@@ -15,5 +15,6 @@ mod lift;
 #[path = "../../../store/tests/it/pg.rs"]
 mod pg;
 mod runtime_store;
+mod s7_device;
 mod sink;
 mod task_isolation;

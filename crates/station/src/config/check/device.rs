@@ -64,6 +64,7 @@ impl Ctx<'_> {
                 ioa_base,
                 settings: device.settings.clone(),
                 plant_port: None,
+                io: Vec::new(),
             };
             // A device on the plant's serial port: the kind checks its settings as for a
             // serial port (the runtime puts the pseudo-terminal's path there).

@@ -53,12 +53,132 @@ struct Sources {
 }
 
 impl Ctx<'_> {
+    /// An I/O binding of a device's item: the device must be the node's, the item one its
+    /// kind takes (checked by the kind), the direction `input` or `output`; the item is
+    /// added to the device's.
+    fn check_device_io(
+        &mut self,
+        at: &dyn Fn(&'static str) -> Vec<Seg>,
+        raw: &RawNode,
+        io: &RawIo,
+        device: &str,
+        devices: &mut [FieldDeviceConfig],
+    ) -> Option<IoSource> {
+        let Some(found) = devices.iter_mut().find(|d| d.name == device) else {
+            self.err(
+                &at("device"),
+                ConfigProblem::Unknown {
+                    what: Reference::Device,
+                    name: device.to_owned(),
+                    within: raw.name.clone(),
+                },
+            );
+            return None;
+        };
+        let Some(item) = &io.item else {
+            self.err(
+                &at("device"),
+                ConfigProblem::Missing {
+                    what: "item",
+                    needed_by: "an I/O binding of a device",
+                    hint: "the device's address, e.g. I0.1 or DB1.DBX0.3",
+                },
+            );
+            return None;
+        };
+        let output = match io.direction.as_deref() {
+            Some("input") => false,
+            Some("output") => true,
+            Some(_) => {
+                self.err(
+                    &at("direction"),
+                    ConfigProblem::Invalid {
+                        detail: "direction is input (the device to the PLC) or output (the PLC to the device)".to_owned(),
+                    },
+                );
+                return None;
+            }
+            None => {
+                self.err(
+                    &at("device"),
+                    ConfigProblem::Missing {
+                        what: "direction",
+                        needed_by: "an I/O binding of a device",
+                        hint: "input or output",
+                    },
+                );
+                return None;
+            }
+        };
+        let device_item = crate::device::DeviceItem {
+            item: item.clone(),
+            output,
+        };
+        if let Some(kind) = self.kinds.get(&found.kind) {
+            if let Err(reason) = kind.check_item(&device_item) {
+                self.err(&at("item"), ConfigProblem::Invalid { detail: reason });
+                return None;
+            }
+        }
+        if output && io.scale.is_some() {
+            self.err(
+                &at("scale"),
+                ConfigProblem::Invalid {
+                    detail: "only inputs are scaled".to_owned(),
+                },
+            );
+        }
+        if !found.io.contains(&device_item) {
+            found.io.push(device_item);
+        }
+        Some(IoSource::Device {
+            device: device.to_owned(),
+            item: item.clone(),
+            output,
+        })
+    }
+
     /// The node's I/O bindings: each a plant signal or a point of the node (`points`, its
     /// devices' among them), with a finite `scale`.
-    fn check_io(&mut self, n: usize, raw: &RawNode, points: &[PointConfig]) -> Vec<IoBinding> {
+    fn check_io(
+        &mut self,
+        n: usize,
+        raw: &RawNode,
+        points: &[PointConfig],
+        devices: &mut [FieldDeviceConfig],
+    ) -> Vec<IoBinding> {
         let mut bindings = Vec::new();
         for (i, io) in raw.io.iter().enumerate() {
             let at = |key: &'static str| vec![K("node"), I(n), K("io"), I(i), K(key)];
+            if let Some(device) = &io.device {
+                if io.signal.is_some() || io.point.is_some() {
+                    self.err(&at("device"), Conflict::IoSignalAndPoint);
+                    continue;
+                }
+                if let Some(source) = self.check_device_io(&at, raw, io, device, devices) {
+                    bindings.push(IoBinding {
+                        source,
+                        variable: io.variable.clone(),
+                        scale: io.scale,
+                    });
+                }
+                continue;
+            }
+            if io.item.is_some() || io.direction.is_some() {
+                self.err(
+                    &at(if io.item.is_some() {
+                        "item"
+                    } else {
+                        "direction"
+                    }),
+                    ConfigProblem::Missing {
+                        what: "device",
+                        needed_by: "an I/O binding with item or direction",
+                        hint: "",
+                    },
+                );
+                continue;
+            }
             let source = match (&io.signal, &io.point) {
                 (Some(signal), None) => IoSource::Signal(signal.clone()),
                 (None, Some(point)) => {
@@ -147,7 +267,7 @@ impl Ctx<'_> {
             },
         );
         points.extend(lift_points);
-        let (devices, device_points) = self.check_devices(
+        let (mut devices, device_points) = self.check_devices(
             n,
             raw,
             TakenPoints {
@@ -156,7 +276,7 @@ impl Ctx<'_> {
             },
         );
         points.extend(device_points);
-        let io = self.check_io(n, raw, &points);
+        let io = self.check_io(n, raw, &points, &mut devices);
 
         let commands = self.check_commands(
             n,
