@@ -66,6 +66,19 @@
 //! [node.set]                           # optional: PLC values written after the cold start
 //! "LightingBoard.Zpozdeni" = "T#2s"    # variable path = IEC literal
 //!
+//! [node.s7_server]                     # optional: the node's PLC memory served over S7, as an
+//! port_offset = 100                    # S7-1500 serves its CPU's (LOGO! boards connect to it);
+//! markers = 256                        # listens on port_base + port_offset; bytes of %M, %I,
+//! inputs = 128                         # %Q served (defaults 256, 128, 128); a client's write
+//! outputs = 128                        # is in the image at the next cycle's start, the bytes
+//! pdu_size = 960                       # it writes stay its own; points may read them
+//!                                      # (source = "%MX20.0") and commands set markers
+//!                                      # (target = "%MX24.0", pulse_ms)
+//! [[node.s7_server.connection]]        # a client by the TSAP it calls (the thesis's S7
+//! name = "RH2"                         # connections, section 3.3)
+//! tsap = "0101"                        # four hex digits
+//! status = "Concentrator.CommRH2"      # a BOOL kept TRUE while no such client is connected
+//!
 //! [[node.table]]                       # optional: a CSV file loaded into PLC arrays
 //! file = "calendar/vsetin-weekly.csv"  # header row; `#` lines are comments
 //! index = "week"                       # the column with each row's array index
@@ -376,6 +389,42 @@ pub struct NodeConfig {
     pub initial_values: Vec<(String, String)>,
     /// Data tables loaded into PLC arrays after the cold start.
     pub tables: Vec<TableConfig>,
+    /// The node's PLC memory served over S7 (`[node.s7_server]`).
+    pub s7_server: Option<S7ServerConfig>,
+}
+
+/// `[node.s7_server]`: the node's soft PLC served over S7 (ISO-on-TCP) as an S7 CPU
+/// serves its memory, so that LOGO! boards connect to it as to the thesis's S7-1500
+/// concentrators (the railway-station thesis, section 3.3): a client's writes land in the
+/// PLC's process image (`%M`, `%I`, `%Q`) at the start of its next cycle, and reads see
+/// the image as the last cycle left it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct S7ServerConfig {
+    /// Listens on the station's `bind` address, port `port_base + port_offset`.
+    pub port_offset: u16,
+    /// Bytes of the process image served: inputs, outputs, markers.
+    pub inputs: usize,
+    /// Bytes of outputs served.
+    pub outputs: usize,
+    /// Bytes of markers served.
+    pub markers: usize,
+    /// The largest PDU granted (an S7-1500 offers 960; a LOGO! asks 240).
+    pub pdu_size: u16,
+    /// The S7 connections the project expects, by the TSAP their clients call.
+    pub connections: Vec<S7ConnectionConfig>,
+}
+
+/// `[[node.s7_server.connection]]`: one client of the S7 server (a LOGO! board).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct S7ConnectionConfig {
+    /// Its name (`RH2`).
+    pub name: String,
+    /// The server TSAP the client calls (its remote TSAP, `0101`).
+    pub tsap: u16,
+    /// A BOOL of the node's PLC the server keeps TRUE while no client of this TSAP is
+    /// connected (`NOT CommEnabled`, as a link's status point): the source of the
+    /// connection's status point and the `invalid_when` of the points it feeds.
+    pub status: Option<String>,
 }
 
 /// A CSV file loaded into PLC arrays, `[[node.table]]`: the lighting calendar is data, not

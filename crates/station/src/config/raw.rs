@@ -60,6 +60,27 @@ pub(in crate::config) struct RawNode {
     pub(in crate::config) set: std::collections::BTreeMap<String, String>,
     #[serde(default)]
     pub(in crate::config) table: Vec<RawTable>,
+    pub(in crate::config) s7_server: Option<RawS7Server>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(in crate::config) struct RawS7Server {
+    pub(in crate::config) port_offset: i64,
+    pub(in crate::config) inputs: Option<i64>,
+    pub(in crate::config) outputs: Option<i64>,
+    pub(in crate::config) markers: Option<i64>,
+    pub(in crate::config) pdu_size: Option<i64>,
+    #[serde(default)]
+    pub(in crate::config) connection: Vec<RawS7Connection>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(in crate::config) struct RawS7Connection {
+    pub(in crate::config) name: String,
+    pub(in crate::config) tsap: String,
+    pub(in crate::config) status: Option<String>,
 }
 
 #[derive(Deserialize)]

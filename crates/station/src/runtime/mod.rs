@@ -23,6 +23,8 @@
 //!   values become points, their fault logs go into the store's archive).
 //! - [`plant_port`]: the plant's serial ports (a device of the plant on its RS-232) on
 //!   pseudo-terminals, for the project's device drivers.
+//! - [`s7_server`]: a node's PLC memory served over S7 (the S7-1500 concentrator that
+//!   LOGO! boards connect to), connection status per TSAP.
 //! - [`program`]: a new program loaded into a running node's PLC (a lab's student
 //!   program on the lab itself), and the project's own put back.
 //! - [`notification`]: e-mail and webhook notices of what the lifts report, each delivery
@@ -59,6 +61,7 @@ pub mod notification;
 pub mod operation;
 pub mod plant_port;
 pub mod program;
+pub mod s7_server;
 mod server;
 pub mod simulation;
 pub mod sink;
@@ -206,6 +209,8 @@ pub struct NodeRuntime {
     pub lifts: Vec<lift::LiftHandle>,
     /// Its profiled devices (`[[node.device]]`).
     pub devices: Vec<field::FieldDeviceHandle>,
+    /// Its PLC memory served over S7 (`[node.s7_server]`).
+    pub s7_server: Option<s7_server::S7ServerHandle>,
 }
 
 impl NodeRuntime {
@@ -339,6 +344,7 @@ async fn start_simulation(
     clock: &Arc<SimClock>,
     pacing: Pacing,
     images: simulation::DeviceImages,
+    served: Vec<s7_server::S7Prepared>,
 ) -> Result<(mpsc::Sender<SimRequest>, std::thread::JoinHandle<()>), RuntimeError> {
     let (requests, receiver) = mpsc::channel();
     let (built, built_answer) = oneshot::channel();
@@ -349,7 +355,7 @@ async fn start_simulation(
         std::thread::Builder::new()
             .name("stanice-simulation".into())
             .spawn(
-                move || match Simulation::build(&project, &shared, clock, images) {
+                move || match Simulation::build(&project, &shared, clock, images, served) {
                     Ok(simulation) => {
                         let _ = built.send(Ok(()));
                         simulation::run(simulation, pacing, receiver);
@@ -429,6 +435,7 @@ async fn start_servers(
             lines: Vec::new(),
             lifts: Vec::new(),
             devices: Vec::new(),
+            s7_server: None,
         });
     }
     Ok((started, handlers))
@@ -607,9 +614,42 @@ impl Runtime {
         // The simulation thread builds the PLCs (they cannot leave it) and runs the first
         // scan, so that each server starts with real values in its image.
         let images = device_images(&project, &shared);
-        let (requests, thread) =
-            start_simulation(&project, &shared, &clock, options.pacing, images.clone()).await?;
+        // The S7 servers' memories and events: the simulation thread takes the receiving
+        // ends, the servers (started below) the sending ones.
+        let mut served = Vec::new();
+        let mut s7_servers = Vec::new();
+        for (index, _) in &shared {
+            if let Some(prepared) = project
+                .nodes
+                .get(*index)
+                .and_then(s7_server::S7Prepared::new)
+            {
+                s7_servers.push((
+                    prepared.node.clone(),
+                    prepared.config.clone(),
+                    Arc::clone(&prepared.memory),
+                    prepared.sender.clone(),
+                ));
+                served.push(prepared);
+            }
+        }
+        let (requests, thread) = start_simulation(
+            &project,
+            &shared,
+            &clock,
+            options.pacing,
+            images.clone(),
+            served,
+        )
+        .await?;
         first_scan(&requests).await?;
+        let mut s7_handles = HashMap::new();
+        for (node, config, memory, sender) in s7_servers {
+            let port = project.station.port_base.saturating_add(config.port_offset);
+            let address = std::net::SocketAddr::new(project.station.bind, port);
+            let handle = s7_server::start(&node, address, &config, memory, sender).await?;
+            s7_handles.insert(node, handle);
+        }
 
         let selected_indices: Vec<usize> = shared.iter().map(|(index, _)| *index).collect();
         let plant_ports = plant_port::open(&project, &selected_indices, &requests).await?;
@@ -641,6 +681,7 @@ impl Runtime {
             );
             node.devices =
                 start_devices(config, points, &options.device_kinds, &plant_ports, &images)?;
+            node.s7_server = s7_handles.remove(&config.name);
         }
         requests
             .send(SimRequest::Go)
@@ -810,6 +851,9 @@ impl Runtime {
         for port in &self.plant_ports {
             port.stop();
         }
+        for server in self.nodes.iter().filter_map(|node| node.s7_server.as_ref()) {
+            server.stop();
+        }
         // Links first, so that no node reports its lower nodes lost while stopping.
         for node in &self.nodes {
             for link in &node.links {
@@ -849,6 +893,9 @@ impl Drop for Runtime {
         }
         for port in &self.plant_ports {
             port.stop();
+        }
+        for server in self.nodes.iter().filter_map(|node| node.s7_server.as_ref()) {
+            server.stop();
         }
         let _ = self.simulation.send(SimRequest::Stop);
         for node in &self.nodes {

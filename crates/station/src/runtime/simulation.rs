@@ -38,6 +38,8 @@ use points::{EventCause, PointDb, PointId, PointKind, PointValue, Quality};
 
 use crate::device::{ImageValue, IoImage};
 
+use super::s7_server::{S7Prepared, S7Served};
+
 use super::clock::{Pacing, SimClock};
 use super::node::NodePoints;
 use super::RuntimeError;
@@ -89,6 +91,7 @@ pub enum CommandRefusal {
 /// Where a bound signal goes in the PLC: a variable, or the process image at a direct
 /// address (`%IX0.4`, `%ID4`, `%QX1.2`), as a program written with `AT` addresses for a
 /// real PLC's I/O expects (the image is copied to its `AT` variables at the cycle's start).
+#[derive(Clone)]
 enum IoTarget {
     Variable(Leaf),
     Image(String),
@@ -112,6 +115,30 @@ impl IoTarget {
                 };
                 let _ = plc.set_io(address, x);
             }
+        }
+    }
+
+    /// Writes a PLC value (a command's): a variable as it is, an image address as a
+    /// whole number (taking effect at the start of the next cycle).
+    fn write_val(&self, plc: &mut Plc, value: Val) {
+        match self {
+            IoTarget::Variable(leaf) => plc.write_leaf(leaf, value),
+            IoTarget::Image(address) => {
+                let x = match value {
+                    Val::Int(x) => x,
+                    Val::Real(x) => x.round() as i64,
+                    Val::Str(_) => return,
+                };
+                let _ = plc.set_io(address, x);
+            }
+        }
+    }
+
+    /// The lane a value for it takes.
+    fn lane(&self) -> Option<Lane> {
+        match self {
+            IoTarget::Variable(leaf) => leaf.ty.lane(),
+            IoTarget::Image(address) => image_type(address).lane(),
         }
     }
 
@@ -240,7 +267,8 @@ struct SourcedPoint {
 }
 
 struct SimCommand {
-    target: Leaf,
+    /// A variable, or a direct address of the image (a marker an S7 client reads).
+    target: IoTarget,
     remote_enable: Option<Leaf>,
 }
 
@@ -262,12 +290,14 @@ struct SimNode {
     outputs: Vec<OutputBinding>,
     sourced: Vec<SourcedPoint>,
     commands: HashMap<u32, SimCommand>,
+    /// The PLC's memory served over S7 (`[node.s7_server]`).
+    s7: Option<S7Served>,
 }
 
 struct Pulse {
     at: Duration,
     node: usize,
-    leaf: Leaf,
+    target: IoTarget,
 }
 
 /// A plant output driven to a new value by a node's PLC, for observers
@@ -313,6 +343,7 @@ impl Simulation {
         nodes: &[(usize, Arc<NodePoints>)],
         clock: Arc<SimClock>,
         images: DeviceImages,
+        mut served: Vec<S7Prepared>,
     ) -> Result<Simulation, RuntimeError> {
         let start = PlantStart {
             unix_secs: clock.start().timestamp(),
@@ -331,12 +362,23 @@ impl Simulation {
             let Some(config) = project.nodes.get(*index) else {
                 continue;
             };
-            built.push(build_node(
-                config,
-                Arc::clone(points),
-                plant.as_deref(),
-                &images,
-            )?);
+            let mut node = build_node(config, Arc::clone(points), plant.as_deref(), &images)?;
+            if let Some(index) = served.iter().position(|s| s.node == config.name) {
+                let prepared = served.swap_remove(index);
+                let plc = node.plc.as_ref().ok_or_else(|| {
+                    RuntimeError::Setup(format!(
+                        "node `{}`: an S7 server needs the node's PLC",
+                        config.name
+                    ))
+                })?;
+                node.s7 = Some(
+                    S7Served::new(&prepared.config, prepared.memory, prepared.receiver, plc)
+                        .map_err(|error| {
+                            RuntimeError::Setup(format!("node `{}`: {error}", config.name))
+                        })?,
+                );
+            }
+            built.push(node);
         }
         Ok(Simulation {
             clock,
@@ -496,6 +538,16 @@ impl Simulation {
                 config.name
             )));
         };
+        let mut fresh = fresh;
+        if let (Some(served), Some(server), Some(plc)) =
+            (old.s7.as_mut(), &config.s7_server, fresh.plc.as_ref())
+        {
+            // the new program must have the connections' status variables
+            served
+                .rebind(server, plc)
+                .map_err(|error| RuntimeError::Setup(format!("node `{}`: {error}", config.name)))?;
+        }
+        fresh.s7 = old.s7.take();
         if old.plc.is_some() {
             old.run_plc(false, now, plant.as_deref_mut(), observers)
                 .map_err(|error| RuntimeError::Setup(error.to_string()))?;
@@ -596,15 +648,15 @@ impl Simulation {
         let mut ended = Vec::new();
         self.pulses.retain(|p| {
             if p.at <= now {
-                ended.push((p.node, p.leaf.clone()));
+                ended.push((p.node, p.target.clone()));
                 false
             } else {
                 true
             }
         });
-        for (node, leaf) in ended {
+        for (node, target) in ended {
             if let Some(plc) = self.nodes.get_mut(node).and_then(|n| n.plc.as_mut()) {
-                plc.write_leaf(&leaf, Val::Int(0));
+                target.write_val(plc, Val::Int(0));
             }
         }
         let Simulation {
@@ -638,7 +690,7 @@ impl Simulation {
             &sim_node.stopped,
             &sim_node.task_of_program,
             &sim_node.tasks,
-            &command.target.path,
+            command.target.path(),
         ) {
             return Err(CommandRefusal::PlcStopped(reason.to_owned()));
         }
@@ -668,7 +720,7 @@ impl Simulation {
                 )))
             }
         };
-        let value = match (command.target.ty.lane(), value) {
+        let value = match (command.target.lane(), value) {
             (Some(Lane::Int), Val::Int(x)) => Val::Int(x),
             (Some(Lane::Int), Val::Real(x)) => Val::Int(x.round() as i64),
             (Some(Lane::Real), Val::Int(x)) => Val::Real(x as f64),
@@ -680,14 +732,14 @@ impl Simulation {
             }
         };
         let target = command.target.clone();
-        plc.write_leaf(&target, value);
+        target.write_val(plc, value);
         if let Some(length) = pulse {
             self.pulses
-                .retain(|p| !(p.node == node && p.leaf.path == target.path));
+                .retain(|p| !(p.node == node && p.target.path() == target.path()));
             self.pulses.push(Pulse {
                 at: now + length,
                 node,
-                leaf: target,
+                target,
             });
         }
         Ok(())
@@ -707,6 +759,9 @@ impl SimNode {
             .is_some_and(|d| Duration::from_nanos(d.max(0).unsigned_abs()) <= now);
         if !due {
             return;
+        }
+        if let Some(served) = self.s7.as_mut() {
+            served.before_cycle(plc);
         }
         {
             let reads_points = self
@@ -728,6 +783,9 @@ impl SimNode {
         for fault in plc.run_cycle(reading) {
             let message = plc.render(&fault);
             tracing::error!(node = %self.points.name(), "{message}");
+        }
+        if let Some(served) = &self.s7 {
+            served.after_cycle(plc);
         }
         self.settle(now, utc, plant, observers);
     }
@@ -1044,6 +1102,7 @@ fn build_node_from(
         outputs: Vec::new(),
         sourced: Vec::new(),
         commands: HashMap::new(),
+        s7: None,
     };
     if files.is_empty() && config.tasks.is_empty() {
         return Ok(sim);
@@ -1260,7 +1319,21 @@ fn build_node_from(
         let CommandTarget::Variable(path) = &command.target else {
             continue;
         };
-        let target = leaf(&plc, path, &format!("command `{}` target", command.name))?;
+        let target = if path.starts_with('%') {
+            plc.get_io(path).map_err(|error| {
+                setup(format!(
+                    "command `{}` target `{path}`: {error}",
+                    command.name
+                ))
+            })?;
+            IoTarget::Image(path.clone())
+        } else {
+            IoTarget::Variable(leaf(
+                &plc,
+                path,
+                &format!("command `{}` target", command.name),
+            )?)
+        };
         let remote_enable = command
             .remote_enable
             .as_deref()

@@ -264,3 +264,65 @@ settings = { simulate = "red 1" }
         assert!(errors.contains(message), "{io}: {errors}");
     }
 }
+
+/// `[node.s7_server]` is checked when the project loads: a PLC to serve, TSAPs of four
+/// hex digits, connections unique, its port apart from the IEC 104 servers'.
+#[test]
+fn s7_servers_are_checked_at_load() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("station.toml");
+    let text = |sources: &str, server: &str| {
+        format!(
+            r#"
+[station]
+name = "field"
+time_zone = "UTC"
+
+[[node]]
+name = "A"
+common_address = 1
+{sources}
+
+[node.server]
+port_offset = 0
+
+[node.s7_server]
+{server}
+"#
+        )
+    };
+    let loaded = Project::parse(
+        dir.path(),
+        &file,
+        &text(
+            "",
+            "port_offset = 1\nmarkers = 64\nconnection = [{ name = \"RH2\", tsap = \"0101\" }]",
+        ),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        loaded.contains("an S7 server needs sources"),
+        "no PLC to serve: {loaded}"
+    );
+    for (server, message) in [
+        (
+            "port_offset = 0",
+            "node[0].s7_server.port_offset",
+        ),
+        (
+            "port_offset = 1\nconnection = [{ name = \"RH2\", tsap = \"01\" }]",
+            "TSAP `01`: four hex digits",
+        ),
+        (
+            "port_offset = 1\nconnection = [{ name = \"RH2\", tsap = \"0101\" }, { name = \"RZZ\", tsap = \"0101\" }]",
+            "repeats connection `RH2`",
+        ),
+        ("port_offset = 1\npdu_size = 100", "pdu_size"),
+    ] {
+        let errors = Project::parse(dir.path(), &file, &text("sources = [\"plc/main.st\"]", server))
+            .unwrap_err()
+            .to_string();
+        assert!(errors.contains(message), "{server}: {errors}");
+    }
+}

@@ -15,6 +15,7 @@ mod harness;
 mod hierarchy;
 mod lighting;
 mod power;
+mod s7_concentrator;
 mod sorting_lab;
 mod time;
 mod tls;

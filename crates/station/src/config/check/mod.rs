@@ -154,6 +154,22 @@ impl Ctx<'_> {
                     );
                 }
             }
+            if let Some(server) = &built.s7_server {
+                // an S7 server listens on port_base + offset too
+                let path = [K("node"), I(n), K("s7_server"), K("port_offset")];
+                if let Some(other) = seen_ports.get(&server.port_offset) {
+                    self.err(
+                        &path,
+                        ConfigProblem::Duplicate {
+                            what: Unique::PortOffset,
+                            value: server.port_offset.to_string(),
+                            other: other.clone(),
+                        },
+                    );
+                } else {
+                    seen_ports.insert(server.port_offset, format!("{} (S7)", built.name));
+                }
+            }
             nodes.push(built);
         }
         self.check_links(folder, &raw, &mut nodes);

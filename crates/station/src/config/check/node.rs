@@ -138,6 +138,115 @@ impl Ctx<'_> {
         })
     }
 
+    /// `[node.s7_server]`: sizes within reason, TSAPs of four hex digits, names unique;
+    /// the node needs a PLC (its memory is what is served).
+    fn check_s7_server(
+        &mut self,
+        n: usize,
+        raw: &RawNode,
+        server: &RawS7Server,
+    ) -> Option<S7ServerConfig> {
+        let at = |rest: &[Seg]| {
+            let mut path = vec![K("node"), I(n), K("s7_server")];
+            path.extend_from_slice(rest);
+            path
+        };
+        let mut ok = true;
+        if raw.sources.is_empty() {
+            self.err(
+                &at(&[]),
+                ConfigProblem::Missing {
+                    what: "sources",
+                    needed_by: "an S7 server",
+                    hint: "it serves the node's PLC memory",
+                },
+            );
+            ok = false;
+        }
+        let mut range = |key: &'static str, value: Option<i64>, default: i64, max: i64| -> i64 {
+            let value = value.unwrap_or(default);
+            if !(0..=max).contains(&value) {
+                self.err(
+                    &at(&[K(key)]),
+                    ConfigProblem::OutOfRange {
+                        what: key,
+                        value,
+                        min: 0,
+                        max: Some(max),
+                    },
+                );
+                ok = false;
+            }
+            value.clamp(0, max)
+        };
+        let port_offset = range("port_offset", Some(server.port_offset), 0, 65_535);
+        let inputs = range("inputs", server.inputs, 128, 65_536);
+        let outputs = range("outputs", server.outputs, 128, 65_536);
+        let markers = range("markers", server.markers, 256, 65_536);
+        let pdu_size = range("pdu_size", server.pdu_size, 960, 960);
+        if pdu_size < 240 {
+            self.err(
+                &at(&[K("pdu_size")]),
+                ConfigProblem::OutOfRange {
+                    what: "pdu_size",
+                    value: pdu_size,
+                    min: 240,
+                    max: Some(960),
+                },
+            );
+            ok = false;
+        }
+        let mut connections: Vec<S7ConnectionConfig> = Vec::new();
+        for (c, connection) in server.connection.iter().enumerate() {
+            let tsap = match u16::from_str_radix(&connection.tsap, 16) {
+                Ok(tsap) if connection.tsap.len() == 4 => tsap,
+                _ => {
+                    self.err(
+                        &at(&[K("connection"), I(c), K("tsap")]),
+                        ConfigProblem::Invalid {
+                            detail: format!(
+                                "TSAP `{}`: four hex digits, the server TSAP the client calls (`0101`)",
+                                connection.tsap
+                            ),
+                        },
+                    );
+                    ok = false;
+                    continue;
+                }
+            };
+            if let Some(other) = connections
+                .iter()
+                .find(|other| other.name == connection.name || other.tsap == tsap)
+            {
+                self.err(
+                    &at(&[K("connection"), I(c)]),
+                    ConfigProblem::Invalid {
+                        detail: format!(
+                            "connection `{}` (TSAP {:04X}) repeats connection `{}`'s name or TSAP",
+                            connection.name, tsap, other.name
+                        ),
+                    },
+                );
+                ok = false;
+                continue;
+            }
+            connections.push(S7ConnectionConfig {
+                name: connection.name.clone(),
+                tsap,
+                status: connection.status.clone(),
+            });
+        }
+        let size = |value: i64| usize::try_from(value).unwrap_or(0);
+        ok.then(|| S7ServerConfig {
+            port_offset: u16::try_from(port_offset).unwrap_or(0),
+            inputs: size(inputs),
+            outputs: size(outputs),
+            markers: size(markers),
+            pdu_size: u16::try_from(pdu_size).unwrap_or(960),
+            connections,
+        })
+    }
+
     /// The node's I/O bindings: each a plant signal or a point of the node (`points`, its
     /// devices' among them), with a finite `scale`.
     fn check_io(
@@ -297,6 +406,10 @@ impl Ctx<'_> {
         let lines = self.check_lines(n, raw);
         let notify = self.check_notify(n, raw);
         let tables = self.check_tables(folder, n, raw);
+        let s7_server = raw
+            .s7_server
+            .as_ref()
+            .and_then(|server| self.check_s7_server(n, raw, server));
         NodeConfig {
             name: raw.name.clone(),
             description: raw.description.clone(),
@@ -318,6 +431,7 @@ impl Ctx<'_> {
                 .map(|(path, value)| (path.clone(), value.clone()))
                 .collect(),
             tables,
+            s7_server,
         }
     }
 
@@ -534,7 +648,12 @@ impl Ctx<'_> {
         }
         for (c, command) in raw.command.iter().enumerate() {
             if is_variable(&command.target) {
-                named.push((vec![K("command"), I(c), K("target")], &command.target));
+                if command.target.starts_with('%') {
+                    // a direct address of the process image (a marker an S7 client reads)
+                    addresses.push((vec![K("command"), I(c), K("target")], &command.target));
+                } else {
+                    named.push((vec![K("command"), I(c), K("target")], &command.target));
+                }
             }
             if let Some(variable) = &command.remote_enable {
                 named.push((vec![K("command"), I(c), K("remote_enable")], variable));
@@ -558,6 +677,19 @@ impl Ctx<'_> {
                         detail: error.to_string(),
                     },
                 );
+            }
+        }
+        for (c, connection) in raw
+            .s7_server
+            .iter()
+            .flat_map(|server| server.connection.iter())
+            .enumerate()
+        {
+            if let Some(status) = &connection.status {
+                named.push((
+                    vec![K("s7_server"), K("connection"), I(c), K("status")],
+                    status,
+                ));
             }
         }
         let groups = raw
