@@ -1,10 +1,14 @@
 #!/usr/bin/env python3
-"""Writes examples/vsetin/station.toml, the Vsetín railway station project.
+"""Writes examples/vsetin/station.toml, the Vsetín railway station project, and with
+`--s7` its variant examples/vsetin-s7 (station.toml and the concentrators' programs), in
+which the LOGO! boards report to the S7-1500 concentrators over S7 connections as in the
+thesis (section 3.3) instead of IEC 104.
 
 The project is plain TOML and runs as it is; this script only saves typing the thirteen
 lighting boards and the repeated board points. Edit the tables below and run
 
     python3 examples/vsetin/tools/generate_station_toml.py
+    python3 examples/vsetin/tools/generate_station_toml.py --s7
 
 IOA plan (the railway-station thesis's point lists, docs/THESES.md; where it is silent, ours):
   RDRT own points      1-10 SP of module P9, 21 HMI local, 24/25 module faults,
@@ -23,9 +27,14 @@ IOA plan (the railway-station thesis's point lists, docs/THESES.md; where it is 
 Ports: port_base + 0 RDRT, 1 RH1.1, 2 RH2, 3 RZS1, 4 RZZ, 5 RDA, 9 + k lighting board k.
 """
 
+import sys
 from pathlib import Path
 
-OUT = Path(__file__).resolve().parent.parent / "station.toml"
+S7 = "--s7" in sys.argv[1:]
+HERE = Path(__file__).resolve().parent.parent
+OUT = (HERE.parent / "vsetin-s7" if S7 else HERE) / "station.toml"
+# The variant shares the programs and the calendar of examples/vsetin.
+SHARED = "../vsetin/" if S7 else ""
 LIGHTING = [f"ROV{k:02d}" for k in range(1, 13)] + ["OR"]
 
 out = []
@@ -99,7 +108,7 @@ def link(name, target, status_point=None, republish=None):
     table("[[node.link]]", **fields)
 
 
-emit("""# The Vsetín railway station (the railway-station thesis, docs/THESES.md): power boards RH2, RZZ and
+emit("" if S7 else """# The Vsetín railway station (the railway-station thesis, docs/THESES.md): power boards RH2, RZZ and
 # RDA (LOGO!), the concentrators RH1.1 and RZS1 (S7-1500), twelve lighting-tower boards
 # ROV01..ROV12 (S7-1200) and the OŘ-area lighting (S7-1500), and the central PLC RDRT
 # (Tecomat TC700) serving the dispatch systems. Every node is an IEC 104 server; each
@@ -108,8 +117,20 @@ emit("""# The Vsetín railway station (the railway-station thesis, docs/THESES.m
 # Written by tools/generate_station_toml.py (its header has the IOA and port plan); the
 # format is documented in crates/station/src/config/mod.rs.
 """)
-table("station", name="Vsetín", time_zone="Europe/Prague", store="sqlite:events.sqlite",
-      retention_days=60, port_base=2404, bind="127.0.0.1", plant="vsetin")
+if S7:
+    emit("""# The Vsetín railway station with its LOGO! boards on S7 connections (the railway-station
+# thesis, docs/THESES.md, section 3.3): RH1.1 and RZS1 serve their PLC memory over S7
+# ([node.s7_server]) as the S7-1500 concentrators do, and the boards RH2, RZZ and RDA are
+# simulated LOGO!s that connect to them as S7 clients, writing their inputs into the
+# concentrators' markers (tag list 6.1) and reading their commands from them. Everything
+# else is examples/vsetin, whose programs and calendar this project uses. Against real
+# LOGO!s: drop the three board nodes and let the concentrators listen on port 102.
+#
+#   stanice run examples/vsetin-s7
+""")
+table("station", name="Vsetín (S7)" if S7 else "Vsetín", time_zone="Europe/Prague",
+      store="sqlite:events.sqlite", retention_days=60, port_base=2504 if S7 else 2404,
+      bind="127.0.0.1", plant="vsetin")
 
 # --------------------------------------------------------------------------------------
 # Power boards RH2 and RZZ: the LOGO! QF1 logic (spec 5.1, 5.2).
@@ -168,7 +189,7 @@ def power_board(board, program, source, ca, port_offset, description):
 # other client as the dispatch systems DDTS/DŘT. While HMI-local mode is on, commands from
 # all but the HMI are refused (AllowCmd, 7.5). Each link's failure is a point (7.3).
 BLOCKED = "RDRTIO.PovelyBlokovany"
-node("RDRT", "central PLC (Tecomat TC700) and HMI", 1, 0, sources=["plc/rdrt_io.st"],
+node("RDRT", "central PLC (Tecomat TC700) and HMI", 1, 0, sources=[f"{SHARED}plc/rdrt_io.st"],
      allowed=False, groups=[
          {"name": "hmi", "clients": ["127.0.0.2"], "status_point": "COMM_HMI"},
          {"name": "ed", "clients": ["127.0.0.3"], "status_point": "COMM_ED",
@@ -236,24 +257,8 @@ for k, board in enumerate(LIGHTING, start=1):
     link(board, board, f"COMM_{board}", republish=10_000 + 100 * k)
 
 # --------------------------------------------------------------------------------------
-node("RH1.1", "main board concentrator (S7-1500)", 11, 1)
-point("COMM_RH2", "M_SP_TB_1", 280, None, "communication failure to the LOGO! of RH2")
-link("RH2", "RH2", "COMM_RH2", republish=0)
-
-power_board("RH2", "RH2Logic", "plc/rh2_logic.st", 21, 2, "board RH2 (LOGO!), fed from T2")
-
-node("RZS1", "standby-supply board concentrator (S7-1500)", 12, 3)
-point("COMM_RZZ", "M_SP_TB_1", 380, None, "communication failure to the LOGO! of RZZ")
-point("COMM_RDA", "M_SP_TB_1", 400, None, "communication failure to the LOGO! of RDA")
-link("RZZ", "RZZ", "COMM_RZZ", republish=100)
-link("RDA", "RDA", "COMM_RDA", republish=0)
-
-power_board("RZZ", "RZZLogic", "plc/rzz_logic.st", 22, 4, "board RZZ (LOGO!), fed from T1")
-
-# --------------------------------------------------------------------------------------
-node("RDA", "transfer board mains / diesel generator (LOGO!)", 23, 5, sources=["plc/rda_transfer.st"])
-task("main", 10, ["RDATransfer"], 100)
-for signal, variable in [
+# RDA's LOGO!: its plant signals and the points it reports.
+RDA_IO = [
     ("RDA_KHU1_Napeti_sit", "KHU1_NapetiSit"), ("RDA_KHU2_Napeti_DA", "KHU2_NapetiDA"),
     ("RDA_KHU3_Napeti_RZS", "KHU3_NapetiRZS"), ("RDA_KM1_Zapnut", "KM1_Zapnut"),
     ("RDA_KM2_Zapnut", "KM2_Zapnut"), ("RDA_SA1_Mistne", "SA1_Mistne"),
@@ -262,9 +267,8 @@ for signal, variable in [
     ("RDA_DA_Porucha", "DA_Porucha"), ("RDA_FV1_Prepetova_ochrana", "FV1_PrepetovaOchrana"),
     ("RDA_FU1_Pretavena_pojistka", "FU1_PretavenaPojistka"),
     ("RDA_KM1_Zap", "KM1_Zap"), ("RDA_KM2_Zap", "KM2_Zap"), ("RDA_DA_Start", "DA_Start"),
-]:
-    io(signal, f"RDATransfer.{variable}")
-for ioa, variable, text in [
+]
+RDA_POINTS = [
     (401, "KM1_Zapnut", "contactor KM1 (supply from RH1.1, mains) closed"),
     (402, "KM2_Zapnut", "contactor KM2 (supply from the diesel generator) closed"),
     (403, "KHU1_NapetiSit", "mains voltage present"),
@@ -285,13 +289,154 @@ for ioa, variable, text in [
     (418, "Porucha_DA", "generator fault"),
     (419, "Porucha_KM1", "contactor KM1 does not follow its coil"),
     (420, "Porucha_KM2", "contactor KM2 does not follow its coil"),
-]:
-    point(f"RDA_{variable}", "M_SP_TB_1", ioa, f"RDATransfer.{variable}", text)
-point("RDA_Stav", "M_ME_TE_1", 421, "RDATransfer.Stav",
-      "transfer state: 0 start, 1 mains, 2 generator starting, 3 settling, 4 on generator, 5 returning, 9 emergency off")
-command("RDA_ProvozDA", "C_SC_NA_1", 2201, "RDATransfer.Cmd_ProvozDA",
-        "run RZS from the diesel generator (test run; level, held until switched off)",
-        remote_enable="RDATransfer.SA1_Dalkove")
+]
+RDA_STAV_TEXT = ("transfer state: 0 start, 1 mains, 2 generator starting, 3 settling, "
+                 "4 on generator, 5 returning, 9 emergency off")
+
+
+def rda_board(port_offset):
+    node("RDA", "transfer board mains / diesel generator (LOGO!)", 23, port_offset,
+         sources=[f"{SHARED}plc/rda_transfer.st"])
+    task("main", 10, ["RDATransfer"], 100)
+    for signal, variable in RDA_IO:
+        io(signal, f"RDATransfer.{variable}")
+
+
+if not S7:
+    # ----------------------------------------------------------------------------------
+    node("RH1.1", "main board concentrator (S7-1500)", 11, 1)
+    point("COMM_RH2", "M_SP_TB_1", 280, None, "communication failure to the LOGO! of RH2")
+    link("RH2", "RH2", "COMM_RH2", republish=0)
+
+    power_board("RH2", "RH2Logic", "plc/rh2_logic.st", 21, 2, "board RH2 (LOGO!), fed from T2")
+
+    node("RZS1", "standby-supply board concentrator (S7-1500)", 12, 3)
+    point("COMM_RZZ", "M_SP_TB_1", 380, None, "communication failure to the LOGO! of RZZ")
+    point("COMM_RDA", "M_SP_TB_1", 400, None, "communication failure to the LOGO! of RDA")
+    link("RZZ", "RZZ", "COMM_RZZ", republish=100)
+    link("RDA", "RDA", "COMM_RDA", republish=0)
+
+    power_board("RZZ", "RZZLogic", "plc/rzz_logic.st", 22, 4, "board RZZ (LOGO!), fed from T1")
+
+    # ----------------------------------------------------------------------------------
+    rda_board(5)
+    for ioa, variable, text in RDA_POINTS:
+        point(f"RDA_{variable}", "M_SP_TB_1", ioa, f"RDATransfer.{variable}", text)
+    point("RDA_Stav", "M_ME_TE_1", 421, "RDATransfer.Stav", RDA_STAV_TEXT)
+    command("RDA_ProvozDA", "C_SC_NA_1", 2201, "RDATransfer.Cmd_ProvozDA",
+            "run RZS from the diesel generator (test run; level, held until switched off)",
+            remote_enable="RDATransfer.SA1_Dalkove")
+else:
+    # ----------------------------------------------------------------------------------
+    # The S7 variant: each concentrator serves its PLC memory over S7 ([node.s7_server],
+    # port_base + 50 and + 51 here, 102 on the S7-1500s); its LOGO! boards connect to it
+    # as S7 clients with the TSAPs of the thesis's connection table (3.3: local IDs
+    # 100-102, here the called TSAPs 0100-0102) and write their inputs into its markers
+    # (tag list 6.1: RH2 at M20.0-M22.1, commands M24.0/M24.1), where the concentrator's
+    # tag table declares them. RZZ and RDA at RZS1: RZZ as RH2 at RH1.1 (5.2: "the RH2
+    # pattern"), RDA (not in the thesis's lists, ours) at M40.0-M42.3, its state at MW44,
+    # its command at M46.0. The boards' meters (IOA 271-274, ours) are not in the transfer
+    # areas. Against real LOGO!s the board nodes go and the concentrators listen on 102.
+    def tag(name):
+        """A tag's name as an ST identifier (FA1.1 -> FA1_1)."""
+        return name.replace(".", "_")
+
+    def marker(index, first_byte):
+        return f"{first_byte + index // 8}.{index % 8}"
+
+    def board_tags(board, first_byte):
+        """(tag, marker bit, text, board program variable) of a power board's inputs."""
+        return [(f"{board}_{tag(suffix.replace('{B}', board))}", marker(i, first_byte),
+                 text.replace("{B}", board), variable)
+                for i, (suffix, variable, text) in enumerate(BOARD_INPUTS)]
+
+    PROGRAMS = {}  # concentrator program -> [(tag, address, type, comment)]
+
+    def concentrator(name, description, ca, port_offset, s7_offset, program, connections):
+        node(name, description, ca, port_offset, sources=[f"plc/{program.lower()}.st"])
+        task("main", 10, [program], 100)
+        table("node.s7_server", port_offset=s7_offset, markers=64)
+        PROGRAMS[program] = []
+        for connection, tsap, ioa in connections:
+            table("[[node.s7_server.connection]]", name=connection, tsap=tsap,
+                  status=f"{program}.Comm_{connection}")
+            PROGRAMS[program].append((f"Comm_{connection}", None, "BOOL := TRUE",
+                                      f"LOGO!8_{connection} not connected (S7_Connection_{connection})"))
+            point(f"COMM_{connection}", "M_SP_TB_1", ioa, f"{program}.Comm_{connection}",
+                  f"communication failure to the LOGO! of {connection} (S7 connection)")
+
+    def concentrated_board(program, board, ioa_base, first_byte, commands):
+        tags = board_tags(board, first_byte)
+        for i, ((name, bit, text, _), (suffix, _, _)) in enumerate(zip(tags, BOARD_INPUTS)):
+            PROGRAMS[program].append((name, f"%MX{bit}", "BOOL", text))
+            # the points keep the plain project's names (RH2_V1_FA1.1), the tags are ST names
+            point(f"{board}_{suffix.replace('{B}', board)}", "M_SP_TB_1", ioa_base + i,
+                  f"{program}.{name}", text, invalid_when=f"{program}.Comm_{board}")
+        remote = f"{program}.{board}_P1_SA1_Dalkove"
+        for bit, (ioa, suffix, text) in enumerate(commands):
+            address = f"%MX{first_byte + 4}.{bit}"
+            PROGRAMS[program].append((f"{board}_{suffix}", address, "BOOL", text))
+            command(f"{board}_{suffix}", "C_SC_NA_1", ioa, address, text,
+                    remote_enable=remote, pulse_ms=500)
+
+    def device_io(device, item, direction, variable):
+        table("[[node.io]]", device=device, item=item, direction=direction, variable=variable)
+
+    def s7_device(concentrator_node, tsap):
+        name = f"S7_{tag(concentrator_node)}"
+        table("[[node.device]]", name=name, kind="s7",
+              description=f"S7 connection to the S7-1500 of {concentrator_node}", ioa_base=900,
+              settings={"connect": f"node:{concentrator_node}", "tsap": f"0200:{tsap}",
+                        "cycle_ms": 50})
+        return name
+
+    def logo_board(board, program, source, ca, description, concentrator_node, tsap, first_byte):
+        node(board, description, ca, None, sources=[f"{SHARED}{source}"])
+        task("main", 10, [program], 100)
+        for suffix, variable, _ in BOARD_INPUTS:
+            io(f"{board}_{suffix.replace('{B}', board)}", f"{program}.{variable}")
+        io(f"{board}_QF1_Zapnut", f"{program}.QF1_Zapnut")
+        io(f"{board}_QF1_Vyp", f"{program}.QF1_OFF")
+        io(f"{board}_QF1_Zap", f"{program}.QF1_ON")
+        device = s7_device(concentrator_node, tsap)
+        for _, bit, _, variable in board_tags(board, first_byte):
+            device_io(device, f"M{bit}", "output", f"{program}.{variable}")
+        device_io(device, f"M{first_byte + 4}.0", "input", f"{program}.Cmd_VypnoutQF1")
+        device_io(device, f"M{first_byte + 4}.1", "input", f"{program}.Cmd_ZapnoutQF1")
+
+    QF1_COMMANDS = [(2021, "VypnoutQF1", "open QF1"), (2022, "ZapnoutQF1", "close QF1")]
+    concentrator("RH1.1", "main board concentrator (S7-1500): S7 server of LOGO! RH2", 11, 1, 50,
+                 "RH11Concentrator", [("RH2", "0101", 280)])
+    concentrated_board("RH11Concentrator", "RH2", 281, 20, QF1_COMMANDS)
+    logo_board("RH2", "RH2Logic", "plc/rh2_logic.st", 21, "board RH2 (LOGO!), fed from T2",
+               "RH1.1", "0101", 20)
+
+    concentrator("RZS1", "standby-supply board concentrator (S7-1500): S7 server of LOGO! RZZ and RDA",
+                 12, 3, 51, "RZS1Concentrator", [("RZZ", "0101", 380), ("RDA", "0102", 400)])
+    concentrated_board("RZS1Concentrator", "RZZ", 381, 20,
+                       [(2121, "VypnoutQF1", "open QF1"), (2122, "ZapnoutQF1", "close QF1")])
+    for i, (ioa, variable, text) in enumerate(RDA_POINTS):
+        name = f"RDA_{variable}"
+        PROGRAMS["RZS1Concentrator"].append((name, f"%MX{marker(i, 40)}", "BOOL", text))
+        point(name, "M_SP_TB_1", ioa, f"RZS1Concentrator.{name}", text,
+              invalid_when="RZS1Concentrator.Comm_RDA")
+    PROGRAMS["RZS1Concentrator"].append(("RDA_Stav", "%MW44", "INT", "transfer state"))
+    point("RDA_Stav", "M_ME_TE_1", 421, "RZS1Concentrator.RDA_Stav", RDA_STAV_TEXT,
+          invalid_when="RZS1Concentrator.Comm_RDA")
+    PROGRAMS["RZS1Concentrator"].append(("RDA_ProvozDA", "%MX46.0", "BOOL",
+                                         "command: run RZS from the diesel generator"))
+    command("RDA_ProvozDA", "C_SC_NA_1", 2201, "%MX46.0",
+            "run RZS from the diesel generator (test run; level, held until switched off)",
+            remote_enable="RZS1Concentrator.RDA_SA1_Dalkove")
+
+    logo_board("RZZ", "RZZLogic", "plc/rzz_logic.st", 22, "board RZZ (LOGO!), fed from T1",
+               "RZS1", "0101", 20)
+    rda_board(None)
+    device = s7_device("RZS1", "0102")
+    for i, (_, variable, _) in enumerate(RDA_POINTS):
+        device_io(device, f"M{marker(i, 40)}", "output", f"RDATransfer.{variable}")
+    device_io(device, "MW44:INT", "output", "RDATransfer.Stav")
+    device_io(device, "M46.0", "input", "RDATransfer.Cmd_ProvozDA")
 
 # --------------------------------------------------------------------------------------
 LIGHTING_INPUTS = [
@@ -342,7 +487,7 @@ LIGHTING_COMMANDS = [
 
 for k, board in enumerate(LIGHTING, start=1):
     what = "OŘ-area lighting (S7-1500 in DT)" if board == "OR" else f"lighting tower board {board} (S7-1200)"
-    node(board, what, 100 + k, 9 + k, sources=["plc/osvetleni.st", "plc/lighting_board.st"])
+    node(board, what, 100 + k, 9 + k, sources=[f"{SHARED}plc/osvetleni.st", f"{SHARED}plc/lighting_board.st"])
     task("main", 100, ["LightingBoard"], 400)
     # Staggered switch-on (spec 4.9, RS-A8: index x 2 s); astronomical mode until the
     # dispatch sets another.
@@ -350,7 +495,7 @@ for k, board in enumerate(LIGHTING, start=1):
                          '"LightingBoard.Vstupy.W_Astral"': "TRUE"})
     # The weekly calendar is data (spec 4.4): generated for Vsetín by
     # `cargo run -p plant --example lighting_calendar`, replaceable by the official E 11 file.
-    table("[[node.table]]", file="calendar/vsetin-weekly.csv", index="week",
+    table("[[node.table]]", file=f"{SHARED}calendar/vsetin-weekly.csv", index="week",
           columns={"off_utc": "LightingBoard.Osvetleni.sunrise_data",
                    "on_utc": "LightingBoard.Osvetleni.sunset_data"})
     for suffix, variable in LIGHTING_INPUTS:
@@ -364,5 +509,21 @@ for k, board in enumerate(LIGHTING, start=1):
         command(f"{board}_{name}", type_id, n, target, text,
                 remote_enable="LightingBoard.Dalkove", **extra)
 
+OUT.parent.mkdir(parents=True, exist_ok=True)
 OUT.write_text("\n".join(out).rstrip() + "\n", encoding="utf-8")
 print(f"wrote {OUT}")
+if S7:
+    for program, tags in PROGRAMS.items():
+        lines = [f"(* The tag table of the S7-1500 concentrator {program} (the railway-station thesis,",
+                 "   section 6.1): the markers its LOGO! boards write over their S7 connections and",
+                 "   the commands they read, and each connection's status (set by the station's S7",
+                 "   server). Written by examples/vsetin/tools/generate_station_toml.py --s7. *)",
+                 "", f"PROGRAM {program}", "VAR"]
+        for name, address, type_, comment in tags:
+            at = f" AT {address}" if address else ""
+            lines.append(f"    {name}{at} : {type_};  (* {comment} *)")
+        lines += ["END_VAR", "END_PROGRAM", ""]
+        path = OUT.parent / "plc" / f"{program.lower()}.st"
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text("\n".join(lines), encoding="utf-8")
+        print(f"wrote {path}")

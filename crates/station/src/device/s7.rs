@@ -17,7 +17,8 @@
 //! variable = "RH2Logic.QF1_Zapnut"
 //! ```
 //!
-//! Settings: `connect` (host, port 102 unless given), `rack` and `slot` (0 and 1) or
+//! Settings: `connect` (host, port 102 unless given; or `node:NAME`, the S7 server of a
+//! node of the same project, `[node.s7_server]`), `rack` and `slot` (0 and 1) or
 //! `tsap = "LLLL:RRRR"`, `cycle_ms` (the read cycle, default 100), `write_every_ms`
 //! (outputs are written when they change and all of them again at this period, default
 //! 1000), `timeout_ms` (a connect, a read or a write, default 3000).
@@ -35,6 +36,10 @@ use crate::config::FieldDeviceConfig;
 
 /// The kind's name in a project.
 pub const KIND: &str = "s7";
+
+/// `connect = "node:RH1.1"`: the S7 server of a node of the same project (a simulated
+/// board reporting to a simulated concentrator), wherever the project's ports put it.
+pub const NODE_PREFIX: &str = "node:";
 
 /// The S7 device kind.
 #[derive(Debug)]
@@ -107,10 +112,11 @@ fn settings(table: &toml::Table) -> Result<Settings, DeviceError> {
     let Some(toml::Value::String(connect)) = table.get("connect") else {
         return Err(setting("connect", "the PLC's address, host or host:port"));
     };
-    let connect = if connect
-        .rsplit_once(':')
-        .is_some_and(|(_, port)| port.parse::<u16>().is_ok())
-        && !connect.ends_with(']')
+    let connect = if connect.starts_with(NODE_PREFIX)
+        || connect
+            .rsplit_once(':')
+            .is_some_and(|(_, port)| port.parse::<u16>().is_ok())
+            && !connect.ends_with(']')
     {
         connect.clone()
     } else {

@@ -75,7 +75,7 @@ use chrono::{DateTime, Utc};
 use iec60870::cs104::server::{ServerError, ServerHandle};
 use tokio::sync::oneshot;
 
-use crate::config::{NodeConfig, Project};
+use crate::config::{FieldDeviceConfig, NodeConfig, Project};
 use crate::device::DeviceKinds;
 use crate::store::{
     open_store, spawn_retention, EventStore, Retention, RetentionHandle, StoreError,
@@ -523,6 +523,27 @@ fn start_lifts(
 
 /// Starts the node's profiled devices (`[[node.device]]`) under the field-source
 /// supervisor.
+/// `connect = "node:NAME"` of a device resolved to that node's S7 server's address (the
+/// station's `bind`, `port_base` + its `port_offset`).
+fn s7_server_address(project: &Project, mut device: FieldDeviceConfig) -> FieldDeviceConfig {
+    let target = device
+        .settings
+        .get("connect")
+        .and_then(toml::Value::as_str)
+        .and_then(|connect| connect.strip_prefix(crate::device::s7::NODE_PREFIX))
+        .and_then(|name| project.node(name))
+        .and_then(|node| node.s7_server.as_ref());
+    if let Some(server) = target {
+        let port = project.station.port_base.saturating_add(server.port_offset);
+        let address = std::net::SocketAddr::new(project.station.bind, port);
+        device.settings.insert(
+            "connect".to_owned(),
+            toml::Value::String(address.to_string()),
+        );
+    }
+    device
+}
+
 /// An I/O image for each device of the selected nodes whose items a PLC is bound to.
 fn device_images(
     project: &Project,
@@ -546,6 +567,7 @@ fn device_images(
 }
 
 fn start_devices(
+    project: &Project,
     config: &NodeConfig,
     points: &Arc<NodePoints>,
     kinds: &DeviceKinds,
@@ -559,7 +581,7 @@ fn start_devices(
         .devices
         .iter()
         .map(|device| {
-            let device = &plant_ports.device(&config.name, device);
+            let device = &s7_server_address(project, plant_ports.device(&config.name, device));
             let kind = kinds.get(&device.kind).ok_or_else(|| {
                 setup(
                     &device.name,
@@ -679,8 +701,14 @@ impl Runtime {
                 &archived_faults,
                 notifications,
             );
-            node.devices =
-                start_devices(config, points, &options.device_kinds, &plant_ports, &images)?;
+            node.devices = start_devices(
+                &project,
+                config,
+                points,
+                &options.device_kinds,
+                &plant_ports,
+                &images,
+            )?;
             node.s7_server = s7_handles.remove(&config.name);
         }
         requests

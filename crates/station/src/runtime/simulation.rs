@@ -1187,7 +1187,14 @@ fn build_node_from(
                     .cloned()
                     .ok_or_else(|| setup(format!("no I/O image of device `{device}`")))?;
                 if *output {
-                    if let IoTarget::Variable(_) = target {
+                    // A variable the project also binds as an input (a LOGO!'s contact
+                    // reported to its concentrator) is passed on, not driven: it has no
+                    // safe value of its own.
+                    let passed_on = config.io.iter().any(|other| {
+                        other.variable == binding.variable
+                            && !matches!(other.source, IoSource::Device { output: true, .. })
+                    });
+                    if let (IoTarget::Variable(_), false) = (&target, passed_on) {
                         plc.bind_output(&binding.variable).map_err(|error| {
                             setup(format!("output `{}`: {error}", binding.variable))
                         })?;

@@ -19,3 +19,4 @@ mod s7_concentrator;
 mod sorting_lab;
 mod time;
 mod tls;
+mod vsetin_s7;

@@ -99,7 +99,7 @@ programs = ["Logo"]
 name = "S7_RH11"
 kind = "s7"
 ioa_base = 900
-settings = {{ connect = "127.0.0.1:{s7}", tsap = "0200:0101", cycle_ms = 20 }}
+settings = {{ connect = "node:RH1.1", tsap = "0200:0101", cycle_ms = 20 }}
 
 [[node.io]]
 device = "S7_RH11"
@@ -112,8 +112,7 @@ device = "S7_RH11"
 item = "M24.0"
 direction = "input"
 variable = "Logo.OpenCmd"
-"#,
-        s7 = base + 1
+"#
     );
     let folder = project_folder(&[
         ("station.toml", &text),

@@ -173,6 +173,32 @@ impl Ctx<'_> {
             nodes.push(built);
         }
         self.check_links(folder, &raw, &mut nodes);
+        // `connect = "node:NAME"`: a node of the project with an S7 server.
+        for (n, node) in nodes.iter().enumerate() {
+            for (d, device) in node.devices.iter().enumerate() {
+                let Some(target) = device
+                    .settings
+                    .get("connect")
+                    .and_then(toml::Value::as_str)
+                    .and_then(|connect| connect.strip_prefix(crate::device::s7::NODE_PREFIX))
+                else {
+                    continue;
+                };
+                if !nodes
+                    .iter()
+                    .any(|other| other.name == target && other.s7_server.is_some())
+                {
+                    self.err(
+                        &[K("node"), I(n), K("device"), I(d), K("settings")],
+                        ConfigProblem::Invalid {
+                            detail: format!(
+                                "connect: no node `{target}` with an S7 server ([node.s7_server])"
+                            ),
+                        },
+                    );
+                }
+            }
+        }
         if station.plant.is_none() {
             for (n, node) in nodes.iter().enumerate() {
                 for (d, device) in node.devices.iter().enumerate() {
