@@ -289,6 +289,14 @@ the table goes to FOLDER/grades.csv and FOLDER/grades.html unless --out says oth
         "  stanice plc explain E0201                     # what a code means, a wrong example, the fix
   stanice plc explain --list",
     ),
+    ("modbus", crate::modbus::EXAMPLES),
+    ("modbus read", crate::modbus::READ_EXAMPLES),
+    ("modbus write", crate::modbus::WRITE_EXAMPLES),
+    ("modbus serve", crate::modbus::SERVE_EXAMPLES),
+    ("s7", crate::s7::EXAMPLES),
+    ("s7 read", crate::s7::READ_EXAMPLES),
+    ("s7 write", crate::s7::WRITE_EXAMPLES),
+    ("s7 serve", crate::s7::SERVE_EXAMPLES),
 ];
 
 /// The `after_help` of the subcommand at `path`: its examples, and for the client the

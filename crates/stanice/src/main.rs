@@ -29,11 +29,13 @@ mod interrupt;
 mod lab;
 mod lift;
 mod link_report;
+mod modbus;
 mod plc;
 mod points;
 mod port_in_use;
 mod printed_time;
 mod run;
+mod s7;
 mod serial_line;
 mod sorting;
 mod stats;
@@ -77,10 +79,18 @@ enum Command {
     /// board simulator; read-only).
     #[command(subcommand)]
     Lift(lift::LiftCommand),
+    /// Modbus TCP and RTU test tool: read and write a device's coils and registers, or
+    /// serve them as a TCP server or an RTU slave.
+    #[command(subcommand, after_help = modbus::help(modbus::EXAMPLES))]
+    Modbus(modbus::ModbusCommand),
     /// The remote sorting lab's Sartorius balance on RS-232: read what it sends, or
     /// simulate it with the thesis's measured scatter.
     #[command(subcommand)]
     Balance(balance::BalanceCommand),
+    /// Siemens S7 over ISO-on-TCP: read and write a PLC's memory by absolute address
+    /// (DB1.DBW2, MB10, IX0.1), or serve data blocks, inputs, outputs and markers as one.
+    #[command(subcommand, after_help = s7::help(s7::EXAMPLES))]
+    S7(s7::S7Command),
     /// Statistics for the labs: the sorting lab's class limits from weighings of its
     /// balls (confidence intervals, coverage, decision limits, expected reliability).
     #[command(subcommand)]
@@ -141,7 +151,9 @@ fn main() -> std::process::ExitCode {
             Command::Iec101(command) => iec101::run(command).await,
             Command::Iec103(command) => iec103::run(command).await,
             Command::Lift(command) => lift::run(command).await,
+            Command::Modbus(command) => modbus::run(command).await,
             Command::Balance(command) => balance::run(command).await,
+            Command::S7(command) => s7::run(command).await,
             Command::Stats(command) => stats::run(command),
             Command::Sorting(command) => sorting::run(command),
             Command::Demo(args) => demo::run(args).await,

@@ -341,8 +341,13 @@ fn print_banner(runtime: &Runtime, store: &str, speed: f64, demo: bool) {
         } else {
             format!(", links to {}", links.join(", "))
         };
+        let s7 = node
+            .s7_server
+            .as_ref()
+            .map(|s7| format!(", S7 server {}", s7.local_addr()))
+            .unwrap_or_default();
         println!(
-            "  {name:<8} {} points, {server}{links}",
+            "  {name:<8} {} points, {server}{s7}{links}",
             node.points.points().len()
         );
     }

@@ -65,6 +65,10 @@ const SKIPPED: &[(&str, &str)] = &[
         "a benchmark: a release build and 1,000 simulated sortings (`stanice sorting reliability --sortings 100`, run above, is the same measurement, shorter)",
     ),
     (
+        "cargo bench -p s7 --bench throughput",
+        "a benchmark: a release build and seconds of measurement against python-snap7",
+    ),
+    (
         "cargo bench -p hmi --bench live",
         "a benchmark: a release build and headless Chromium",
     ),
@@ -189,9 +193,15 @@ fn kind(arguments: &[String]) -> Kind {
     let words: Vec<&str> = arguments.iter().map(String::as_str).collect();
     match words.as_slice() {
         ["run" | "demo" | "hmi", ..] | ["lab", "serve", ..] => Kind::LongRunning,
-        ["iec104", "server", ..] | ["lift", "simulate", ..] => Kind::Outstation,
+        ["iec104", "server", ..]
+        | ["lift", "simulate", ..]
+        | ["s7", "serve", ..]
+        | ["modbus", "serve", ..] => Kind::Outstation,
         ["iec104", "client", ..] => Kind::Client,
-        ["iec104", "command", ..] | ["lift", "poll", ..] => Kind::PeerOneShot,
+        ["iec104", "command", ..]
+        | ["lift", "poll", ..]
+        | ["s7", "read" | "write", ..]
+        | ["modbus", "read" | "write", ..] => Kind::PeerOneShot,
         _ => Kind::OneShot,
     }
 }

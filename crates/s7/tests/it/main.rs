@@ -14,4 +14,6 @@ mod frames;
 #[cfg(feature = "tokio")]
 mod loopback;
 mod pair;
+#[cfg(feature = "tokio")]
+mod peer;
 mod props;

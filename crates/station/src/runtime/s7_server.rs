@@ -122,6 +122,8 @@ pub(crate) struct S7Served {
     peers: HashMap<SocketAddr, Option<u16>>,
     /// Per area (I, Q, M): the bytes a client writes.
     owned: [Vec<bool>; 3],
+    /// Per area: each served byte's image address (`%MB20`), made once.
+    addresses: [Vec<String>; 3],
     /// Each connection's TSAP and its status BOOL.
     connections: Vec<(String, u16, Option<Leaf>)>,
 }
@@ -143,6 +145,11 @@ impl S7Served {
                 vec![false; config.inputs],
                 vec![false; config.outputs],
                 vec![false; config.markers],
+            ],
+            addresses: [
+                byte_addresses('I', config.inputs),
+                byte_addresses('Q', config.outputs),
+                byte_addresses('M', config.markers),
             ],
         })
     }
@@ -226,15 +233,15 @@ impl S7Served {
             .memory
             .lock()
             .unwrap_or_else(|poisoned| poisoned.into_inner());
-        for ((area, letter), owned) in AREAS.iter().zip(&self.owned) {
+        for (((area, _), owned), addresses) in AREAS.iter().zip(&self.owned).zip(&self.addresses) {
             let Some(bytes) = memory.area_mut(*area) else {
                 continue;
             };
-            for (byte, (slot, mine)) in bytes.iter_mut().zip(owned).enumerate() {
+            for ((slot, mine), address) in bytes.iter_mut().zip(owned).zip(addresses) {
                 if *mine {
                     continue;
                 }
-                if let Ok(value) = plc.get_io(&format!("%{letter}B{byte}")) {
+                if let Ok(value) = plc.get_io(address) {
                     *slot = u8::try_from(value & 0xFF).unwrap_or(0);
                 }
             }
@@ -263,4 +270,9 @@ fn resolve(config: &S7ServerConfig, plc: &Plc) -> Result<Vec<(String, u16, Optio
             Ok((connection.name.clone(), connection.tsap, status))
         })
         .collect()
+}
+
+/// The image addresses of the first `count` bytes of an area (`%MB0`, `%MB1`, ...).
+fn byte_addresses(letter: char, count: usize) -> Vec<String> {
+    (0..count).map(|byte| format!("%{letter}B{byte}")).collect()
 }
