@@ -225,9 +225,12 @@
 //!                                      # plant = "PORT": a serial port of the project's plant
 //!                                      # (the sorter's `balance`), on a pseudo-terminal the
 //!                                      # runtime opens, read as through `serial`; an `s7`
-//!                                      # device: connect = "host[:port]", rack/slot or tsap,
-//!                                      # cycle_ms, write_every_ms, timeout_ms; its items are
-//!                                      # bound by [[node.io]] device = ...
+//!                                      # device: connect = "host[:port]" or "node:NAME",
+//!                                      # rack/slot or tsap, cycle_ms, write_every_ms,
+//!                                      # timeout_ms; a `modbus` device: tcp or serial (baud,
+//!                                      # parity), unit, cycle_ms, ...; their items are bound
+//!                                      # by [[node.io]] device = ... (crate::device::s7,
+//!                                      # crate::device::modbus)
 //!
 //! [node.notify.smtp]                   # optional: notifications of the node's lifts
 //! host = "smtp.example.cz"             # (the notify crate's format, docs/LIFT.md):

@@ -23,6 +23,7 @@
 
 pub mod balance;
 pub mod image;
+pub mod modbus;
 pub mod s7;
 
 pub use image::{DeviceItem, ImageValue, IoImage};
@@ -131,12 +132,14 @@ impl fmt::Debug for DeviceKinds {
 
 impl DeviceKinds {
     /// The kinds built into the station: the sorting lab's balance ([`balance`]), a PLC
-    /// or LOGO! read and written over S7 ([`s7`]).
+    /// or LOGO! read and written over S7 ([`s7`]), a Modbus TCP server or RTU slave
+    /// ([`modbus`]).
     pub fn builtin() -> DeviceKinds {
         let mut kinds = DeviceKinds::default();
         for kind in [
             Arc::new(balance::BalanceKind::new()) as Arc<dyn DeviceKind>,
             Arc::new(s7::S7Kind::new()),
+            Arc::new(modbus::ModbusKind::new()),
         ] {
             // A built-in profile that cannot make points is a bug the tests catch.
             if let Err(error) = kinds.register(kind) {

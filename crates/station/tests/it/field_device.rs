@@ -188,7 +188,8 @@ fn the_loader_makes_the_profiles_points_and_refuses_unknown_kinds() {
     .to_string();
     assert!(
         errors.contains("station.toml:13:8")
-            && errors.contains("no device kind `toy-clock` (known: balance, s7, toy-counter)"),
+            && errors
+                .contains("no device kind `toy-clock` (known: balance, modbus, s7, toy-counter)"),
         "{errors}"
     );
     // The built-in kinds alone do not know the toy.

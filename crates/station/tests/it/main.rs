@@ -11,6 +11,7 @@ mod balance;
 mod config;
 mod field_device;
 mod lift;
+mod modbus_device;
 /// The store tests' throwaway PostgreSQL helpers, one file for both crates.
 #[path = "../../../store/tests/it/pg.rs"]
 mod pg;
