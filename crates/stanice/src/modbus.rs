@@ -672,23 +672,4 @@ mod tests {
             "holding registers 100..=101 = 1, 2"
         );
     }
-
-    /// Every example line is a command line the parser accepts.
-    #[test]
-    fn every_example_parses() {
-        use clap::CommandFactory as _;
-        for examples in [EXAMPLES, READ_EXAMPLES, WRITE_EXAMPLES, SERVE_EXAMPLES] {
-            for line in examples.lines().filter(|l| l.starts_with("  stanice ")) {
-                let words: Vec<&str> = line
-                    .split(" #")
-                    .next()
-                    .unwrap()
-                    .split_whitespace()
-                    .collect();
-                if let Err(error) = crate::Cli::command().try_get_matches_from(&words) {
-                    panic!("`{line}`: {error}");
-                }
-            }
-        }
-    }
 }

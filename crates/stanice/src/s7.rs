@@ -649,26 +649,6 @@ mod tests {
         assert!(parse_data_block("1").unwrap_err().contains("NUMBER:SIZE"));
     }
 
-    /// Every example line is a command line the parser accepts (as `examples.rs` checks
-    /// the lines of its table).
-    #[test]
-    fn every_example_parses() {
-        use clap::CommandFactory as _;
-        for examples in [EXAMPLES, READ_EXAMPLES, WRITE_EXAMPLES, SERVE_EXAMPLES] {
-            for line in examples.lines().filter(|l| l.starts_with("  stanice ")) {
-                let words: Vec<&str> = line
-                    .split(" #")
-                    .next()
-                    .unwrap()
-                    .split_whitespace()
-                    .collect();
-                if let Err(error) = crate::Cli::command().try_get_matches_from(&words) {
-                    panic!("`{line}`: {error}");
-                }
-            }
-        }
-    }
-
     #[test]
     fn json_lines_keep_the_item_as_written() {
         assert_eq!(

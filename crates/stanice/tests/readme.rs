@@ -69,6 +69,10 @@ const SKIPPED: &[(&str, &str)] = &[
         "a benchmark: a release build and seconds of measurement against python-snap7",
     ),
     (
+        "cargo bench -p modbus --bench throughput",
+        "a benchmark: a release build and seconds of measurement against pymodbus",
+    ),
+    (
         "cargo bench -p hmi --bench live",
         "a benchmark: a release build and headless Chromium",
     ),

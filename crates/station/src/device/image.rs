@@ -14,6 +14,8 @@
 //! Plain `std` locks: the simulation thread and the driver each hold one for a moment.
 
 use std::collections::HashMap;
+
+// `OutputSchedule` takes the time from its caller: the device module reads no clock.
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Mutex;
 
@@ -125,6 +127,47 @@ impl IoImage {
     }
 }
 
+/// When a driver writes a device's outputs: when the PLC has changed one since the last
+/// write, and all of them again every `every` (a device that restarted, or whose output a
+/// person changed by hand, gets them back).
+#[derive(Debug, Clone)]
+pub struct OutputSchedule {
+    every: std::time::Duration,
+    written: Option<u64>,
+    last_full: Option<std::time::Instant>,
+}
+
+impl OutputSchedule {
+    /// A schedule that writes everything again every `every`.
+    pub fn new(every: std::time::Duration) -> OutputSchedule {
+        OutputSchedule {
+            every,
+            written: None,
+            last_full: None,
+        }
+    }
+
+    /// The outputs to write at `now`, if it is time (the first call always is).
+    pub fn due(
+        &mut self,
+        image: &IoImage,
+        now: std::time::Instant,
+    ) -> Option<Vec<(String, ImageValue)>> {
+        let full = self
+            .last_full
+            .is_none_or(|last| now.saturating_duration_since(last) >= self.every);
+        if !full && self.written == Some(image.output_changes()) {
+            return None;
+        }
+        let (changes, outputs) = image.outputs();
+        self.written = Some(changes);
+        if full {
+            self.last_full = Some(now);
+        }
+        Some(outputs)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -145,5 +188,32 @@ mod tests {
         let (changes, outputs) = image.outputs();
         assert_eq!(changes, 2);
         assert_eq!(outputs, vec![("Q0.0".to_owned(), ImageValue::Bool(false))]);
+    }
+
+    #[test]
+    fn outputs_are_written_on_change_and_all_again_every_period() {
+        use std::time::{Duration, Instant};
+        let image = IoImage::new();
+        image.set_output("Q0.0", ImageValue::Bool(true));
+        let mut schedule = OutputSchedule::new(Duration::from_secs(1));
+        let start = Instant::now();
+        assert!(schedule.due(&image, start).is_some(), "the first time");
+        assert!(schedule
+            .due(&image, start + Duration::from_millis(100))
+            .is_none());
+        image.set_output("Q0.0", ImageValue::Bool(false));
+        let changed = schedule
+            .due(&image, start + Duration::from_millis(200))
+            .unwrap();
+        assert_eq!(changed, vec![("Q0.0".to_owned(), ImageValue::Bool(false))]);
+        assert!(schedule
+            .due(&image, start + Duration::from_millis(900))
+            .is_none());
+        assert!(
+            schedule
+                .due(&image, start + Duration::from_millis(1000))
+                .is_some(),
+            "all again after the period"
+        );
     }
 }

@@ -26,7 +26,7 @@ pub mod image;
 pub mod modbus;
 pub mod s7;
 
-pub use image::{DeviceItem, ImageValue, IoImage};
+pub use image::{DeviceItem, ImageValue, IoImage, OutputSchedule};
 
 use std::collections::BTreeMap;
 use std::fmt;

@@ -345,7 +345,7 @@ mod runtime {
     use serial_line::io::Transport;
 
     use super::{spans, DeviceDriver, DeviceError, Encoding, Item, Line, Settings};
-    use crate::device::{DriverFuture, ImageValue, Readings};
+    use crate::device::{DriverFuture, ImageValue, OutputSchedule, Readings};
 
     pub(super) struct ModbusDriver {
         pub(super) settings: Settings,
@@ -436,8 +436,7 @@ mod runtime {
                     .filter(|(_, _, output)| *output)
                     .map(|(text, item, _)| (text.as_str(), *item))
                     .collect();
-                let mut written: Option<u64> = None;
-                let mut last_full = tokio::time::Instant::now();
+                let mut schedule = OutputSchedule::new(self.settings.write_every);
                 let mut ticks = tokio::time::interval(self.settings.cycle);
                 ticks.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
                 loop {
@@ -465,45 +464,37 @@ mod runtime {
                             }
                         }
                     }
-                    if let Some(image) = readings.image() {
-                        let changes = image.output_changes();
-                        let due = last_full.elapsed() >= self.settings.write_every;
-                        if !outputs.is_empty() && (written != Some(changes) || due) {
-                            let (changes, values) = image.outputs();
-                            for (text, value) in values {
-                                let Some(item) = outputs.get(text.as_str()) else {
-                                    continue;
+                    let due = readings.image().and_then(|image| {
+                        schedule.due(image, tokio::time::Instant::now().into_std())
+                    });
+                    for (text, value) in due.into_iter().flatten() {
+                        let Some(item) = outputs.get(text.as_str()) else {
+                            continue;
+                        };
+                        let result = match item.table {
+                            Table::Coils => {
+                                let on = match value {
+                                    ImageValue::Bool(on) => on,
+                                    ImageValue::Number(x) => x != 0.0,
                                 };
-                                let result = match item.table {
-                                    Table::Coils => {
-                                        let on = match value {
-                                            ImageValue::Bool(on) => on,
-                                            ImageValue::Number(x) => x != 0.0,
-                                        };
-                                        client.write_coils(unit, item.address, &[on]).await
-                                    }
-                                    _ => {
-                                        client
-                                            .write_registers(
-                                                unit,
-                                                item.address,
-                                                &encode(item.encoding, value),
-                                            )
-                                            .await
-                                    }
-                                };
-                                match result {
-                                    Ok(()) => {}
-                                    Err(modbus::ClientError::Exception { .. }) => {
-                                        tracing::warn!(item = %text, "an output refused by the device");
-                                    }
-                                    Err(error) => return io(error),
-                                }
+                                client.write_coils(unit, item.address, &[on]).await
                             }
-                            written = Some(changes);
-                            if due {
-                                last_full = tokio::time::Instant::now();
+                            _ => {
+                                client
+                                    .write_registers(
+                                        unit,
+                                        item.address,
+                                        &encode(item.encoding, value),
+                                    )
+                                    .await
                             }
+                        };
+                        match result {
+                            Ok(()) => {}
+                            Err(modbus::ClientError::Exception { .. }) => {
+                                tracing::warn!(item = %text, "an output refused by the device");
+                            }
+                            Err(error) => return io(error),
                         }
                     }
                     readings.answering(true);

@@ -211,7 +211,7 @@ mod runtime {
     use s7::{ClientConfig, Value, ValueType};
 
     use super::{DeviceDriver, DeviceError, Settings};
-    use crate::device::{DriverFuture, ImageValue, Readings};
+    use crate::device::{DriverFuture, ImageValue, OutputSchedule, Readings};
 
     pub(super) struct S7Driver {
         pub(super) settings: Settings,
@@ -291,8 +291,7 @@ mod runtime {
                     .filter(|(_, _, output)| *output)
                     .map(|(item, address, _)| (item.as_str(), *address))
                     .collect();
-                let mut written: Option<u64> = None;
-                let mut last_full = tokio::time::Instant::now();
+                let mut schedule = OutputSchedule::new(self.settings.write_every);
                 let mut ticks = tokio::time::interval(self.settings.cycle);
                 ticks.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
                 loop {
@@ -314,31 +313,25 @@ mod runtime {
                             }
                         }
                     }
-                    if let Some(image) = readings.image() {
-                        let changes = image.output_changes();
-                        let due = last_full.elapsed() >= self.settings.write_every;
-                        if !outputs.is_empty() && (written != Some(changes) || due) {
-                            let (changes, values) = image.outputs();
-                            let items: Vec<(s7::Address, Value)> = values
-                                .into_iter()
-                                .filter_map(|(item, value)| {
-                                    let address = outputs.get(item.as_str())?;
-                                    Some((*address, from_image(value, address.value_type())))
-                                })
-                                .collect();
-                            if !items.is_empty() {
-                                match client.write_values(&items).await {
-                                    Ok(results) => {
-                                        for result in results.into_iter().filter_map(Result::err) {
-                                            tracing::warn!(%result, "an output refused by the device");
-                                        }
+                    let due = readings.image().and_then(|image| {
+                        schedule.due(image, tokio::time::Instant::now().into_std())
+                    });
+                    if let Some(values) = due.filter(|_| !outputs.is_empty()) {
+                        let items: Vec<(s7::Address, Value)> = values
+                            .into_iter()
+                            .filter_map(|(item, value)| {
+                                let address = outputs.get(item.as_str())?;
+                                Some((*address, from_image(value, address.value_type())))
+                            })
+                            .collect();
+                        if !items.is_empty() {
+                            match client.write_values(&items).await {
+                                Ok(results) => {
+                                    for result in results.into_iter().filter_map(Result::err) {
+                                        tracing::warn!(%result, "an output refused by the device");
                                     }
-                                    Err(error) => return io(error),
                                 }
-                            }
-                            written = Some(changes);
-                            if due {
-                                last_full = tokio::time::Instant::now();
+                                Err(error) => return io(error),
                             }
                         }
                     }
