@@ -40,14 +40,8 @@ struct ProgramRequest {
     seed: Option<u64>,
 }
 
-/// The trial, the request and this request's turn, once the user may try programs and
-/// the files are one to sixteen.
-async fn prepare(
-    state: &AppState,
-    writer: &Writer,
-    body: Result<Json<ProgramRequest>, JsonRejection>,
-) -> Result<(Arc<dyn ProgramTrial>, ProgramRequest, OwnedSemaphorePermit), AppError> {
-    let Json(request) = body.map_err(AppError::body("bad program request: "))?;
+/// The trial, once the user is of the `[program]` level.
+fn trial_for(state: &AppState, writer: &Writer) -> Result<Arc<dyn ProgramTrial>, AppError> {
     let program = state
         .station
         .config()
@@ -56,17 +50,33 @@ async fn prepare(
         .ok_or(AppError::NoTrial)?;
     let trial = state.trial.clone().ok_or(AppError::NoTrial)?;
     writer.require_level(program.level)?;
+    Ok(trial)
+}
+
+/// This request's turn: one trial at a time (another waits).
+async fn turn(state: &AppState) -> Result<OwnedSemaphorePermit, AppError> {
+    Arc::clone(&state.trial_running)
+        .acquire_owned()
+        .await
+        .map_err(|_| AppError::NoTrial)
+}
+
+/// The trial, the request and this request's turn, once the user may try programs and
+/// the files are one to sixteen.
+async fn prepare(
+    state: &AppState,
+    writer: &Writer,
+    body: Result<Json<ProgramRequest>, JsonRejection>,
+) -> Result<(Arc<dyn ProgramTrial>, ProgramRequest, OwnedSemaphorePermit), AppError> {
+    let Json(request) = body.map_err(AppError::body("bad program request: "))?;
+    let trial = trial_for(state, writer)?;
     if request.files.is_empty() || request.files.len() > 16 {
         return Err(AppError::BadParameter {
             name: "files",
             message: "one to sixteen ST files".into(),
         });
     }
-    let turn = Arc::clone(&state.trial_running)
-        .acquire_owned()
-        .await
-        .map_err(|_| AppError::NoTrial)?;
-    Ok((trial, request, turn))
+    Ok((trial, request, turn(state).await?))
 }
 
 async fn check(
@@ -153,22 +163,12 @@ async fn restore(
     body: Result<Json<RestoreRequest>, JsonRejection>,
 ) -> Result<Json<Value>, AppError> {
     let Json(RestoreRequest {}) = body.map_err(AppError::body("bad restore request: "))?;
-    let program = state
-        .station
-        .config()
-        .program
-        .clone()
-        .ok_or(AppError::NoTrial)?;
-    let trial = state.trial.clone().ok_or(AppError::NoTrial)?;
-    writer.require_level(program.level)?;
+    let trial = trial_for(&state, &writer)?;
     if !trial.live() {
         return Err(AppError::NotLive);
     }
     require_lease(&state, &writer)?;
-    let _turn = Arc::clone(&state.trial_running)
-        .acquire_owned()
-        .await
-        .map_err(|_| AppError::NoTrial)?;
+    let _turn = turn(&state).await?;
     let outcome = trial.restore(writer.user().to_owned()).await;
     tracing::info!(peer = %writer.peer(), user = %LogText(writer.user()), ok = outcome.is_ok(), "the lab's program restored");
     outcome.map(Json).map_err(AppError::Trial)
