@@ -15,3 +15,4 @@ mod pty;
 mod pymodbus;
 mod support;
 mod vectors;
+mod wireshark;
