@@ -71,7 +71,7 @@
 //! markers = 256                        # listens on port_base + port_offset; bytes of %M, %I,
 //! inputs = 128                         # %Q served (defaults 256, 128, 128); a client's write
 //! outputs = 128                        # is in the image at the next cycle's start, the bytes
-//! pdu_size = 960                       # it writes stay its own; points may read them
+//! pdu_size = 960                       # the PLC changes go out after it; points may read them
 //!                                      # (source = "%MX20.0") and commands set markers
 //!                                      # (target = "%MX24.0", pulse_ms)
 //! [[node.s7_server.connection]]        # a client by the TSAP it calls (the thesis's S7

@@ -8,15 +8,17 @@
 //!                                  |  events: connected (TSAP), write, closed
 //!                                  v
 //!  simulation thread, the node's cycle:
-//!    before: each write -> the PLC's image (%MB20 ...), the byte now the client's;
+//!    before: each write -> the PLC's image (%MB20 ...)
 //!            each connection's status BOOL := no client of its TSAP connected
 //!    PLC cycle
-//!    after:  the image -> Memory, but for the bytes a client writes (its transfer area)
+//!    after:  each image byte the PLC changed (its program, a command) -> Memory
 //! ```
 //!
-//! A byte a client has written is the client's from then on: the PLC's copy of the image
-//! never overwrites it, so a read never sees a client's write undone. Reads see the image
-//! as the last cycle left it. The served sizes are the project's (`inputs`, `outputs`,
+//! The image goes out byte by byte only where the PLC changed it since it last went out
+//! or a client's write came in: a byte a client wrote stays as written until the PLC
+//! writes it (so a read never sees a client's write undone by a cycle that ran before the
+//! write reached the image), and a marker a client once wrote still carries the PLC's
+//! next command. Reads see the image as the last cycle left it. The served sizes are the project's (`inputs`, `outputs`,
 //! `markers` bytes); data blocks are not served (the soft PLC has none), so a DB item is
 //! answered "object does not exist" and the connection goes on.
 
@@ -120,8 +122,9 @@ pub(crate) struct S7Served {
     events: tokio::sync::mpsc::Receiver<ServeEvent>,
     /// The TSAP each connected client called.
     peers: HashMap<SocketAddr, Option<u16>>,
-    /// Per area (I, Q, M): the bytes a client writes.
-    owned: [Vec<bool>; 3],
+    /// Per area (I, Q, M): each byte as the memory and the image last agreed on it (after
+    /// a copy out, or a client's write in); `None` before the first copy.
+    agreed: [Vec<Option<u8>>; 3],
     /// Per area: each served byte's image address (`%MB20`), made once.
     addresses: [Vec<String>; 3],
     /// Each connection's TSAP and its status BOOL.
@@ -141,10 +144,10 @@ impl S7Served {
             memory,
             events,
             peers: HashMap::new(),
-            owned: [
-                vec![false; config.inputs],
-                vec![false; config.outputs],
-                vec![false; config.markers],
+            agreed: [
+                vec![None; config.inputs],
+                vec![None; config.outputs],
+                vec![None; config.markers],
             ],
             addresses: [
                 byte_addresses('I', config.inputs),
@@ -197,7 +200,7 @@ impl S7Served {
         }
     }
 
-    /// A client's write into the image; the bytes are the client's from now on.
+    /// A client's write into the image; memory and image agree on its bytes again.
     fn apply(&mut self, plc: &mut Plc, write: &s7::WriteEvent) {
         let Some(index) = AREAS.iter().position(|(area, _)| *area == write.area) else {
             return;
@@ -206,13 +209,6 @@ impl S7Served {
             return;
         };
         let start = usize::try_from(write.start).unwrap_or(usize::MAX);
-        if let Some(owned) = self.owned.get_mut(index) {
-            for byte in start..start.saturating_add(write.data.len()) {
-                if let Some(flag) = owned.get_mut(byte) {
-                    *flag = true;
-                }
-            }
-        }
         match write.bit {
             Some(bit) => {
                 let value = write.data.first().copied().unwrap_or(0);
@@ -224,25 +220,43 @@ impl S7Served {
                 }
             }
         }
+        if let (Some(agreed), Some(addresses)) =
+            (self.agreed.get_mut(index), self.addresses.get(index))
+        {
+            for byte in start..start.saturating_add(write.data.len()) {
+                if let (Some(slot), Some(address)) = (agreed.get_mut(byte), addresses.get(byte)) {
+                    *slot = plc
+                        .get_io(address)
+                        .ok()
+                        .and_then(|value| u8::try_from(value & 0xFF).ok());
+                }
+            }
+        }
     }
 
-    /// After the node's cycle: the image into the served memory, but for the clients'
-    /// bytes.
-    pub(crate) fn after_cycle(&self, plc: &Plc) {
+    /// After the node's cycle: the bytes the PLC changed into the served memory.
+    pub(crate) fn after_cycle(&mut self, plc: &Plc) {
         let mut memory = self
             .memory
             .lock()
             .unwrap_or_else(|poisoned| poisoned.into_inner());
-        for (((area, _), owned), addresses) in AREAS.iter().zip(&self.owned).zip(&self.addresses) {
+        for (((area, _), agreed), addresses) in
+            AREAS.iter().zip(&mut self.agreed).zip(&self.addresses)
+        {
             let Some(bytes) = memory.area_mut(*area) else {
                 continue;
             };
-            for ((slot, mine), address) in bytes.iter_mut().zip(owned).zip(addresses) {
-                if *mine {
+            for ((slot, last), address) in bytes.iter_mut().zip(agreed.iter_mut()).zip(addresses) {
+                let Some(value) = plc
+                    .get_io(address)
+                    .ok()
+                    .and_then(|value| u8::try_from(value & 0xFF).ok())
+                else {
                     continue;
-                }
-                if let Ok(value) = plc.get_io(address) {
-                    *slot = u8::try_from(value & 0xFF).unwrap_or(0);
+                };
+                if *last != Some(value) {
+                    *slot = value;
+                    *last = Some(value);
                 }
             }
         }

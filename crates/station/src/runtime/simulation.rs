@@ -784,7 +784,7 @@ impl SimNode {
             let message = plc.render(&fault);
             tracing::error!(node = %self.points.name(), "{message}");
         }
-        if let Some(served) = &self.s7 {
+        if let Some(served) = self.s7.as_mut() {
             served.after_cycle(plc);
         }
         self.settle(now, utc, plant, observers);

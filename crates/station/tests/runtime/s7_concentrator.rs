@@ -168,6 +168,34 @@ async fn a_logo_board_reports_to_its_s7_concentrator_and_takes_its_commands() {
     )
     .await;
 
+    // An engineering tool writes the command byte by hand (MB24 = 0): the byte is the
+    // PLC's again at its next change, so dispatch's command still reaches the board.
+    let s7_address = runtime
+        .node("RH1.1")
+        .unwrap()
+        .s7_server
+        .as_ref()
+        .unwrap()
+        .local_addr();
+    let tool = s7::io::Client::connect(
+        s7_address,
+        s7::ClientConfig::new(s7::Tsaps::rack_slot(0, 1)),
+        Duration::from_secs(5),
+    )
+    .await
+    .unwrap();
+    let written = tool
+        .write_values(&[("MB24".parse().unwrap(), s7::Value::Byte(0))])
+        .await
+        .unwrap();
+    assert!(written.iter().all(Result::is_ok), "{written:?}");
+    // The board's own bytes are not disturbed by it: QF1 still reads closed.
+    for _ in 0..5 {
+        runtime.advance(Duration::from_millis(20)).await.unwrap();
+    }
+    let qf1 = tool.read_values(&["M20.0".parse().unwrap()]).await.unwrap();
+    assert_eq!(qf1[0].as_ref().unwrap(), &s7::Value::Bool(true));
+
     // Dispatch opens QF1: the pulse on %MX24.0 reaches the board's program.
     let address = runtime
         .node("RH1.1")
