@@ -9,7 +9,7 @@
 //!                       0x05 out of range, 0x06 type), the others served
 //! write var          -> into Memory, a bit alone; a return code per item; Write event
 //!                       per item written
-//! other functions    -> ack_data with error 0x8104 (not implemented)
+//! other functions    -> ack_data with error 0x8104 (S7: function not supported by this PLC)
 //! a job or answer larger than the PDU size -> ack_data with error 0x8500
 //! an undecodable job -> ack with error 0x8404 while the reference can be read;
 //!                       after MAX_BAD_PDUS of them, or any bad frame: Closed
@@ -331,7 +331,7 @@ impl ServerConnection {
             Request::ReadVar(items) => read_answer(pdu_ref, &items, memory),
             Request::WriteVar(items) => self.write_answer(pdu_ref, items, memory),
             Request::Other { function, .. } => {
-                tracing::debug!(target: "s7::pdu", function, "function not implemented");
+                tracing::debug!(target: "s7::pdu", function, "a function this server does not offer: answered with error 0x8104");
                 error_answer(pdu_ref, ErrorCode::FUNCTION_NOT_IMPLEMENTED)
             }
             Request::SetupCommunication(_) => return Ok(()),

@@ -515,7 +515,7 @@ fn the_server_answers_bad_jobs_and_closes_after_too_many() {
         }]
     );
     assert!(!server.is_closed());
-    // Setup, then a function not implemented (0x1A, request download).
+    // Setup, then a function the server does not offer (0x1A, request download): error 0x8104.
     server.handle_input(
         &data(&Pdu::Job {
             pdu_ref: 6,
