@@ -237,7 +237,7 @@ async fn take_authority(s: &Setup, operator: &Client) {
 }
 
 /// Issue 11: in Vsetín's own hmi.toml every board control (the functional elements of the
-/// board views RH2, RZZ and RZS/RDA, spec 9.2) needs the authority with this HMI; the
+/// board views RH2, RZZ, RH1.2, RZS2 and RZS/RDA, spec 9.2) needs the authority with this HMI; the
 /// authority command itself and the lighting boards' settings (the dispatch's own inputs,
 /// spec 4.2) do not.
 #[test]
@@ -249,11 +249,15 @@ fn vsetin_board_controls_need_the_control_authority() {
         .filter(|p| p.type_id.is_command())
         .map(|p| p.name.as_str())
         .collect();
-    let board = |name: &str| ["RH2_", "RZZ_", "RDA_"].iter().any(|b| name.starts_with(b));
+    let board = |name: &str| {
+        ["RH2_", "RZZ_", "RH12_", "RZS2_", "RDA_"]
+            .iter()
+            .any(|b| name.starts_with(b))
+    };
     assert_eq!(
         commands.iter().filter(|c| board(c)).count(),
-        5,
-        "QF1 open/close of RH2 and RZZ, the RDA test run: {commands:?}"
+        9,
+        "QF1 open/close of RH2, RZZ, RH1.2 and RZS2, the RDA test run: {commands:?}"
     );
     for command in commands {
         let authority = config.control(command).authority;

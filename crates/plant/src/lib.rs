@@ -70,20 +70,30 @@
 //! # The station model
 //!
 //! ```text
-//!  TNS_USTI ─LINE─┐                 ┌─T1─ T1_LV ─QF1─ RZZ ─FA1─ RZZ_V1 ─FA1.1..5─ RZZ_F1..5
-//!                 ├── R6 (6 kV) ────┤                 └─TI_RZZA─ RZZ_A (autoblock)
-//!  TNS_VALMEZ ─LINE┘                 └─T2─ T2_LV ─QF1─ RH2 ─FA1─ RH2_V1 ─FA1.1─ RH2_F1 ─ ROV01..03
-//!                                                                      ├FA1.2─ RH2_F2 ─ ROV04..06
-//!                                                                      ├FA1.3─ RH2_F3 ─ ROV07..09
-//!                                                                      ├FA1.4─ RH2_F4 ─ ROV10..12
-//!                                                                      └FA1.5─ RH2_F5 ─ OR
-//!  UTILITY ─RH11_QF1─ RH11 ─RDA_KM1─┐
-//!             └─TI_RH11─ RH11_AB     ├─ RZS (board RZS1)
+//!  TNS_USTI ─LINE─ R6_USTI ─R6_Q1─┐            ┌─T1 (TZ1)─ T1_LV ─QF1─ RZZ ─FA1─ RZZ_V1 ─FA1.1..5─ RZZ_F1..5
+//!                     └──RS602──┐  ├─ R6 ─R6_Q3─ R6_T ┤                  │  └─TI_RZZA─ RZZ_A (autoblock)
+//!  TNS_VALMEZ ─LINE─ R6_VALMEZ ─R6_Q2┘  └──────────┘ │                  └─UZ_K1─┐
+//!                                    (RS602 by-passes R6)                        ├─ SZZ (signalling equipment)
+//!                                                  └─T2─ T2_LV ─QF1─ RH2 ─FA1─ RH2_V1 ─FA1.1─ RH2_F1 ─ ROV01..03
+//!                                                                      │       ├FA1.2─ RH2_F2 ─ ROV04..06
+//!                                                                      │       ├FA1.3─ RH2_F3 ─ ROV07..09
+//!                                                                      │       ├FA1.4─ RH2_F4 ─ ROV10..12
+//!                                                                      │       └FA1.5─ RH2_F5 ─ OR
+//!  UTILITY ─RH11_QF1─ RH11 ─RDA_KM1─┐                                    │
+//!             ├─TI_RH11─ RH11_AB     ├─ RZS (board RZS1) ─UZ_K2──────────┘ (backup of SZZ)
+//!             ├─QF1─ RH12 (RH1.2)    │    ├─QF1─ RZS2
+//!             └─QF1─ RHDT (RH in DT) │    └─QF1─ RZSDT (RZS in DT)
 //!  DA (diesel set) ───────RDA_KM2───┘
 //! ```
 //!
 //! Where the spec is silent the model makes a documented choice: which RH2 branch feeds
-//! which tower (above), QF1 auxiliary contacts `RH2_QF1_Zapnut`/`RZZ_QF1_Zapnut` (not in
+//! which tower (above); what RS602 bridges (the line from TNS Ústí to the transformers'
+//! 6 kV side, so that R6 can be taken out: it closes by hand only while R6_Q3 is open, and
+//! R6_Q3 only while RS602 is open); that the thesis's TZ1 (the 6/0.4 kV transformer of the
+//! signalling supply, feeding RZZ) is the transformer of chamber T1; the universal
+//! source's changeover (RZZ preferred, RZS1 as backup, break before make); where RH1.2,
+//! RZS2 and the DT boards are fed from (above) and which DI module reports what; QF1
+//! auxiliary contacts `RH2_QF1_Zapnut`/`RZZ_QF1_Zapnut` (not in
 //! the thesis tag list), the RDA contactors KM1/KM2 and their relays, the completion of the
 //! truncated tag names (`…_Napeti_na_privodu`, `…_Napeti_na_pripojeni`,
 //! `…_Havarijni_vypnuti`, `…_Prepetova_ochrana`, `…_Napeti_zdroje`), the loads and all
@@ -94,14 +104,16 @@
 //! | Device | Behaviour | Default |
 //! |---|---|---|
 //! | Motorised breaker QF1 (RH2, RZZ) | closes on the *rising edge* of the close coil (anti-pumping), opens on the trip coil; trip-free (trip wins, aborts a closing); emergency-off trips it through a hard-wired release and blocks closing; door pushbuttons work only with SA1 in local | close 60 ms, open 40 ms |
-//! | Manual breakers FA, `RH11_QF1` | closed at start; open on a trip fault (after the open time) or by hand; reclosed by hand or by clearing the trip | open 40 ms |
+//! | Motorised breaker QF1 of RH1.2 and RZS2 | as RH2's (the same LOGO! board) | close 60 ms, open 40 ms |
+//! | Manual breakers FA, `RH11_QF1`, `RHDT_QF1`, `RZSDT_QF1`, the R6 cubicles `R6_Q1..3` and the by-pass disconnector box `RS602` | closed at start (RS602 open); open on a trip fault (after the open time) or by hand; reclosed by hand or by clearing the trip; RS602 and R6_Q3 lock each other out (a hand close is refused while the other is closed) | open 40 ms |
+//! | Universal source of the signalling equipment (`UZ_K1` from RZZ, `UZ_K2` from RZS1) | K1 follows RZZ's voltage; K2 closes only while RZZ is dead and K1 open, and opens when RZZ returns (then K1 closes): never both | relays 20 ms, contactors as below |
 //! | Contactors (`RDA_KM1`, `RDA_KM2`, `{L}_KM1`, manual `{L}_KM2`) | follow the coil; a pulse shorter than the pick-up does nothing; RDA's emergency-off cuts both coils | pick-up 30 ms, drop-out 20 ms |
 //! | Voltage relays KHU | follow their bus (or the generator's ≥ 90 % voltage) | 20 ms both ways |
 //! | Lamp feedback relay `PrRele` | picks up when the lamp circuit is energised and healthy, drops at once | pick-up 50 ms |
 //! | Lamps | light output ramps 0 → 100 % over the warm-up; constant electrical power while energised | 3 s; tower 2.4 kW, OŘ 6 kW |
 //! | Diesel set | start request (level) → cranking → running at start delay; voltage linear to 90 % at +`voltage_build`, overshoot 106 % mid-way, settled (`RDA_DA_Pripraven`) at +`settle`; start removed → runs unloaded for the cool-down, then stops; fail-to-start fault → `RDA_DA_Porucha` at the start delay, retried when the fault clears | 5 s, 1 s, 6 s, cool-down 60 s, 400 V |
 //! | Dusk sensors | "dark" below 20 lx; the sky is a NOAA sunrise/sunset for Vsetín with linear twilight ramps (0 lx at sunrise − 30 min, 1,000 lx at + 30 min), so switching instants are exact; [`Action::SetIlluminance`] forces a value | 20 lx |
-//! | Meters | board meters count their own base load while the bus is live; tower meters the lamps | RH1.1 15 kW, RZZ 8, RZS 10, RH2 5 |
+//! | Meters | board meters count their own base load while the bus is live; tower meters the lamps | RH1.1 15 kW, RZZ 8, RZS 10, RH2 5, RH1.2 6, RZS2 4, RH in DT 20, RZS in DT 6, signalling equipment 4 |
 //!
 //! The initial state is steady: grid live, QF1 and FA closed, relays picked up, RDA
 //! contactors open (the PLC closes one), generator stopped, all selectors in remote, time
@@ -109,7 +121,8 @@
 //!
 //! # Signal table
 //!
-//! `{B}` stands for `RH2` and `RZZ`; `{L}` for the lighting boards `ROV01`…`ROV12` and
+//! `{B}` stands for the LOGO! boards `RH2`, `RZZ`, `RH12` (RH1.2) and `RZS2`; `{D}` for
+//! the boards in DT, `RHDT` and `RZSDT`; `{L}` for the lighting boards `ROV01`…`ROV12` and
 //! `OR`; `{a..b}` for each integer of the range. [`signal_table_markdown`] renders the
 //! full expanded list. Inputs are what the PLC reads, outputs what it drives.
 //!
@@ -127,7 +140,7 @@
 //! | `{B}_P1_SA1_Dalkove` | in | BOOL | `{B}_LOGO` | selector SA1 in remote (IOA 293) |
 //! | `{B}_P1_FU1_Pretavena_pojistka` | in | BOOL | `{B}_LOGO` | fuse FU1 blown (IOA 294) |
 //! | `{B}_P1_FV1_Prepetova_ochrana` | in | BOOL | `{B}_LOGO` | surge arrester FV1 tripped (IOA 295) |
-//! | `RH2_P1_KHVRH2_Havarijni_vypnuti`, `RZZ_P1_KHVRZZ_Havarijni_vypnuti` | in | BOOL | `{B}_LOGO` | emergency off pressed (IOA 296) |
+//! | `RH2_P1_KHVRH2_Havarijni_vypnuti`, `RZZ_P1_KHVRZZ_Havarijni_vypnuti`, `RH12_P1_KHVRH12_Havarijni_vypnuti`, `RZS2_P1_KHVRZS2_Havarijni_vypnuti` | in | BOOL | `{B}_LOGO` | emergency off pressed (IOA 296) |
 //! | `{B}_P1_FV110_Prepetova_ochrana` | in | BOOL | `{B}_LOGO` | surge arrester FV110 tripped (IOA 297) |
 //! | `{B}_P1_G110.2_Napeti_zdroje` | in | BOOL | `{B}_LOGO` | 110 V source G110.2 healthy (IOA 298) |
 //! | `{B}_RezervaVstup{1..14}` | in | BOOL | `{B}_LOGO` | spare inputs, always FALSE |
@@ -137,6 +150,9 @@
 //! | `RH11_KHU1_Napeti_sit` | in | BOOL | `RH11_DI` | utility voltage present |
 //! | `RH11_FV1_Prepetova_ochrana`, `RH11_FU1_Pretavena_pojistka` | in | BOOL | `RH11_DI` | surge arrester tripped, fuse blown |
 //! | `RH11_U`, `RH11_P_kW`, `RH11_I_A`, `RH11_Energie_kWh`, `R6_U` | in | REAL | `RH11_DI` | busbar voltage, power, current, energy; 6 kV switchroom voltage |
+//! | `R6_T_U` | in | REAL V | `RH11_DI` | 6 kV voltage at the transformers (through R6 or RS602) |
+//! | `R6_Q1_Zapnut`, `R6_Q2_Zapnut`, `R6_Q3_Zapnut` | in | BOOL | `RH11_DI` | R6 cubicles closed: incomers from TNS Ústí and TNS Valašské Meziříčí, transformer feeder |
+//! | `RS602_Zapnut` | in | BOOL | `RH11_DI` | by-pass disconnector box RS602 closed |
 //! | `RDA_KM1_Zap` | out | BOOL | `RDA_LOGO` | coil of KM1, supply of RZS from RH1.1 (mains) |
 //! | `RDA_KM2_Zap` | out | BOOL | `RDA_LOGO` | coil of KM2, supply of RZS from the diesel set |
 //! | `RDA_DA_Start` | out | BOOL | `RDA_LOGO` | generator start/run request (level) |
@@ -154,6 +170,14 @@
 //! | `RZS1_KHU1_Napeti` | in | BOOL | `RZS1_DI` | RZS busbar voltage present |
 //! | `RZS1_FV1_Prepetova_ochrana`, `RZS1_FU1_Pretavena_pojistka` | in | BOOL | `RZS1_DI` | surge arrester tripped, fuse blown |
 //! | `RZS1_U`, `RZS1_P_kW`, `RZS1_I_A`, `RZS1_Energie_kWh` | in | REAL | `RZS1_DI` | busbar voltage (from the generator's curve when fed by it), power, current, energy |
+//! | `UZ_Napeti_RZZ`, `UZ_Napeti_RZS1` | in | BOOL | `RZS1_DI` | universal source: input from RZZ (TZ1) / backup input from RZS1 live |
+//! | `UZ_K1_Zapnut`, `UZ_K2_Zapnut` | in | BOOL | `RZS1_DI` | universal source fed from RZZ / from RZS1 |
+//! | `UZ_Vystup` | in | BOOL | `RZS1_DI` | signalling equipment supplied |
+//! | `SZZ_P_kW` | in | REAL kW | `RZS1_DI` | power of the signalling equipment |
+//! | `{D}_QF1_Zapnut` | in | BOOL | `{D}_DI` | incoming breaker QF1 closed (cable from RH1.1 / RZS) |
+//! | `{D}_KHU1_Napeti` | in | BOOL | `{D}_DI` | busbar voltage present |
+//! | `{D}_FV1_Prepetova_ochrana`, `{D}_FU1_Pretavena_pojistka` | in | BOOL | `{D}_DI` | surge arrester tripped, fuse blown |
+//! | `{D}_U`, `{D}_P_kW`, `{D}_I_A`, `{D}_Energie_kWh` | in | REAL | `{D}_DI` | busbar voltage, power, current, energy |
 //! | `RDRT_FV230`, `RDRT_FV110`, `RDRT_FV24` | in | BOOL | `RDRT_P9` | DI0–DI2: surge arresters tripped (SP 1–3) |
 //! | `RDRT_G230_OK`, `RDRT_G110_OK`, `RDRT_G24_OK` | in | BOOL | `RDRT_P9` | DI3–DI5: supplies healthy (SP 4–6 invert them) |
 //! | `RDRT_Rezerva_DI6` | in | BOOL | `RDRT_P9` | DI6: spare |
@@ -175,7 +199,7 @@
 //! | `{L}_Svit_pct` | in | REAL % | `{L}_PLC` | light output (warm-up ramp) |
 //! | `ENV_Osvetlenost_lx` | in | REAL lx | `ENV` | outdoor illuminance |
 //!
-//! That is 314 inputs and 20 outputs.
+//! That is 415 inputs and 24 outputs.
 //!
 //! # Faults ([`Fault`]) and hand operations ([`Action`])
 //!
@@ -188,7 +212,7 @@
 //! | `lamp-failure {L}` | lamp circuit broken: no current, `PrRele` drops |
 //! | `fuse-blown NAME` | `*_FU1` indication (a lighting board's FU1 also cuts its lamps) |
 //! | `surge-arrester NAME` | `*_FV1`, `*_FV110`, `RDRT_FV*` indication |
-//! | `emergency-off RH2\|RZZ\|RDA` | latched mushroom button: trips QF1 / cuts the RDA contactors |
+//! | `emergency-off RH2\|RZZ\|RH12\|RZS2\|RDA` | latched mushroom button: trips QF1 / cuts the RDA contactors |
 //! | `door-open {L}\|RDRT_NN\|RDRT_VN\|RDRT_T1\|RDRT_T2` | door contact |
 //! | `supply-unit-fault {B}_G110.2\|RDRT_G230\|RDRT_G110\|RDRT_G24` | supply-healthy contact drops |
 //! | `network-switch-fault RDRT_ABB\|RDRT_KORENIX\|RDRT_SIEMENS` | switch fault contact |

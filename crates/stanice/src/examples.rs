@@ -271,12 +271,12 @@ the table goes to FOLDER/grades.csv and FOLDER/grades.html unless --out says oth
     ),
     (
         "plc",
-        "  stanice plc check examples/vsetin/plc/rh2_logic.st
+        "  stanice plc check examples/vsetin/plc/logo_board.st
   stanice plc run counter.st --program Main --cycles 10",
     ),
     (
         "plc check",
-        "  stanice plc check examples/vsetin/plc/rh2_logic.st
+        "  stanice plc check examples/vsetin/plc/logo_board.st
   stanice plc check lib.st main.st               # several files form one program",
     ),
     (

@@ -127,9 +127,14 @@ def heading(svg, title, subtitle):
 
 
 # ------------------------------------------------------------------------ supply overview
+def value(svg, x, y, point, unit, digits="0", cls="value small", anchor=None):
+    """A measurement as text."""
+    svg.text(x, y, "", cls, anchor, data_text=use(point), data_unit=unit, data_digits=digits)
+
+
 def supply():
-    svg = Svg("Vsetín — power supply overview", 1200, 720)
-    heading(svg, "Power supply — technology building TO",
+    svg = Svg("Vsetín — power supply overview", 1200, 760)
+    heading(svg, "Power supply — technology building TO and transport terminal DT",
             "HV 6 kV yellow, LV 0.4 kV green; dashed grey = no voltage. Click a board for its panel.")
 
     svg.comment("Control authority (spec 7.4, 9.2): HMI-local vs remote dispatch, point SP 21, command IOA 2001")
@@ -144,56 +149,78 @@ def supply():
     button(svg, 990, 120, 175, "Give to dispatch", "RDRT_HMI_Mistne", 0, "RDRT_SP21_HMI_Mistne")
     svg.close("g")
 
-    svg.comment("6 kV feeds from the traction substations into switchroom R6 (no voltage points: always drawn live)")
-    svg.open("g", id="hv-feeds")
-    svg.text(40, 92, "TNS Ústí u Vsetína R6kV", "label")
-    svg.text(330, 92, "TNS Valašské Meziříčí R6kV", "label")
-    svg.el("path", d="M 110 100 V 160", class_="hv")
-    svg.el("path", d="M 420 100 V 160", class_="hv")
-    svg.el("path", d="M 60 160 H 520", class_="hv bus", id="bus-R6")
-    svg.text(530, 165, "R6 — 6 kV switchroom (by-pass RS602)", "label")
+    svg.comment("6 kV: the lines from the traction substations, switchroom R6 (incomers Q1, Q2,"
+                " transformer feeder Q3) and the by-pass RS602 (spec 2.2); the voltages as numbers")
+    svg.open("g", id="hv", transform="translate(0 -4)")
+    svg.open("a", href="#screen/rh11")
+    svg.text(70, 84, "TNS Ústí R6kV ›", "label")
+    svg.text(330, 84, "TNS Valašské Meziříčí R6kV ›", "label")
+    svg.close("a")
+    svg.el("path", d="M 110 92 V 111 M 110 133 V 160", class_="hv")
+    svg.el("path", d="M 420 92 V 111 M 420 133 V 160", class_="hv")
+    breaker(svg, 110, 122, "R6_Q1_Zapnut", "Q1", size=16, state_text=False)
+    breaker(svg, 420, 122, "R6_Q2_Zapnut", "Q2", size=16, state_text=False)
+    svg.el("path", d="M 90 160 H 520", class_="hv bus", id="bus-R6")
+    svg.text(440, 154, "R6", "label")
+    value(svg, 470, 154, "R6_U", "V")
+    svg.el("path", d="M 265 160 V 171 M 265 189 V 200", class_="hv")
+    breaker(svg, 265, 180, "R6_Q3_Zapnut", "Q3", size=16, state_text=False)
+    svg.el("path", d="M 110 100 H 40 V 171 M 40 189 V 200 H 130", class_="hv", stroke_dasharray="6 3")
+    breaker(svg, 40, 180, "RS602_Zapnut", "RS602", size=16, state_text=False)
+    svg.el("path", d="M 130 200 H 400", class_="hv bus", id="bus-R6_T")
+    value(svg, 290, 196, "R6_T_U", "V")
     svg.close("g")
 
-    svg.comment("Transformers: T1 feeds RZZ (KHU1 of RZZ), T2 feeds RH2 (KHU1 of RH2)")
-    for name, x, board in [("T1", 150, "RZZ"), ("T2", 380, "RH2")]:
+    svg.comment("Transformers: T1 (the thesis's TZ1) feeds RZZ (KHU1 of RZZ), T2 feeds RH2 (KHU1 of RH2)")
+    for name, x, board in [("T1 (TZ1)", 150, "RZZ"), ("T2", 380, "RH2")]:
         khu1 = f"{board}_P1_KHU1_Napeti_na_privodu"
-        svg.open("g", id=f"transformer-{name}")
-        svg.el("path", d=f"M {x} 160 V 205", class_="hv", data_energised=use(khu1))
-        svg.el("circle", cx=x, cy=218, r=14, class_="transformer")
-        svg.el("circle", cx=x, cy=238, r=14, class_="transformer")
-        svg.text(x + 22, 224, f"{name} 6/0.4 kV", "label")
-        svg.el("path", d=f"M {x} 252 V 300", class_="lv", data_energised=khu1)
+        svg.open("g", id=f"transformer-{name.split()[0]}")
+        svg.el("path", d=f"M {x} 196 V 212", class_="hv", data_energised=use(khu1))
+        svg.el("circle", cx=x, cy=225, r=13, class_="transformer")
+        svg.el("circle", cx=x, cy=244, r=13, class_="transformer")
+        svg.text(x + 20, 240, f"{name} 6/0.4 kV", "label small")
+        svg.el("path", d=f"M {x} 257 V 300", class_="lv", data_energised=khu1)
         svg.close("g")
 
-    svg.comment("Board RZZ (signalling), fed from T1; QF1 shown by the voltage behind it (KHU3)")
-    svg.open("g", id="board-RZZ")
-    board_box(svg, 60, 300, 200, 150, "RZZ", "signalling board, LOGO!", link="rzz")
-    breaker(svg, 150, 360, "RZZ_P1_KHU3_Napeti_na_pripojeni", "QF1", state_text=False)
-    svg.el("path", d="M 150 300 V 349", class_="lv", data_energised="RZZ_P1_KHU1_Napeti_na_privodu")
-    svg.el("path", d="M 80 410 H 240", class_="lv bus", data_energised=use("RZZ_P1_KHU3_Napeti_na_pripojeni"))
-    svg.el("path", d="M 150 371 V 410", class_="lv", data_energised="RZZ_P1_KHU3_Napeti_na_pripojeni")
-    indicator(svg, 80, 435, "RZZ_P1_KHVRZZ_Havarijni_vypnuti", "emergency off", "fault", 6)
-    svg.text(190, 381, "", "value small", data_text="RZZ_P1_SA1_Dalkove", data_on="remote", data_off="LOCAL")
+    for board, x, subtitle, screen in [("RZZ", 60, "signalling board, LOGO!", "rzz"),
+                                       ("RH2", 290, "main distribution, LOGO!", "rh2")]:
+        svg.comment(f"Board {board}; QF1 shown by the voltage behind it (KHU3)")
+        svg.open("g", id=f"board-{board}")
+        p = f"{board}_P1_"
+        board_box(svg, x, 300, 200, 150, board, subtitle, link=screen)
+        breaker(svg, x + 90, 360, f"{p}KHU3_Napeti_na_pripojeni", "QF1", state_text=False)
+        svg.el("path", d=f"M {x + 90} 300 V 349", class_="lv", data_energised=f"{p}KHU1_Napeti_na_privodu")
+        svg.el("path", d=f"M {x + 20} 410 H {x + 180}", class_="lv bus", data_energised=use(f"{p}KHU3_Napeti_na_pripojeni"))
+        svg.el("path", d=f"M {x + 90} 371 V 410", class_="lv", data_energised=f"{p}KHU3_Napeti_na_pripojeni")
+        indicator(svg, x + 20, 435, f"{p}KHV{board}_Havarijni_vypnuti", "emergency off", "fault", 6)
+        svg.text(x + 130, 381, "", "value small", data_text=use(f"{p}SA1_Dalkove"), data_on="remote", data_off="LOCAL")
+        svg.close("g")
+
+    svg.comment("The signalling equipment's universal source (spec 2.2): from RZZ (K1), backup from RZS1 (K2)")
+    svg.open("g", id="signalling-supply")
+    svg.el("path", d="M 110 410 V 529", class_="lv", data_energised=use("UZ_Napeti_RZZ"))
+    board_box(svg, 60, 490, 200, 120, "Signalling supply", None, link="rzs1")
+    breaker(svg, 110, 540, "UZ_K1_Zapnut", "K1", size=18, state_text=False)
+    breaker(svg, 200, 540, "UZ_K2_Zapnut", "K2", size=18, state_text=False)
+    svg.el("path", d="M 110 549 V 575 M 200 549 V 575", class_="lv", data_energised=use("UZ_Vystup"))
+    svg.el("path", d="M 80 575 H 240", class_="lv bus", data_energised="UZ_Vystup")
+    svg.text(80, 598, "", "value small", data_text="UZ_Vystup", data_on="supplied", data_off="NOT SUPPLIED")
+    value(svg, 240, 598, "SZZ_P_kW", "kW", "1", anchor="end")
     svg.close("g")
 
-    svg.comment("Board RH2, fed from T2")
-    svg.open("g", id="board-RH2")
-    board_box(svg, 290, 300, 200, 150, "RH2", "main distribution, LOGO!", link="rh2")
-    breaker(svg, 380, 360, "RH2_P1_KHU3_Napeti_na_pripojeni", "QF1", state_text=False)
-    svg.el("path", d="M 380 300 V 349", class_="lv", data_energised="RH2_P1_KHU1_Napeti_na_privodu")
-    svg.el("path", d="M 310 410 H 470", class_="lv bus", data_energised=use("RH2_P1_KHU3_Napeti_na_pripojeni"))
-    svg.el("path", d="M 380 371 V 410", class_="lv", data_energised="RH2_P1_KHU3_Napeti_na_pripojeni")
-    indicator(svg, 310, 435, "RH2_P1_KHVRH2_Havarijni_vypnuti", "emergency off", "fault", 6)
-    svg.text(420, 381, "", "value small", data_text="RH2_P1_SA1_Dalkove", data_on="remote", data_off="LOCAL")
-    svg.close("g")
-
-    svg.comment("Board RH1.1: main board on the utility connection; its voltage is RDA's mains input (KHU1 of RDA)")
+    svg.comment("Board RH1.1: main board on the utility connection; RDA's mains input (KHU1 of RDA), RH1.2 and RH in DT")
     svg.open("g", id="board-RH1.1")
     svg.text(560, 258, "utility connection (distribution)", "label")
-    svg.el("path", d="M 640 265 V 300", class_="lv", data_energised=use("RDA_KHU1_NapetiSit"))
-    board_box(svg, 540, 300, 200, 110, "RH1.1", "main board, S7-1500")
+    svg.el("path", d="M 640 265 V 300", class_="lv", data_energised=use("RH11_KHU1_Napeti_sit"))
+    board_box(svg, 540, 300, 200, 110, "RH1.1", "main board, S7-1500", link="rh11")
     svg.el("path", d="M 560 360 H 720", class_="lv bus", data_energised="RDA_KHU1_NapetiSit")
     svg.text(560, 390, "autoblock supply, RDA mains", "label small")
+    value(svg, 720, 390, "RH11_P_kW", "kW", "1", anchor="end")
+    svg.el("path", d="M 587 360 V 460 M 693 360 V 460", class_="lv", data_energised="RDA_KHU1_NapetiSit")
+    for x, title, screen, live in [(540, "RH1.2", "rh12", "RH12_P1_KHU3_Napeti_na_pripojeni"),
+                                   (646, "RH (DT)", "dt", "RHDT_KHU1_Napeti")]:
+        board_box(svg, x, 460, 94, 60, title, None, link=screen)
+        indicator(svg, x + 14, 505, live, "live", "ind", 6)
     svg.close("g")
 
     svg.comment("RDA: automatic transfer mains (KM1) / diesel generator (KM2) to the secured board RZS")
@@ -213,21 +240,24 @@ def supply():
     indicator(svg, 816, 362, "RDA_Porucha", "transfer fault", "fault", 6)
     svg.close("g")
 
-    svg.comment("RZS / RZS1: the secured network, fed through KM1 or KM2 (busbar voltage KHU3 of RDA)")
+    svg.comment("RZS / RZS1: the secured network, fed through KM1 or KM2 (busbar voltage KHU3 of RDA);"
+                " RZS2 and RZS in DT hang off it, and the signalling supply's backup K2")
     svg.open("g", id="board-RZS")
     svg.el("path", d="M 850 441 V 470 M 1000 441 V 470", class_="lv", data_energised=use("RDA_KHU3_NapetiRZS"))
     svg.el("path", d="M 820 470 H 1160", class_="lv bus", data_energised="RDA_KHU3_NapetiRZS")
     svg.el("path", d="M 990 470 V 540", class_="lv", data_energised="RDA_KHU3_NapetiRZS")
-    board_box(svg, 890, 540, 220, 90, "RZS / RZS1", "secured network, S7-1500")
+    board_box(svg, 890, 540, 220, 90, "RZS / RZS1", "secured network, S7-1500", link="rzs1")
     indicator(svg, 905, 600, "RDA_BezNapeti", "RZS without supply", "fault", 6)
+    svg.el("path", d="M 890 620 H 200 V 551", class_="lv", data_energised=use("UZ_Napeti_RZS1"))
+    svg.el("path", d="M 940 630 V 660 M 1060 630 V 660", class_="lv", data_energised="RDA_KHU3_NapetiRZS")
+    for x, title, screen, live in [(893, "RZS2", "rzs2", "RZS2_P1_KHU3_Napeti_na_pripojeni"),
+                                   (1013, "RZS (DT)", "dt", "RZSDT_KHU1_Napeti")]:
+        board_box(svg, x, 660, 94, 60, title, None, link=screen)
+        indicator(svg, x + 14, 705, live, "live", "ind", 6)
     svg.close("g")
 
-    svg.comment("RZZ backup from RZS1 (spec 2.2) and the autoblock from RH1.1: plain wiring")
-    svg.el("path", d="M 890 600 H 160 V 450", class_="wire", stroke_dasharray="2 4")
-    svg.text(300, 594, "backup of the signalling supply RZZ from RZS1", "label small")
-
     svg.comment("Legend")
-    svg.open("g", id="legend", transform="translate(40 660)")
+    svg.open("g", id="legend", transform="translate(40 700)")
     svg.el("path", d="M 0 0 H 40", class_="hv")
     svg.text(48, 4, "6 kV", "label")
     svg.el("path", d="M 100 0 H 140", class_="lv")
@@ -236,28 +266,45 @@ def supply():
     svg.text(232, 4, "closed", "label")
     svg.el("rect", x=290, y=-8, width=16, height=16, class_="breaker", data_value="off")
     svg.text(312, 4, "open", "label")
-    svg.text(370, 4, "blinking magenta = invalid (no current value)", "label")
+    svg.text(0, 30, "blinking magenta = invalid (no current value)", "label")
     svg.close("g")
     svg.write("supply.svg")
 
 
 # ------------------------------------------------------------------------ RH2 / RZZ panels
-def power_board(board, fed_from, concentrator, comm_upper):
-    svg = Svg(f"Vsetín — board {board}", 1200, 720)
+def meters(svg, x, y, board, title="Meter"):
+    """A board's meter: voltage, current, power, energy."""
+    svg.open("g", id=f"meter-{board}")
+    svg.el("rect", x=x, y=y, width=330, height=120, rx=6, class_="frame")
+    svg.text(x + 15, y + 22, title, "title")
+    for i, (suffix, label, unit, digits) in enumerate([("U", "voltage", "V", "0"), ("I_A", "current", "A", "1"),
+                                                       ("P_kW", "power", "kW", "1"),
+                                                       ("Energie_kWh", "energy", "kWh", "1")]):
+        row_y = y + 46 + i * 20
+        svg.text(x + 15, row_y, label, "label")
+        value(svg, x + 200, row_y, f"{board}_{suffix}", unit, digits, "value", "end")
+    svg.close("g")
+
+
+def power_board(board, fed_from, concentrator, comm_upper, name=None):
+    """A LOGO! board's panel; `name` is the thesis's (RH1.2) where the prefix differs."""
+    name = name or board
+    svg = Svg(f"Vsetín — board {name}", 1200, 720)
     p = f"{board}_P1_"
     v = f"{board}_V1_"
-    heading(svg, f"Board {board} — fed from transformer {fed_from}",
+    heading(svg, f"Board {name} — fed from {fed_from}",
             f"LOGO! reporting through {concentrator}; QF1 operated from here only with SA1 in remote and HMI authority local.")
 
     svg.comment("Communication: the LOGO! link and the concentrator link (TRUE = failure)")
     svg.open("g", id="communication")
-    indicator(svg, 40, 85, f"COMM_{board}", f"link {concentrator} → {board} failed", "fault")
+    indicator(svg, 40, 85, f"COMM_{board}", f"link {concentrator} → {name} failed", "fault")
     indicator(svg, 340, 85, comm_upper, f"link RDRT → {concentrator} failed", "fault")
     svg.close("g")
+    meters(svg, 830, 110, board, f"Meter of {name}")
 
     svg.comment(f"Incoming feeder from {fed_from} (KHU1), feeder breaker QF1, busbar (KHU3)")
     svg.open("g", id="feeder")
-    svg.text(60, 130, f"from {fed_from} 0.4 kV", "label")
+    svg.text(60, 130, f"from {fed_from}", "label")
     svg.el("path", d="M 120 140 V 210", class_="lv", data_energised=use(f"{p}KHU1_Napeti_na_privodu"))
     indicator(svg, 150, 175, f"{p}KHU1_Napeti_na_privodu", "voltage on feeder (KHU1)")
     svg.comment("QF1 has no auxiliary contact point: its state is the voltage behind it (KHU3)")
@@ -398,6 +445,181 @@ def rda():
     svg.write("rda.svg")
 
 
+# ------------------------------------------------------------------------ RH1.1 and R6
+def rh11():
+    svg = Svg("Vsetín — board RH1.1 and the 6 kV switchroom R6", 1200, 720)
+    heading(svg, "Board RH1.1 and the 6 kV switchroom R6",
+            "R6's cubicles and the by-pass RS602 are operated by hand on site; RS602 closes only with Q3 open.")
+    svg.open("g", id="communication")
+    indicator(svg, 40, 85, "COMM_RH", "link RDRT → RH1.1 failed", "fault")
+    indicator(svg, 300, 85, "COMM_RH2", "link RH1.1 → RH2 failed", "fault")
+    indicator(svg, 560, 85, "COMM_RH12", "link RH1.1 → RH1.2 failed", "fault")
+    svg.close("g")
+
+    svg.comment("6 kV switchroom R6: incomers Q1 (TNS Ústí), Q2 (TNS Valašské Meziříčí), transformer"
+                " feeder Q3; by-pass disconnector box RS602 from the Ústí line to the transformers")
+    svg.open("g", id="r6")
+    svg.el("rect", x=30, y=110, width=560, height=330, rx=6, class_="frame")
+    svg.text(45, 132, "6 kV switchroom R6", "title")
+    svg.text(110, 160, "line from TNS Ústí", "label")
+    svg.text(340, 160, "line from TNS Valašské Meziříčí", "label")
+    svg.el("path", d="M 180 168 V 209 M 180 231 V 270", class_="hv")
+    svg.el("path", d="M 420 168 V 209 M 420 231 V 270", class_="hv")
+    breaker(svg, 180, 220, "R6_Q1_Zapnut", "Q1")
+    breaker(svg, 420, 220, "R6_Q2_Zapnut", "Q2")
+    svg.el("path", d="M 140 270 H 500", class_="hv bus")
+    svg.text(510, 266, "R6", "title")
+    value(svg, 510, 286, "R6_U", "V", cls="value")
+    svg.el("path", d="M 300 270 V 319 M 300 341 V 390", class_="hv")
+    breaker(svg, 300, 330, "R6_Q3_Zapnut", "Q3")
+    svg.el("path", d="M 180 185 H 70 V 319 M 70 341 V 390 H 140", class_="hv", stroke_dasharray="6 3")
+    breaker(svg, 70, 330, "RS602_Zapnut", "RS602")
+    svg.el("path", d="M 140 390 H 500", class_="hv bus")
+    svg.text(510, 386, "to T1 (TZ1), T2", "label")
+    value(svg, 510, 406, "R6_T_U", "V", cls="value")
+    svg.open("a", href="#screen/rzz")
+    svg.text(160, 425, "T1 → RZZ ›", "label")
+    svg.close("a")
+    svg.open("a", href="#screen/rh2")
+    svg.text(380, 425, "T2 → RH2 ›", "label")
+    svg.close("a")
+    svg.close("g")
+
+    svg.comment("RH1.1: utility feed, QF1, busbar, protection; outgoing to RDA (mains), RH1.2, RH in DT, autoblock")
+    svg.open("g", id="rh11")
+    svg.el("rect", x=620, y=250, width=560, height=190, rx=6, class_="frame")
+    svg.text(635, 272, "RH1.1 — main board (S7-1500)", "title")
+    svg.text(640, 296, "utility connection", "label")
+    svg.el("path", d="M 680 305 V 339 M 680 361 V 390", class_="lv", data_energised=use("RH11_KHU1_Napeti_sit"))
+    breaker(svg, 680, 350, "RH11_QF1_Zapnut", "QF1")
+    indicator(svg, 800, 300, "RH11_KHU1_Napeti_sit", "utility voltage (KHU1)")
+    svg.el("path", d="M 640 390 H 1160", class_="lv bus", data_energised="RH11_KHU1_Napeti_sit")
+    for x, label, screen in [(780, "RDA (mains) ›", "rda"), (900, "RH1.2 ›", "rh12"), (1010, "RH in DT ›", "dt"),
+                             (1110, "autoblock", None)]:
+        svg.el("path", d=f"M {x} 390 V 410", class_="lv", data_energised="RH11_KHU1_Napeti_sit")
+        if screen:
+            svg.open("a", href=f"#screen/{screen}")
+            svg.text(x, 426, label, "label small", "middle")
+            svg.close("a")
+        else:
+            svg.text(x, 426, label, "label small", "middle")
+    indicator(svg, 800, 325, "RH11_FU1_Pretavena_pojistka", "fuse FU1 blown", "warn")
+    indicator(svg, 800, 350, "RH11_FV1_Prepetova_ochrana", "surge arrester FV1 tripped", "warn")
+    svg.close("g")
+    meters(svg, 830, 110, "RH11", "Meter of RH1.1")
+    svg.text(20, 690, "", "label", data_text="RDRT_SP21_HMI_Mistne",
+             data_on="Control authority: LOCAL (this HMI)", data_off="Control authority: REMOTE dispatch")
+    svg.write("rh11.svg")
+
+
+# ------------------------------------------------------------------------ RZS1 and the signalling supply
+def rzs1():
+    svg = Svg("Vsetín — board RZS1 and the signalling supply", 1200, 720)
+    heading(svg, "Board RZS1 and the signalling equipment's supply",
+            "The universal source takes RZZ (TZ1 from the 6 kV level) and falls back to RZS1; never both.")
+    svg.open("g", id="communication")
+    for i, (point, label) in enumerate([("COMM_RZS", "link RDRT → RZS1 failed"),
+                                        ("COMM_RZZ", "link RZS1 → RZZ failed"),
+                                        ("COMM_RDA", "link RZS1 → RDA failed"),
+                                        ("COMM_RZS2", "link RZS1 → RZS2 failed")]):
+        indicator(svg, 40 + i * 270, 85, point, label, "fault")
+    svg.close("g")
+
+    svg.comment("RZS1: the secured-network board, fed by RDA (mains or diesel)")
+    svg.open("g", id="rzs1")
+    svg.el("rect", x=30, y=110, width=760, height=200, rx=6, class_="frame")
+    svg.text(45, 132, "RZS1 — secured network (S7-1500)", "title")
+    svg.open("a", href="#screen/rda")
+    svg.text(60, 160, "from RDA (mains KM1 / diesel KM2) ›", "label")
+    svg.close("a")
+    svg.el("path", d="M 120 168 V 230", class_="lv", data_energised=use("RZS1_KHU1_Napeti"))
+    svg.el("path", d="M 60 230 H 760", class_="lv bus", data_energised="RZS1_KHU1_Napeti")
+    indicator(svg, 150, 200, "RZS1_KHU1_Napeti", "busbar voltage (KHU1)")
+    indicator(svg, 420, 160, "RZS1_FU1_Pretavena_pojistka", "fuse FU1 blown", "warn")
+    indicator(svg, 420, 185, "RZS1_FV1_Prepetova_ochrana", "surge arrester FV1 tripped", "warn")
+    for x, label, screen in [(200, "RZS2 ›", "rzs2"), (400, "RZS in DT ›", "dt"), (600, "signalling (K2)", None)]:
+        svg.el("path", d=f"M {x} 230 V 260", class_="lv", data_energised="RZS1_KHU1_Napeti")
+        if screen:
+            svg.open("a", href=f"#screen/{screen}")
+            svg.text(x, 278, label, "label", "middle")
+            svg.close("a")
+        else:
+            svg.text(x, 278, label, "label", "middle")
+    svg.close("g")
+    meters(svg, 830, 110, "RZS1", "Meter of RZS1")
+
+    svg.comment("The universal source: K1 from RZZ (TZ1), K2 from RZS1 (backup), output to the signalling equipment")
+    svg.open("g", id="universal-source")
+    svg.el("rect", x=30, y=340, width=760, height=290, rx=6, class_="frame")
+    svg.text(45, 362, "Signalling equipment — universal source", "title")
+    svg.open("a", href="#screen/rzz")
+    svg.text(90, 392, "from RZZ (T1 = TZ1 6/0.4 kV) ›", "label")
+    svg.close("a")
+    svg.text(430, 392, "backup from RZS1", "label")
+    svg.el("path", d="M 200 400 V 459", class_="lv", data_energised=use("UZ_Napeti_RZZ"))
+    svg.el("path", d="M 500 400 V 459", class_="lv", data_energised=use("UZ_Napeti_RZS1"))
+    indicator(svg, 220, 430, "UZ_Napeti_RZZ", "input live")
+    indicator(svg, 520, 430, "UZ_Napeti_RZS1", "input live")
+    breaker(svg, 200, 475, "UZ_K1_Zapnut", "K1", size=30)
+    breaker(svg, 500, 475, "UZ_K2_Zapnut", "K2", size=30)
+    svg.el("path", d="M 200 490 V 540 M 500 490 V 540", class_="lv", data_energised=use("UZ_Vystup"))
+    svg.el("path", d="M 120 540 H 640", class_="lv bus", data_energised="UZ_Vystup")
+    svg.text(120, 570, "", "value", data_text="UZ_Vystup", data_on="signalling equipment supplied",
+             data_off="SIGNALLING EQUIPMENT NOT SUPPLIED", font_size=15)
+    svg.text(120, 595, "", "value small", data_text="UZ_K2_Zapnut", data_on="on the backup supply (RZS1)",
+             data_off="")
+    svg.text(520, 600, "power", "label")
+    value(svg, 640, 600, "SZZ_P_kW", "kW", "1", "value", "end")
+    svg.close("g")
+    svg.text(20, 690, "", "label", data_text="RDRT_SP21_HMI_Mistne",
+             data_on="Control authority: LOCAL (this HMI)", data_off="Control authority: REMOTE dispatch")
+    svg.write("rzs1.svg")
+
+
+# ------------------------------------------------------------------------ DT
+def dt():
+    svg = Svg("Vsetín — transport terminal DT", 1200, 720)
+    heading(svg, "Transport terminal DT — boards RH and RZS, OŘ-area lighting",
+            "Three S7-1500s, each on its own IEC 104 link to RDRT; the incoming breakers are operated by hand.")
+    for i, (board, title, feed, comm, screen) in enumerate([
+            ("RHDT", "RH in DT", "from RH1.1 (mains)", "COMM_RH_DT", "rh11"),
+            ("RZSDT", "RZS in DT", "from RZS (secured network)", "COMM_RZS_DT", "rzs1")]):
+        x = 30 + i * 590
+        svg.comment(f"{title}: link, incoming QF1, busbar, protection, meter")
+        svg.open("g", id=f"board-{board}")
+        svg.el("rect", x=x, y=80, width=560, height=470, rx=6, class_="frame")
+        svg.text(x + 15, 104, f"{title} (S7-1500)", "title")
+        indicator(svg, x + 300, 100, comm, "link to RDRT failed", "fault")
+        svg.open("a", href=f"#screen/{screen}")
+        svg.text(x + 40, 140, f"{feed} ›", "label")
+        svg.close("a")
+        svg.el("path", d=f"M {x + 100} 150 V 204 M {x + 100} 226 V 270", class_="lv",
+               data_energised=use(f"{board}_KHU1_Napeti"))
+        breaker(svg, x + 100, 215, f"{board}_QF1_Zapnut", "QF1")
+        svg.el("path", d=f"M {x + 40} 270 H {x + 520}", class_="lv bus", data_energised=f"{board}_KHU1_Napeti")
+        indicator(svg, x + 260, 200, f"{board}_KHU1_Napeti", "busbar voltage (KHU1)")
+        indicator(svg, x + 260, 225, f"{board}_FU1_Pretavena_pojistka", "fuse FU1 blown", "warn")
+        indicator(svg, x + 260, 250, f"{board}_FV1_Prepetova_ochrana", "surge arrester FV1 tripped", "warn")
+        svg.close("g")
+        meters(svg, x + 40, 300, board, f"Meter of {title}")
+
+    svg.comment("The third S7-1500 in DT runs the OŘ-area lighting (spec 2.1, 3.1)")
+    svg.open("g", id="or-lighting")
+    svg.el("rect", x=30, y=570, width=1150, height=110, rx=6, class_="frame")
+    svg.open("a", href="#screen/lighting")
+    svg.text(45, 594, "OŘ-area lighting (S7-1500) ›", "title")
+    svg.close("a")
+    indicator(svg, 60, 625, "COMM_OR", "link to RDRT failed", "fault")
+    svg.el("circle", cx=330, cy=621, r=12, class_="lamp", data_point=use("OR_PrRele"))
+    svg.text(350, 626, "", "value", data_text=use("OR_Osv_Zap"), data_on="lighting ON", data_off="lighting off")
+    svg.text(600, 626, "power", "label")
+    value(svg, 720, 626, "OR_P_kW", "kW", "1", "value", "end")
+    svg.text(780, 626, "energy", "label")
+    value(svg, 920, 626, "OR_Energie_kWh", "kWh", "1", "value", "end")
+    svg.close("g")
+    svg.write("dt.svg")
+
+
 # ------------------------------------------------------------------------ lighting
 def lighting():
     cols, w, h = 5, 232, 222
@@ -514,11 +736,15 @@ def topology():
         svg.text(x + 10, y + 39, subtitle, "label small")
         svg.close("g")
 
-    node(300, 300, "RH1.1", "S7-1500", "COMM_RH", "M 560 230 V 265 H 370 V 300")
-    node(760, 300, "RZS1", "S7-1500", "COMM_RZS", "M 640 230 V 265 H 830 V 300")
-    node(300, 410, "RH2", "LOGO!", "COMM_RH2", "M 370 350 V 410", "rh2")
-    node(660, 410, "RZZ", "LOGO!", "COMM_RZZ", "M 810 350 V 380 H 730 V 410", "rzz")
-    node(860, 410, "RDA", "LOGO!", "COMM_RDA", "M 850 350 V 380 H 930 V 410", "rda")
+    node(300, 300, "RH1.1", "S7-1500 (TO)", "COMM_RH", "M 560 230 V 265 H 370 V 300", "rh11")
+    node(450, 300, "RH in DT", "S7-1500 (DT)", "COMM_RH_DT", "M 580 230 V 282 H 520 V 300", "dt")
+    node(760, 300, "RZS1", "S7-1500 (TO)", "COMM_RZS", "M 640 230 V 265 H 830 V 300", "rzs1")
+    node(910, 300, "RZS in DT", "S7-1500 (DT)", "COMM_RZS_DT", "M 620 230 V 282 H 980 V 300", "dt")
+    node(290, 410, "RH2", "LOGO!", "COMM_RH2", "M 360 350 V 410", "rh2")
+    node(440, 410, "RH1.2", "LOGO!", "COMM_RH12", "M 380 350 V 385 H 510 V 410", "rh12")
+    node(610, 410, "RZZ", "LOGO!", "COMM_RZZ", "M 810 350 V 385 H 680 V 410", "rzz")
+    node(760, 410, "RDA", "LOGO!", "COMM_RDA", "M 830 350 V 410", "rda")
+    node(910, 410, "RZS2", "LOGO!", "COMM_RZS2", "M 850 350 V 385 H 980 V 410", "rzs2")
 
     svg.comment("The thirteen lighting boards, each on its own link from RDRT")
     svg.open("g", id="lighting-links")
@@ -573,12 +799,23 @@ HMI_TOML_HEAD = """\
 # 7 control authority, 9 administrator.
 
 title = "Vsetín railway station"
+# The address the HMI connects to RDRT from: the station's redundancy group "hmi" (the
+# TC700's local HMI, with command authority) takes clients from 127.0.0.2; from another
+# address the HMI would be dispatch, whose commands the station refuses while it is local.
+local_address = "127.0.0.2"
+# The zone the station stamps its time tags in (its station.toml's time_zone).
+time_zone = "Europe/Prague"
+# Printed by the station's banner beside the users file (users.toml holds only hashes).
+sign_in_note = "the demo's are operator / operator-vsetin, admin / admin-vsetin, viewer / viewer-vsetin"
 default_control_level = 5
 """
 
 SCREENS = [("supply", "Supply", "supply.svg"), ("topology", "Topology", "topology.svg"),
-           ("rh2", "RH2", "rh2.svg"), ("rzz", "RZZ", "rzz.svg"),
-           ("rda", "RZS / RDA", "rda.svg"), ("lighting", "Lighting", "lighting.svg")]
+           ("rh11", "RH1.1 / R6", "rh11.svg"), ("rh2", "RH2", "rh2.svg"), ("rh12", "RH1.2", "rh12.svg"),
+           ("rzs1", "RZS1 / signalling", "rzs1.svg"), ("rzz", "RZZ", "rzz.svg"), ("rzs2", "RZS2", "rzs2.svg"),
+           ("rda", "RZS / RDA", "rda.svg"), ("dt", "DT", "dt.svg"), ("lighting", "Lighting", "lighting.svg")]
+# LOGO! boards with a feeder breaker QF1 under control: (plant prefix, name in the thesis)
+QF1_BOARDS = [("RH2", "RH2"), ("RZZ", "RZZ"), ("RH12", "RH1.2"), ("RZS2", "RZS2")]
 
 
 def toml_value(value):
@@ -606,6 +843,9 @@ def alarm_list():
         ("RDA_HavarijniVyp", 1, "RDA: emergency off"),
         ("RH2_P1_KHVRH2_Havarijni_vypnuti", 1, "RH2: emergency off"),
         ("RZZ_P1_KHVRZZ_Havarijni_vypnuti", 1, "RZZ: emergency off"),
+        ("RH12_P1_KHVRH12_Havarijni_vypnuti", 1, "RH1.2: emergency off"),
+        ("RZS2_P1_KHVRZS2_Havarijni_vypnuti", 1, "RZS2: emergency off"),
+        ("UZ_K2_Zapnut", 2, "Signalling equipment on its backup supply (RZS1)"),
         ("RDA_Porucha_DA", 2, "RDA: generator fault"),
         ("RDA_DA_Porucha", 2, "RDA: generator failed to start"),
         ("RDA_Porucha_KM1", 2, "RDA: contactor KM1 does not follow its coil"),
@@ -620,14 +860,24 @@ def alarm_list():
         ("COMM_RH2", 2, "Link RH1.1 - RH2 failed"),
         ("COMM_RZZ", 2, "Link RZS1 - RZZ failed"),
         ("COMM_RDA", 2, "Link RZS1 - RDA failed"),
+        ("COMM_RH12", 2, "Link RH1.1 - RH1.2 failed"),
+        ("COMM_RZS2", 2, "Link RZS1 - RZS2 failed"),
+        ("COMM_RH_DT", 2, "Link RDRT - RH in DT failed"),
+        ("COMM_RZS_DT", 2, "Link RDRT - RZS in DT failed"),
     ]
+    # Raised while FALSE: (point, priority, text)
+    alarms_when_off = [("UZ_Vystup", 1, "Signalling equipment without supply"),
+                       ("RHDT_KHU1_Napeti", 2, "RH in DT without voltage")]
     alarms += [(f"COMM_{b}", 2, f"Link RDRT - lighting board {b} failed") for b in LIGHTING]
     alarms += [(f"{b}_Osv_Por", 3, f"{b}: lighting-circuit fault") for b in LIGHTING]
     alarms += [(f"{b}_Porucha_KM1", 3, f"{b}: lighting contactor KM1 fault") for b in LIGHTING]
-    for board in ["RH2", "RZZ"]:
-        alarms += [(f"{board}_P1_FU1_Pretavena_pojistka", 3, f"{board}: fuse FU1 blown"),
-                   (f"{board}_P1_FV1_Prepetova_ochrana", 3, f"{board}: surge arrester FV1 tripped"),
-                   (f"{board}_P1_FV110_Prepetova_ochrana", 3, f"{board}: surge arrester FV110 tripped")]
+    for board, name in QF1_BOARDS:
+        alarms += [(f"{board}_P1_FU1_Pretavena_pojistka", 3, f"{name}: fuse FU1 blown"),
+                   (f"{board}_P1_FV1_Prepetova_ochrana", 3, f"{name}: surge arrester FV1 tripped"),
+                   (f"{board}_P1_FV110_Prepetova_ochrana", 3, f"{name}: surge arrester FV110 tripped")]
+    for board, name in [("RH11", "RH1.1"), ("RZS1", "RZS1"), ("RHDT", "RH in DT"), ("RZSDT", "RZS in DT")]:
+        alarms += [(f"{board}_FU1_Pretavena_pojistka", 3, f"{name}: fuse FU1 blown"),
+                   (f"{board}_FV1_Prepetova_ochrana", 3, f"{name}: surge arrester FV1 tripped")]
     alarms += [("RDA_FU1_PretavenaPojistka", 3, "RDA: fuse FU1 blown"),
                ("RDA_FV1_PrepetovaOchrana", 3, "RDA: surge arrester FV1 tripped"),
                ("RDRT_SP1_FV230", 3, "RDRT: surge arrester FV230 tripped"),
@@ -642,8 +892,10 @@ def alarm_list():
     alarms += [("RDRT_SP26_Dvere_NN", 4, "LV switchroom door open"),
                ("RDRT_SP27_Dvere_VN", 4, "HV switchroom door open"),
                ("RDRT_SP28_Dvere_T1", 4, "Transformer chamber T1 door open"),
-               ("RDRT_SP29_Dvere_T2", 4, "Transformer chamber T2 door open")]
-    return alarms
+               ("RDRT_SP29_Dvere_T2", 4, "Transformer chamber T2 door open"),
+               ("RS602_Zapnut", 4, "6 kV switchroom R6 by-passed (RS602 closed)")]
+    return [(point, priority, text, True) for point, priority, text in alarms] + \
+        [(point, priority, text, False) for point, priority, text in alarms_when_off]
 
 
 def hmi_toml():
@@ -656,16 +908,16 @@ def hmi_toml():
                "# It needs no authority itself: it is how this HMI takes the authority back.")
     out.append(toml_table("control", command=use("RDRT_HMI_Mistne"), level=7,
                           confirm="Change the control authority between this HMI (local) and the remote dispatch?"))
-    out.append("# The board views' functional elements (QF1 of RH2 and RZZ, the RDA test run) work only\n"
+    out.append("# The board views' functional elements (QF1 of the LOGO! boards, the RDA test run) work only\n"
                "# while the control authority is with this HMI (spec 9.2): SP 21 \"HMI local\" TRUE.\n"
                "# The HMI refuses them itself otherwise (refused-authority) and audits the refusal.")
     # The station itself gates only the dispatch (ED) link by SP 21 (spec 7.5), not the HMI's.
     authority = {"point": use("RDRT_SP21_HMI_Mistne"), "state": True}
-    for board in ["RH2", "RZZ"]:
-        out.append(f"# {board}: feeder breaker QF1 (spec 5.1, 5.2), select-before-operate; refused with SA1 in local.")
+    for board, name in QF1_BOARDS:
+        out.append(f"# {name}: feeder breaker QF1 (spec 5.1, 5.2), select-before-operate; refused with SA1 in local.")
         for cmd, verb in [("VypnoutQF1", "Open"), ("ZapnoutQF1", "Close")]:
             out.append(toml_table("control", command=use(f"{board}_{cmd}"), level=5, select=True,
-                                  confirm=f"{verb} feeder breaker QF1 of {board}?",
+                                  confirm=f"{verb} feeder breaker QF1 of {name}?",
                                   local_point=use(f"{board}_P1_SA1_Mistne"), authority=authority))
     out.append(toml_table("control", command=use("RDA_ProvozDA"), level=5,
                           confirm="Test run: supply RZS from the diesel generator (or end the test run)?",
@@ -684,18 +936,20 @@ def hmi_toml():
     out.append("# ---------------------------------------------------------------- alarms\n"
                "# 1 supply lost / emergency off, 2 generator, controller and link faults,\n"
                "# 3 lighting circuits, fuses and surge arresters, 4 doors.")
-    for point, priority, text in alarm_list():
+    for point, priority, text, when in alarm_list():
         out.append(toml_table("alarm", point=use(point), priority=priority, text=text,
-                              acknowledge=priority <= 3))
+                              when=None if when else False, acknowledge=priority <= 3))
 
     out.append("# ---------------------------------------------------------------- trends")
     for b in LIGHTING:
         out.append(toml_table("trend", point=use(f"{b}_P_kW")))
         out.append(toml_table("trend", point=use(f"{b}_Energie_kWh")))
     out.append(toml_table("trend", point=use("RDA_Stav")))
-    for board in ["RH2", "RZZ"]:
+    for board in [b for b, _ in QF1_BOARDS] + ["RH11", "RZS1", "RHDT", "RZSDT"]:
         for meter in ["U", "P_kW", "I_A", "Energie_kWh"]:
             out.append(toml_table("trend", point=use(f"{board}_{meter}")))
+    for point in ["R6_U", "R6_T_U", "SZZ_P_kW"]:
+        out.append(toml_table("trend", point=use(point)))
     (HERE / "hmi.toml").write_text("\n".join(out), encoding="utf-8")
     print("wrote hmi.toml")
 
@@ -704,8 +958,13 @@ if __name__ == "__main__":
     hmi_toml()
     supply()
     topology()
-    power_board("RH2", "T2", "RH1.1", "COMM_RH")
-    power_board("RZZ", "T1", "RZS1", "COMM_RZS")
+    rh11()
+    power_board("RH2", "transformer T2", "RH1.1", "COMM_RH")
+    power_board("RH12", "RH1.1", "RH1.1", "COMM_RH", name="RH1.2")
+    rzs1()
+    power_board("RZZ", "transformer T1 (TZ1)", "RZS1", "COMM_RZS")
+    power_board("RZS2", "RZS (secured network)", "RZS1", "COMM_RZS")
     rda()
+    dt()
     lighting()
     print(f"{len(USED)} points and commands bound")

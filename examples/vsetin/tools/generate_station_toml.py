@@ -12,19 +12,27 @@ lighting boards and the repeated board points. Edit the tables below and run
 
 IOA plan (the railway-station thesis's point lists, docs/THESES.md; where it is silent, ours):
   RDRT own points      1-10 SP of module P9, 21 HMI local, 24/25 module faults,
-                       26-29 switchroom doors, 32/33 links RH/RZS, 38-41 upper links
-                       ED/MŘS/HMI/service, 50-62 links ROV01..OR;
-                       command 2001 HMI local
+                       26-29 switchroom doors, 32/33 links RH/RZS (TO), 34/35 links RH/RZS
+                       in DT, 38-41 upper links ED/MŘS/HMI/service, 50-62 links
+                       ROV01..OR; command 2001 HMI local
+  RH1.1 own I/O        201-208 SP (QF1, KHU1, FV1, FU1, R6 cubicles Q1-Q3, by-pass
+                       RS602), 211-216 ME (meter, R6 and transformer 6 kV voltages)
   RH2 (via RH1.1)      281-298 (thesis), commands 2021/2022 (thesis), meter 271-274;
                        RH1.1's link 280
+  RH1.2 (via RH1.1)    RH2's + 40: 321-338, meter 311-314, commands 2061/2062; link 320
+  RZS1 own I/O         341-348 SP (KHU1, FV1, FU1, the universal source of the signalling
+                       equipment), 351-355 ME (meter, signalling load)
   RZZ (via RZS1)       381-398 (RZZ's own 281-298 + 100), meter 371-374, commands
                        2121/2122
   RDA (via RZS1)       401-421, command 2201; RZS1's links: 380 RZZ, 400 RDA
+  RZS2 (via RZS1)      RZZ's + 60: 441-458, meter 431-434, commands 2181/2182; link 440
+  RH in DT             501-504 SP, 511-514 ME;   RZS in DT   601-604 SP, 611-614 ME
   lighting board k     10000 + 100*k + n (ROV01 = 1, ..., ROV12 = 12, OR = 13):
                        points n = 1-22 and 31/32, commands n = 51-64
                        (no IOA is both a point and a command: many controlling
                        stations keep one object per address)
-Ports: port_base + 0 RDRT, 1 RH1.1, 2 RH2, 3 RZS1, 4 RZZ, 5 RDA, 9 + k lighting board k.
+Ports: port_base + 0 RDRT, 1 RH1.1, 2 RH2, 3 RZS1, 4 RZZ, 5 RDA, 6 RH1.2, 7 RZS2, 8 RH in DT,
+9 RZS in DT, 9 + k lighting board k.
 """
 
 import sys
@@ -108,11 +116,13 @@ def link(name, target, status_point=None, republish=None):
     table("[[node.link]]", **fields)
 
 
-emit("" if S7 else """# The Vsetín railway station (the railway-station thesis, docs/THESES.md): power boards RH2, RZZ and
-# RDA (LOGO!), the concentrators RH1.1 and RZS1 (S7-1500), twelve lighting-tower boards
-# ROV01..ROV12 (S7-1200) and the OŘ-area lighting (S7-1500), and the central PLC RDRT
-# (Tecomat TC700) serving the dispatch systems. Every node is an IEC 104 server; each
-# upper node concentrates the ones below over IEC 104 links on loopback.
+emit("" if S7 else """# The Vsetín railway station (the railway-station thesis, docs/THESES.md): power boards RH2, RZZ,
+# RDA, RH1.2 and RZS2 (LOGO!), the concentrators RH1.1 and RZS1 in TO and RH and RZS in DT
+# (S7-1500), twelve lighting-tower boards ROV01..ROV12 (S7-1200) and the OŘ-area lighting
+# (S7-1500 in DT), and the central PLC RDRT (Tecomat TC700) serving the dispatch systems.
+# Every node is an IEC 104 server; each upper node concentrates the ones below over IEC
+# 104 links on loopback. The choices made where the thesis is silent are listed in
+# README.md.
 #
 # Written by tools/generate_station_toml.py (its header has the IOA and port plan); the
 # format is documented in crates/station/src/config/mod.rs.
@@ -120,11 +130,11 @@ emit("" if S7 else """# The Vsetín railway station (the railway-station thesis,
 if S7:
     emit("""# The Vsetín railway station with its LOGO! boards on S7 connections (the railway-station
 # thesis, docs/THESES.md, section 3.3): RH1.1 and RZS1 serve their PLC memory over S7
-# ([node.s7_server]) as the S7-1500 concentrators do, and the boards RH2, RZZ and RDA are
-# simulated LOGO!s that connect to them as S7 clients, writing their inputs into the
-# concentrators' markers (tag list 6.1) and reading their commands from them. Everything
-# else is examples/vsetin, whose programs and calendar this project uses. Against real
-# LOGO!s: drop the three board nodes and let the concentrators listen on port 102.
+# ([node.s7_server]) as the S7-1500 concentrators do, and the boards RH2, RH1.2, RZZ, RZS2
+# and RDA are simulated LOGO!s that connect to them as S7 clients, writing their inputs
+# into the concentrators' markers (tag list 6.1) and reading their commands from them.
+# Everything else is examples/vsetin, whose programs and calendar this project uses.
+# Against real LOGO!s: drop the five board nodes and let the concentrators listen on 102.
 #
 #   stanice run examples/vsetin-s7
 """)
@@ -157,8 +167,14 @@ BOARD_INPUTS = [
 ]
 
 
-def power_board(board, program, source, ca, port_offset, description):
-    node(board, description, ca, port_offset, sources=[source])
+LOGO = "LogoBoard"
+LOGO_SOURCE = "plc/logo_board.st"
+
+
+def power_board(name, board, ca, port_offset, description):
+    """A LOGO! board node `name` on the plant signals `board`_* (RH1.2's are RH12_*)."""
+    program = LOGO
+    node(name, description, ca, port_offset, sources=[f"{SHARED}{LOGO_SOURCE}"])
     task("main", 10, [program], 100)  # a LOGO! scans in milliseconds
     for suffix, variable, _ in BOARD_INPUTS:
         io(f"{board}_{suffix.replace('{B}', board)}", f"{program}.{variable}")
@@ -170,7 +186,7 @@ def power_board(board, program, source, ca, port_offset, description):
     for i, (suffix, variable, text) in enumerate(BOARD_INPUTS):
         suffix = suffix.replace("{B}", board)
         point(f"{board}_{suffix}", "M_SP_TB_1", 281 + i, f"{program}.{variable}",
-              text.replace("{B}", board))
+              text.replace("{B}", name))
     # The board's meter (not in the thesis' point list; ours): float with deadband.
     for ioa, meter, text, deadband in [(271, "U", "busbar voltage, V", 5.0),
                                        (272, "P_kW", "load power, kW", 0.5),
@@ -181,6 +197,95 @@ def power_board(board, program, source, ca, port_offset, description):
             remote_enable=f"{program}.SA1_Dalkove", pulse_ms=500)
     command(f"{board}_ZapnoutQF1", "C_SC_NA_1", 2022, f"{program}.Cmd_ZapnoutQF1", "close QF1",
             remote_enable=f"{program}.SA1_Dalkove", pulse_ms=500)
+
+
+# --------------------------------------------------------------------------------------
+# The S7-1500 concentrators' own I/O (their DI modules; not in the thesis's point lists,
+# ours): (plant signal = point name, IOA, description); REAL signals are measurements
+# with the deadband given.
+OWN_IO = {
+    "RH1.1": ("RH11Concentrator", "RH11_DI", [
+        ("RH11_QF1_Zapnut", 201, "main breaker QF1 (utility feed) closed"),
+        ("RH11_KHU1_Napeti_sit", 202, "utility voltage present (relay KHU1)"),
+        ("RH11_FV1_Prepetova_ochrana", 203, "surge arrester FV1 tripped"),
+        ("RH11_FU1_Pretavena_pojistka", 204, "fuse FU1 blown"),
+        ("R6_Q1_Zapnut", 205, "R6 incoming cubicle Q1 (line from TNS Ústí) closed"),
+        ("R6_Q2_Zapnut", 206, "R6 incoming cubicle Q2 (line from TNS Valašské Meziříčí) closed"),
+        ("R6_Q3_Zapnut", 207, "R6 transformer feeder Q3 closed"),
+        ("RS602_Zapnut", 208, "6 kV by-pass disconnector box RS602 closed (R6 by-passed)"),
+    ], [
+        ("RH11_U", 211, "busbar voltage, V", 5.0),
+        ("RH11_P_kW", 212, "load power, kW", 0.5),
+        ("RH11_I_A", 213, "phase current, A", 1.0),
+        ("RH11_Energie_kWh", 214, "energy meter, kWh", 1.0),
+        ("R6_U", 215, "6 kV switchroom R6 voltage, V", 50.0),
+        ("R6_T_U", 216, "6 kV voltage at the transformers T1/T2, V", 50.0),
+    ]),
+    "RZS1": ("RZS1Concentrator", "RZS1_DI", [
+        ("RZS1_KHU1_Napeti", 341, "RZS busbar voltage present (relay KHU1)"),
+        ("RZS1_FV1_Prepetova_ochrana", 342, "surge arrester FV1 tripped"),
+        ("RZS1_FU1_Pretavena_pojistka", 343, "fuse FU1 blown"),
+        ("UZ_Napeti_RZZ", 344, "signalling supply: input from RZZ (TZ1) live"),
+        ("UZ_Napeti_RZS1", 345, "signalling supply: backup input from RZS1 live"),
+        ("UZ_K1_Zapnut", 346, "signalling equipment fed from RZZ (TZ1)"),
+        ("UZ_K2_Zapnut", 347, "signalling equipment fed from RZS1 (backup)"),
+        ("UZ_Vystup", 348, "signalling equipment supplied"),
+    ], [
+        ("RZS1_U", 351, "busbar voltage, V", 5.0),
+        ("RZS1_P_kW", 352, "load power, kW", 0.5),
+        ("RZS1_I_A", 353, "phase current, A", 1.0),
+        ("RZS1_Energie_kWh", 354, "energy meter, kWh", 1.0),
+        ("SZZ_P_kW", 355, "power of the signalling equipment, kW", 0.5),
+    ]),
+}
+for dt_node, board, base, feed in [("RH-DT", "RHDT", 500, "RH1.1"), ("RZS-DT", "RZSDT", 600, "RZS")]:
+    OWN_IO[dt_node] = (f"{board}Concentrator", f"{board}_DI", [
+        (f"{board}_QF1_Zapnut", base + 1, f"incoming breaker QF1 (cable from {feed}) closed"),
+        (f"{board}_KHU1_Napeti", base + 2, "busbar voltage present (relay KHU1)"),
+        (f"{board}_FV1_Prepetova_ochrana", base + 3, "surge arrester FV1 tripped"),
+        (f"{board}_FU1_Pretavena_pojistka", base + 4, "fuse FU1 blown"),
+    ], [
+        (f"{board}_U", base + 11, "busbar voltage, V", 5.0),
+        (f"{board}_P_kW", base + 12, "load power, kW", 0.5),
+        (f"{board}_I_A", base + 13, "phase current, A", 1.0),
+        (f"{board}_Energie_kWh", base + 14, "energy meter, kWh", 1.0),
+    ])
+PROGRAMS = {}  # concentrator program -> [(tag, address, type, comment)], written as tag tables
+
+
+def own_io(name):
+    """The concentrator `name`'s own inputs: plant signals into its tag table, its points
+    invalid while its DI module is pulled or unreachable."""
+    program, module, bools, reals = OWN_IO[name]
+    tags = PROGRAMS.setdefault(program, [])
+    tags.append(("PoruchaDI", None, "BOOL", f"DI module {module} pulled or unreachable"))
+    io(f"module-fault:{module}", f"{program}.PoruchaDI")
+    for signal, ioa, text in bools:
+        tags.append((signal, None, "BOOL", text))
+        io(signal, f"{program}.{signal}")
+        point(signal, "M_SP_TB_1", ioa, f"{program}.{signal}", text,
+              invalid_when=f"{program}.PoruchaDI")
+    for signal, ioa, text, deadband in reals:
+        tags.append((signal, None, "REAL", text))
+        io(signal, f"{program}.{signal}")
+        point(signal, "M_ME_TF_1", ioa, f"{program}.{signal}", text, deadband=deadband,
+              invalid_when=f"{program}.PoruchaDI")
+
+
+SHARED_PROGRAMS = set()  # tag tables the S7 variant takes from examples/vsetin
+
+
+def concentrator_node(name, description, ca, port_offset, shared=False):
+    """A concentrator with its own I/O; `shared`: the same in both projects (the S7
+    variant uses examples/vsetin's tag table)."""
+    program = OWN_IO[name][0]
+    folder = SHARED if shared else ""
+    if shared:
+        SHARED_PROGRAMS.add(program)
+    node(name, description, ca, port_offset, sources=[f"{folder}plc/{program.lower()}.st"])
+    task("main", 10, [program], 100)
+    own_io(name)
+    return program
 
 
 # --------------------------------------------------------------------------------------
@@ -241,6 +346,8 @@ for ioa, variable, text in [
           invalid_when="RDRTIO.PoruchaModul6")
 point("COMM_RH", "M_SP_TB_1", 32, None, "communication failure to the S7-1500 RH (TRUE = link down)", groups=[1])
 point("COMM_RZS", "M_SP_TB_1", 33, None, "communication failure to the S7-1500 RZS (TRUE = link down)", groups=[1])
+point("COMM_RH_DT", "M_SP_TB_1", 34, None, "communication failure to the S7-1500 RH in DT (TRUE = link down)", groups=[1])
+point("COMM_RZS_DT", "M_SP_TB_1", 35, None, "communication failure to the S7-1500 RZS in DT (TRUE = link down)", groups=[1])
 for ioa, name, text in [(38, "COMM_ED", "link to ED (electric dispatch) down"),
                         (39, "COMM_MRS", "link to MŘS down"),
                         (40, "COMM_HMI", "link to the local HMI down"),
@@ -253,6 +360,8 @@ command("RDRT_HMI_Mistne", "C_SC_NA_1", 2001, "RDRTIO.HmiLokalne", "HMI local mo
         from_groups=["hmi"])
 link("RH", "RH1.1", "COMM_RH", republish=0)
 link("RZS", "RZS1", "COMM_RZS", republish=0)
+link("RH_DT", "RH-DT", "COMM_RH_DT", republish=0)
+link("RZS_DT", "RZS-DT", "COMM_RZS_DT", republish=0)
 for k, board in enumerate(LIGHTING, start=1):
     link(board, board, f"COMM_{board}", republish=10_000 + 100 * k)
 
@@ -304,19 +413,25 @@ def rda_board(port_offset):
 
 if not S7:
     # ----------------------------------------------------------------------------------
-    node("RH1.1", "main board concentrator (S7-1500)", 11, 1)
+    concentrator_node("RH1.1", "main board concentrator (S7-1500)", 11, 1)
     point("COMM_RH2", "M_SP_TB_1", 280, None, "communication failure to the LOGO! of RH2")
+    point("COMM_RH12", "M_SP_TB_1", 320, None, "communication failure to the LOGO! of RH1.2")
     link("RH2", "RH2", "COMM_RH2", republish=0)
+    link("RH1.2", "RH1.2", "COMM_RH12", republish=40)
 
-    power_board("RH2", "RH2Logic", "plc/rh2_logic.st", 21, 2, "board RH2 (LOGO!), fed from T2")
+    power_board("RH2", "RH2", 21, 2, "board RH2 (LOGO!), fed from T2")
+    power_board("RH1.2", "RH12", 24, 6, "board RH1.2 (LOGO!), fed from RH1.1")
 
-    node("RZS1", "standby-supply board concentrator (S7-1500)", 12, 3)
+    concentrator_node("RZS1", "standby-supply board concentrator (S7-1500)", 12, 3)
     point("COMM_RZZ", "M_SP_TB_1", 380, None, "communication failure to the LOGO! of RZZ")
     point("COMM_RDA", "M_SP_TB_1", 400, None, "communication failure to the LOGO! of RDA")
+    point("COMM_RZS2", "M_SP_TB_1", 440, None, "communication failure to the LOGO! of RZS2")
     link("RZZ", "RZZ", "COMM_RZZ", republish=100)
     link("RDA", "RDA", "COMM_RDA", republish=0)
+    link("RZS2", "RZS2", "COMM_RZS2", republish=160)
 
-    power_board("RZZ", "RZZLogic", "plc/rzz_logic.st", 22, 4, "board RZZ (LOGO!), fed from T1")
+    power_board("RZZ", "RZZ", 22, 4, "board RZZ (LOGO!), fed from T1 (TZ1)")
+    power_board("RZS2", "RZS2", 25, 7, "board RZS2 (LOGO!), fed from RZS")
 
     # ----------------------------------------------------------------------------------
     rda_board(5)
@@ -333,10 +448,12 @@ else:
     # as S7 clients with the TSAPs of the thesis's connection table (3.3: local IDs
     # 100-102, here the called TSAPs 0100-0102) and write their inputs into its markers
     # (tag list 6.1: RH2 at M20.0-M22.1, commands M24.0/M24.1), where the concentrator's
-    # tag table declares them. RZZ and RDA at RZS1: RZZ as RH2 at RH1.1 (5.2: "the RH2
-    # pattern"), RDA (not in the thesis's lists, ours) at M40.0-M42.3, its state at MW44,
-    # its command at M46.0. The boards' meters (IOA 271-274, ours) are not in the transfer
-    # areas. Against real LOGO!s the board nodes go and the concentrators listen on 102.
+    # tag table declares them. The other boards (not in the thesis's lists, ours): RH1.2
+    # at RH1.1 as RH2 ten bytes up (M30.0-M32.1, commands M34.0/M34.1); RZZ at RZS1 as RH2
+    # at RH1.1 (5.2: "the RH2 pattern"), RZS2 ten bytes up from RDA (M50.0-M52.1, M54.0/
+    # M54.1), RDA at M40.0-M42.3, its state at MW44, its command at M46.0. The boards'
+    # meters (IOA 271-274, ours) are not in the transfer areas. Against real LOGO!s the
+    # board nodes go and the concentrators listen on 102.
     def tag(name):
         """A tag's name as an ST identifier (FA1.1 -> FA1_1)."""
         return name.replace(".", "_")
@@ -346,24 +463,23 @@ else:
 
     def board_tags(board, first_byte):
         """(tag, marker bit, text, board program variable) of a power board's inputs."""
+        shown = "RH1.2" if board == "RH12" else board  # the plant's prefix, the thesis's name
         return [(f"{board}_{tag(suffix.replace('{B}', board))}", marker(i, first_byte),
-                 text.replace("{B}", board), variable)
+                 text.replace("{B}", shown), variable)
                 for i, (suffix, variable, text) in enumerate(BOARD_INPUTS)]
 
-    PROGRAMS = {}  # concentrator program -> [(tag, address, type, comment)]
-
-    def concentrator(name, description, ca, port_offset, s7_offset, program, connections):
-        node(name, description, ca, port_offset, sources=[f"plc/{program.lower()}.st"])
-        task("main", 10, [program], 100)
+    def concentrator(name, description, ca, port_offset, s7_offset, connections):
+        """connections: (thesis connection name, board prefix, called TSAP, status IOA)."""
+        program = concentrator_node(name, description, ca, port_offset)
         table("node.s7_server", port_offset=s7_offset, markers=64)
-        PROGRAMS[program] = []
-        for connection, tsap, ioa in connections:
+        for connection, board, tsap, ioa in connections:
             table("[[node.s7_server.connection]]", name=connection, tsap=tsap,
-                  status=f"{program}.Comm_{connection}")
-            PROGRAMS[program].append((f"Comm_{connection}", None, "BOOL := TRUE",
+                  status=f"{program}.Comm_{board}")
+            PROGRAMS[program].append((f"Comm_{board}", None, "BOOL := TRUE",
                                       f"LOGO!8_{connection} not connected (S7_Connection_{connection})"))
-            point(f"COMM_{connection}", "M_SP_TB_1", ioa, f"{program}.Comm_{connection}",
+            point(f"COMM_{board}", "M_SP_TB_1", ioa, f"{program}.Comm_{board}",
                   f"communication failure to the LOGO! of {connection} (S7 connection)")
+        return program
 
     def concentrated_board(program, board, ioa_base, first_byte, commands):
         tags = board_tags(board, first_byte)
@@ -379,6 +495,9 @@ else:
             command(f"{board}_{suffix}", "C_SC_NA_1", ioa, address, text,
                     remote_enable=remote, pulse_ms=500)
 
+    def qf1_commands(ioa):
+        return [(ioa, "VypnoutQF1", "open QF1"), (ioa + 1, "ZapnoutQF1", "close QF1")]
+
     def device_io(device, item, direction, variable):
         table("[[node.io]]", device=device, item=item, direction=direction, variable=variable)
 
@@ -390,8 +509,9 @@ else:
                         "cycle_ms": 50})
         return name
 
-    def logo_board(board, program, source, ca, description, concentrator_node, tsap, first_byte):
-        node(board, description, ca, None, sources=[f"{SHARED}{source}"])
+    def logo_board(name, board, ca, description, concentrator_node, tsap, first_byte):
+        program = LOGO
+        node(name, description, ca, None, sources=[f"{SHARED}{LOGO_SOURCE}"])
         task("main", 10, [program], 100)
         for suffix, variable, _ in BOARD_INPUTS:
             io(f"{board}_{suffix.replace('{B}', board)}", f"{program}.{variable}")
@@ -404,17 +524,18 @@ else:
         device_io(device, f"M{first_byte + 4}.0", "input", f"{program}.Cmd_VypnoutQF1")
         device_io(device, f"M{first_byte + 4}.1", "input", f"{program}.Cmd_ZapnoutQF1")
 
-    QF1_COMMANDS = [(2021, "VypnoutQF1", "open QF1"), (2022, "ZapnoutQF1", "close QF1")]
-    concentrator("RH1.1", "main board concentrator (S7-1500): S7 server of LOGO! RH2", 11, 1, 50,
-                 "RH11Concentrator", [("RH2", "0101", 280)])
-    concentrated_board("RH11Concentrator", "RH2", 281, 20, QF1_COMMANDS)
-    logo_board("RH2", "RH2Logic", "plc/rh2_logic.st", 21, "board RH2 (LOGO!), fed from T2",
-               "RH1.1", "0101", 20)
+    concentrator("RH1.1", "main board concentrator (S7-1500): S7 server of LOGO! RH2 and RH1.2",
+                 11, 1, 50, [("RH2", "RH2", "0101", 280), ("RH1.2", "RH12", "0100", 320)])
+    concentrated_board("RH11Concentrator", "RH2", 281, 20, qf1_commands(2021))
+    concentrated_board("RH11Concentrator", "RH12", 321, 30, qf1_commands(2061))
+    logo_board("RH2", "RH2", 21, "board RH2 (LOGO!), fed from T2", "RH1.1", "0101", 20)
+    logo_board("RH1.2", "RH12", 24, "board RH1.2 (LOGO!), fed from RH1.1", "RH1.1", "0100", 30)
 
-    concentrator("RZS1", "standby-supply board concentrator (S7-1500): S7 server of LOGO! RZZ and RDA",
-                 12, 3, 51, "RZS1Concentrator", [("RZZ", "0101", 380), ("RDA", "0102", 400)])
-    concentrated_board("RZS1Concentrator", "RZZ", 381, 20,
-                       [(2121, "VypnoutQF1", "open QF1"), (2122, "ZapnoutQF1", "close QF1")])
+    concentrator("RZS1", "standby-supply board concentrator (S7-1500): S7 server of LOGO! RZZ, "
+                 "RDA and RZS2", 12, 3, 51,
+                 [("RZZ", "RZZ", "0101", 380), ("RDA", "RDA", "0102", 400),
+                  ("RZS2", "RZS2", "0100", 440)])
+    concentrated_board("RZS1Concentrator", "RZZ", 381, 20, qf1_commands(2121))
     for i, (ioa, variable, text) in enumerate(RDA_POINTS):
         name = f"RDA_{variable}"
         PROGRAMS["RZS1Concentrator"].append((name, f"%MX{marker(i, 40)}", "BOOL", text))
@@ -428,15 +549,25 @@ else:
     command("RDA_ProvozDA", "C_SC_NA_1", 2201, "%MX46.0",
             "run RZS from the diesel generator (test run; level, held until switched off)",
             remote_enable="RZS1Concentrator.RDA_SA1_Dalkove")
+    concentrated_board("RZS1Concentrator", "RZS2", 441, 50, qf1_commands(2181))
 
-    logo_board("RZZ", "RZZLogic", "plc/rzz_logic.st", 22, "board RZZ (LOGO!), fed from T1",
-               "RZS1", "0101", 20)
+    logo_board("RZZ", "RZZ", 22, "board RZZ (LOGO!), fed from T1 (TZ1)", "RZS1", "0101", 20)
+    logo_board("RZS2", "RZS2", 25, "board RZS2 (LOGO!), fed from RZS", "RZS1", "0100", 50)
     rda_board(None)
     device = s7_device("RZS1", "0102")
     for i, (_, variable, _) in enumerate(RDA_POINTS):
         device_io(device, f"M{marker(i, 40)}", "output", f"RDATransfer.{variable}")
     device_io(device, "MW44:INT", "output", "RDATransfer.Stav")
     device_io(device, "M46.0", "input", "RDATransfer.Cmd_ProvozDA")
+
+# --------------------------------------------------------------------------------------
+# The S7-1500s in DT: RH and RZS of the transport terminal (spec 2.1, 3.1), reporting
+# their own I/O to the TC700 over IEC 104 (7.5: its master links to RH and RZS, TO and
+# DT). The third S7-1500 there, the OŘ-area lighting, is the lighting board OR below.
+concentrator_node("RH-DT", "RH board concentrator in DT (S7-1500), fed from RH1.1", 13, 8,
+                  shared=True)
+concentrator_node("RZS-DT", "RZS board concentrator in DT (S7-1500), fed from RZS", 14, 9,
+                  shared=True)
 
 # --------------------------------------------------------------------------------------
 LIGHTING_INPUTS = [
@@ -512,18 +643,21 @@ for k, board in enumerate(LIGHTING, start=1):
 OUT.parent.mkdir(parents=True, exist_ok=True)
 OUT.write_text("\n".join(out).rstrip() + "\n", encoding="utf-8")
 print(f"wrote {OUT}")
-if S7:
-    for program, tags in PROGRAMS.items():
-        lines = [f"(* The tag table of the S7-1500 concentrator {program} (the railway-station thesis,",
-                 "   section 6.1): the markers its LOGO! boards write over their S7 connections and",
-                 "   the commands they read, and each connection's status (set by the station's S7",
-                 "   server). Written by examples/vsetin/tools/generate_station_toml.py --s7. *)",
-                 "", f"PROGRAM {program}", "VAR"]
-        for name, address, type_, comment in tags:
-            at = f" AT {address}" if address else ""
-            lines.append(f"    {name}{at} : {type_};  (* {comment} *)")
-        lines += ["END_VAR", "END_PROGRAM", ""]
-        path = OUT.parent / "plc" / f"{program.lower()}.st"
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text("\n".join(lines), encoding="utf-8")
-        print(f"wrote {path}")
+for program, tags in PROGRAMS.items():
+    if S7 and program in SHARED_PROGRAMS:
+        continue
+    lines = [f"(* The tag table of the S7-1500 concentrator {program} (the railway-station thesis,",
+             "   sections 5.4, 5.5 and 6.1): its own inputs, which the station binds to the plant",
+             "   ([[node.io]]), and in examples/vsetin-s7 the markers its LOGO! boards write over",
+             "   their S7 connections, the commands they read and each connection's status (set",
+             "   by the station's S7 server). Written by",
+             "   examples/vsetin/tools/generate_station_toml.py. *)",
+             "", f"PROGRAM {program}", "VAR"]
+    for name, address, type_, comment in tags:
+        at = f" AT {address}" if address else ""
+        lines.append(f"    {name}{at} : {type_};  (* {comment} *)")
+    lines += ["END_VAR", "END_PROGRAM", ""]
+    path = OUT.parent / "plc" / f"{program.lower()}.st"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("\n".join(lines), encoding="utf-8")
+    print(f"wrote {path}")

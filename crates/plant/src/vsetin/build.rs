@@ -104,6 +104,7 @@ impl VsetinPlant {
             board: None,
             tripped: false,
             both_coils: false,
+            interlock: None,
         });
         self.breakers.len() - 1
     }
@@ -167,14 +168,30 @@ impl VsetinPlant {
         let b_rh11ab = n.add_bus("RH11_AB");
         let b_rzs = n.add_bus("RZS");
         let b_da = n.add_bus("DA");
+        // The switchroom's cable ends and the transformers' 6 kV side, between which the
+        // by-pass RS602 closes (railway spec 2.2; the model's choice of what it bridges).
+        let b_r6_usti = n.add_bus("R6_USTI");
+        let b_r6_valmez = n.add_bus("R6_VALMEZ");
+        let b_r6_t = n.add_bus("R6_T");
+        let b_rh12 = n.add_bus("RH12");
+        let b_rh12_v1 = n.add_bus("RH12_V1");
+        let b_rzs2 = n.add_bus("RZS2");
+        let b_rzs2_v1 = n.add_bus("RZS2_V1");
+        let b_rhdt = n.add_bus("RHDT");
+        let b_rzsdt = n.add_bus("RZSDT");
+        let b_szz = n.add_bus("SZZ");
         let s_usti = n.add_source("TNS_USTI", b_usti, "grid");
         let s_valmez = n.add_source("TNS_VALMEZ", b_valmez, "grid");
         let s_util = n.add_source("UTILITY", b_util, "grid");
         self.da_source = n.add_source("DA", b_da, "diesel");
-        n.add_link("LINE_USTI", b_usti, b_r6);
-        n.add_link("LINE_VALMEZ", b_valmez, b_r6);
-        let l_t1 = n.add_link("T1", b_r6, b_t1);
-        let l_t2 = n.add_link("T2", b_r6, b_t2);
+        n.add_link("LINE_USTI", b_usti, b_r6_usti);
+        n.add_link("LINE_VALMEZ", b_valmez, b_r6_valmez);
+        let l_q1 = n.add_link("R6_Q1", b_r6_usti, b_r6);
+        let l_q2 = n.add_link("R6_Q2", b_r6_valmez, b_r6);
+        let l_q3 = n.add_link("R6_Q3", b_r6, b_r6_t);
+        let l_rs602 = n.add_link("RS602", b_r6_usti, b_r6_t);
+        let l_t1 = n.add_link("T1", b_r6_t, b_t1);
+        let l_t2 = n.add_link("T2", b_r6_t, b_t2);
         n.add_link("TI_RZZA", b_rzz, b_rzza);
         n.add_link("TI_RH11", b_rh11, b_rh11ab);
         for (name, r) in [
@@ -185,6 +202,15 @@ impl VsetinPlant {
             ("T2", SupplyRef::Link(l_t2)),
         ] {
             self.supplies.insert(name.to_string(), (r, false));
+        }
+        let r6_q1 = self.breaker("R6_Q1", true, Some(l_q1));
+        let r6_q2 = self.breaker("R6_Q2", true, Some(l_q2));
+        let r6_q3 = self.breaker("R6_Q3", true, Some(l_q3));
+        let rs602 = self.breaker("RS602", false, Some(l_rs602));
+        for (a, b) in [(rs602, r6_q3), (r6_q3, rs602)] {
+            if let Some(x) = self.breakers.get_mut(a) {
+                x.interlock = Some(b);
+            }
         }
 
         // RH2 (fed from T2) and RZZ (fed from T1): LOGO! boards of the same pattern.
@@ -248,8 +274,42 @@ impl VsetinPlant {
             "6 kV switchroom voltage",
             Src::BusVoltage(b_r6, 6000.0),
         );
+        self.input(
+            "R6_T_U",
+            m,
+            "6 kV voltage at the transformers T1/T2 (through R6 or the by-pass RS602)",
+            Src::BusVoltage(b_r6_t, 6000.0),
+        );
+        for (sig, dev, desc) in [
+            (
+                "R6_Q1_Zapnut",
+                r6_q1,
+                "R6 incoming cubicle Q1 (line from TNS Ústí) closed",
+            ),
+            (
+                "R6_Q2_Zapnut",
+                r6_q2,
+                "R6 incoming cubicle Q2 (line from TNS Valašské Meziříčí) closed",
+            ),
+            (
+                "R6_Q3_Zapnut",
+                r6_q3,
+                "R6 transformer feeder Q3 (to T1/T2) closed",
+            ),
+            (
+                "RS602_Zapnut",
+                rs602,
+                "by-pass disconnector box RS602 closed (R6 by-passed)",
+            ),
+        ] {
+            self.input(sig, m, desc, Src::BreakerClosed(dev));
+        }
         self.board("RH11_AB", b_rh11ab, 3.0, false);
         self.board("RZZ_A", b_rzza, 3.0, false);
+
+        // RH1.2: the main board's second section, a LOGO! board of the RH2 pattern fed from
+        // RH1.1 (railway spec 3.1; its feed and load are the model's choice).
+        self.logo_board("RH12", b_rh11, b_rh12, b_rh12_v1, 6.0);
 
         // RDA: automatic transfer between RH1.1 (mains) and the diesel generator onto RZS.
         let m = self.module("RDA_LOGO");
@@ -403,6 +463,86 @@ impl VsetinPlant {
         );
         self.input("RZS1_Energie_kWh", m, "energy meter", Src::BoardEnergy(bd));
 
+        // The signalling equipment's universal source (railway spec 2.2): fed from RZZ
+        // (whose transformer T1 is the thesis's TZ1 6/0.4 kV from the 6 kV level), backed
+        // up from RZS1; its changeover prefers RZZ and never closes both inputs. Its state
+        // contacts are wired to RZS1's DI module (the model's choice).
+        let l_k1 = self.net.add_link("UZ_K1", b_rzz, b_szz);
+        let l_k2 = self.net.add_link("UZ_K2", b_rzs, b_szz);
+        let khu_rzz = self.relay(Sense::Bus(b_rzz));
+        let khu_rzs = self.relay(Sense::Bus(b_rzs));
+        let khu_szz = self.relay(Sense::Bus(b_szz));
+        let k1 = self.contactor(
+            "UZ_K1",
+            Some(l_k1),
+            Coil::Changeover {
+                own: khu_rzz,
+                yields_to: None,
+                interlock: usize::MAX,
+            },
+        );
+        let k2 = self.contactor(
+            "UZ_K2",
+            Some(l_k2),
+            Coil::Changeover {
+                own: khu_rzs,
+                yields_to: Some(khu_rzz),
+                interlock: k1,
+            },
+        );
+        if let Some(c) = self.contactors.get_mut(k1) {
+            c.coil = Coil::Changeover {
+                own: khu_rzz,
+                yields_to: None,
+                interlock: k2,
+            };
+        }
+        let uz = self.board("SZZ", b_szz, 4.0, false);
+        for (sig, desc, src) in [
+            (
+                "UZ_Napeti_RZZ",
+                "universal source: input from RZZ (TZ1) live",
+                Src::Relay(khu_rzz),
+            ),
+            (
+                "UZ_Napeti_RZS1",
+                "universal source: backup input from RZS1 live",
+                Src::Relay(khu_rzs),
+            ),
+            (
+                "UZ_K1_Zapnut",
+                "universal source fed from RZZ (contactor K1 closed)",
+                Src::ContactorClosed(k1),
+            ),
+            (
+                "UZ_K2_Zapnut",
+                "universal source fed from RZS1, backup (contactor K2 closed)",
+                Src::ContactorClosed(k2),
+            ),
+            (
+                "UZ_Vystup",
+                "signalling equipment supplied (universal source output live)",
+                Src::Relay(khu_szz),
+            ),
+        ] {
+            self.input(sig, m, desc, src);
+        }
+        self.input(
+            "SZZ_P_kW",
+            m,
+            "active power of the signalling equipment",
+            Src::BoardPower(uz),
+        );
+
+        // RZS2: the secured network's second board, a LOGO! board of the RH2 pattern fed
+        // from RZS (railway spec 3.1; feed and load the model's choice).
+        self.logo_board("RZS2", b_rzs, b_rzs2, b_rzs2_v1, 4.0);
+
+        // DT: the RH and RZS boards of the transport terminal with their S7-1500s (railway
+        // spec 2.1, 3.1), fed over cables from RH1.1 and RZS (the model's choice).
+        self.dt_board("RHDT", b_rh11, b_rhdt, 20.0, "RH1.1");
+        self.dt_board("RZSDT", b_rzs, b_rzsdt, 6.0, "RZS (RZS1)");
+
         // RDRT: TC700 module p9 (DI0..DI9) and the door contacts on module p6.
         let m = self.module("RDRT_P9");
         for (sig, dev, kind, active_true, desc) in [
@@ -505,7 +645,68 @@ impl VsetinPlant {
         );
     }
 
-    /// RH2 / RZZ pattern; returns the five feeder buses of FA1.1..FA1.5.
+    /// A board in DT with its S7-1500's DI module `{p}_DI`: an incoming breaker QF1 (by
+    /// hand) on a cable from `from`, voltage relay, surge arrester, fuse and meter.
+    fn dt_board(&mut self, p: &str, b_from: usize, b_bus: usize, base_kw: f64, from: &str) {
+        let m = self.module(&format!("{p}_DI"));
+        let l = self.net.add_link(&format!("{p}_QF1"), b_from, b_bus);
+        let qf = self.breaker(&format!("{p}_QF1"), true, Some(l));
+        let bd = self.board(p, b_bus, base_kw, false);
+        let khu = self.relay(Sense::Bus(b_bus));
+        let fv = self.contact(&format!("{p}_FV1"), ContactKind::Arrester);
+        let fu = self.contact(&format!("{p}_FU1"), ContactKind::Fuse);
+        self.input(
+            &format!("{p}_QF1_Zapnut"),
+            m,
+            &format!("incoming breaker QF1 (cable from {from}) closed"),
+            Src::BreakerClosed(qf),
+        );
+        self.input(
+            &format!("{p}_KHU1_Napeti"),
+            m,
+            "busbar voltage present (relay KHU1)",
+            Src::Relay(khu),
+        );
+        self.input(
+            &format!("{p}_FV1_Prepetova_ochrana"),
+            m,
+            "surge arrester FV1 tripped",
+            Src::Contact(fv, true),
+        );
+        self.input(
+            &format!("{p}_FU1_Pretavena_pojistka"),
+            m,
+            "fuse FU1 blown",
+            Src::Contact(fu, true),
+        );
+        self.input(
+            &format!("{p}_U"),
+            m,
+            "busbar voltage",
+            Src::BusVoltage(b_bus, 400.0),
+        );
+        self.input(
+            &format!("{p}_P_kW"),
+            m,
+            "active power of the board's own load",
+            Src::BoardPower(bd),
+        );
+        self.input(
+            &format!("{p}_I_A"),
+            m,
+            "phase current (three-phase, from power and voltage)",
+            Src::BoardCurrent(bd),
+        );
+        self.input(
+            &format!("{p}_Energie_kWh"),
+            m,
+            "energy meter",
+            Src::BoardEnergy(bd),
+        );
+    }
+
+    /// RH2 / RZZ pattern (also RH1.2 and RZS2); returns the five feeder buses of
+    /// FA1.1..FA1.5.
     fn logo_board(
         &mut self,
         p: &str,

@@ -1,5 +1,7 @@
-//! The Vsetín railway station plant: supplies, transformers, boards RH1.1, RH2, RZZ, RDA,
-//! RZS1, the diesel generator set, 12 lighting towers (ROV) and the OŘ-area lighting.
+//! The Vsetín railway station plant: the 6 kV switchroom R6 with its by-pass RS602,
+//! transformers, boards RH1.1, RH1.2, RH2, RZZ, RDA, RZS1, RZS2 (TO), RH and RZS in DT, the
+//! universal source of the signalling equipment, the diesel generator set, 12 lighting
+//! towers (ROV) and the OŘ-area lighting.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt;
@@ -94,12 +96,24 @@ struct BreakerDev {
     board: Option<usize>,
     tripped: bool,
     both_coils: bool,
+    /// A breaker that must be open before this one closes by hand (RS602 and the
+    /// switchroom's transformer feeder R6_Q3 lock each other out).
+    interlock: Option<usize>,
 }
 
 #[derive(Debug, Clone, Copy)]
 enum Coil {
     Output(usize),
     ManualSwitch(usize),
+    /// The changeover of a two-input supply (the signalling equipment's universal source):
+    /// energised while the relay `own` sees its input, the relay `yields_to` (the
+    /// preferred input's) does not, and the contactor `interlock` (the other input's) is
+    /// open, so the two inputs are never closed together (break before make).
+    Changeover {
+        own: usize,
+        yields_to: Option<usize>,
+        interlock: usize,
+    },
 }
 
 #[derive(Debug, Clone)]
@@ -372,8 +386,20 @@ impl VsetinPlant {
             gen_start: None,
         };
         p.build();
+        // Start in the steady state: relays already follow what they sense, and the
+        // contactors their relays drive (the universal source's changeover) have followed
+        // them; the PLC-driven coils are all off at time zero, so those stay open.
+        for _ in 0..2 {
+            p.settle();
+            for r in &mut p.relays {
+                r.dev.complete();
+            }
+            p.settle();
+            for c in &mut p.contactors {
+                c.dev.complete();
+            }
+        }
         p.settle();
-        // Start in the steady state: relays already follow what they sense.
         for r in &mut p.relays {
             r.dev.complete();
         }
@@ -455,6 +481,19 @@ impl VsetinPlant {
             let coil = match c.coil {
                 Coil::Output(o) => self.out_eff(Some(o)),
                 Coil::ManualSwitch(l) => self.lights.get(l).is_some_and(|l| l.manual_switch),
+                Coil::Changeover {
+                    own,
+                    yields_to,
+                    interlock,
+                } => {
+                    let relay = |r: usize| self.relays.get(r).is_some_and(|r| r.dev.value());
+                    relay(own)
+                        && !yields_to.is_some_and(relay)
+                        && !self
+                            .contactors
+                            .get(interlock)
+                            .is_some_and(|k| k.dev.value())
+                }
             } && !self.board_estop(c.estop_board);
             if let Some(c) = self.contactors.get_mut(i) {
                 c.dev.drive(now, coil);
@@ -1003,6 +1042,16 @@ impl VsetinPlant {
             if close && b.tripped {
                 return Err(PlantError::Refused(format!(
                     "{name}: tripped by its protection; clear the fault to reclose"
+                )));
+            }
+            let locked_by = b
+                .interlock
+                .and_then(|x| self.breakers.get(x))
+                .filter(|x| x.dev.closed());
+            if let (true, Some(other)) = (close, locked_by) {
+                return Err(PlantError::Refused(format!(
+                    "{name}: interlocked while {} is closed; open it first",
+                    other.name
                 )));
             }
             if let Some(b) = self.breakers.get_mut(i) {

@@ -407,22 +407,22 @@ fn board_binds(b: &str, program: &str) -> Vec<Bind> {
     binds
 }
 
-fn add_rh2(st: &mut Station) {
+/// A LOGO! power board (RH2, RZZ, RH12, RZS2): each its own PLC running `LogoBoard`.
+fn add_logo_board(st: &mut Station, board: &str) {
     st.add(
-        "RH2",
-        &["rh2_logic.st"],
-        "RH2Logic",
-        board_binds("RH2", "RH2Logic"),
+        board,
+        &["logo_board.st"],
+        "LogoBoard",
+        board_binds(board, "LogoBoard"),
     );
 }
 
+fn add_rh2(st: &mut Station) {
+    add_logo_board(st, "RH2");
+}
+
 fn add_rzz(st: &mut Station) {
-    st.add(
-        "RZZ",
-        &["rzz_logic.st"],
-        "RZZLogic",
-        board_binds("RZZ", "RZZLogic"),
-    );
+    add_logo_board(st, "RZZ");
 }
 
 fn add_rda(st: &mut Station) {
@@ -886,7 +886,7 @@ fn pulse(st: &mut Station, node: &str, cmd: &str) {
 
 #[test]
 fn rh2_and_rzz_remote_commands_operate_qf1_only_in_remote() {
-    for (board, program) in [("RH2", "RH2Logic"), ("RZZ", "RZZLogic")] {
+    for (board, program) in [("RH2", "LogoBoard"), ("RZZ", "LogoBoard")] {
         let mut st = Station::new(VsetinPlant::new(), ms(10));
         add_rh2(&mut st);
         add_rzz(&mut st);
@@ -934,7 +934,7 @@ fn rh2_and_rzz_emergency_off_trips_through_the_logo() {
     // Without the hard-wired release, only the LOGO! program opens the feeder.
     let mut cfg = StationConfig::default();
     cfg.estop_trips_feeder = false;
-    for (board, program) in [("RH2", "RH2Logic"), ("RZZ", "RZZLogic")] {
+    for (board, program) in [("RH2", "LogoBoard"), ("RZZ", "LogoBoard")] {
         let mut st = Station::new(VsetinPlant::with_config(cfg.clone()), ms(10));
         add_rh2(&mut st);
         add_rzz(&mut st);
@@ -1218,11 +1218,13 @@ fn whole_station_every_plant_output_is_driven_by_one_controller() {
     add_rh2(&mut st);
     add_rzz(&mut st);
     add_rda(&mut st);
+    add_logo_board(&mut st, "RH12");
+    add_logo_board(&mut st, "RZS2");
     for b in lighting_boards() {
         add_lighting(&mut st, &b);
     }
     add_rdrt(&mut st);
-    assert_eq!(st.nodes.len(), 17);
+    assert_eq!(st.nodes.len(), 19);
     let mut driven: Vec<String> = st
         .nodes
         .iter()
@@ -1250,6 +1252,8 @@ fn whole_station_every_plant_output_is_driven_by_one_controller() {
     st.run_for(s(30));
     assert!(st.sig("RDA_KM1_Zapnut"));
     assert!(st.sig("RH2_QF1_Zapnut") && st.sig("RZZ_QF1_Zapnut"));
+    assert!(st.sig("RH12_QF1_Zapnut") && st.sig("RZS2_QF1_Zapnut"));
+    assert!(st.sig("UZ_K1_Zapnut") && !st.sig("UZ_K2_Zapnut") && st.sig("UZ_Vystup"));
     for b in lighting_boards() {
         assert!(st.sig(&format!("{b}_PrRele")), "{b}");
     }

@@ -57,7 +57,7 @@ fn signal_names_are_unique_and_cover_the_rh2_tag_list() {
         .filter(|s| s.direction == Direction::Output)
         .map(|s| s.name.as_str())
         .collect();
-    assert_eq!(outputs.len(), 4 + 3 + 13);
+    assert_eq!(outputs.len(), 2 * 4 + 3 + 13);
     assert_eq!(p.outputs().len(), outputs.len());
     assert_eq!(p.inputs().len() + outputs.len(), p.signals().len());
     println!("{} signals ({} outputs)", p.signals().len(), outputs.len());
@@ -196,7 +196,8 @@ fn expand(pat: &str) -> Vec<String> {
         let end = start + pat[start..].find('}').unwrap();
         let (head, key, tail) = (&pat[..start], &pat[start + 1..end], &pat[end + 1..]);
         let subs: Vec<String> = match key {
-            "B" => vec!["RH2".into(), "RZZ".into()],
+            "B" => ["RH2", "RZZ", "RH12", "RZS2"].map(String::from).to_vec(),
+            "D" => ["RHDT", "RZSDT"].map(String::from).to_vec(),
             "L" => plant::lighting_boards(),
             range => {
                 let (a, b) = range.split_once("..").unwrap();
@@ -280,14 +281,24 @@ fn short_device_names_resolve_when_unique() {
         Err(PlantError::AmbiguousDevice {
             kind: "breaker",
             name: "QF1".into(),
-            candidates: vec!["RH11_QF1".into(), "RH2_QF1".into(), "RZZ_QF1".into()],
+            candidates: [
+                "RH11_QF1",
+                "RH12_QF1",
+                "RH2_QF1",
+                "RHDT_QF1",
+                "RZS2_QF1",
+                "RZSDT_QF1",
+                "RZZ_QF1",
+            ]
+            .map(String::from)
+            .to_vec(),
         })
     );
     let message = p
         .operate(Action::Close("QF1".into()))
         .unwrap_err()
         .to_string();
-    assert!(message.contains("RH2_QF1, RZZ_QF1"), "{message}");
+    assert!(message.contains("RH2_QF1, RHDT_QF1"), "{message}");
 
     p.inject(Fault::ModulePulled("p9".into())).unwrap();
     p.inject(Fault::BreakerTripped("RH11".into())).unwrap();

@@ -57,17 +57,19 @@ fn demo_serves_the_station_to_dispatch() {
         .filter(|line| line["cot"] == "inrogen")
         .filter_map(|line| line["ioa"].as_u64())
         .collect();
-    // The whole station: the TC700's own points, the boards behind both concentrators
-    // (RH2 at the thesis' addresses) and the thirteen lighting boards.
+    // The whole station: the TC700's own points, the concentrators' own I/O and the boards
+    // behind them (RH2 at the thesis' addresses), the boards in DT and the thirteen
+    // lighting boards.
     for ioa in [
-        1, 10, 21, 32, 33, 50, 62, 280, 281, 298, 381, 398, 401, 415, 10_101, 10_111, 11_332,
+        1, 10, 21, 32, 33, 34, 35, 50, 62, 201, 208, 216, 280, 281, 298, 320, 338, 341, 348, 381,
+        398, 401, 415, 440, 458, 501, 514, 601, 614, 10_101, 10_111, 11_332,
     ] {
         assert!(
             interrogated.contains(&ioa),
             "IOA {ioa} missing: {interrogated:?}"
         );
     }
-    assert_eq!(interrogated.len(), 416);
+    assert_eq!(interrogated.len(), 507);
     // Every value is valid: the links below RDRT, on TLS, are all up.
     let invalid = invalid_of(&output.stdout);
     assert!(invalid.is_empty(), "{invalid:?}");

@@ -230,7 +230,10 @@ fn the_console_names_the_devices_and_accepts_unique_short_names() {
 
     type_line(&mut station, "close QF1");
     let refused = wait_for_line(&lines, "error: `QF1` could be");
-    assert!(refused.contains("RH11_QF1, RH2_QF1, RZZ_QF1"), "{refused}");
+    assert!(
+        refused.contains("RH11_QF1, RH12_QF1, RH2_QF1, RHDT_QF1, RZS2_QF1, RZSDT_QF1, RZZ_QF1"),
+        "{refused}"
+    );
 
     type_line(&mut station, "stuck-open rh2_fa1.1");
     wait_for_line(&lines, "ok: stuck-open rh2_fa1.1");

@@ -31,7 +31,7 @@
 //! name = "RH1.1"                       # unique
 //! description = "main board concentrator (S7-1500)"   # optional
 //! common_address = 11                  # 1..=65534
-//! sources = ["plc/rh2_logic.st"]       # ST files relative to the project; must exist
+//! sources = ["plc/logo_board.st"]       # ST files relative to the project; must exist
 //!
 //! [node.server]                        # optional: the node's IEC 104 server
 //! port_offset = 7                      # unique among the nodes
@@ -60,7 +60,7 @@
 //! name = "fast"
 //! interval_ms = 50                     # >= 1
 //! priority = 1                         # 0..=255, default 0
-//! programs = ["RH2Logic"]              # PROGRAM names declared in the node's sources
+//! programs = ["LogoBoard"]              # PROGRAM names declared in the node's sources
 //! watchdog_ms = 200                    # optional
 //!
 //! [node.set]                           # optional: PLC values written after the cold start
@@ -96,7 +96,7 @@
 //!                                      # or, real I/O: device = "LOGO_RH2" (a [[node.device]]
 //!                                      # with items, e.g. kind "s7"), item = "I0.1" and
 //!                                      # direction = "input" | "output"
-//! variable = "RH2Logic.SA1_Dalkove"    # or a direct address of the process image
+//! variable = "LogoBoard.SA1_Dalkove"    # or a direct address of the process image
 //!                                      # (`%IX0.4`, `%ID4`, `%QX1.2`) for a program that
 //!                                      # reads its I/O through `AT` variables; a REAL
 //!                                      # signal is rounded into an integer address
@@ -105,7 +105,7 @@
 //! name = "RH2_V1_FA1_Zapnut"           # unique per node
 //! type = "M_SP_TB_1"                   # a monitor-direction type (1..=40)
 //! ioa = 281                            # 1..=16_777_215, unique per node among points
-//! source = "RH2Logic.FA1_Zapnut"       # a PLC variable path, or "link:LINK/IOA": the point
+//! source = "LogoBoard.FA1_Zapnut"       # a PLC variable path, or "link:LINK/IOA": the point
 //!                                      # IOA of the node behind the link LINK of this node;
 //!                                      # omitted for a link's status_point (M_SP_NA_1 or
 //!                                      # M_SP_TB_1, TRUE = link down); or a direct address
@@ -122,9 +122,9 @@
 //! name = "RH2_VypnoutQF1"              # unique per node
 //! type = "C_SC_NA_1"                   # a command type (45..=64)
 //! ioa = 2021                           # unique per node among commands
-//! target = "RH2Logic.Cmd_VypnoutQF1"   # a PLC variable, or "link:LINK/IOA" to forward it down
+//! target = "LogoBoard.Cmd_VypnoutQF1"   # a PLC variable, or "link:LINK/IOA" to forward it down
 //! select_required = false              # default false
-//! remote_enable = "RH2Logic.SA1_Dalkove"   # optional BOOL variable; FALSE (local mode):
+//! remote_enable = "LogoBoard.SA1_Dalkove"   # optional BOOL variable; FALSE (local mode):
 //!                                          # remote commands are refused
 //! pulse_ms = 500                       # optional, single/double commands on a variable:
 //!                                      # reset to FALSE after this time
@@ -516,7 +516,7 @@ pub struct TaskConfig {
 pub struct IoBinding {
     /// Where the value comes from (or, for a plant output, goes to).
     pub source: IoSource,
-    /// The PLC variable path, e.g. `RH2Logic.SA1_Dalkove`, or a direct address of the
+    /// The PLC variable path, e.g. `LogoBoard.SA1_Dalkove`, or a direct address of the
     /// process image (`%ID4`).
     pub variable: String,
     /// A factor an input's value is multiplied by before the PLC gets it.

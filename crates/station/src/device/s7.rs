@@ -14,7 +14,7 @@
 //! device = "LOGO_RH2"
 //! item = "I0.1"                     # an S7 absolute address, typed with :INT, :REAL ...
 //! direction = "input"               # read every cycle into the PLC variable
-//! variable = "RH2Logic.QF1_Zapnut"
+//! variable = "LogoBoard.QF1_Zapnut"
 //! ```
 //!
 //! Settings: `connect` (host, port 102 unless given; or `node:NAME`, the S7 server of a

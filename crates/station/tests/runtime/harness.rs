@@ -114,11 +114,19 @@ impl Received {
         }
     }
 
+    /// A short floating-point measurement's value.
+    pub(crate) fn real(&self) -> Option<f32> {
+        match self.element {
+            Element::Float { value, .. } => Some(value),
+            _ => None,
+        }
+    }
+
     pub(crate) fn invalid(&self) -> bool {
         match &self.element {
-            Element::SinglePoint { quality, .. } | Element::DoublePoint { quality, .. } => {
-                quality.invalid
-            }
+            Element::SinglePoint { quality, .. }
+            | Element::DoublePoint { quality, .. }
+            | Element::Float { quality, .. } => quality.invalid,
             _ => false,
         }
     }

@@ -20,3 +20,4 @@ mod sorting_lab;
 mod time;
 mod tls;
 mod vsetin_s7;
+mod whole_station;

@@ -2,7 +2,8 @@
 //! connections (the railway-station thesis, section 3.3). A breaker change at the
 //! simulated LOGO! of RH2 reaches dispatch over IEC 104 through RH1.1's S7 server and
 //! RDRT, and a dispatch command reaches the LOGO!'s output through the concentrator's
-//! markers; the board's S7 connection lost, its points are invalid at dispatch.
+//! markers; the board's S7 connection lost, its points are invalid at dispatch. RH1.2 and
+//! RZS2 do the same on the connections with ID 100.
 
 use std::time::Duration;
 
@@ -62,6 +63,13 @@ async fn a_logo_on_s7_reports_to_dispatch_and_takes_its_commands() {
                     .last(381)
                     .is_some_and(|r| r.on() == Some(true) && !r.invalid())
                 && dispatch.last(401).is_some_and(|r| !r.invalid())
+                // RH1.2 and RZS2 on the connections with ID 100 (TSAP 0100)
+                && dispatch.last(320).and_then(|r| r.on()) == Some(false)
+                && dispatch
+                    .last(331)
+                    .is_some_and(|r| r.on() == Some(true) && !r.invalid())
+                && dispatch.last(440).and_then(|r| r.on()) == Some(false)
+                && dispatch.last(451).is_some_and(|r| !r.invalid())
         },
     )
     .await;
@@ -91,6 +99,15 @@ async fn a_logo_on_s7_reports_to_dispatch_and_takes_its_commands() {
         .await
         .unwrap();
     assert!(!feeder_closed, "the LOGO! opened QF1");
+    // The same through RH1.2's markers (M34.0, IOA 2061).
+    assert!(dispatch.single_command(2061, true, false).await);
+    advance_until(
+        &runtime,
+        Duration::from_millis(100),
+        "RH1.2's busbar voltage lost",
+        || dispatch.last(331).and_then(|r| r.on()) == Some(false),
+    )
+    .await;
 
     // The board's S7 connection lost: COMM_RH2 at dispatch, RH2's points invalid.
     for device in &runtime.node("RH2").unwrap().devices {

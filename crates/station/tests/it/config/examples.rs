@@ -12,8 +12,11 @@ fn vsetin_example_loads() {
     };
     assert_eq!(project.station.name, "Vsetín");
     let names: Vec<&str> = project.nodes.iter().map(|n| n.name.as_str()).collect();
-    assert_eq!(&names[..6], ["RDRT", "RH1.1", "RH2", "RZS1", "RZZ", "RDA"]);
-    assert_eq!(names.len(), 6 + 13);
+    assert_eq!(
+        &names[..10],
+        ["RDRT", "RH1.1", "RH2", "RH1.2", "RZS1", "RZZ", "RZS2", "RDA", "RH-DT", "RZS-DT"]
+    );
+    assert_eq!(names.len(), 10 + 13);
     assert!(names.contains(&"ROV12") && names.contains(&"OR"));
 
     let rh2 = project.node("RH2").unwrap();
@@ -42,24 +45,39 @@ fn vsetin_example_loads() {
     );
     assert_eq!(
         rh2.commands[0].target,
-        CommandTarget::Variable("RH2Logic.Cmd_VypnoutQF1".into())
+        CommandTarget::Variable("LogoBoard.Cmd_VypnoutQF1".into())
     );
-    assert_eq!(rh2.tasks[0].programs, ["RH2Logic"]);
+    assert_eq!(rh2.tasks[0].programs, ["LogoBoard"]);
 
-    // RH1.1 republishes RH2 whole (same IOAs) beside its own link status point 280.
+    // RH1.1 republishes RH2 whole (same IOAs) and RH1.2 shifted by 40, beside its own
+    // I/O (201-216) and its link status points 280 and 320.
     let rh11 = project.node("RH1.1").unwrap();
-    assert_eq!(rh11.points.len(), 23);
-    assert_eq!(rh11.points[0].source, PointSource::LinkStatus("RH2".into()));
-    assert_eq!(rh11.link("RH2").unwrap().republish, Some(0));
+    assert_eq!(rh11.points.len(), 14 + 2 * (1 + 22));
     assert_eq!(
-        rh11.points[1].source,
+        rh11.point("COMM_RH2").unwrap().source,
+        PointSource::LinkStatus("RH2".into())
+    );
+    assert_eq!(rh11.link("RH2").unwrap().republish, Some(0));
+    assert_eq!(rh11.link("RH1.2").unwrap().republish, Some(40));
+    assert_eq!(
+        rh11.point("RH2_V1_FA1_Zapnut").unwrap().source,
         PointSource::Link {
             link: "RH2".into(),
             ioa: 281
         }
     );
+    assert_eq!(rh11.point("RH12_V1_FA1_Zapnut").unwrap().ioa.get(), 321);
     assert_eq!(
-        rh11.commands[1].target,
+        rh11.point("RS602_Zapnut").unwrap().source,
+        PointSource::Variable("RH11Concentrator.RS602_Zapnut".into())
+    );
+    let close_qf1 = rh11
+        .commands
+        .iter()
+        .find(|c| c.name == "RH2_ZapnoutQF1")
+        .unwrap();
+    assert_eq!(
+        close_qf1.target,
         CommandTarget::Link {
             link: "RH2".into(),
             ioa: Ioa::from(2022u16)
@@ -99,7 +117,30 @@ fn vsetin_example_loads() {
         .map(|c| c.ioa.get())
         .collect();
     assert_eq!(forwarded, [2021, 2022]);
-    assert_eq!(rdrt.points.len(), 416);
+    // The whole station: RH1.2 and RZS2 through their concentrators, the DT boards on
+    // links of their own, the by-pass and the signalling supply.
+    for (name, ioa) in [
+        ("RH12_V1_FA1_Zapnut", 321),
+        ("COMM_RH12", 320),
+        ("RZS2_V1_FA1_Zapnut", 441),
+        ("COMM_RZS2", 440),
+        ("RS602_Zapnut", 208),
+        ("UZ_K2_Zapnut", 347),
+        ("RHDT_QF1_Zapnut", 501),
+        ("RZSDT_U", 611),
+        ("COMM_RH_DT", 34),
+        ("COMM_RZS_DT", 35),
+    ] {
+        assert_eq!(rdrt.point(name).unwrap().ioa.get(), ioa, "{name}");
+    }
+    let forwarded: Vec<u32> = rdrt
+        .commands
+        .iter()
+        .filter(|c| c.name.starts_with("RH12_") || c.name.starts_with("RZS2_"))
+        .map(|c| c.ioa.get())
+        .collect();
+    assert_eq!(forwarded, [2061, 2062, 2181, 2182]);
+    assert_eq!(rdrt.points.len(), 416 + 14 + 13 + 2 * 23 + 2 * 8 + 2);
     assert_eq!(
         rdrt.point("COMM_HMI").unwrap().source,
         PointSource::ClientStatus("hmi".into())

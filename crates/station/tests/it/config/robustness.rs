@@ -40,8 +40,8 @@ proptest! {
         let dir = folder(&kept[..end], &[]);
         std::fs::create_dir_all(dir.path().join("plc")).unwrap();
         std::fs::copy(
-            testkit::projects::vsetin().join("plc/rh2_logic.st"),
-            dir.path().join("plc/rh2_logic.st"),
+            testkit::projects::vsetin().join("plc/logo_board.st"),
+            dir.path().join("plc/logo_board.st"),
         )
         .unwrap();
         if let Err(errors) = Project::load(dir.path()) {
