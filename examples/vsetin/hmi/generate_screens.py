@@ -446,6 +446,15 @@ def rda():
 
 
 # ------------------------------------------------------------------------ RH1.1 and R6
+def screen_link(svg, x, y, label, screen, cls):
+    """A centred label, a link to `screen` unless it is None."""
+    if screen:
+        svg.open("a", href=f"#screen/{screen}")
+    svg.text(x, y, label, cls, "middle")
+    if screen:
+        svg.close("a")
+
+
 def rh11():
     svg = Svg("Vsetín — board RH1.1 and the 6 kV switchroom R6", 1200, 720)
     heading(svg, "Board RH1.1 and the 6 kV switchroom R6",
@@ -497,12 +506,7 @@ def rh11():
     for x, label, screen in [(780, "RDA (mains) ›", "rda"), (900, "RH1.2 ›", "rh12"), (1010, "RH in DT ›", "dt"),
                              (1110, "autoblock", None)]:
         svg.el("path", d=f"M {x} 390 V 410", class_="lv", data_energised="RH11_KHU1_Napeti_sit")
-        if screen:
-            svg.open("a", href=f"#screen/{screen}")
-            svg.text(x, 426, label, "label small", "middle")
-            svg.close("a")
-        else:
-            svg.text(x, 426, label, "label small", "middle")
+        screen_link(svg, x, 426, label, screen, "label small")
     indicator(svg, 800, 325, "RH11_FU1_Pretavena_pojistka", "fuse FU1 blown", "warn")
     indicator(svg, 800, 350, "RH11_FV1_Prepetova_ochrana", "surge arrester FV1 tripped", "warn")
     svg.close("g")
@@ -539,12 +543,7 @@ def rzs1():
     indicator(svg, 420, 185, "RZS1_FV1_Prepetova_ochrana", "surge arrester FV1 tripped", "warn")
     for x, label, screen in [(200, "RZS2 ›", "rzs2"), (400, "RZS in DT ›", "dt"), (600, "signalling (K2)", None)]:
         svg.el("path", d=f"M {x} 230 V 260", class_="lv", data_energised="RZS1_KHU1_Napeti")
-        if screen:
-            svg.open("a", href=f"#screen/{screen}")
-            svg.text(x, 278, label, "label", "middle")
-            svg.close("a")
-        else:
-            svg.text(x, 278, label, "label", "middle")
+        screen_link(svg, x, 278, label, screen, "label")
     svg.close("g")
     meters(svg, 830, 110, "RZS1", "Meter of RZS1")
 

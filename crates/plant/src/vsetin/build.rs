@@ -249,25 +249,7 @@ impl VsetinPlant {
             "fuse FU1 blown",
             Src::Contact(fu, true),
         );
-        self.input(
-            "RH11_U",
-            m,
-            "busbar voltage",
-            Src::BusVoltage(b_rh11, 400.0),
-        );
-        self.input(
-            "RH11_P_kW",
-            m,
-            "active power of the board's own load",
-            Src::BoardPower(bd),
-        );
-        self.input(
-            "RH11_I_A",
-            m,
-            "phase current (three-phase, from power and voltage)",
-            Src::BoardCurrent(bd),
-        );
-        self.input("RH11_Energie_kWh", m, "energy meter", Src::BoardEnergy(bd));
+        self.board_meter("RH11", m, b_rh11, bd);
         self.input(
             "R6_U",
             m,
@@ -448,20 +430,7 @@ impl VsetinPlant {
             "fuse FU1 blown",
             Src::Contact(fu, true),
         );
-        self.input("RZS1_U", m, "busbar voltage", Src::BusVoltage(b_rzs, 400.0));
-        self.input(
-            "RZS1_P_kW",
-            m,
-            "active power of the board's own load",
-            Src::BoardPower(bd),
-        );
-        self.input(
-            "RZS1_I_A",
-            m,
-            "phase current (three-phase, from power and voltage)",
-            Src::BoardCurrent(bd),
-        );
-        self.input("RZS1_Energie_kWh", m, "energy meter", Src::BoardEnergy(bd));
+        self.board_meter("RZS1", m, b_rzs, bd);
 
         // The signalling equipment's universal source (railway spec 2.2): fed from RZZ
         // (whose transformer T1 is the thesis's TZ1 6/0.4 kV from the 6 kV level), backed
@@ -645,6 +614,35 @@ impl VsetinPlant {
         );
     }
 
+    /// A board's meter on its module `m`: `{p}_U` (busbar voltage), `{p}_P_kW`, `{p}_I_A`
+    /// and `{p}_Energie_kWh` of the board `bd`'s own load.
+    fn board_meter(&mut self, p: &str, m: usize, bus: usize, bd: usize) {
+        self.input(
+            &format!("{p}_U"),
+            m,
+            "busbar voltage",
+            Src::BusVoltage(bus, 400.0),
+        );
+        self.input(
+            &format!("{p}_P_kW"),
+            m,
+            "active power of the board's own load",
+            Src::BoardPower(bd),
+        );
+        self.input(
+            &format!("{p}_I_A"),
+            m,
+            "phase current (three-phase, from power and voltage)",
+            Src::BoardCurrent(bd),
+        );
+        self.input(
+            &format!("{p}_Energie_kWh"),
+            m,
+            "energy meter",
+            Src::BoardEnergy(bd),
+        );
+    }
+
     /// A board in DT with its S7-1500's DI module `{p}_DI`: an incoming breaker QF1 (by
     /// hand) on a cable from `from`, voltage relay, surge arrester, fuse and meter.
     fn dt_board(&mut self, p: &str, b_from: usize, b_bus: usize, base_kw: f64, from: &str) {
@@ -679,30 +677,7 @@ impl VsetinPlant {
             "fuse FU1 blown",
             Src::Contact(fu, true),
         );
-        self.input(
-            &format!("{p}_U"),
-            m,
-            "busbar voltage",
-            Src::BusVoltage(b_bus, 400.0),
-        );
-        self.input(
-            &format!("{p}_P_kW"),
-            m,
-            "active power of the board's own load",
-            Src::BoardPower(bd),
-        );
-        self.input(
-            &format!("{p}_I_A"),
-            m,
-            "phase current (three-phase, from power and voltage)",
-            Src::BoardCurrent(bd),
-        );
-        self.input(
-            &format!("{p}_Energie_kWh"),
-            m,
-            "energy meter",
-            Src::BoardEnergy(bd),
-        );
+        self.board_meter(p, m, b_bus, bd);
     }
 
     /// RH2 / RZZ pattern (also RH1.2 and RZS2); returns the five feeder buses of
@@ -842,30 +817,7 @@ impl VsetinPlant {
             "feeder breaker QF1 closed (auxiliary contact; not in the thesis tag list)",
             Src::BreakerClosed(qf),
         );
-        self.input(
-            &format!("{p}_U"),
-            m,
-            "busbar voltage",
-            Src::BusVoltage(b_bus, 400.0),
-        );
-        self.input(
-            &format!("{p}_P_kW"),
-            m,
-            "active power of the board's own load",
-            Src::BoardPower(bd),
-        );
-        self.input(
-            &format!("{p}_I_A"),
-            m,
-            "phase current (three-phase, from power and voltage)",
-            Src::BoardCurrent(bd),
-        );
-        self.input(
-            &format!("{p}_Energie_kWh"),
-            m,
-            "energy meter",
-            Src::BoardEnergy(bd),
-        );
+        self.board_meter(p, m, b_bus, bd);
         feeders
     }
 

@@ -11,16 +11,6 @@ use station::store::{EventQuery, Order};
 
 use crate::harness::*;
 
-fn rdrt_address(runtime: &station::runtime::Runtime) -> std::net::SocketAddr {
-    runtime
-        .node("RDRT")
-        .unwrap()
-        .server
-        .as_ref()
-        .unwrap()
-        .local_addr()
-}
-
 /// (value, time tag in ms since the epoch) of a single point received with a CP56 tag.
 fn value_and_time(r: &Received) -> (bool, i64) {
     let Some(TimeTag::Cp56(tag)) = r.time else {

@@ -87,6 +87,17 @@ pub(crate) async fn advance_until(
 }
 
 /// Waits until every link of every node is up.
+/// The address of the Vsetín top node RDRT's IEC 104 server (where dispatch connects).
+pub(crate) fn rdrt_address(runtime: &Runtime) -> std::net::SocketAddr {
+    runtime
+        .node("RDRT")
+        .unwrap()
+        .server
+        .as_ref()
+        .unwrap()
+        .local_addr()
+}
+
 pub(crate) async fn links_up(runtime: &Runtime) {
     eventually("every link is up", || {
         runtime

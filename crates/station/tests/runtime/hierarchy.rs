@@ -9,16 +9,6 @@ use crate::harness::*;
 
 const RDRT_CA: u16 = 1;
 
-fn rdrt_address(runtime: &station::runtime::Runtime) -> std::net::SocketAddr {
-    runtime
-        .node("RDRT")
-        .unwrap()
-        .server
-        .as_ref()
-        .unwrap()
-        .local_addr()
-}
-
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn dispatch_reads_the_board_through_two_concentrators() {
     let runtime = start(vsetin_project(), StoreChoice::Disabled).await;

@@ -17,16 +17,6 @@ const ON_MAINS: u32 = 414;
 const ON_GENERATOR: u32 = 415;
 const RZS_DEAD: u32 = 416;
 
-fn rdrt_address(runtime: &station::runtime::Runtime) -> std::net::SocketAddr {
-    runtime
-        .node("RDRT")
-        .unwrap()
-        .server
-        .as_ref()
-        .unwrap()
-        .local_addr()
-}
-
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn mains_loss_transfers_to_the_generator_and_back_without_joining_sources() {
     let runtime = start(vsetin_project(), StoreChoice::Disabled).await;

@@ -8,7 +8,7 @@
 use std::time::Duration;
 
 use station::config::Project;
-use station::runtime::{Runtime, StoreChoice};
+use station::runtime::StoreChoice;
 
 use crate::harness::*;
 
@@ -31,16 +31,6 @@ fn project() -> Project {
         .unwrap_or(0)
         + 1;
     project.with_port_base(free_port_range(ports))
-}
-
-fn rdrt_address(runtime: &Runtime) -> std::net::SocketAddr {
-    runtime
-        .node("RDRT")
-        .unwrap()
-        .server
-        .as_ref()
-        .unwrap()
-        .local_addr()
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

@@ -22,16 +22,6 @@ const RZSDT_BUSBAR_LIVE: u32 = 602;
 const COMM_RH_DT: u32 = 34;
 const COMM_RZS_DT: u32 = 35;
 
-fn rdrt_address(runtime: &station::runtime::Runtime) -> std::net::SocketAddr {
-    runtime
-        .node("RDRT")
-        .unwrap()
-        .server
-        .as_ref()
-        .unwrap()
-        .local_addr()
-}
-
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_whole_station_reaches_dispatch() {
     let runtime = start(vsetin_project(), StoreChoice::Disabled).await;
