@@ -125,12 +125,33 @@ async fn run(samples: usize) {
     browser::login(&client, &url, "bench", "bench-password").await;
     client.goto(&format!("{url}/#screen/grid")).await.unwrap();
     let ready = Instant::now();
+    // The fill's stages, each printed when first seen: the page started, the screen drawn,
+    // the live snapshot in, the points known valid, every element showing its value.
+    let mut stages: Vec<(String, u128)> = Vec::new();
     loop {
-        let shown = js(
+        let state = js(
             &client,
-            "document.querySelectorAll('[data-point][data-value]').length",
+            "[document.body.dataset.ready === 'true', Boolean(document.querySelector('#mimic svg')),               Boolean(window.HMI && HMI.wsOpen), window.HMI ? HMI.points.size : 0,               window.HMI ? [...HMI.points.values()].filter(p => p.value !== null && !p.invalid).length : 0,               document.querySelectorAll('[data-point][data-value]').length]",
         )
         .await;
+        let names = [
+            "page started",
+            "screen drawn",
+            "live connection open",
+            "points known",
+            "points with a value",
+            "elements showing a value",
+        ];
+        for (i, name) in names.iter().enumerate() {
+            let reached = match &state[i] {
+                serde_json::Value::Bool(b) => *b,
+                other => other.as_u64() == Some(u64::from(POINTS)),
+            };
+            if reached && !stages.iter().any(|(n, _)| n == name) {
+                stages.push(((*name).to_owned(), ready.elapsed().as_millis()));
+            }
+        }
+        let shown = state[5].clone();
         if shown.as_u64() == Some(u64::from(POINTS)) {
             break;
         }
@@ -144,6 +165,11 @@ async fn run(samples: usize) {
         "HMI live path: IEC 104 outstation -> HMI -> WebSocket -> Chromium DOM; screen of {POINTS} bound elements ({} ms to fill)",
         ready.elapsed().as_millis()
     );
+    let stages: Vec<String> = stages
+        .iter()
+        .map(|(name, ms)| format!("{name} {ms} ms"))
+        .collect();
+    println!("  fill stages: {}", stages.join(", "));
     js(
         &client,
         "(() => { window.__seen = []; const target = document.querySelector('[data-point=\"P00001\"]');\

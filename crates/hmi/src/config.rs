@@ -154,6 +154,26 @@ pub struct AlarmConfig {
     /// Whether it needs an operator acknowledgement.
     #[serde(default)]
     pub acknowledge: bool,
+    /// Suppression by design (ISA-18.2): the alarm is suppressed while this point has
+    /// this state (a feeder alarm while its board is under local control on purpose).
+    #[serde(default)]
+    pub suppress_when: Option<AlarmCondition>,
+    /// The link point (`COMM_*`, TRUE while the link is lost) the alarm's point comes
+    /// through: while it is TRUE, and for the settle time after it returns, the alarm is
+    /// a consequence of the link's alarm and not raised on its own.
+    #[serde(default)]
+    pub link: Option<String>,
+}
+
+/// A single point having a state (`{ point = "...", state = true }`).
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AlarmCondition {
+    /// A single point of `points.csv`.
+    pub point: String,
+    /// The state (default TRUE).
+    #[serde(default = "yes")]
+    pub state: bool,
 }
 
 /// A lift of the fleet the lift screens show (`[[lift]]`): its points are `NAME.status`,
@@ -456,6 +476,28 @@ impl HmiConfig {
                     "priority",
                     format!("alarm on `{}`: priority is 1..=4", alarm.point),
                 ));
+            }
+            if let Some(condition) = &alarm.suppress_when {
+                if !single(&condition.point) {
+                    return Err(bad(
+                        "suppress_when",
+                        format!(
+                            "alarm on `{}`: suppression point `{}` is no single point",
+                            alarm.point, condition.point
+                        ),
+                    ));
+                }
+            }
+            if let Some(link) = &alarm.link {
+                if !single(link) || link == &alarm.point {
+                    return Err(bad(
+                        "link",
+                        format!(
+                            "alarm on `{}`: link point `{link}` is no other single point",
+                            alarm.point
+                        ),
+                    ));
+                }
             }
         }
         let mut lift_names = HashSet::new();

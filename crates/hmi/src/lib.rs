@@ -11,7 +11,9 @@
 //! - [`auth`]: sessions, CSRF tokens, login rate limit.
 //! - [`link`]: the IEC 104 link to the station, point table, controls with select-before-operate,
 //!   recording into the HMI's own event store.
-//! - [`alarms`]: raised/cleared alarms, acknowledgement, shelving.
+//! - [`alarms`]: raised/cleared alarms, acknowledgement, shelving, suppression, out of
+//!   service, the initial state after an interrogation, chattering and flood alarms, the
+//!   KPI report (ISA-18.2, EEMUA 191).
 //! - [`live`]: the messages of the live WebSocket (the browser's `HMI.receive`).
 //! - [`web`]: the axum router: pages, JSON API, WebSocket; the lift screens' API reads
 //!   the station's own store (the fault archive, the lifts' point history) when

@@ -28,7 +28,7 @@ use store::{
 };
 use tokio::sync::broadcast;
 
-use crate::alarms::{Alarm, Alarms};
+use crate::alarms::{kpi, Alarm, AlarmRefusal, Alarms, Shelve, SETTLE};
 use crate::config::{HmiConfig, PointRow};
 use crate::live::{LinkState, LiveMessage};
 
@@ -209,6 +209,7 @@ impl Station {
             Arc::new(Observer(Arc::clone(&station))),
         );
         let _ = station.link.set(link);
+        tokio::spawn(Station::alarm_clock(Arc::downgrade(&station)));
         station
     }
 
@@ -254,30 +255,130 @@ impl Station {
             .listed()
     }
 
-    /// Acknowledges an alarm.
+    /// Acknowledges an alarm, audited (ISA-18.2 keeps who acknowledged what).
     pub fn acknowledge(&self, id: usize, user: &str) -> Option<Alarm> {
-        let alarm = self
-            .alarms
-            .lock()
-            .unwrap_or_else(|p| p.into_inner())
-            .acknowledge(id)?;
-        tracing::info!(user, alarm = %alarm.text, "alarm acknowledged");
-        self.broadcast_alarm(&alarm);
+        let alarm = self.alarm_book().acknowledge(id)?;
+        self.audit_alarm(user, &alarm, true, "alarm acknowledged", None);
         Some(alarm)
     }
 
-    /// Shelves an alarm for `minutes` (0 unshelves).
-    pub fn shelve(&self, id: usize, minutes: u32, user: &str) -> Option<Alarm> {
-        let until =
-            (minutes > 0).then(|| Utc::now() + chrono::Duration::minutes(i64::from(minutes)));
+    fn alarm_book(&self) -> std::sync::MutexGuard<'_, Alarms> {
+        self.alarms.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// Shelves an alarm (ISA-18.2: timed or one-shot), audited.
+    pub fn shelve(
+        &self,
+        id: usize,
+        how: Shelve,
+        reason: Option<String>,
+        user: &str,
+    ) -> Result<Alarm, AlarmRefusal> {
+        let alarm = self.alarm_book().shelve(id, how, reason.clone(), user)?;
+        let how = match how {
+            Shelve::OneShot => "one-shot, until it returns to normal".to_owned(),
+            Shelve::Until(until) => format!("until {}", until.to_rfc3339()),
+        };
+        self.audit_alarm(user, &alarm, true, &format!("alarm shelved {how}"), reason);
+        Ok(alarm)
+    }
+
+    /// Unshelves an alarm by hand (it returns acknowledged), audited.
+    pub fn unshelve(&self, id: usize, user: &str) -> Result<Alarm, AlarmRefusal> {
+        let alarm = self.alarm_book().unshelve(id)?;
+        self.audit_alarm(user, &alarm, false, "alarm unshelved", None);
+        Ok(alarm)
+    }
+
+    /// Takes an alarm out of service, audited.
+    pub fn out_of_service(
+        &self,
+        id: usize,
+        reason: String,
+        user: &str,
+    ) -> Result<Alarm, AlarmRefusal> {
         let alarm = self
-            .alarms
-            .lock()
-            .unwrap_or_else(|p| p.into_inner())
-            .shelve(id, until)?;
-        tracing::info!(user, alarm = %alarm.text, minutes, "alarm shelved");
-        self.broadcast_alarm(&alarm);
-        Some(alarm)
+            .alarm_book()
+            .out_of_service(id, reason.clone(), user, Utc::now())?;
+        self.audit_alarm(
+            user,
+            &alarm,
+            true,
+            "alarm taken out of service",
+            Some(reason),
+        );
+        Ok(alarm)
+    }
+
+    /// Returns an alarm to service, audited.
+    pub fn in_service(&self, id: usize, user: &str) -> Result<Alarm, AlarmRefusal> {
+        let alarm = self.alarm_book().in_service(id, Utc::now())?;
+        self.audit_alarm(user, &alarm, false, "alarm returned to service", None);
+        Ok(alarm)
+    }
+
+    /// The alarm KPI report of `from..to`; `earlier`: the activations before the HMI's
+    /// own log, read from its store ([`kpi::stored_activations`]).
+    pub fn alarm_kpi(
+        &self,
+        earlier: Option<&[crate::alarms::Activation]>,
+        from: DateTime<Utc>,
+        to: DateTime<Utc>,
+    ) -> kpi::KpiReport {
+        kpi::report(&self.alarm_book(), earlier, from, to, Utc::now())
+    }
+
+    /// The HMI's own log of alarm activations starts then.
+    pub fn alarm_log_start(&self) -> DateTime<Utc> {
+        self.alarm_book().log_start()
+    }
+
+    /// Records an alarm-management action in the HMI's audit (the command records of its
+    /// store: the alarm's point, `true` for shelve / out of service, `false` for their
+    /// ends, the action and reason in the detail) and tells every browser.
+    fn audit_alarm(
+        &self,
+        user: &str,
+        alarm: &Alarm,
+        on: bool,
+        action: &str,
+        reason: Option<String>,
+    ) {
+        let detail = match &reason {
+            Some(reason) => format!("{action}: {} (reason: {reason})", alarm.text),
+            None => format!("{action}: {}", alarm.text),
+        };
+        tracing::info!(user, alarm = %alarm.text, %detail, "alarm management");
+        self.recorder.command(CommandRecord {
+            id: None,
+            time: Utc::now(),
+            actor: Actor::User(user.to_owned()),
+            node: self.node_label.clone(),
+            point: alarm.point.clone(),
+            ioa: None,
+            value: PointValue::Bool(on),
+            phase: CommandPhase::Execute,
+            outcome: CommandOutcome::Executed,
+            detail,
+        });
+        self.broadcast_alarm(alarm);
+    }
+
+    /// The alarm clock: ends timed shelves within a second of their time (ISA-18.2),
+    /// settle windows, chattering and floods. Runs while the station lives.
+    async fn alarm_clock(station: std::sync::Weak<Station>) {
+        let mut tick = tokio::time::interval(Duration::from_millis(200));
+        tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+        loop {
+            tick.tick().await;
+            let Some(station) = station.upgrade() else {
+                return;
+            };
+            let changed = station.alarm_book().tick(Utc::now());
+            for alarm in &changed {
+                station.broadcast_alarm(alarm);
+            }
+        }
     }
 
     /// Cuts the link to the station (a test of what the operator sees), or restores it.
@@ -331,6 +432,9 @@ impl Station {
         tracing::info!(up, "station link");
         self.broadcast(LiveMessage::Link(LinkState::of(self)));
         if up {
+            // The general interrogation follows at once: what it and the station's
+            // start-up image bring in the next seconds is the initial state, not a flood.
+            self.alarm_book().settle(Utc::now() + SETTLE);
             return;
         }
         // Every value is invalid at once: the operator must not act on stale values.
@@ -348,6 +452,17 @@ impl Station {
     }
 
     fn apply(&self, asdu: &Asdu) {
+        if asdu.type_id == TypeId::C_IC_NA_1
+            && asdu.cot.cause == iec60870::asdu::Cause::ACTIVATION_TERMINATION
+        {
+            // A long interrogation: the initial state lasts until a second after the end
+            // of the one that opened the window (a later one opens none).
+            let now = Utc::now();
+            let mut book = self.alarm_book();
+            if book.settling(now) {
+                book.settle(now + chrono::Duration::seconds(1));
+            }
+        }
         if asdu.cot.negative || !asdu.type_id.is_monitor() {
             return;
         }

@@ -102,10 +102,13 @@ pub enum LiveMessage {
     ///
     /// `{"type": "link", "up", "address"}`.
     Link(LinkState),
-    /// One alarm changed: raised, cleared, acknowledged or shelved.
+    /// One alarm changed: raised, cleared, acknowledged, shelved, suppressed, out of
+    /// service or back.
     ///
     /// `{"type": "alarm", "id", "point", "text", "priority", "raised", "cleared",
-    /// "acknowledged", "shelved_until", "active", "needs_acknowledgement"}` ([`Alarm`]);
+    /// "acknowledged", "shelved_until", "active", "needs_acknowledgement", "shelved",
+    /// "oneshot", "shelve_reason", "shelved_by", "suppressed", "out_of_service",
+    /// "consequence_of", "system"}` ([`Alarm`]);
     /// the browser replaces its copy of the alarm with that `id`.
     Alarm(Alarm),
     /// A user's control and what it came to (every browser hears of every control).
@@ -199,6 +202,8 @@ mod tests {
             priority: 2,
             text: "tripped".into(),
             acknowledge: true,
+            suppress_when: None,
+            link: None,
         }])
         .point("QF1", true, false, Utc::now())
         .remove(0);

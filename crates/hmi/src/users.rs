@@ -31,6 +31,9 @@ pub struct UserRecord {
     /// the first screen.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub start: Option<String>,
+    /// A locked user cannot log in (the record and its hash stay, for unlocking).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub locked: bool,
 }
 
 #[derive(Debug, Default, Serialize, Deserialize)]
@@ -148,8 +151,9 @@ impl Users {
 
     /// The level of a user whose password is right; `None` otherwise.
     pub fn verify(&self, name: &str, password: &str) -> Option<u8> {
+        // A locked user costs one verification like anybody, and gets no level.
         let (record_hash, level) = match self.users.get(name) {
-            Some(user) => (user.hash.as_str(), Some(user.level)),
+            Some(user) => (user.hash.as_str(), (!user.locked).then_some(user.level)),
             None => (self.decoy.as_str(), None),
         };
         let parsed = PasswordHash::new(record_hash).ok()?;
@@ -189,17 +193,74 @@ impl Users {
                 level,
                 hash: hash(password)?,
                 start: None,
+                locked: false,
             },
         );
         self.save()
     }
 
-    /// Removes a user.
+    /// Removes a user (the command line may remove anybody; the HMI's administration
+    /// asks [`Users::keep_an_administrator`] first).
     pub fn remove(&mut self, name: &str) -> Result<(), HmiError> {
         if self.users.remove(name).is_none() {
             return Err(HmiError::Users(format!("no user `{name}`")));
         }
         self.save()
+    }
+
+    /// Sets a user's level; never demotes the last unlocked level-9 user.
+    pub fn set_level(&mut self, name: &str, level: u8) -> Result<(), HmiError> {
+        if level > MAX_LEVEL {
+            return Err(HmiError::Users(format!(
+                "level {level} is above {MAX_LEVEL}"
+            )));
+        }
+        if !self.users.contains_key(name) {
+            return Err(HmiError::Users(format!("no user `{name}`")));
+        }
+        if level < MAX_LEVEL {
+            self.keep_an_administrator(name, "demoted")?;
+        }
+        if let Some(user) = self.users.get_mut(name) {
+            user.level = level;
+        }
+        self.save()
+    }
+
+    /// Locks or unlocks a user; never locks the last unlocked level-9 user.
+    pub fn set_locked(&mut self, name: &str, locked: bool) -> Result<(), HmiError> {
+        if !self.users.contains_key(name) {
+            return Err(HmiError::Users(format!("no user `{name}`")));
+        }
+        if locked {
+            self.keep_an_administrator(name, "locked")?;
+        }
+        if let Some(user) = self.users.get_mut(name) {
+            user.locked = locked;
+        }
+        self.save()
+    }
+
+    /// Refuses a change that would leave nobody unlocked at level 9 to administer the
+    /// users (`name` is the user about to be `what`).
+    pub fn keep_an_administrator(&self, name: &str, what: &str) -> Result<(), HmiError> {
+        let others = self
+            .users
+            .iter()
+            .filter(|(other, user)| {
+                other.as_str() != name && user.level == MAX_LEVEL && !user.locked
+            })
+            .count();
+        let is_administrator = self
+            .users
+            .get(name)
+            .is_some_and(|user| user.level == MAX_LEVEL && !user.locked);
+        if is_administrator && others == 0 {
+            return Err(HmiError::Users(format!(
+                "`{name}` is the last unlocked level-{MAX_LEVEL} user and cannot be {what}"
+            )));
+        }
+        Ok(())
     }
 
     /// Sets a user's password (and, optionally, level).
@@ -291,5 +352,34 @@ mod tests {
         )
         .unwrap();
         assert!(Users::load(&path).is_err());
+    }
+
+    #[test]
+    fn locking_and_levels_keep_an_administrator() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("users.toml");
+        let mut users = Users::load(&path).unwrap();
+        users.add("admin", 9, "long enough").unwrap();
+        users.add("novak", 3, "long enough").unwrap();
+        // The only administrator: never demoted or locked.
+        assert!(users.set_level("admin", 8).is_err());
+        assert!(users.set_locked("admin", true).is_err());
+        assert!(users.keep_an_administrator("admin", "removed").is_err());
+        assert!(users.keep_an_administrator("novak", "removed").is_ok());
+        assert!(users.set_level("novak", 10).is_err());
+        users.set_level("novak", 9).unwrap();
+        // Two now: either may go.
+        users.set_locked("admin", true).unwrap();
+        assert_eq!(users.verify("admin", "long enough"), None, "locked");
+        assert!(
+            users.set_locked("novak", true).is_err(),
+            "novak is the last unlocked one"
+        );
+        let reloaded = Users::load(&path).unwrap();
+        assert!(reloaded.record("admin").unwrap().locked);
+        assert_eq!(reloaded.verify("novak", "long enough"), Some(9));
+        users.set_locked("admin", false).unwrap();
+        assert_eq!(users.verify("admin", "long enough"), Some(9));
+        assert!(!std::fs::read_to_string(&path).unwrap().contains("locked"));
     }
 }

@@ -34,6 +34,7 @@ mod points;
 mod program;
 mod session;
 mod trends;
+mod users;
 
 use std::sync::{Arc, RwLock};
 
@@ -111,6 +112,7 @@ pub fn router(state: AppState) -> Router {
         .merge(events::routes())
         .merge(alarms::routes())
         .merge(trends::routes())
+        .merge(users::routes())
         .merge(lease::routes())
         .merge(choices::routes())
         .merge(program::routes())

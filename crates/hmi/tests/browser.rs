@@ -540,7 +540,7 @@ async fn operator_and_viewer_in_a_real_browser() {
     assert_eq!(cells[2], json!("RH2_VypnoutQF1"), "{cells}");
     assert_eq!(
         cells[4],
-        json!("operator"),
+        json!("HMI user operator"),
         "the event names the user: {cells}"
     );
     assert!(
@@ -1115,6 +1115,10 @@ async fn screenshots() {
     .await;
     tokio::time::sleep(Duration::from_secs(2)).await;
     click(&client, "#alarm-ack-all").await;
+    // "Acknowledge shown" asks first (nothing may wait: then it only says so).
+    if js(&client, "document.getElementById('alarm-ack-dialog').open").await == json!(true) {
+        click(&client, "#alarm-ack-confirm").await;
+    }
     tokio::time::sleep(Duration::from_secs(40)).await;
     site.operate("lamp-failure ROV03").await;
     site.operate("breaker-tripped RH2_FA1.3").await;

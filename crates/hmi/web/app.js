@@ -125,6 +125,21 @@ const HMI = (window.HMI = {
     if (typeof value === "number") return this.formatNumber(value);
     return String(value);
   },
+  /**
+   * A command someone sent, in words for a notice to the other users: its description
+   * ("open QF1") with the state sent ("on"/"off") or the number set; never a raw value.
+   */
+  commandSummary(name, value) {
+    const control = this.controls.get(name);
+    const what = (control && control.description) || name;
+    const type = (control && control.type) || "";
+    if (type.startsWith("C_SC") || type.startsWith("C_DC")) {
+      const on = type.startsWith("C_DC") ? value === 2 : value === true || value === 1;
+      return `${what}: ${on ? "on" : "off"}`;
+    }
+    if (typeof value === "number") return `${what} set to ${this.formatNumber(value)}`;
+    return what;
+  },
   pad(n, width = 2) {
     return String(n).padStart(width, "0");
   },
@@ -175,7 +190,8 @@ const HMI = (window.HMI = {
     const scheme = window.location.protocol === "https:" ? "wss:" : "ws:";
     let socket;
     try {
-      socket = new WebSocket(`${scheme}//${window.location.host}/api/live`);
+      // batch=1: the messages waiting at the server come together, as one JSON array.
+      socket = new WebSocket(`${scheme}//${window.location.host}/api/live?batch=1`);
     } catch (error) {
       this.scheduleReconnect();
       return;
@@ -191,7 +207,8 @@ const HMI = (window.HMI = {
       } catch (error) {
         return;
       }
-      this.receive(message);
+      if (Array.isArray(message)) for (const one of message) this.receive(one);
+      else this.receive(message);
     });
     socket.addEventListener("close", () => {
       if (this.ws !== socket) return;
@@ -240,7 +257,10 @@ const HMI = (window.HMI = {
         } else {
           this.loadAlarms();
         }
-        this.fillPointNames();
+        // The names' list (thousands of <option>s) waits for an idle moment: the
+        // screen's values come first.
+        if (window.requestIdleCallback) requestIdleCallback(() => this.fillPointNames(), { timeout: 3000 });
+        else setTimeout(() => this.fillPointNames(), 500);
         this.setOpen(true);
         this.emit("snapshot", message);
         this.emit("alarms", null);
@@ -279,7 +299,7 @@ const HMI = (window.HMI = {
       case "command": {
         this.emit("command", message);
         if (this.session && message.user !== this.session.user) {
-          this.toast(`${message.user}: ${message.command} = ${this.formatValue(message.value)} — ${this.outcomeWords(message.outcome)}`);
+          this.toast(`${message.user}: ${this.commandSummary(message.command, message.value)} — ${this.outcomeWords(message.outcome)}`);
         }
         break;
       }
@@ -320,6 +340,8 @@ const HMI = (window.HMI = {
   fillPointNames() {
     const list = document.getElementById("point-names");
     if (!list) return;
+    // Again after every snapshot: only when the names changed (thousands of options).
+    if (list.children.length === this.points.size + this.controls.size) return;
     const names = [...this.points.keys(), ...this.controls.keys()].sort();
     list.replaceChildren(...names.map((name) => this.el("option", { value: name })));
   },

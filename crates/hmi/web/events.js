@@ -1,6 +1,10 @@
 // Stanice web HMI — the event list: value changes and commands from the HMI's own event
-// store (GET /api/events), newest first, filtered by time, point (name or prefix*), kind
-// and user, paged with the server's `next` cursor over any length of history.
+// store and the station's command audit (GET /api/events: the commands of every IEC 104
+// client, dispatch's included, when the HMI reads the station's store), newest first,
+// filtered by time, point (name or prefix*), kind and user, paged with the server's `next`
+// cursor over any length of history. Columns: time, kind, point, value, origin (the HMI
+// user, or the client's address in the station's audit), outcome, reason (a refusal in
+// the station's words).
 "use strict";
 
 (function () {
@@ -55,8 +59,9 @@
       HMI.el("td", { class: isCommand ? "kind-command" : "", text: isCommand ? "command" : "value" }),
       HMI.el("td", { title: `IOA ${event.ioa}${description ? ` — ${description}` : ""}`, text: event.point }),
       HMI.el("td", { class: event.invalid ? "invalid" : "", text: value }),
-      HMI.el("td", { text: event.user || "" }),
-      HMI.el("td", { class: outcomeClass(event.outcome), title: event.detail || "", text: event.outcome ? `${event.outcome}${event.detail ? ` — ${event.detail}` : ""}` : "" }),
+      HMI.el("td", { class: "origin", title: event.source === "station" ? "from the station's command audit" : "", text: event.origin || event.user || "" }),
+      HMI.el("td", { class: outcomeClass(event.outcome), title: event.detail || "", text: event.outcome || "" }),
+      HMI.el("td", { class: "reason", text: event.reason || (event.outcome === "executed" ? "" : event.detail || "") }),
     );
   }
 
@@ -73,12 +78,15 @@
       cursors = cursors.slice(0, index + 1);
       if (next) cursors.push(next);
       const items = result.items || [];
+      const note = document.getElementById("events-note");
+      note.textContent = result.note ? `Note: ${result.note}.` : "";
+      note.hidden = !result.note;
       if (items.length) body.replaceChildren(...items.map(row));
-      else body.replaceChildren(HMI.el("tr", {}, HMI.el("td", { colspan: "6", class: "muted", text: "No events match." })));
+      else body.replaceChildren(HMI.el("tr", {}, HMI.el("td", { colspan: "7", class: "muted", text: "No events match." })));
       document.getElementById("events-page").textContent = `page ${page + 1}${items.length ? `, ${items.length} event(s)` : ""}`;
     } catch (error) {
       body.replaceChildren(
-        HMI.el("tr", {}, HMI.el("td", { colspan: "6", class: "muted", text: `Cannot load events: ${error.message}` })),
+        HMI.el("tr", {}, HMI.el("td", { colspan: "7", class: "muted", text: `Cannot load events: ${error.message}` })),
       );
       next = null;
     } finally {

@@ -41,6 +41,7 @@
   let linkElements = [];
   let commandElements = [];
   let showing = null;
+  let changes = new Map(); // point name -> {value, at: Date of the last change seen here, or null}
 
   // ------------------------------------------------------------------ loading a screen
   /**
@@ -71,7 +72,9 @@
         const value = attribute.value.trim().toLowerCase();
         if (name.startsWith("on")) element.removeAttribute(attribute.name);
         else if ((name === "href" || name.endsWith(":href")) && !value.startsWith("#")) element.removeAttribute(attribute.name);
-        else if (dangerousUrl(attribute.value)) element.removeAttribute(attribute.name);
+        // Every dangerous URL has a colon (the parser already decoded &#58;): the check
+        // runs only on those, which keeps a screen of 10,000 elements quick to load.
+        else if (attribute.value.includes(":") && dangerousUrl(attribute.value)) element.removeAttribute(attribute.name);
       }
     }
     return svg;
@@ -124,11 +127,79 @@
         localStorage.setItem("stanice.mimic", now ? "natural" : "fit");
       },
     });
-    box.replaceChildren(banner, HMI.el("div", { class: "mimic-tools" }, zoom), svgRoot);
+    const hint = HMI.el("span", { class: "hint", text: "drag or scroll to move, pinch to zoom" });
+    box.replaceChildren(banner, HMI.el("div", { class: "mimic-tools" }, hint, zoom), svgRoot);
     index();
     refreshAll();
+    fitReadable();
     const screen = HMI.screens.find((s) => s.id === id);
     if (screen) document.title = `${screen.title} — ${HMI.session.title || "Stanice HMI"}`;
+  }
+
+  // ------------------------------------------------------------------ phones
+  // On a narrow screen the drawing is not fitted to the width (a 1200-unit screen fitted to
+  // 390 px draws 13-px labels at 4 px): it is drawn at the scale where its smallest text is
+  // 12 px, panned inside its box by scrolling (touch) or dragging (mouse), and zoomed by
+  // the browser's pinch zoom. The Fit/1:1 toggle is for wide screens only.
+  const PHONE = window.matchMedia("(max-width: 760px)");
+  const READABLE_PX = 12;
+  function fitReadable() {
+    const box = document.getElementById("mimic");
+    const zoom = document.getElementById("mimic-zoom");
+    const hint = box.querySelector(".mimic-tools .hint");
+    const phone = PHONE.matches;
+    box.classList.toggle("readable", phone);
+    if (zoom) zoom.hidden = phone;
+    if (hint) hint.hidden = !phone;
+    if (!svgRoot) return;
+    if (!phone) {
+      svgRoot.style.width = "";
+      return;
+    }
+    const viewBox = svgRoot.viewBox && svgRoot.viewBox.baseVal;
+    const width = viewBox && viewBox.width ? viewBox.width : svgRoot.getBBox().width;
+    let smallest = Infinity;
+    for (const text of svgRoot.querySelectorAll("text")) {
+      if (!text.textContent.trim() && !text.hasAttribute("data-text") && !text.hasAttribute("data-link-status")) continue;
+      const size = parseFloat(getComputedStyle(text).fontSize);
+      if (size > 0 && size < smallest) smallest = size;
+    }
+    const scale = Number.isFinite(smallest) ? Math.max(1, READABLE_PX / smallest) : 1;
+    // A hair over, so that rounding never draws 11.99 px.
+    svgRoot.style.width = `${Math.ceil(width * scale * 1.01)}px`;
+  }
+  PHONE.addEventListener("change", fitReadable);
+
+  // Dragging the drawing with a mouse moves it inside its box; a drag is not a click.
+  let panned = false;
+  function panning(box) {
+    let start = null;
+    box.addEventListener("pointerdown", (event) => {
+      panned = false;
+      if (event.pointerType !== "mouse" || event.button !== 0) return;
+      if (box.scrollWidth <= box.clientWidth && box.scrollHeight <= box.clientHeight) return;
+      start = { x: event.clientX, y: event.clientY, left: box.scrollLeft, top: box.scrollTop };
+    });
+    box.addEventListener("pointermove", (event) => {
+      if (!start) return;
+      const dx = event.clientX - start.x;
+      const dy = event.clientY - start.y;
+      if (!panned && Math.hypot(dx, dy) < 6) return;
+      panned = true;
+      box.classList.add("panning");
+      box.scrollLeft = start.left - dx;
+      box.scrollTop = start.top - dy;
+    });
+    const end = () => {
+      start = null;
+      box.classList.remove("panning");
+      // The click that ends a drag comes right after pointerup: forget the drag after it.
+      setTimeout(() => {
+        panned = false;
+      }, 0);
+    };
+    box.addEventListener("pointerup", end);
+    box.addEventListener("pointercancel", end);
   }
 
   function index() {
@@ -362,7 +433,11 @@
       binding.apply(element, point);
       invalid = invalid || HMI.isInvalid(point);
     }
-    if (invalid) element.setAttribute("data-invalid", "true");
+    // Before the live connection first opened (the page is loading) nothing is marked
+    // lost: the values are not known yet, the banner says so, and a screen of thousands of
+    // blinking elements would only slow the first values down. A connection that closes
+    // later marks everything.
+    if (invalid && wasOpen !== null) element.setAttribute("data-invalid", "true");
     else element.removeAttribute("data-invalid");
   }
 
@@ -384,23 +459,121 @@
 
   function refreshAll() {
     if (!svgRoot) return;
-    for (const list of bound.values()) for (const element of list) refresh(element);
+    applied = new Map();
+    for (const [name, list] of bound) {
+      applied.set(name, drawnAs(HMI.points.get(name)));
+      for (const element of list) refresh(element);
+    }
     refreshLink();
+    showDialogState();
+    showFaceplate();
+  }
+
+  // Live updates are coalesced: a point message only notes the point's name; its elements
+  // are redrawn once, with the latest value, when the updates are applied. While the page
+  // is idle (nothing applied within the last frame) an update is applied at once, so a
+  // lone change shows without waiting; under a stream of updates they wait for the next
+  // animation frame and are applied together. A point whose value and validity are those
+  // already drawn is skipped.
+  const FRAME_MS = 16;
+  let pending = new Set(); // point names changed since the last apply
+  let pendingAll = false; // everything to redraw (snapshot, link, connection)
+  let frame = null; // the requested animation frame, if one is
+  let lastApplied = -Infinity; // performance.now() of the last apply
+  let applied = new Map(); // point name -> what its elements show ("value|invalid")
+
+  function drawnAs(point) {
+    if (!point) return "?";
+    return `${JSON.stringify(point.value)}|${HMI.isInvalid(point)}`;
+  }
+
+  function applyPending() {
+    frame = null;
+    lastApplied = performance.now();
+    const names = pending;
+    pending = new Set();
+    if (!svgRoot) return;
+    if (pendingAll) {
+      // The link or the connection changed: every element's validity may have; the
+      // comparison below still skips the ones drawn as they are.
+      pendingAll = false;
+      for (const name of bound.keys()) names.add(name);
+      refreshLink();
+      if (dialogState) names.add(dialogState.statePoint);
+      if (faceplateState) names.add(faceplateState.names[0]);
+    }
+    for (const name of names) {
+      const point = HMI.points.get(name);
+      const now = drawnAs(point);
+      if (applied.get(name) === now) continue;
+      applied.set(name, now);
+      for (const element of bound.get(name) || []) refresh(element);
+    }
+    if (dialogState && names.has(dialogState.statePoint)) showDialogState();
+    if (faceplateState && faceplateState.names.some((name) => names.has(name))) showFaceplate();
+  }
+
+  // The next frame, or FRAME_MS at the latest: a browser may hold animation frames back
+  // (headless, occluded), and a value must not wait for them.
+  let timer = null;
+  function applySoon() {
+    if (frame !== null) return;
+    const run = () => {
+      cancelAnimationFrame(frame);
+      clearTimeout(timer);
+      applyPending();
+    };
+    frame = requestAnimationFrame(run);
+    timer = setTimeout(run, FRAME_MS);
+  }
+
+  function scheduleApply() {
+    if (frame !== null) return;
+    if (performance.now() - lastApplied >= FRAME_MS) applyPending();
+    else applySoon();
+  }
+
+  function noteChange(point) {
+    const change = changes.get(point.name);
+    if (!change || JSON.stringify(change.value) !== JSON.stringify(point.value)) {
+      changes.set(point.name, { value: point.value, at: change ? new Date() : null });
+    }
   }
 
   HMI.on("point", (point) => {
+    noteChange(point);
     if (!svgRoot) return;
-    for (const element of bound.get(point.name) || []) refresh(element);
-    if (dialogState && dialogState.statePoint === point.name) showDialogState();
+    if (!bound.has(point.name) && !(dialogState && dialogState.statePoint === point.name) &&
+        !(faceplateState && faceplateState.names.includes(point.name))) return;
+    pending.add(point.name);
+    scheduleApply();
   });
-  HMI.on("snapshot", refreshAll);
-  HMI.on("link", refreshAll);
-  HMI.on("connection", refreshAll);
+  function redrawAll() {
+    pendingAll = true;
+    applySoon();
+  }
+  // A snapshot (on connecting, and again when this browser fell behind) redraws only the
+  // points whose value or validity differs from what is drawn.
+  HMI.on("snapshot", () => {
+    for (const point of HMI.points.values()) {
+      noteChange(point);
+      if (bound.has(point.name) && applied.get(point.name) !== drawnAs(point)) pending.add(point.name);
+    }
+    applySoon();
+  });
+  HMI.on("link", redrawAll);
+  let wasOpen = null;
+  HMI.on("connection", (open) => {
+    if (open === wasOpen) return;
+    wasOpen = open;
+    redrawAll();
+  });
 
   HMI.pages.screen = {
     show,
     hide() {
       showing = null;
+      closeFaceplate();
     },
   };
 
@@ -408,6 +581,8 @@
   const dialog = () => document.getElementById("control-dialog");
   let dialogState = null; // {control, element, value, statePoint, busy}
 
+  /** The words of a command's values: the element's data-on-label/data-off-label, else
+   * the words of the state point's element (data-on/data-off), else ON/OFF. */
   function valueChoices(control, element) {
     const fixed = element.getAttribute("data-command-value");
     const type = control.type || "";
@@ -415,14 +590,16 @@
     const offLabel = element.getAttribute("data-off-label") || "OFF";
     if (fixed !== null) {
       const value = Number(fixed);
-      const label = type.startsWith("C_SC") || type.startsWith("C_DC") ? (value ? onLabel : offLabel) : fixed;
-      return { kind: "fixed", options: [{ value, label: `${fixed} — ${label}` }] };
+      const label =
+        element.getAttribute("data-label") ||
+        (type.startsWith("C_SC") || type.startsWith("C_DC") || type.startsWith("C_RC") ? (value ? onLabel : offLabel) : fixed);
+      return { kind: "fixed", options: [{ value, label }] };
     }
     if (type.startsWith("C_SC")) {
-      return { kind: "choice", options: [{ value: 1, label: `1 — ${onLabel}` }, { value: 0, label: `0 — ${offLabel}` }] };
+      return { kind: "choice", options: [{ value: 1, label: onLabel }, { value: 0, label: offLabel }] };
     }
     if (type.startsWith("C_DC") || type.startsWith("C_RC")) {
-      return { kind: "choice", options: [{ value: 2, label: `2 — ${onLabel}` }, { value: 1, label: `1 — ${offLabel}` }] };
+      return { kind: "choice", options: [{ value: 2, label: onLabel }, { value: 1, label: offLabel }] };
     }
     return { kind: element.getAttribute("data-command-format") === "minutes" ? "minutes" : "number", options: [] };
   }
@@ -438,8 +615,7 @@
       target.textContent = "—";
       return;
     }
-    const value = HMI.formatValue(point.value, point.type);
-    target.textContent = `${point.description || point.name}: ${value}${HMI.isInvalid(point) ? " (invalid)" : ""}`;
+    target.textContent = `${point.description || point.name}: ${valueInWords(point)}${HMI.isInvalid(point) ? " (not valid now)" : ""}`;
   }
 
   function step(name) {
@@ -474,11 +650,11 @@
     const label = element.getAttribute("data-label");
     document.getElementById("control-title").textContent = label || control.description || name;
     document.getElementById("control-description").textContent = label && control.description ? control.description : "";
-    document.getElementById("control-name").textContent = `${name} (IOA ${control.ioa}, ${control.type})`;
+    document.getElementById("control-name").textContent = `${name} (IOA ${control.ioa}, ${typeWords(control.type)})`;
     showDialogState();
 
     const fieldset = document.getElementById("control-values");
-    const legend = HMI.el("legend", { text: "Value to send" });
+    const legend = HMI.el("legend", { text: "What to do" });
     const inputs = [];
     if (choices.kind === "fixed" || choices.kind === "choice") {
       choices.options.forEach((option, i) => {
@@ -520,11 +696,41 @@
     return Number.isFinite(value) ? value : null;
   }
 
+  /** The value chosen, in the dialog's words: the option's label, hh:mm, or the number with its unit. */
   function valueLabel(value) {
     const option = dialogState.choices.options.find((o) => o.value === value);
     if (option) return option.label;
-    if (dialogState.choices.kind === "minutes") return `${HMI.pad(Math.floor(value / 60))}:${HMI.pad(value % 60)} (${value} min)`;
-    return String(value);
+    if (dialogState.choices.kind === "minutes") return `${HMI.pad(Math.floor(value / 60))}:${HMI.pad(value % 60)}`;
+    const unit = dialogState.element.getAttribute("data-unit");
+    return unit ? `${HMI.formatNumber(value)} ${unit}` : HMI.formatNumber(value);
+  }
+
+  /** What the command does, for the dialog's sentences: the element's label or the command's description. */
+  function commandWords() {
+    const { control, element } = dialogState;
+    return element.getAttribute("data-label") || control.description || control.command;
+  }
+
+  /** The question before executing: hmi.toml's `confirm` for a command of one meaning, else built from the words. */
+  function question(value) {
+    const { control, choices } = dialogState;
+    const label = valueLabel(value);
+    if (choices.kind === "fixed") return control.confirm || (label.endsWith("?") ? label : `${label}?`);
+    if (choices.kind === "choice") {
+      const what = control.description || control.command;
+      return control.confirm ? `${control.confirm} — ${label}` : `${what}: ${label}?`;
+    }
+    const what = commandWords();
+    return control.confirm ? `${control.confirm} — set to ${label}` : `${what}: set to ${label}?`;
+  }
+
+  /** The outcome's subject: what was done, in words. */
+  function doneWords(value) {
+    const { choices } = dialogState;
+    const label = valueLabel(value);
+    if (choices.kind === "fixed") return label.replace(/\?$/, "");
+    if (choices.kind === "choice") return `${commandWords()}: ${label}`;
+    return `${commandWords()} set to ${label}`;
   }
 
   function toConfirm() {
@@ -535,10 +741,7 @@
     }
     dialogState.value = value;
     const { control } = dialogState;
-    const what = control.description || control.command;
-    document.getElementById("control-confirm").textContent = control.confirm
-      ? `${control.confirm} (value ${valueLabel(value)})`
-      : `Send “${what}” with value ${valueLabel(value)}?`;
+    document.getElementById("control-confirm").textContent = question(value);
     document.getElementById("control-sbo").hidden = !control.select;
     step("confirm");
     document.getElementById("control-execute").focus();
@@ -563,8 +766,9 @@
     const body = result.body || {};
     const word = body.outcome || (result.status === 403 ? "refused-permission" : "error");
     outcome.dataset.outcome = word;
+    const subject = doneWords(value);
     outcome.textContent =
-      word === "error" ? `Failed: ${body.error || body.detail || `HTTP ${result.status}`}` : `${control.command} = ${value}: ${HMI.outcomeWords(word)}`;
+      word === "error" ? `${subject}: failed — ${body.error || body.detail || `the HMI answered ${result.status}`}` : `${subject}: ${HMI.outcomeWords(word)}`;
     detail.textContent = body.detail || "";
     dialogState.busy = false;
     document.querySelector("#control-step-result button").focus();
@@ -573,6 +777,186 @@
   function close() {
     if (dialog().open) dialog().close();
     dialogState = null;
+  }
+
+  // ------------------------------------------------------------------ the faceplate
+  // A click on a bound element (one without data-command, which opens the control
+  // dialog) opens the faceplate of its point(s): name and description, the value in
+  // words, the quality in words, the time tag with date and zone, the source, the last
+  // change seen, and the commands whose state point it is. It stays open, following the
+  // value live, until closed (its button or Esc).
+  //
+  // The commands of a point: the elements of this screen with data-command whose
+  // data-state-point (or data-point) names the point, as buttons opening their control
+  // dialog; then the controls of hmi.toml whose `local_point` is the point (refused while
+  // it says local), named.
+  let faceplateState = null; // {element, names: [point names]}
+  const faceplate = () => document.getElementById("faceplate");
+
+  const TYPE_WORDS = {
+    M_SP: "single point",
+    M_DP: "double point",
+    M_ST: "step position",
+    M_BO: "bitstring",
+    M_ME_NA: "measured value, normalised",
+    M_ME_NB: "measured value, scaled",
+    M_ME_NC: "measured value, floating point",
+    M_IT: "integrated total (counter)",
+    C_SC: "single command",
+    C_DC: "double command",
+    C_RC: "regulating step command",
+    C_SE_NA: "setpoint, normalised",
+    C_SE_NB: "setpoint, scaled",
+    C_SE_NC: "setpoint, floating point",
+  };
+  /** The IEC type in words, with its mnemonic. */
+  function typeWords(type) {
+    if (!type) return "unknown type";
+    const key = Object.keys(TYPE_WORDS).find((prefix) => type.startsWith(prefix));
+    return key ? `${TYPE_WORDS[key]} (${type})` : type;
+  }
+
+  const QUALITY_WORDS = { IV: "invalid", NT: "not topical", SB: "substituted", BL: "blocked", OV: "overflow" };
+  /** The quality in words: good, or the flags set, with why the HMI does not trust it. */
+  function qualityWords(point) {
+    if (!point) return "unknown point";
+    if (!HMI.wsOpen) return "not current: no connection to the HMI server";
+    if (!HMI.link.up) return "invalid: the station link is down";
+    if (point.value === null || point.value === undefined) return "invalid: no value received yet";
+    const flags = (point.quality || []).map((flag) => QUALITY_WORDS[flag] || flag);
+    if (point.invalid && !flags.includes("invalid")) flags.unshift("invalid");
+    return flags.length ? flags.join(", ") : "good";
+  }
+
+  /** A time with its date and zone, e.g. 2026-11-27 13:55:03.120 UTC+01:00 (Europe/Prague). */
+  function timeWithZone(time) {
+    const d = time instanceof Date ? time : new Date(time);
+    if (Number.isNaN(d.getTime())) return String(time);
+    const minutes = -d.getTimezoneOffset();
+    const sign = minutes < 0 ? "-" : "+";
+    const offset = `UTC${sign}${HMI.pad(Math.floor(Math.abs(minutes) / 60))}:${HMI.pad(Math.abs(minutes) % 60)}`;
+    let zone = "";
+    try {
+      zone = Intl.DateTimeFormat().resolvedOptions().timeZone || "";
+    } catch (error) {
+      /* the offset says enough */
+    }
+    return `${HMI.formatTime(d, true)} ${offset}${zone ? ` (${zone})` : ""}`;
+  }
+
+  /** An element of this screen that words `name`'s values (data-on/data-off, data-unit, data-map). */
+  function wordingElement(name, preferred) {
+    const words = (element) =>
+      element &&
+      element.getAttribute("data-text") === name &&
+      ["data-on", "data-off", "data-unit", "data-map"].some((a) => element.getAttribute(a));
+    if (words(preferred)) return preferred;
+    return (bound.get(name) || []).find(words) || null;
+  }
+
+  /** A point's value in words: the screen's words for it, else on/off, open/closed/between/faulty, or the number with its unit. */
+  function valueInWords(point, preferred) {
+    if (!point || point.value === null || point.value === undefined) return "no value";
+    const element = wordingElement(point.name, preferred);
+    if (element) {
+      const text = textOf(element, point);
+      if (text !== "") return text;
+    }
+    if (typeof point.value === "boolean") return point.value ? "on" : "off";
+    if (point.type && point.type.startsWith("M_DP")) {
+      return ["between (intermediate position)", "open (off)", "closed (on)", "faulty (indeterminate)"][point.value] || "faulty";
+    }
+    return HMI.formatValue(point.value, point.type);
+  }
+
+  /** The point names an element shows, in the order of BINDINGS, each once. */
+  function pointNames(element) {
+    const names = [];
+    for (const binding of BINDINGS) {
+      const name = element.getAttribute(binding.attribute);
+      if (name && !names.includes(name)) names.push(name);
+    }
+    return names;
+  }
+
+  function commandsOf(name) {
+    const onScreen = svgRoot
+      ? [...svgRoot.querySelectorAll("[data-command]")].filter(
+          (element) => element.getAttribute("data-state-point") === name || element.getAttribute("data-point") === name,
+        )
+      : [];
+    const interlocked = [...HMI.controls.values()].filter((control) => control.local_point === name);
+    return { onScreen, interlocked };
+  }
+
+  function faceplateSection(name) {
+    const point = HMI.points.get(name);
+    const change = changes.get(name);
+    const facts = HMI.el("dl", { class: "facts" });
+    const fact = (term, text, key) => facts.append(HMI.el("dt", { text: term }), HMI.el("dd", { text, "data-fact": key }));
+    const preferred = faceplateState && faceplateState.element;
+    fact("Value", valueInWords(point, preferred), "value");
+    fact("Quality", qualityWords(point), "quality");
+    fact("Time tag", point && point.time ? timeWithZone(point.time) : "none (the station sent no time tag)", "time");
+    fact("Last change", change && change.at ? timeWithZone(change.at) : "not since this page connected", "changed");
+    fact(
+      "Source",
+      point ? `station ${HMI.link.address || "—"}, IOA ${point.ioa}, ${typeWords(point.type)}` : "not in points.csv",
+      "source",
+    );
+    const { onScreen, interlocked } = commandsOf(name);
+    const commands = HMI.el("div", { class: "faceplate-commands", "data-fact": "commands" });
+    for (const element of onScreen) {
+      const control = HMI.controls.get(element.getAttribute("data-command"));
+      const label = element.getAttribute("data-label") || (control && control.description) || element.getAttribute("data-command");
+      commands.append(
+        HMI.el("button", {
+          type: "button",
+          class: "secondary",
+          text: label,
+          disabled: !(control && control.allowed),
+          title: control && !control.allowed ? `needs level ${control.level}` : "",
+          onclick: () => openControl(element),
+        }),
+      );
+    }
+    for (const control of interlocked) {
+      commands.append(HMI.el("div", { class: "muted", text: `${control.description || control.command}: refused while this says local` }));
+    }
+    if (!commands.children.length) commands.append(HMI.el("span", { class: "muted", text: "none" }));
+    facts.append(HMI.el("dt", { text: "Commands" }), HMI.el("dd", {}, commands));
+    return HMI.el(
+      "section",
+      { "data-point-name": name },
+      HMI.el("h4", { text: point && point.description ? point.description : name }),
+      HMI.el("p", { class: "muted", text: name }),
+      facts,
+    );
+  }
+
+  function showFaceplate() {
+    if (!faceplateState) return;
+    const body = document.getElementById("faceplate-body");
+    const focused = document.activeElement && body.contains(document.activeElement);
+    body.replaceChildren(...faceplateState.names.map(faceplateSection));
+    if (focused) document.getElementById("faceplate-close").focus();
+  }
+
+  function openFaceplate(element) {
+    const names = pointNames(element);
+    if (!names.length) return;
+    faceplateState = { element, names };
+    const point = HMI.points.get(names[0]);
+    document.getElementById("faceplate-title").textContent = point && point.description ? point.description : names[0];
+    showFaceplate();
+    if (!faceplate().open) faceplate().show();
+    faceplate().dataset.point = names[0];
+    if (info) info.hidden = true;
+  }
+
+  function closeFaceplate() {
+    faceplateState = null;
+    if (faceplate() && faceplate().open) faceplate().close();
   }
 
   // ------------------------------------------------------------------ point information
@@ -612,9 +996,16 @@
       if (info) info.hidden = true;
     });
     box.classList.toggle("natural", localStorage.getItem("stanice.mimic") === "natural");
+    panning(box);
     box.addEventListener("click", (event) => {
+      if (panned) return; // the end of a drag, not a click
       const element = event.target.closest("[data-command]");
-      if (element && box.contains(element)) openControl(element);
+      if (element && box.contains(element)) {
+        openControl(element);
+        return;
+      }
+      const shown = event.target.closest(BOUND);
+      if (shown && svgRoot && svgRoot.contains(shown)) openFaceplate(shown);
     });
     box.addEventListener("keydown", (event) => {
       if (event.key !== "Enter" && event.key !== " ") return;
@@ -623,6 +1014,10 @@
         event.preventDefault();
         openControl(element);
       }
+    });
+    document.getElementById("faceplate-close").addEventListener("click", closeFaceplate);
+    document.addEventListener("keydown", (event) => {
+      if (event.key === "Escape" && faceplateState && !dialog().open) closeFaceplate();
     });
     document.getElementById("control-next").addEventListener("click", toConfirm);
     document.getElementById("control-execute").addEventListener("click", execute);
@@ -633,5 +1028,5 @@
     document.getElementById("control-form").addEventListener("submit", (event) => event.preventDefault());
   });
 
-  HMI.mimic = { refreshAll, openControl };
+  HMI.mimic = { refreshAll, openControl, openFaceplate, closeFaceplate };
 })();

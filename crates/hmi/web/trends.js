@@ -1,5 +1,8 @@
-// Stanice web HMI — trends: one measurement over a time range (GET /api/trend), drawn on
-// a <canvas> by the small chart below (no library). Buttons pick the last 1 h / 1 d / 7 d;
+// Stanice web HMI — trends: up to 8 measurements (pens) over a time range
+// (GET /api/trend?points=A,B, downsampled by the server to one bucket per pixel column),
+// drawn on a <canvas> by the small chart below (no library). The address #trends/A,B opens
+// those pens; the legend names each pen with its unit (its × removes it); "CSV" downloads
+// the shown period as time,A,B. Each pen has its own value scale; the axis is the first's. Buttons pick the last 1 h / 1 d / 7 d;
 // dragging across the chart zooms into the dragged range ("Zoom out" goes back); with
 // "follow live" the newest values arriving over the WebSocket are appended.
 //
@@ -11,8 +14,14 @@
   const MARGIN = { left: 64, right: 18, top: 30, bottom: 40 };
   const TIME_STEPS = [1, 2, 5, 10, 15, 30, 60, 120, 300, 600, 900, 1800, 3600, 7200, 10800, 21600, 43200, 86400, 172800, 604800].map((s) => s * 1000);
 
+  const COLOURS = ["#4fa3e0", "#f0a830", "#6cc070", "#e06c8c", "#b08de0", "#4fd0c8", "#d0d060", "#e0e0e0"];
+  const MAX_PENS = 8;
+
   const state = {
-    point: "",
+    point: "", // the first pen
+    pens: [], // point names, in the legend's order
+    series: [], // [{point, unit, description, samples}] as the server answered
+    csvUrl: "",
     from: 0,
     to: 0,
     samples: [], // [time_ms, value, invalid]
@@ -50,39 +59,90 @@
   async function fillSelect() {
     const select = document.getElementById("trend-point");
     const list = await trendList();
-    const current = state.point || (list[0] && list[0].name) || "";
-    select.replaceChildren(
-      ...list.map((t) => HMI.el("option", { value: t.name, selected: t.name === current, text: t.description ? `${t.name} — ${t.description}` : t.name })),
+    if (!state.pens.length && list[0]) state.pens = [list[0].name];
+    const current = state.pens[0] || "";
+    const option = (t, selected) => HMI.el("option", { value: t.name, selected, text: t.description ? `${t.name} — ${t.description}` : t.name });
+    select.replaceChildren(...list.map((t) => option(t, t.name === current)));
+    document.getElementById("trend-add").replaceChildren(
+      HMI.el("option", { value: "", text: "add a pen…" }),
+      ...list.filter((t) => !state.pens.includes(t.name)).map((t) => option(t, false)),
     );
     state.point = current;
   }
 
+  // The address names the pens (#trends/A,B), so a trend can be bookmarked and sent.
+  function pensChanged() {
+    state.point = state.pens[0] || "";
+    const hash = `#trends/${state.pens.map(encodeURIComponent).join(",")}`;
+    if (window.location.hash !== hash) history.replaceState(null, "", hash);
+    fillSelect().then(load);
+  }
+
+  function legend() {
+    const element = document.getElementById("trend-legend");
+    element.replaceChildren(
+      ...state.pens.map((name, i) => {
+        const series = state.series.find((s) => s.point === name) || {};
+        const point = HMI.points.get(name);
+        const description = series.description || (point && point.description) || "";
+        const remove = HMI.el("button", { type: "button", class: "secondary trend-remove", title: `Remove ${name}`, text: "×" });
+        remove.addEventListener("click", () => {
+          state.pens = state.pens.filter((p) => p !== name);
+          pensChanged();
+        });
+        return HMI.el(
+          "li",
+          { class: "trend-pen", "data-point": name },
+          HMI.el("span", { class: "trend-swatch", style: `background:${COLOURS[i % COLOURS.length]}` }),
+          HMI.el("span", { class: "trend-pen-name", text: name }),
+          HMI.el("span", { class: "muted", text: `${description ? ` ${description}` : ""}${series.unit ? ` [${series.unit}]` : ""}` }),
+          state.pens.length > 1 ? remove : "",
+        );
+      }),
+    );
+  }
+
   async function load() {
-    if (!state.point) {
+    if (!state.pens.length) {
       state.samples = [];
+      state.series = [];
       state.error = "No measurement is configured for trends.";
       draw();
       return;
     }
     state.loading = true;
     draw();
+    // One bucket per pixel column of the chart.
+    const width = Math.max(100, Math.min(4000, Math.round((canvas().clientWidth || 1000) - MARGIN.left - MARGIN.right)));
     const parameters = new URLSearchParams({
-      point: state.point,
+      points: state.pens.join(","),
       from: new Date(state.from).toISOString(),
       to: new Date(state.to).toISOString(),
+      width: String(width),
     });
-    const wanted = `${state.point}|${state.from}|${state.to}`;
+    const key = () => `${state.pens.join(",")}|${state.from}|${state.to}`;
+    const wanted = key();
     try {
       const result = await HMI.api(`/api/trend?${parameters}`);
-      if (wanted !== `${state.point}|${state.from}|${state.to}`) return; // superseded
-      state.samples = (result.samples || []).map((s) => [Number(s[0]), s[1] === null ? null : Number(s[1]), Boolean(s[2])]);
-      state.unit = result.unit || "";
+      if (wanted !== key()) return; // superseded
+      // [time_ms, value, invalid] or, for a bucket of several values, [..., min, max].
+      const sample = (s) => [Number(s[0]), s[1] === null ? null : Number(s[1]), Boolean(s[2]), ...(s.length > 3 ? [Number(s[3]), Number(s[4])] : [])];
+      state.series = (result.series || []).map((s) => ({ point: s.point, unit: s.unit || "", description: s.description || "", samples: (s.samples || []).map(sample) }));
+      state.samples = state.series.length ? state.series[0].samples : [];
+      state.unit = state.series.length ? state.series[0].unit : "";
+      parameters.set("format", "csv");
+      state.csvUrl = `/api/trend?${parameters}`;
+      const link = document.getElementById("trend-csv");
+      link.href = state.csvUrl;
+      link.removeAttribute("aria-disabled");
       state.error = "";
     } catch (error) {
       state.samples = [];
+      state.series = [];
       state.error = `Cannot load the trend: ${error.message}`;
     } finally {
       state.loading = false;
+      legend();
       document.getElementById("page-trends").dataset.loaded = String(Date.now());
       draw();
     }
@@ -156,19 +216,26 @@
 
     const plot = { x: MARGIN.left, y: MARGIN.top, w: width - MARGIN.left - MARGIN.right, h: height - MARGIN.top - MARGIN.bottom };
     if (plot.w < 40 || plot.h < 40) return;
-    const inRange = state.samples.filter((s) => s[0] >= state.from && s[0] <= state.to);
-    // The value in force at the start of the range is the last sample before it.
-    const before = [...state.samples].reverse().find((s) => s[0] < state.from);
-    const [lo, hi] = valueRange(before ? [before, ...inRange] : inRange);
+    // Each pen: its samples in the range, the one in force at its start, its own scale.
+    const pens = state.series.map((s, i) => {
+      const inRange = s.samples.filter((x) => x[0] >= state.from && x[0] <= state.to);
+      const before = [...s.samples].reverse().find((x) => x[0] < state.from);
+      const series = before ? [before, ...inRange] : inRange;
+      const extremes = series.flatMap((x) => (x.length > 3 ? [[x[0], x[3]], [x[0], x[4]]] : [x]));
+      const [lo, hi] = valueRange(extremes);
+      return { colour: COLOURS[i % COLOURS.length], inRange, series, lo, hi, yOf: (v) => plot.y + plot.h - ((v - lo) / (hi - lo)) * plot.h };
+    });
+    const first = pens[0] || { inRange: [], series: [], lo: 0, hi: 1, yOf: (v) => plot.y + plot.h - v * plot.h, colour: COLOURS[0] };
+    const { inRange, lo, hi, yOf } = first;
     const xOf = (t) => plot.x + ((t - state.from) / (state.to - state.from)) * plot.w;
-    const yOf = (v) => plot.y + plot.h - ((v - lo) / (hi - lo)) * plot.h;
 
-    // Title.
+    // Title: the first pen, and how many more the legend names.
     const point = HMI.points.get(state.point);
     g.fillStyle = text;
     g.textAlign = "left";
     g.textBaseline = "alphabetic";
-    g.fillText(`${state.point}${point && point.description ? ` — ${point.description}` : ""}`, plot.x, 18);
+    const more = pens.length > 1 ? ` (+${pens.length - 1} pen${pens.length > 2 ? "s" : ""}, axis of the first)` : "";
+    g.fillText(`${state.point}${point && point.description ? ` — ${point.description}` : ""}${more}`, plot.x, 18);
     g.textAlign = "right";
     g.fillStyle = muted;
     g.fillText(`${HMI.formatTime(state.from)} … ${HMI.formatTime(state.to)}`, plot.x + plot.w, 18);
@@ -213,28 +280,39 @@
     g.beginPath();
     g.rect(plot.x, plot.y, plot.w, plot.h);
     g.clip();
-    const series = before ? [before, ...inRange] : inRange;
+    const series = first.series;
     const end = Math.min(state.to, HMI.now());
-    g.strokeStyle = colour("--accent", "#4fa3e0");
-    g.lineWidth = 2;
-    g.beginPath();
-    let drawing = false;
-    for (let i = 0; i < series.length; i += 1) {
-      const [t, v, invalid] = series[i];
-      const nextT = i + 1 < series.length ? series[i + 1][0] : end;
-      if (v === null || invalid) {
-        drawing = false;
-        continue;
+    for (const pen of [...pens].reverse()) {
+      // A bucket of several values: its min..max as a band behind the line.
+      g.fillStyle = pen.colour;
+      g.globalAlpha = 0.3;
+      for (const [t, v, invalid, min, max] of pen.series) {
+        if (min === undefined || v === null || invalid) continue;
+        const y0 = pen.yOf(max);
+        g.fillRect(xOf(Math.max(t, state.from)) - 0.5, y0, 1.5, Math.max(1, pen.yOf(min) - y0));
       }
-      const x0 = xOf(Math.max(t, state.from));
-      const x1 = xOf(Math.max(nextT, state.from));
-      const y = yOf(v);
-      if (drawing) g.lineTo(x0, y);
-      else g.moveTo(x0, y);
-      g.lineTo(x1, y);
-      drawing = true;
+      g.globalAlpha = 1;
+      g.strokeStyle = pen.colour;
+      g.lineWidth = 2;
+      g.beginPath();
+      let drawing = false;
+      for (let i = 0; i < pen.series.length; i += 1) {
+        const [t, v, invalid] = pen.series[i];
+        const nextT = i + 1 < pen.series.length ? pen.series[i + 1][0] : end;
+        if (v === null || invalid) {
+          drawing = false;
+          continue;
+        }
+        const x0 = xOf(Math.max(t, state.from));
+        const x1 = xOf(Math.max(nextT, state.from));
+        const y = pen.yOf(v);
+        if (drawing) g.lineTo(x0, y);
+        else g.moveTo(x0, y);
+        g.lineTo(x1, y);
+        drawing = true;
+      }
+      g.stroke();
     }
-    g.stroke();
     // Invalid samples: a mark in the lost colour at the bottom.
     g.fillStyle = colour("--lost", "#f4f");
     for (const [t, v, invalid] of series) {
@@ -366,8 +444,16 @@
 
   HMI.on("ready", () => {
     document.getElementById("trend-point").addEventListener("change", (event) => {
-      state.point = event.target.value;
-      load();
+      // The first pen; the others stay.
+      state.pens = [event.target.value, ...state.pens.slice(1).filter((p) => p !== event.target.value)];
+      pensChanged();
+    });
+    document.getElementById("trend-add").addEventListener("change", (event) => {
+      const name = event.target.value;
+      if (name && !state.pens.includes(name) && state.pens.length < MAX_PENS) {
+        state.pens = [...state.pens, name];
+        pensChanged();
+      }
     });
     for (const button of document.querySelectorAll("#trend-form [data-range]")) {
       button.addEventListener("click", () => setRange(Number(button.dataset.range)));
@@ -400,8 +486,14 @@
   });
 
   HMI.pages.trends = {
-    async show() {
+    async show(argument) {
       state.shown = true;
+      // #trends/A,B: those pens (known points only, at most 8).
+      if (argument) {
+        const asked = argument.split(",").map((name) => name.trim()).filter((name) => name);
+        const pens = [...new Set(asked)].slice(0, MAX_PENS);
+        if (pens.length) state.pens = pens;
+      }
       await fillSelect();
       if (!state.to) {
         state.to = HMI.now();

@@ -12,6 +12,7 @@
 //! | `model`       | the records: [`EventRecord`], [`CommandRecord`] and their codes (values, quality and causes are the point model's) |
 //! | `query`       | filters, ordering and keyset pages: [`EventQuery`], [`CommandQuery`], [`Page`]; offset pages with a total: [`CountedPage`] |
 //! | `lift`        | the lift fault archive: [`LiftFaultArchive`] (a trait of its own), [`LiftFaultRecord`], [`LiftFaultQuery`], [`LiftFaultOrder`] |
+//! | `trend`       | trends downsampled in the database: [`TrendQuery`], [`TrendBucket`] (min, max, mean per slice of the range) |
 //! | `notification` | the record of e-mails and webhook calls sent or suppressed: [`NotificationLog`] (a trait of its own), [`NotificationRecord`], [`NotificationQuery`] |
 //! | [`url`]       | store addresses: [`url::StoreUrl`] (`sqlite:PATH`, `sqlite::memory:`, `postgres://...`) |
 //! | `sql`         | what both backends share: the migrations, the queries' SQL, purge, stats, row mapping, and the `EventStore` behaviour itself |
@@ -119,6 +120,7 @@ mod retention;
 mod sql;
 #[cfg(feature = "database")]
 mod sqlite;
+mod trend;
 pub mod url;
 
 use chrono::{DateTime, Utc};
@@ -144,6 +146,7 @@ pub use recorder::{Recorder, CHANNEL_CAPACITY};
 pub use retention::{spawn_retention, Retention, RetentionHandle};
 #[cfg(feature = "database")]
 pub use sqlite::SqliteStore;
+pub use trend::{TrendBucket, TrendMode, TrendQuery, MAX_TREND_BUCKETS};
 
 /// A boxed future, so that [`EventStore`] can be used as `dyn EventStore`.
 pub type StoreFuture<'a, T> = Pin<Box<dyn Future<Output = Result<T, StoreError>> + Send + 'a>>;
@@ -205,6 +208,18 @@ pub trait EventStore: LiftFaultArchive + NotificationLog + Send + Sync {
 
     /// Row counts and time span.
     fn stats(&self) -> StoreFuture<'_, StoreStats>;
+
+    /// A point's values over a time range, downsampled in the database: per slice of
+    /// the range its minimum, maximum and mean (see [`TrendQuery`]), oldest first. The
+    /// default answers [`StoreError::InvalidQuery`]: a store that cannot aggregate.
+    fn query_trend<'a>(&'a self, query: &'a TrendQuery) -> StoreFuture<'a, Vec<TrendBucket>> {
+        let _ = query;
+        Box::pin(async {
+            Err(StoreError::InvalidQuery(
+                "this store cannot downsample a trend".to_owned(),
+            ))
+        })
+    }
 
     /// Closes the store at a shutdown, after the last write: SQLite checkpoints its
     /// write-ahead log into the database file (no `-wal`/`-shm` files left behind),

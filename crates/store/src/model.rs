@@ -133,7 +133,8 @@ impl EventRecord {
 pub enum Actor {
     /// A logged-in user of the HMI or the command line.
     User(String),
-    /// A controlling station over a link, by remote address (for example `10.0.0.5:40123`).
+    /// A controlling station over a link, by remote address and, where the station
+    /// classifies its clients, redundancy group (`10.0.0.5:40123 (group dispatch)`).
     Remote(String),
 }
 

@@ -98,10 +98,11 @@ def indicator(svg, x, y, point, label, cls="ind", r=8, anchor="start"):
     svg.text(x + r + 6, y + 4, label, "label")
 
 
-def button(svg, x, y, w, label, command, value, state_point=None, h=26):
-    """A control button: a click opens the control dialog for COMMAND with VALUE."""
+def button(svg, x, y, w, label, command, value, state_point=None, h=26, words=None):
+    """A control button: a click opens the control dialog for COMMAND with VALUE; `words`
+    (default the label) say what it does in the dialog."""
     svg.open("g", class_="control", data_command=use(command), data_command_value=value,
-             data_label=label, **({"data-state-point": use(state_point)} if state_point else {}))
+             data_label=words or label, **({"data-state-point": use(state_point)} if state_point else {}))
     svg.el("rect", x=x, y=y, width=w, height=h, rx=5, class_="button")
     svg.text(x + w / 2, y + h / 2 + 4, label, "button-text")
     svg.close("g")
@@ -286,8 +287,10 @@ def meters(svg, x, y, board, title="Meter"):
     svg.close("g")
 
 
-def power_board(board, fed_from, concentrator, comm_upper, name=None):
-    """A LOGO! board's panel; `name` is the thesis's (RH1.2) where the prefix differs."""
+def power_board(board, fed_from, concentrator, comm_upper, name=None, feeders=None):
+    """A LOGO! board's panel; `name` is the thesis's (RH1.2) where the prefix differs;
+    `feeders` names what FA1.1 .. FA1.5 feed (spare where not given)."""
+    feeders = feeders or ["spare"] * 5
     name = name or board
     svg = Svg(f"Vsetín — board {name}", 1200, 720)
     p = f"{board}_P1_"
@@ -330,6 +333,8 @@ def power_board(board, fed_from, concentrator, comm_upper, name=None):
         svg.el("path", d=f"M {x} 300 V 349", class_="wire")
         breaker(svg, x, 360, point, label)
         svg.el("path", d=f"M {x} 371 V 420", class_="wire")
+        if i > 0:
+            svg.text(x, 436, feeders[i - 1], "label feeder", "middle")
     svg.close("g")
 
     svg.comment("110 V DC section: source G110.2, breakers FA110.0 .. FA110.2, surge arrester FV110")
@@ -635,14 +640,28 @@ def lighting():
         svg.text(10, 20, board if board != "OR" else "OŘ area", "title")
         svg.el("circle", cx=w - 16, cy=14, r=6, class_="fault", data_point=use(f"COMM_{board}"))
         svg.text(w - 26, 18, "link", "label small", "end")
-        svg.comment("lamp: lit while the lamp-circuit relay reports current")
+        svg.comment("lamp: lit while the lamp-circuit relay reports current; 'lighting ON' says so, the"
+                    " command (Osv_Zap) is told apart")
         svg.el("circle", cx=30, cy=52, r=15, class_="lamp", data_point=use(f"{b}PrRele"))
-        svg.text(54, 47, "", "value", data_text=use(f"{b}Osv_Zap"), data_on="lighting ON", data_off="lighting off")
-        svg.text(54, 63, "", "label small", data_text=use(f"{b}Zap_Rucne"), data_on="by manual command", data_off="")
-        svg.comment("mode in force (exactly one is TRUE)")
-        for i, (flag, label) in enumerate([("Osv_Rucne", "MAN"), ("Set_Astral", "ASTRO"), ("Set_Cidlo", "DUSK"),
-                                           ("Set_Cas", "TIME"), ("Zap_Z_Rozvadece", "LOCAL")]):
-            svg.text(10 + i * 44, 88, label, "state small", data_text=use(f"{b}{flag}"), data_on=label, data_off=label)
+        svg.text(54, 47, "", "value", data_text=use(f"{b}PrRele"), data_on="lighting ON",
+                 data_off="lighting off")
+        svg.text(54, 63, "", "label small", data_text=use(f"{b}Osv_Zap"), data_on="switched on",
+                 data_off="switched off")
+        svg.text(130, 63, "", "label small", data_text=use(f"{b}Zap_Rucne"), data_on="by hand", data_off="")
+        svg.comment("mode in force, lit: LOCAL (cabinet), else MAN, else the automatic modes set (ASTRO,"
+                    " DUSK, TIME); under MAN the automatic ones are set but not in force: drawn unlit")
+        svg.text(10, 88, "MAN", "state small", data_text=use(f"{b}Osv_Rucne"), data_on="MAN", data_off="MAN")
+        svg.open("g", class_="auto-modes", data_visible=use(f"{b}Osv_Rucne"), data_visible_when="off")
+        for i, (flag, label) in enumerate([("Set_Astral", "ASTRO"), ("Set_Cidlo", "DUSK"), ("Set_Cas", "TIME")]):
+            svg.text(54 + i * 44, 88, label, "state small", data_text=use(f"{b}{flag}"), data_on=label,
+                     data_off=label)
+        svg.close("g")
+        svg.open("g", class_="auto-modes-held", data_visible=use(f"{b}Osv_Rucne"), data_visible_when="on")
+        for i, label in enumerate(["ASTRO", "DUSK", "TIME"]):
+            svg.text(54 + i * 44, 88, label, "state small")
+        svg.close("g")
+        svg.text(186, 88, "LOCAL", "state small", data_text=use(f"{b}Zap_Z_Rozvadece"), data_on="LOCAL",
+                 data_off="LOCAL")
         svg.comment("contactor, faults")
         svg.el("rect", x=10, y=98, width=14, height=14, class_="breaker", data_point=use(f"{b}KM1_Zapnut"))
         svg.text(30, 110, "KM1", "label small")
@@ -660,24 +679,31 @@ def lighting():
         svg.text(181, 130, "remote", "label small")
         svg.comment("power and energy")
         svg.text(10, 152, "", "value", data_text=use(f"{b}P_kW"), data_unit="kW", data_digits="1")
-        svg.text(90, 152, "", "value", data_text=use(f"{b}Energie_kWh"), data_unit="kWh", data_digits="0")
+        svg.text(70, 152, "", "value", data_text=use(f"{b}Energie_kWh"), data_unit="kWh", data_digits="1")
         svg.text(w - 10, 152, "apply times…", "value small", "end", data_command=use(f"{b}W_SetTime"),
                  data_command_value=1, data_label=f"{board}: take over the four window times")
         svg.comment("time windows: the dot is lit inside a window; W1/W2 on/off set the times (hh:mm setpoints,"
                     " which the board does not report back)")
         svg.open("g", class_="windows")
-        svg.el("circle", cx=14, cy=168, r=5, class_="ind", data_point=use(f"{b}Zap_Cas"))
+        svg.el("circle", cx=14, cy=163, r=5, class_="ind", data_point=use(f"{b}Zap_Cas"))
+        svg.text(24, 167, "", "label small", data_text=use(f"{b}Zap_Cas"), data_on="inside a time window",
+                 data_off="outside the time windows")
         for i, n in enumerate(["1", "2"]):
             for j, (which, word) in enumerate([("Zap", "on"), ("Vyp", "off")]):
                 cmd = use(f"{b}W_Cas{n}{which}")
-                svg.text(26 + i * 104 + j * 50, 172, f"W{n} {word}…", "value small", data_command=cmd,
+                svg.text(10 + (i * 2 + j) * 56, 182, f"W{n} {word}…", "value small", data_command=cmd,
                          data_command_format="minutes", data_label=f"{board}: time window {n}, {word} time")
         svg.close("g")
         svg.comment("manual controls")
-        button(svg, 8, 184, 52, "Man", f"{b}W_Rucne", 1, f"{b}Osv_Rucne")
-        button(svg, 64, 184, 52, "Auto", f"{b}W_Rucne", 0, f"{b}Osv_Rucne")
-        button(svg, 120, 184, 50, "On", f"{b}W_ZapRucne", 1, f"{b}Osv_Zap")
-        button(svg, 174, 184, 50, "Off", f"{b}W_ZapRucne", 0, f"{b}Osv_Zap")
+        name = board if board != "OR" else "OŘ area"
+        button(svg, 8, 190, 52, "Man", f"{b}W_Rucne", 1, f"{b}Osv_Rucne",
+               words=f"Put the lighting of {name} in manual mode?")
+        button(svg, 64, 190, 52, "Auto", f"{b}W_Rucne", 0, f"{b}Osv_Rucne",
+               words=f"Put the lighting of {name} back in automatic mode?")
+        button(svg, 120, 190, 50, "On", f"{b}W_ZapRucne", 1, f"{b}Osv_Zap",
+               words=f"Switch the lighting of {name} on by hand?")
+        button(svg, 174, 190, 50, "Off", f"{b}W_ZapRucne", 0, f"{b}Osv_Zap",
+               words=f"Switch the lighting of {name} off by hand?")
         svg.close("g")
     svg.write("lighting.svg")
 
@@ -690,9 +716,9 @@ def topology():
 
     svg.comment("Upper systems served by RDRT (spec 7.5): ED, MŘS and the service access have their"
                 " link points (SP 38, 39, 41: TRUE while no client of theirs is connected); DDTS and"
-                " DŘT share the dispatch group, which has none")
+                " DŘT share the dispatch group and its link point (SP 42)")
     svg.open("g", id="upper")
-    for i, (name, comm) in enumerate([("DDTS", None), ("DŘT", None), ("ED", "COMM_ED"),
+    for i, (name, comm) in enumerate([("DDTS", "COMM_DISPATCH"), ("DŘT", "COMM_DISPATCH"), ("ED", "COMM_ED"),
                                       ("MŘS", "COMM_MRS"), ("Servis", "COMM_SERVIS")]):
         x = 300 + i * 130
         if comm:
@@ -701,7 +727,10 @@ def topology():
         else:
             svg.el("path", d=f"M {x + 50} 109 V 150", class_="wire")
             svg.el("rect", x=x, y=75, width=100, height=34, rx=5, class_="frame")
-        svg.text(x + 50, 97, name, "label", "middle")
+        svg.text(x + 50, 91 if comm else 97, name, "label", "middle")
+        if comm:
+            svg.text(x + 50, 104, "", "label small", "middle", data_text=comm, data_on="link down",
+                     data_off="link up")
     svg.el("path", d="M 350 150 H 870", class_="wire")
     svg.el("path", d="M 600 150 V 170", class_="wire")
     svg.close("g")
@@ -835,6 +864,40 @@ def toml_table(name, **fields):
     return "\n".join(lines) + "\n"
 
 
+# The link point (COMM_*, TRUE while the link is lost) each board's points come through:
+# an alarm behind a lost link is a consequence of the link's alarm, not raised on its own
+# (docs/HMI.md, "Alarm management"). RH2 and RH1.2 are reached through RH1.1, RZZ, RDA and
+# RZS2 through RZS1, so their link alarms are consequences of those links in turn.
+ALARM_LINKS = {"RH2": "COMM_RH2", "RZZ": "COMM_RZZ", "RH12": "COMM_RH12", "RZS2": "COMM_RZS2",
+               "RDA": "COMM_RDA", "RH11": "COMM_RH", "RZS1": "COMM_RZS", "RHDT": "COMM_RH_DT",
+               "RZSDT": "COMM_RZS_DT", **{b: f"COMM_{b}" for b in LIGHTING}}
+LINK_BEHIND = {"COMM_RH2": "COMM_RH", "COMM_RH12": "COMM_RH", "COMM_RZZ": "COMM_RZS",
+               "COMM_RDA": "COMM_RZS", "COMM_RZS2": "COMM_RZS"}
+
+
+def alarm_link(point):
+    """The link point an alarm's point comes through, or None (RDRT's own points)."""
+    if point in LINK_BEHIND:
+        return LINK_BEHIND[point]
+    if point.startswith("COMM_"):
+        return None
+    return ALARM_LINKS.get(point.split("_")[0])
+
+
+def alarm_suppression(point):
+    """Suppression by design. A lighting board's lighting-circuit fault is suppressed while
+    the board is under local (cabinet) control: the maintainer at the cabinet switches
+    circuits by hand and opens them to work on them, which the fault input reports, and
+    nobody in dispatch can act on it meanwhile. Not the fuse, surge-arrester or KM1 alarms:
+    a blown fuse or a failed contactor under local control is still a fault to repair.
+    (Nor a board's fuses while its QF1 is open: QF1 opens on such faults, so that would
+    hide the cause of the trip.)"""
+    board = point.split("_")[0]
+    if board in LIGHTING and point == f"{board}_Osv_Por":
+        return {"point": use(f"{board}_Zap_Z_Rozvadece"), "state": True}
+    return None
+
+
 def alarm_list():
     alarms = [
         ("RDA_Porucha", 1, "RDA: transfer fault"),
@@ -925,8 +988,8 @@ def hmi_toml():
                "# No authority: their settings are the dispatch's own inputs (spec 4.2, \"in (DDTS)\"),\n"
                "# and spec 9.2 restricts only the board views' breakers to HMI-local authority.")
     for board in LIGHTING:
-        for cmd, confirm in [("W_Rucne", f"Manual mode of lighting board {board} (1) or back to automatic (0)?"),
-                             ("W_ZapRucne", f"Switch the lighting of {board} manually?"),
+        # W_Rucne and W_ZapRucne mean two things (on/off): the buttons' words ask the question.
+        for cmd, confirm in [("W_Rucne", None), ("W_ZapRucne", None),
                              ("W_Astral", None), ("W_Cidlo", None), ("W_Cas", None), ("W_SetTime", None),
                              ("W_Cas1Zap", None), ("W_Cas1Vyp", None), ("W_Cas2Zap", None), ("W_Cas2Vyp", None)]:
             out.append(toml_table("control", command=use(f"{board}_{cmd}"), level=3, confirm=confirm,
@@ -936,8 +999,11 @@ def hmi_toml():
                "# 1 supply lost / emergency off, 2 generator, controller and link faults,\n"
                "# 3 lighting circuits, fuses and surge arresters, 4 doors.")
     for point, priority, text, when in alarm_list():
+        link = alarm_link(point)
         out.append(toml_table("alarm", point=use(point), priority=priority, text=text,
-                              when=None if when else False, acknowledge=priority <= 3))
+                              when=None if when else False, acknowledge=priority <= 3,
+                              suppress_when=alarm_suppression(point),
+                              link=use(link) if link else None))
 
     out.append("# ---------------------------------------------------------------- trends")
     for b in LIGHTING:
@@ -958,7 +1024,8 @@ if __name__ == "__main__":
     supply()
     topology()
     rh11()
-    power_board("RH2", "transformer T2", "RH1.1", "COMM_RH")
+    power_board("RH2", "transformer T2", "RH1.1", "COMM_RH",
+                feeders=["ROV01–03", "ROV04–06", "ROV07–09", "ROV10–12", "OŘ"])
     power_board("RH12", "RH1.1", "RH1.1", "COMM_RH", name="RH1.2")
     rzs1()
     power_board("RZZ", "transformer T1 (TZ1)", "RZS1", "COMM_RZS")

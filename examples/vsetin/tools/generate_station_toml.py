@@ -13,7 +13,8 @@ lighting boards and the repeated board points. Edit the tables below and run
 IOA plan (the railway-station thesis's point lists, docs/THESES.md; where it is silent, ours):
   RDRT own points      1-10 SP of module P9, 21 HMI local, 24/25 module faults,
                        26-29 switchroom doors, 32/33 links RH/RZS (TO), 34/35 links RH/RZS
-                       in DT, 38-41 upper links ED/MŘS/HMI/service, 50-62 links
+                       in DT, 38-41 upper links ED/MŘS/HMI/service, 42 the dispatch
+                       link (DDTS/DŘT), 50-62 links
                        ROV01..OR; command 2001 HMI local
   RH1.1 own I/O        201-208 SP (QF1, KHU1, FV1, FU1, R6 cubicles Q1-Q3, by-pass
                        RS602), 211-216 ME (meter, R6 and transformer 6 kV voltages)
@@ -303,7 +304,7 @@ node("RDRT", "central PLC (Tecomat TC700) and HMI", 1, 0, sources=[f"{SHARED}plc
           "refuse_commands_when": BLOCKED},
          {"name": "service", "clients": ["127.0.0.5"], "status_point": "COMM_SERVIS",
           "refuse_commands_when": BLOCKED},
-         {"name": "dispatch", "refuse_commands_when": BLOCKED},
+         {"name": "dispatch", "status_point": "COMM_DISPATCH", "refuse_commands_when": BLOCKED},
      ])
 task("main", 100, ["RDRTIO"], 400)
 for signal, variable in [
@@ -351,7 +352,8 @@ point("COMM_RZS_DT", "M_SP_TB_1", 35, None, "communication failure to the S7-150
 for ioa, name, text in [(38, "COMM_ED", "link to ED (electric dispatch) down"),
                         (39, "COMM_MRS", "link to MŘS down"),
                         (40, "COMM_HMI", "link to the local HMI down"),
-                        (41, "COMM_SERVIS", "service link down")]:
+                        (41, "COMM_SERVIS", "service link down"),
+                        (42, "COMM_DISPATCH", "link to the dispatch systems DDTS/DŘT down")]:
     point(name, "M_SP_TB_1", ioa, None, text + " (no client connected)", groups=[1])
 for k, board in enumerate(LIGHTING, start=1):
     point(f"COMM_{board}", "M_SP_TB_1", 49 + k, None,

@@ -42,6 +42,7 @@ async fn controls(State(state): State<AppState>, user: LoggedIn) -> Json<Value> 
                 "level": control.level,
                 "select": control.select,
                 "confirm": control.confirm,
+                "local_point": control.local_point,
                 "allowed": user.session.level >= control.level,
             })
         })
@@ -164,15 +165,22 @@ fn authority_refusal(state: &AppState, control: &crate::config::ControlConfig) -
     if held {
         return None;
     }
+    // In words, not raw values: a single point is on or off.
+    let words = |value: &Value| match value {
+        Value::Bool(true) => "on".to_owned(),
+        Value::Bool(false) => "off".to_owned(),
+        other => other.to_string(),
+    };
     let now = match &point {
-        Some(p) if !p.invalid => p.value.to_string(),
+        Some(p) if !p.invalid => words(&p.value),
         _ => "unknown (invalid)".to_owned(),
     };
+    let needed = words(&json!(authority.state));
     Some(match &authority.reason {
         Some(reason) => format!("{reason} ({} is {now})", authority.point),
         None => format!(
-            "the control authority is not with this HMI ({} is {now}, {} needed)",
-            authority.point, authority.state
+            "the control authority is not with this HMI ({} is {now}, {needed} needed)",
+            authority.point
         ),
     })
 }

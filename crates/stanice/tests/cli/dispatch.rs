@@ -69,7 +69,7 @@ fn demo_serves_the_station_to_dispatch() {
             "IOA {ioa} missing: {interrogated:?}"
         );
     }
-    assert_eq!(interrogated.len(), 507);
+    assert_eq!(interrogated.len(), 508);
     // Every value is valid: the links below RDRT, on TLS, are all up.
     let invalid = invalid_of(&output.stdout);
     assert!(invalid.is_empty(), "{invalid:?}");

@@ -139,13 +139,14 @@ impl StationHandler for NodeHandler {
         let handler_links = self.links.get().cloned().unwrap_or_default();
         let handler_lines = self.lines.get().cloned().unwrap_or_default();
         let simulation = self.simulation.clone();
+        let group = self.group_of(&command.peer).cloned();
+        let group_name = group.as_ref().map(|g| g.name.clone()).unwrap_or_default();
         let this = Recorded {
             points,
             command: command.clone(),
             name: routed.name.clone(),
+            group: group.as_ref().map(|g| g.name.clone()),
         };
-        let group = self.group_of(&command.peer).cloned();
-        let group_name = group.as_ref().map(|g| g.name.clone()).unwrap_or_default();
         if !routed.from_groups.is_empty() && !routed.from_groups.contains(&group_name) {
             let detail = format!(
                 "accepted only from {} (this client is in `{group_name}`)",
@@ -211,6 +212,7 @@ impl StationHandler for NodeHandler {
             points: Arc::clone(&self.points),
             command: command.clone(),
             name,
+            group: self.group_of(&command.peer).map(|g| g.name.clone()),
         };
         // The reason (the age of a stale command, ...) is the audit record's detail; a
         // refusal need not wait for its commit (nothing was done).
@@ -289,6 +291,8 @@ struct Recorded {
     points: Arc<NodePoints>,
     command: server::Command,
     name: String,
+    /// The sender's redundancy group, named in the audit beside its address.
+    group: Option<String>,
 }
 
 impl Recorded {
@@ -325,7 +329,10 @@ impl Recorded {
         CommandRecord {
             id: None,
             time: self.points.clock().now(),
-            actor: Actor::Remote(self.command.peer.to_string()),
+            actor: Actor::Remote(match &self.group {
+                Some(group) => format!("{} (group {group})", self.command.peer),
+                None => self.command.peer.to_string(),
+            }),
             node: self.points.name().to_owned(),
             point: self.name,
             ioa: Some(self.command.ioa.get()),

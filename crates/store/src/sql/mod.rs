@@ -18,7 +18,8 @@ use chrono::{DateTime, Utc};
 use crate::{
     Backend, CommandQuery, CommandRecord, CountedPage, EventQuery, EventRecord, EventStore,
     LiftFaultArchive, LiftFaultQuery, LiftFaultRecord, NotificationLog, NotificationQuery,
-    NotificationRecord, Page, RecordId, StoreError, StoreFuture, StoreStats,
+    NotificationRecord, Page, RecordId, StoreError, StoreFuture, StoreStats, TrendBucket,
+    TrendMode, TrendQuery, MAX_TREND_BUCKETS,
 };
 use row::{
     check_command, check_event, check_lift_fault, check_notification, command_from_row,
@@ -165,6 +166,131 @@ async fn one<D: Database, T: Send + 'static>(
         .ok_or_else(|| StoreError::Corrupt("a statement returned no row".to_owned()))
 }
 
+/// The aggregation of a trend: one row per non-empty bucket of the range, oldest first.
+/// Booleans, integers and floats (value kinds 1, 3, 4) count; the index on (point,
+/// event_ms) bounds the scan to the point's rows of the range.
+fn trend_sql(query: &TrendQuery, backend: Backend) -> Statement {
+    let params = vec![
+        Param::text(query.point.as_str()),
+        Param::int(to_ms(query.from)),
+        Param::int(to_ms(query.to)),
+        Param::int(query.bucket_ms()),
+    ];
+    let point = Param::text("").placeholder(backend, 1);
+    let from = Param::int(0).placeholder(backend, 2);
+    let to = Param::int(0).placeholder(backend, 3);
+    let width = Param::int(0).placeholder(backend, 4);
+    let sql = format!(
+        "SELECT CAST(MIN(event_ms) AS BIGINT), CAST(MAX(event_ms) AS BIGINT), \
+                MIN(v), MAX(v), AVG(v), CAST(COUNT(*) AS BIGINT), CAST(MAX(iv) AS BIGINT) \
+         FROM (SELECT event_ms, (quality & 1) AS iv, \
+                      COALESCE(value_float, CAST(value_int AS DOUBLE PRECISION)) AS v, \
+                      CAST((event_ms - {from}) / {width} AS BIGINT) AS bucket \
+               FROM events \
+               WHERE point = {point} AND event_ms >= {from} AND event_ms < {to} \
+                 AND value_kind IN (1, 3, 4) \
+                 AND (value_float IS NOT NULL OR value_int IS NOT NULL)) AS slice \
+         GROUP BY bucket ORDER BY bucket"
+    );
+    Statement {
+        access: Access::Read,
+        sql,
+        params,
+    }
+}
+
+fn trend_bucket_from_row(r: &dyn row::Columns) -> Result<TrendBucket, StoreError> {
+    let real = |i: usize| -> Result<f64, StoreError> {
+        r.real(i)?
+            .ok_or_else(|| StoreError::Corrupt("a trend bucket without values".to_owned()))
+    };
+    Ok(TrendBucket {
+        first_time: row::from_ms(r.need_int(0)?)?,
+        last_time: row::from_ms(r.need_int(1)?)?,
+        first: None,
+        last: None,
+        min: real(2)?,
+        max: real(3)?,
+        avg: real(4)?,
+        count: u64::try_from(r.need_int(5)?).unwrap_or(0),
+        invalid: r.need_int(6)? != 0,
+    })
+}
+
+/// The first and last value of each bucket, by two index seeks per bucket on (point,
+/// event_ms, id): the buckets are counted by a recursive query, each picks the ids of
+/// its ends, and the ends' rows are joined. Empty buckets are left out (no id).
+fn trend_ends_sql(query: &TrendQuery, backend: Backend) -> Statement {
+    let span = (to_ms(query.to) - to_ms(query.from)).max(1);
+    let width = query.bucket_ms();
+    let slices = (span + width - 1) / width;
+    let params = vec![
+        Param::text(query.point.as_str()),
+        Param::int(to_ms(query.from)),
+        Param::int(to_ms(query.to)),
+        Param::int(width),
+        Param::int(slices),
+    ];
+    let point = Param::text("").placeholder(backend, 1);
+    let from = Param::int(0).placeholder(backend, 2);
+    let to = Param::int(0).placeholder(backend, 3);
+    let width = Param::int(0).placeholder(backend, 4);
+    let slices = Param::int(0).placeholder(backend, 5);
+    let end = |direction: &str| {
+        format!(
+            "(SELECT id FROM events \
+              WHERE point = {point} AND event_ms >= {from} + i * {width} \
+                AND event_ms < {from} + (i + 1) * {width} AND event_ms < {to} \
+                AND value_kind IN (1, 3, 4) \
+                AND (value_float IS NOT NULL OR value_int IS NOT NULL) \
+              ORDER BY event_ms {direction}, id {direction} LIMIT 1)"
+        )
+    };
+    let (first, last) = (end("ASC"), end("DESC"));
+    let value =
+        |t: &str| format!("COALESCE({t}.value_float, CAST({t}.value_int AS DOUBLE PRECISION))");
+    let (first_value, last_value) = (value("f"), value("l"));
+    let sql = format!(
+        "WITH RECURSIVE slices (i) AS ( \
+             SELECT CAST(0 AS BIGINT) UNION ALL SELECT i + 1 FROM slices WHERE i + 1 < {slices}), \
+         picks AS (SELECT i, {first} AS first_id, {last} AS last_id FROM slices) \
+         SELECT f.event_ms, {first_value}, CAST(f.quality & 1 AS BIGINT), \
+                l.event_ms, {last_value}, CAST(l.quality & 1 AS BIGINT), \
+                CAST(CASE WHEN p.first_id = p.last_id THEN 1 ELSE 2 END AS BIGINT) \
+         FROM picks p JOIN events f ON f.id = p.first_id JOIN events l ON l.id = p.last_id \
+         ORDER BY p.i"
+    );
+    Statement {
+        access: Access::Read,
+        sql,
+        params,
+    }
+}
+
+fn trend_ends_from_row(r: &dyn row::Columns) -> Result<TrendBucket, StoreError> {
+    let real = |i: usize| -> Result<f64, StoreError> {
+        r.real(i)?
+            .ok_or_else(|| StoreError::Corrupt("a trend bucket without values".to_owned()))
+    };
+    let (first, last) = (real(1)?, real(4)?);
+    let count = u64::try_from(r.need_int(6)?).unwrap_or(1);
+    Ok(TrendBucket {
+        first_time: row::from_ms(r.need_int(0)?)?,
+        last_time: row::from_ms(r.need_int(3)?)?,
+        first: Some(first),
+        last: Some(last),
+        min: first.min(last),
+        max: first.max(last),
+        avg: if count == 1 {
+            first
+        } else {
+            (first + last) / 2.0
+        },
+        count,
+        invalid: r.need_int(2)? != 0 || r.need_int(5)? != 0,
+    })
+}
+
 /// The count and the page of an offset-paged query.
 async fn counted<D: Database, T: Send + 'static>(
     db: &D,
@@ -263,6 +389,30 @@ impl<D: Database> EventStore for D {
 
     fn close(&self) -> StoreFuture<'_, ()> {
         Database::close(self)
+    }
+
+    fn query_trend<'a>(&'a self, query: &'a TrendQuery) -> StoreFuture<'a, Vec<TrendBucket>> {
+        Box::pin(async move {
+            if query.buckets == 0 || query.buckets > MAX_TREND_BUCKETS {
+                return Err(StoreError::InvalidQuery(format!(
+                    "a trend has 1 to {MAX_TREND_BUCKETS} buckets, not {}",
+                    query.buckets
+                )));
+            }
+            if query.to <= query.from {
+                return Ok(Vec::new());
+            }
+            match query.mode {
+                TrendMode::Aggregate => {
+                    self.rows(trend_sql(query, D::BACKEND), trend_bucket_from_row)
+                        .await
+                }
+                TrendMode::FirstLast => {
+                    self.rows(trend_ends_sql(query, D::BACKEND), trend_ends_from_row)
+                        .await
+                }
+            }
+        })
     }
 
     fn stats(&self) -> StoreFuture<'_, StoreStats> {

@@ -68,4 +68,6 @@ on_both_backends!(
     lift_fault_bad_input_is_refused,
     notifications_round_trip_and_paging,
     purge_keeps_lift_faults_and_drops_old_notifications,
+    trend_downsamples_per_bucket,
+    trend_first_and_last_per_bucket,
 );

@@ -927,3 +927,119 @@ pub(crate) async fn bad_input_is_refused_cleanly(store: Arc<dyn EventStore>) {
     // Nothing of the refused batches was stored.
     assert_eq!(store.stats().await.unwrap().events, 1);
 }
+
+/// A trend downsampled in the database: per bucket the first and last time, min, max,
+/// mean, count and whether any value was invalid; booleans and integers count, texts
+/// and other points do not; empty buckets are left out; bad bucket counts are refused.
+pub(crate) async fn trend_downsamples_per_bucket(store: Arc<dyn EventStore>) {
+    use store::{TrendQuery, MAX_TREND_BUCKETS};
+    let mut events: Vec<EventRecord> = (0..10)
+        .map(|i| {
+            ev(
+                "RH2_U",
+                PointValue::Float(f64::from(i)),
+                i64::from(i) * 1000,
+            )
+        })
+        .collect();
+    // Second bucket (10..20 s): integers and a boolean, one invalid.
+    events.push(ev("RH2_U", PointValue::Int(40), 12_000));
+    let mut invalid = ev("RH2_U", PointValue::Bool(true), 15_000);
+    invalid.quality = quality_from_bits(1);
+    events.push(invalid);
+    events.push(ev("RH2_U", PointValue::Text("n/a".into()), 16_000));
+    // Nothing from 20 to 30 s; another point in the range.
+    events.push(ev("RH2_I", PointValue::Float(99.0), 5_000));
+    events.push(ev("RH2_U", PointValue::Float(-3.0), 35_000));
+    store.append_events(&events).await.unwrap();
+
+    let query = TrendQuery::new("RH2_U", at_ms(0), at_ms(40_000), 4);
+    assert_eq!(query.bucket_ms(), 10_000);
+    let buckets = store.query_trend(&query).await.unwrap();
+    assert_eq!(buckets.len(), 3, "{buckets:?}");
+    let first = buckets[0];
+    assert_eq!(
+        (first.first_time, first.last_time),
+        (at_ms(0), at_ms(9_000))
+    );
+    assert_eq!(
+        (first.min, first.max, first.avg, first.count),
+        (0.0, 9.0, 4.5, 10)
+    );
+    assert!(!first.invalid);
+    let second = buckets[1];
+    assert_eq!(
+        (second.min, second.max, second.avg, second.count),
+        (1.0, 40.0, 20.5, 2)
+    );
+    assert!(second.invalid);
+    assert_eq!(buckets[2].first_time, at_ms(35_000));
+    assert_eq!((buckets[2].min, buckets[2].count), (-3.0, 1));
+
+    // The end is exclusive; an empty or reversed range has no buckets.
+    let tail = TrendQuery::new("RH2_U", at_ms(0), at_ms(9_000), 9);
+    assert_eq!(store.query_trend(&tail).await.unwrap().len(), 9);
+    let reversed = TrendQuery::new("RH2_U", at_ms(10_000), at_ms(0), 10);
+    assert!(store.query_trend(&reversed).await.unwrap().is_empty());
+    for buckets in [0, MAX_TREND_BUCKETS + 1] {
+        let bad = TrendQuery::new("RH2_U", at_ms(0), at_ms(10_000), buckets);
+        assert!(matches!(
+            store.query_trend(&bad).await,
+            Err(StoreError::InvalidQuery(_))
+        ));
+    }
+}
+
+/// The first and last value of each bucket, by index seeks: the same buckets as the
+/// aggregation, with the ends' values and times.
+pub(crate) async fn trend_first_and_last_per_bucket(store: Arc<dyn EventStore>) {
+    use store::{TrendMode, TrendQuery};
+    let mut events: Vec<EventRecord> = (0..10)
+        .map(|i| {
+            ev(
+                "RH2_U",
+                PointValue::Float(f64::from(i)),
+                i64::from(i) * 1000,
+            )
+        })
+        .collect();
+    events.push(ev("RH2_U", PointValue::Int(40), 12_000));
+    let mut invalid = ev("RH2_U", PointValue::Bool(true), 15_000);
+    invalid.quality = quality_from_bits(1);
+    events.push(invalid);
+    events.push(ev("RH2_U", PointValue::Text("n/a".into()), 16_000));
+    events.push(ev("RH2_I", PointValue::Float(99.0), 5_000));
+    events.push(ev("RH2_U", PointValue::Float(-3.0), 35_000));
+    store.append_events(&events).await.unwrap();
+
+    let query =
+        TrendQuery::new("RH2_U", at_ms(0), at_ms(40_000), 4).with_mode(TrendMode::FirstLast);
+    let buckets = store.query_trend(&query).await.unwrap();
+    assert_eq!(buckets.len(), 3, "{buckets:?}");
+    let first = buckets[0];
+    assert_eq!(
+        (first.first_time, first.last_time),
+        (at_ms(0), at_ms(9_000))
+    );
+    assert_eq!((first.first, first.last), (Some(0.0), Some(9.0)));
+    assert_eq!((first.min, first.max, first.count), (0.0, 9.0, 2));
+    assert!(!first.invalid);
+    let second = buckets[1];
+    assert_eq!((second.first, second.last), (Some(40.0), Some(1.0)));
+    assert_eq!(
+        (second.first_time, second.last_time),
+        (at_ms(12_000), at_ms(15_000))
+    );
+    assert!(second.invalid);
+    let third = buckets[2];
+    assert_eq!(
+        (third.first, third.last, third.count),
+        (Some(-3.0), Some(-3.0), 1)
+    );
+    assert_eq!(third.avg, -3.0);
+    // The end is exclusive, the range not a multiple of the width.
+    let short =
+        TrendQuery::new("RH2_U", at_ms(0), at_ms(35_000), 3).with_mode(TrendMode::FirstLast);
+    let buckets = store.query_trend(&short).await.unwrap();
+    assert_eq!(buckets.len(), 2, "{buckets:?}");
+}

@@ -140,7 +140,7 @@ fn vsetin_example_loads() {
         .map(|c| c.ioa.get())
         .collect();
     assert_eq!(forwarded, [2061, 2062, 2181, 2182]);
-    assert_eq!(rdrt.points.len(), 416 + 14 + 13 + 2 * 23 + 2 * 8 + 2);
+    assert_eq!(rdrt.points.len(), 416 + 14 + 13 + 2 * 23 + 2 * 8 + 2 + 1); // + 1: the dispatch link (IOA 42)
     assert_eq!(
         rdrt.point("COMM_HMI").unwrap().source,
         PointSource::ClientStatus("hmi".into())

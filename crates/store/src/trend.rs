@@ -1,0 +1,96 @@
+//! Trends downsampled in the store: one point's numeric values over a time range, folded
+//! into at most so many buckets (one per pixel column of a chart), each with its minimum,
+//! maximum and mean, so that 60 days of a measurement every few seconds (a million
+//! rows) reach a chart as a few thousand numbers.
+
+use chrono::{DateTime, Utc};
+
+/// The most buckets one trend query may ask for.
+pub const MAX_TREND_BUCKETS: usize = 20_000;
+
+/// How a trend query folds a bucket.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
+pub enum TrendMode {
+    /// Every value of the bucket: min, max, mean, count (reads every row of the range:
+    /// exact extremes, a cost that grows with the rows).
+    #[default]
+    Aggregate,
+    /// The bucket's first and last value, found by two index seeks (a cost that grows
+    /// with the buckets only: 60 days of a value every few seconds in tens of
+    /// milliseconds), `min`/`max`/`avg` of those two; a spike between them is not seen.
+    FirstLast,
+}
+
+/// A trend query: `point`'s numeric values (bool as 0/1, integers, floats) with an event
+/// time in `from..to`, in `buckets` equal slices of the range.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrendQuery {
+    /// The point's name.
+    pub point: String,
+    /// The start of the range (inclusive).
+    pub from: DateTime<Utc>,
+    /// The end of the range (exclusive).
+    pub to: DateTime<Utc>,
+    /// How many slices the range is cut into (1..=[`MAX_TREND_BUCKETS`]).
+    pub buckets: usize,
+    /// How a slice is folded.
+    pub mode: TrendMode,
+}
+
+impl TrendQuery {
+    /// A query of `point` over `from..to` in `buckets` slices.
+    pub fn new(
+        point: impl Into<String>,
+        from: DateTime<Utc>,
+        to: DateTime<Utc>,
+        buckets: usize,
+    ) -> TrendQuery {
+        TrendQuery {
+            point: point.into(),
+            from,
+            to,
+            buckets,
+            mode: TrendMode::Aggregate,
+        }
+    }
+
+    /// The query with `mode`.
+    pub fn with_mode(mut self, mode: TrendMode) -> TrendQuery {
+        self.mode = mode;
+        self
+    }
+
+    /// The width of one bucket in milliseconds (at least 1).
+    pub fn bucket_ms(&self) -> i64 {
+        let span = (self.to - self.from).num_milliseconds().max(1);
+        let buckets = i64::try_from(self.buckets.max(1)).unwrap_or(i64::MAX);
+        // Rounded up, so that `buckets` slices cover the whole range.
+        ((span + buckets - 1) / buckets).max(1)
+    }
+}
+
+/// One slice of a trend: what the point's values did in it. Only slices with at least one
+/// value are returned.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TrendBucket {
+    /// The event time of the slice's first value.
+    pub first_time: DateTime<Utc>,
+    /// The event time of the slice's last value.
+    pub last_time: DateTime<Utc>,
+    /// The slice's first value ([`TrendMode::FirstLast`]; `None` when aggregated).
+    pub first: Option<f64>,
+    /// The slice's last value ([`TrendMode::FirstLast`]; `None` when aggregated).
+    pub last: Option<f64>,
+    /// The smallest value.
+    pub min: f64,
+    /// The largest value.
+    pub max: f64,
+    /// The mean of the values.
+    pub avg: f64,
+    /// How many values fell in the slice ([`TrendMode::FirstLast`]: how many were read,
+    /// 1 or 2).
+    pub count: u64,
+    /// Whether any value of the slice was invalid (IV) ([`TrendMode::FirstLast`]: the
+    /// first or the last).
+    pub invalid: bool,
+}
