@@ -206,7 +206,7 @@ def supply():
     svg.el("path", d="M 110 549 V 575 M 200 549 V 575", class_="lv", data_energised=use("UZ_Vystup"))
     svg.el("path", d="M 80 575 H 240", class_="lv bus", data_energised="UZ_Vystup")
     svg.text(80, 598, "", "value small", data_text="UZ_Vystup", data_on="supplied", data_off="NOT SUPPLIED")
-    value(svg, 240, 598, "SZZ_P_kW", "kW", "1", anchor="end")
+    value(svg, 250, 562, "SZZ_P_kW", "kW", "1", anchor="end")
     svg.close("g")
 
     svg.comment("Board RH1.1: main board on the utility connection; RDA's mains input (KHU1 of RDA), RH1.2 and RH in DT")
@@ -216,7 +216,7 @@ def supply():
     board_box(svg, 540, 300, 200, 110, "RH1.1", "main board, S7-1500", link="rh11")
     svg.el("path", d="M 560 360 H 720", class_="lv bus", data_energised="RDA_KHU1_NapetiSit")
     svg.text(560, 390, "autoblock supply, RDA mains", "label small")
-    value(svg, 720, 390, "RH11_P_kW", "kW", "1", anchor="end")
+    value(svg, 730, 337, "RH11_P_kW", "kW", "1", anchor="end")
     svg.el("path", d="M 587 360 V 460 M 693 360 V 460", class_="lv", data_energised="RDA_KHU1_NapetiSit")
     for x, title, screen, live in [(540, "RH1.2", "rh12", "RH12_P1_KHU3_Napeti_na_pripojeni"),
                                    (646, "RH (DT)", "dt", "RHDT_KHU1_Napeti")]:
