@@ -398,13 +398,21 @@ async fn follow_users_file(
             Err(_) => continue,
         };
         let changed: Vec<String> = {
-            let old = users.read().unwrap_or_else(|p| p.into_inner());
-            old.names()
+            // The page's administration changes the users and writes their file under
+            // this lock: a file read before such a change is stale by now, and applying
+            // it would undo the change (the next tick loads the file as it is).
+            let mut old = users.write().unwrap_or_else(|p| p.into_inner());
+            if read_users_file(&path) != known {
+                continue;
+            }
+            let changed = old
+                .names()
                 .filter(|name| old.record(name) != fresh.record(name))
                 .map(str::to_owned)
-                .collect()
+                .collect();
+            *old = fresh;
+            changed
         };
-        *users.write().unwrap_or_else(|p| p.into_inner()) = fresh;
         for name in &changed {
             sessions.remove_user(name);
             tracing::info!(user = %LogText(name), "user removed or changed: sessions ended");

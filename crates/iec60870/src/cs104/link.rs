@@ -189,6 +189,10 @@ async fn drive_client(
             request = control.recv() => match request {
                 Some(Control::Cut) => {
                     *lock(&state.client) = None;
+                    // Nobody reads the client's events from here on: closed, so that a
+                    // client waiting to hand one over (a full channel after a burst)
+                    // gets to the close request instead of waiting for ever.
+                    events.close();
                     client.close().await;
                     state.up.store(false, Ordering::Release);
                     observer.down(&LinkDown::Cut);
@@ -197,6 +201,7 @@ async fn drive_client(
                 Some(Control::Restore) => {}
                 Some(Control::Stop) | None => {
                     *lock(&state.client) = None;
+                    events.close();
                     client.close().await;
                     state.up.store(false, Ordering::Release);
                     return ClientEnd::Stop;
