@@ -101,6 +101,7 @@
       }
       if (showing !== id) return; // the user went elsewhere meanwhile
     }
+    performance.mark("hmi:screen-fetched");
     const parsed = new DOMParser().parseFromString(text, "image/svg+xml");
     const root = parsed.documentElement;
     if (!root || root.nodeName !== "svg" || parsed.querySelector("parsererror")) {
@@ -108,7 +109,10 @@
       return;
     }
     // Sanitised while still inert, then imported: no unsanitised node enters the page.
-    svgRoot = document.importNode(sanitise(root), true);
+    performance.mark("hmi:screen-parsed");
+    const clean = sanitise(root);
+    performance.mark("hmi:screen-sanitised");
+    svgRoot = document.importNode(clean, true);
     svgRoot.removeAttribute("width");
     svgRoot.removeAttribute("height");
     svgRoot.setAttribute("data-screen", id);
@@ -129,9 +133,16 @@
     });
     const hint = HMI.el("span", { class: "hint", text: "drag or scroll to move, pinch to zoom" });
     box.replaceChildren(banner, HMI.el("div", { class: "mimic-tools" }, hint, zoom), svgRoot);
+    performance.mark("hmi:screen-inserted");
     index();
+    performance.mark("hmi:screen-indexed");
     refreshAll();
     fitReadable();
+    // Performance marks for measuring a screen's fill (crates/hmi/benches/live.rs): drawn
+    // now; filled once every bound point shows a valid value (noteFilled).
+    performance.mark("hmi:screen-drawn", { detail: id });
+    filledMarked = false;
+    noteFilled();
     const screen = HMI.screens.find((s) => s.id === id);
     if (screen) document.title = `${screen.title} — ${HMI.session.title || "Stanice HMI"}`;
   }
@@ -487,6 +498,20 @@
     return `${JSON.stringify(point.value)}|${HMI.isInvalid(point)}`;
   }
 
+  // Whether the "screen filled" mark was set for the screen shown; until then, after each
+  // apply, whether every bound point is drawn with a valid value (a pass over the points
+  // per apply, only until the screen has filled once).
+  let filledMarked = false;
+  function noteFilled() {
+    if (filledMarked || !svgRoot) return;
+    for (const name of bound.keys()) {
+      const drawn = applied.get(name);
+      if (drawn === undefined || drawn === "?" || !drawn.endsWith("|false")) return;
+    }
+    filledMarked = true;
+    performance.mark("hmi:screen-filled", { detail: svgRoot.getAttribute("data-screen") });
+  }
+
   function applyPending() {
     frame = null;
     lastApplied = performance.now();
@@ -511,6 +536,7 @@
     }
     if (dialogState && names.has(dialogState.statePoint)) showDialogState();
     if (faceplateState && faceplateState.names.some((name) => names.has(name))) showFaceplate();
+    noteFilled();
   }
 
   // The next frame, or FRAME_MS at the latest: a browser may hold animation frames back
