@@ -33,7 +33,7 @@ use chromium::{browser_available, click, js, until as until_js, Driver};
 use chrono::{DateTime, Utc};
 use fantoccini::Client as Browser;
 use hmi::{Hmi, HmiOptions};
-use http_support::{request as http, Reply};
+use http_support::{request as http, Client};
 use iec60870::time::TimeZonePolicy;
 use serde_json::{json, Value};
 use station::config::Project;
@@ -192,49 +192,7 @@ async fn setup_with_store(store: &str) -> Setup {
     }
 }
 
-struct Client {
-    address: SocketAddr,
-    cookie: String,
-    csrf: String,
-}
-
 impl Client {
-    async fn login(address: SocketAddr, user: &str, password: &str) -> Client {
-        let reply = http(
-            address,
-            "POST",
-            "/api/login",
-            &[],
-            &json!({"username": user, "password": password}).to_string(),
-        )
-        .await;
-        assert_eq!(reply.status, 200, "{}", reply.body);
-        let cookie = reply
-            .header("set-cookie")
-            .map(|v| v.split(';').next().unwrap().to_owned())
-            .unwrap();
-        Client {
-            address,
-            cookie,
-            csrf: reply.json()["csrf"].as_str().unwrap().to_owned(),
-        }
-    }
-
-    async fn get(&self, path: &str) -> Reply {
-        http(self.address, "GET", path, &[("Cookie", &self.cookie)], "").await
-    }
-
-    async fn post(&self, path: &str, body: Value) -> Reply {
-        http(
-            self.address,
-            "POST",
-            path,
-            &[("Cookie", &self.cookie), ("X-CSRF-Token", &self.csrf)],
-            &body.to_string(),
-        )
-        .await
-    }
-
     /// `POST /api/alarms/{id}/{action}`, expecting 200; the alarm.
     async fn alarm_action(&self, id: u64, action: &str, body: Value) -> Value {
         let reply = self

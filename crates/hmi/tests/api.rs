@@ -11,8 +11,7 @@
 
 #[path = "support/http.rs"]
 mod http_client;
-use http_client::{request as http, Reply};
-use std::net::SocketAddr;
+use http_client::{request as http, Client};
 use std::path::Path;
 use std::time::Duration;
 
@@ -143,58 +142,7 @@ async fn setup_with(extra_toml: &str) -> Setup {
     }
 }
 
-struct Client {
-    address: SocketAddr,
-    cookie: String,
-    csrf: String,
-}
-
 impl Client {
-    async fn login(address: SocketAddr, user: &str, password: &str) -> Client {
-        let reply = http(
-            address,
-            "POST",
-            "/api/login",
-            &[],
-            &json!({"username": user, "password": password}).to_string(),
-        )
-        .await;
-        assert_eq!(reply.status, 200, "{}", reply.body);
-        let cookie = reply
-            .headers
-            .iter()
-            .find(|(n, _)| n == "set-cookie")
-            .map(|(_, v)| v.split(';').next().unwrap().to_owned())
-            .unwrap();
-        let set_cookie = &reply
-            .headers
-            .iter()
-            .find(|(n, _)| n == "set-cookie")
-            .unwrap()
-            .1;
-        assert!(set_cookie.contains("HttpOnly") && set_cookie.contains("SameSite=Strict"));
-        Client {
-            address,
-            cookie,
-            csrf: reply.json()["csrf"].as_str().unwrap().to_owned(),
-        }
-    }
-
-    async fn get(&self, path: &str) -> Reply {
-        http(self.address, "GET", path, &[("Cookie", &self.cookie)], "").await
-    }
-
-    async fn post(&self, path: &str, body: Value) -> Reply {
-        http(
-            self.address,
-            "POST",
-            path,
-            &[("Cookie", &self.cookie), ("X-CSRF-Token", &self.csrf)],
-            &body.to_string(),
-        )
-        .await
-    }
-
     async fn point(&self, name: &str) -> Value {
         let points = self.get("/api/points").await.json();
         points["points"]

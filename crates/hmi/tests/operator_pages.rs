@@ -14,7 +14,7 @@
 mod chromium;
 #[path = "support/http.rs"]
 mod http_client;
-use http_client::{request as http, Reply};
+use http_client::{login_reply, request as http, Client};
 use std::net::SocketAddr;
 use std::path::Path;
 use std::time::Duration;
@@ -137,58 +137,6 @@ async fn setup(archive: bool) -> Setup {
         hmi,
         project,
         dir,
-    }
-}
-
-struct Client {
-    address: SocketAddr,
-    cookie: String,
-    csrf: String,
-}
-
-async fn login_reply(address: SocketAddr, user: &str, password: &str) -> Reply {
-    http(
-        address,
-        "POST",
-        "/api/login",
-        &[],
-        &json!({"username": user, "password": password}).to_string(),
-    )
-    .await
-}
-
-impl Client {
-    async fn login(address: SocketAddr, user: &str, password: &str) -> Client {
-        let reply = login_reply(address, user, password).await;
-        assert_eq!(reply.status, 200, "{}", reply.body);
-        let cookie = reply
-            .header("set-cookie")
-            .map(|v| v.split(';').next().unwrap().to_owned())
-            .unwrap();
-        Client {
-            address,
-            cookie,
-            csrf: reply.json()["csrf"].as_str().unwrap().to_owned(),
-        }
-    }
-
-    async fn get(&self, path: &str) -> Reply {
-        http(self.address, "GET", path, &[("Cookie", &self.cookie)], "").await
-    }
-
-    async fn send(&self, method: &str, path: &str, body: Value) -> Reply {
-        http(
-            self.address,
-            method,
-            path,
-            &[("Cookie", &self.cookie), ("X-CSRF-Token", &self.csrf)],
-            &body.to_string(),
-        )
-        .await
-    }
-
-    async fn post(&self, path: &str, body: Value) -> Reply {
-        self.send("POST", path, body).await
     }
 }
 

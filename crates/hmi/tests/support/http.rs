@@ -1,12 +1,13 @@
 //! A plain HTTP/1.1 client for the HMI's API tests: one request on a fresh loopback
 //! connection, the reply's status, headers (names in lower case) and body (chunked
-//! bodies joined). Included by `#[path]` in tests/api.rs and tests/lifts.rs.
+//! bodies joined), and [`Client`], a logged-in user of the API (its session cookie and
+//! CSRF token). Included by `#[path]` in the API and page tests.
 #![allow(dead_code)]
 
 use std::net::SocketAddr;
 use std::time::Duration;
 
-use serde_json::Value;
+use serde_json::{json, Value};
 use tokio::io::{AsyncReadExt as _, AsyncWriteExt as _};
 
 /// An HTTP reply.
@@ -97,5 +98,62 @@ pub(crate) async fn request(
         status,
         headers,
         body,
+    }
+}
+
+/// The reply to `POST /api/login` as `user`.
+pub(crate) async fn login_reply(address: SocketAddr, user: &str, password: &str) -> Reply {
+    request(
+        address,
+        "POST",
+        "/api/login",
+        &[],
+        &json!({"username": user, "password": password}).to_string(),
+    )
+    .await
+}
+
+/// A logged-in user of the HMI's API: its session cookie and its CSRF token, sent with
+/// every request that changes something.
+pub(crate) struct Client {
+    pub(crate) address: SocketAddr,
+    pub(crate) cookie: String,
+    pub(crate) csrf: String,
+}
+
+impl Client {
+    /// Logs in (the test fails unless the HMI answers 200 with a strict, HTTP-only cookie).
+    pub(crate) async fn login(address: SocketAddr, user: &str, password: &str) -> Client {
+        let reply = login_reply(address, user, password).await;
+        assert_eq!(reply.status, 200, "{}", reply.body);
+        let set_cookie = reply.header("set-cookie").unwrap().to_owned();
+        assert!(set_cookie.contains("HttpOnly") && set_cookie.contains("SameSite=Strict"));
+        Client {
+            address,
+            cookie: set_cookie.split(';').next().unwrap().to_owned(),
+            csrf: reply.json()["csrf"].as_str().unwrap().to_owned(),
+        }
+    }
+
+    /// `GET path` in the session.
+    pub(crate) async fn get(&self, path: &str) -> Reply {
+        request(self.address, "GET", path, &[("Cookie", &self.cookie)], "").await
+    }
+
+    /// `method path` with a JSON body, the session and its CSRF token.
+    pub(crate) async fn send(&self, method: &str, path: &str, body: Value) -> Reply {
+        request(
+            self.address,
+            method,
+            path,
+            &[("Cookie", &self.cookie), ("X-CSRF-Token", &self.csrf)],
+            &body.to_string(),
+        )
+        .await
+    }
+
+    /// `POST path` with a JSON body, the session and its CSRF token.
+    pub(crate) async fn post(&self, path: &str, body: Value) -> Reply {
+        self.send("POST", path, body).await
     }
 }
