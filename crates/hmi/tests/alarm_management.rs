@@ -22,10 +22,12 @@
 
 #[path = "support/chromium.rs"]
 mod chromium;
+#[path = "support/site.rs"]
+mod site;
+use site::Site;
 #[path = "support/http.rs"]
 mod http_support;
 
-use std::net::SocketAddr;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
@@ -662,83 +664,6 @@ async fn the_kpi_report_reaches_back_across_a_restart_through_the_store() {
 
 // ---------------------------------------------------------------------------- browser
 
-/// The Vsetín station (every node, the plant, real time) and its web HMI with the
-/// example's own screens, as `stanice demo` runs them.
-struct Site {
-    runtime: Option<Runtime>,
-    hmi: Option<Hmi>,
-    url: String,
-}
-
-impl Site {
-    async fn start() -> Site {
-        let project = Project::load(&vsetin())
-            .unwrap_or_else(|e| panic!("{:?}", e.errors()))
-            .with_port_base(free_port_range(23));
-        let zone = project.station.time_zone;
-        let runtime = Runtime::start(
-            project,
-            RuntimeOptions {
-                nodes: Vec::new(),
-                pacing: Pacing::RealTime { speed: 1.0 },
-                start: Utc::now(),
-                store: StoreChoice::Disabled,
-                device_kinds: station::device::DeviceKinds::builtin(),
-            },
-        )
-        .await
-        .unwrap();
-        let top = runtime.project().top_node().unwrap().clone();
-        let server = runtime
-            .node(&top.name)
-            .and_then(|node| node.server.as_ref())
-            .unwrap()
-            .local_addr();
-        let screens = vsetin().join("hmi");
-        let hmi = Hmi::start(HmiOptions {
-            screens: screens.clone(),
-            users: screens.join("users.toml"),
-            connect: vec![server.to_string()],
-            common_address: top.common_address,
-            listen: SocketAddr::from(([127, 0, 0, 1], 0)),
-            store: Some("sqlite::memory:".into()),
-            zone: TimeZonePolicy::Zone(zone),
-            local_address: None,
-            archive: None,
-        })
-        .await
-        .unwrap();
-        let url = format!("http://{}", hmi.address);
-        Site {
-            runtime: Some(runtime),
-            hmi: Some(hmi),
-            url,
-        }
-    }
-
-    fn hmi(&self) -> &Hmi {
-        self.hmi.as_ref().unwrap()
-    }
-
-    async fn operate(&self, line: &str) {
-        self.runtime
-            .as_ref()
-            .unwrap()
-            .operate(line)
-            .await
-            .unwrap_or_else(|e| panic!("{line}: {e}"));
-    }
-
-    async fn stop(mut self) {
-        if let Some(hmi) = self.hmi.take() {
-            hmi.shutdown().await;
-        }
-        if let Some(runtime) = self.runtime.take() {
-            runtime.shutdown().await;
-        }
-    }
-}
-
 /// Waits until the alarm of a door contact is active (or not) in the HMI.
 async fn door_alarm(site: &Site, point: &str, active: bool) {
     let started = Instant::now();
@@ -805,7 +730,7 @@ async fn no_alarm_flood_at_start_and_the_alarm_line_in_a_real_browser() {
     let Some((driver, chromium)) = browser_available() else {
         return;
     };
-    let site = Site::start().await;
+    let site = Site::start(Utc::now(), 1.0).await;
 
     // --- No flood at start: from the link coming up (the interrogation) through 8 s after
     // it and 6 s more, at most 2 alarms wait for acknowledgement at any moment.

@@ -26,59 +26,14 @@
 
 #[path = "support/chromium.rs"]
 mod chromium;
+#[path = "support/site.rs"]
+mod site;
 use chromium::{browser_available, click, js, until, Driver};
-use std::net::SocketAddr;
+use site::Site;
 
 use chrono::Utc;
 use fantoccini::{Client, Locator};
-use hmi::{Hmi, HmiOptions};
-use iec60870::time::TimeZonePolicy;
 use serde_json::{json, Value};
-use station::config::Project;
-use station::runtime::{Pacing, Runtime, RuntimeOptions, StoreChoice};
-use testkit::ports::free_port_range;
-use testkit::projects::vsetin;
-
-/// The Vsetín station and its HMI on the example's screens; the caller shuts them down.
-async fn site() -> (Runtime, Hmi) {
-    let project = Project::load(&vsetin())
-        .unwrap_or_else(|e| panic!("{:?}", e.errors()))
-        .with_port_base(free_port_range(23));
-    let zone = project.station.time_zone;
-    let runtime = Runtime::start(
-        project,
-        RuntimeOptions {
-            nodes: Vec::new(),
-            pacing: Pacing::RealTime { speed: 1.0 },
-            start: Utc::now(),
-            store: StoreChoice::Disabled,
-            device_kinds: station::device::DeviceKinds::builtin(),
-        },
-    )
-    .await
-    .unwrap();
-    let top = runtime.project().top_node().unwrap().clone();
-    let server = runtime
-        .node(&top.name)
-        .and_then(|node| node.server.as_ref())
-        .unwrap()
-        .local_addr();
-    let screens = vsetin().join("hmi");
-    let hmi = Hmi::start(HmiOptions {
-        screens: screens.clone(),
-        users: screens.join("users.toml"),
-        connect: vec![server.to_string()],
-        common_address: top.common_address,
-        listen: SocketAddr::from(([127, 0, 0, 1], 0)),
-        store: Some("sqlite::memory:".into()),
-        zone: TimeZonePolicy::Zone(zone),
-        local_address: None,
-        archive: None,
-    })
-    .await
-    .unwrap();
-    (runtime, hmi)
-}
 
 async fn log_in_ready(client: &Client, url: &str, user: &str, password: &str) {
     client.goto(&format!("{url}/")).await.unwrap();
@@ -165,8 +120,8 @@ async fn screens_that_tell_the_truth() {
     let Some((driver, chromium)) = browser_available() else {
         return;
     };
-    let (runtime, hmi) = site().await;
-    let url = format!("http://{}", hmi.address);
+    let site = Site::start(Utc::now(), 1.0).await;
+    let url = site.url.clone();
     let driver = Driver::start(&driver, chromium);
     let client = driver.session(1280, 900).await;
     log_in_ready(&client, &url, "operator", "operator-vsetin").await;
@@ -225,7 +180,7 @@ async fn screens_that_tell_the_truth() {
     );
     assert_eq!(facts["commands"], json!("none"), "{facts}");
     // It follows the value and stays open: the plant trips FA1.1.
-    runtime.operate("breaker-tripped RH2_FA1.1").await.unwrap();
+    site.operate("breaker-tripped RH2_FA1.1").await;
     until(
         &client,
         "document.querySelector('#faceplate [data-fact=\"value\"]').textContent === 'open'",
@@ -541,6 +496,5 @@ async fn screens_that_tell_the_truth() {
     assert_eq!(js(&client, "HMI.errors").await, json!([]), "script errors");
     client.close().await.unwrap();
     drop(driver);
-    hmi.shutdown().await;
-    runtime.shutdown().await;
+    site.stop().await;
 }
