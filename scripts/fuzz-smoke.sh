@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # A short run of every cargo-fuzz target: builds them (so they keep compiling) and fuzzes
-# each for FUZZ_SECONDS (default 12: with fifteen targets the smoke stays a few minutes of
+# each for FUZZ_SECONDS (default 12: with sixteen targets the smoke stays a few minutes of
 # a CI run that must stay under 30; longer campaigns set it). Any crash fails the run and leaves the reproducer
 # in fuzz/artifacts/. Needs the nightly toolchain (preinstalled on the project's machine
 # kind); cargo-fuzz is installed from crates.io when missing.
@@ -41,6 +41,9 @@ for target in $targets; do
             printf '\x00\x13\x68\x0e\x0e\x68\x01\x00\x01\x01\x02\x02\x00\x00\x00\x00\x00\x38\x22\x0c\x6d\x16' > "corpus/$target/status"
             printf '\x00\x16\x68\x11\x11\x68\x01\x00\x04\x03\x03\x0a\x00\x07\x2a\x0f\x0e\x03\x16\x3c\x00\x01\x03\xbc\x16' > "corpus/$target/fault"
             printf '\x00\x0b\x68\x06\x06\x68\x01\x00\x04\x05\x00\x00\x0a\x16' > "corpus/$target/empty" ;;
+        # the example projects' mimic screens
+        mimic_*)
+            cp ../examples/*/hmi/*.svg "corpus/$target/" ;;
         # the balance records of spec §7.3 (B1, B3, B4)
         balance_*)
             printf '+   2.345    \r\n' > "corpus/$target/b1"

@@ -17,6 +17,14 @@ fn mime(name: &str) -> &'static str {
     }
 }
 
+/// The entity tag of a file: FNV-1a, 64 bits (a change detector, not a digest against
+/// an adversary; no crate needed for ten lines).
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |hash, byte| {
+        (hash ^ u64::from(*byte)).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
 fn main() -> Result<(), String> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("web");
     println!("cargo:rerun-if-changed={}", dir.display());
@@ -36,14 +44,18 @@ fn main() -> Result<(), String> {
             return Err(format!("{} has no {required}", dir.display()));
         }
     }
-    let mut out = String::from("/// The embedded files of `web/`: (name, content type, bytes).\npub(crate) static FILES: &[(&str, &str, &[u8])] = &[\n");
+    let mut out = String::from("/// The embedded files of `web/`: (name, content type, bytes, entity tag).\npub(crate) static FILES: &[(&str, &str, &[u8], &str)] = &[\n");
     for name in &names {
-        println!("cargo:rerun-if-changed={}", dir.join(name).display());
+        let path = dir.join(name);
+        println!("cargo:rerun-if-changed={}", path.display());
+        let bytes = std::fs::read(&path)
+            .map_err(|error| format!("cannot read {}: {error}", path.display()))?;
         let _ = writeln!(
             out,
-            "    ({name:?}, {:?}, include_bytes!({:?})),",
+            "    ({name:?}, {:?}, include_bytes!({:?}), {:?}),",
             mime(name),
-            dir.join(name).display().to_string()
+            path.display().to_string(),
+            format!("\"{:016x}\"", fnv1a(&bytes))
         );
     }
     out.push_str("];\n");

@@ -409,7 +409,8 @@ impl HmiConfig {
             if !ids.insert(screen.id.as_str()) {
                 return Err(bad("id", format!("duplicate screen id `{}`", screen.id)));
             }
-            if !self.folder.join(&screen.file).is_file() {
+            let path = self.folder.join(&screen.file);
+            if !path.is_file() {
                 return Err(bad(
                     "file",
                     format!(
@@ -418,6 +419,20 @@ impl HmiConfig {
                         screen.file.display()
                     ),
                 ));
+            }
+            // A broken drawing is an error at its line and column now, not a blank
+            // screen in an operator's browser later.
+            let svg = std::fs::read_to_string(&path)
+                .map_err(|error| HmiError::Config(format!("{}: {error}", path.display())))?;
+            if let Err(error) = mimic_svg::clean(&svg) {
+                return Err(HmiError::Config(format!(
+                    "{}:{}:{}: screen `{}`: {}",
+                    path.display(),
+                    error.line,
+                    error.column,
+                    screen.id,
+                    error.message
+                )));
             }
         }
         let single = |name: &str| {
@@ -779,6 +794,30 @@ pub fn camera_origin(url: &str) -> Option<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_broken_screen_file_is_an_error_at_its_line_and_column() {
+        let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
+        let write = |name: &str, text: &str| {
+            std::fs::write(dir.path().join(name), text).unwrap_or_else(|e| panic!("{e}"));
+        };
+        write(
+            "points.csv",
+            "ioa,type,name,description\n1,M_SP_NA_1,A,a point\n",
+        );
+        write(
+            "hmi.toml",
+            "title = \"Test\"\n[[screen]]\nid = \"main\"\ntitle = \"Main\"\nfile = \"main.svg\"\n",
+        );
+        write(
+            "main.svg",
+            "<svg xmlns=\"http://www.w3.org/2000/svg\">\n  <g>\n    <rect data-point=\"A\"/>\n  </h>\n</svg>\n",
+        );
+        let error = HmiConfig::load(dir.path()).err().map(|e| e.to_string());
+        let error = error.unwrap_or_default();
+        assert!(error.contains("main.svg:4:"), "{error}");
+        assert!(error.contains("screen `main`"), "{error}");
+    }
 
     #[test]
     fn a_choice_allows_known_values_and_with_distinct_no_repeats() {

@@ -299,6 +299,7 @@ impl Hmi {
                 });
             }
             None => {
+                let listener = tls::PlainListener(listener);
                 tokio::spawn(async move {
                     let served = axum::serve(listener, app)
                         .with_graceful_shutdown(until_stopped)

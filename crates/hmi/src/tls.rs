@@ -108,6 +108,8 @@ impl TlsListener {
                 if done.is_closed() {
                     return;
                 }
+                let mut stream = stream;
+                no_delay(&mut stream);
                 let acceptor = acceptor.clone();
                 let done = done.clone();
                 tokio::spawn(async move {
@@ -149,8 +151,36 @@ impl Listener for TlsListener {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Peer(pub SocketAddr);
 
-impl Connected<IncomingStream<'_, TcpListener>> for Peer {
-    fn connect_info(stream: IncomingStream<'_, TcpListener>) -> Self {
+/// Live values go out as small WebSocket frames: without TCP_NODELAY, Nagle's algorithm
+/// holds one back until the browser's delayed ACK (up to 40 ms on Linux) whenever an
+/// earlier one is still unacknowledged. Set on every accepted connection, plain or TLS.
+pub(crate) fn no_delay(stream: &mut TcpStream) {
+    if let Err(error) = stream.set_nodelay(true) {
+        tracing::debug!(%error, "TCP_NODELAY not set");
+    }
+}
+
+/// The plain listener: TCP connections with TCP_NODELAY set.
+#[derive(Debug)]
+pub struct PlainListener(pub TcpListener);
+
+impl Listener for PlainListener {
+    type Io = TcpStream;
+    type Addr = SocketAddr;
+
+    async fn accept(&mut self) -> (Self::Io, Self::Addr) {
+        let (mut stream, peer) = Listener::accept(&mut self.0).await;
+        no_delay(&mut stream);
+        (stream, peer)
+    }
+
+    fn local_addr(&self) -> std::io::Result<Self::Addr> {
+        self.0.local_addr()
+    }
+}
+
+impl Connected<IncomingStream<'_, PlainListener>> for Peer {
+    fn connect_info(stream: IncomingStream<'_, PlainListener>) -> Self {
         Peer(*stream.remote_addr())
     }
 }

@@ -152,6 +152,16 @@ pub enum AppError {
         /// Why.
         source: std::io::Error,
     },
+    /// 500: a screen's SVG file is not well-formed (edited since the HMI started).
+    #[error("screen `{id}`, file {file}: {source}")]
+    ScreenInvalid {
+        /// The screen.
+        id: String,
+        /// Its file.
+        file: String,
+        /// Where and why.
+        source: mimic_svg::SvgError,
+    },
     /// 500: the session cookie could not be made into a header.
     #[error("cookie")]
     Cookie,
@@ -206,9 +216,10 @@ impl AppError {
             AppError::Busy(_) | AppError::NoStore | AppError::AuditUnavailable => {
                 StatusCode::SERVICE_UNAVAILABLE
             }
-            AppError::ScreenFile { .. } | AppError::Cookie | AppError::NoPeer => {
-                StatusCode::INTERNAL_SERVER_ERROR
-            }
+            AppError::ScreenFile { .. }
+            | AppError::ScreenInvalid { .. }
+            | AppError::Cookie
+            | AppError::NoPeer => StatusCode::INTERNAL_SERVER_ERROR,
         }
     }
 

@@ -1,7 +1,7 @@
 //! The pages and their static files (embedded from `web/`), and the mimic screens.
 
 use axum::extract::{Path, State};
-use axum::http::{header, HeaderValue};
+use axum::http::{header, HeaderMap, HeaderValue, StatusCode};
 use axum::response::{IntoResponse, Redirect, Response};
 use axum::routing::get;
 use axum::{Json, Router};
@@ -22,38 +22,51 @@ pub(super) fn routes() -> Router<AppState> {
         .route("/api/screens/{id}", get(screen))
 }
 
-/// An embedded file of `web/`, revalidated on each use (`no-cache`).
-fn file(name: &str) -> Result<Response, AppError> {
-    files::FILES
+/// An embedded file of `web/`, revalidated on each use (`no-cache`) by its entity tag: a
+/// reload answers 304 and the browser keeps its copy (and V8 its compiled scripts).
+fn file(name: &str, headers: &HeaderMap) -> Result<Response, AppError> {
+    let (_, mime, bytes, tag) = files::FILES
         .iter()
-        .find(|(n, _, _)| *n == name)
-        .map(|(_, mime, bytes)| {
-            (
-                [
-                    (header::CONTENT_TYPE, HeaderValue::from_static(mime)),
-                    (header::CACHE_CONTROL, HeaderValue::from_static("no-cache")),
-                ],
-                *bytes,
-            )
-                .into_response()
-        })
-        .ok_or(AppError::NotFound)
+        .find(|(n, _, _, _)| *n == name)
+        .ok_or(AppError::NotFound)?;
+    let tag_header = HeaderValue::from_static(tag);
+    let unchanged = headers
+        .get(header::IF_NONE_MATCH)
+        .and_then(|value| value.to_str().ok())
+        .is_some_and(|value| {
+            value
+                .split(',')
+                .any(|t| t.trim() == *tag || t.trim() == "*")
+        });
+    let cache = [
+        (header::CACHE_CONTROL, HeaderValue::from_static("no-cache")),
+        (header::ETAG, tag_header),
+    ];
+    if unchanged {
+        return Ok((StatusCode::NOT_MODIFIED, cache).into_response());
+    }
+    Ok((
+        [(header::CONTENT_TYPE, HeaderValue::from_static(mime))],
+        cache,
+        *bytes,
+    )
+        .into_response())
 }
 
 /// The application, or the login page for a browser without a session.
-async fn index(user: Result<LoggedIn, AppError>) -> Result<Response, AppError> {
+async fn index(user: Result<LoggedIn, AppError>, headers: HeaderMap) -> Result<Response, AppError> {
     if user.is_err() {
         return Ok(Redirect::to("/login").into_response());
     }
-    file("index.html")
+    file("index.html", &headers)
 }
 
-async fn login_page() -> Result<Response, AppError> {
-    file("login.html")
+async fn login_page(headers: HeaderMap) -> Result<Response, AppError> {
+    file("login.html", &headers)
 }
 
-async fn static_file(Path(name): Path<String>) -> Result<Response, AppError> {
-    file(&name)
+async fn static_file(Path(name): Path<String>, headers: HeaderMap) -> Result<Response, AppError> {
+    file(&name, &headers)
 }
 
 /// The public information pages: the screens folder's `public/`, served to anyone, apart
@@ -130,12 +143,21 @@ async fn screen(
         .iter()
         .find(|s| s.id == id)
         .ok_or_else(|| AppError::NoScreen(id.clone()))?;
-    let svg = tokio::fs::read_to_string(config.folder.join(&screen.file))
+    let path = config.folder.join(&screen.file);
+    let text = tokio::fs::read_to_string(&path)
         .await
         .map_err(|source| AppError::ScreenFile {
             id: id.clone(),
             source,
         })?;
+    // Read from the file at every request (an edited screen shows on reload), checked
+    // and made safe here, once, rather than in every browser (mimic-svg): the page puts
+    // the markup in with its HTML parser, without a second pass over 10,000 elements.
+    let svg = mimic_svg::clean(&text).map_err(|source| AppError::ScreenInvalid {
+        id: id.clone(),
+        file: path.display().to_string(),
+        source,
+    })?;
     Ok((
         [(
             header::CONTENT_TYPE,
