@@ -16,8 +16,9 @@
 //! | `notification` | the record of e-mails and webhook calls sent or suppressed: [`NotificationLog`] (a trait of its own), [`NotificationRecord`], [`NotificationQuery`] |
 //! | [`url`]       | store addresses: [`url::StoreUrl`] (`sqlite:PATH`, `sqlite::memory:`, `postgres://...`) |
 //! | `sql`         | what both backends share: the migrations, the queries' SQL, purge, stats, row mapping, and the `EventStore` behaviour itself |
-//! | `sqlite`, `postgres` | the backends, differing only in how they reach their database |
-//! | `recorder`    | [`Recorder`]: the bounded channel and batching writer in front of a store |
+//! | `sqlite`, `postgres` | the backends: how they reach their database, how a batch of events goes in (SQLite: one prepared INSERT OR IGNORE per row; PostgreSQL: binary COPY into a staging table, then INSERT ... ON CONFLICT DO NOTHING), and retention (`postgres::partitions`: day partitions) |
+//! | `policy`      | [`StoragePolicy`]: deadbands (absolute, percent) and storage rate limits per point, applied by the recorder |
+//! | `recorder`    | [`Recorder`]: the bounded channel and batching writer in front of a store; gives every event an idempotent key ([`EventKey`]) |
 //! | `retention`   | [`spawn_retention`]: the periodic purge of old history |
 //!
 //! The backends, the recorder and retention are the feature `database` (on by default);
@@ -33,12 +34,15 @@
 //!                                                 +--> Recorder: bounded channel
 //!                                                      (full: events dropped and counted,
 //!                                                       commands wait for room)
-//!                                                        | write task: one transaction per burst
+//!                                                        | write task: StoragePolicy (deadband,
+//!                                                        | rate limit), an EventKey for each event,
+//!                                                        | one transaction per burst
 //!                                                        v
 //!                      EventStore (SqliteStore | PostgresStore) --> query_events / query_commands
 //!                                                        ^              (HMI event list, CLI)
-//!                      spawn_retention: purge_older_than every interval
-//!                      (events, commands, notifications; never the lift fault archive)
+//!                      spawn_retention: prepare_partitions (7 days ahead) and
+//!                      purge_older_than every interval (events, commands,
+//!                      notifications; never the lift fault archive)
 //!
 //!  lift monitor --append_lift_faults--> EventStore --query_lift_faults--> HMI fault archive
 //!  notifier ----append_notification---> EventStore --query_notifications--> HMI
@@ -64,14 +68,30 @@
 //! # Schema
 //!
 //! Tables `events` and `commands` (migration 1), `lift_faults` and `notifications`
-//! (migration 2), versioned by `schema_version`; the migrations are one
+//! (migration 2), the idempotent key of events and, on PostgreSQL, day partitions
+//! (migration 3), versioned by `schema_version`; the migrations are one
 //! list for both backends (SQL files under `migrations/`, column types filled in per
-//! backend), applied at open, so a database of an older version is brought up to date
-//! when a newer program opens it. Times are
+//! backend; version 3 has a text of its own per backend), applied at open, so a database
+//! of an older version is brought up to date when a newer program opens it (on
+//! PostgreSQL, version 3 converts the old tables into partitioned ones, rows and ids
+//! kept). Times are
 //! milliseconds since the Unix epoch (UTC) in 64-bit integers; values are split into
 //! `value_kind` plus `value_int`/`value_float`/`value_text`; enums are stored as the stable
 //! codes of [`EventCause::code`], [`CommandOutcome::code`] and [`CommandPhase::code`].
 //! `events.event_ms` is the event time ([`EventRecord::event_time`]) that queries order by.
+//! `events.source_id`/`source_seq` hold the [`EventKey`] (NULL without one), unique per
+//! store: appending an event whose key is stored already stores nothing (and answers the
+//! stored event's id), so a batch written again after a crash between its commit and its
+//! acknowledgement is stored once.
+//!
+//! On PostgreSQL `events` and `commands` are RANGE-partitioned by UTC day of the event
+//! time (`event_ms`, `commands.time_ms`): a table `events_YYYYMMDD` per day, made at open
+//! for today and [`DAYS_AHEAD`] days ahead, again with every retention pass, and for any
+//! day an append meets; a time years off (a source clock gone wild) lands in the DEFAULT
+//! partition until its day is made. The indexes of the event list (time, point, node,
+//! invalid only), the command audit (time, user, point, outcome) and the trends (point,
+//! time) are on the partitioned tables, so every day has them; a query with a time range
+//! reads only its days. Ids come from the sequences `event_ids` and `command_ids`.
 //! A lift fault's board time has no zone: `lift_faults.board_ms` holds its wall-clock
 //! reading as if it were UTC (NULL when the board sent an impossible date), and
 //! `lift_faults.filed_ms` the time it is filtered and sorted by
@@ -79,9 +99,12 @@
 //!
 //! # Retention
 //!
-//! [`spawn_retention`] deletes events, command records and notification records older than
-//! its cutoff (the notification record is an audit like the command audit, and grows
-//! with every suppressed repeat of a flapping lift's fault). The lift fault archive is never
+//! [`spawn_retention`] deletes events (by event time), command records and notification
+//! records older than its cutoff. On PostgreSQL events and command records go by whole
+//! days: a day's partition is dropped (not deleted row by row) once all of it is older
+//! than the cutoff, so up to a day more than the retention stays; SQLite deletes rows in
+//! chunks. (The notification record is an audit like the command audit, and grows
+//! with every suppressed repeat of a flapping lift's fault.) The lift fault archive is never
 //! purged: it is kept for years for the service figures (faults per year, MTBF), and it
 //! grows by a board's fault stack, a few records a day at worst.
 //!
@@ -109,6 +132,7 @@ mod error;
 mod lift;
 mod model;
 mod notification;
+mod policy;
 #[cfg(feature = "database")]
 mod postgres;
 mod query;
@@ -131,9 +155,12 @@ pub use error::StoreError;
 pub use lift::{LiftFaultOrder, LiftFaultQuery, LiftFaultRecord};
 pub use model::{
     quality_from_bits, quality_to_bits, value_kind_code, Actor, CommandOutcome, CommandPhase,
-    CommandRecord, EventCause, EventRecord, PointValue, Quality, RecordId, SourceTime,
+    CommandRecord, EventCause, EventKey, EventRecord, PointValue, Quality, RecordId, SourceTime,
 };
 pub use notification::{NotificationOutcome, NotificationQuery, NotificationRecord};
+pub use policy::{Deadband, PointPolicy, StoragePolicy};
+#[cfg(feature = "database")]
+pub use postgres::partitions::{DAYS_AHEAD, ON_DEMAND_FUTURE_DAYS, ON_DEMAND_PAST_DAYS};
 #[cfg(feature = "database")]
 pub use postgres::{PostgresConfig, PostgresStore};
 pub use query::{
@@ -186,7 +213,8 @@ pub trait EventStore: LiftFaultArchive + NotificationLog + Send + Sync {
 
     /// Appends a batch of events in one transaction (all or nothing) and returns the ids the
     /// store assigned, in the order of `events`. Ids grow with insertion order. Times keep
-    /// millisecond precision.
+    /// millisecond precision. An event whose [`EventKey`] the store holds already is not
+    /// stored again: its id is the stored event's.
     fn append_events<'a>(&'a self, events: &'a [EventRecord]) -> StoreFuture<'a, Vec<RecordId>>;
 
     /// Appends one command record and returns its id.
@@ -201,13 +229,23 @@ pub trait EventStore: LiftFaultArchive + NotificationLog + Send + Sync {
         query: &'a CommandQuery,
     ) -> StoreFuture<'a, Page<CommandRecord>>;
 
-    /// Deletes events received before `cutoff`, and command and notification records
-    /// older than `cutoff`; returns how many rows went. The lift fault archive is never
+    /// Deletes events whose event time ([`EventRecord::event_time`]) is before `cutoff`,
+    /// and command and notification records older than `cutoff`; returns how many rows
+    /// went. PostgreSQL drops whole days of events and command records (day partitions):
+    /// the day holding the cutoff stays whole. The lift fault archive is never
     /// purged: it is kept for years (faults per year, MTBF).
     fn purge_older_than(&self, cutoff: DateTime<Utc>) -> StoreFuture<'_, u64>;
 
     /// Row counts and time span.
     fn stats(&self) -> StoreFuture<'_, StoreStats>;
+
+    /// Makes the storage of the days from `now` on ready: on PostgreSQL the day partitions
+    /// of today and [`DAYS_AHEAD`] days ahead (the store does it at open, and the retention
+    /// task with each pass); nothing to do on SQLite.
+    fn prepare_partitions(&self, now: DateTime<Utc>) -> StoreFuture<'_, ()> {
+        let _ = now;
+        Box::pin(async { Ok(()) })
+    }
 
     /// A point's values over a time range, downsampled in the database: per slice of
     /// the range its minimum, maximum and mean (see [`TrendQuery`]), oldest first. The

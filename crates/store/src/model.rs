@@ -48,6 +48,30 @@ pub fn quality_from_bits(bits: u8) -> Quality {
     }
 }
 
+/// The idempotent key of an event: who produced it and its number in that source's
+/// sequence. A store keeps one event per key, so writing a batch again (after a crash
+/// between its commit and its acknowledgement, or a retry after a lost connection) never
+/// stores an event twice. The [`crate::Recorder`] gives every event without a key one of
+/// its own; a source that can replay after a restart (a journal, a buffering outstation)
+/// sets its own, stable across restarts.
+#[derive(Debug, Clone, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct EventKey {
+    /// The source's identity (a node, a link, a recorder's run); not empty.
+    pub source: String,
+    /// The event's number in the source's sequence (at most `i64::MAX`).
+    pub sequence: u64,
+}
+
+impl EventKey {
+    /// The key of event number `sequence` of `source`.
+    pub fn new(source: impl Into<String>, sequence: u64) -> EventKey {
+        EventKey {
+            source: source.into(),
+            sequence,
+        }
+    }
+}
+
 /// One recorded value change of a point.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EventRecord {
@@ -72,6 +96,8 @@ pub struct EventRecord {
     pub cause: EventCause,
     /// Where it came from: the link or node name it arrived over (or the node itself).
     pub origin: String,
+    /// The idempotent key ([`EventKey`]); `None`: no deduplication.
+    pub key: Option<EventKey>,
 }
 
 impl EventRecord {
@@ -89,6 +115,7 @@ impl EventRecord {
             received_time: change.received,
             cause: change.cause,
             origin: origin.to_owned(),
+            key: None,
         }
     }
 
@@ -112,7 +139,14 @@ impl EventRecord {
             source_time: None,
             received_time,
             cause: EventCause::Spontaneous,
+            key: None,
         }
+    }
+
+    /// The event with the idempotent key `key`.
+    pub fn with_key(mut self, key: EventKey) -> EventRecord {
+        self.key = Some(key);
+        self
     }
 
     /// The time the event is filed under for [`crate::TimeBasis::Source`]: the source time

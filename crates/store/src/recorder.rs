@@ -8,13 +8,19 @@
 //! PostgreSQL server gone away) must not grow the process without limit. Events that do
 //! not fit are dropped, counted and reported (a warning at most once a minute); commands
 //! are never dropped: they wait for room.
+//!
+//! Every event leaves with an idempotent key ([`crate::EventKey`]): its own when the
+//! source gave it one, else the recorder's (this run's identity and a sequence number), so
+//! that a batch retried after an error whose commit did happen is not stored twice. A
+//! [`StoragePolicy`] (deadbands, storage rate limits) thins events out before they are
+//! written ([`Recorder::spawn_with_policy`]).
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 use tokio::sync::{mpsc, oneshot};
 
-use crate::{CommandRecord, EventRecord, EventStore};
+use crate::{CommandRecord, EventKey, EventRecord, EventStore, StoragePolicy};
 
 /// Events taken from the channel per transaction at most.
 const BATCH: usize = 1024;
@@ -46,6 +52,8 @@ struct Counters {
     failed: AtomicU64,
     /// Events dropped because the channel was full.
     overflowed: AtomicU64,
+    /// Events the storage policy left out.
+    suppressed: AtomicU64,
     /// When the overflow was last reported.
     overflow_warning: std::sync::Mutex<Option<std::time::Instant>>,
 }
@@ -75,9 +83,31 @@ impl Recorder {
 
     /// As [`Recorder::spawn`], with a channel of `capacity` records.
     pub fn spawn_with_capacity(store: Arc<dyn EventStore>, capacity: usize) -> Recorder {
+        Recorder::spawn_with(store, capacity, StoragePolicy::default())
+    }
+
+    /// As [`Recorder::spawn`], storing only the events `policy` admits.
+    pub fn spawn_with_policy(store: Arc<dyn EventStore>, policy: StoragePolicy) -> Recorder {
+        Recorder::spawn_with(store, CHANNEL_CAPACITY, policy)
+    }
+
+    fn spawn_with(store: Arc<dyn EventStore>, capacity: usize, policy: StoragePolicy) -> Recorder {
         let (sender, receiver) = mpsc::channel(capacity.max(1));
         let counters = Arc::new(Counters::default());
-        tokio::spawn(write_loop(store, receiver, Arc::clone(&counters)));
+        let writer = Writer {
+            store,
+            counters: Arc::clone(&counters),
+            policy,
+            keys: EventKey::new(
+                format!(
+                    "recorder/{}/{}",
+                    std::process::id(),
+                    chrono::Utc::now().timestamp_millis()
+                ),
+                0,
+            ),
+        };
+        tokio::spawn(writer.run(receiver));
         Recorder {
             sender: Some(sender),
             counters,
@@ -190,66 +220,96 @@ impl Recorder {
     pub fn overflowed(&self) -> u64 {
         self.counters.overflowed.load(Ordering::Relaxed)
     }
+
+    /// Events the storage policy left out (deadband, rate limit).
+    pub fn suppressed(&self) -> u64 {
+        self.counters.suppressed.load(Ordering::Relaxed)
+    }
 }
 
-async fn write_loop(
+/// The write task: the store, the policy and the next key of this run.
+struct Writer {
     store: Arc<dyn EventStore>,
-    mut receiver: mpsc::Receiver<Record>,
     counters: Arc<Counters>,
-) {
-    let mut buffer = Vec::with_capacity(BATCH);
-    let mut events = Vec::with_capacity(BATCH);
-    while receiver.recv_many(&mut buffer, BATCH).await > 0 {
-        for record in buffer.drain(..) {
-            match record {
-                Record::Event(event) => events.push(event),
-                Record::Command(command, committed) => {
-                    write_events(&*store, &mut events, &counters).await;
-                    let stored = match store.append_command(&command).await {
-                        Ok(_) => true,
-                        Err(error) => {
-                            counters.failed.fetch_add(1, Ordering::Relaxed);
-                            tracing::error!(%error, point = %command.point, "command record lost");
-                            false
-                        }
-                    };
-                    if let Some(committed) = committed {
-                        let _ = committed.send(stored);
-                    }
-                }
-                Record::Flush(done) => {
-                    write_events(&*store, &mut events, &counters).await;
-                    let _ = done.send(());
-                }
-                Record::Close(done) => {
-                    write_events(&*store, &mut events, &counters).await;
-                    if let Err(error) = store.close().await {
-                        tracing::warn!(%error, "the store did not close cleanly");
-                    }
-                    let _ = done.send(());
-                    // The receiver goes: later records find the channel closed.
-                    return;
-                }
-            }
-        }
-        write_events(&*store, &mut events, &counters).await;
-    }
+    policy: StoragePolicy,
+    /// The key the next event without one gets.
+    keys: EventKey,
 }
 
-async fn write_events(store: &dyn EventStore, events: &mut Vec<EventRecord>, counters: &Counters) {
-    if events.is_empty() {
-        return;
-    }
-    if let Err(error) = store.append_events(events).await {
-        // A batch is all or nothing; retry one by one so that one bad record does not take
-        // its neighbours with it.
-        tracing::warn!(%error, count = events.len(), "event batch refused; writing one by one");
-        for event in events.iter() {
-            if let Err(error) = store.append_events(std::slice::from_ref(event)).await {
-                counters.failed.fetch_add(1, Ordering::Relaxed);
-                tracing::error!(%error, point = %event.point, "event record lost");
+impl Writer {
+    async fn run(mut self, mut receiver: mpsc::Receiver<Record>) {
+        let mut buffer = Vec::with_capacity(BATCH);
+        let mut events = Vec::with_capacity(BATCH);
+        let thin = !self.policy.is_every_change();
+        while receiver.recv_many(&mut buffer, BATCH).await > 0 {
+            for record in buffer.drain(..) {
+                match record {
+                    Record::Event(event) => {
+                        if thin && !self.policy.admit(&event) {
+                            self.counters.suppressed.fetch_add(1, Ordering::Relaxed);
+                        } else {
+                            events.push(self.keyed(event));
+                        }
+                    }
+                    Record::Command(command, committed) => {
+                        self.write_events(&mut events).await;
+                        let stored = match self.store.append_command(&command).await {
+                            Ok(_) => true,
+                            Err(error) => {
+                                self.counters.failed.fetch_add(1, Ordering::Relaxed);
+                                tracing::error!(%error, point = %command.point, "command record lost");
+                                false
+                            }
+                        };
+                        if let Some(committed) = committed {
+                            let _ = committed.send(stored);
+                        }
+                    }
+                    Record::Flush(done) => {
+                        self.write_events(&mut events).await;
+                        let _ = done.send(());
+                    }
+                    Record::Close(done) => {
+                        self.write_events(&mut events).await;
+                        if let Err(error) = self.store.close().await {
+                            tracing::warn!(%error, "the store did not close cleanly");
+                        }
+                        let _ = done.send(());
+                        // The receiver goes: later records find the channel closed.
+                        return;
+                    }
+                }
             }
+            self.write_events(&mut events).await;
         }
     }
-    events.clear();
+
+    /// The event with a key: its own, or the next of this run.
+    fn keyed(&mut self, mut event: EventRecord) -> EventRecord {
+        if event.key.is_none() {
+            event.key = Some(self.keys.clone());
+            self.keys.sequence += 1;
+        }
+        event
+    }
+
+    async fn write_events(&self, events: &mut Vec<EventRecord>) {
+        if events.is_empty() {
+            return;
+        }
+        if let Err(error) = self.store.append_events(events).await {
+            // A batch is all or nothing; retry one by one so that one bad record does not
+            // take its neighbours with it. Had the batch been committed after all (the
+            // connection lost before the answer), the keys make the retry store nothing
+            // twice.
+            tracing::warn!(%error, count = events.len(), "event batch refused; writing one by one");
+            for event in events.iter() {
+                if let Err(error) = self.store.append_events(std::slice::from_ref(event)).await {
+                    self.counters.failed.fetch_add(1, Ordering::Relaxed);
+                    tracing::error!(%error, point = %event.point, "event record lost");
+                }
+            }
+        }
+        events.clear();
+    }
 }

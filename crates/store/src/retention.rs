@@ -1,4 +1,5 @@
-//! Retention: how long the store keeps history, and the background purge.
+//! Retention: how long the store keeps history, and the background task that purges it
+//! and, on PostgreSQL, makes the coming days' partitions ahead.
 
 use chrono::{DateTime, Utc};
 use std::sync::Arc;
@@ -11,7 +12,8 @@ use crate::EventStore;
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[non_exhaustive]
 pub struct Retention {
-    /// Events and command records older than this are deleted. The railway regulator asks
+    /// Events (by event time) and command records older than this are deleted (on
+    /// PostgreSQL by whole days). The railway regulator asks
     /// for at least 60 days, the default.
     pub max_age: Duration,
     /// Time between two purges (default one hour).
@@ -95,7 +97,11 @@ where
         ticks.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
         loop {
             ticks.tick().await;
-            let cutoff = retention.cutoff(clock());
+            let now = clock();
+            if let Err(e) = store.prepare_partitions(now).await {
+                tracing::warn!(error = %e, "retention: making the coming days' partitions failed");
+            }
+            let cutoff = retention.cutoff(now);
             match store.purge_older_than(cutoff).await {
                 Ok(0) => tracing::debug!(%cutoff, "retention: nothing to purge"),
                 Ok(n) => tracing::info!(%cutoff, rows = n, "retention: purged"),

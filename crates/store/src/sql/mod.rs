@@ -44,8 +44,6 @@ pub(crate) enum Param {
     Real(Option<f64>),
     /// A text, or a typed NULL.
     Text(Option<String>),
-    /// A boolean.
-    Bool(bool),
 }
 
 impl Param {
@@ -63,7 +61,6 @@ impl Param {
             Param::Int(_) => "int8",
             Param::Real(_) => "float8",
             Param::Text(_) => "text",
-            Param::Bool(_) => "bool",
         }
     }
 
@@ -73,12 +70,6 @@ impl Param {
             Backend::Sqlite => format!("?{n}"),
             Backend::Postgres => format!("${n}::{}", self.pg_type()),
         }
-    }
-
-    /// The placeholder of parameter `n` standing for an array of such values
-    /// (PostgreSQL's `unnest` of a batch).
-    pub(crate) fn array_placeholder(&self, n: usize) -> String {
-        format!("${n}::{}[]", self.pg_type())
     }
 }
 
@@ -146,6 +137,24 @@ pub(crate) trait Database: Send + Sync {
         rows: Vec<Vec<Param>>,
     ) -> StoreFuture<'_, Vec<RecordId>>;
 
+    /// Deletes events whose event time, and command records whose time, is before
+    /// `cutoff_ms`; returns how many went. SQLite deletes rows in chunks; PostgreSQL drops
+    /// whole day partitions (so up to a day more than the cutoff stays).
+    fn purge_history(&self, cutoff_ms: i64) -> StoreFuture<'_, u64>;
+
+    /// Before a command record of `time_ms` is appended (PostgreSQL makes its day's
+    /// partition).
+    fn before_command(&self, time_ms: i64) -> StoreFuture<'_, ()> {
+        let _ = time_ms;
+        Box::pin(async { Ok(()) })
+    }
+
+    /// Makes the storage for the days from `now` on ready ([`EventStore::prepare_partitions`]).
+    fn prepare_partitions(&self, now: DateTime<Utc>) -> StoreFuture<'_, ()> {
+        let _ = now;
+        Box::pin(async { Ok(()) })
+    }
+
     /// Refreshes the query planner's statistics.
     fn analyze(&self) -> StoreFuture<'_, ()>;
 
@@ -164,6 +173,31 @@ async fn one<D: Database, T: Send + 'static>(
         .into_iter()
         .next()
         .ok_or_else(|| StoreError::Corrupt("a statement returned no row".to_owned()))
+}
+
+/// Deletes the rows of `table` whose `column` is before `cutoff_ms`, in chunks of
+/// [`PURGE_CHUNK`] so that appends interleave with a large purge; returns how many went.
+pub(crate) async fn delete_older<D: Database>(
+    db: &D,
+    table: &str,
+    column: &str,
+    cutoff_ms: i64,
+) -> Result<u64, StoreError> {
+    let (cutoff, limit) = (Param::int(cutoff_ms), Param::int(PURGE_CHUNK));
+    let sql = format!(
+        "DELETE FROM {table} WHERE id IN (SELECT id FROM {table} WHERE {column} < {} LIMIT {})",
+        cutoff.placeholder(D::BACKEND, 1),
+        limit.placeholder(D::BACKEND, 2)
+    );
+    let params = vec![cutoff, limit];
+    let mut total = 0u64;
+    loop {
+        let n = db.execute(sql.clone(), params.clone()).await?;
+        total += n;
+        if n < PURGE_CHUNK.unsigned_abs() {
+            return Ok(total);
+        }
+    }
 }
 
 /// The aggregation of a trend: one row per non-empty bucket of the range, oldest first.
@@ -250,6 +284,36 @@ fn trend_ends_sql(query: &TrendQuery, backend: Backend) -> Statement {
     let value =
         |t: &str| format!("COALESCE({t}.value_float, CAST({t}.value_int AS DOUBLE PRECISION))");
     let (first_value, last_value) = (value("f"), value("l"));
+    if backend == Backend::Postgres {
+        // Each end's row straight from its index seek (LATERAL), not by id afterwards: ids
+        // are not indexed on the day partitions. The plain bounds of the range let the
+        // planner leave out the days outside it; the slice's bounds prune the rest at
+        // run time.
+        let end = |direction: &str| {
+            format!(
+                "(SELECT id, event_ms, quality, value_float, value_int FROM events \
+                  WHERE point = {point} AND event_ms >= {from} AND event_ms >= {from} + i * {width} \
+                    AND event_ms < {from} + (i + 1) * {width} AND event_ms < {to} \
+                    AND value_kind IN (1, 3, 4) \
+                    AND (value_float IS NOT NULL OR value_int IS NOT NULL) \
+                  ORDER BY event_ms {direction}, id {direction} LIMIT 1)"
+            )
+        };
+        let (first, last) = (end("ASC"), end("DESC"));
+        let sql = format!(
+            "SELECT f.event_ms, {first_value}, CAST(f.quality & 1 AS BIGINT), \
+                    l.event_ms, {last_value}, CAST(l.quality & 1 AS BIGINT), \
+                    CAST(CASE WHEN f.id = l.id THEN 1 ELSE 2 END AS BIGINT) \
+             FROM generate_series(CAST(0 AS BIGINT), {slices} - 1) AS i \
+             CROSS JOIN LATERAL {first} AS f CROSS JOIN LATERAL {last} AS l \
+             ORDER BY i"
+        );
+        return Statement {
+            access: Access::Read,
+            sql,
+            params,
+        };
+    }
     let sql = format!(
         "WITH RECURSIVE slices (i) AS ( \
              SELECT CAST(0 AS BIGINT) UNION ALL SELECT i + 1 FROM slices WHERE i + 1 < {slices}), \
@@ -320,6 +384,7 @@ impl<D: Database> EventStore for D {
     fn append_command<'a>(&'a self, command: &'a CommandRecord) -> StoreFuture<'a, RecordId> {
         Box::pin(async move {
             check_command(command)?;
+            self.before_command(to_ms(command.time)).await?;
             let run = insert(
                 D::BACKEND,
                 "commands",
@@ -354,37 +419,19 @@ impl<D: Database> EventStore for D {
 
     fn purge_older_than(&self, cutoff: DateTime<Utc>) -> StoreFuture<'_, u64> {
         Box::pin(async move {
-            let (cutoff, limit) = (Param::int(to_ms(cutoff)), Param::int(PURGE_CHUNK));
-            let bounds = (
-                cutoff.placeholder(D::BACKEND, 1),
-                limit.placeholder(D::BACKEND, 2),
-            );
-            let params = vec![cutoff, limit];
-            let mut total = 0u64;
+            let cutoff = to_ms(cutoff);
+            let mut total = self.purge_history(cutoff).await?;
             // Not `lift_faults`: the fault archive is kept for years (see the crate doc).
-            for (table, col) in [
-                ("events", "received_ms"),
-                ("commands", "time_ms"),
-                ("notifications", "time_ms"),
-            ] {
-                let sql = format!(
-                    "DELETE FROM {table} WHERE id IN \
-                     (SELECT id FROM {table} WHERE {col} < {} LIMIT {})",
-                    bounds.0, bounds.1
-                );
-                loop {
-                    let n = self.execute(sql.clone(), params.clone()).await?;
-                    total += n;
-                    if n < PURGE_CHUNK.unsigned_abs() {
-                        break;
-                    }
-                }
-            }
+            total += delete_older(self, "notifications", "time_ms", cutoff).await?;
             // Refresh the planner's statistics with each (hourly) retention pass: they
             // decide between the point index and the time index for prefix filters.
             self.analyze().await?;
             Ok(total)
         })
+    }
+
+    fn prepare_partitions(&self, now: DateTime<Utc>) -> StoreFuture<'_, ()> {
+        Database::prepare_partitions(self, now)
     }
 
     fn close(&self) -> StoreFuture<'_, ()> {

@@ -9,8 +9,8 @@ use chrono::{DateTime, NaiveDateTime, Utc};
 
 use super::Param;
 use crate::model::{
-    quality_from_bits, quality_to_bits, Actor, CommandOutcome, CommandPhase, CommandRecord,
-    EventCause, EventRecord, PointValue, RecordId, SourceTime,
+    quality_from_bits, Actor, CommandOutcome, CommandPhase, CommandRecord, EventCause, EventKey,
+    EventRecord, PointValue, RecordId, SourceTime,
 };
 use crate::{LiftFaultRecord, NotificationOutcome, NotificationRecord, StoreError, StoreStats};
 
@@ -56,7 +56,8 @@ pub(crate) type Decode<T> = fn(&dyn Columns) -> Result<T, StoreError>;
 
 /// The columns an event is written to, in the order of [`event_params`].
 pub(crate) const EVENT_INSERT: &str = "node, point, ioa, value_kind, value_int, value_float, \
-     value_text, quality, source_ms, source_invalid, received_ms, event_ms, cause, origin";
+     value_text, quality, source_ms, source_invalid, received_ms, event_ms, cause, origin, \
+     source_id, source_seq";
 
 /// The columns a command record is written to, in the order of [`command_params`].
 pub(crate) const COMMAND_INSERT: &str = "time_ms, actor_kind, actor, node, point, ioa, \
@@ -64,7 +65,8 @@ pub(crate) const COMMAND_INSERT: &str = "time_ms, actor_kind, actor, node, point
 
 /// The columns every event query selects, in the order [`event_from_row`] reads them.
 pub(crate) const EVENT_COLUMNS: &str = "id, node, point, ioa, value_kind, value_int, value_float, \
-     value_text, quality, source_ms, source_invalid, received_ms, cause, origin";
+     value_text, quality, source_ms, source_invalid, received_ms, cause, origin, source_id, \
+     source_seq";
 
 /// The columns every command query selects, in the order [`command_from_row`] reads them.
 pub(crate) const COMMAND_COLUMNS: &str = "id, time_ms, actor_kind, actor, node, point, ioa, \
@@ -94,24 +96,9 @@ pub(crate) const STATS: &str = "SELECT (SELECT count(*) FROM events), \
      (SELECT min(received_ms) FROM events), (SELECT max(received_ms) FROM events), \
      (SELECT count(*) FROM commands)";
 
-/// An event as the parameters of one row of [`EVENT_INSERT`].
-pub(crate) fn event_params(e: &EventRecord) -> Vec<Param> {
-    let mut row = vec![
-        Param::text(&e.node),
-        Param::text(&e.point),
-        Param::Int(e.ioa.map(i64::from)),
-    ];
-    row.extend(value_params(&e.value));
-    row.extend([
-        Param::int(i64::from(quality_to_bits(e.quality))),
-        Param::Int(e.source_time.map(|s| to_ms(s.time))),
-        Param::Bool(e.source_time.is_some_and(|s| s.invalid)),
-        Param::int(to_ms(e.received_time)),
-        Param::int(to_ms(e.event_time())),
-        Param::int(i64::from(e.cause.code())),
-        Param::text(&e.origin),
-    ]);
-    row
+/// A key's sequence number as stored (checked by [`check_event`] to fit).
+pub(crate) fn key_sequence(sequence: u64) -> i64 {
+    i64::try_from(sequence).unwrap_or(i64::MAX)
 }
 
 /// A command record as the parameters of one row of [`COMMAND_INSERT`].
@@ -158,6 +145,14 @@ pub(crate) fn event_from_row(r: &dyn Columns) -> Result<EventRecord, StoreError>
         cause: EventCause::from_code(cause)
             .ok_or_else(|| StoreError::Corrupt(format!("unknown cause {cause}")))?,
         origin: r.need_text(13)?,
+        key: match (r.text(14)?, r.int(15)?) {
+            (Some(source), Some(sequence)) => Some(EventKey {
+                source,
+                sequence: u64::try_from(sequence)
+                    .map_err(|_| StoreError::Corrupt(format!("key sequence {sequence}")))?,
+            }),
+            _ => None,
+        },
     })
 }
 
@@ -276,19 +271,29 @@ pub(crate) fn stats_from_row(r: &dyn Columns) -> Result<StoreStats, StoreError> 
     })
 }
 
-/// The value as the `(value_kind, value_int, value_float, value_text)` columns.
-fn value_params(value: &PointValue) -> [Param; 4] {
-    let kind = Param::int(i64::from(crate::model::value_kind_code(value)));
-    let (int, float, text) = match value {
+/// The value as its `(value_int, value_float, value_text)` columns.
+pub(crate) fn value_columns(value: &PointValue) -> (Option<i64>, Option<f64>, Option<&str>) {
+    match value {
         PointValue::Bool(b) => (Some(i64::from(*b)), None, None),
         PointValue::DoublePoint(d) => (Some(i64::from(*d)), None, None),
         PointValue::Int(i) => (Some(*i), None, None),
         // NaN is kept as a NULL float (SQLite turns NaN into NULL anyway).
         PointValue::Float(f) => (None, (!f.is_nan()).then_some(*f), None),
         PointValue::Bits(b) => (Some(i64::from(*b)), None, None),
-        PointValue::Text(t) => (None, None, Some(t.clone())),
-    };
-    [kind, Param::Int(int), Param::Real(float), Param::Text(text)]
+        PointValue::Text(t) => (None, None, Some(t.as_str())),
+    }
+}
+
+/// The value as the `(value_kind, value_int, value_float, value_text)` columns.
+fn value_params(value: &PointValue) -> [Param; 4] {
+    let kind = Param::int(i64::from(crate::model::value_kind_code(value)));
+    let (int, float, text) = value_columns(value);
+    [
+        kind,
+        Param::Int(int),
+        Param::Real(float),
+        Param::Text(text.map(str::to_owned)),
+    ]
 }
 
 /// The value from its four columns starting at `first`; a row that does not fit is
@@ -370,6 +375,16 @@ pub(crate) fn check_event(e: &EventRecord) -> Result<(), StoreError> {
     check_text("node name", &e.node, false)?;
     check_text("point name", &e.point, false)?;
     check_text("origin", &e.origin, true)?;
+    if let Some(key) = &e.key {
+        check_text("key source", &key.source, false)?;
+        if i64::try_from(key.sequence).is_err() {
+            return Err(StoreError::InvalidRecord(format!(
+                "key sequence {} above {}",
+                key.sequence,
+                i64::MAX
+            )));
+        }
+    }
     check_value(&e.value)
 }
 

@@ -11,6 +11,18 @@ use crate::{Backend, StoreError};
 struct Migration {
     version: i64,
     sql: &'static str,
+    /// PostgreSQL's own text where the step differs in more than column types (the
+    /// partitioning of version 3); `None`: `sql` for both.
+    postgres: Option<&'static str>,
+}
+
+impl Migration {
+    fn sql(&self, backend: Backend) -> &'static str {
+        match (backend, self.postgres) {
+            (Backend::Postgres, Some(sql)) => sql,
+            _ => self.sql,
+        }
+    }
 }
 
 /// The migrations, in version order.
@@ -18,10 +30,19 @@ const MIGRATIONS: &[Migration] = &[
     Migration {
         version: 1,
         sql: include_str!("../../migrations/0001_init.sql"),
+        postgres: None,
     },
     Migration {
         version: 2,
         sql: include_str!("../../migrations/0002_lift.sql"),
+        postgres: None,
+    },
+    Migration {
+        version: 3,
+        sql: include_str!("../../migrations/0003_keys.sqlite.sql"),
+        postgres: Some(include_str!(
+            "../../migrations/0003_partitions.postgres.sql"
+        )),
     },
 ];
 
@@ -110,7 +131,9 @@ pub(crate) fn pending(
             version: m.version,
             sql: format!(
                 "{};\nINSERT INTO schema_version (version, applied_ms) VALUES ({}, {now_ms})",
-                expand(backend, m.sql).trim_end().trim_end_matches(';'),
+                expand(backend, m.sql(backend))
+                    .trim_end()
+                    .trim_end_matches(';'),
                 m.version
             ),
         })
@@ -125,15 +148,19 @@ mod tests {
     #[test]
     fn the_list_is_in_version_order() {
         assert!(MIGRATIONS.windows(2).all(|w| w[0].version < w[1].version));
-        assert_eq!(supported(), 2);
+        assert_eq!(supported(), 3);
     }
 
     #[test]
     fn an_old_database_gets_only_the_newer_steps() {
         let steps = pending(Backend::Sqlite, 1, 0).unwrap();
-        assert_eq!(steps.iter().map(|s| s.version).collect::<Vec<_>>(), [2]);
+        assert_eq!(steps.iter().map(|s| s.version).collect::<Vec<_>>(), [2, 3]);
         assert!(steps[0].sql.contains("CREATE TABLE lift_faults"));
-        assert!(pending(Backend::Postgres, 2, 0).unwrap().is_empty());
+        assert!(steps[1].sql.contains("events_key"));
+        assert!(!steps[1].sql.contains("PARTITION"));
+        let steps = pending(Backend::Postgres, 2, 0).unwrap();
+        assert!(steps[0].sql.contains("PARTITION BY RANGE (event_ms)"));
+        assert!(pending(Backend::Postgres, 3, 0).unwrap().is_empty());
     }
 
     #[test]

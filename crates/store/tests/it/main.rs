@@ -9,7 +9,9 @@
     clippy::indexing_slicing
 )]
 
+mod crash;
 mod fixture;
+mod partitions;
 mod pg;
 mod recorder;
 mod retention;
@@ -57,6 +59,8 @@ on_both_backends!(
     command_audit_round_trip_and_queries,
     command_pagination,
     purge_by_age,
+    purge_goes_by_event_time,
+    keyed_events_are_stored_once,
     stats_count_rows,
     batch_of_100k_events,
     concurrent_writers,

@@ -134,3 +134,43 @@ async fn a_stalled_store_drops_counted_events_but_keeps_every_command() {
     let (events, _, failed) = recorder.counts();
     assert_eq!((events, failed), (1000, 0));
 }
+
+/// The storage policy thins a fast counter out before the store sees it, and every event
+/// the recorder writes carries a key of its own (one source, consecutive numbers).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_policy_thins_out_before_writing_and_every_event_gets_a_key() {
+    use store::{PointPolicy, StoragePolicy};
+    let store: Arc<dyn EventStore> = Arc::from(open_store("sqlite::memory:").await.unwrap());
+    let policy = StoragePolicy::new(
+        PointPolicy::default().with_min_interval(std::time::Duration::from_secs(60)),
+    );
+    let recorder = Recorder::spawn_with_policy(Arc::clone(&store), policy);
+    // A counter changing every 0.5 s for an hour, and a breaker switching as often.
+    for i in 0..7200 {
+        recorder.event(ev("C", PointValue::Int(i), i * 500));
+        recorder.event(ev("Q", PointValue::Bool(i % 2 == 0), i * 500));
+    }
+    recorder.flush().await;
+    assert_eq!(store.stats().await.unwrap().events, 60 + 7200);
+    assert_eq!(recorder.suppressed(), 7200 - 60);
+    let mut keys = Vec::new();
+    let mut after = None;
+    loop {
+        let page = store
+            .query_events(&EventQuery::default().with_limit(1000).with_after(after))
+            .await
+            .unwrap();
+        keys.extend(page.items.iter().map(|e| e.key.clone().unwrap()));
+        after = page.next;
+        if after.is_none() {
+            break;
+        }
+    }
+    let source = keys[0].source.clone();
+    assert!(source.starts_with("recorder/"), "{source}");
+    assert!(keys.iter().all(|k| k.source == source));
+    let mut numbers: Vec<u64> = keys.iter().map(|k| k.sequence).collect();
+    numbers.sort_unstable();
+    assert_eq!(numbers, (0..7260).collect::<Vec<_>>());
+    recorder.close().await;
+}

@@ -154,7 +154,7 @@ async fn sqlite_refuses_a_newer_schema() {
             err,
             StoreError::SchemaTooNew {
                 found: 99,
-                supported: 2
+                supported: 3
             }
         ),
         "{err}"
@@ -194,7 +194,7 @@ async fn postgres_persists_across_reopen_and_refuses_a_newer_schema() {
             err,
             StoreError::SchemaTooNew {
                 found: 42,
-                supported: 2
+                supported: 3
             }
         ),
         "{err}"
@@ -298,7 +298,7 @@ async fn sqlite_migrates_a_version_1_database() {
         .unwrap()
         .collect::<Result<_, _>>()
         .unwrap();
-    assert_eq!(versions, [1, 2]);
+    assert_eq!(versions, [1, 2, 3]);
     // Opening again migrates nothing.
     drop(conn);
     check_reopened(
@@ -336,6 +336,35 @@ async fn postgres_migrates_a_version_1_database() {
     {
         let store = open_store(&store_url).await.unwrap();
         check_migrated_to_2(&*store).await;
+        // Version 3 made `events` partitioned by day, the old row in its day, its id kept,
+        // and new ids after it.
+        let partitioned: i64 = client
+            .query_one(
+                &format!(
+                    "SELECT count(*) FROM pg_partitioned_table \
+                     WHERE partrelid IN ('{schema}.events'::regclass, '{schema}.commands'::regclass)"
+                ),
+                &[],
+            )
+            .await
+            .unwrap()
+            .get(0);
+        assert_eq!(partitioned, 2);
+        let old_day: i64 = client
+            .query_one(
+                &format!("SELECT count(*) FROM {schema}.events_19700101"),
+                &[],
+            )
+            .await
+            .unwrap()
+            .get(0);
+        assert_eq!(old_day, 1);
+        let old = store.query_events(&EventQuery::default()).await.unwrap();
+        let ids = store
+            .append_events(&[ev("NEW", PointValue::Int(1), 0)])
+            .await
+            .unwrap();
+        assert!(ids[0] > old.items[0].id.unwrap());
     }
     let versions: Vec<i64> = client
         .query(
@@ -347,8 +376,15 @@ async fn postgres_migrates_a_version_1_database() {
         .iter()
         .map(|r| r.get(0))
         .collect();
-    assert_eq!(versions, [1, 2]);
-    check_reopened(&*open_store(&store_url).await.unwrap()).await;
+    assert_eq!(versions, [1, 2, 3]);
+    let reopened = open_store(&store_url).await.unwrap();
+    let archive = reopened
+        .query_lift_faults(&LiftFaultQuery::default())
+        .await
+        .unwrap();
+    assert_eq!(archive.total, 1);
+    assert_eq!(reopened.stats().await.unwrap().events, 2);
+    drop(reopened);
     client
         .batch_execute(&format!("DROP SCHEMA {schema} CASCADE"))
         .await

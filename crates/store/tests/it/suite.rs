@@ -10,8 +10,8 @@ pub(crate) use lift::*;
 
 use store::{
     quality_from_bits, Actor, CommandOutcome, CommandPhase, CommandQuery, CommandRecord, Cursor,
-    EventCause, EventQuery, EventRecord, EventStore, Order, Page, PointValue, Quality, SourceTime,
-    StoreError, TimeBasis, MAX_PAGE_SIZE,
+    EventCause, EventKey, EventQuery, EventRecord, EventStore, Order, Page, PointValue, Quality,
+    SourceTime, StoreError, TimeBasis, MAX_PAGE_SIZE,
 };
 
 /// 2026-03-01 00:00:00 UTC, the base of every test time.
@@ -643,17 +643,10 @@ pub(crate) async fn command_pagination(store: Arc<dyn EventStore>) {
 
 pub(crate) async fn purge_by_age(store: Arc<dyn EventStore>) {
     let day = 86_400_000i64;
-    // 30 000 events over 100 days (purge works in chunks of 10 000).
+    // 30 000 events over 100 days (SQLite purges in chunks of 10 000; PostgreSQL drops
+    // whole day partitions: the cutoff is a UTC midnight, so both purge the same rows).
     let events: Vec<_> = (0..30_000i64)
-        .map(|i| {
-            let mut e = ev("P", PointValue::Int(i), i * (100 * day / 30_000));
-            // Source time does not matter for retention: the station's clock does.
-            e.source_time = Some(SourceTime {
-                time: at_ms(200 * day),
-                invalid: false,
-            });
-            e
-        })
+        .map(|i| ev("P", PointValue::Int(i), i * (100 * day / 30_000)))
         .collect();
     store.append_events(&events).await.unwrap();
     for d in 0..100 {
@@ -680,13 +673,93 @@ pub(crate) async fn purge_by_age(store: Arc<dyn EventStore>) {
         .await
         .unwrap();
     assert_eq!(oldest.items[0].time, cutoff);
-    // Purging again deletes nothing; appends still work.
+    // Purging again deletes nothing; appends still work, also of a day already purged.
     assert_eq!(store.purge_older_than(cutoff).await.unwrap(), 0);
     store
         .append_events(&[ev("P", PointValue::Int(1), 0)])
         .await
         .unwrap();
     assert_eq!(store.purge_older_than(cutoff).await.unwrap(), 1);
+}
+
+/// Retention goes by the event time (the partition key on PostgreSQL): an event received
+/// late but stamped at its source before the cutoff goes, one stamped after it stays.
+pub(crate) async fn purge_goes_by_event_time(store: Arc<dyn EventStore>) {
+    let day = 86_400_000i64;
+    let stamped = |received: i64, source: i64| {
+        let mut e = ev("P", PointValue::Int(source), received);
+        e.source_time = Some(SourceTime::at(at_ms(source)));
+        e
+    };
+    store
+        .append_events(&[
+            stamped(50 * day, 10 * day), // buffered at the source, sent late
+            stamped(5 * day, 45 * day),  // a source clock ahead
+            stamped(50 * day, 50 * day),
+        ])
+        .await
+        .unwrap();
+    assert_eq!(store.purge_older_than(at_ms(40 * day)).await.unwrap(), 1);
+    let left = all_events(
+        &*store,
+        EventQuery::default()
+            .with_order(Order::OldestFirst)
+            .with_limit(10),
+    )
+    .await;
+    let values: Vec<_> = left.iter().map(|e| e.value.clone()).collect();
+    assert_eq!(
+        values,
+        [PointValue::Int(45 * day), PointValue::Int(50 * day)]
+    );
+}
+
+/// The idempotent key: a batch written again (a crash between commit and acknowledgement,
+/// then the retry) stores nothing twice, and answers the stored ids; events without a key
+/// are all kept.
+pub(crate) async fn keyed_events_are_stored_once(store: Arc<dyn EventStore>) {
+    let keyed = |seq: u64| {
+        ev("K", PointValue::Int(seq as i64), seq as i64 * 10)
+            .with_key(EventKey::new("RH2/run-1", seq))
+    };
+    let first: Vec<_> = (0..100).map(keyed).collect();
+    let ids = store.append_events(&first).await.unwrap();
+    // The retry overlaps: 50..100 again, and 100..150 new; and one duplicate within it.
+    let mut retry: Vec<_> = (50..150).map(keyed).collect();
+    retry.push(keyed(120));
+    let again = store.append_events(&retry).await.unwrap();
+    assert_eq!(again.len(), retry.len());
+    assert_eq!(&again[..50], &ids[50..]);
+    assert_eq!(again[100], again[70]);
+    // The same key from another source is another event; unkeyed events are all kept.
+    store
+        .append_events(&[
+            ev("K", PointValue::Int(0), 0).with_key(EventKey::new("RH2/run-2", 0)),
+            ev("K", PointValue::Int(0), 0),
+            ev("K", PointValue::Int(0), 0),
+        ])
+        .await
+        .unwrap();
+    let got = all_events(
+        &*store,
+        EventQuery::default()
+            .with_order(Order::OldestFirst)
+            .with_limit(MAX_PAGE_SIZE),
+    )
+    .await;
+    assert_eq!(got.len(), 153);
+    let mut keys: Vec<_> = got.iter().filter_map(|e| e.key.clone()).collect();
+    assert_eq!(keys.len(), 151);
+    keys.sort();
+    keys.dedup();
+    assert_eq!(keys.len(), 151, "a key stored twice");
+    assert_eq!(got[0].key, Some(EventKey::new("RH2/run-1", 0)));
+    // A key's sequence must fit the database's 64-bit integer.
+    let too_big = ev("K", PointValue::Int(0), 0).with_key(EventKey::new("S", u64::MAX));
+    assert!(matches!(
+        store.append_events(&[too_big]).await,
+        Err(StoreError::InvalidRecord(_))
+    ));
 }
 
 pub(crate) async fn stats_count_rows(store: Arc<dyn EventStore>) {

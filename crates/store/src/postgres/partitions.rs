@@ -1,0 +1,264 @@
+//! The day partitions of `events` and `commands` on PostgreSQL (schema version 3): making
+//! the days an append or the calendar needs, and dropping the days retention no longer
+//! keeps.
+//!
+//! A partition is one UTC day of the table's time (`events.event_ms`, `commands.time_ms`),
+//! named `events_YYYYMMDD`; times without a day partition go to the DEFAULT partition
+//! (`events_default`). The database function `stanice_day_partition` (migration 3) makes a
+//! day, moving that day's rows out of the DEFAULT partition first. The store makes today
+//! and [`DAYS_AHEAD`] days ahead at open and with each retention pass, and any other day an
+//! append meets (within [`ON_DEMAND_PAST_DAYS`] back and [`ON_DEMAND_FUTURE_DAYS`] ahead of
+//! today, so a source clock gone wild fills the DEFAULT partition, not the catalogue with
+//! thousands of tables). Retention drops every partition whose whole day is older than its
+//! cutoff and deletes the DEFAULT partition's rows older than it.
+
+use std::collections::HashSet;
+use std::sync::atomic::{AtomicI64, Ordering};
+use std::sync::Mutex;
+
+use chrono::{DateTime, NaiveDate, Utc};
+use tokio_postgres::Client;
+
+use crate::StoreError;
+
+/// One day in milliseconds.
+pub(crate) const DAY_MS: i64 = 86_400_000;
+
+/// Days after today whose partitions the store keeps made.
+pub const DAYS_AHEAD: i64 = 7;
+
+/// How many days before today an append's time may lie and still get a day partition.
+pub const ON_DEMAND_PAST_DAYS: i64 = 3_660;
+
+/// How many days after today an append's time may lie and still get a day partition.
+pub const ON_DEMAND_FUTURE_DAYS: i64 = 366;
+
+/// A partitioned table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub(crate) enum History {
+    /// `events`, by `event_ms`.
+    Events,
+    /// `commands` (the command audit), by `time_ms`.
+    Commands,
+}
+
+impl History {
+    pub(crate) const ALL: [History; 2] = [History::Events, History::Commands];
+
+    pub(crate) fn table(self) -> &'static str {
+        match self {
+            History::Events => "events",
+            History::Commands => "commands",
+        }
+    }
+
+    fn key(self) -> &'static str {
+        match self {
+            History::Events => "event_ms",
+            History::Commands => "time_ms",
+        }
+    }
+}
+
+/// The start of the UTC day holding `ms`.
+pub(crate) fn day_of(ms: i64) -> i64 {
+    ms.div_euclid(DAY_MS) * DAY_MS
+}
+
+/// The start of the day a partition's name says (`events_20260301`), `None` for the
+/// DEFAULT partition or a name the store did not make.
+fn day_of_name(history: History, name: &str) -> Option<i64> {
+    let digits = name.strip_prefix(history.table())?.strip_prefix('_')?;
+    let date = NaiveDate::parse_from_str(digits, "%Y%m%d").ok()?;
+    Some(date.and_hms_opt(0, 0, 0)?.and_utc().timestamp_millis())
+}
+
+/// The days known to have a partition, and the retention's last cutoff.
+#[derive(Debug)]
+pub(crate) struct Partitions {
+    known: Mutex<HashSet<(History, i64)>>,
+    /// Days wholly before this (ms) are retention's: no partition is made for them again.
+    kept_from: AtomicI64,
+}
+
+impl Default for Partitions {
+    fn default() -> Partitions {
+        Partitions {
+            known: Mutex::default(),
+            kept_from: AtomicI64::new(i64::MIN),
+        }
+    }
+}
+
+impl Partitions {
+    /// The days of `times` that need their partition made (not known to exist, within the
+    /// on-demand window around `now`, not already given up by retention).
+    pub(crate) fn missing(
+        &self,
+        history: History,
+        times: impl IntoIterator<Item = i64>,
+        now: DateTime<Utc>,
+    ) -> Vec<i64> {
+        let today = day_of(now.timestamp_millis());
+        let earliest = (today - ON_DEMAND_PAST_DAYS * DAY_MS).max(day_of(
+            self.kept_from
+                .load(Ordering::Relaxed)
+                .max(i64::MIN + DAY_MS),
+        ));
+        let latest = today + ON_DEMAND_FUTURE_DAYS * DAY_MS;
+        let known = self.known.lock().unwrap_or_else(|p| p.into_inner());
+        let mut days: Vec<i64> = times
+            .into_iter()
+            .map(day_of)
+            .filter(|day| (earliest..=latest).contains(day) && !known.contains(&(history, *day)))
+            .collect();
+        days.sort_unstable();
+        days.dedup();
+        days
+    }
+
+    /// Makes the partitions of `days` (those missing), on `client` outside any
+    /// transaction of the caller, and remembers them.
+    pub(crate) async fn make(
+        &self,
+        client: &Client,
+        history: History,
+        days: &[i64],
+    ) -> Result<(), StoreError> {
+        for &day in days {
+            let made: bool = client
+                .query_one(
+                    "SELECT stanice_day_partition($1::text, $2::int8)",
+                    &[&history.table(), &day],
+                )
+                .await?
+                .try_get(0)?;
+            if made {
+                tracing::debug!(
+                    table = history.table(),
+                    day_ms = day,
+                    "made a day partition"
+                );
+            }
+            self.known
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .insert((history, day));
+        }
+        Ok(())
+    }
+
+    /// Makes today's partitions and [`DAYS_AHEAD`] days ahead, of both tables.
+    pub(crate) async fn make_ahead(
+        &self,
+        client: &Client,
+        now: DateTime<Utc>,
+    ) -> Result<(), StoreError> {
+        let today = day_of(now.timestamp_millis());
+        let days: Vec<i64> = (0..=DAYS_AHEAD).map(|d| today + d * DAY_MS).collect();
+        for history in History::ALL {
+            let missing = self.missing(history, days.iter().copied(), now);
+            self.make(client, history, &missing).await?;
+        }
+        Ok(())
+    }
+
+    /// Drops every partition of `history` whose day ends at or before `cutoff_ms` and
+    /// deletes the DEFAULT partition's rows older than it; returns the rows gone.
+    pub(crate) async fn drop_before(
+        &self,
+        client: &Client,
+        history: History,
+        cutoff_ms: i64,
+    ) -> Result<u64, StoreError> {
+        self.kept_from.fetch_max(cutoff_ms, Ordering::Relaxed);
+        let partitions = client
+            .query(
+                "SELECT c.relname::text FROM pg_inherits i JOIN pg_class c ON c.oid = i.inhrelid \
+                 WHERE i.inhparent = to_regclass($1::text)",
+                &[&history.table()],
+            )
+            .await?;
+        let mut gone = 0u64;
+        for row in partitions {
+            let name: String = row.try_get(0)?;
+            let Some(day) = day_of_name(history, &name) else {
+                continue;
+            };
+            if day + DAY_MS > cutoff_ms {
+                continue;
+            }
+            // The name is one the store made (checked above): letters, digits, '_'.
+            let rows: i64 = client
+                .query_one(&format!("SELECT count(*) FROM {name}"), &[])
+                .await?
+                .try_get(0)?;
+            client
+                .batch_execute(&format!("DROP TABLE IF EXISTS {name}"))
+                .await?;
+            self.known
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .remove(&(history, day));
+            tracing::info!(table = history.table(), partition = %name, rows, "retention dropped a day");
+            gone += u64::try_from(rows).unwrap_or(0);
+        }
+        gone += client
+            .execute(
+                &format!(
+                    "DELETE FROM {}_default WHERE {} < $1::int8",
+                    history.table(),
+                    history.key()
+                ),
+                &[&cutoff_ms],
+            )
+            .await?;
+        Ok(gone)
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+    use chrono::TimeZone;
+
+    #[test]
+    fn days_are_utc_days_also_before_1970() {
+        assert_eq!(day_of(0), 0);
+        assert_eq!(day_of(DAY_MS - 1), 0);
+        assert_eq!(day_of(-1), -DAY_MS);
+        let t = Utc
+            .with_ymd_and_hms(2026, 3, 1, 0, 0, 0)
+            .unwrap()
+            .timestamp_millis();
+        assert_eq!(day_of_name(History::Events, "events_20260301"), Some(t));
+        assert_eq!(day_of_name(History::Commands, "commands_20260301"), Some(t));
+        assert_eq!(day_of_name(History::Events, "events_default"), None);
+        assert_eq!(day_of_name(History::Events, "commands_20260301"), None);
+    }
+
+    #[test]
+    fn only_unknown_days_within_the_window_are_made() {
+        let now = Utc.with_ymd_and_hms(2026, 3, 1, 12, 0, 0).unwrap();
+        let p = Partitions::default();
+        let today = day_of(now.timestamp_millis());
+        let times = [
+            today + 5,
+            today + 7,
+            today + DAY_MS,
+            today + 400 * DAY_MS,  // a clock a year ahead: DEFAULT
+            today - 4000 * DAY_MS, // eleven years back: DEFAULT
+        ];
+        assert_eq!(
+            p.missing(History::Events, times, now),
+            [today, today + DAY_MS]
+        );
+        p.known.lock().unwrap().insert((History::Events, today));
+        assert_eq!(p.missing(History::Events, times, now), [today + DAY_MS]);
+        assert_eq!(p.missing(History::Commands, times, now).len(), 2);
+        // Retention gave up the days before its cutoff.
+        p.kept_from.store(today + DAY_MS, Ordering::Relaxed);
+        assert_eq!(p.missing(History::Commands, times, now), [today + DAY_MS]);
+    }
+}

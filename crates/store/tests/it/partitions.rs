@@ -1,0 +1,177 @@
+//! PostgreSQL's day partitions: made at open (today and 7 days ahead) and for the days
+//! appends meet, a clock far off in the DEFAULT partition until its day is made, retention
+//! by dropping whole days, and an older database converted with its rows.
+
+use chrono::{Duration, Utc};
+use store::{open_store, Actor, CommandOutcome, CommandPhase, CommandRecord};
+use store::{PointValue, DAYS_AHEAD};
+
+use crate::pg::{admin, postgres_schema, postgres_url};
+use crate::suite::{at_ms, ev};
+
+const DAY: i64 = 86_400_000;
+
+/// The day partitions of `table` in `schema`, by name, and the rows of each.
+async fn partitions(
+    client: &tokio_postgres::Client,
+    schema: &str,
+    table: &str,
+) -> Vec<(String, i64)> {
+    let names: Vec<String> = client
+        .query(
+            "SELECT c.relname::text FROM pg_inherits i JOIN pg_class c ON c.oid = i.inhrelid \
+             WHERE i.inhparent = to_regclass($1) ORDER BY 1",
+            &[&format!("{schema}.{table}")],
+        )
+        .await
+        .unwrap()
+        .iter()
+        .map(|r| r.get(0))
+        .collect();
+    let mut out = Vec::new();
+    for name in names {
+        let rows: i64 = client
+            .query_one(&format!("SELECT count(*) FROM {schema}.{name}"), &[])
+            .await
+            .unwrap()
+            .get(0);
+        out.push((name, rows));
+    }
+    out
+}
+
+fn rows_of(parts: &[(String, i64)], name: &str) -> Option<i64> {
+    parts.iter().find(|(n, _)| n == name).map(|(_, rows)| *rows)
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn postgres_days_are_partitions_made_ahead_on_demand_and_dropped_whole() {
+    let Some(url) = postgres_url("postgres_days_are_partitions") else {
+        return;
+    };
+    let (schema, store_url) = postgres_schema(&url, "partitions").await;
+    let client = admin(&url).await.unwrap();
+    let store = open_store(&store_url).await.unwrap();
+
+    // At open: today and DAYS_AHEAD days ahead, of both tables, plus the DEFAULT ones.
+    let parts = partitions(&client, &schema, "events").await;
+    for d in 0..=DAYS_AHEAD {
+        let name = format!(
+            "events_{}",
+            (Utc::now() + Duration::days(d)).format("%Y%m%d")
+        );
+        assert_eq!(rows_of(&parts, &name), Some(0), "{name} in {parts:?}");
+    }
+    assert_eq!(rows_of(&parts, "events_default"), Some(0));
+    let name = format!(
+        "commands_{}",
+        (Utc::now() + Duration::days(DAYS_AHEAD)).format("%Y%m%d")
+    );
+    assert!(rows_of(&partitions(&client, &schema, "commands").await, &name).is_some());
+
+    // Appends make the days they meet (2026-03-01 to 03-04), each row in its day.
+    let events: Vec<_> = (0..400)
+        .map(|i| ev("P", PointValue::Int(i), i * DAY / 100))
+        .collect();
+    store.append_events(&events).await.unwrap();
+    let command = CommandRecord {
+        id: None,
+        time: at_ms(DAY + 5),
+        actor: Actor::User("op".into()),
+        node: "RDRT".into(),
+        point: "P".into(),
+        ioa: None,
+        value: PointValue::Bool(true),
+        phase: CommandPhase::Execute,
+        outcome: CommandOutcome::Executed,
+        detail: String::new(),
+    };
+    store.append_command(&command).await.unwrap();
+    // A source clock years ahead: the DEFAULT partition, not a table of its own.
+    let far = ev("P", PointValue::Int(-1), 3000 * DAY);
+    store.append_events(&[far]).await.unwrap();
+    let parts = partitions(&client, &schema, "events").await;
+    for day in 1..=4 {
+        assert_eq!(rows_of(&parts, &format!("events_2026030{day}")), Some(100));
+    }
+    assert_eq!(rows_of(&parts, "events_default"), Some(1));
+    let commands = partitions(&client, &schema, "commands").await;
+    assert_eq!(rows_of(&commands, "commands_20260302"), Some(1));
+
+    // When that day's partition is made (the calendar reached it), its row moves there.
+    let far_day = at_ms(3000 * DAY);
+    store
+        .prepare_partitions(far_day - Duration::days(2))
+        .await
+        .unwrap();
+    let parts = partitions(&client, &schema, "events").await;
+    assert_eq!(rows_of(&parts, "events_default"), Some(0));
+    assert_eq!(
+        rows_of(&parts, &format!("events_{}", far_day.format("%Y%m%d"))),
+        Some(1)
+    );
+
+    // Retention at 03-03 06:00: the whole days before it go (two tables dropped), the day
+    // holding the cutoff stays whole.
+    let purged = store
+        .purge_older_than(at_ms(2 * DAY + DAY / 4))
+        .await
+        .unwrap();
+    assert_eq!(purged, 200 + 1);
+    let parts = partitions(&client, &schema, "events").await;
+    assert_eq!(rows_of(&parts, "events_20260301"), None);
+    assert_eq!(rows_of(&parts, "events_20260302"), None);
+    assert_eq!(rows_of(&parts, "events_20260303"), Some(100));
+    assert_eq!(store.stats().await.unwrap().events, 201);
+    assert_eq!(
+        rows_of(
+            &partitions(&client, &schema, "commands").await,
+            "commands_20260302"
+        ),
+        None
+    );
+    // A late event of a dropped day does not bring the day back: DEFAULT, and the next
+    // pass purges it.
+    store
+        .append_events(&[ev("P", PointValue::Int(7), 5)])
+        .await
+        .unwrap();
+    let parts = partitions(&client, &schema, "events").await;
+    assert_eq!(rows_of(&parts, "events_20260301"), None);
+    assert_eq!(rows_of(&parts, "events_default"), Some(1));
+    assert_eq!(store.purge_older_than(at_ms(2 * DAY)).await.unwrap(), 1);
+
+    drop(store);
+    client
+        .batch_execute(&format!("DROP SCHEMA {schema} CASCADE"))
+        .await
+        .unwrap();
+}
+
+/// Two stores making the same days at once (two station processes on one database).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn postgres_two_stores_make_the_same_days_at_once() {
+    let Some(url) = postgres_url("postgres_two_stores_make_the_same_days") else {
+        return;
+    };
+    let (schema, store_url) = postgres_schema(&url, "partitions_race").await;
+    let a = open_store(&store_url).await.unwrap();
+    let b = open_store(&store_url).await.unwrap();
+    let batch = |offset: i64| -> Vec<_> {
+        (0..300)
+            .map(|i| ev("P", PointValue::Int(i), offset + i * DAY / 10))
+            .collect()
+    };
+    let (first, second) = (batch(0), batch(1));
+    let (x, y) = tokio::join!(a.append_events(&first), b.append_events(&second));
+    x.unwrap();
+    y.unwrap();
+    assert_eq!(a.stats().await.unwrap().events, 600);
+    drop((a, b));
+    admin(&url)
+        .await
+        .unwrap()
+        .batch_execute(&format!("DROP SCHEMA {schema} CASCADE"))
+        .await
+        .unwrap();
+}
