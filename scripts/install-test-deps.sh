@@ -13,6 +13,13 @@
 #                  through chromedriver over WebDriver)
 #   * aiosmtpd    (PyPI; the loopback SMTP server the notify crate's e-mail
 #                  tests start, tests/support/smtp_sink.py)
+#   * mosquitto   (Debian package; the MQTT broker the Sparkplug B tests start on a
+#                  free loopback port, crates/sparkplug/tests/broker.rs and
+#                  crates/stanice/tests/cli/sparkplug.rs)
+#   * paho-mqtt, tahu, protobuf (PyPI; the independent Sparkplug B consumer
+#                  crates/sparkplug/tests/consumer.py: paho's MQTT client and
+#                  Eclipse Tahu's published sparkplug_b protobuf, which pins
+#                  protobuf 3.19.1)
 #   * hat-drivers (PyPI; its IEC 60870-5-103 master, FT1.2 link layer and
 #                  serial driver are the independent 103 peer of
 #                  tests/peer/hat103_master.py, used by
@@ -38,6 +45,9 @@ PYSERIAL_VERSION="3.5"   # pymodbus's RTU over a pseudo-terminal
 PYMODBUS_VERSION="3.16.1"   # the Modbus TCP/RTU peer of the field I/O tests
 PYTHON_SNAP7_VERSION="3.3.0"   # the S7 peer (Snap7 server and client) of the field I/O tests
 HAT_DRIVERS_VERSION="0.10.10"   # verified against tests/peer/hat103_master.py
+PAHO_MQTT_VERSION="2.2.0"   # verified against crates/sparkplug/tests/consumer.py
+TAHU_VERSION="0.1.2"   # its sparkplug_b_pb2, the consumer's protobuf
+PROTOBUF_VERSION="3.19.1"   # the one tahu 0.1.2 requires
 PYTHON="${PYTHON:-python3}"
 
 export DEBIAN_FRONTEND=noninteractive
@@ -217,6 +227,19 @@ py_install pyserial "$PYSERIAL_VERSION" serial
 py_install pymodbus "$PYMODBUS_VERSION" pymodbus.client pymodbus.server
 py_install python-snap7 "$PYTHON_SNAP7_VERSION" snap7.client snap7.server
 
+# ---------------------------------------------------------------- Sparkplug B peers
+# Pure-Python wheels: paho-mqtt, tahu (the generated sparkplug_b_pb2) and the protobuf
+# runtime tahu pins. The broker is Debian's mosquitto; the tests start their own
+# instance on a free loopback port (the package's system service is not used).
+py_install protobuf "$PROTOBUF_VERSION" google.protobuf
+py_install paho-mqtt "$PAHO_MQTT_VERSION" paho.mqtt.client
+py_install tahu "$TAHU_VERSION" tahu.sparkplug_b_pb2
+if [ -x /usr/sbin/mosquitto ] || command -v mosquitto >/dev/null 2>&1; then
+    log "mosquitto present"
+else
+    apt_install mosquitto
+fi
+
 # ---------------------------------------------------------------- postgresql
 # Only the server binaries under /usr/lib/postgresql/*/bin are used. The package
 # may create and start a system cluster on port 5432; that is harmless, the
@@ -250,5 +273,7 @@ log "verify: $("$PYTHON" -c 'import c104, c104._c104 as m; print("c104", m.__ver
 log "verify: aiosmtpd $("$PYTHON" -c 'import importlib.metadata as m, aiosmtpd.smtp; print(m.version("aiosmtpd"))')"
 log "verify: hat-drivers $("$PYTHON" -c 'import importlib.metadata as m, hat.drivers.iec103, hat.drivers.serial; print(m.version("hat-drivers"))')"
 log "verify: $(tshark --version 2>/dev/null | head -n1)"
+log "verify: $("$PYTHON" -c 'import importlib.metadata as m, paho.mqtt.client, tahu.sparkplug_b_pb2; print("paho-mqtt", m.version("paho-mqtt"), "tahu", m.version("tahu"))')"
+log "verify: mosquitto $(dpkg-query -W -f='${Version}' mosquitto 2>/dev/null || echo '(not from Debian)')"
 log "verify: $("$(ls -d /usr/lib/postgresql/*/bin | sort -V | tail -n1)/initdb" --version)"
 log "verify: $(chromedriver --version 2>/dev/null | head -n1)"

@@ -66,6 +66,11 @@ pub(crate) struct RunOptions {
     /// The private key (PEM: PKCS#8, PKCS#1 or SEC1) of --hmi-tls-cert.
     #[arg(long, value_name = "FILE", requires = "hmi_tls_cert")]
     hmi_tls_key: Option<PathBuf>,
+    /// Make every node an MQTT Sparkplug B edge node publishing to this broker
+    /// (`mqtt://HOST:PORT`, `mqtts://HOST:PORT`); instead of the url of station.toml's
+    /// `[mqtt]`, whose other settings (ca, username, password, primary_host, group) apply.
+    #[arg(long, value_name = "URL")]
+    mqtt: Option<String>,
 }
 
 /// The web HMI that `run` (with `--hmi`) or `demo` serves next to the station.
@@ -174,6 +179,15 @@ pub(crate) async fn run_project(
         Err(error) => return Err(anyhow::Error::new(error).context("the station does not start")),
     };
     print_banner(&runtime, &store_shown, options.speed, demo);
+    // Kept for the run: dropping them closes the connections (the broker then publishes
+    // each node's NDEATH, its will).
+    let _edge_nodes = match start_mqtt(&runtime, options.mqtt.as_deref()) {
+        Ok(nodes) => nodes,
+        Err(error) => {
+            runtime.shutdown().await;
+            return Err(anyhow::Error::new(error).context("the station does not start"));
+        }
+    };
     let archive =
         (store_shown != "none" && !store_shown.contains(":memory:")).then(|| store_shown.clone());
     let hmi = match &plan {
@@ -202,6 +216,44 @@ pub(crate) async fn run_project(
     }
     runtime.shutdown().await;
     Ok(ExitCode::SUCCESS)
+}
+
+/// Makes every node an MQTT Sparkplug B edge node when `--mqtt URL` or `[mqtt]` asks for
+/// it (the URL of `--mqtt` first, the table's other settings either way).
+fn start_mqtt(
+    runtime: &Runtime,
+    url: Option<&str>,
+) -> Result<Vec<sparkplug::mqtt::MqttNode>, sparkplug::mqtt::MqttError> {
+    let project = runtime.project();
+    let settings = match (url, &project.mqtt) {
+        (None, None) => return Ok(Vec::new()),
+        (url, Some(table)) => sparkplug::mqtt::MqttSettings {
+            url: url.map_or_else(|| table.url.clone(), str::to_owned),
+            ca: table.ca.clone(),
+            username: table.username.clone(),
+            password: table.password.clone(),
+            primary_host: table.primary_host.clone(),
+            group: table.group.clone(),
+            redundancy_group: table.redundancy_group.clone(),
+        },
+        (Some(url), None) => sparkplug::mqtt::MqttSettings {
+            url: url.to_owned(),
+            ..sparkplug::mqtt::MqttSettings::default()
+        },
+    };
+    let nodes = sparkplug::mqtt::start(runtime, &settings)?;
+    let group = settings.group.as_deref().unwrap_or(&project.station.name);
+    let primary = settings
+        .primary_host
+        .as_deref()
+        .map(|host| format!(", publishing while primary host `{host}` is online"))
+        .unwrap_or_default();
+    println!(
+        "  MQTT     Sparkplug B to {}: group `{group}`, {} edge node(s){primary}",
+        settings.url,
+        nodes.len()
+    );
+    Ok(nodes)
 }
 
 /// The project's web HMI folder: screens, points and users.

@@ -7,6 +7,7 @@
 //! | [`process`]  | a command run to its end with a time limit (output drained); a child killed on drop; a child started until it prints a marker | stanice's CLI and interoperability tests |
 //! | [`peers`]    | the skip-or-fail rule for missing peers (`STANICE_REQUIRE_PEERS`); python3 modules; the c104 scripts of `tests/peer/`; a tshark capture checked by the dissectors | iec60870's c104 test and benchmark, stanice's dispatch, capture and IEC 103 tests |
 //! | [`chromium`] | chromedriver and Chromium found, a driver on a free port, headless sessions, clicks and scripts (feature `chromium`) | hmi's browser tests and benchmarks |
+//! | [`mqtt`]     | a mosquitto broker on a free port; the Sparkplug B consumer of `crates/sparkplug/tests/consumer.py`; a project that changes by itself | sparkplug's broker tests, stanice's `run --mqtt` test |
 //! | [`smtp`]     | the aiosmtpd sink of `tests/support/smtp_sink.py`                     | notify's and station's mail tests |
 //! | [`projects`] | project folders: the examples, a copy of one without its stores, a folder of given files, a lift fleet | stanice's CLI tests, station's runtime tests, the lift-fleet benchmarks |
 //!
@@ -23,6 +24,7 @@ use std::path::{Path, PathBuf};
 
 #[cfg(feature = "chromium")]
 pub mod chromium;
+pub mod mqtt;
 pub mod peers;
 pub mod ports;
 pub mod process;

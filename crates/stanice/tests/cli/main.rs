@@ -22,5 +22,6 @@ mod s7;
 mod serial;
 mod shutdown;
 mod sorting;
+mod sparkplug;
 mod stats;
 mod users;

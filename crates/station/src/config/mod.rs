@@ -255,6 +255,16 @@
 //! channels = ["technicians", "tickets"]
 //! quiet_period_s = 900                 # the same lift and class again within it: suppressed
 //! rate_limit = { max = 10, per_s = 3600 }   # at most 10 notices an hour by this rule
+//!
+//! [mqtt]                               # optional: every node an MQTT Sparkplug B edge node
+//! url = "mqtts://broker.example:8883"  # mqtt:// or mqtts:// (default ports 1883, 8883)
+//! ca = "tls/broker-ca.pem"             # optional, mqtts:// only: the broker's CA (PEM)
+//! username = "station"                 # optional
+//! password = "secret"                  # optional, needs username
+//! primary_host = "scada"               # optional: publish only while its STATE is online
+//! group = "vsetin"                     # optional: the group id; default the station's name
+//! redundancy_group = "dispatch"        # default: the redundancy group hosts' commands count
+//!                                      # as (authority, from_groups), audited as MQTT host
 //! ```
 //!
 //! Points and commands name a line device's signals: `source = "line:LINE/DEVICE/FUN/INF"`
@@ -284,7 +294,9 @@
 //! (a textual check, case-insensitive; the PLC compiler checks the rest); a status point
 //! naming no point of the node, a status point that is not a single point or has a
 //! `source`, a point without `source` that no link names; unknown time zones; `retention_days = 0`; unparsable IP
-//! and socket addresses; unsupported store URLs. ST sources must be UTF-8 (a leading
+//! and socket addresses; unsupported store URLs; an `[mqtt]` url that is not
+//! `mqtt://`/`mqtts://`, a `ca` missing or with `mqtt://`, a `password` without `username`,
+//! a `primary_host` or `group` that cannot stand in a Sparkplug topic. ST sources must be UTF-8 (a leading
 //! byte-order mark is accepted); a file that is not is reported at its first invalid byte.
 //!
 //! With the `runtime` feature (the default) each node's ST sources are also compiled as
@@ -332,6 +344,28 @@ pub struct Project {
     pub station: StationSettings,
     /// The `[[node]]` tables, in file order.
     pub nodes: Vec<NodeConfig>,
+    /// The `[mqtt]` table: the nodes publish as Sparkplug B edge nodes.
+    pub mqtt: Option<MqttConfig>,
+}
+
+/// The `[mqtt]` table: the broker the nodes publish to as Sparkplug B edge nodes (group
+/// id the station's name, edge node id the node's name).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MqttConfig {
+    /// `mqtt://HOST[:PORT]` or `mqtts://HOST[:PORT]`.
+    pub url: String,
+    /// The CA certificate (PEM) of a `mqtts://` broker, resolved against the project folder.
+    pub ca: Option<PathBuf>,
+    /// User name.
+    pub username: Option<String>,
+    /// Password.
+    pub password: Option<String>,
+    /// The primary host application whose STATE must be online for the nodes to publish.
+    pub primary_host: Option<String>,
+    /// The group id instead of the station's name.
+    pub group: Option<String>,
+    /// The redundancy group hosts' commands count as (default `dispatch`).
+    pub redundancy_group: Option<String>,
 }
 
 /// Station-wide settings, the `[station]` table.

@@ -15,6 +15,19 @@ pub(in crate::config) struct RawProject {
     pub(in crate::config) station: RawStation,
     #[serde(default)]
     pub(in crate::config) node: Vec<RawNode>,
+    pub(in crate::config) mqtt: Option<RawMqtt>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(in crate::config) struct RawMqtt {
+    pub(in crate::config) url: String,
+    pub(in crate::config) ca: Option<String>,
+    pub(in crate::config) username: Option<String>,
+    pub(in crate::config) password: Option<String>,
+    pub(in crate::config) primary_host: Option<String>,
+    pub(in crate::config) group: Option<String>,
+    pub(in crate::config) redundancy_group: Option<String>,
 }
 
 #[derive(Deserialize)]

@@ -130,8 +130,17 @@ fn routed_commands(config: &NodeConfig, sim_node: usize) -> HashMap<u32, RoutedC
         .collect()
 }
 
-impl StationHandler for NodeHandler {
-    fn handle_command(&self, command: server::Command) -> CommandFuture {
+impl NodeHandler {
+    /// A command through the node's routing, authority and audit, whoever sent it: its
+    /// sender's redundancy group by name (`group_name`, empty for none) and that group's
+    /// settings when the server has it, and the actor the audit names.
+    fn route(
+        &self,
+        command: server::Command,
+        group_name: String,
+        group: Option<crate::config::RedundancyGroup>,
+        actor: String,
+    ) -> CommandFuture {
         let Some(routed) = self.commands.get(&command.ioa.get()).cloned() else {
             return server::ready(server::CommandOutcome::Refused);
         };
@@ -139,13 +148,11 @@ impl StationHandler for NodeHandler {
         let handler_links = self.links.get().cloned().unwrap_or_default();
         let handler_lines = self.lines.get().cloned().unwrap_or_default();
         let simulation = self.simulation.clone();
-        let group = self.group_of(&command.peer).cloned();
-        let group_name = group.as_ref().map(|g| g.name.clone()).unwrap_or_default();
         let this = Recorded {
             points,
             command: command.clone(),
             name: routed.name.clone(),
-            group: group.as_ref().map(|g| g.name.clone()),
+            actor,
         };
         if !routed.from_groups.is_empty() && !routed.from_groups.contains(&group_name) {
             let detail = format!(
@@ -202,6 +209,15 @@ impl StationHandler for NodeHandler {
             }
         })
     }
+}
+
+impl StationHandler for NodeHandler {
+    fn handle_command(&self, command: server::Command) -> CommandFuture {
+        let group = self.group_of(&command.peer).cloned();
+        let group_name = group.as_ref().map(|g| g.name.clone()).unwrap_or_default();
+        let actor = peer_actor(&command.peer, group.as_ref().map(|g| g.name.as_str()));
+        self.route(command, group_name, group, actor)
+    }
 
     fn command_refused(&self, command: &server::Command, refusal: &server::CommandRefusal) {
         let name = self.commands.get(&command.ioa.get()).map_or_else(
@@ -212,7 +228,10 @@ impl StationHandler for NodeHandler {
             points: Arc::clone(&self.points),
             command: command.clone(),
             name,
-            group: self.group_of(&command.peer).map(|g| g.name.clone()),
+            actor: peer_actor(
+                &command.peer,
+                self.group_of(&command.peer).map(|g| g.name.as_str()),
+            ),
         };
         // The reason (the age of a stale command, ...) is the audit record's detail; a
         // refusal need not wait for its commit (nothing was done).
@@ -291,8 +310,17 @@ struct Recorded {
     points: Arc<NodePoints>,
     command: server::Command,
     name: String,
-    /// The sender's redundancy group, named in the audit beside its address.
-    group: Option<String>,
+    /// Who sent it, as the audit names it (a client's address and redundancy group, an
+    /// MQTT host).
+    actor: String,
+}
+
+/// A controlling station as the audit names it: its address and redundancy group.
+fn peer_actor(peer: &Peer, group: Option<&str>) -> String {
+    match group {
+        Some(group) => format!("{peer} (group {group})"),
+        None => peer.to_string(),
+    }
 }
 
 impl Recorded {
@@ -323,16 +351,13 @@ impl Recorded {
 
     fn audit_record(self, outcome: CommandOutcome, detail: String) -> CommandRecord {
         tracing::info!(
-            node = %self.points.name(), command = %self.name, peer = %self.command.peer,
+            node = %self.points.name(), command = %self.name, actor = %self.actor,
             select = self.command.select, ?outcome, %detail, "command"
         );
         CommandRecord {
             id: None,
             time: self.points.clock().now(),
-            actor: Actor::Remote(match &self.group {
-                Some(group) => format!("{} (group {group})", self.command.peer),
-                None => self.command.peer.to_string(),
-            }),
+            actor: Actor::Remote(self.actor),
             node: self.points.name().to_owned(),
             point: self.name,
             ioa: Some(self.command.ioa.get()),
@@ -380,4 +405,114 @@ fn command_value(element: &Element) -> PointValue {
         || PointValue::Text(element.short_name().to_owned()),
         |(value, _)| value,
     )
+}
+
+/// A node's commands for protocols other than its IEC 104 server (an MQTT host's
+/// writes): the same routing, authority by redundancy group and audit as a command from
+/// a controlling station.
+#[derive(Clone)]
+pub struct CommandPort {
+    handler: Arc<NodeHandler>,
+    common_address: iec60870::asdu::CommonAddress,
+    by_name: HashMap<String, (iec60870::asdu::Ioa, iec60870::asdu::TypeId)>,
+}
+
+impl std::fmt::Debug for CommandPort {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CommandPort")
+            .field("node", &self.handler.points.name())
+            .finish_non_exhaustive()
+    }
+}
+
+/// Why a command was not carried out.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum CommandError {
+    /// The node has no command of this name.
+    #[error("node has no command `{0}`")]
+    Unknown(String),
+    /// Refused (its reason is in the audit and the log).
+    #[error("command `{0}` refused")]
+    Refused(String),
+}
+
+impl CommandPort {
+    pub(crate) fn new(config: &NodeConfig, handler: &Arc<NodeHandler>) -> CommandPort {
+        CommandPort {
+            handler: Arc::clone(handler),
+            common_address: config.common_address,
+            by_name: config
+                .commands
+                .iter()
+                .map(|c| (c.name.clone(), (c.ioa, c.type_id)))
+                .collect(),
+        }
+    }
+
+    /// Audits a command refused before it reached the node (an MQTT write of a metric
+    /// that is not a command, of another type, without a value), with its reason.
+    pub fn audit_refusal(&self, point: &str, value: PointValue, detail: &str, actor: &str) {
+        let points = &self.handler.points;
+        tracing::info!(node = %points.name(), command = %point, %actor, %detail, "command refused");
+        points.recorder().command(CommandRecord {
+            id: None,
+            time: points.clock().now(),
+            actor: Actor::Remote(actor.to_owned()),
+            node: points.name().to_owned(),
+            point: point.to_owned(),
+            ioa: self.by_name.get(point).map(|(ioa, _)| ioa.get()),
+            value,
+            phase: CommandPhase::Execute,
+            outcome: CommandOutcome::Refused,
+            detail: detail.to_owned(),
+        });
+    }
+
+    /// The type of a command by name.
+    pub fn command_type(&self, name: &str) -> Option<iec60870::asdu::TypeId> {
+        self.by_name.get(name).map(|(_, type_id)| *type_id)
+    }
+
+    /// Carries out command `name` with `element` (an execute, no time tag) as sent by
+    /// `actor` in redundancy group `group`: routed, checked against the group's authority
+    /// and the command's range, and audited with `actor`, as a command from dispatch.
+    pub async fn execute(
+        &self,
+        name: &str,
+        element: Element,
+        actor: &str,
+        group: &str,
+    ) -> Result<(), CommandError> {
+        let Some((ioa, type_id)) = self.by_name.get(name).copied() else {
+            return Err(CommandError::Unknown(name.to_owned()));
+        };
+        let command = server::Command {
+            type_id,
+            common_address: self.common_address,
+            ioa,
+            element,
+            time: None,
+            originator: 0,
+            select: false,
+            // Not a serial master: the actor names the sender in the audit and logs.
+            peer: Peer::Serial {
+                port: Arc::from(actor),
+                link_address: 0,
+            },
+        };
+        let settings = self
+            .handler
+            .groups
+            .iter()
+            .find(|g| g.name == group)
+            .cloned();
+        let outcome = self
+            .handler
+            .route(command, group.to_owned(), settings, actor.to_owned())
+            .await;
+        match outcome {
+            server::CommandOutcome::Executed | server::CommandOutcome::Confirmed(_) => Ok(()),
+            _ => Err(CommandError::Refused(name.to_owned())),
+        }
+    }
 }

@@ -14,7 +14,8 @@
 //! - [`simulation`]: the thread that owns the plant and every node's soft PLC, steps
 //!   them on the simulated clock and feeds PLC-sourced points.
 //! - [`node`]: a node's point database with its sinks and recorder ([`NodePoints`]).
-//! - [`sink`]: where a node's changes go upward (its IEC 104 server; an IEC 101 slave or MQTT later).
+//! - [`sink`]: where a node's changes go upward (its IEC 104 server; the MQTT Sparkplug B
+//!   publisher of crate `sparkplug` attaches one more).
 //! - [`link`]: the IEC 104 client links to lower nodes (concentration, invalidation,
 //!   status points, time source).
 //! - [`line`]: the serial lines to protection devices (IEC 103 master, the gateway role:
@@ -30,7 +31,8 @@
 //! - [`notification`]: e-mail and webhook notices of what the lifts report, each delivery
 //!   recorded.
 //! - `command`: the server hooks — a command's authority, range and audit, then its
-//!   target executes it; clock synchronisation passed down.
+//!   target executes it; clock synchronisation passed down. [`CommandPort`] takes the
+//!   same path for other protocols (an MQTT host's write), naming their actor.
 //! - `target`: where a command goes, one `Target` per kind (a PLC variable, refused in
 //!   local mode; an object down a link; a line device's general command; an IEC 101
 //!   outstation's object).
@@ -92,6 +94,7 @@ pub use sink::{Iec104Sink, PointSink};
 
 use clock::LocalClocks;
 use command::NodeHandler;
+pub use command::{CommandError, CommandPort};
 use link::LinkSpec;
 pub use operation::{Operation, OperationError};
 use simulation::SimRequest;
@@ -211,6 +214,8 @@ pub struct NodeRuntime {
     pub devices: Vec<field::FieldDeviceHandle>,
     /// Its PLC memory served over S7 (`[node.s7_server]`).
     pub s7_server: Option<s7_server::S7ServerHandle>,
+    /// Its commands for other protocols (MQTT), through its routing, authority and audit.
+    pub commands: CommandPort,
 }
 
 impl NodeRuntime {
@@ -427,6 +432,7 @@ async fn start_servers(
             clocks,
         ));
         let server = server::start_server(project, config, points, &handler, zone).await?;
+        let commands = CommandPort::new(config, &handler);
         handlers.push(handler);
         started.push(NodeRuntime {
             points: Arc::clone(points),
@@ -436,6 +442,7 @@ async fn start_servers(
             lifts: Vec::new(),
             devices: Vec::new(),
             s7_server: None,
+            commands,
         });
     }
     Ok((started, handlers))

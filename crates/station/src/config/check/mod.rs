@@ -215,10 +215,90 @@ impl Ctx<'_> {
                 }
             }
         }
+        let mqtt = raw.mqtt.as_ref().map(|mqtt| self.check_mqtt(folder, mqtt));
         Project {
             folder: folder.to_path_buf(),
             station,
             nodes,
+            mqtt,
+        }
+    }
+
+    /// The `[mqtt]` table: a broker URL of its scheme, a CA only over TLS (the file must
+    /// exist), a password only with a user, ids that can stand in a Sparkplug topic.
+    pub(in crate::config) fn check_mqtt(&mut self, folder: &Path, raw: &RawMqtt) -> MqttConfig {
+        let (tls, host) = match raw.url.split_once("://") {
+            Some(("mqtt" | "tcp", rest)) => (Some(false), rest),
+            Some(("mqtts" | "ssl", rest)) => (Some(true), rest),
+            _ => (None, ""),
+        };
+        let host = host.trim_end_matches('/');
+        if tls.is_none() || host.is_empty() || host.starts_with(':') || host.contains('/') {
+            self.err(
+                &[K("mqtt"), K("url")],
+                ConfigProblem::Invalid {
+                    detail: format!(
+                        "`{}` is not an MQTT broker URL (mqtt://HOST[:PORT] or mqtts://HOST[:PORT])",
+                        raw.url
+                    ),
+                },
+            );
+        }
+        let ca = raw.ca.as_deref().map(|ca| {
+            if tls == Some(false) {
+                self.err(
+                    &[K("mqtt"), K("ca")],
+                    ConfigProblem::Invalid {
+                        detail: "a CA is for mqtts:// brokers; this URL is mqtt://".to_owned(),
+                    },
+                );
+            }
+            self.existing_file(folder, ca, &[K("mqtt"), K("ca")])
+        });
+        if raw.password.is_some() && raw.username.is_none() {
+            self.err(
+                &[K("mqtt"), K("password")],
+                ConfigProblem::Missing {
+                    what: "username",
+                    needed_by: "a password",
+                    hint: "",
+                },
+            );
+        }
+        if raw
+            .redundancy_group
+            .as_deref()
+            .is_some_and(|g| g.trim().is_empty())
+        {
+            self.err(
+                &[K("mqtt"), K("redundancy_group")],
+                ConfigProblem::Empty {
+                    what: "redundancy group",
+                },
+            );
+        }
+        for (key, id) in [("primary_host", &raw.primary_host), ("group", &raw.group)] {
+            if let Some(id) = id {
+                if id.is_empty() || id.contains(['/', '+', '#']) {
+                    self.err(
+                        &[K("mqtt"), K(key)],
+                        ConfigProblem::Invalid {
+                            detail: format!(
+                                "`{id}` cannot be a Sparkplug id (empty, or with `/`, `+` or `#`)"
+                            ),
+                        },
+                    );
+                }
+            }
+        }
+        MqttConfig {
+            url: raw.url.clone(),
+            ca,
+            username: raw.username.clone(),
+            password: raw.password.clone(),
+            primary_host: raw.primary_host.clone(),
+            group: raw.group.clone(),
+            redundancy_group: raw.redundancy_group.clone(),
         }
     }
 
