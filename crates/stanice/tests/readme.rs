@@ -81,6 +81,18 @@ const SKIPPED: &[(&str, &str)] = &[
         "a benchmark: a release build and a minute of 200 lifts polled in real time",
     ),
     (
+        "cargo bench -p store --bench historian",
+        "a benchmark: a release build, a table of a million events and more, and PostgreSQL",
+    ),
+    (
+        "cargo bench -p sparkplug --bench throughput",
+        "a benchmark: a release build and a mosquitto broker",
+    ),
+    (
+        "cargo bench -p stanice --bench master_many",
+        "a benchmark: a release build, 1,000 outstations and a master process for half a minute",
+    ),
+    (
         "cargo bench -p hmi --bench lift_fleet",
         "a benchmark: a release build, 200 lifts in real time and headless Chromium",
     ),
