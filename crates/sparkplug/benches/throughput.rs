@@ -17,7 +17,7 @@ use std::time::{Duration, Instant};
 use rumqttc::{AsyncClient, Event, MqttOptions, Packet, QoS};
 use sparkplug::datatype::{DataType, QualityCode, Value};
 use sparkplug::edge::{EdgeConfig, EdgeNode, MetricSpec, Sample};
-use sparkplug::mqtt::{spawn_edge, MqttSettings, MqttStats};
+use sparkplug::mqtt::{spawn_edge, MqttConfig, MqttStats};
 
 const METRICS: usize = 100;
 const CHANGES: u64 = 200_000;
@@ -113,9 +113,9 @@ async fn main() {
     .unwrap();
     let stats = Arc::new(MqttStats::default());
     let (changes, changes_rx) = tokio::sync::mpsc::channel(65_536);
-    let settings = MqttSettings {
+    let settings = MqttConfig {
         url: format!("mqtt://127.0.0.1:{port}"),
-        ..MqttSettings::default()
+        ..MqttConfig::default()
     };
     let node = spawn_edge(
         &settings,

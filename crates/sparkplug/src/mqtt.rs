@@ -33,25 +33,9 @@ const CLIENT_QUEUE: usize = 1024;
 /// The wait before reconnecting to a broker that could not be reached.
 const RECONNECT_DELAY: Duration = Duration::from_secs(1);
 
-/// Where and how the nodes connect (`--mqtt URL`, the `[mqtt]` table).
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct MqttSettings {
-    /// `mqtt://HOST:PORT` or `mqtts://HOST:PORT` (ports 1883 and 8883 by default).
-    pub url: String,
-    /// The CA certificate (PEM) a `mqtts://` broker's certificate is checked against.
-    pub ca: Option<PathBuf>,
-    /// User name.
-    pub username: Option<String>,
-    /// Password.
-    pub password: Option<String>,
-    /// The primary host application whose STATE must be online for the nodes to publish.
-    pub primary_host: Option<String>,
-    /// The group id, instead of the project's name.
-    pub group: Option<String>,
-    /// The redundancy group MQTT hosts' commands count as (its authority, a command's
-    /// `from_groups`); default `dispatch`.
-    pub redundancy_group: Option<String>,
-}
+/// Where and how the nodes connect: the station's `[mqtt]` table, or one made from
+/// `--mqtt URL` (one concept, kept by the station's configuration).
+pub use station::config::MqttConfig;
 
 /// The redundancy group of MQTT hosts' commands when none is configured.
 pub const DEFAULT_REDUNDANCY_GROUP: &str = "dispatch";
@@ -216,7 +200,7 @@ impl Drop for MqttNode {
 
 /// Makes every node of a running project an edge node (group id the project's name or
 /// `settings.group`, edge node id the node's name), each with its own connection.
-pub fn start(runtime: &Runtime, settings: &MqttSettings) -> Result<Vec<MqttNode>, MqttError> {
+pub fn start(runtime: &Runtime, settings: &MqttConfig) -> Result<Vec<MqttNode>, MqttError> {
     let group = settings
         .group
         .clone()
@@ -241,7 +225,7 @@ pub fn start(runtime: &Runtime, settings: &MqttSettings) -> Result<Vec<MqttNode>
 /// Makes one node an edge node of `group`; hosts' writes of its command metrics go to
 /// `commands` (without it they are refused).
 pub fn start_node(
-    settings: &MqttSettings,
+    settings: &MqttConfig,
     group: &str,
     config: &NodeConfig,
     points: &Arc<NodePoints>,
@@ -347,7 +331,7 @@ async fn carry_out_writes(
 /// Runs an edge node on its own MQTT connection: `changes` are its metrics' changes (by
 /// index), `now` its clock in milliseconds since the Unix epoch.
 pub fn spawn_edge(
-    settings: &MqttSettings,
+    settings: &MqttConfig,
     edge: EdgeNode,
     client_id: String,
     stats: Arc<MqttStats>,

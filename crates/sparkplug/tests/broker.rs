@@ -10,7 +10,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use points::{PointChange, PointValue};
-use sparkplug::mqtt::{self, MqttSettings};
+use sparkplug::mqtt::{self, MqttConfig};
 use station::config::Project;
 use station::runtime::sink::{PointSink, SinkError};
 use station::runtime::{Runtime, RuntimeOptions, StoreChoice};
@@ -78,9 +78,9 @@ async fn an_independent_consumer_sees_births_data_and_the_will() {
     let initial = node.points();
     let publishers = mqtt::start(
         &runtime,
-        &MqttSettings {
+        &MqttConfig {
             url: format!("mqtt://127.0.0.1:{}", broker.port),
-            ..MqttSettings::default()
+            ..MqttConfig::default()
         },
     )
     .unwrap();
@@ -264,10 +264,10 @@ async fn with_a_primary_host_the_node_births_once_it_is_online_and_rebirths_on_n
     .unwrap();
     let publishers = mqtt::start(
         &runtime,
-        &MqttSettings {
+        &MqttConfig {
             url: format!("mqtt://127.0.0.1:{}", broker.port),
             primary_host: Some("scada".into()),
-            ..MqttSettings::default()
+            ..MqttConfig::default()
         },
     )
     .unwrap();
@@ -399,9 +399,9 @@ async fn ncmd_writes_are_routed_checked_and_audited_as_dispatch_commands() {
     .unwrap();
     let _publishers = mqtt::start(
         &runtime,
-        &MqttSettings {
+        &MqttConfig {
             url: format!("mqtt://127.0.0.1:{}", broker.port),
-            ..MqttSettings::default()
+            ..MqttConfig::default()
         },
     )
     .unwrap();

@@ -227,18 +227,13 @@ fn start_mqtt(
     let project = runtime.project();
     let settings = match (url, &project.mqtt) {
         (None, None) => return Ok(Vec::new()),
-        (url, Some(table)) => sparkplug::mqtt::MqttSettings {
+        (url, Some(table)) => sparkplug::mqtt::MqttConfig {
             url: url.map_or_else(|| table.url.clone(), str::to_owned),
-            ca: table.ca.clone(),
-            username: table.username.clone(),
-            password: table.password.clone(),
-            primary_host: table.primary_host.clone(),
-            group: table.group.clone(),
-            redundancy_group: table.redundancy_group.clone(),
+            ..table.clone()
         },
-        (Some(url), None) => sparkplug::mqtt::MqttSettings {
+        (Some(url), None) => sparkplug::mqtt::MqttConfig {
             url: url.to_owned(),
-            ..sparkplug::mqtt::MqttSettings::default()
+            ..sparkplug::mqtt::MqttConfig::default()
         },
     };
     let nodes = sparkplug::mqtt::start(runtime, &settings)?;

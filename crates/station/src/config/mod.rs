@@ -349,8 +349,9 @@ pub struct Project {
 }
 
 /// The `[mqtt]` table: the broker the nodes publish to as Sparkplug B edge nodes (group
-/// id the station's name, edge node id the node's name).
-#[derive(Debug, Clone, PartialEq)]
+/// id the station's name, edge node id the node's name); `--mqtt URL` makes one with
+/// only the URL.
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct MqttConfig {
     /// `mqtt://HOST[:PORT]` or `mqtts://HOST[:PORT]`.
     pub url: String,
