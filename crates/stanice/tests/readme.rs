@@ -93,6 +93,10 @@ const SKIPPED: &[(&str, &str)] = &[
         "a benchmark: a release build, 1,000 outstations and a master process for half a minute",
     ),
     (
+        "cargo bench -p stanice --bench vsetin_processes",
+        "a benchmark: a release build and 23 node processes for half a minute on the project's ports moved",
+    ),
+    (
         "cargo bench -p hmi --bench lift_fleet",
         "a benchmark: a release build, 200 lifts in real time and headless Chromium",
     ),
