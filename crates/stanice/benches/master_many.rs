@@ -21,6 +21,7 @@ use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
+use testkit::process::resident_and_cpu;
 
 use iec60870::asdu::{CommonAddress, Element, Ioa, Quality, TypeId};
 use iec60870::cs104::server::{
@@ -86,26 +87,6 @@ fn project(servers: &[ServerHandle], points: u32) -> String {
         }
     }
     toml
-}
-
-/// Resident set (KiB) and CPU time (clock ticks) of a process.
-fn usage(pid: u32) -> Option<(u64, u64)> {
-    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
-    let rss = status
-        .lines()
-        .find_map(|line| line.strip_prefix("VmRSS:"))?
-        .split_whitespace()
-        .next()?
-        .parse()
-        .ok()?;
-    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
-    // The fields after the command's closing parenthesis; utime and stime are the 14th
-    // and 15th of the line, the 12th and 13th after it.
-    let rest = stat.rsplit_once(')')?.1;
-    let fields: Vec<&str> = rest.split_whitespace().collect();
-    let utime: u64 = fields.get(11)?.parse().ok()?;
-    let stime: u64 = fields.get(12)?.parse().ok()?;
-    Some((rss, utime + stime))
 }
 
 fn main() {
@@ -189,7 +170,7 @@ async fn run(options: Options) {
         tokio::time::sleep(Duration::from_millis(100)).await;
     }
     let connected_after = launched.elapsed();
-    let (rss_connected, _) = usage(pid).unwrap_or_default();
+    let (rss_connected, _) = resident_and_cpu(pid).unwrap_or_default();
     println!(
         "  every outstation connected and started {:.1} s after the master's start; resident {:.1} MB",
         connected_after.as_secs_f64(),
@@ -228,12 +209,12 @@ async fn run(options: Options) {
         })
     };
     let ticks_per_second = 100.0; // USER_HZ on Linux
-    let (_, cpu_start) = usage(pid).unwrap();
+    let (_, cpu_start) = resident_and_cpu(pid).unwrap();
     let measured = Instant::now();
     let mut samples = Vec::new();
     for _ in 0..options.seconds.div_ceil(5) {
         tokio::time::sleep(Duration::from_secs(5)).await;
-        let (rss, cpu) = usage(pid).unwrap();
+        let (rss, cpu) = resident_and_cpu(pid).unwrap();
         samples.push((measured.elapsed().as_secs_f64(), rss, cpu));
     }
     running.store(false, Ordering::Relaxed);

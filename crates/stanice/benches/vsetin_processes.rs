@@ -15,6 +15,7 @@
 use std::net::TcpStream;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
+use testkit::process::resident_and_cpu;
 
 /// The project's node names, in the order of station.toml (`name = "..."` after each
 /// `[[node]]` header).
@@ -38,24 +39,6 @@ fn node_names(toml: &str) -> Vec<String> {
         }
     }
     names
-}
-
-/// Resident set (KiB) and CPU time (clock ticks) of a process.
-fn usage(pid: u32) -> Option<(u64, u64)> {
-    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
-    let rss = status
-        .lines()
-        .find_map(|line| line.strip_prefix("VmRSS:"))?
-        .split_whitespace()
-        .next()?
-        .parse()
-        .ok()?;
-    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
-    // utime and stime: the 12th and 13th fields after the command's closing parenthesis.
-    let fields: Vec<&str> = stat.rsplit_once(')')?.1.split_whitespace().collect();
-    let utime: u64 = fields.get(11)?.parse().ok()?;
-    let stime: u64 = fields.get(12)?.parse().ok()?;
-    Some((rss, utime + stime))
 }
 
 fn main() {
@@ -105,7 +88,7 @@ fn main() {
     );
     let before: Vec<Option<(u64, u64)>> = children
         .iter()
-        .map(|(_, child)| usage(child.id()))
+        .map(|(_, child)| resident_and_cpu(child.id()))
         .collect();
     let measured = Instant::now();
     std::thread::sleep(Duration::from_secs(seconds));
@@ -113,7 +96,9 @@ fn main() {
     let ticks_per_second = 100.0; // USER_HZ on Linux
     let mut total_rss = 0;
     for ((name, child), before) in children.iter().zip(&before) {
-        let (Some((_, cpu_before)), Some((rss, cpu_after))) = (before, usage(child.id())) else {
+        let (Some((_, cpu_before)), Some((rss, cpu_after))) =
+            (before, resident_and_cpu(child.id()))
+        else {
             println!("  {name:<8} ended during the measurement");
             continue;
         };
