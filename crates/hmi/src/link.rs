@@ -153,7 +153,7 @@ fn point_db(rows: &[PointRow]) -> PointDb {
                     link: "station".to_owned(),
                     ioa: row.ioa,
                 },
-                storage_interval: None,
+                storage: points::StorageRule::default(),
                 description: row.description.clone(),
             })
         })

@@ -41,7 +41,7 @@ fn spec(name: &str, type_id: TypeId, n: u32) -> PointSpec {
         groups: 1,
         deadband: None,
         source: PointSource::Variable(format!("plc:{name}")),
-        storage_interval: None,
+        storage: points::StorageRule::default(),
         description: String::new(),
     }
 }

@@ -42,6 +42,12 @@ impl PointKind {
         )
     }
 
+    /// Whether the kind's values are numbers (a storage deadband or rate limit applies):
+    /// measurements, step positions and integrated totals.
+    pub fn is_numeric(self) -> bool {
+        self.is_measurement() || matches!(self, PointKind::Step | PointKind::Total)
+    }
+
     /// The value a point holds before its first update: the kind's zero.
     pub fn initial(self) -> PointValue {
         match self {

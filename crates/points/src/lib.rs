@@ -17,6 +17,7 @@
 //! | [`cause`]   | [`EventCause`], why a change happened                                    |
 //! | [`spec`]    | [`PointSpec`], [`PointSource`], [`Transmission`], the device signals     |
 //! | [`profile`] | [`DeviceProfile`]: the points a kind of device brings, as data          |
+//! | [`storage`] | [`StorageRule`] (deadband, storage rate limit) and [`StorageFilter`]: which changes the history keeps |
 //! | [`db`]      | [`PointDb`]: a node's points, report by exception, invalidation, cyclic points; [`PointChange`] |
 //!
 //! # Data flow
@@ -41,6 +42,7 @@ pub mod kind;
 pub mod profile;
 pub mod quality;
 pub mod spec;
+pub mod storage;
 pub mod value;
 
 pub use cause::EventCause;
@@ -49,4 +51,5 @@ pub use kind::{normalized, PointKind, PointType, TimeStamp};
 pub use profile::{DeviceProfile, ProfileError, SignalProfile};
 pub use quality::{Quality, SourceTime};
 pub use spec::{LiftSignal, LineSignal, PointSource, PointSpec, Transmission};
+pub use storage::{Deadband, StorageFilter, StorageRule};
 pub use value::PointValue;

@@ -7,8 +7,6 @@
 //! point list of the CLI and the HMI all read the same profile, so a new kind of device
 //! is one profile and one driver, with nothing to add to any of them.
 
-use std::time::Duration;
-
 use crate::PointType;
 
 /// What one kind of device brings.
@@ -37,9 +35,9 @@ pub struct SignalProfile {
     pub point_type: PointType,
     /// What the point shows.
     pub description: String,
-    /// The least time between two stored changes (a signal that changes on every poll
-    /// while something is wrong, such as an error count); `None` stores every change.
-    pub storage_interval: Option<Duration>,
+    /// Which of its changes the history keeps (a signal that changes on every poll while
+    /// something is wrong, such as an error count, is stored at most once a minute).
+    pub storage: crate::StorageRule,
 }
 
 impl DeviceProfile {

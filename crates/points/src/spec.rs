@@ -104,15 +104,17 @@ pub enum LiftSignal {
 }
 
 impl LiftSignal {
-    /// The least time between two stored changes of the signal's point, for the signals
-    /// that change on every poll while something is wrong: a silent board's line-error
-    /// count grew every 0.5 s, 170,000 stored events a day per cut cable. The point is
-    /// still sent on every change; the store keeps the first change of each interval
-    /// (and every change of quality). `None`: every change is stored.
-    pub fn storage_interval(self) -> Option<std::time::Duration> {
+    /// Which changes of the signal's point the history keeps: at most one a minute for
+    /// the signals that change on every poll while something is wrong (a silent board's
+    /// line-error count grew every 0.5 s, 170,000 stored events a day per cut cable).
+    /// The point is still sent on every change; the store keeps the first change of each
+    /// interval (and every change of quality). Every change of the other signals.
+    pub fn storage(self) -> crate::StorageRule {
         match self {
-            LiftSignal::Errors => Some(std::time::Duration::from_secs(60)),
-            _ => None,
+            LiftSignal::Errors => {
+                crate::StorageRule::default().with_min_interval(std::time::Duration::from_secs(60))
+            }
+            _ => crate::StorageRule::default(),
         }
     }
 
@@ -291,10 +293,9 @@ pub struct PointSpec {
     /// Where the value comes from (a PLC variable, a point over a link, a status), typed
     /// as the project says it: invalidation on a link's loss picks its points by it.
     pub source: PointSource,
-    /// The least time between two stored changes of the point (see
-    /// [`SignalProfile::storage_interval`](crate::SignalProfile::storage_interval));
-    /// `None` stores every change. Every change is still sent.
-    pub storage_interval: Option<Duration>,
+    /// Which of its changes the history keeps (see [`crate::storage`]); every change is
+    /// still sent.
+    pub storage: crate::StorageRule,
     /// Free description.
     pub description: String,
 }

@@ -17,7 +17,6 @@
 //! | [`url`]       | store addresses: [`url::StoreUrl`] (`sqlite:PATH`, `sqlite::memory:`, `postgres://...`) |
 //! | `sql`         | what both backends share: the migrations, the queries' SQL, purge, stats, row mapping, and the `EventStore` behaviour itself |
 //! | `sqlite`, `postgres` | the backends: how they reach their database, how a batch of events goes in (SQLite: one prepared INSERT OR IGNORE per row; PostgreSQL: binary COPY into a staging table, then INSERT ... ON CONFLICT DO NOTHING), and retention (`postgres::partitions`: day partitions) |
-//! | `policy`      | [`StoragePolicy`]: deadbands (absolute, percent) and storage rate limits per point, applied by the recorder |
 //! | `recorder`    | [`Recorder`]: the bounded channel and batching writer in front of a store; gives every event an idempotent key ([`EventKey`]) |
 //! | `retention`   | [`spawn_retention`]: the periodic purge of old history |
 //!
@@ -29,14 +28,15 @@
 //!
 //! ```text
 //!  value in (PLC, I/O, link) --> PointDb::update --> PointChange (report by exception)
-//!  (the points crate)                                    | EventRecord::of_change
+//!  (the points crate)                                    | the point's StorageRule (deadband,
+//!                                                        | rate limit: points::StorageFilter)
+//!                                                        | EventRecord::of_change
 //!  command audit (CommandRecord) -----------------+      v
 //!                                                 +--> Recorder: bounded channel
 //!                                                      (full: events dropped and counted,
 //!                                                       commands wait for room)
-//!                                                        | write task: StoragePolicy (deadband,
-//!                                                        | rate limit), an EventKey for each event,
-//!                                                        | one transaction per burst
+//!                                                        | write task: an EventKey for each
+//!                                                        | event, one transaction per burst
 //!                                                        v
 //!                      EventStore (SqliteStore | PostgresStore) --> query_events / query_commands
 //!                                                        ^              (HMI event list, CLI)
@@ -132,7 +132,6 @@ mod error;
 mod lift;
 mod model;
 mod notification;
-mod policy;
 #[cfg(feature = "database")]
 mod postgres;
 mod query;
@@ -158,7 +157,6 @@ pub use model::{
     CommandRecord, EventCause, EventKey, EventRecord, PointValue, Quality, RecordId, SourceTime,
 };
 pub use notification::{NotificationOutcome, NotificationQuery, NotificationRecord};
-pub use policy::{Deadband, PointPolicy, StoragePolicy};
 #[cfg(feature = "database")]
 pub use postgres::partitions::{DAYS_AHEAD, ON_DEMAND_FUTURE_DAYS, ON_DEMAND_PAST_DAYS};
 #[cfg(feature = "database")]

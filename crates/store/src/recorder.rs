@@ -11,16 +11,16 @@
 //!
 //! Every event leaves with an idempotent key ([`crate::EventKey`]): its own when the
 //! source gave it one, else the recorder's (this run's identity and a sequence number), so
-//! that a batch retried after an error whose commit did happen is not stored twice. A
-//! [`StoragePolicy`] (deadbands, storage rate limits) thins events out before they are
-//! written ([`Recorder::spawn_with_policy`]).
+//! that a batch retried after an error whose commit did happen is not stored twice. The
+//! recorder stores what it is given: which changes are worth a row (deadbands, storage
+//! rate limits) the point's own storage rule decides before ([`points::StorageFilter`]).
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 use tokio::sync::{mpsc, oneshot};
 
-use crate::{CommandRecord, EventKey, EventRecord, EventStore, StoragePolicy};
+use crate::{CommandRecord, EventKey, EventRecord, EventStore};
 
 /// Events taken from the channel per transaction at most.
 const BATCH: usize = 1024;
@@ -52,8 +52,6 @@ struct Counters {
     failed: AtomicU64,
     /// Events dropped because the channel was full.
     overflowed: AtomicU64,
-    /// Events the storage policy left out.
-    suppressed: AtomicU64,
     /// When the overflow was last reported.
     overflow_warning: std::sync::Mutex<Option<std::time::Instant>>,
 }
@@ -83,21 +81,11 @@ impl Recorder {
 
     /// As [`Recorder::spawn`], with a channel of `capacity` records.
     pub fn spawn_with_capacity(store: Arc<dyn EventStore>, capacity: usize) -> Recorder {
-        Recorder::spawn_with(store, capacity, StoragePolicy::default())
-    }
-
-    /// As [`Recorder::spawn`], storing only the events `policy` admits.
-    pub fn spawn_with_policy(store: Arc<dyn EventStore>, policy: StoragePolicy) -> Recorder {
-        Recorder::spawn_with(store, CHANNEL_CAPACITY, policy)
-    }
-
-    fn spawn_with(store: Arc<dyn EventStore>, capacity: usize, policy: StoragePolicy) -> Recorder {
         let (sender, receiver) = mpsc::channel(capacity.max(1));
         let counters = Arc::new(Counters::default());
         let writer = Writer {
             store,
             counters: Arc::clone(&counters),
-            policy,
             keys: EventKey::new(
                 format!(
                     "recorder/{}/{}",
@@ -220,18 +208,12 @@ impl Recorder {
     pub fn overflowed(&self) -> u64 {
         self.counters.overflowed.load(Ordering::Relaxed)
     }
-
-    /// Events the storage policy left out (deadband, rate limit).
-    pub fn suppressed(&self) -> u64 {
-        self.counters.suppressed.load(Ordering::Relaxed)
-    }
 }
 
-/// The write task: the store, the policy and the next key of this run.
+/// The write task: the store and the next key of this run.
 struct Writer {
     store: Arc<dyn EventStore>,
     counters: Arc<Counters>,
-    policy: StoragePolicy,
     /// The key the next event without one gets.
     keys: EventKey,
 }
@@ -240,17 +222,10 @@ impl Writer {
     async fn run(mut self, mut receiver: mpsc::Receiver<Record>) {
         let mut buffer = Vec::with_capacity(BATCH);
         let mut events = Vec::with_capacity(BATCH);
-        let thin = !self.policy.is_every_change();
         while receiver.recv_many(&mut buffer, BATCH).await > 0 {
             for record in buffer.drain(..) {
                 match record {
-                    Record::Event(event) => {
-                        if thin && !self.policy.admit(&event) {
-                            self.counters.suppressed.fetch_add(1, Ordering::Relaxed);
-                        } else {
-                            events.push(self.keyed(event));
-                        }
-                    }
+                    Record::Event(event) => events.push(self.keyed(event)),
                     Record::Command(command, committed) => {
                         self.write_events(&mut events).await;
                         let stored = match self.store.append_command(&command).await {

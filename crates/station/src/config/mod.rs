@@ -23,6 +23,11 @@
 //! store = "sqlite:events.sqlite"       # default; relative paths resolve against the project
 //!                                      # folder; "sqlite::memory:" and postgres://... allowed
 //! retention_days = 60                  # default 60, >= 1
+//! store_deadband_percent = 0.5         # optional default of numeric points without their own:
+//!                                      # a change within 0.5 % of the last stored value is
+//!                                      # sent, not stored
+//! store_min_interval_ms = 1000         # optional default: at most one stored change of a
+//!                                      # numeric point per second (1..=86_400_000)
 //! port_base = 2404                     # default 2404; a node's server port = port_base + port_offset
 //! bind = "127.0.0.1"                   # default; the address every node's server listens on
 //! plant = "vsetin"                     # optional: which plant simulation drives the I/O
@@ -115,6 +120,11 @@
 //! cycle_ms = 1000                      # required with (and only with) cyclic
 //! groups = [1, 3]                      # interrogation groups 1..=16; default none
 //! deadband = 0.5                       # measurements (M_ME_*) only; absolute, >= 0
+//! store_deadband = 0.2                 # numeric points (M_ME_*, M_ST_*, M_IT_*): what the
+//!                                      # history keeps; absolute, >= 0; or
+//!                                      # store_deadband_percent = 1 (of the last stored value)
+//! store_min_interval_ms = 60000        # numeric points: at most one stored change a minute
+//!                                      # (a change of quality and answers always stored)
 //! invalid_when = "RDRTIO.PoruchaModul9" # optional BOOL variable: TRUE sends the point IV
 //! description = "breaker FA1 closed"   # optional
 //!
@@ -380,6 +390,10 @@ pub struct StationSettings {
     pub store: String,
     /// How long events are kept, in days (>= 1).
     pub retention_days: u32,
+    /// Which changes the history keeps of points without a setting of their own
+    /// (`store_deadband_percent`, `store_min_interval_ms`); already applied to every
+    /// point's [`PointConfig::storage`].
+    pub storage: points::StorageRule,
     /// The port of a node's server is `port_base + port_offset`.
     pub port_base: u16,
     /// The address the nodes' servers listen on.
@@ -666,9 +680,10 @@ pub struct PointConfig {
     pub invalid_when: Option<String>,
     /// For a measurand from a serial-line device: how its fraction becomes the value.
     pub scaling: Option<MeasurandScaling>,
-    /// The least time between two stored changes (a device signal that changes on every
-    /// poll while something is wrong); `None` stores every change.
-    pub storage_interval: Option<Duration>,
+    /// Which of its changes the history keeps (`store_deadband`,
+    /// `store_deadband_percent`, `store_min_interval_ms`, over the station's defaults; a
+    /// device signal that changes on every poll while something is wrong brings its own).
+    pub storage: points::StorageRule,
     /// Free text.
     pub description: String,
 }

@@ -439,6 +439,8 @@ pub enum TypeUse {
     Deadband,
     /// A command with `range`: a set-point.
     Range,
+    /// A point with a storage deadband or rate limit: a numeric type.
+    Storage,
 }
 
 /// Keys or things that exclude each other.
@@ -451,6 +453,9 @@ pub enum Conflict {
     /// A line with not exactly one of `port`, `tcp` and `simulate`.
     #[error("give exactly one of port, tcp and simulate")]
     LineTransport,
+    /// A point with both storage deadbands.
+    #[error("give either store_deadband (absolute) or store_deadband_percent, not both")]
+    StoreDeadbands,
     /// An I/O binding with both `signal` and `point`.
     #[error("give either signal (a plant signal) or point (a point of the node), not both")]
     IoSignalAndPoint,
@@ -764,6 +769,9 @@ fn wrong_type_text(type_id: &str, usage: &TypeUse) -> String {
             format!("a deadband needs a measurement type (M_ME_*), not {type_id}")
         }
         TypeUse::Range => format!("range applies to set-points, not {type_id}"),
+        TypeUse::Storage => format!(
+            "a storage deadband or rate limit thins out numbers (measurements, step positions, integrated totals), not {type_id}: every change of it is stored"
+        ),
     }
 }
 

@@ -37,6 +37,8 @@ pub(in crate::config) struct RawStation {
     pub(in crate::config) time_zone: String,
     pub(in crate::config) store: Option<String>,
     pub(in crate::config) retention_days: Option<u32>,
+    pub(in crate::config) store_deadband_percent: Option<f64>,
+    pub(in crate::config) store_min_interval_ms: Option<i64>,
     pub(in crate::config) port_base: Option<u16>,
     pub(in crate::config) bind: Option<String>,
     pub(in crate::config) plant: Option<String>,
@@ -189,6 +191,9 @@ pub(in crate::config) struct RawPoint {
     #[serde(default)]
     pub(in crate::config) groups: Vec<i64>,
     pub(in crate::config) deadband: Option<f64>,
+    pub(in crate::config) store_deadband: Option<f64>,
+    pub(in crate::config) store_deadband_percent: Option<f64>,
+    pub(in crate::config) store_min_interval_ms: Option<i64>,
     pub(in crate::config) invalid_when: Option<String>,
     pub(in crate::config) measurand_limit: Option<f64>,
     pub(in crate::config) full_scale: Option<f64>,

@@ -38,7 +38,7 @@ impl BalanceKind {
             offset,
             point_type: PointType::new(kind, TimeStamp::Full),
             description: description.to_owned(),
-            storage_interval: None,
+            storage: points::StorageRule::default(),
         };
         BalanceKind {
             profile: DeviceProfile {

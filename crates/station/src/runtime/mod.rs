@@ -272,7 +272,7 @@ pub fn point_specs(node: &NodeConfig) -> Vec<PointSpec> {
                 .fold(0u16, |bits, g| bits | (1 << (g - 1))),
             deadband: point.deadband,
             source: point.source.clone(),
-            storage_interval: point.storage_interval,
+            storage: point.storage,
             description: point.description.clone(),
         })
         .collect()

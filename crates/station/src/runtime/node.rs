@@ -19,7 +19,7 @@ use iec60870::asdu::Asdu;
 use iec60870::time::TimeZonePolicy;
 use points::{
     EventCause, Point, PointChange, PointDb, PointDbError, PointId, PointKey, PointValue, Quality,
-    SourceTime,
+    SourceTime, StorageFilter, StorageRule,
 };
 use points_iec::{event_cause, from_element, received_as_event};
 
@@ -40,10 +40,10 @@ pub struct NodePoints {
     /// Commands waiting for the next change of a point (by name) as their return
     /// information; a waiter that gave up has dropped its receiver.
     returns: Mutex<HashMap<String, Vec<tokio::sync::oneshot::Sender<()>>>>,
-    /// Points whose changes the store keeps at most once per interval (by name), with
-    /// the time and quality of the change last stored.
-    storage_intervals: HashMap<String, std::time::Duration>,
-    last_stored: Mutex<HashMap<String, (DateTime<Utc>, Quality)>>,
+    /// The storage rules of the points that have one (by name; the others store every
+    /// change) and what was last stored of each.
+    storage_rules: HashMap<String, StorageRule>,
+    stored: Mutex<StorageFilter>,
 }
 
 impl NodePoints {
@@ -54,19 +54,15 @@ impl NodePoints {
         recorder: Recorder,
         clock: Arc<NodeClock>,
     ) -> Arc<NodePoints> {
-        let storage_intervals = db
+        let storage_rules = db
             .points()
-            .filter_map(|point| {
-                point
-                    .spec
-                    .storage_interval
-                    .map(|interval| (point.spec.name.clone(), interval))
-            })
+            .filter(|point| !point.spec.storage.is_every_change())
+            .map(|point| (point.spec.name.clone(), point.spec.storage))
             .collect();
         Arc::new(NodePoints {
             name: name.to_owned(),
-            storage_intervals,
-            last_stored: Mutex::new(HashMap::new()),
+            storage_rules,
+            stored: Mutex::new(StorageFilter::new()),
             db: Mutex::new(db),
             sinks: std::sync::RwLock::new(Vec::new()),
             zone,
@@ -104,27 +100,24 @@ impl NodePoints {
             .collect()
     }
 
-    /// Whether the store keeps this change: always, but for points with a storage
-    /// interval, whose changes within an interval of the last stored one (and of the same
-    /// quality) are only sent, not stored.
+    /// Whether the store keeps this change: always, but for points with a storage rule
+    /// (a deadband, a rate limit), whose changes it leaves out are only sent.
     fn to_store(&self, change: &PointChange) -> bool {
-        let Some(interval) = self.storage_intervals.get(&change.name) else {
+        let Some(rule) = self.storage_rules.get(&change.name) else {
             return true;
         };
-        let mut last = self
-            .last_stored
+        self.stored
             .lock()
-            .unwrap_or_else(|poison| poison.into_inner());
-        let skip = last.get(&change.name).is_some_and(|(at, quality)| {
-            *quality == change.quality
-                && (change.received - *at)
-                    .to_std()
-                    .is_ok_and(|since| since < *interval)
-        });
-        if !skip {
-            last.insert(change.name.clone(), (change.received, change.quality));
-        }
-        !skip
+            .unwrap_or_else(|poison| poison.into_inner())
+            .admit(*rule, change)
+    }
+
+    /// How many changes the points' storage rules left out of the store so far.
+    pub fn left_out_of_store(&self) -> u64 {
+        self.stored
+            .lock()
+            .unwrap_or_else(|poison| poison.into_inner())
+            .left_out()
     }
 
     /// The node's name.

@@ -37,7 +37,7 @@ impl ToyKind {
             offset,
             point_type: PointType::new(kind, TimeStamp::Full),
             description: format!("the toy's {name}"),
-            storage_interval: None,
+            storage: points::StorageRule::default(),
         };
         ToyKind {
             profile: DeviceProfile {

@@ -17,6 +17,7 @@ mod lighting;
 mod power;
 mod s7_concentrator;
 mod sorting_lab;
+mod storage;
 mod time;
 mod tls;
 mod vsetin_s7;

@@ -119,7 +119,7 @@ impl Ctx<'_> {
                 source: PointSource::DeviceComm {
                     device: device.name.clone(),
                 },
-                storage_interval: None,
+                storage: points::StorageRule::default(),
                 description: format!(
                     "{} not answering (communication alarm){description}",
                     device.name
@@ -134,7 +134,7 @@ impl Ctx<'_> {
                     device: device.name.clone(),
                     signal: signal.name.clone(),
                 },
-                storage_interval: signal.storage_interval,
+                storage: signal.storage,
                 description: format!("{} {}{description}", device.name, signal.description),
             });
             for generated in std::iter::once(status).chain(signals) {

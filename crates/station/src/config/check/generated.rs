@@ -17,7 +17,7 @@ pub(in crate::config) struct GeneratedPoint {
     pub(in crate::config) offset: u32,
     pub(in crate::config) point_type: PointType,
     pub(in crate::config) source: PointSource,
-    pub(in crate::config) storage_interval: Option<Duration>,
+    pub(in crate::config) storage: points::StorageRule,
     pub(in crate::config) description: String,
 }
 
@@ -76,7 +76,7 @@ impl Ctx<'_> {
             deadband: None,
             invalid_when: None,
             scaling: None,
-            storage_interval: point.storage_interval,
+            storage: point.storage,
             description: point.description,
         })
     }

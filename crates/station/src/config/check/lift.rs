@@ -219,7 +219,7 @@ impl Ctx<'_> {
                         lift: lift.name.clone(),
                         signal,
                     },
-                    storage_interval: signal.storage_interval(),
+                    storage: signal.storage(),
                     description: format!("{} {}{description}", lift.name, signal.description()),
                 };
                 match self.generated_point(generated, &raw.name, &mut taken, &at) {

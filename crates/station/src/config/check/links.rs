@@ -318,7 +318,7 @@ impl Ctx<'_> {
                         deadband: None,
                         invalid_when: None,
                         scaling: point.scaling,
-                        storage_interval: point.storage_interval,
+                        storage: point.storage,
                         description: point.description.clone(),
                     });
                 }

@@ -12,6 +12,7 @@ mod node;
 mod point;
 mod serial;
 mod server;
+mod storage;
 
 use command::CommandContext;
 use generated::{GeneratedPoint, TakenPoints};
@@ -173,6 +174,7 @@ impl Ctx<'_> {
             nodes.push(built);
         }
         self.check_links(folder, &raw, &mut nodes);
+        storage::apply_station_storage(&mut nodes, station.storage);
         // `connect = "node:NAME"`: a node of the project with an S7 server.
         for (n, node) in nodes.iter().enumerate() {
             for (d, device) in node.devices.iter().enumerate() {
@@ -350,11 +352,13 @@ impl Ctx<'_> {
                 IpAddr::V4(Ipv4Addr::LOCALHOST)
             }
         };
+        let storage = self.station_storage(raw);
         StationSettings {
             name: raw.name.clone(),
             time_zone,
             store,
             retention_days,
+            storage,
             port_base: raw.port_base.unwrap_or(2404),
             bind,
             plant: raw.plant.clone(),

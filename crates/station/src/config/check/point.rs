@@ -1,7 +1,7 @@
 //! The checks of a node's written points (`[[node.point]]`): name and IOA (unique in the
 //! node), type, source (a PLC variable, `link:`, `line:`, or none for the status point
 //! of a link, a redundancy group, a line or a line's device), measurand scaling,
-//! transmission, interrogation groups and deadband. The points lifts and devices bring
+//! transmission, interrogation groups, deadband and what the history keeps (`storage`). The points lifts and devices bring
 //! are checked in `lift` and `device` (`generated`).
 
 use super::*;
@@ -34,6 +34,7 @@ impl Ctx<'_> {
             let transmission = self.point_transmission(entry, point);
             let groups = self.point_groups(entry, point);
             self.check_deadband(entry, point, type_id);
+            let storage = self.point_storage(entry, point, point_type, type_id);
             points.push(PointConfig {
                 name: point.name.clone(),
                 point_type,
@@ -44,7 +45,7 @@ impl Ctx<'_> {
                 deadband: point.deadband,
                 invalid_when: point.invalid_when.clone(),
                 scaling,
-                storage_interval: None,
+                storage,
                 description: point.description.clone(),
             });
         }

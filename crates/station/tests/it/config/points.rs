@@ -361,3 +361,132 @@ range = {range}
         Some(0.0..=1439.0)
     );
 }
+
+/// What the history keeps: a point's own deadband and rate limit over the station's
+/// defaults, which reach every numeric point without its own (written or brought by a
+/// lift); a binary point keeps every change.
+#[test]
+fn storage_rules_of_points_over_the_station_defaults() {
+    use points::{Deadband, StorageRule};
+    let toml = r#"[station]
+name = "X"
+time_zone = "UTC"
+store_deadband_percent = 0.5
+store_min_interval_ms = 1000
+[[node]]
+name = "A"
+common_address = 1
+[[node.point]]
+name = "U"
+type = "M_ME_NC_1"
+ioa = 1
+source = "M.U"
+store_deadband = 0.2
+[[node.point]]
+name = "C"
+type = "M_IT_NA_1"
+ioa = 2
+source = "M.C"
+store_min_interval_ms = 60000
+[[node.point]]
+name = "I"
+type = "M_ME_NB_1"
+ioa = 3
+source = "M.I"
+[[node.point]]
+name = "Q"
+type = "M_SP_NA_1"
+ioa = 4
+source = "M.Q"
+"#;
+    let project = load(toml, &[]).unwrap();
+    let rule = |name: &str| {
+        project.nodes[0]
+            .points
+            .iter()
+            .find(|p| p.name == name)
+            .unwrap()
+            .storage
+    };
+    let second = std::time::Duration::from_secs(1);
+    assert_eq!(
+        rule("U"),
+        StorageRule::default()
+            .with_deadband(Deadband::Absolute(0.2))
+            .with_min_interval(second)
+    );
+    assert_eq!(
+        rule("C"),
+        StorageRule::default()
+            .with_deadband(Deadband::Percent(0.5))
+            .with_min_interval(std::time::Duration::from_secs(60))
+    );
+    assert_eq!(
+        rule("I"),
+        StorageRule::default()
+            .with_deadband(Deadband::Percent(0.5))
+            .with_min_interval(second)
+    );
+    assert_eq!(project.station.storage, rule("I"));
+}
+
+#[test]
+fn storage_rules_that_cannot_be() {
+    let toml = r#"[station]
+name = "X"
+time_zone = "UTC"
+store_min_interval_ms = 0
+[[node]]
+name = "A"
+common_address = 1
+[[node.point]]
+name = "Q"
+type = "M_SP_TB_1"
+ioa = 1
+source = "M.A"
+store_min_interval_ms = 1000
+[[node.point]]
+name = "U"
+type = "M_ME_NC_1"
+ioa = 2
+source = "M.U"
+store_deadband = 0.2
+store_deadband_percent = 1
+[[node.point]]
+name = "I"
+type = "M_ME_NB_1"
+ioa = 3
+source = "M.I"
+store_deadband_percent = -1
+"#;
+    let errors = errors(toml, &[]);
+    expect(
+        &errors,
+        4,
+        25,
+        "station.store_min_interval_ms",
+        "store_min_interval_ms 0 is outside 1..=86400000",
+    );
+    expect(
+        &errors,
+        13,
+        25,
+        "node[0].point[0].store_min_interval_ms",
+        "thins out numbers",
+    );
+    expect(
+        &errors,
+        20,
+        26,
+        "node[0].point[1].store_deadband_percent",
+        "either store_deadband (absolute) or store_deadband_percent",
+    );
+    expect(
+        &errors,
+        26,
+        26,
+        "node[0].point[2].store_deadband_percent",
+        "store_deadband_percent must be a finite value >= 0",
+    );
+    assert_eq!(errors.len(), 4, "{errors:#?}");
+}
