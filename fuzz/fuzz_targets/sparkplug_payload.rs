@@ -1,7 +1,8 @@
 //! Arbitrary bytes as what a broker hands an edge node: a Sparkplug B payload, an NCMD
 //! (by name, by alias, rebirth) and a primary host's STATE, and arbitrary text as a
 //! topic. Nothing may panic; a payload that decodes encodes to bytes that decode to it
-//! again; the node's answers keep NBIRTH at seq 0 and NDATA counting on without a gap.
+//! again; the node's answers keep NBIRTH at seq 0 and DBIRTH, NDATA and DDATA counting
+//! on without a gap.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -29,9 +30,9 @@ fuzz_target!(|data: &[u8]| {
             buffer_limit: 8,
         },
         vec![
-            MetricSpec { name: "a".into(), datatype: DataType::Boolean, writable: true },
-            MetricSpec { name: "b".into(), datatype: DataType::Int16, writable: true },
-            MetricSpec { name: "c".into(), datatype: DataType::Float, writable: false },
+            MetricSpec { name: "a".into(), datatype: DataType::Boolean, writable: true, device: None },
+            MetricSpec { name: "b".into(), datatype: DataType::Int16, writable: true, device: Some("d".into()) },
+            MetricSpec { name: "c".into(), datatype: DataType::Float, writable: false, device: Some("d".into()) },
         ],
     )
     .expect("a valid node");
@@ -47,6 +48,7 @@ fuzz_target!(|data: &[u8]| {
             let payload = Payload::decode_bytes(&publish.payload).expect("our payloads decode");
             let seq = payload.seq.expect("births and data carry seq");
             if publish.topic.contains("/NBIRTH/") {
+                // a birth (a rebirth asked for) starts the sequence again
                 assert_eq!(seq, 0);
             } else if let Some(expected) = expected {
                 assert_eq!(seq, expected);

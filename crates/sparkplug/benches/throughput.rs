@@ -99,6 +99,7 @@ async fn main() {
             name: format!("m{i}"),
             datatype: DataType::Double,
             writable: false,
+            device: None,
         })
         .collect();
     let edge = EdgeNode::new(

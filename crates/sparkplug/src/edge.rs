@@ -6,8 +6,12 @@
 //! A session: the will (NDEATH with the session's `bdSeq`) is registered with the
 //! connection; once connected (and, with a primary host, once the host's STATE says
 //! online) the node publishes NBIRTH with seq 0, `bdSeq`, `Node Control/Rebirth` and
-//! every metric with its alias and current value; then NDATA for each change, seq going
-//! on modulo 256 without a gap. Changes that cannot go out (no connection, primary host
+//! every node metric with its alias and current value, then a DBIRTH for each of its
+//! devices (a metric's [`MetricSpec::device`]: a lift board, a relay on a serial line, a
+//! field device) with that device's metrics; then NDATA or DDATA for each change, one seq
+//! for all of the node's messages going on modulo 256 without a gap. Aliases are unique
+//! across the node and its devices. A host writes node metrics with NCMD and a device's
+//! with DCMD to that device. Changes that cannot go out (no connection, primary host
 //! offline) are buffered (the oldest dropped past the limit, counted) and replayed after
 //! the next birth, in order, as historical values. A rebirth asked for in NCMD keeps the
 //! session and `bdSeq`; a new connection takes the next `bdSeq`.
@@ -41,6 +45,8 @@ pub struct MetricSpec {
     pub datatype: DataType,
     /// Whether a host may write it (a command).
     pub writable: bool,
+    /// The device it belongs to (its DBIRTH, DDATA and DCMD); `None`: the node's own.
+    pub device: Option<String>,
 }
 
 /// A metric's value at a time.
@@ -117,6 +123,14 @@ pub enum EdgeError {
     /// A metric of a reserved name.
     #[error("metric `{0}` has a name Sparkplug reserves")]
     ReservedMetric(String),
+    /// A device id that cannot stand in a topic.
+    #[error("metric `{metric}`'s device `{device}` cannot be a Sparkplug id (empty, or with `/`, `+` or `#`)")]
+    InvalidDevice {
+        /// The metric.
+        metric: String,
+        /// Its device.
+        device: String,
+    },
 }
 
 #[derive(Debug)]
@@ -131,6 +145,8 @@ pub struct EdgeNode {
     config: EdgeConfig,
     metrics: Vec<Entry>,
     by_name: HashMap<String, usize>,
+    /// The devices, in the order their first metric is declared.
+    devices: Vec<String>,
     bd_seq: u64,
     /// The seq of the next NDATA.
     next_seq: u8,
@@ -155,12 +171,24 @@ impl EdgeNode {
             }
         }
         let mut by_name = HashMap::new();
+        let mut devices: Vec<String> = Vec::new();
         for (index, metric) in metrics.iter().enumerate() {
             if metric.name == BD_SEQ || metric.name == REBIRTH {
                 return Err(EdgeError::ReservedMetric(metric.name.clone()));
             }
             if by_name.insert(metric.name.clone(), index).is_some() {
                 return Err(EdgeError::DuplicateMetric(metric.name.clone()));
+            }
+            if let Some(device) = &metric.device {
+                if !valid_id(device) {
+                    return Err(EdgeError::InvalidDevice {
+                        metric: metric.name.clone(),
+                        device: device.clone(),
+                    });
+                }
+                if !devices.contains(device) {
+                    devices.push(device.clone());
+                }
             }
         }
         let host_online = config.primary_host.is_none();
@@ -174,6 +202,7 @@ impl EdgeNode {
                 })
                 .collect(),
             by_name,
+            devices,
             bd_seq: 0,
             next_seq: 0,
             connected: false,
@@ -221,8 +250,34 @@ impl EdgeNode {
             .map(|index| index as u64 + FIRST_ALIAS)
     }
 
+    /// The node's devices, in the order of their DBIRTHs.
+    pub fn devices(&self) -> &[String] {
+        &self.devices
+    }
+
     fn topic(&self, message: MessageType) -> String {
         Topic::node(&self.config.group, message, &self.config.edge_node).to_string()
+    }
+
+    /// The topic of a message of the node (`device` `None`) or of one of its devices.
+    fn topic_of(&self, message: MessageType, device: Option<&str>) -> String {
+        match device {
+            None => self.topic(message),
+            Some(device) => Topic::Node {
+                group: self.config.group.clone(),
+                message,
+                edge_node: self.config.edge_node.clone(),
+                device: Some(device.to_owned()),
+            }
+            .to_string(),
+        }
+    }
+
+    /// The device of a metric (`None`: the node's own, or no such metric).
+    fn device_of(&self, index: usize) -> Option<&str> {
+        self.metrics
+            .get(index)
+            .and_then(|entry| entry.spec.device.as_deref())
     }
 
     /// The topics to subscribe to once connected: the node's commands and, with a
@@ -298,7 +353,8 @@ impl EdgeNode {
         entry.current = Some(sample.clone());
         if self.born {
             let metric = self.data_metric(index, &sample, false);
-            vec![self.data(vec![metric], now)]
+            let device = self.device_of(index).map(str::to_owned);
+            vec![self.data(vec![metric], device.as_deref(), now)]
         } else {
             if self.buffer.len() >= self.config.buffer_limit {
                 self.buffer.pop_front();
@@ -323,14 +379,19 @@ impl EdgeNode {
                 edge_node,
                 device,
             }) if group == self.config.group && edge_node == self.config.edge_node => {
-                if message == MessageType::DCmd {
-                    let device = device.unwrap_or_default();
-                    return vec![refused(
-                        &format!("device {device}"),
-                        "this node has no devices",
-                    )];
-                }
-                self.command(payload, now)
+                let device = match (message, device) {
+                    (MessageType::DCmd, Some(device)) if self.devices.contains(&device) => {
+                        Some(device)
+                    }
+                    (MessageType::DCmd, device) => {
+                        return vec![refused(
+                            &format!("device {}", device.unwrap_or_default()),
+                            "this node has no such device",
+                        )];
+                    }
+                    _ => None,
+                };
+                self.command(payload, device.as_deref(), now)
             }
             _ => Vec::new(),
         }
@@ -367,10 +428,12 @@ impl EdgeNode {
         }
     }
 
-    fn command(&mut self, payload: &[u8], now: u64) -> Vec<Output> {
+    /// A host's NCMD (`device` `None`) or DCMD to `device`.
+    fn command(&mut self, payload: &[u8], device: Option<&str>, now: u64) -> Vec<Output> {
+        let message = if device.is_some() { "DCMD" } else { "NCMD" };
         let payload = match Payload::decode_bytes(payload) {
             Ok(payload) => payload,
-            Err(error) => return vec![refused("NCMD", &error.to_string())],
+            Err(error) => return vec![refused(message, &error.to_string())],
         };
         let mut outputs = Vec::new();
         for metric in payload.metrics {
@@ -379,8 +442,9 @@ impl EdgeNode {
                 (None, Some(alias)) => format!("alias {alias}"),
                 (None, None) => "a metric without name or alias".to_owned(),
             };
-            let rebirth = metric.name.as_deref() == Some(REBIRTH)
-                || (metric.name.is_none() && metric.alias == Some(REBIRTH_ALIAS));
+            let rebirth = device.is_none()
+                && (metric.name.as_deref() == Some(REBIRTH)
+                    || (metric.name.is_none() && metric.alias == Some(REBIRTH_ALIAS)));
             if rebirth {
                 match metric.value {
                     Some(MetricValue::BooleanValue(true)) => {
@@ -393,7 +457,7 @@ impl EdgeNode {
                 }
                 continue;
             }
-            outputs.push(match self.write(&metric) {
+            outputs.push(match self.write(&metric, device) {
                 Ok(write) => Output::Write(write),
                 Err(reason) => refused(&label, reason),
             });
@@ -401,7 +465,7 @@ impl EdgeNode {
         outputs
     }
 
-    fn write(&self, metric: &Metric) -> Result<Write, &'static str> {
+    fn write(&self, metric: &Metric, device: Option<&str>) -> Result<Write, &'static str> {
         let index = match (&metric.name, metric.alias) {
             (Some(name), _) => self.metric_index(name).ok_or("no such metric")?,
             (None, Some(alias)) => alias
@@ -412,6 +476,12 @@ impl EdgeNode {
             (None, None) => return Err("no name or alias"),
         };
         let entry = self.metrics.get(index).ok_or("no such metric")?;
+        if entry.spec.device.as_deref() != device {
+            return Err(match device {
+                None => "a device's metric: write it with DCMD to its device",
+                Some(_) => "not a metric of this device",
+            });
+        }
         if !entry.spec.writable {
             return Err("not writable");
         }
@@ -431,7 +501,8 @@ impl EdgeNode {
         })
     }
 
-    /// NBIRTH (seq 0) with every metric, then the buffered changes as historical NDATA.
+    /// NBIRTH (seq 0) with the node's metrics, a DBIRTH for each device with its
+    /// metrics, then the buffered changes as historical NDATA and DDATA.
     fn birth(&mut self, now: u64) -> Vec<Output> {
         let mut metrics = vec![
             Metric {
@@ -451,7 +522,60 @@ impl EdgeNode {
                 ..Metric::default()
             },
         ];
+        metrics.extend(self.birth_metrics(None, now));
+        let birth = Payload {
+            timestamp: Some(now),
+            metrics,
+            seq: Some(0),
+            ..Payload::default()
+        };
+        self.next_seq = 1;
+        self.born = true;
+        let mut outputs = vec![Output::Publish(Publish {
+            topic: self.topic(MessageType::NBirth),
+            payload: birth.to_bytes(),
+        })];
+        for device in self.devices.clone() {
+            let birth = Payload {
+                timestamp: Some(now),
+                metrics: self.birth_metrics(Some(&device), now),
+                seq: Some(u64::from(self.next_seq)),
+                ..Payload::default()
+            };
+            self.next_seq = self.next_seq.wrapping_add(1);
+            outputs.push(Output::Publish(Publish {
+                topic: self.topic_of(MessageType::DBirth, Some(&device)),
+                payload: birth.to_bytes(),
+            }));
+        }
+        // The buffer in order, each run of one device's (or the node's) changes in
+        // messages of at most REPLAY_BATCH metrics.
+        let buffered: Vec<(usize, Sample)> = self.buffer.drain(..).collect();
+        let mut run: Vec<Metric> = Vec::new();
+        let mut run_device: Option<String> = None;
+        for (index, sample) in &buffered {
+            let device = self.device_of(*index).map(str::to_owned);
+            if !run.is_empty() && (device != run_device || run.len() == REPLAY_BATCH) {
+                let metrics = std::mem::take(&mut run);
+                outputs.push(self.data(metrics, run_device.as_deref(), now));
+            }
+            run_device = device;
+            run.push(self.data_metric(*index, sample, true));
+        }
+        if !run.is_empty() {
+            outputs.push(self.data(run, run_device.as_deref(), now));
+        }
+        outputs
+    }
+
+    /// The birth metrics of the node's own metrics (`device` `None`) or of a device's:
+    /// name, alias, type, current value (null before the first), `Writable` for commands.
+    fn birth_metrics(&self, device: Option<&str>, now: u64) -> Vec<Metric> {
+        let mut metrics = Vec::new();
         for (index, entry) in self.metrics.iter().enumerate() {
+            if entry.spec.device.as_deref() != device {
+                continue;
+            }
             let mut metric = match &entry.current {
                 Some(sample) => value_metric(entry.spec.datatype, sample),
                 None => Metric {
@@ -474,27 +598,7 @@ impl EdgeNode {
             }
             metrics.push(metric);
         }
-        let birth = Payload {
-            timestamp: Some(now),
-            metrics,
-            seq: Some(0),
-            ..Payload::default()
-        };
-        self.next_seq = 1;
-        self.born = true;
-        let mut outputs = vec![Output::Publish(Publish {
-            topic: self.topic(MessageType::NBirth),
-            payload: birth.to_bytes(),
-        })];
-        let buffered: Vec<(usize, Sample)> = self.buffer.drain(..).collect();
-        for batch in buffered.chunks(REPLAY_BATCH) {
-            let metrics = batch
-                .iter()
-                .map(|(index, sample)| self.data_metric(*index, sample, true))
-                .collect();
-            outputs.push(self.data(metrics, now));
-        }
-        outputs
+        metrics
     }
 
     fn data_metric(&self, index: usize, sample: &Sample, historical: bool) -> Metric {
@@ -510,7 +614,8 @@ impl EdgeNode {
         metric
     }
 
-    fn data(&mut self, metrics: Vec<Metric>, now: u64) -> Output {
+    /// NDATA (`device` `None`) or DDATA of `device`, with the node's next seq.
+    fn data(&mut self, metrics: Vec<Metric>, device: Option<&str>, now: u64) -> Output {
         let payload = Payload {
             timestamp: Some(now),
             metrics,
@@ -518,8 +623,13 @@ impl EdgeNode {
             ..Payload::default()
         };
         self.next_seq = self.next_seq.wrapping_add(1);
+        let message = if device.is_some() {
+            MessageType::DData
+        } else {
+            MessageType::NData
+        };
         Output::Publish(Publish {
-            topic: self.topic(MessageType::NData),
+            topic: self.topic_of(message, device),
             payload: payload.to_bytes(),
         })
     }

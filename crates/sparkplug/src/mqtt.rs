@@ -118,7 +118,7 @@ pub struct MqttStats {
     pub dropped: AtomicU64,
     /// Messages handed to the MQTT client.
     pub published: AtomicU64,
-    /// Births published.
+    /// Node births (NBIRTH) published; each carries its devices' births after it.
     pub births: AtomicU64,
     /// Connections made (each counted once what it had to publish at once is handed on).
     pub connections: AtomicU64,

@@ -7,6 +7,12 @@
 //! double commands Boolean (true = ON/close, false = OFF/open), set-points of their IEC
 //! type (normalized and float Float, scaled Int16), bitstrings UInt32, regulating steps
 //! Boolean (true = higher).
+//!
+//! The points of a device the node reads (a watched lift's board, a relay or outstation on
+//! a serial line, a profiled field device) are that device's metrics, in its DBIRTH and
+//! DDATA under the device's name; so are the commands the node forwards to such a device
+//! (a host writes them with DCMD). A device whose name cannot stand in a topic stays with
+//! the node's own metrics, with a warning.
 
 use std::collections::HashMap;
 
@@ -31,6 +37,45 @@ pub struct NodeMetrics {
 /// Whether the node owns the point (it is not forwarded from a lower node).
 pub fn owns(point: &Point) -> bool {
     !matches!(point.spec.source, PointSource::Link { .. })
+}
+
+/// The device a point belongs to, as Sparkplug sees devices (`None`: the node's own: a
+/// PLC variable, a link's or client group's or a whole line's status).
+pub fn point_device(source: &PointSource) -> Option<&str> {
+    match source {
+        PointSource::Line { device, .. }
+        | PointSource::DeviceStatus { device, .. }
+        | PointSource::Device { device, .. }
+        | PointSource::DeviceComm { device } => Some(device),
+        PointSource::Lift { lift, .. } => Some(lift),
+        PointSource::Variable(_)
+        | PointSource::Link { .. }
+        | PointSource::LinkStatus(_)
+        | PointSource::ClientStatus(_)
+        | PointSource::LineStatus { .. } => None,
+    }
+}
+
+/// The device a command goes to (`None`: the node's own, a PLC variable).
+pub fn command_device(target: &CommandTarget) -> Option<&str> {
+    match target {
+        CommandTarget::LineObject { device, .. } | CommandTarget::Line { device, .. } => {
+            Some(device)
+        }
+        CommandTarget::Variable(_) | CommandTarget::Link { .. } => None,
+    }
+}
+
+/// A device id as the metric's device, or `None` (with a warning) when it cannot stand
+/// in a topic.
+fn device_id(node: &str, metric: &str, device: Option<&str>) -> Option<String> {
+    let device = device?;
+    if crate::topic::valid_id(device) {
+        Some(device.to_owned())
+    } else {
+        tracing::warn!(%node, %metric, %device, "a device name that cannot stand in a Sparkplug topic: its metric is the node's");
+        None
+    }
 }
 
 /// The metric type of a point kind.
@@ -70,6 +115,11 @@ pub fn node_metrics(config: &NodeConfig, points: &[Point]) -> NodeMetrics {
             name: point.spec.name.clone(),
             datatype: point_datatype(point.spec.point_type.kind),
             writable: false,
+            device: device_id(
+                &config.name,
+                &point.spec.name,
+                point_device(&point.spec.source),
+            ),
         });
     }
     for command in config
@@ -88,6 +138,7 @@ pub fn node_metrics(config: &NodeConfig, points: &[Point]) -> NodeMetrics {
             name: command.name.clone(),
             datatype,
             writable: true,
+            device: device_id(&config.name, &command.name, command_device(&command.target)),
         });
     }
     metrics

@@ -289,9 +289,20 @@ async fn with_a_primary_host_the_node_births_once_it_is_online_and_rebirths_on_n
     assert_eq!(birth.seq, Some(0));
     let bd_seq = long_metric(&birth, "bdSeq");
     assert_eq!(bd_seq, Some(0));
-    // What changed while the host was offline follows, as history, in sequence.
-    let data = host.next("/NDATA/S7").await;
-    assert_eq!(data.seq, Some(1));
+    // The balance is a device of the node: its birth follows the node's, then its data
+    // (what changed while the host was offline, as history, or a change since), in
+    // sequence.
+    let device_birth = host.next("/DBIRTH/S7/BAL").await;
+    assert_eq!(device_birth.seq, Some(1));
+    assert!(
+        device_birth
+            .metrics
+            .iter()
+            .any(|m| m.name.as_deref() == Some("BAL.weight")),
+        "{device_birth:?}"
+    );
+    let data = host.next("/DDATA/S7/BAL").await;
+    assert_eq!(data.seq, Some(2));
 
     let rebirth = sparkplug::Payload {
         timestamp: Some(3),
@@ -314,6 +325,9 @@ async fn with_a_primary_host_the_node_births_once_it_is_online_and_rebirths_on_n
         .unwrap();
     let again = host.next("/NBIRTH/S7").await;
     assert_eq!(again.seq, Some(0));
+    let device_again = host.next("/DBIRTH/S7/BAL").await;
+    assert_eq!(device_again.seq, Some(1));
+    assert_eq!(device_again.metrics.len(), device_birth.metrics.len());
     assert_eq!(
         long_metric(&again, "bdSeq"),
         bd_seq,

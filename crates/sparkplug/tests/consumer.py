@@ -5,8 +5,12 @@ protobuf of Eclipse Tahu (PyPI `tahu`, its sparkplug_b_pb2), nothing of ours.
 Subscribes to spBv1.0/# on a broker and checks one edge node's session:
   * NBIRTH: seq 0, a bdSeq metric (Int64), Node Control/Rebirth (Boolean, false), every
     metric with a name, an alias and a datatype;
-  * NDATA: seq continuing modulo 256 without a gap, a payload timestamp, every metric by
-    an alias of the birth, its value in the field of the birth's datatype, a timestamp;
+  * DBIRTH of each device of the node: after the NBIRTH, every metric with a name, an
+    alias unique across the node and its devices, and a datatype;
+  * NDATA and DDATA: one seq for all of the node's messages (NBIRTH 0, then DBIRTH,
+    NDATA, DDATA) continuing modulo 256 without a gap, a payload timestamp, every metric
+    by an alias of the node's birth (NDATA) or of that device's birth (DDATA), its value
+    in the field of the birth's datatype, a timestamp;
   * NDEATH (the will): the bdSeq of the NBIRTH it closes.
 Prints `READY` once subscribed, `DATA n` as data arrives, and at the end (NDEATH seen,
 or the timeout) one JSON line: {"verdict": "PASS"|"FAIL", "problems": [...], ...} with
@@ -35,8 +39,9 @@ FIELD.update({t: "long_value" for t in LONG_TYPES})
 problems = []
 births = []          # bdSeq of each NBIRTH
 deaths = []          # bdSeq of each NDEATH
-aliases = {}         # alias -> (name, datatype)
+aliases = {}         # alias -> (name, datatype, device or None)
 values = []          # [name, timestamp, value, quality]
+devices = set()      # devices born since the last NBIRTH
 data_count = 0
 next_seq = None
 done = threading.Event()
@@ -85,12 +90,28 @@ def on_subscribe(client, userdata, mid, reason_codes, properties):
     print("READY", flush=True)
 
 
+def next_in_sequence(kind, payload):
+    """Checks a message's seq against the node's one sequence; False before any NBIRTH."""
+    global next_seq
+    if next_seq is None:
+        problem("%s before NBIRTH" % kind)
+        return False
+    if payload.seq != next_seq:
+        problem("%s seq %d, expected %d" % (kind, payload.seq, next_seq))
+    next_seq = (payload.seq + 1) % 256
+    return True
+
+
 def on_message(client, userdata, message):
     global next_seq, data_count
     topic = message.topic
-    if not topic.startswith(prefix) or not topic.endswith("/" + node):
+    if not topic.startswith(prefix):
         return
-    kind = topic[len(prefix):].split("/")[0]
+    parts = topic[len(prefix):].split("/")
+    if len(parts) < 2 or parts[1] != node:
+        return
+    kind = parts[0]
+    device = parts[2] if len(parts) > 2 else None
     payload = sparkplug.Payload()
     try:
         payload.ParseFromString(message.payload)
@@ -109,30 +130,47 @@ def on_message(client, userdata, message):
             problem("NBIRTH without Node Control/Rebirth Boolean false")
         births.append(bd.long_value if bd is not None else None)
         aliases.clear()
+        devices.clear()
         for metric in payload.metrics:
             if not metric.name or not metric.HasField("alias") or not metric.HasField("datatype"):
                 problem("NBIRTH metric without name, alias or datatype: %s" % metric)
                 continue
-            aliases[metric.alias] = (metric.name, metric.datatype)
+            aliases[metric.alias] = (metric.name, metric.datatype, None)
             if metric.name not in ("bdSeq", "Node Control/Rebirth"):
                 values.append([metric.name, metric.timestamp, metric_value(metric, metric.datatype), quality(metric)])
         next_seq = 1
-    elif kind == "NDATA":
-        if next_seq is None:
-            problem("NDATA before NBIRTH")
+    elif kind == "DBIRTH":
+        if device is None:
+            problem("DBIRTH without a device id: %s" % topic)
             return
-        if payload.seq != next_seq:
-            problem("NDATA seq %d, expected %d" % (payload.seq, next_seq))
-        next_seq = (payload.seq + 1) % 256
+        if not next_in_sequence(kind, payload):
+            return
+        devices.add(device)
+        for metric in payload.metrics:
+            if not metric.name or not metric.HasField("alias") or not metric.HasField("datatype"):
+                problem("DBIRTH metric without name, alias or datatype: %s" % metric)
+                continue
+            if metric.alias in aliases and aliases[metric.alias][0] != metric.name:
+                problem("DBIRTH %s: alias %d already %s" % (device, metric.alias, aliases[metric.alias][0]))
+            aliases[metric.alias] = (metric.name, metric.datatype, device)
+            values.append([metric.name, metric.timestamp, metric_value(metric, metric.datatype), quality(metric)])
+    elif kind in ("NDATA", "DDATA"):
+        if kind == "DDATA" and device not in devices:
+            problem("DDATA of %s before its DBIRTH" % device)
+            return
+        if not next_in_sequence(kind, payload):
+            return
         if not payload.HasField("timestamp"):
-            problem("NDATA without timestamp")
+            problem("%s without timestamp" % kind)
         for metric in payload.metrics:
             if metric.alias not in aliases:
-                problem("NDATA metric of unknown alias %d" % metric.alias)
+                problem("%s metric of unknown alias %d" % (kind, metric.alias))
                 continue
-            name, datatype = aliases[metric.alias]
+            name, datatype, owner = aliases[metric.alias]
+            if owner != device:
+                problem("%s of %s carries %s, a metric of %s" % (kind, device or "the node", name, owner or "the node"))
             if not metric.HasField("timestamp"):
-                problem("NDATA metric %s without timestamp" % name)
+                problem("%s metric %s without timestamp" % (kind, name))
             values.append([name, metric.timestamp, metric_value(metric, datatype), quality(metric)])
         data_count += 1
         print("DATA %d" % data_count, flush=True)
@@ -153,7 +191,7 @@ client.loop_stop()
 if not births:
     problem("no NBIRTH")
 if data_count < min_data:
-    problem("%d NDATA, expected at least %d" % (data_count, min_data))
+    problem("%d NDATA/DDATA, expected at least %d" % (data_count, min_data))
 if not finished:
     problem("no NDEATH within %.0f s" % timeout)
 elif births and deaths[-1] != births[-1]:
@@ -164,5 +202,6 @@ print(json.dumps({
     "births": births,
     "deaths": deaths,
     "data": data_count,
+    "devices": sorted(devices),
     "values": values,
 }), flush=True)

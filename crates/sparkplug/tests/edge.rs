@@ -1,5 +1,5 @@
 //! The sans-IO edge node: births, data and sequence numbers, the will, rebirth, NCMD
-//! writes, quality, primary host and buffering; payloads and topics round-trip.
+//! writes, devices (DBIRTH, DDATA, DCMD), quality, primary host and buffering; payloads and topics round-trip.
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
@@ -28,26 +28,31 @@ fn node(primary_host: Option<&str>) -> EdgeNode {
                 name: "breaker".into(),
                 datatype: DataType::Boolean,
                 writable: false,
+                device: None,
             },
             MetricSpec {
                 name: "voltage".into(),
                 datatype: DataType::Float,
                 writable: false,
+                device: None,
             },
             MetricSpec {
                 name: "tap".into(),
                 datatype: DataType::Int8,
                 writable: false,
+                device: None,
             },
             MetricSpec {
                 name: "breaker_cmd".into(),
                 datatype: DataType::Boolean,
                 writable: true,
+                device: None,
             },
             MetricSpec {
                 name: "setpoint".into(),
                 datatype: DataType::Int16,
                 writable: true,
+                device: None,
             },
         ],
     )
@@ -328,6 +333,127 @@ fn ncmd_writes_a_command_metric_by_name_or_alias_and_refuses_the_rest() {
     ));
 }
 
+/// A node with devices: NBIRTH with the node's metrics, a DBIRTH per device with its own
+/// (aliases unique across the node), DDATA for a device's changes, one seq for all; DCMD
+/// writes a device's command, NCMD may not, and a DCMD to another device is refused.
+#[test]
+fn devices_have_births_data_and_commands_of_their_own_under_one_seq() {
+    let spec = |name: &str, datatype, writable, device: Option<&str>| MetricSpec {
+        name: name.into(),
+        datatype,
+        writable,
+        device: device.map(str::to_owned),
+    };
+    let mut edge = EdgeNode::new(
+        EdgeConfig {
+            group: "plant".into(),
+            edge_node: "rtu1".into(),
+            primary_host: None,
+            buffer_limit: 1000,
+        },
+        vec![
+            spec("breaker", DataType::Boolean, false, None),
+            spec("L1.position", DataType::Int32, false, Some("L1")),
+            spec("REF1.trip", DataType::Boolean, false, Some("REF1")),
+            spec("REF1.open", DataType::Boolean, true, Some("REF1")),
+            spec("L1.status", DataType::Int32, false, Some("L1")),
+        ],
+    )
+    .unwrap();
+    assert_eq!(edge.devices(), ["L1", "REF1"]);
+    // A change before the connection waits in the buffer, for the device's DDATA.
+    edge.update(1, sample(Value::Int(3), QualityCode::Good, 5), 5);
+    let births = published(&edge.connected(10));
+    let topics: Vec<&str> = births.iter().map(|(t, _)| t.as_str()).collect();
+    assert_eq!(
+        topics,
+        [
+            "spBv1.0/plant/NBIRTH/rtu1",
+            "spBv1.0/plant/DBIRTH/rtu1/L1",
+            "spBv1.0/plant/DBIRTH/rtu1/REF1",
+            "spBv1.0/plant/DDATA/rtu1/L1",
+        ]
+    );
+    let seqs: Vec<Option<u64>> = births.iter().map(|(_, p)| p.seq).collect();
+    assert_eq!(seqs, [Some(0), Some(1), Some(2), Some(3)]);
+    let names = |payload: &Payload| -> Vec<String> {
+        payload
+            .metrics
+            .iter()
+            .filter_map(|m| m.name.clone())
+            .collect()
+    };
+    assert_eq!(names(&births[0].1), [BD_SEQ, REBIRTH, "breaker"]);
+    assert_eq!(names(&births[1].1), ["L1.position", "L1.status"]);
+    assert_eq!(names(&births[2].1), ["REF1.trip", "REF1.open"]);
+    let mut aliases: Vec<u64> = births[..3]
+        .iter()
+        .flat_map(|(_, p)| p.metrics.iter().filter_map(|m| m.alias))
+        .collect();
+    aliases.sort_unstable();
+    aliases.dedup();
+    assert_eq!(
+        aliases.len(),
+        2 + 5,
+        "aliases unique across node and devices"
+    );
+    assert_eq!(births[3].1.metrics[0].is_historical, Some(true));
+    assert_eq!(births[3].1.metrics[0].value, Some(MetricValue::IntValue(3)));
+    // Changes: the node's in NDATA, a device's in its DDATA; the seq goes on.
+    let data = published(&edge.update(2, sample(Value::Bool(true), QualityCode::Good, 20), 20));
+    assert_eq!(data[0].0, "spBv1.0/plant/DDATA/rtu1/REF1");
+    assert_eq!(data[0].1.seq, Some(4));
+    let data = published(&edge.update(0, sample(Value::Bool(true), QualityCode::Good, 21), 21));
+    assert_eq!(data[0].0, "spBv1.0/plant/NDATA/rtu1");
+    assert_eq!(data[0].1.seq, Some(5));
+    // DCMD to REF1 writes its command; NCMD may not; DCMD to L1 may not either.
+    let open = || Metric {
+        name: Some("REF1.open".into()),
+        value: Some(MetricValue::BooleanValue(true)),
+        ..Metric::default()
+    };
+    let written = edge.received("spBv1.0/plant/DCMD/rtu1/REF1", &ncmd(vec![open()]), 30);
+    assert!(
+        matches!(written.as_slice(), [Output::Write(w)] if w.metric == "REF1.open" && w.value == Value::Bool(true)),
+        "{written:?}"
+    );
+    for (topic, reason) in [
+        (NCMD, "a device's metric: write it with DCMD to its device"),
+        ("spBv1.0/plant/DCMD/rtu1/L1", "not a metric of this device"),
+        (
+            "spBv1.0/plant/DCMD/rtu1/NOPE",
+            "this node has no such device",
+        ),
+    ] {
+        let refused = edge.received(topic, &ncmd(vec![open()]), 31);
+        assert!(
+            matches!(refused.as_slice(), [Output::Refused(r)] if r.reason == reason),
+            "{topic}: {refused:?}"
+        );
+    }
+    // A rebirth gives the NBIRTH and every DBIRTH again, seq from 0.
+    let rebirth = Metric {
+        name: Some(REBIRTH.into()),
+        value: Some(MetricValue::BooleanValue(true)),
+        ..Metric::default()
+    };
+    let again = published(&edge.received(NCMD, &ncmd(vec![rebirth]), 40));
+    let seqs: Vec<Option<u64>> = again.iter().map(|(_, p)| p.seq).collect();
+    assert_eq!(seqs, [Some(0), Some(1), Some(2)]);
+    assert_eq!(again[2].0, "spBv1.0/plant/DBIRTH/rtu1/REF1");
+    // A device id that cannot stand in a topic is refused.
+    assert!(EdgeNode::new(
+        EdgeConfig {
+            group: "plant".into(),
+            edge_node: "rtu1".into(),
+            primary_host: None,
+            buffer_limit: 1,
+        },
+        vec![spec("x", DataType::Boolean, false, Some("a/b"))],
+    )
+    .is_err());
+}
+
 #[test]
 fn with_a_primary_host_nothing_goes_out_until_it_is_online_then_the_buffer_replays_in_order() {
     let mut edge = node(Some("scada"));
@@ -401,6 +527,7 @@ fn a_full_buffer_drops_the_oldest_and_counts() {
             name: "x".into(),
             datatype: DataType::Int32,
             writable: false,
+            device: None,
         }],
     )
     .unwrap();
@@ -436,6 +563,7 @@ fn ids_that_cannot_stand_in_a_topic_and_reserved_names_are_refused() {
         name: BD_SEQ.into(),
         datatype: DataType::Int64,
         writable: false,
+        device: None,
     }];
     assert!(EdgeNode::new(config("g"), reserved).is_err());
     let twice = vec![
@@ -443,11 +571,13 @@ fn ids_that_cannot_stand_in_a_topic_and_reserved_names_are_refused() {
             name: "x".into(),
             datatype: DataType::Int64,
             writable: false,
+            device: None,
         },
         MetricSpec {
             name: "x".into(),
             datatype: DataType::Int64,
             writable: false,
+            device: None,
         },
     ];
     assert!(EdgeNode::new(config("g"), twice).is_err());

@@ -1,6 +1,6 @@
 //! `stanice run PROJECT --mqtt mqtt://HOST:PORT`: the node publishes as a Sparkplug B edge
 //! node to a real mosquitto broker, an independent consumer (paho-mqtt, Eclipse Tahu's
-//! protobuf) checks birth, sequence and values, and when the process is killed (-9) the
+//! protobuf) checks births (the node's and its balance device's), sequence and values, and when the process is killed (-9) the
 //! broker publishes its will, NDEATH with the birth's bdSeq.
 
 use std::time::Duration;
@@ -35,6 +35,8 @@ fn run_with_mqtt_publishes_births_data_and_the_will_on_kill() {
     assert_eq!(verdict["verdict"], "PASS", "{verdict}");
     assert_eq!(verdict["births"], serde_json::json!([0]));
     assert_eq!(verdict["deaths"], serde_json::json!([0]));
+    // The balance is a device of the node: its points come in its DBIRTH and DDATA.
+    assert_eq!(verdict["devices"], serde_json::json!(["BAL"]), "{verdict}");
     assert!(
         verdict["values"]
             .as_array()
