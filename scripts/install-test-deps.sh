@@ -20,6 +20,8 @@
 #                  crates/sparkplug/tests/consumer.py: paho's MQTT client and
 #                  Eclipse Tahu's published sparkplug_b protobuf, which pins
 #                  protobuf 3.19.1)
+#   * iproute2    (Debian package; `ip` makes the network namespaces of
+#                  scripts/netns-station.sh, crates/stanice/tests/netns.rs)
 #   * hat-drivers (PyPI; its IEC 60870-5-103 master, FT1.2 link layer and
 #                  serial driver are the independent 103 peer of
 #                  tests/peer/hat103_master.py, used by
@@ -265,6 +267,15 @@ if ! command -v chromedriver >/dev/null 2>&1; then
     exit 1
 fi
 log "chromium: $(chromium --version 2>/dev/null | head -n1)"
+
+# ---------------------------------------------------------------- iproute2
+# `ip`: the network namespaces, bridges and veth pairs of scripts/netns-station.sh, in which
+# crates/stanice/tests/netns.rs runs the Vsetín station one node per namespace (as root).
+if command -v ip >/dev/null 2>&1; then
+    log "iproute2 present"
+else
+    apt_install iproute2
+fi
 
 # ---------------------------------------------------------------- verify
 # c104 2.2.1 has no c104.__version__ attribute (its .pyi claims one); the

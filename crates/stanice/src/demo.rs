@@ -38,7 +38,7 @@ fn project_folder() -> PathBuf {
 }
 
 pub(crate) async fn run(args: DemoArgs) -> anyhow::Result<ExitCode> {
-    run_project(&project_folder(), args.options, true).await
+    run_project(&project_folder(), None, args.options, true).await
 }
 
 /// Puts every link between the project's controllers on TLS with mutual authentication,

@@ -133,6 +133,7 @@ While it runs, type `help` for the faults and hand operations of the console.",
         "  stanice run examples/vsetin
   stanice run examples/vsetin --node RH2 --port-base 12404   # one node, other ports
   stanice run examples/vsetin --speed 60 --duration 30s --store none
+  stanice run examples/vsetin --node RH1.1 --hosts scripts/netns-vsetin.hosts.toml   # on its own host
 While it runs, type `help` for the faults and hand operations of the console.",
     ),
     (

@@ -24,7 +24,7 @@ pub(crate) fn explain(project: &Project, node: &str, address: SocketAddr) -> Str
         .iter()
         .filter_map(|node| node.server.as_ref().map(|server| server.port_offset))
         .collect();
-    match free_port_base(project, &offsets) {
+    match free_port_base(project, address.ip(), &offsets) {
         Some(base) => text.push_str(&format!(
             "; run it on other ports with --port-base {base} (its servers then listen on {base}..{})",
             base + offsets.iter().copied().max().unwrap_or(0)
@@ -35,16 +35,17 @@ pub(crate) fn explain(project: &Project, node: &str, address: SocketAddr) -> Str
 }
 
 /// A port base, in steps of 100 above the project's, at which every server of the
-/// project could listen now.
-fn free_port_base(project: &Project, offsets: &[u16]) -> Option<u16> {
+/// project could listen now on `ip` (the station's `bind`, or the node's host when a hosts
+/// file puts it on one).
+fn free_port_base(project: &Project, ip: std::net::IpAddr, offsets: &[u16]) -> Option<u16> {
     let span = offsets.iter().copied().max().unwrap_or(0);
     (1..=100u16)
         .filter_map(|step| project.station.port_base.checked_add(step * 100))
         .filter(|base| base.checked_add(span).is_some())
         .find(|base| {
-            offsets.iter().all(|offset| {
-                TcpListener::bind(SocketAddr::new(project.station.bind, base + offset)).is_ok()
-            })
+            offsets
+                .iter()
+                .all(|offset| TcpListener::bind(SocketAddr::new(ip, base + offset)).is_ok())
         })
 }
 

@@ -11,7 +11,7 @@ use std::process::ExitCode;
 use anyhow::Context as _;
 use chrono::{DateTime, Utc};
 use clap::Args;
-use station::config::Project;
+use station::config::{HostsFile, Project};
 use station::runtime::{Pacing, Runtime, RuntimeError, RuntimeOptions, StoreChoice};
 
 use crate::interrupt::Interrupt;
@@ -21,6 +21,11 @@ use crate::interrupt::Interrupt;
 pub(crate) struct RunArgs {
     /// The project folder (holding station.toml).
     project: PathBuf,
+    /// A deployment's hosts file (TOML): the address each node runs at (`[nodes]`: its
+    /// server listens there, links to it connect there) and the addresses standing for
+    /// the project's client addresses (`[clients]`); see docs/DEPLOYMENT.md.
+    #[arg(long, value_name = "FILE")]
+    hosts: Option<PathBuf>,
     #[command(flatten)]
     options: RunOptions,
 }
@@ -86,7 +91,7 @@ struct HmiPlan {
 }
 
 pub(crate) async fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
-    run_project(&args.project, args.options, false).await
+    run_project(&args.project, args.hosts.as_deref(), args.options, false).await
 }
 
 /// Loads a project, printing every configuration error as `file:line:col: error: ...`.
@@ -102,14 +107,34 @@ pub(crate) fn load_project(folder: &Path) -> anyhow::Result<Project> {
     })
 }
 
+/// Applies the hosts file `file` to `project`, printing every error as
+/// `file:line:col: error: ...` as [`load_project`] does.
+fn deploy(project: Project, file: &Path) -> anyhow::Result<Project> {
+    let report = |errors: station::config::ConfigErrors| {
+        eprintln!("{errors}");
+        anyhow::anyhow!(
+            "{} error(s) in the hosts file {}",
+            errors.total(),
+            file.display()
+        )
+    };
+    let hosts = HostsFile::load(file).map_err(report)?;
+    project.with_hosts(&hosts).map_err(report)
+}
+
+/// Runs the project in `folder` (deployed as the hosts file `hosts` says, if given).
 pub(crate) async fn run_project(
     folder: &Path,
+    hosts: Option<&Path>,
     options: RunOptions,
     demo: bool,
 ) -> anyhow::Result<ExitCode> {
     // From the start: a Ctrl-C while the station starts stops it once started, cleanly.
     let mut interrupt = Interrupt::listen();
     let mut project = load_project(folder)?;
+    if let Some(file) = hosts {
+        project = deploy(project, file)?;
+    }
     if demo {
         // The demo's links between controllers go over mutually authenticated TLS.
         project = crate::demo::secure_links(project)?;

@@ -329,7 +329,9 @@
 //! `spans` the key paths and their positions, `error` where problems are, `problem` what
 //! they are, and `check` turns the raw file into the model: the station and the order of
 //! things in `check`, one node in `check::node`, the links between nodes in
-//! `check::links`, serial lines in `check::line`.
+//! `check::links`, serial lines in `check::line`. `hosts` is the deployment overlay: a
+//! hosts file ([`HostsFile`]) saying on which address each node runs and which addresses
+//! stand for the project's client addresses, applied by [`Project::with_hosts`].
 use std::collections::{HashMap, HashSet};
 use std::fmt;
 use std::net::{IpAddr, Ipv4Addr, SocketAddr};
@@ -415,6 +417,10 @@ pub struct NodeConfig {
     pub sources: Vec<PathBuf>,
     /// The node's IEC 104 server, if it has one.
     pub server: Option<ServerConfig>,
+    /// The address of the host the node runs on, from a deployment's hosts file
+    /// ([`Project::with_hosts`], `stanice run --hosts`): its servers listen there and links
+    /// to it connect there. `None`: the station's `bind` (every node on one machine).
+    pub host: Option<IpAddr>,
     /// PLC tasks.
     pub tasks: Vec<TaskConfig>,
     /// Plant signal <-> PLC variable bindings.
@@ -1018,12 +1024,26 @@ impl Project {
 }
 
 impl NodeConfig {
-    /// The node's server address, `bind:port_base+port_offset`; `None` without a server or
-    /// when the port passes 65535.
+    /// The node's server address, `HOST:port_base+port_offset` (HOST its [`host`](Self::host)
+    /// or else the station's `bind`); `None` without a server or when the port passes 65535.
     pub fn server_address(&self, station: &StationSettings) -> Option<SocketAddr> {
         let server = self.server.as_ref()?;
         let port = station.port_base.checked_add(server.port_offset)?;
-        Some(SocketAddr::new(station.bind, port))
+        Some(SocketAddr::new(self.listen_ip(station), port))
+    }
+
+    /// The address of the node's S7 server (`[node.s7_server]`), as
+    /// [`server_address`](Self::server_address) says for its IEC 104 one; `None` without
+    /// one or when the port passes 65535.
+    pub fn s7_server_address(&self, station: &StationSettings) -> Option<SocketAddr> {
+        let server = self.s7_server.as_ref()?;
+        let port = station.port_base.checked_add(server.port_offset)?;
+        Some(SocketAddr::new(self.listen_ip(station), port))
+    }
+
+    /// Where the node's servers listen: its host's address, or the station's `bind`.
+    pub fn listen_ip(&self, station: &StationSettings) -> IpAddr {
+        self.host.unwrap_or(station.bind)
     }
 
     /// The point called `name`.
@@ -1039,12 +1059,14 @@ impl NodeConfig {
 
 mod check;
 mod error;
+mod hosts;
 pub mod problem;
 mod raw;
 mod spans;
 
 use error::*;
 pub use error::{ConfigError, ConfigErrors, MAX_ERRORS_PER_FILE};
+pub use hosts::{HostsFile, HostsProblem};
 pub use problem::ConfigProblem;
 use problem::*;
 use raw::*;

@@ -14,6 +14,7 @@
 //! | values                       | [`OutOfRange`], [`InvalidNumber`], [`EmptyRange`], [`Empty`], [`Malformed`], [`StoreUrl`], [`Invalid`] |
 //! | IEC types                    | [`WrongType`]                                                    |
 //! | keys that need or exclude each other | [`Missing`], [`Conflict`], [`Republish`]                  |
+//! | a deployment's hosts file    | [`Hosts`]                                                        |
 //! | the node's PLC               | `StDiagnostic` (with the `runtime` feature), [`PlcStart`], [`PlcVariable`], [`UnknownVariable`] |
 //!
 //! Where a problem is another crate's (toml's parser, serde, the store address parser, the
@@ -40,6 +41,7 @@
 //! [`Missing`]: ConfigProblem::Missing
 //! [`Conflict`]: ConfigProblem::Conflict
 //! [`Republish`]: ConfigProblem::Republish
+//! [`Hosts`]: ConfigProblem::Hosts
 //! [`PlcStart`]: ConfigProblem::PlcStart
 //! [`PlcVariable`]: ConfigProblem::PlcVariable
 //! [`UnknownVariable`]: ConfigProblem::UnknownVariable
@@ -219,6 +221,10 @@ pub enum ConfigProblem {
     /// A point or command republished from a lower node that does not fit the upper one.
     #[error(transparent)]
     Republish(#[from] RepublishClash),
+    /// A deployment's hosts file that does not fit the project (a node left out, a client
+    /// address the project does not name); see [`HostsFile`](super::HostsFile).
+    #[error(transparent)]
+    Hosts(#[from] super::HostsProblem),
     /// An error of the PLC compiler in a node's ST sources, at its place there.
     #[cfg(feature = "runtime")]
     #[error("{message}")]

@@ -347,7 +347,7 @@ async fn start_simulation(
     project: &Project,
     nodes: &[(usize, Arc<NodePoints>)],
     clock: &Arc<SimClock>,
-    pacing: Pacing,
+    (pacing, started): (Pacing, std::time::Instant),
     images: simulation::DeviceImages,
     served: Vec<s7_server::S7Prepared>,
 ) -> Result<(mpsc::Sender<SimRequest>, std::thread::JoinHandle<()>), RuntimeError> {
@@ -363,7 +363,7 @@ async fn start_simulation(
                 move || match Simulation::build(&project, &shared, clock, images, served) {
                     Ok(simulation) => {
                         let _ = built.send(Ok(()));
-                        simulation::run(simulation, pacing, receiver);
+                        simulation::run(simulation, pacing, started, receiver);
                     }
                     Err(error) => {
                         let _ = built.send(Err(error));
@@ -530,8 +530,8 @@ fn start_lifts(
 
 /// Starts the node's profiled devices (`[[node.device]]`) under the field-source
 /// supervisor.
-/// `connect = "node:NAME"` of a device resolved to that node's S7 server's address (the
-/// station's `bind`, `port_base` + its `port_offset`).
+/// `connect = "node:NAME"` of a device resolved to that node's S7 server's address (its
+/// host or the station's `bind`, `port_base` + its `port_offset`).
 fn s7_server_address(project: &Project, mut device: FieldDeviceConfig) -> FieldDeviceConfig {
     let target = device
         .settings
@@ -539,10 +539,8 @@ fn s7_server_address(project: &Project, mut device: FieldDeviceConfig) -> FieldD
         .and_then(toml::Value::as_str)
         .and_then(|connect| connect.strip_prefix(crate::device::s7::NODE_PREFIX))
         .and_then(|name| project.node(name))
-        .and_then(|node| node.s7_server.as_ref());
-    if let Some(server) = target {
-        let port = project.station.port_base.saturating_add(server.port_offset);
-        let address = std::net::SocketAddr::new(project.station.bind, port);
+        .and_then(|node| node.s7_server_address(&project.station));
+    if let Some(address) = target {
         device.settings.insert(
             "connect".to_owned(),
             toml::Value::String(address.to_string()),
@@ -630,6 +628,10 @@ fn start_retention(
 impl Runtime {
     /// Starts `project` (or the nodes `options.nodes` of it) on the current tokio runtime.
     pub async fn start(project: Project, options: RuntimeOptions) -> Result<Runtime, RuntimeError> {
+        // The wall-clock instant of the simulated start: a real-time clock counts from it,
+        // not from the end of the start-up (the store opened, the PLCs compiled), so that
+        // at speed 1 a station started at `now` keeps the wall clock's time.
+        let started = std::time::Instant::now();
         let selected = select_nodes(&project, &options.nodes)?;
         let store = open_event_store(&project, &options.store).await?;
         let recorder = match &store {
@@ -666,7 +668,7 @@ impl Runtime {
             &project,
             &shared,
             &clock,
-            options.pacing,
+            (options.pacing, started),
             images.clone(),
             served,
         )
@@ -675,7 +677,10 @@ impl Runtime {
         let mut s7_handles = HashMap::new();
         for (node, config, memory, sender) in s7_servers {
             let port = project.station.port_base.saturating_add(config.port_offset);
-            let address = std::net::SocketAddr::new(project.station.bind, port);
+            let ip = project.node(&node).map_or(project.station.bind, |node| {
+                node.listen_ip(&project.station)
+            });
+            let address = std::net::SocketAddr::new(ip, port);
             let handle = s7_server::start(&node, address, &config, memory, sender).await?;
             s7_handles.insert(node, handle);
         }

@@ -1474,16 +1474,24 @@ fn load_table(plc: &mut Plc, table: &crate::config::TableConfig) -> Result<(), T
     Ok(())
 }
 
-/// The simulation thread's loop.
-pub(crate) fn run(mut sim: Simulation, pacing: Pacing, requests: mpsc::Receiver<SimRequest>) {
-    // Hold at time zero until the servers are up.
+/// The simulation thread's loop. `started`: the wall-clock instant of simulated time zero
+/// (the runtime's start) for [`Pacing::RealTime`].
+pub(crate) fn run(
+    mut sim: Simulation,
+    pacing: Pacing,
+    started: Instant,
+    requests: mpsc::Receiver<SimRequest>,
+) {
+    // Hold at time zero until the servers are up; then catch up with the wall clock from
+    // `started`, so that the start-up's seconds are not missing from simulated time (a
+    // station at speed 1 started at `now` would otherwise run that much behind the wall
+    // clock, and hand the lag on to the nodes it synchronises).
     sim.advance_to(Duration::ZERO, 1);
     let mut going = false;
-    let mut anchor: Option<(Instant, Duration)> = None;
+    let (real0, sim0) = (started, Duration::ZERO);
     loop {
         let request = match (pacing, going) {
             (Pacing::RealTime { speed }, true) => {
-                let (real0, sim0) = *anchor.get_or_insert((Instant::now(), sim.now));
                 let target = sim0
                     + Duration::try_from_secs_f64(real0.elapsed().as_secs_f64() * speed)
                         .unwrap_or(Duration::MAX / 2);

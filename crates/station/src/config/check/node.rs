@@ -416,6 +416,7 @@ impl Ctx<'_> {
             common_address: common,
             sources: sources.paths,
             server,
+            host: None,
             tasks,
             io,
             points,
