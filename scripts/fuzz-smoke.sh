@@ -1,12 +1,24 @@
 #!/usr/bin/env bash
 # A short run of every cargo-fuzz target: builds them (so they keep compiling) and fuzzes
-# each for FUZZ_SECONDS (default 12: with sixteen targets the smoke stays a few minutes of
-# a CI run that must stay under 30; longer campaigns set it). Any crash fails the run and leaves the reproducer
-# in fuzz/artifacts/. Needs the nightly toolchain (preinstalled on the project's machine
-# kind); cargo-fuzz is installed from crates.io when missing.
+# each for FUZZ_SECONDS (default 12: with seventeen targets the smoke stays a few minutes
+# of a CI run that must stay under 30; longer campaigns set it). Any crash fails the run
+# and leaves the reproducer in fuzz/artifacts/. Needs the nightly toolchain (preinstalled
+# on the project's machine kind); cargo-fuzz is installed from crates.io when missing.
+#
+#   bash scripts/fuzz-smoke.sh [build|run]     (default: both; CI builds while other
+#                                               checks run, then runs)
+#
+# The targets build with 16 code generation units instead of cargo-fuzz's default of one:
+# a clean build of the seventeen targets (the PLC compiler and Cranelift among them, with
+# AddressSanitizer and coverage instrumentation) took 818 s with one unit on the 2-core
+# machine, most of a CI run's budget; 16 units build in a fraction of that, and a smoke
+# run of seconds per target loses nothing to the slightly slower code. A long campaign
+# may set FUZZ_CODEGEN_UNITS=1.
 set -euo pipefail
 cd "$(dirname "$0")/../fuzz"
 seconds="${FUZZ_SECONDS:-12}"
+mode="${1:-all}"
+build_flags=(--release --codegen-units "${FUZZ_CODEGEN_UNITS:-16}")
 
 if ! rustup toolchain list | grep -q '^nightly'; then
     echo "fuzz smoke: no nightly toolchain on this machine; the stable random-input tests ran instead" >&2
@@ -19,8 +31,13 @@ if ! command -v cargo-fuzz >/dev/null 2>&1; then
 fi
 
 targets=$(cargo +nightly fuzz list)
-echo "fuzz smoke: building $(echo "$targets" | wc -l) targets"
-cargo +nightly fuzz build --release
+if [ "$mode" != "run" ]; then
+    echo "fuzz smoke: building $(echo "$targets" | wc -l) targets"
+    cargo +nightly fuzz build "${build_flags[@]}"
+fi
+if [ "$mode" = "build" ]; then
+    exit 0
+fi
 for target in $targets; do
     echo "fuzz smoke: $target for ${seconds}s"
     mkdir -p "corpus/$target"
@@ -53,7 +70,7 @@ for target in $targets; do
         lab_*)
             cp ../examples/lab/scenarios/*.toml "corpus/$target/" ;;
     esac
-    cargo +nightly fuzz run --release "$target" "corpus/$target" -- \
+    cargo +nightly fuzz run "${build_flags[@]}" "$target" "corpus/$target" -- \
         -max_total_time="$seconds" -rss_limit_mb=2048 -print_final_stats=1 ${extra[@]+"${extra[@]}"} 2>&1 \
         | grep -E 'stat::number_of_executed_units|Done|ERROR|panicked|SUMMARY' || true
     # cargo fuzz run exits non-zero on a crash; the pipeline above hides that, so check

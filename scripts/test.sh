@@ -8,8 +8,12 @@ cd "$(dirname "$0")/.."
 # A clean clone builds once: incremental caches would only double the target folder's size.
 if [ "${CI:-}" = "true" ]; then export CARGO_INCREMENTAL=0; fi
 
-echo "== installing test dependencies [${SECONDS} s]"
-bash scripts/install-test-deps.sh
+# The test dependencies (Debian and Python packages: mostly downloads) install in the
+# background while formatting and lints keep the cores busy; the tests wait for them.
+deps_log="$(mktemp /tmp/stanice-test-deps.XXXXXX)"
+echo "== installing test dependencies, in the background [${SECONDS} s]"
+bash scripts/install-test-deps.sh >"$deps_log" 2>&1 &
+deps_pid=$!
 
 echo "== formatting [${SECONDS} s]"
 cargo fmt --all -- --check
@@ -19,14 +23,46 @@ cargo clippy --workspace --all-targets --locked -- -D warnings
 # The protocol cores build without tokio (for serial adapters, other runtimes, fuzzers).
 cargo clippy -p iec60870 --no-default-features --locked -- -D warnings
 
+echo "== waiting for the test dependencies [${SECONDS} s]"
+deps_status=0
+wait "$deps_pid" || deps_status=$?
+cat "$deps_log"
+rm -f "$deps_log"
+if [ "$deps_status" -ne 0 ]; then
+    echo "installing the test dependencies failed (exit $deps_status)" >&2
+    exit "$deps_status"
+fi
+
 echo "== tests (unit, property, state machine, interoperability with c104, tshark) [${SECONDS} s]"
 # The interoperability tests refuse to skip when STANICE_REQUIRE_PEERS=1.
 export STANICE_REQUIRE_PEERS=1
 bash scripts/with-postgres.sh cargo test --workspace --locked
 
+# The fuzz targets build (the nightly compiler, all cores) while the peer tooling, which
+# runs no Stanice code and waits mostly on sockets and captures, checks itself.
+fuzz_log="$(mktemp /tmp/stanice-fuzz-build.XXXXXX)"
+echo "== building the fuzz targets, in the background [${SECONDS} s]"
+bash scripts/fuzz-smoke.sh build >"$fuzz_log" 2>&1 &
+fuzz_pid=$!
+
 echo "== the peer tooling checks itself (c104 against c104; the capture checker must reject broken frames) [${SECONDS} s]"
-bash tests/peer/selftest.sh
+selftest_status=0
+bash tests/peer/selftest.sh || selftest_status=$?
+
+echo "== waiting for the fuzz targets to build [${SECONDS} s]"
+fuzz_status=0
+wait "$fuzz_pid" || fuzz_status=$?
+cat "$fuzz_log"
+rm -f "$fuzz_log"
+if [ "$selftest_status" -ne 0 ]; then
+    echo "the peer selftest failed (exit $selftest_status)" >&2
+    exit "$selftest_status"
+fi
+if [ "$fuzz_status" -ne 0 ]; then
+    echo "building the fuzz targets failed (exit $fuzz_status)" >&2
+    exit "$fuzz_status"
+fi
 
 echo "== fuzz smoke [${SECONDS} s]"
-bash scripts/fuzz-smoke.sh
+bash scripts/fuzz-smoke.sh run
 echo "== done [${SECONDS} s]"
