@@ -9,11 +9,12 @@
 #                                               checks run, then runs)
 #
 # The targets build with 16 code generation units instead of cargo-fuzz's default of one:
-# a clean build of the seventeen targets (the PLC compiler and Cranelift among them, with
-# AddressSanitizer and coverage instrumentation) took 818 s with one unit on the 2-core
-# machine, most of a CI run's budget; 16 units build in a fraction of that, and a smoke
-# run of seconds per target loses nothing to the slightly slower code. A long campaign
-# may set FUZZ_CODEGEN_UNITS=1.
+# a clean release build of the seventeen targets (the PLC compiler and Cranelift among
+# them, every crate instrumented for coverage and AddressSanitizer) took 818 s with one
+# unit and 778 s with 16 on the 2-core machine, so the units are not where the time goes
+# (an unoptimised `--dev` build took 306 s, but ran some 800 inputs a second of
+# apci_stream where the release build runs about 15,000). A long campaign may set
+# FUZZ_CODEGEN_UNITS=1.
 set -euo pipefail
 cd "$(dirname "$0")/../fuzz"
 seconds="${FUZZ_SECONDS:-12}"

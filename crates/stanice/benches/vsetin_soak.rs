@@ -22,7 +22,9 @@
 //! and 100 ms (the project is copied and its `interval_ms` raised): at the configured
 //! cycles a simulated day takes hours of this 2-core machine, and a soak looks for what
 //! grows or gets lost over simulated time, not for the PLC's timing. 250 ms still sees
-//! every 500 ms command pulse.
+//! every 500 ms command pulse; 500 ms (the figures in README.md, 30 days in 22 minutes)
+//! may miss a pulse that starts on a cycle, which changes what the plant does, not what
+//! is counted.
 //!
 //! What it prints: the resident set of the station process at every simulated 6 hours,
 //! the slope of each process life's resident set over simulated time (least squares,

@@ -93,6 +93,10 @@ const SKIPPED: &[(&str, &str)] = &[
         "a benchmark: a release build, 1,000 outstations and a master process for half a minute",
     ),
     (
+        "cargo bench -p stanice --bench vsetin_soak",
+        "a benchmark: a release build and most of an hour of the whole station at speed",
+    ),
+    (
         "cargo bench -p stanice --bench vsetin_processes",
         "a benchmark: a release build and 23 node processes for half a minute on the project's ports moved",
     ),
