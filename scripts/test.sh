@@ -8,6 +8,19 @@ cd "$(dirname "$0")/.."
 # A clean clone builds once: incremental caches would only double the target folder's size.
 if [ "${CI:-}" = "true" ]; then export CARGO_INCREMENTAL=0; fi
 
+# finish_background WHAT PID LOG: waits for a step started in the background, shows what it
+# printed, and ends the run with its exit status when it failed.
+finish_background() {
+    local status=0
+    wait "$2" || status=$?
+    cat "$3"
+    rm -f "$3"
+    if [ "$status" -ne 0 ]; then
+        echo "$1 failed (exit $status)" >&2
+        exit "$status"
+    fi
+}
+
 # The test dependencies (Debian and Python packages: mostly downloads) install in the
 # background while formatting and lints keep the cores busy; the tests wait for them.
 deps_log="$(mktemp /tmp/stanice-test-deps.XXXXXX)"
@@ -24,14 +37,7 @@ cargo clippy --workspace --all-targets --locked -- -D warnings
 cargo clippy -p iec60870 --no-default-features --locked -- -D warnings
 
 echo "== waiting for the test dependencies [${SECONDS} s]"
-deps_status=0
-wait "$deps_pid" || deps_status=$?
-cat "$deps_log"
-rm -f "$deps_log"
-if [ "$deps_status" -ne 0 ]; then
-    echo "installing the test dependencies failed (exit $deps_status)" >&2
-    exit "$deps_status"
-fi
+finish_background "installing the test dependencies" "$deps_pid" "$deps_log"
 
 echo "== tests (unit, property, state machine, interoperability with c104, tshark) [${SECONDS} s]"
 # The interoperability tests refuse to skip when STANICE_REQUIRE_PEERS=1.
@@ -50,17 +56,10 @@ selftest_status=0
 bash tests/peer/selftest.sh || selftest_status=$?
 
 echo "== waiting for the fuzz targets to build [${SECONDS} s]"
-fuzz_status=0
-wait "$fuzz_pid" || fuzz_status=$?
-cat "$fuzz_log"
-rm -f "$fuzz_log"
+finish_background "building the fuzz targets" "$fuzz_pid" "$fuzz_log"
 if [ "$selftest_status" -ne 0 ]; then
     echo "the peer selftest failed (exit $selftest_status)" >&2
     exit "$selftest_status"
-fi
-if [ "$fuzz_status" -ne 0 ]; then
-    echo "building the fuzz targets failed (exit $fuzz_status)" >&2
-    exit "$fuzz_status"
 fi
 
 echo "== fuzz smoke [${SECONDS} s]"

@@ -161,18 +161,7 @@ fn value_kind(value: &DeValue<'_>) -> &'static str {
 impl HostsFile {
     /// Reads and checks the hosts file `file` (TOML, its tables, the addresses).
     pub fn load(file: &Path) -> Result<HostsFile, ConfigErrors> {
-        let bytes = std::fs::read(file).map_err(|e| {
-            ConfigErrors::single(ConfigError::unpositioned(
-                file,
-                ConfigProblem::Unreadable {
-                    file: None,
-                    kind: e.kind(),
-                    detail: e.to_string(),
-                },
-            ))
-        })?;
-        let text = String::from_utf8(bytes)
-            .map_err(|e| ConfigErrors::single(not_utf8(file, e.as_bytes())))?;
+        let text = read_config_text(file)?;
         HostsFile::parse(file, &text)
     }
 

@@ -925,18 +925,7 @@ impl Project {
     /// program adds) for `[[node.device]]`.
     pub fn load_with(folder: &Path, kinds: &DeviceKinds) -> Result<Project, ConfigErrors> {
         let file = folder.join(PROJECT_FILE);
-        let bytes = std::fs::read(&file).map_err(|e| {
-            ConfigErrors::single(ConfigError::unpositioned(
-                &file,
-                ConfigProblem::Unreadable {
-                    file: None,
-                    kind: e.kind(),
-                    detail: e.to_string(),
-                },
-            ))
-        })?;
-        let text = String::from_utf8(bytes)
-            .map_err(|e| ConfigErrors::single(not_utf8(&file, e.as_bytes())))?;
+        let text = read_config_text(&file)?;
         Project::parse_with(folder, &file, &text, kinds)
     }
 
@@ -1021,6 +1010,22 @@ impl Project {
             LinkTarget::Node(name) => self.node(name)?.server_address(&self.station),
         }
     }
+}
+
+/// A configuration file's text (`station.toml`, a hosts file): unreadable or not UTF-8 is
+/// an error naming the file.
+fn read_config_text(file: &Path) -> Result<String, ConfigErrors> {
+    let bytes = std::fs::read(file).map_err(|e| {
+        ConfigErrors::single(ConfigError::unpositioned(
+            file,
+            ConfigProblem::Unreadable {
+                file: None,
+                kind: e.kind(),
+                detail: e.to_string(),
+            },
+        ))
+    })?;
+    String::from_utf8(bytes).map_err(|e| ConfigErrors::single(not_utf8(file, e.as_bytes())))
 }
 
 impl NodeConfig {
