@@ -25,7 +25,7 @@ use store::{
 };
 
 /// Events per append, as today's figure (500) and as the recorder's largest batch.
-const BATCHES: [usize; 2] = [500, 1024];
+const BATCHES: [usize; 3] = [500, 1024, 8192];
 /// Events written per ingestion figure.
 const INGEST_EVENTS: usize = 200_000;
 /// Points of the large table: a trend reads about `events / POINTS` rows.
@@ -117,7 +117,7 @@ async fn run(store: &dyn EventStore, large: usize) -> Figures {
         let events: Vec<_> = (written..written + n)
             .map(|i| event(i, large, "large"))
             .collect();
-        for chunk in events.chunks(1024) {
+        for chunk in events.chunks(8192) {
             store.append_events(chunk).await.unwrap();
         }
         written += n;

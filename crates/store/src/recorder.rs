@@ -22,8 +22,10 @@ use tokio::sync::{mpsc, oneshot};
 
 use crate::{CommandRecord, EventKey, EventRecord, EventStore};
 
-/// Events taken from the channel per transaction at most.
-const BATCH: usize = 1024;
+/// Events taken from the channel per transaction at most. Only what is queued is taken,
+/// so a quiet station writes small batches; under a flood a large batch costs far less
+/// per event (the historian bench: SQLite 46,000/s in batches of 1,024, 59,000/s in 8,192).
+const BATCH: usize = 8192;
 
 /// Records waiting for the store at most: a minute of a busy station's changes.
 pub const CHANNEL_CAPACITY: usize = 65_536;
