@@ -5,7 +5,8 @@
 //!
 //! ```text
 //! cargo bench -p stanice --bench vsetin_soak [-- --days 30 --speed 2000 --cycle-ms 250
-//!                                                --kill-every-hours 120 --seed 1]
+//!                                                --kill-every-hours 120 --seed 1
+//!                                                --event-buffer N]
 //! ```
 //!
 //! The station runs as `stanice run` in a child process (all 23 nodes, SQLite store in a
@@ -25,6 +26,12 @@
 //! every 500 ms command pulse; 500 ms (the figures in README.md, 30 days in 22 minutes)
 //! may miss a pulse that starts on a cycle, which changes what the plant does, not what
 //! is counted.
+//!
+//! `--event-buffer N` sets every server's `event_buffer` (events kept per redundancy group
+//! no client takes; the project's default is 100,000): RDRT's redundancy groups for the
+//! HMI, ED, MRS and service have no client in the soak and fill their buffers, which is
+//! most of the memory a process life gains (the heap profile in the closing note of the
+//! scale-out issue); with a small buffer they are full within the first simulated day.
 //!
 //! What it prints: the resident set of the station process at every simulated 6 hours,
 //! the slope of each process life's resident set over simulated time (least squares,
@@ -55,6 +62,7 @@ struct Settings {
     cycle_ms: u64,
     kill_every_hours: f64,
     seed: u64,
+    event_buffer: Option<u64>,
 }
 
 impl Settings {
@@ -78,6 +86,7 @@ impl Settings {
                 .and_then(|v| v.parse().ok())
                 .unwrap_or(120.0),
             seed: value("--seed").and_then(|v| v.parse().ok()).unwrap_or(1),
+            event_buffer: value("--event-buffer").and_then(|v| v.parse().ok()),
         }
     }
 }
@@ -149,14 +158,15 @@ fn random_fault(random: &mut Random) -> (String, String) {
 }
 
 /// Copies the project folder (files and sub-folders) with every PLC task's
-/// `interval_ms` below `cycle_ms` raised to it.
-fn copy_project(from: &Path, to: &Path, cycle_ms: u64) {
+/// `interval_ms` below `cycle_ms` raised to it and, given one, every server's
+/// `event_buffer` set.
+fn copy_project(from: &Path, to: &Path, cycle_ms: u64, event_buffer: Option<u64>) {
     std::fs::create_dir_all(to).unwrap();
     for entry in std::fs::read_dir(from).unwrap() {
         let entry = entry.unwrap();
         let target = to.join(entry.file_name());
         if entry.file_type().unwrap().is_dir() {
-            copy_project(&entry.path(), &target, cycle_ms);
+            copy_project(&entry.path(), &target, cycle_ms, event_buffer);
         } else if entry.file_name() == "station.toml" {
             let text = std::fs::read_to_string(entry.path()).unwrap();
             let raised: Vec<String> = text
@@ -165,7 +175,12 @@ fn copy_project(from: &Path, to: &Path, cycle_ms: u64) {
                     Some(ms) if ms.parse::<u64>().is_ok_and(|ms| ms < cycle_ms) => {
                         format!("interval_ms = {cycle_ms}")
                     }
-                    _ => line.to_owned(),
+                    _ => match event_buffer {
+                        Some(events) if line.trim() == "[node.server]" => {
+                            format!("{line}\nevent_buffer = {events}")
+                        }
+                        _ => line.to_owned(),
+                    },
                 })
                 .collect();
             std::fs::write(&target, raised.join("\n")).unwrap();
@@ -370,6 +385,7 @@ async fn soak(settings: Settings) {
         &testkit::repository_root().join("examples/vsetin"),
         &project,
         settings.cycle_ms,
+        settings.event_buffer,
     );
     let store_url = format!("sqlite:{}", folder.path().join("events.sqlite").display());
     let port_base = testkit::ports::free_port_range(23);
@@ -377,13 +393,17 @@ async fn soak(settings: Settings) {
     let end = start + chrono::Duration::seconds((settings.days * 86_400.0) as i64);
     let mut random = Random(settings.seed.max(1));
     println!(
-        "Vsetín soak: {} simulated days from {} at speed {} (PLC tasks every {} ms), a kill -9 every {} simulated hours, seed {}",
+        "Vsetín soak: {} simulated days from {} at speed {} (PLC tasks every {} ms), a kill -9 every {} simulated hours, seed {}, event buffers {}",
         settings.days,
         start.format("%Y-%m-%d %H:%M UTC"),
         settings.speed,
         settings.cycle_ms,
         settings.kill_every_hours,
-        settings.seed
+        settings.seed,
+        settings.event_buffer.map_or_else(
+            || "as the project has them".to_owned(),
+            |events| format!("of {events} events")
+        )
     );
 
     let mut config = ClientConfig::new(format!("127.0.0.1:{port_base}"), CommonAddress::new(1));

@@ -287,3 +287,17 @@ impl Group {
         self.config.clients.is_empty()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A group's buffer holds up to `event_buffer_capacity` of these (and a `VecDeque`
+    /// rounds its allocation up to a power of two): the station documents a full
+    /// buffer's memory from this size, so a larger event must be a decision.
+    #[test]
+    fn a_queued_event_stays_small() {
+        let size = std::mem::size_of::<QueuedEvent>();
+        assert!(size <= 80, "QueuedEvent is {size} bytes");
+    }
+}

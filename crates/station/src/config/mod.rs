@@ -514,7 +514,20 @@ pub struct ServerConfig {
     /// The maximum command delay of time-tagged commands (`max_command_age_ms`,
     /// [`DEFAULT_MAX_COMMAND_AGE`] when not given); `None` when turned off.
     pub max_command_age: Option<Duration>,
+    /// Events kept per redundancy group while none of its clients takes them
+    /// (`event_buffer`, [`DEFAULT_EVENT_BUFFER`] when not given); past it the oldest go.
+    pub event_buffer: usize,
 }
+
+/// The events a server keeps per redundancy group unless `event_buffer` says otherwise:
+/// about 26 days of the Vsetín dispatch node's traffic (3,850 events a day), so an outage
+/// of weeks replays whole. The memory is what the buffer holds: 64 bytes an event, the
+/// allocation rounded up to a power of two, so a full default buffer takes 8.4 MB per
+/// group (the soak's heap profile found these buffers growing in groups no client uses).
+pub const DEFAULT_EVENT_BUFFER: usize = 100_000;
+
+/// The largest `event_buffer` a server accepts.
+pub const MAX_EVENT_BUFFER: usize = 10_000_000;
 
 /// The maximum command delay of a project's servers unless `max_command_age_ms` says
 /// otherwise: a time-tagged command that waited longer in some queue (a slow WAN, a

@@ -116,6 +116,7 @@ pub(in crate::config) struct RawServer {
     pub(in crate::config) tls: Option<RawTls>,
     pub(in crate::config) redundancy: Option<String>,
     pub(in crate::config) max_command_age_ms: Option<RawCommandAge>,
+    pub(in crate::config) event_buffer: Option<i64>,
 }
 
 /// `max_command_age_ms`: milliseconds, or `"off"` for no limit.

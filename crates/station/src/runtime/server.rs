@@ -61,6 +61,7 @@ fn server_config(
     server.reserved_per_group = NODE_SERVER_SLOTS.reserved_per_group;
     server.start_timeout = Some(NODE_SERVER_SLOTS.start_timeout);
     server.outstation.max_command_age = settings.max_command_age;
+    server.outstation.event_buffer_capacity = settings.event_buffer;
     server.outstation.time_zone = zone;
     if let Some(files) = &settings.tls {
         // Already resolved against the project folder by the configuration.

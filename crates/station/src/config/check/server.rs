@@ -36,6 +36,7 @@ impl Ctx<'_> {
             .map(|t| self.tls_files(folder, t, &node_path(n, &[K("server"), K("tls")])));
         let redundancy = self.redundancy_mode(n, s, &redundancy_groups);
         let max_command_age = self.max_command_age(n, s);
+        let event_buffer = self.event_buffer(n, s);
         ServerConfig {
             port_offset,
             allowed_clients,
@@ -43,6 +44,29 @@ impl Ctx<'_> {
             tls,
             redundancy,
             max_command_age,
+            event_buffer,
+        }
+    }
+
+    /// The events kept per redundancy group (`event_buffer`, 1..=[`MAX_EVENT_BUFFER`]).
+    fn event_buffer(&mut self, n: usize, s: &RawServer) -> usize {
+        let Some(events) = s.event_buffer else {
+            return DEFAULT_EVENT_BUFFER;
+        };
+        match usize::try_from(events) {
+            Ok(events) if (1..=MAX_EVENT_BUFFER).contains(&events) => events,
+            _ => {
+                self.err(
+                    &node_path(n, &[K("server"), K("event_buffer")]),
+                    ConfigProblem::OutOfRange {
+                        what: "event_buffer",
+                        value: events,
+                        min: 1,
+                        max: Some(MAX_EVENT_BUFFER as i64),
+                    },
+                );
+                DEFAULT_EVENT_BUFFER
+            }
         }
     }
 

@@ -37,6 +37,40 @@ fn the_maximum_command_delay_is_set_or_turned_off() {
     );
 }
 
+/// `event_buffer`: the events kept per redundancy group, 100,000 unless given; zero,
+/// negative and absurd sizes are refused at their position.
+#[test]
+fn the_event_buffer_is_sized_per_server() {
+    let project = |events: &str| {
+        format!(
+            "[station]\nname = \"T\"\ntime_zone = \"UTC\"\n[[node]]\nname = \"A\"\n\
+             common_address = 1\n[node.server]\nport_offset = 0\n{events}\n"
+        )
+    };
+    let buffer = |text: &str| {
+        load(&project(text), &[])
+            .unwrap()
+            .node("A")
+            .unwrap()
+            .server
+            .as_ref()
+            .unwrap()
+            .event_buffer
+    };
+    assert_eq!(buffer(""), station::config::DEFAULT_EVENT_BUFFER);
+    assert_eq!(buffer("event_buffer = 5000"), 5000);
+    for (text, column) in [("0", 16), ("-3", 16), ("20000000", 16)] {
+        expect_only(
+            &project(&format!("event_buffer = {text}")),
+            &[],
+            9,
+            column,
+            "node[0].server.event_buffer",
+            "event_buffer",
+        );
+    }
+}
+
 #[test]
 fn same_port_offset() {
     let toml = r#"[station]
