@@ -100,6 +100,7 @@ async fn main() {
             datatype: DataType::Double,
             writable: false,
             device: None,
+            comm_alarm: false,
         })
         .collect();
     let edge = EdgeNode::new(

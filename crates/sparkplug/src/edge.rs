@@ -15,6 +15,14 @@
 //! offline) are buffered (the oldest dropped past the limit, counted) and replayed after
 //! the next birth, in order, as historical values. A rebirth asked for in NCMD keeps the
 //! session and `bdSeq`; a new connection takes the next `bdSeq`.
+//!
+//! A device that stops answering dies: a metric marked [`MetricSpec::comm_alarm`] (the
+//! device's communication alarm, TRUE while it does not answer) turning TRUE publishes
+//! the device's DDEATH (with the next seq), and nothing more of the device goes out (its
+//! changes are kept as its current values) until the alarm turns FALSE, which publishes a
+//! new DBIRTH with the device's metrics as they are then. A device dead at the node's
+//! birth gets no DBIRTH, and its buffered changes are not replayed (its values come with
+//! its next birth).
 
 use std::collections::{HashMap, VecDeque};
 
@@ -47,6 +55,9 @@ pub struct MetricSpec {
     pub writable: bool,
     /// The device it belongs to (its DBIRTH, DDATA and DCMD); `None`: the node's own.
     pub device: Option<String>,
+    /// The device's communication alarm (a Boolean, TRUE while the device does not
+    /// answer): its changes are the device's DDEATH and its next DBIRTH, not DDATA.
+    pub comm_alarm: bool,
 }
 
 /// A metric's value at a time.
@@ -344,17 +355,38 @@ impl EdgeNode {
         }
     }
 
-    /// A metric changed (`index` from [`EdgeNode::metric_index`]): NDATA when born, else
-    /// buffered for the next birth. An unknown index is ignored.
+    /// A metric changed (`index` from [`EdgeNode::metric_index`]): NDATA or its device's
+    /// DDATA when born (a device's death or birth for its communication alarm, nothing
+    /// while the device is dead), else buffered for the next birth. An unknown index is
+    /// ignored.
     pub fn update(&mut self, index: usize, sample: Sample, now: u64) -> Vec<Output> {
-        let Some(entry) = self.metrics.get_mut(index) else {
+        let Some(entry) = self.metrics.get(index) else {
             return Vec::new();
         };
-        entry.current = Some(sample.clone());
+        let device = entry.spec.device.clone();
+        let was_dead = device.as_deref().is_some_and(|d| self.is_dead(d));
+        if let Some(entry) = self.metrics.get_mut(index) {
+            entry.current = Some(sample.clone());
+        }
         if self.born {
-            let metric = self.data_metric(index, &sample, false);
-            let device = self.device_of(index).map(str::to_owned);
-            vec![self.data(vec![metric], device.as_deref(), now)]
+            match device {
+                Some(device) => {
+                    let dead = self.is_dead(&device);
+                    match (was_dead, dead) {
+                        (false, true) => vec![self.device_death(&device, now)],
+                        (true, false) => vec![self.device_birth(&device, now)],
+                        (true, true) => Vec::new(),
+                        (false, false) => {
+                            let metric = self.data_metric(index, &sample, false);
+                            vec![self.data(vec![metric], Some(&device), now)]
+                        }
+                    }
+                }
+                None => {
+                    let metric = self.data_metric(index, &sample, false);
+                    vec![self.data(vec![metric], None, now)]
+                }
+            }
         } else {
             if self.buffer.len() >= self.config.buffer_limit {
                 self.buffer.pop_front();
@@ -536,25 +568,20 @@ impl EdgeNode {
             payload: birth.to_bytes(),
         })];
         for device in self.devices.clone() {
-            let birth = Payload {
-                timestamp: Some(now),
-                metrics: self.birth_metrics(Some(&device), now),
-                seq: Some(u64::from(self.next_seq)),
-                ..Payload::default()
-            };
-            self.next_seq = self.next_seq.wrapping_add(1);
-            outputs.push(Output::Publish(Publish {
-                topic: self.topic_of(MessageType::DBirth, Some(&device)),
-                payload: birth.to_bytes(),
-            }));
+            if !self.is_dead(&device) {
+                outputs.push(self.device_birth(&device, now));
+            }
         }
         // The buffer in order, each run of one device's (or the node's) changes in
-        // messages of at most REPLAY_BATCH metrics.
+        // messages of at most REPLAY_BATCH metrics; a dead device's are left out.
         let buffered: Vec<(usize, Sample)> = self.buffer.drain(..).collect();
         let mut run: Vec<Metric> = Vec::new();
         let mut run_device: Option<String> = None;
         for (index, sample) in &buffered {
             let device = self.device_of(*index).map(str::to_owned);
+            if device.as_deref().is_some_and(|d| self.is_dead(d)) {
+                continue;
+            }
             if !run.is_empty() && (device != run_device || run.len() == REPLAY_BATCH) {
                 let metrics = std::mem::take(&mut run);
                 outputs.push(self.data(metrics, run_device.as_deref(), now));
@@ -566,6 +593,47 @@ impl EdgeNode {
             outputs.push(self.data(run, run_device.as_deref(), now));
         }
         outputs
+    }
+
+    /// Whether `device` does not answer: its communication alarm is TRUE.
+    fn is_dead(&self, device: &str) -> bool {
+        self.metrics.iter().any(|entry| {
+            entry.spec.comm_alarm
+                && entry.spec.device.as_deref() == Some(device)
+                && entry
+                    .current
+                    .as_ref()
+                    .is_some_and(|sample| sample.value == Value::Bool(true))
+        })
+    }
+
+    /// The DBIRTH of `device` with its metrics as they are, with the node's next seq.
+    fn device_birth(&mut self, device: &str, now: u64) -> Output {
+        let birth = Payload {
+            timestamp: Some(now),
+            metrics: self.birth_metrics(Some(device), now),
+            seq: Some(u64::from(self.next_seq)),
+            ..Payload::default()
+        };
+        self.next_seq = self.next_seq.wrapping_add(1);
+        Output::Publish(Publish {
+            topic: self.topic_of(MessageType::DBirth, Some(device)),
+            payload: birth.to_bytes(),
+        })
+    }
+
+    /// The DDEATH of `device`: a timestamp and the node's next seq, no metrics.
+    fn device_death(&mut self, device: &str, now: u64) -> Output {
+        let death = Payload {
+            timestamp: Some(now),
+            seq: Some(u64::from(self.next_seq)),
+            ..Payload::default()
+        };
+        self.next_seq = self.next_seq.wrapping_add(1);
+        Output::Publish(Publish {
+            topic: self.topic_of(MessageType::DDeath, Some(device)),
+            payload: death.to_bytes(),
+        })
     }
 
     /// The birth metrics of the node's own metrics (`device` `None`) or of a device's:

@@ -438,10 +438,20 @@ async fn connection_task(
                 if events.send(ConnectionEvent::Lost).is_err() {
                     return;
                 }
-                // The next connection's will (its bdSeq) before reconnecting.
+                // The next connection's will (its bdSeq) before reconnecting. The node
+                // task sends it once it has taken the loss in, so every message it queued
+                // for the dead session is queued by now: dropped, so that no NDATA of the
+                // old session goes out before the new NBIRTH (rumqttc would send them
+                // first on the new connection). The birth carries every current value.
                 let Some(will) = wills.recv().await else {
                     return;
                 };
+                eventloop.clean();
+                let stale = eventloop.pending.len();
+                eventloop.pending.clear();
+                if stale > 0 {
+                    tracing::debug!(%stale, "messages of the lost MQTT session dropped");
+                }
                 eventloop.mqtt_options.set_last_will(last_will(&will));
                 tokio::time::sleep(RECONNECT_DELAY).await;
                 continue;

@@ -12,7 +12,9 @@
 //! a serial line, a profiled field device) are that device's metrics, in its DBIRTH and
 //! DDATA under the device's name; so are the commands the node forwards to such a device
 //! (a host writes them with DCMD). A device whose name cannot stand in a topic stays with
-//! the node's own metrics, with a warning.
+//! the node's own metrics, with a warning. A device's communication alarm (a serial-line
+//! device's status point, a profiled device's, a lift board's "not answering") is its
+//! DDEATH when it turns TRUE and its new DBIRTH when it turns FALSE.
 
 use std::collections::HashMap;
 
@@ -54,6 +56,20 @@ pub fn point_device(source: &PointSource) -> Option<&str> {
         | PointSource::ClientStatus(_)
         | PointSource::LineStatus { .. } => None,
     }
+}
+
+/// Whether the point is its device's communication alarm (TRUE while the device does not
+/// answer): the device's DDEATH and DBIRTH in Sparkplug.
+pub fn is_comm_alarm(source: &PointSource) -> bool {
+    matches!(
+        source,
+        PointSource::DeviceStatus { .. }
+            | PointSource::DeviceComm { .. }
+            | PointSource::Lift {
+                signal: points::LiftSignal::NotAnswering,
+                ..
+            }
+    )
 }
 
 /// The device a command goes to (`None`: the node's own, a PLC variable).
@@ -111,15 +127,17 @@ pub fn node_metrics(config: &NodeConfig, points: &[Point]) -> NodeMetrics {
         metrics
             .index
             .insert(point.spec.name.clone(), metrics.specs.len());
+        let device = device_id(
+            &config.name,
+            &point.spec.name,
+            point_device(&point.spec.source),
+        );
         metrics.specs.push(MetricSpec {
             name: point.spec.name.clone(),
             datatype: point_datatype(point.spec.point_type.kind),
             writable: false,
-            device: device_id(
-                &config.name,
-                &point.spec.name,
-                point_device(&point.spec.source),
-            ),
+            comm_alarm: device.is_some() && is_comm_alarm(&point.spec.source),
+            device,
         });
     }
     for command in config
@@ -139,6 +157,7 @@ pub fn node_metrics(config: &NodeConfig, points: &[Point]) -> NodeMetrics {
             datatype,
             writable: true,
             device: device_id(&config.name, &command.name, command_device(&command.target)),
+            comm_alarm: false,
         });
     }
     metrics

@@ -10,7 +10,10 @@ Subscribes to spBv1.0/# on a broker and checks one edge node's session:
   * NDATA and DDATA: one seq for all of the node's messages (NBIRTH 0, then DBIRTH,
     NDATA, DDATA) continuing modulo 256 without a gap, a payload timestamp, every metric
     by an alias of the node's birth (NDATA) or of that device's birth (DDATA), its value
-    in the field of the birth's datatype, a timestamp;
+    in the field of the birth's datatype, a timestamp; DDATA only of a device born and
+    not dead since;
+  * DDEATH: of a device born, with the next seq and a timestamp; the device says nothing
+    more until its next DBIRTH;
   * NDEATH (the will): the bdSeq of the NBIRTH it closes.
 Prints `READY` once subscribed, `DATA n` as data arrives, and at the end (NDEATH seen,
 or the timeout) one JSON line: {"verdict": "PASS"|"FAIL", "problems": [...], ...} with
@@ -41,7 +44,8 @@ births = []          # bdSeq of each NBIRTH
 deaths = []          # bdSeq of each NDEATH
 aliases = {}         # alias -> (name, datatype, device or None)
 values = []          # [name, timestamp, value, quality]
-devices = set()      # devices born since the last NBIRTH
+devices = set()      # devices born since the last NBIRTH and not dead since
+device_deaths = []   # devices whose DDEATH came, in order
 data_count = 0
 next_seq = None
 done = threading.Event()
@@ -154,6 +158,16 @@ def on_message(client, userdata, message):
                 problem("DBIRTH %s: alias %d already %s" % (device, metric.alias, aliases[metric.alias][0]))
             aliases[metric.alias] = (metric.name, metric.datatype, device)
             values.append([metric.name, metric.timestamp, metric_value(metric, metric.datatype), quality(metric)])
+    elif kind == "DDEATH":
+        if device not in devices:
+            problem("DDEATH of %s, not born" % device)
+            return
+        if not next_in_sequence(kind, payload):
+            return
+        if not payload.HasField("timestamp"):
+            problem("DDEATH without timestamp")
+        devices.discard(device)
+        device_deaths.append(device)
     elif kind in ("NDATA", "DDATA"):
         if kind == "DDATA" and device not in devices:
             problem("DDATA of %s before its DBIRTH" % device)
@@ -203,5 +217,6 @@ print(json.dumps({
     "deaths": deaths,
     "data": data_count,
     "devices": sorted(devices),
+    "device_deaths": device_deaths,
     "values": values,
 }), flush=True)

@@ -29,30 +29,35 @@ fn node(primary_host: Option<&str>) -> EdgeNode {
                 datatype: DataType::Boolean,
                 writable: false,
                 device: None,
+                comm_alarm: false,
             },
             MetricSpec {
                 name: "voltage".into(),
                 datatype: DataType::Float,
                 writable: false,
                 device: None,
+                comm_alarm: false,
             },
             MetricSpec {
                 name: "tap".into(),
                 datatype: DataType::Int8,
                 writable: false,
                 device: None,
+                comm_alarm: false,
             },
             MetricSpec {
                 name: "breaker_cmd".into(),
                 datatype: DataType::Boolean,
                 writable: true,
                 device: None,
+                comm_alarm: false,
             },
             MetricSpec {
                 name: "setpoint".into(),
                 datatype: DataType::Int16,
                 writable: true,
                 device: None,
+                comm_alarm: false,
             },
         ],
     )
@@ -343,6 +348,7 @@ fn devices_have_births_data_and_commands_of_their_own_under_one_seq() {
         datatype,
         writable,
         device: device.map(str::to_owned),
+        comm_alarm: false,
     };
     let mut edge = EdgeNode::new(
         EdgeConfig {
@@ -454,6 +460,100 @@ fn devices_have_births_data_and_commands_of_their_own_under_one_seq() {
     .is_err());
 }
 
+/// A device whose communication alarm turns TRUE dies (DDEATH with the next seq), says
+/// nothing while dead, and is born again (DBIRTH with its values as they are then) when
+/// the alarm clears; a device dead at the node's birth has no DBIRTH and no replay.
+#[test]
+fn a_device_that_stops_answering_dies_and_is_born_again_when_it_answers() {
+    let spec = |name: &str, datatype, device: &str, comm_alarm| MetricSpec {
+        name: name.into(),
+        datatype,
+        writable: false,
+        device: Some(device.to_owned()),
+        comm_alarm,
+    };
+    let mut edge = EdgeNode::new(
+        EdgeConfig {
+            group: "plant".into(),
+            edge_node: "rtu1".into(),
+            primary_host: None,
+            buffer_limit: 1000,
+        },
+        vec![
+            spec("REF1.current", DataType::Float, "REF1", false),
+            spec("REF1.status", DataType::Boolean, "REF1", true),
+            spec("REF2.current", DataType::Float, "REF2", false),
+            spec("REF2.status", DataType::Boolean, "REF2", true),
+        ],
+    )
+    .unwrap();
+    let good = |value, at| sample(value, QualityCode::Good, at);
+    edge.set(1, good(Value::Bool(false), 1));
+    // REF2 stops answering before the connection; its buffered change is not replayed.
+    edge.update(3, good(Value::Bool(true), 2), 2);
+    edge.update(2, good(Value::Float(7.0), 3), 3);
+    let births = published(&edge.connected(10));
+    let topics: Vec<&str> = births.iter().map(|(t, _)| t.as_str()).collect();
+    assert_eq!(
+        topics,
+        [
+            "spBv1.0/plant/NBIRTH/rtu1",
+            "spBv1.0/plant/DBIRTH/rtu1/REF1"
+        ]
+    );
+    // REF1 answers: DDATA; stops: DDEATH, seq going on, no metrics.
+    let data = published(&edge.update(0, good(Value::Float(1.5), 20), 20));
+    assert_eq!(data[0].0, "spBv1.0/plant/DDATA/rtu1/REF1");
+    assert_eq!(data[0].1.seq, Some(2));
+    let death = published(&edge.update(1, good(Value::Bool(true), 21), 21));
+    assert_eq!(death.len(), 1);
+    assert_eq!(death[0].0, "spBv1.0/plant/DDEATH/rtu1/REF1");
+    assert_eq!(death[0].1.seq, Some(3));
+    assert_eq!(death[0].1.timestamp, Some(21));
+    assert!(death[0].1.metrics.is_empty());
+    // Dead: its changes go nowhere, but are kept.
+    assert!(edge.update(0, good(Value::Float(2.5), 22), 22).is_empty());
+    // It answers again: a DBIRTH with the newest values, the alarm FALSE.
+    let again = published(&edge.update(1, good(Value::Bool(false), 30), 30));
+    assert_eq!(again.len(), 1);
+    assert_eq!(again[0].0, "spBv1.0/plant/DBIRTH/rtu1/REF1");
+    assert_eq!(again[0].1.seq, Some(4));
+    assert_eq!(
+        metric(&again[0].1, "REF1.current").value,
+        Some(MetricValue::FloatValue(2.5))
+    );
+    assert_eq!(
+        metric(&again[0].1, "REF1.status").value,
+        Some(MetricValue::BooleanValue(false))
+    );
+    // REF2, dead since before the birth, is born when it answers, with its value.
+    let born = published(&edge.update(3, good(Value::Bool(false), 40), 40));
+    assert_eq!(born[0].0, "spBv1.0/plant/DBIRTH/rtu1/REF2");
+    assert_eq!(born[0].1.seq, Some(5));
+    assert_eq!(
+        metric(&born[0].1, "REF2.current").value,
+        Some(MetricValue::FloatValue(7.0))
+    );
+    // A rebirth leaves a dead device out again.
+    edge.update(1, good(Value::Bool(true), 50), 50);
+    let rebirth = Metric {
+        name: Some(REBIRTH.into()),
+        value: Some(MetricValue::BooleanValue(true)),
+        ..Metric::default()
+    };
+    let topics: Vec<String> = published(&edge.received(NCMD, &ncmd(vec![rebirth]), 60))
+        .into_iter()
+        .map(|(t, _)| t)
+        .collect();
+    assert_eq!(
+        topics,
+        [
+            "spBv1.0/plant/NBIRTH/rtu1",
+            "spBv1.0/plant/DBIRTH/rtu1/REF2"
+        ]
+    );
+}
+
 #[test]
 fn with_a_primary_host_nothing_goes_out_until_it_is_online_then_the_buffer_replays_in_order() {
     let mut edge = node(Some("scada"));
@@ -528,6 +628,7 @@ fn a_full_buffer_drops_the_oldest_and_counts() {
             datatype: DataType::Int32,
             writable: false,
             device: None,
+            comm_alarm: false,
         }],
     )
     .unwrap();
@@ -564,6 +665,7 @@ fn ids_that_cannot_stand_in_a_topic_and_reserved_names_are_refused() {
         datatype: DataType::Int64,
         writable: false,
         device: None,
+        comm_alarm: false,
     }];
     assert!(EdgeNode::new(config("g"), reserved).is_err());
     let twice = vec![
@@ -572,12 +674,14 @@ fn ids_that_cannot_stand_in_a_topic_and_reserved_names_are_refused() {
             datatype: DataType::Int64,
             writable: false,
             device: None,
+            comm_alarm: false,
         },
         MetricSpec {
             name: "x".into(),
             datatype: DataType::Int64,
             writable: false,
             device: None,
+            comm_alarm: false,
         },
     ];
     assert!(EdgeNode::new(config("g"), twice).is_err());
