@@ -338,3 +338,18 @@ fn every_help_has_examples() {
     assert!(text.contains("NT not topical"), "{text}");
     assert!(text.contains("UPPER CASE = set"), "{text}");
 }
+
+/// A store address without its scheme is refused once, in plain words: the cause is not
+/// printed twice ("bad store URL ...: bad store URL ...").
+#[test]
+fn a_bad_store_address_is_said_once() {
+    let mut run = stanice();
+    run.arg("run")
+        .arg(vsetin())
+        .args(["--store", "/tmp/no-scheme.db", "--log", "error"]);
+    let output = run_bounded(run, 60);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_ne!(output.status.code(), Some(0), "{stderr}");
+    assert_eq!(stderr.matches("bad store URL").count(), 1, "{stderr}");
+    assert!(stderr.contains("expected sqlite:PATH"), "{stderr}");
+}

@@ -109,9 +109,11 @@ pub enum RuntimeError {
     /// A node's Structured Text does not compile; the diagnostics as `file:line:col`.
     #[error("{0}")]
     Plc(String),
-    /// The event store could not be opened.
+    /// The event store could not be opened. Its cause is in the message, not chained as
+    /// a source: printed with its chain, it read twice ("bad store URL ...: bad store
+    /// URL ...").
     #[error("event store: {0}")]
-    Store(#[from] StoreError),
+    Store(StoreError),
     /// A server could not start (TLS files, an address that cannot be bound). Its cause is
     /// in the message, not chained as a source: printed with its chain, it read twice.
     #[error("node `{node}`: {error}")]
@@ -133,6 +135,12 @@ pub enum RuntimeError {
     /// The simulation thread has ended.
     #[error("the simulation has stopped")]
     Stopped,
+}
+
+impl From<StoreError> for RuntimeError {
+    fn from(error: StoreError) -> RuntimeError {
+        RuntimeError::Store(error)
+    }
 }
 
 /// Where events go.
