@@ -36,6 +36,18 @@ cargo clippy --workspace --all-targets --locked -- -D warnings
 # The protocol cores build without tokio (for serial adapters, other runtimes, fuzzers).
 cargo clippy -p iec60870 --no-default-features --locked -- -D warnings
 
+echo "== building the tests [${SECONDS} s]"
+cargo test --workspace --locked --no-run
+
+# The fuzz targets build (the nightly compiler) in the background, at the lowest CPU
+# priority, while the tests run (they wait on sockets, pseudo-terminals, browsers and
+# timeouts much of the time, and must pass on a busy machine) and while the peer tooling,
+# which runs no Stanice code, checks itself.
+fuzz_log="$(mktemp /tmp/stanice-fuzz-build.XXXXXX)"
+echo "== building the fuzz targets, in the background [${SECONDS} s]"
+nice -n 19 bash scripts/fuzz-smoke.sh build >"$fuzz_log" 2>&1 &
+fuzz_pid=$!
+
 echo "== waiting for the test dependencies [${SECONDS} s]"
 finish_background "installing the test dependencies" "$deps_pid" "$deps_log"
 
@@ -43,13 +55,6 @@ echo "== tests (unit, property, state machine, interoperability with c104, tshar
 # The interoperability tests refuse to skip when STANICE_REQUIRE_PEERS=1.
 export STANICE_REQUIRE_PEERS=1
 bash scripts/with-postgres.sh cargo test --workspace --locked
-
-# The fuzz targets build (the nightly compiler, all cores) while the peer tooling, which
-# runs no Stanice code and waits mostly on sockets and captures, checks itself.
-fuzz_log="$(mktemp /tmp/stanice-fuzz-build.XXXXXX)"
-echo "== building the fuzz targets, in the background [${SECONDS} s]"
-bash scripts/fuzz-smoke.sh build >"$fuzz_log" 2>&1 &
-fuzz_pid=$!
 
 echo "== the peer tooling checks itself (c104 against c104; the capture checker must reject broken frames) [${SECONDS} s]"
 selftest_status=0

@@ -30,9 +30,10 @@ fuzz_target!(|data: &[u8]| {
             buffer_limit: 8,
         },
         vec![
-            MetricSpec { name: "a".into(), datatype: DataType::Boolean, writable: true, device: None },
-            MetricSpec { name: "b".into(), datatype: DataType::Int16, writable: true, device: Some("d".into()) },
-            MetricSpec { name: "c".into(), datatype: DataType::Float, writable: false, device: Some("d".into()) },
+            MetricSpec { name: "a".into(), datatype: DataType::Boolean, writable: true, device: None, comm_alarm: false },
+            MetricSpec { name: "b".into(), datatype: DataType::Int16, writable: true, device: Some("d".into()), comm_alarm: false },
+            MetricSpec { name: "c".into(), datatype: DataType::Float, writable: false, device: Some("d".into()), comm_alarm: false },
+            MetricSpec { name: "d.status".into(), datatype: DataType::Boolean, writable: false, device: Some("d".into()), comm_alarm: true },
         ],
     )
     .expect("a valid node");
