@@ -68,7 +68,10 @@ const HMI = (window.HMI = {
     if (init.method && init.method !== "GET" && this.session) {
       init.headers["X-CSRF-Token"] = this.session.csrf;
     }
-    const response = await fetch(path, init);
+    return this.admit(await fetch(path, init), path);
+  },
+  /** A response to `path` as request() answers it: a 401 (the session ended) goes to the login page. */
+  admit(response, path) {
     if (response.status === 401 && path !== "/api/login") {
       window.location.replace("/login");
       throw new Error("not logged in");
@@ -77,7 +80,10 @@ const HMI = (window.HMI = {
   },
   /** GET (or any method) returning the JSON body; throws Error(message) on HTTP errors. */
   async api(path, options) {
-    const response = await this.request(path, options);
+    return this.body(await this.request(path, options));
+  },
+  /** A response's body (JSON or text); throws Error(message) on HTTP errors. */
+  async body(response) {
     let body = null;
     const type = response.headers.get("Content-Type") || "";
     if (type.includes("json")) body = await response.json();
@@ -191,40 +197,56 @@ const HMI = (window.HMI = {
   wsTimer: null,
   connect() {
     clearTimeout(this.wsTimer);
-    const scheme = window.location.protocol === "https:" ? "wss:" : "ws:";
-    let socket;
-    try {
-      // batch=1: the messages waiting at the server come together, as one JSON array.
-      socket = new WebSocket(`${scheme}//${window.location.host}/api/live?batch=1`);
-    } catch (error) {
-      this.scheduleReconnect();
-      return;
+    // The first time, the socket early.js opened while the page loaded, with the
+    // messages it brought meanwhile; later (a reconnection) a new one.
+    const early = window.STANICE_EARLY;
+    let socket = early && early.socket;
+    const brought = socket ? early.messages : [];
+    if (socket) {
+      socket.removeEventListener("message", early.keep);
+      early.socket = null;
+    } else {
+      const scheme = window.location.protocol === "https:" ? "wss:" : "ws:";
+      try {
+        // batch=1: the messages waiting at the server come together, as one JSON array.
+        socket = new WebSocket(`${scheme}//${window.location.host}/api/live?batch=1`);
+      } catch (error) {
+        this.scheduleReconnect();
+        return;
+      }
     }
     this.ws = socket;
-    socket.addEventListener("open", () => {
+    const opened = () => {
       this.wsAttempts = 0;
       performance.mark("hmi:live-open");
-    });
-    socket.addEventListener("message", (event) => {
+    };
+    const message = (event) => {
       if (performance.getEntriesByName("hmi:live-message").length === 0) performance.mark("hmi:live-message");
-      let message;
+      let parsed;
       try {
-        message = JSON.parse(event.data);
+        parsed = JSON.parse(event.data);
       } catch (error) {
         return;
       }
-      if (Array.isArray(message)) for (const one of message) this.receive(one);
-      else this.receive(message);
-    });
-    socket.addEventListener("close", () => {
+      if (Array.isArray(parsed)) for (const one of parsed) this.receive(one);
+      else this.receive(parsed);
+    };
+    const closed = () => {
       if (this.ws !== socket) return;
       this.ws = null;
       this.setOpen(false);
       this.scheduleReconnect();
-    });
+    };
+    socket.addEventListener("open", opened);
+    socket.addEventListener("message", message);
+    socket.addEventListener("close", closed);
     socket.addEventListener("error", () => {
       /* the close event follows */
     });
+    // An adopted socket may have opened, brought messages or closed already.
+    if (socket.readyState === WebSocket.OPEN) opened();
+    for (const event of brought) message(event);
+    if (socket.readyState === WebSocket.CLOSED) closed();
   },
   scheduleReconnect() {
     this.wsAttempts += 1;
