@@ -609,30 +609,34 @@ impl EdgeNode {
 
     /// The DBIRTH of `device` with its metrics as they are, with the node's next seq.
     fn device_birth(&mut self, device: &str, now: u64) -> Output {
-        let birth = Payload {
-            timestamp: Some(now),
-            metrics: self.birth_metrics(Some(device), now),
-            seq: Some(u64::from(self.next_seq)),
-            ..Payload::default()
-        };
-        self.next_seq = self.next_seq.wrapping_add(1);
-        Output::Publish(Publish {
-            topic: self.topic_of(MessageType::DBirth, Some(device)),
-            payload: birth.to_bytes(),
-        })
+        let metrics = self.birth_metrics(Some(device), now);
+        self.sequenced(MessageType::DBirth, Some(device), metrics, now)
     }
 
     /// The DDEATH of `device`: a timestamp and the node's next seq, no metrics.
     fn device_death(&mut self, device: &str, now: u64) -> Output {
-        let death = Payload {
+        self.sequenced(MessageType::DDeath, Some(device), Vec::new(), now)
+    }
+
+    /// A message of the node (`device` `None`) or of a device, with these metrics, a
+    /// timestamp and the node's next seq (every message after the NBIRTH takes one).
+    fn sequenced(
+        &mut self,
+        message: MessageType,
+        device: Option<&str>,
+        metrics: Vec<Metric>,
+        now: u64,
+    ) -> Output {
+        let payload = Payload {
             timestamp: Some(now),
+            metrics,
             seq: Some(u64::from(self.next_seq)),
             ..Payload::default()
         };
         self.next_seq = self.next_seq.wrapping_add(1);
         Output::Publish(Publish {
-            topic: self.topic_of(MessageType::DDeath, Some(device)),
-            payload: death.to_bytes(),
+            topic: self.topic_of(message, device),
+            payload: payload.to_bytes(),
         })
     }
 
@@ -684,22 +688,12 @@ impl EdgeNode {
 
     /// NDATA (`device` `None`) or DDATA of `device`, with the node's next seq.
     fn data(&mut self, metrics: Vec<Metric>, device: Option<&str>, now: u64) -> Output {
-        let payload = Payload {
-            timestamp: Some(now),
-            metrics,
-            seq: Some(u64::from(self.next_seq)),
-            ..Payload::default()
-        };
-        self.next_seq = self.next_seq.wrapping_add(1);
         let message = if device.is_some() {
             MessageType::DData
         } else {
             MessageType::NData
         };
-        Output::Publish(Publish {
-            topic: self.topic_of(message, device),
-            payload: payload.to_bytes(),
-        })
+        self.sequenced(message, device, metrics, now)
     }
 }
 
