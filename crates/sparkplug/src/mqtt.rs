@@ -388,6 +388,16 @@ pub fn spawn_edge(
     })
 }
 
+/// Drops what the event loop still holds for a lost session (requests queued by the
+/// client and not yet sent, and those rumqttc keeps to send first on the next
+/// connection); how many.
+fn forget_lost_session(eventloop: &mut EventLoop) -> usize {
+    eventloop.clean();
+    let stale = eventloop.pending.len();
+    eventloop.pending.clear();
+    stale
+}
+
 fn last_will(will: &Publish) -> LastWill {
     LastWill::new(&will.topic, will.payload.clone(), QoS::AtLeastOnce, false)
 }
@@ -446,9 +456,7 @@ async fn connection_task(
                 let Some(will) = wills.recv().await else {
                     return;
                 };
-                eventloop.clean();
-                let stale = eventloop.pending.len();
-                eventloop.pending.clear();
+                let stale = forget_lost_session(&mut eventloop);
                 if stale > 0 {
                     tracing::debug!(%stale, "messages of the lost MQTT session dropped");
                 }
@@ -553,5 +561,30 @@ impl NodeTask {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    /// Messages queued for a session that died do not go out on the next connection.
+    #[test]
+    fn a_lost_sessions_queued_messages_are_forgotten() {
+        let options = MqttOptions::new("node", "127.0.0.1", 1);
+        let (client, mut eventloop) = AsyncClient::new(options, CLIENT_QUEUE);
+        for seq in 0..3u8 {
+            client
+                .try_publish("spBv1.0/g/NDATA/node", QoS::AtMostOnce, false, vec![seq])
+                .unwrap();
+        }
+        assert_eq!(forget_lost_session(&mut eventloop), 3);
+        assert!(eventloop.pending.is_empty());
+        assert_eq!(
+            forget_lost_session(&mut eventloop),
+            0,
+            "nothing left to send"
+        );
     }
 }
