@@ -64,6 +64,20 @@ fn node(primary_host: Option<&str>) -> EdgeNode {
     .unwrap()
 }
 
+/// Node `rtu1` of group `plant`, no primary host, a buffer of 1,000 changes.
+fn plant_node(metrics: Vec<MetricSpec>) -> EdgeNode {
+    EdgeNode::new(
+        EdgeConfig {
+            group: "plant".into(),
+            edge_node: "rtu1".into(),
+            primary_host: None,
+            buffer_limit: 1000,
+        },
+        metrics,
+    )
+    .unwrap()
+}
+
 fn sample(value: Value, quality: QualityCode, timestamp: u64) -> Sample {
     Sample {
         value,
@@ -350,22 +364,13 @@ fn devices_have_births_data_and_commands_of_their_own_under_one_seq() {
         device: device.map(str::to_owned),
         comm_alarm: false,
     };
-    let mut edge = EdgeNode::new(
-        EdgeConfig {
-            group: "plant".into(),
-            edge_node: "rtu1".into(),
-            primary_host: None,
-            buffer_limit: 1000,
-        },
-        vec![
-            spec("breaker", DataType::Boolean, false, None),
-            spec("L1.position", DataType::Int32, false, Some("L1")),
-            spec("REF1.trip", DataType::Boolean, false, Some("REF1")),
-            spec("REF1.open", DataType::Boolean, true, Some("REF1")),
-            spec("L1.status", DataType::Int32, false, Some("L1")),
-        ],
-    )
-    .unwrap();
+    let mut edge = plant_node(vec![
+        spec("breaker", DataType::Boolean, false, None),
+        spec("L1.position", DataType::Int32, false, Some("L1")),
+        spec("REF1.trip", DataType::Boolean, false, Some("REF1")),
+        spec("REF1.open", DataType::Boolean, true, Some("REF1")),
+        spec("L1.status", DataType::Int32, false, Some("L1")),
+    ]);
     assert_eq!(edge.devices(), ["L1", "REF1"]);
     // A change before the connection waits in the buffer, for the device's DDATA.
     edge.update(1, sample(Value::Int(3), QualityCode::Good, 5), 5);
@@ -472,21 +477,12 @@ fn a_device_that_stops_answering_dies_and_is_born_again_when_it_answers() {
         device: Some(device.to_owned()),
         comm_alarm,
     };
-    let mut edge = EdgeNode::new(
-        EdgeConfig {
-            group: "plant".into(),
-            edge_node: "rtu1".into(),
-            primary_host: None,
-            buffer_limit: 1000,
-        },
-        vec![
-            spec("REF1.current", DataType::Float, "REF1", false),
-            spec("REF1.status", DataType::Boolean, "REF1", true),
-            spec("REF2.current", DataType::Float, "REF2", false),
-            spec("REF2.status", DataType::Boolean, "REF2", true),
-        ],
-    )
-    .unwrap();
+    let mut edge = plant_node(vec![
+        spec("REF1.current", DataType::Float, "REF1", false),
+        spec("REF1.status", DataType::Boolean, "REF1", true),
+        spec("REF2.current", DataType::Float, "REF2", false),
+        spec("REF2.status", DataType::Boolean, "REF2", true),
+    ]);
     let good = |value, at| sample(value, QualityCode::Good, at);
     edge.set(1, good(Value::Bool(false), 1));
     // REF2 stops answering before the connection; its buffered change is not replayed.

@@ -5,26 +5,31 @@ use std::time::Duration;
 
 use super::support::*;
 
+/// A project of one node `A` whose server has these further lines.
+fn one_server(lines: &str) -> String {
+    format!(
+        "[station]\nname = \"T\"\ntime_zone = \"UTC\"\n[[node]]\nname = \"A\"\n\
+         common_address = 1\n[node.server]\nport_offset = 0\n{lines}\n"
+    )
+}
+
+/// The server of node `A` of `one_server(lines)`.
+fn server_of(lines: &str) -> station::config::ServerConfig {
+    load(&one_server(lines), &[])
+        .unwrap()
+        .node("A")
+        .unwrap()
+        .server
+        .clone()
+        .unwrap()
+}
+
 /// `max_command_age_ms`: milliseconds, or "off" for no limit; another word is refused
 /// at its position.
 #[test]
 fn the_maximum_command_delay_is_set_or_turned_off() {
-    let project = |age: &str| {
-        format!(
-            "[station]\nname = \"T\"\ntime_zone = \"UTC\"\n[[node]]\nname = \"A\"\n\
-             common_address = 1\n[node.server]\nport_offset = 0\nmax_command_age_ms = {age}\n"
-        )
-    };
-    let age = |text: &str| {
-        load(&project(text), &[])
-            .unwrap()
-            .node("A")
-            .unwrap()
-            .server
-            .as_ref()
-            .unwrap()
-            .max_command_age
-    };
+    let project = |age: &str| one_server(&format!("max_command_age_ms = {age}"));
+    let age = |text: &str| server_of(&format!("max_command_age_ms = {text}")).max_command_age;
     assert_eq!(age("5000"), Some(Duration::from_secs(5)));
     assert_eq!(age("\"off\""), None);
     expect_only(
@@ -41,27 +46,12 @@ fn the_maximum_command_delay_is_set_or_turned_off() {
 /// negative and absurd sizes are refused at their position.
 #[test]
 fn the_event_buffer_is_sized_per_server() {
-    let project = |events: &str| {
-        format!(
-            "[station]\nname = \"T\"\ntime_zone = \"UTC\"\n[[node]]\nname = \"A\"\n\
-             common_address = 1\n[node.server]\nport_offset = 0\n{events}\n"
-        )
-    };
-    let buffer = |text: &str| {
-        load(&project(text), &[])
-            .unwrap()
-            .node("A")
-            .unwrap()
-            .server
-            .as_ref()
-            .unwrap()
-            .event_buffer
-    };
+    let buffer = |lines: &str| server_of(lines).event_buffer;
     assert_eq!(buffer(""), station::config::DEFAULT_EVENT_BUFFER);
     assert_eq!(buffer("event_buffer = 5000"), 5000);
     for (text, column) in [("0", 16), ("-3", 16), ("20000000", 16)] {
         expect_only(
-            &project(&format!("event_buffer = {text}")),
+            &one_server(&format!("event_buffer = {text}")),
             &[],
             9,
             column,
