@@ -92,6 +92,16 @@
 //! invalid only), the command audit (time, user, point, outcome) and the trends (point,
 //! time) are on the partitioned tables, so every day has them; a query with a time range
 //! reads only its days. Ids come from the sequences `event_ids` and `command_ids`.
+//!
+//! `trend_rollups` (schema version 4) holds, per point with numeric values and per minute
+//! ([`ROLLUP_SPAN_MS`]) that has values, the first and last event time, the minimum,
+//! maximum, sum and count of the values and whether any was invalid. It is folded in the
+//! transaction that stores the events, from the rows actually stored (an event ignored for
+//! its key is not folded twice): on SQLite by the writer, one statement per batch; on
+//! PostgreSQL by a statement trigger on `events` over the INSERT's transition table (so
+//! every way of inserting keeps it). An aggregated trend of buckets four minutes wide or
+//! more reads the rollups ([`TrendQuery::rollup_span_ms`]). Retention deletes the rollups
+//! of the purged minutes (SQLite) or days (PostgreSQL).
 //! A lift fault's board time has no zone: `lift_faults.board_ms` holds its wall-clock
 //! reading as if it were UTC (NULL when the board sent an impossible date), and
 //! `lift_faults.filed_ms` the time it is filtered and sorted by
@@ -171,7 +181,7 @@ pub use recorder::{Recorder, CHANNEL_CAPACITY};
 pub use retention::{spawn_retention, Retention, RetentionHandle};
 #[cfg(feature = "database")]
 pub use sqlite::SqliteStore;
-pub use trend::{TrendBucket, TrendMode, TrendQuery, MAX_TREND_BUCKETS};
+pub use trend::{TrendBucket, TrendMode, TrendQuery, MAX_TREND_BUCKETS, ROLLUP_SPAN_MS};
 
 /// A boxed future, so that [`EventStore`] can be used as `dyn EventStore`.
 pub type StoreFuture<'a, T> = Pin<Box<dyn Future<Output = Result<T, StoreError>> + Send + 'a>>;

@@ -296,6 +296,33 @@ fn insert_rows(
     Ok(ids)
 }
 
+/// Folds the events with ids `?1..=?2` into the trend rollups (schema version 4): per
+/// point and minute, in one statement over the batch's rows, upserting in key order.
+/// One statement per batch rather than a trigger per row: each of the batch's minutes is
+/// upserted once, in key order, where a row trigger upserts once per event in the events'
+/// order. (`WHERE true`: SQLite's parser needs a WHERE before the ON CONFLICT of an
+/// INSERT ... SELECT.)
+const FOLD_ROLLUPS: &str = "INSERT INTO trend_rollups (point, start_ms, first_ms, last_ms, \
+     min_value, max_value, sum_value, samples, invalid) \
+     SELECT point, event_ms - (event_ms % 60000 + 60000) % 60000 AS start_ms, \
+            MIN(event_ms), MAX(event_ms), MIN(v), MAX(v), SUM(v), COUNT(*), MAX(quality & 1) \
+     FROM (SELECT point, event_ms, quality, \
+                  COALESCE(value_float, CAST(value_int AS REAL)) AS v \
+           FROM events \
+           WHERE id BETWEEN ?1 AND ?2 AND value_kind IN (1, 3, 4) \
+             AND (value_float IS NOT NULL OR value_int IS NOT NULL)) \
+     WHERE true \
+     GROUP BY point, start_ms \
+     ORDER BY point, start_ms \
+     ON CONFLICT (point, start_ms) DO UPDATE SET \
+         first_ms  = min(first_ms, excluded.first_ms), \
+         last_ms   = max(last_ms, excluded.last_ms), \
+         min_value = min(min_value, excluded.min_value), \
+         max_value = max(max_value, excluded.max_value), \
+         sum_value = sum_value + excluded.sum_value, \
+         samples   = samples + excluded.samples, \
+         invalid   = max(invalid, excluded.invalid)";
+
 /// Appends events in one immediate transaction, leaving out those whose key is already
 /// stored (answered with the stored one's id); ids in their order. The columns are bound
 /// straight from the records: no parameter list per row.
@@ -309,6 +336,8 @@ fn insert_events(
     );
     let tx = conn.transaction_with_behavior(TransactionBehavior::Immediate)?;
     let mut ids = Vec::with_capacity(events.len());
+    // The ids this transaction stores: consecutive, as the writer is the only one.
+    let mut stored_ids: Option<(i64, i64)> = None;
     {
         let mut stmt = tx.prepare_cached(&sql)?;
         for e in events {
@@ -334,7 +363,9 @@ fn insert_events(
                 key_seq,
             ])?;
             if stored == 1 {
-                ids.push(tx.last_insert_rowid());
+                let id = tx.last_insert_rowid();
+                stored_ids = Some(stored_ids.map_or((id, id), |(first, _)| (first, id)));
+                ids.push(id);
             } else {
                 // Ignored: its key is stored already.
                 let id = tx
@@ -345,6 +376,10 @@ fn insert_events(
                 ids.push(id);
             }
         }
+    }
+    if let Some((first, last)) = stored_ids {
+        tx.prepare_cached(FOLD_ROLLUPS)?
+            .execute(rusqlite::params![first, last])?;
     }
     tx.commit()?;
     Ok(ids)

@@ -23,10 +23,6 @@ const MAX_PENS: usize = 8;
 const DEFAULT_BUCKETS: usize = 1_000;
 /// The longest range one request may ask for.
 const MAX_RANGE_DAYS: i64 = 400;
-/// Up to this range a bucket is folded over every value (exact extremes); beyond it,
-/// by default, to its first and last value (index seeks: 60 days in tens of
-/// milliseconds, where reading every row takes seconds).
-const AGGREGATE_UP_TO_DAYS: i64 = 7;
 
 pub(super) fn routes() -> Router<AppState> {
     Router::new()
@@ -66,8 +62,9 @@ struct TrendParameters {
     width: Option<usize>,
     /// `json` (the default) or `csv`.
     format: Option<String>,
-    /// `minmax` (every value of a bucket) or `firstlast` (its first and last value);
-    /// default: `minmax` up to 7 days, `firstlast` beyond.
+    /// `minmax` (every value of a bucket: exact extremes, read from the store's minute
+    /// and hour rollups for long ranges) or `firstlast` (its first and last value);
+    /// default `minmax`.
     mode: Option<String>,
 }
 
@@ -189,9 +186,7 @@ async fn trend(
         ));
     }
     let mode = match query.mode.as_deref() {
-        None if to - from <= chrono::Duration::days(AGGREGATE_UP_TO_DAYS) => TrendMode::Aggregate,
-        None => TrendMode::FirstLast,
-        Some("minmax") => TrendMode::Aggregate,
+        None | Some("minmax") => TrendMode::Aggregate,
         Some("firstlast") => TrendMode::FirstLast,
         Some(other) => return Err(bad("mode", format!("`{other}` is not minmax or firstlast"))),
     };

@@ -489,6 +489,11 @@ impl Database for PostgresStore {
         })
     }
 
+    /// Whole days go (their partitions dropped): the rollups before the cutoff's day.
+    fn rollups_purged_before(&self, cutoff_ms: i64) -> i64 {
+        partitions::day_of(cutoff_ms)
+    }
+
     fn prepare_partitions(&self, now: DateTime<Utc>) -> StoreFuture<'_, ()> {
         Box::pin(async move {
             let connection = checkout(&self.pool).await?;

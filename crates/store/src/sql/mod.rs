@@ -19,7 +19,7 @@ use crate::{
     Backend, CommandQuery, CommandRecord, CountedPage, EventQuery, EventRecord, EventStore,
     LiftFaultArchive, LiftFaultQuery, LiftFaultRecord, NotificationLog, NotificationQuery,
     NotificationRecord, Page, RecordId, StoreError, StoreFuture, StoreStats, TrendBucket,
-    TrendMode, TrendQuery, MAX_TREND_BUCKETS,
+    TrendMode, TrendQuery, MAX_TREND_BUCKETS, ROLLUP_SPAN_MS,
 };
 use row::{
     check_command, check_event, check_lift_fault, check_notification, command_from_row,
@@ -29,7 +29,7 @@ use row::{
 };
 use select::{
     command_cursor, command_sql, event_cursor, event_sql, into_page, lift_fault_sql,
-    notification_sql, Counted,
+    notification_sql, trend_sql, Counted,
 };
 
 /// Rows one purge statement deletes, so appends interleave with a large purge.
@@ -142,6 +142,13 @@ pub(crate) trait Database: Send + Sync {
     /// whole day partitions (so up to a day more than the cutoff stays).
     fn purge_history(&self, cutoff_ms: i64) -> StoreFuture<'_, u64>;
 
+    /// The start before which the trend rollups go when [`Database::purge_history`] is
+    /// given `cutoff_ms`: where the events it keeps begin, rounded down to a minute (a
+    /// minute before it ends before the cutoff).
+    fn rollups_purged_before(&self, cutoff_ms: i64) -> i64 {
+        cutoff_ms.div_euclid(ROLLUP_SPAN_MS) * ROLLUP_SPAN_MS
+    }
+
     /// Before a command record of `time_ms` is appended (PostgreSQL makes its day's
     /// partition).
     fn before_command(&self, time_ms: i64) -> StoreFuture<'_, ()> {
@@ -200,39 +207,6 @@ pub(crate) async fn delete_older<D: Database>(
     }
 }
 
-/// The aggregation of a trend: one row per non-empty bucket of the range, oldest first.
-/// Booleans, integers and floats (value kinds 1, 3, 4) count; the index on (point,
-/// event_ms) bounds the scan to the point's rows of the range.
-fn trend_sql(query: &TrendQuery, backend: Backend) -> Statement {
-    let params = vec![
-        Param::text(query.point.as_str()),
-        Param::int(to_ms(query.from)),
-        Param::int(to_ms(query.to)),
-        Param::int(query.bucket_ms()),
-    ];
-    let point = Param::text("").placeholder(backend, 1);
-    let from = Param::int(0).placeholder(backend, 2);
-    let to = Param::int(0).placeholder(backend, 3);
-    let width = Param::int(0).placeholder(backend, 4);
-    let sql = format!(
-        "SELECT CAST(MIN(event_ms) AS BIGINT), CAST(MAX(event_ms) AS BIGINT), \
-                MIN(v), MAX(v), AVG(v), CAST(COUNT(*) AS BIGINT), CAST(MAX(iv) AS BIGINT) \
-         FROM (SELECT event_ms, (quality & 1) AS iv, \
-                      COALESCE(value_float, CAST(value_int AS DOUBLE PRECISION)) AS v, \
-                      CAST((event_ms - {from}) / {width} AS BIGINT) AS bucket \
-               FROM events \
-               WHERE point = {point} AND event_ms >= {from} AND event_ms < {to} \
-                 AND value_kind IN (1, 3, 4) \
-                 AND (value_float IS NOT NULL OR value_int IS NOT NULL)) AS slice \
-         GROUP BY bucket ORDER BY bucket"
-    );
-    Statement {
-        access: Access::Read,
-        sql,
-        params,
-    }
-}
-
 fn trend_bucket_from_row(r: &dyn row::Columns) -> Result<TrendBucket, StoreError> {
     let real = |i: usize| -> Result<f64, StoreError> {
         r.real(i)?
@@ -249,6 +223,58 @@ fn trend_bucket_from_row(r: &dyn row::Columns) -> Result<TrendBucket, StoreError
         count: u64::try_from(r.need_int(5)?).unwrap_or(0),
         invalid: r.need_int(6)? != 0,
     })
+}
+
+/// Deletes the trend rollups that start before `before_ms`: point by point, each a range
+/// of the primary key (point, start_ms) deleted in chunks of
+/// [`PURGE_CHUNK`]; the points found by a loose scan of the key (one seek per point), so
+/// that no index on the start alone costs every append.
+async fn purge_rollups<D: Database>(db: &D, before_ms: i64) -> Result<(), StoreError> {
+    let points = Statement {
+        access: Access::Write,
+        sql: "WITH RECURSIVE points (point) AS ( \
+                  SELECT MIN(point) FROM trend_rollups \
+                  UNION ALL \
+                  SELECT (SELECT MIN(t.point) FROM trend_rollups t WHERE t.point > p.point) \
+                  FROM points p WHERE p.point IS NOT NULL) \
+              SELECT point FROM points WHERE point IS NOT NULL"
+            .to_owned(),
+        params: Vec::new(),
+    };
+    let points = db
+        .rows(points, |r| {
+            r.text(0)?
+                .ok_or_else(|| StoreError::Corrupt("a rollup without a point".to_owned()))
+        })
+        .await?;
+    let bind = |n: usize, p: &Param| p.placeholder(D::BACKEND, n);
+    let (point, before, limit) = (
+        bind(1, &Param::text("")),
+        bind(2, &Param::int(0)),
+        bind(3, &Param::int(0)),
+    );
+    // A chunk ends at the chunk's first start after it (a scalar subquery, computed once:
+    // an `IN (SELECT ... LIMIT)` became a nested loop over the table on PostgreSQL).
+    let sql = format!(
+        "DELETE FROM trend_rollups WHERE point = {point} \
+           AND start_ms < COALESCE((SELECT start_ms FROM trend_rollups \
+                                    WHERE point = {point} AND start_ms < {before} \
+                                    ORDER BY start_ms LIMIT 1 OFFSET {limit}), {before})"
+    );
+    for name in points {
+        let params = vec![
+            Param::text(name.as_str()),
+            Param::int(before_ms),
+            Param::int(PURGE_CHUNK),
+        ];
+        loop {
+            let gone = db.execute(sql.clone(), params.clone()).await?;
+            if gone < PURGE_CHUNK.unsigned_abs() {
+                break;
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The first and last value of each bucket, by two index seeks per bucket on (point,
@@ -423,6 +449,9 @@ impl<D: Database> EventStore for D {
             let mut total = self.purge_history(cutoff).await?;
             // Not `lift_faults`: the fault archive is kept for years (see the crate doc).
             total += delete_older(self, "notifications", "time_ms", cutoff).await?;
+            // The trend rollups whose events are gone (not counted: they are not
+            // records).
+            purge_rollups(self, self.rollups_purged_before(cutoff)).await?;
             // Refresh the planner's statistics with each (hourly) retention pass: they
             // decide between the point index and the time index for prefix filters.
             self.analyze().await?;

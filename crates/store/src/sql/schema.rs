@@ -44,6 +44,11 @@ const MIGRATIONS: &[Migration] = &[
             "../../migrations/0003_partitions.postgres.sql"
         )),
     },
+    Migration {
+        version: 4,
+        sql: include_str!("../../migrations/0004_rollups.sqlite.sql"),
+        postgres: Some(include_str!("../../migrations/0004_rollups.postgres.sql")),
+    },
 ];
 
 /// The newest version this program knows.
@@ -148,19 +153,23 @@ mod tests {
     #[test]
     fn the_list_is_in_version_order() {
         assert!(MIGRATIONS.windows(2).all(|w| w[0].version < w[1].version));
-        assert_eq!(supported(), 3);
+        assert_eq!(supported(), 4);
     }
 
     #[test]
     fn an_old_database_gets_only_the_newer_steps() {
         let steps = pending(Backend::Sqlite, 1, 0).unwrap();
-        assert_eq!(steps.iter().map(|s| s.version).collect::<Vec<_>>(), [2, 3]);
+        assert_eq!(
+            steps.iter().map(|s| s.version).collect::<Vec<_>>(),
+            [2, 3, 4]
+        );
         assert!(steps[0].sql.contains("CREATE TABLE lift_faults"));
         assert!(steps[1].sql.contains("events_key"));
         assert!(!steps[1].sql.contains("PARTITION"));
         let steps = pending(Backend::Postgres, 2, 0).unwrap();
         assert!(steps[0].sql.contains("PARTITION BY RANGE (event_ms)"));
-        assert!(pending(Backend::Postgres, 3, 0).unwrap().is_empty());
+        assert!(steps[1].sql.contains("stanice_fold_rollups"));
+        assert!(pending(Backend::Postgres, 4, 0).unwrap().is_empty());
     }
 
     #[test]

@@ -11,8 +11,76 @@ use super::{Access, Param, Statement};
 use crate::query::{Cursor, Order, PointFilter, TimeBasis, MAX_PAGE_SIZE};
 use crate::{
     Backend, CommandQuery, CommandRecord, EventQuery, EventRecord, LiftFaultOrder, LiftFaultQuery,
-    NotificationQuery, Page, StoreError,
+    NotificationQuery, Page, StoreError, TrendQuery,
 };
+
+/// The aggregation of a trend: one row per non-empty bucket of the range, oldest first,
+/// with the first and last time, min, max, mean, count and IV of its values (booleans,
+/// integers and floats: value kinds 1, 3, 4).
+///
+/// Where the query has a rollup span ([`TrendQuery::rollup_span_ms`]), the whole minutes
+/// inside the range are read from `trend_rollups` (each counted in the bucket its start
+/// falls in, so a bucket's edges move to a minute's) and only the partial minutes at the
+/// range's two ends from `events`: 60 days of a point are 86,400 minute rows, however
+/// many events they hold. Otherwise every event of the range is read, through the index
+/// on (point, event_ms).
+pub(crate) fn trend_sql(query: &TrendQuery, backend: Backend) -> Statement {
+    let (from_ms, to_ms) = (to_ms(query.from), to_ms(query.to));
+    let mut b = SelectBuilder::new(backend);
+    let point = b.bind(Param::text(query.point.as_str()));
+    let from = b.bind(Param::int(from_ms));
+    let width = b.bind(Param::int(query.bucket_ms()));
+    let mut parts = Vec::new();
+    let raw = |b: &mut SelectBuilder, start: i64, end: i64| {
+        let (start, end) = (b.bind(Param::int(start)), b.bind(Param::int(end)));
+        format!(
+            "SELECT CAST((event_ms - {from}) / {width} AS BIGINT) AS bucket, \
+                    event_ms AS first_ms, event_ms AS last_ms, v AS min_v, v AS max_v, \
+                    v AS sum_v, 1 AS n, iv \
+             FROM (SELECT event_ms, (quality & 1) AS iv, \
+                          COALESCE(value_float, CAST(value_int AS DOUBLE PRECISION)) AS v \
+                   FROM events \
+                   WHERE point = {point} AND event_ms >= {start} AND event_ms < {end} \
+                     AND value_kind IN (1, 3, 4) \
+                     AND (value_float IS NOT NULL OR value_int IS NOT NULL)) AS raw"
+        )
+    };
+    match query.rollup_span_ms() {
+        Some(span) => {
+            // The whole spans of the range, and the partial ones at its two ends.
+            let inner_from = (from_ms + span - 1).div_euclid(span) * span;
+            let inner_to = (to_ms.div_euclid(span) * span).max(inner_from);
+            let (start, end) = (b.bind(Param::int(inner_from)), b.bind(Param::int(inner_to)));
+            parts.push(format!(
+                "SELECT CAST((start_ms - {from}) / {width} AS BIGINT) AS bucket, first_ms, \
+                        last_ms, min_value AS min_v, max_value AS max_v, sum_value AS sum_v, \
+                        samples AS n, invalid AS iv \
+                 FROM trend_rollups \
+                 WHERE point = {point} AND start_ms >= {start} \
+                   AND start_ms < {end}"
+            ));
+            if from_ms < inner_from {
+                parts.push(raw(&mut b, from_ms, inner_from.min(to_ms)));
+            }
+            if inner_to < to_ms {
+                parts.push(raw(&mut b, inner_to, to_ms));
+            }
+        }
+        None => parts.push(raw(&mut b, from_ms, to_ms)),
+    }
+    let sql = format!(
+        "SELECT CAST(MIN(first_ms) AS BIGINT), CAST(MAX(last_ms) AS BIGINT), MIN(min_v), \
+                MAX(max_v), SUM(sum_v) / CAST(SUM(n) AS DOUBLE PRECISION), \
+                CAST(SUM(n) AS BIGINT), CAST(MAX(iv) AS BIGINT) \
+         FROM ({}) AS slice GROUP BY bucket ORDER BY bucket",
+        parts.join(" UNION ALL ")
+    );
+    Statement {
+        access: Access::Read,
+        sql,
+        params: b.params,
+    }
+}
 
 /// A `SELECT` under construction: a WHERE clause with its parameters.
 struct SelectBuilder {

@@ -74,4 +74,5 @@ on_both_backends!(
     purge_keeps_lift_faults_and_drops_old_notifications,
     trend_downsamples_per_bucket,
     trend_first_and_last_per_bucket,
+    trend_reads_the_rollups,
 );

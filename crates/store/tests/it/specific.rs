@@ -154,7 +154,7 @@ async fn sqlite_refuses_a_newer_schema() {
             err,
             StoreError::SchemaTooNew {
                 found: 99,
-                supported: 3
+                supported: 4
             }
         ),
         "{err}"
@@ -194,7 +194,7 @@ async fn postgres_persists_across_reopen_and_refuses_a_newer_schema() {
             err,
             StoreError::SchemaTooNew {
                 found: 42,
-                supported: 3
+                supported: 4
             }
         ),
         "{err}"
@@ -253,13 +253,21 @@ fn version_1(backend: Backend) -> String {
     )
 }
 
-/// What a store opened on the version-1 database must show: the old event, and a working
-/// fault archive.
+/// What a store opened on the version-1 database must show: the old event, in the trend
+/// rollups too (folded by the migration), and a working fault archive.
 async fn check_migrated_to_2(store: &dyn EventStore) {
     let events = store.query_events(&EventQuery::default()).await.unwrap();
     assert_eq!(events.items.len(), 1);
     assert_eq!(events.items[0].point, "OLD");
     assert_eq!(events.items[0].value, PointValue::Int(42));
+    let epoch = chrono::DateTime::<chrono::Utc>::UNIX_EPOCH;
+    let day = store::TrendQuery::new("OLD", epoch, epoch + chrono::Duration::days(1), 1);
+    assert_eq!(day.rollup_span_ms(), Some(60_000));
+    let trend = store.query_trend(&day).await.unwrap();
+    assert_eq!(
+        trend.iter().map(|b| (b.min, b.count)).collect::<Vec<_>>(),
+        [(42.0, 1)]
+    );
     let fault = LiftFaultRecord {
         id: None,
         node: "LIFTS".into(),
@@ -298,7 +306,7 @@ async fn sqlite_migrates_a_version_1_database() {
         .unwrap()
         .collect::<Result<_, _>>()
         .unwrap();
-    assert_eq!(versions, [1, 2, 3]);
+    assert_eq!(versions, [1, 2, 3, 4]);
     // Opening again migrates nothing.
     drop(conn);
     check_reopened(
@@ -376,7 +384,7 @@ async fn postgres_migrates_a_version_1_database() {
         .iter()
         .map(|r| r.get(0))
         .collect();
-    assert_eq!(versions, [1, 2, 3]);
+    assert_eq!(versions, [1, 2, 3, 4]);
     let reopened = open_store(&store_url).await.unwrap();
     let archive = reopened
         .query_lift_faults(&LiftFaultQuery::default())

@@ -673,6 +673,21 @@ pub(crate) async fn purge_by_age(store: Arc<dyn EventStore>) {
         .await
         .unwrap();
     assert_eq!(oldest.items[0].time, cutoff);
+    // The trend rollups went with their events (12,000 minutes: more than one chunk).
+    let trend = |from: i64, to: i64| store::TrendQuery::new("P", at_ms(from), at_ms(to), 100);
+    assert!(store
+        .query_trend(&trend(0, 40 * day))
+        .await
+        .unwrap()
+        .is_empty());
+    let kept = store
+        .query_trend(&trend(40 * day, 100 * day))
+        .await
+        .unwrap();
+    assert_eq!(
+        kept.iter().map(|b| b.count).sum::<u64>(),
+        30_000 - expect_events
+    );
     // Purging again deletes nothing; appends still work, also of a day already purged.
     assert_eq!(store.purge_older_than(cutoff).await.unwrap(), 0);
     store
@@ -1115,4 +1130,186 @@ pub(crate) async fn trend_first_and_last_per_bucket(store: Arc<dyn EventStore>) 
         TrendQuery::new("RH2_U", at_ms(0), at_ms(35_000), 3).with_mode(TrendMode::FirstLast);
     let buckets = store.query_trend(&short).await.unwrap();
     assert_eq!(buckets.len(), 2, "{buckets:?}");
+}
+
+/// What an aggregated trend must answer, folded by hand from `events`: with a rollup span,
+/// a value of a whole span inside the range counts in the bucket the span's start falls
+/// in, a value of the partial spans at the range's ends by its own time; without, every
+/// value by its own time.
+fn trend_by_hand(events: &[EventRecord], query: &store::TrendQuery) -> Vec<(i64, TrendFold)> {
+    let (from, to) = (query.from.timestamp_millis(), query.to.timestamp_millis());
+    let width = query.bucket_ms();
+    let mut folds = std::collections::BTreeMap::<i64, TrendFold>::new();
+    for e in events {
+        let t = e.event_time().timestamp_millis();
+        let v = match e.value {
+            PointValue::Bool(b) => f64::from(u8::from(b)),
+            PointValue::Int(i) => i as f64,
+            PointValue::Float(f) => f,
+            _ => continue,
+        };
+        if e.point != query.point || t < from || t >= to {
+            continue;
+        }
+        let at = match query.rollup_span_ms() {
+            Some(span) => {
+                let start = t.div_euclid(span) * span;
+                if start >= from && start + span <= to {
+                    start
+                } else {
+                    t
+                }
+            }
+            None => t,
+        };
+        let fold = folds.entry((at - from) / width).or_insert(TrendFold {
+            first: t,
+            last: t,
+            min: v,
+            max: v,
+            sum: 0.0,
+            count: 0,
+            invalid: false,
+        });
+        fold.first = fold.first.min(t);
+        fold.last = fold.last.max(t);
+        fold.min = fold.min.min(v);
+        fold.max = fold.max.max(v);
+        fold.sum += v;
+        fold.count += 1;
+        fold.invalid |= e.quality.invalid;
+    }
+    folds.into_iter().collect()
+}
+
+#[derive(Debug, Clone, Copy)]
+struct TrendFold {
+    first: i64,
+    last: i64,
+    min: f64,
+    max: f64,
+    sum: f64,
+    count: u64,
+    invalid: bool,
+}
+
+/// Trends of wide buckets are read from the rollups the database keeps as it stores the
+/// events, and answer what every event folded by hand answers (buckets of many minutes,
+/// and ranges that start and end inside a minute); a batch written again under its keys,
+/// single appends and a text value leave them exact; retention takes them with the
+/// events.
+pub(crate) async fn trend_reads_the_rollups(store: Arc<dyn EventStore>) {
+    use store::{TrendMode, TrendQuery};
+    let hour = 3_600_000;
+    // Six hours of a value about every 7 s: floats, integers and booleans, some invalid.
+    let mut x: u64 = 0x5eed;
+    let events: Vec<EventRecord> = (0..3_000u64)
+        .map(|i| {
+            x = x
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            let t = i64::try_from(i * 7_000 + (x >> 59) * 100).unwrap();
+            let value = match i % 5 {
+                0 => PointValue::Int(i64::try_from(x >> 54).unwrap() - 512),
+                1 => PointValue::Bool(x & 1 == 1),
+                _ => PointValue::Float((x >> 11) as f64 / (1u64 << 53) as f64 * 100.0 - 50.0),
+            };
+            let mut e = ev("RH2_P", value, t).with_key(EventKey::new("rollups", i));
+            if i % 97 == 0 {
+                e.quality = quality_from_bits(1);
+            }
+            e
+        })
+        .collect();
+    store.append_events(&events[..1_000]).await.unwrap();
+    // The first thousand again (a batch retried after a crash): stored once.
+    store.append_events(&events[..2_000]).await.unwrap();
+    for e in &events[2_000..2_010] {
+        store.append_events(std::slice::from_ref(e)).await.unwrap();
+    }
+    store.append_events(&events[2_010..]).await.unwrap();
+    store
+        .append_events(&[
+            ev("RH2_P", PointValue::Text("n/a".into()), 600_000),
+            ev("RH2_Q", PointValue::Float(1e9), 600_000),
+        ])
+        .await
+        .unwrap();
+
+    let queries = [
+        // Edges inside minutes: 40 buckets of 8.9 minutes, minute spans.
+        (
+            TrendQuery::new("RH2_P", at_ms(90_500), at_ms(6 * hour - 12_345), 40),
+            Some(60_000),
+        ),
+        // One bucket of 6.5 hours, partial minutes at both ends.
+        (
+            TrendQuery::new("RH2_P", at_ms(-1_800_100), at_ms(6 * hour + 1), 1),
+            Some(60_000),
+        ),
+        // Aligned to minutes: no partial spans.
+        (
+            TrendQuery::new("RH2_P", at_ms(0), at_ms(2 * hour), 30),
+            Some(60_000),
+        ),
+        // Buckets of 2 minutes: every event read.
+        (TrendQuery::new("RH2_P", at_ms(0), at_ms(hour), 30), None),
+    ];
+    for (query, span) in queries {
+        assert_eq!(query.rollup_span_ms(), span, "{query:?}");
+        let got = store.query_trend(&query).await.unwrap();
+        let want = trend_by_hand(&events, &query);
+        assert_eq!(got.len(), want.len(), "{query:?}: {got:?}");
+        for (bucket, (index, fold)) in got.iter().zip(&want) {
+            let context = format!("{query:?}, bucket {index}: {bucket:?} against {fold:?}");
+            assert_eq!(
+                (
+                    bucket.first_time.timestamp_millis(),
+                    bucket.last_time.timestamp_millis()
+                ),
+                (fold.first, fold.last),
+                "{context}"
+            );
+            assert_eq!(
+                (bucket.min, bucket.max, bucket.count, bucket.invalid),
+                (fold.min, fold.max, fold.count, fold.invalid),
+                "{context}"
+            );
+            let mean = fold.sum / fold.count as f64;
+            assert!(
+                (bucket.avg - mean).abs() <= 1e-9 * mean.abs().max(1.0),
+                "{context}"
+            );
+        }
+    }
+    // First and last are not read from rollups.
+    assert_eq!(
+        TrendQuery::new("RH2_P", at_ms(0), at_ms(6 * hour), 10)
+            .with_mode(TrendMode::FirstLast)
+            .rollup_span_ms(),
+        None
+    );
+
+    // Retention keeps what is younger than its cutoff (SQLite the events by their time,
+    // PostgreSQL whole days)...
+    store.purge_older_than(at_ms(3 * hour)).await.unwrap();
+    let kept = TrendQuery::new("RH2_P", at_ms(3 * hour), at_ms(6 * hour), 20);
+    let got = store.query_trend(&kept).await.unwrap();
+    let want = trend_by_hand(&events, &kept);
+    assert_eq!(
+        got.iter()
+            .map(|b| (b.min, b.max, b.count))
+            .collect::<Vec<_>>(),
+        want.iter()
+            .map(|(_, f)| (f.min, f.max, f.count))
+            .collect::<Vec<_>>()
+    );
+    // ... and takes the rollups with their events (a whole day here, as PostgreSQL drops
+    // day partitions).
+    store.purge_older_than(at_ms(24 * hour)).await.unwrap();
+    for buckets in [1, 40] {
+        let gone = TrendQuery::new("RH2_P", at_ms(0), at_ms(6 * hour), buckets);
+        assert!(gone.rollup_span_ms().is_some());
+        assert!(store.query_trend(&gone).await.unwrap().is_empty());
+    }
 }
