@@ -280,6 +280,16 @@ async fn run(samples: usize) {
         if load {
             tokio::time::sleep(Duration::from_secs(2)).await;
         }
+        // The page's frame intervals meanwhile (one animation-frame callback per frame,
+        // no task of its own): how long the main thread was held between frames.
+        js(
+            &client,
+            "(() => { window.__frames = []; window.__framing = true; let last = null;\
+             const tick = (t) => { if (last !== null) window.__frames.push(t - last); last = t;\
+               if (window.__framing) requestAnimationFrame(tick); };\
+             requestAnimationFrame(tick); return true; })()",
+        )
+        .await;
         let mut latencies = Vec::new();
         let mut broadcasts = Vec::new();
         for i in 0..samples {
@@ -317,6 +327,18 @@ async fn run(samples: usize) {
         }
         running.store(false, Ordering::Relaxed);
         let _ = background.await;
+        let frames = js(
+            &client,
+            "(() => { window.__framing = false; return window.__frames; })()",
+        )
+        .await;
+        report(
+            "  the page's frame intervals meanwhile",
+            frames
+                .as_array()
+                .map(|a| a.iter().filter_map(|v| v.as_f64()).collect())
+                .unwrap_or_default(),
+        );
         report(
             "  of which to the HMI's broadcast (IEC 104 and the HMI)",
             broadcasts,

@@ -487,16 +487,21 @@
 
   // Live updates are coalesced. A point message only notes the point's name; after the
   // live connection's message (one or a batch of many, batch=1) the names it brought are
-  // applied at once when they are few (at most SMALL_BATCH) and the DOM work done so
-  // outside animation frames within the current frame interval is under
-  // IMMEDIATE_BUDGET_MS: a lone change shows without waiting for a frame. Otherwise they
-  // wait for the next animation frame and are applied together with everything else
-  // pending, each point once with its latest value. A point whose value and validity are
-  // those already drawn is skipped.
+  // applied at once when they are few (at most LONE: a lone change shows without waiting
+  // for a frame, whatever else is pending) or while the DOM work done outside animation
+  // frames within the current frame interval is under IMMEDIATE_BUDGET_MS. The rest wait
+  // for the next animation frame, each point once with its latest value, and a frame
+  // applies them in the order they came for at most FRAME_BUDGET_MS, leaving the others to
+  // the frames after it: a burst of thousands never holds the page's main thread for
+  // longer than a frame (drawing the changed elements comes on top), so a change that
+  // arrives meanwhile is not queued behind it. A point whose value and validity are those
+  // already drawn is skipped.
   const FRAME_MS = 16;
   const SMALL_BATCH = 64;
+  const LONE = 16;
   const IMMEDIATE_BUDGET_MS = 3;
-  let pending = new Set(); // point names changed and not yet applied
+  const FRAME_BUDGET_MS = 6;
+  let pending = new Set(); // point names changed and not yet applied, in the order they came
   let fresh = new Set(); // the names the current live message brought
   let flushQueued = false;
   let pendingAll = false; // everything to redraw (snapshot, link, connection)
@@ -565,19 +570,34 @@
 
   function applyPending() {
     frame = null;
-    const names = pending;
-    pending = new Set();
-    if (!svgRoot) return;
+    if (!svgRoot) {
+      pending = new Set();
+      return;
+    }
     if (pendingAll) {
       // The link or the connection changed: every element's validity may have; the
-      // comparison in applyNames still skips the ones drawn as they are.
+      // comparison in applyName still skips the ones drawn as they are. (All at once: it
+      // happens on a reconnection, not 10,000 times a second.)
       pendingAll = false;
-      for (const name of bound.keys()) names.add(name);
+      for (const name of bound.keys()) pending.add(name);
       refreshLink();
-      if (dialogState) names.add(dialogState.statePoint);
-      if (faceplateState) names.add(faceplateState.names[0]);
+      if (dialogState) pending.add(dialogState.statePoint);
+      if (faceplateState) pending.add(faceplateState.names[0]);
+      const names = pending;
+      pending = new Set();
+      applyNames(names);
+      return;
     }
-    applyNames(names);
+    const deadline = performance.now() + FRAME_BUDGET_MS;
+    const done = new Set();
+    for (const name of pending) {
+      if (done.size % SMALL_BATCH === SMALL_BATCH - 1 && performance.now() >= deadline) break;
+      pending.delete(name);
+      applyName(name);
+      done.add(name);
+    }
+    afterApplying(done);
+    if (pending.size > 0) applySoon();
   }
 
   // The next frame, or FRAME_MS at the latest: a browser may hold animation frames back
@@ -595,10 +615,11 @@
   }
 
   /**
-   * After a live message: its names now, in the order they came, while the frame
-   * interval's immediate budget lasts (checked every SMALL_BATCH names); the rest at the
-   * next frame. A change in a burst of thousands then mostly shows at once instead of
-   * waiting up to a frame, and the budget keeps the page's frames for drawing.
+   * After a live message: its names now, in the order they came, when they are few or
+   * while the frame interval's immediate budget lasts (checked every SMALL_BATCH names);
+   * the rest at the next frames. A change in a burst of thousands then mostly shows at
+   * once instead of waiting up to a frame, and the budget keeps the page's frames for
+   * drawing.
    */
   function flush() {
     flushQueued = false;
@@ -609,8 +630,8 @@
       immediateFrom = start;
       immediateSpent = 0;
     }
-    if (!pendingAll && svgRoot && immediateSpent < IMMEDIATE_BUDGET_MS) {
-      const deadline = start + (IMMEDIATE_BUDGET_MS - immediateSpent);
+    if (!pendingAll && svgRoot && (names.size <= LONE || immediateSpent < IMMEDIATE_BUDGET_MS)) {
+      const deadline = start + Math.max(0, IMMEDIATE_BUDGET_MS - immediateSpent);
       const done = new Set();
       for (const name of names) {
         if (done.size % SMALL_BATCH === SMALL_BATCH - 1 && performance.now() >= deadline) break;
