@@ -5,8 +5,8 @@
 # and leaves the reproducer in fuzz/artifacts/. Needs the nightly toolchain (preinstalled
 # on the project's machine kind); cargo-fuzz is installed from crates.io when missing.
 #
-#   bash scripts/fuzz-smoke.sh [build|run]     (default: both; CI builds while other
-#                                               checks run, then runs)
+#   bash scripts/fuzz-smoke.sh [build|run]     (default: both; CI runs both at nice 19
+#                                               while the tests run)
 #
 # The targets build without a sanitizer (FUZZ_SANITIZER, default none) and with 16 code
 # generation units (FUZZ_CODEGEN_UNITS). Measured on the 2-core machine, a clean release
