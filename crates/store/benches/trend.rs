@@ -1,8 +1,8 @@
 //! Trend benchmark: a 60-day trend of one measurement, downsampled in the store, over a
 //! store holding a value every 5 s of that measurement and of a second one (two million
 //! events), for a chart 1,600 pixels wide. Prints p50/p99 of the downsampled query, both
-//! modes (first/last per bucket by index seeks, which the HMI uses beyond 7 days, and
-//! min/max/mean over every row), and,
+//! modes (first/last per bucket by index seeks, and min/max/mean, the HMI's default, read
+//! from the store's minute rollups), and,
 //! for comparison, how long reading the raw rows page by page takes (the HMI's trend
 //! before downsampling read at most 20,000 of them).
 //!
