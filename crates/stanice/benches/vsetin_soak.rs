@@ -6,7 +6,7 @@
 //! ```text
 //! cargo bench -p stanice --bench vsetin_soak [-- --days 30 --speed 2000 --cycle-ms 250
 //!                                                --kill-every-hours 120 --seed 1
-//!                                                --event-buffer N]
+//!                                                --event-buffer N --store-cache-mib N]
 //! ```
 //!
 //! The station runs as `stanice run` in a child process (all 23 nodes, SQLite store in a
@@ -32,6 +32,8 @@
 //! HMI, ED, MRS and service have no client in the soak and fill their buffers, which is
 //! most of the memory a process life gains (the heap profile in the closing note of the
 //! scale-out issue); with a small buffer they are full within the first simulated day.
+//! `--store-cache-mib N` bounds the SQLite store's page caches (`sqlite:PATH?cache_mib=N`):
+//! the rest of that growth, 64 MiB by default, filled at some 70 KB per simulated hour.
 //!
 //! What it prints: the resident set of the station process at every simulated 6 hours,
 //! the slope of each process life's resident set over simulated time (least squares,
@@ -63,6 +65,7 @@ struct Settings {
     kill_every_hours: f64,
     seed: u64,
     event_buffer: Option<u64>,
+    store_cache_mib: Option<u32>,
 }
 
 impl Settings {
@@ -87,6 +90,7 @@ impl Settings {
                 .unwrap_or(120.0),
             seed: value("--seed").and_then(|v| v.parse().ok()).unwrap_or(1),
             event_buffer: value("--event-buffer").and_then(|v| v.parse().ok()),
+            store_cache_mib: value("--store-cache-mib").and_then(|v| v.parse().ok()),
         }
     }
 }
@@ -387,13 +391,19 @@ async fn soak(settings: Settings) {
         settings.cycle_ms,
         settings.event_buffer,
     );
-    let store_url = format!("sqlite:{}", folder.path().join("events.sqlite").display());
+    let store_url = format!(
+        "sqlite:{}{}",
+        folder.path().join("events.sqlite").display(),
+        settings
+            .store_cache_mib
+            .map_or_else(String::new, |mib| format!("?cache_mib={mib}"))
+    );
     let port_base = testkit::ports::free_port_range(23);
     let start = Utc.with_ymd_and_hms(2026, 1, 5, 6, 0, 0).unwrap();
     let end = start + chrono::Duration::seconds((settings.days * 86_400.0) as i64);
     let mut random = Random(settings.seed.max(1));
     println!(
-        "Vsetín soak: {} simulated days from {} at speed {} (PLC tasks every {} ms), a kill -9 every {} simulated hours, seed {}, event buffers {}",
+        "Vsetín soak: {} simulated days from {} at speed {} (PLC tasks every {} ms), a kill -9 every {} simulated hours, seed {}, event buffers {}, store {}",
         settings.days,
         start.format("%Y-%m-%d %H:%M UTC"),
         settings.speed,
@@ -403,7 +413,8 @@ async fn soak(settings: Settings) {
         settings.event_buffer.map_or_else(
             || "as the project has them".to_owned(),
             |events| format!("of {events} events")
-        )
+        ),
+        store_url
     );
 
     let mut config = ClientConfig::new(format!("127.0.0.1:{port_base}"), CommonAddress::new(1));
@@ -431,6 +442,9 @@ async fn soak(settings: Settings) {
     let mut commands = Commands::default();
     let mut next_kill = start + hours(settings.kill_every_hours);
     let mut kills: Vec<DateTime<Utc>> = Vec::new();
+    // Events received by dispatch, in order, and how many had come at each kill.
+    let mut received: Vec<Seen> = Vec::new();
+    let mut kill_marks: Vec<usize> = Vec::new();
     let mut next_sample = start;
     // Resident set per process life: (simulated hours since the soak's start, KB).
     let mut lives: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
@@ -484,6 +498,12 @@ async fn soak(settings: Settings) {
                 .unwrap_or(now);
             station.kill();
             kills.push(at);
+            // Where in the stream of received events the kill fell (those before it
+            // drained now; more may still be in flight from before the kill).
+            while let Ok(seen) = seen_receiver.try_recv() {
+                received.push(seen);
+            }
+            kill_marks.push(received.len());
             // Faults do not survive a restart: the plant starts healthy.
             clears.clear();
             station = Station::start(&project, &store_url, port_base, settings.speed, at);
@@ -497,7 +517,6 @@ async fn soak(settings: Settings) {
     let wall_seconds = wall.elapsed().as_secs_f64();
     station.stop();
     client.close().await;
-    let mut received: Vec<Seen> = Vec::new();
     while let Ok(seen) = seen_receiver.try_recv() {
         received.push(seen);
     }
@@ -537,9 +556,18 @@ async fn soak(settings: Settings) {
             break;
         }
     }
-    let missing: Vec<&Seen> = received
+    let missing: Vec<usize> = (0..received.len())
+        .filter(|&i| !stored.contains_key(&received[i]))
+        .collect();
+    // How far (in received events) each missing one came before the next kill.
+    let before_kill: Vec<usize> = missing
         .iter()
-        .filter(|seen| !stored.contains_key(seen))
+        .filter_map(|&i| {
+            kill_marks
+                .iter()
+                .find(|&&mark| mark >= i)
+                .map(|mark| mark - i)
+        })
         .collect();
     let audited = audited_commands(store.as_ref()).await;
 
@@ -578,6 +606,15 @@ async fn soak(settings: Settings) {
         stored_total,
         missing.len()
     );
+    if !missing.is_empty() {
+        println!(
+            "  of the missing, {} came within 200 events before a kill -9 (at most {} before \
+             one), {} at other times",
+            before_kill.iter().filter(|&&d| d <= 200).count(),
+            before_kill.iter().max().copied().unwrap_or(0),
+            missing.len() - before_kill.iter().filter(|&&d| d <= 200).count()
+        );
+    }
     println!(
         "commands: {} sent, {} confirmed, {} refused, {} failed (no answer, connection lost); audited as executed {}, audited more than once {}",
         commands.sent,

@@ -86,7 +86,7 @@ pub(crate) async fn run(args: EventsArgs) -> anyhow::Result<ExitCode> {
         .clone()
         .unwrap_or_else(|| project.station.store.clone());
     // Reading must not leave an empty store behind where a station never ran.
-    if let Ok(StoreUrl::SqliteFile(path)) = StoreUrl::parse(&url) {
+    if let Ok(StoreUrl::SqliteFile { path, .. }) = StoreUrl::parse(&url) {
         if !path.exists() {
             anyhow::bail!(
                 "no event store at {}: the project has not run yet (stanice run {}) or its \

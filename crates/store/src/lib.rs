@@ -330,7 +330,9 @@ pub async fn open_store_at(url: &crate::url::StoreUrl) -> Result<Box<dyn EventSt
     use crate::url::StoreUrl;
     Ok(match url {
         StoreUrl::SqliteMemory => Box::new(SqliteStore::open_in_memory().await?),
-        StoreUrl::SqliteFile(path) => Box::new(SqliteStore::open(path).await?),
+        StoreUrl::SqliteFile { path, cache_mib } => {
+            Box::new(SqliteStore::open_with_cache(path, *cache_mib).await?)
+        }
         StoreUrl::Postgres(url) => {
             Box::new(PostgresStore::connect(PostgresConfig::from_url(url)?).await?)
         }

@@ -26,8 +26,10 @@ const BUSY_TIMEOUT: Duration = Duration::from_secs(5);
 /// Reader connections of a file database.
 const READERS: usize = 2;
 
-/// The writer's page cache, in KiB (a negative `cache_size` is KiB).
-const WRITER_CACHE_KIB: i64 = -65_536;
+/// The writer's page cache by default, in KiB.
+const WRITER_CACHE_KIB: i64 = 65_536;
+/// A reader's page cache by default (SQLite's own default), in KiB.
+const READER_CACHE_KIB: i64 = 2_048;
 /// Log pages (4 KiB) between automatic checkpoints.
 const WAL_CHECKPOINT_PAGES: i64 = 16_384;
 
@@ -131,7 +133,21 @@ fn configure(conn: &Connection) -> Result<(), StoreError> {
     Ok(())
 }
 
-fn open_writer(path: &Path) -> Result<Connection, StoreError> {
+/// The page caches of the writer and of each reader, in KiB: the defaults, or `cache_mib`
+/// shared out (each reader a sixteenth of it, at most its default; the writer the rest).
+fn cache_kib(cache_mib: Option<u32>) -> (i64, i64) {
+    match cache_mib {
+        None => (WRITER_CACHE_KIB, READER_CACHE_KIB),
+        Some(mib) => {
+            let total = i64::from(mib) * 1024;
+            let reader = (total / 16).min(READER_CACHE_KIB);
+            let readers = i64::try_from(READERS).unwrap_or(i64::MAX);
+            (total - readers * reader, reader)
+        }
+    }
+}
+
+fn open_writer(path: &Path, cache_kib: i64) -> Result<Connection, StoreError> {
     let conn = Connection::open(path)?;
     configure(&conn)?;
     // WAL: readers never block the writer nor the writer the readers. NORMAL sync in WAL
@@ -142,10 +158,11 @@ fn open_writer(path: &Path) -> Result<Connection, StoreError> {
         tracing::warn!(%mode, "SQLite refused WAL mode");
     }
     conn.pragma_update(None, "synchronous", "NORMAL")?;
-    // A 64 MiB page cache (SQLite's default is 2 MiB): an append touches six indexes
+    // A 64 MiB page cache by default (SQLite's is 2 MiB): an append touches six indexes
     // (time, received time, point, node, invalid, key) whose pages of the recent past
-    // then stay in memory instead of being read back for every batch.
-    conn.pragma_update(None, "cache_size", WRITER_CACHE_KIB)?;
+    // then stay in memory instead of being read back for every batch. (A negative
+    // `cache_size` is KiB.)
+    conn.pragma_update(None, "cache_size", -cache_kib)?;
     // Checkpoint every 64 MiB of log instead of SQLite's 4 MiB: an append dirties index
     // pages all over the point index, and each checkpoint writes them into the file and
     // syncs it; fewer, larger checkpoints write a page once for many batches (measured on
@@ -158,13 +175,14 @@ fn open_writer(path: &Path) -> Result<Connection, StoreError> {
     Ok(conn)
 }
 
-fn open_reader(path: &Path) -> Result<Connection, StoreError> {
+fn open_reader(path: &Path, cache_kib: i64) -> Result<Connection, StoreError> {
     let conn = Connection::open_with_flags(
         path,
         OpenFlags::SQLITE_OPEN_READ_WRITE | OpenFlags::SQLITE_OPEN_NO_MUTEX,
     )?;
     configure(&conn)?;
     conn.pragma_update(None, "query_only", "ON")?;
+    conn.pragma_update(None, "cache_size", -cache_kib)?;
     Ok(conn)
 }
 
@@ -186,12 +204,22 @@ fn migrate(conn: &Connection) -> Result<(), StoreError> {
 impl SqliteStore {
     /// Opens (creating and migrating when needed) the database file at `path`.
     pub async fn open(path: impl AsRef<Path>) -> Result<SqliteStore, StoreError> {
+        SqliteStore::open_with_cache(path, None).await
+    }
+
+    /// [`SqliteStore::open`] with its page caches taking at most `cache_mib` MiB
+    /// together (`None`: 64 MiB for the writer, 2 MiB for each reader).
+    pub async fn open_with_cache(
+        path: impl AsRef<Path>,
+        cache_mib: Option<u32>,
+    ) -> Result<SqliteStore, StoreError> {
         let path = path.as_ref().to_path_buf();
         let p = path.clone();
+        let (writer_kib, reader_kib) = cache_kib(cache_mib);
         let (writer, readers) = tokio::task::spawn_blocking(move || {
-            let writer = open_writer(&p)?;
+            let writer = open_writer(&p, writer_kib)?;
             let readers = (0..READERS)
-                .map(|_| open_reader(&p))
+                .map(|_| open_reader(&p, reader_kib))
                 .collect::<Result<Vec<_>, _>>()?;
             Ok::<_, StoreError>((writer, readers))
         })
@@ -442,5 +470,24 @@ impl Database for SqliteStore {
             self.writer.close().await;
             Ok(())
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_cache_setting_bounds_every_connection_together() {
+        assert_eq!(cache_kib(None), (65_536, 2_048));
+        // 4 MiB: each reader 256 KiB, the writer the other 3.5 MiB.
+        assert_eq!(cache_kib(Some(4)), (3_584, 256));
+        // 64 MiB: readers at their default.
+        assert_eq!(cache_kib(Some(64)), (61_440, 2_048));
+        for mib in [1, 2, 7, 1000] {
+            let (writer, reader) = cache_kib(Some(mib));
+            assert_eq!(writer + 2 * reader, i64::from(mib) * 1024);
+            assert!(writer > 0 && reader > 0);
+        }
     }
 }

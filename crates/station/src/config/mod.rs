@@ -21,7 +21,9 @@
 //! name = "Vsetín"
 //! time_zone = "Europe/Prague"          # IANA name
 //! store = "sqlite:events.sqlite"       # default; relative paths resolve against the project
-//!                                      # folder; "sqlite::memory:" and postgres://... allowed
+//!                                      # folder; "sqlite::memory:" and postgres://... allowed;
+//!                                      # "sqlite:events.sqlite?cache_mib=8" bounds the page
+//!                                      # caches (default 64 MiB + 2 x 2 MiB)
 //! retention_days = 60                  # default 60, >= 1
 //! store_deadband_percent = 0.5         # optional default of numeric points without their own:
 //!                                      # a change within 0.5 % of the last stored value is

@@ -136,6 +136,29 @@ async fn sqlite_memory_store_works_and_is_private() {
     assert_eq!(b.stats().await.unwrap().events, 0);
 }
 
+/// `?cache_mib=N`: the store opens with its page caches bounded and works; a cache of
+/// 0 MiB is a bad address. (How the MiB are shared out: the unit test in src/sqlite.rs.)
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_sqlite_store_opens_with_a_bounded_cache() {
+    let dir = tempfile::tempdir().unwrap();
+    let url = format!(
+        "sqlite:{}?cache_mib=2",
+        dir.path().join("small.db").display()
+    );
+    let store = open_store(&url).await.unwrap();
+    store
+        .append_events(&[ev("A", PointValue::Int(1), 1)])
+        .await
+        .unwrap();
+    assert_eq!(store.stats().await.unwrap().events, 1);
+    store.close().await.unwrap();
+    assert!(dir.path().join("small.db").exists());
+    assert!(matches!(
+        open_store("sqlite:x.db?cache_mib=0").await.err(),
+        Some(StoreError::BadUrl { .. })
+    ));
+}
+
 #[tokio::test]
 async fn sqlite_refuses_a_newer_schema() {
     let dir = tempfile::tempdir().unwrap();
