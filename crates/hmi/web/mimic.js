@@ -588,16 +588,23 @@
       applyNames(names);
       return;
     }
-    const deadline = performance.now() + FRAME_BUDGET_MS;
+    applyUntil(pending, performance.now() + FRAME_BUDGET_MS);
+    if (pending.size > 0) applySoon();
+  }
+
+  /**
+   * Applies `names` in their order until `deadline` (checked every SMALL_BATCH names),
+   * each taken out of `pending`; what depends on them follows once.
+   */
+  function applyUntil(names, deadline) {
     const done = new Set();
-    for (const name of pending) {
+    for (const name of names) {
       if (done.size % SMALL_BATCH === SMALL_BATCH - 1 && performance.now() >= deadline) break;
       pending.delete(name);
       applyName(name);
       done.add(name);
     }
     afterApplying(done);
-    if (pending.size > 0) applySoon();
   }
 
   // The next frame, or FRAME_MS at the latest: a browser may hold animation frames back
@@ -631,15 +638,7 @@
       immediateSpent = 0;
     }
     if (!pendingAll && svgRoot && (names.size <= LONE || immediateSpent < IMMEDIATE_BUDGET_MS)) {
-      const deadline = start + Math.max(0, IMMEDIATE_BUDGET_MS - immediateSpent);
-      const done = new Set();
-      for (const name of names) {
-        if (done.size % SMALL_BATCH === SMALL_BATCH - 1 && performance.now() >= deadline) break;
-        pending.delete(name);
-        applyName(name);
-        done.add(name);
-      }
-      afterApplying(done);
+      applyUntil(names, start + Math.max(0, IMMEDIATE_BUDGET_MS - immediateSpent));
       immediateSpent += performance.now() - start;
     }
     if (pending.size > 0 || pendingAll) applySoon();
