@@ -176,7 +176,7 @@ pub use query::{
     DEFAULT_PAGE_SIZE, MAX_PAGE_SIZE,
 };
 #[cfg(feature = "database")]
-pub use recorder::{Recorder, CHANNEL_CAPACITY};
+pub use recorder::{AfterStored, Recorder, CHANNEL_CAPACITY, FORWARD_DEADLINE};
 #[cfg(feature = "database")]
 pub use retention::{spawn_retention, Retention, RetentionHandle};
 #[cfg(feature = "database")]

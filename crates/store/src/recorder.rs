@@ -4,6 +4,17 @@
 //! ([`Recorder::command_committed`]): a positive confirmation leaves only once its audit
 //! record would survive a crash of the process (write-ahead).
 //!
+//! Store, then forward: a node hands each change to the recorder together with what
+//! forwards it to dispatch ([`Recorder::event_then`]), and the writer runs that only once
+//! the batch holding the event is committed, so that a process killed at any instant has
+//! stored every event a client above received (it may have stored some no client got:
+//! those the clients read by interrogation after the restart). Changes not stored (left
+//! out by a deadband) pass the same queue ([`Recorder::then`]), so that all leave in the
+//! order the node took them. A store that is slow or gone holds them back for at most
+//! [`FORWARD_DEADLINE`]: the historian must not stop a station's telecontrol. A commit
+//! costs milliseconds (SQLite in WAL mode without a sync per commit; one round trip to
+//! PostgreSQL), well inside IEC 104's timings.
+//!
 //! The channel is bounded ([`CHANNEL_CAPACITY`]): a store that cannot keep up (a
 //! PostgreSQL server gone away) must not grow the process without limit. Events that do
 //! not fit are dropped, counted and reported (a warning at most once a minute); commands
@@ -30,8 +41,18 @@ const BATCH: usize = 8192;
 /// Records waiting for the store at most: a minute of a busy station's changes.
 pub const CHANNEL_CAPACITY: usize = 65_536;
 
+/// How long a slow store may hold back the changes waiting for its commit before they
+/// are forwarded anyway (the commit goes on).
+pub const FORWARD_DEADLINE: std::time::Duration = std::time::Duration::from_secs(1);
+
+/// What runs once an event is stored: forwards the change to the levels above.
+pub type AfterStored = Box<dyn FnOnce() + Send>;
+
 enum Record {
-    Event(EventRecord),
+    /// An event, and what runs once it is stored.
+    Event(EventRecord, Option<AfterStored>),
+    /// What runs once every event queued before it is stored.
+    Then(AfterStored),
     /// A command, and who waits for its commit (told whether it was stored).
     Command(CommandRecord, Option<oneshot::Sender<bool>>),
     Flush(oneshot::Sender<()>),
@@ -109,10 +130,52 @@ impl Recorder {
     pub fn event(&self, record: EventRecord) {
         self.counters.events.fetch_add(1, Ordering::Relaxed);
         if let Some(sender) = &self.sender {
-            if let Err(mpsc::error::TrySendError::Full(_)) = sender.try_send(Record::Event(record))
+            if let Err(mpsc::error::TrySendError::Full(_)) =
+                sender.try_send(Record::Event(record, None))
             {
                 self.overflow();
             }
+        }
+    }
+
+    /// Records a value change and runs `forward` once it is committed (store, then
+    /// forward: see the module documentation). Without a store, or when the event is
+    /// dropped for a full channel, `forward` runs at once: what the store cannot take
+    /// still goes to dispatch.
+    pub fn event_then(&self, record: EventRecord, forward: AfterStored) {
+        self.counters.events.fetch_add(1, Ordering::Relaxed);
+        let Some(sender) = &self.sender else {
+            return forward();
+        };
+        match sender.try_send(Record::Event(record, Some(forward))) {
+            Ok(()) => {}
+            Err(mpsc::error::TrySendError::Full(record)) => {
+                self.overflow();
+                if let Record::Event(_, Some(forward)) = record {
+                    forward();
+                }
+            }
+            Err(mpsc::error::TrySendError::Closed(record)) => {
+                if let Record::Event(_, Some(forward)) = record {
+                    forward();
+                }
+            }
+        }
+    }
+
+    /// Runs `forward` once every event recorded before is committed: a change the store
+    /// leaves out keeps its place among those it keeps. At once without a store or when
+    /// the channel is full.
+    pub fn then(&self, forward: AfterStored) {
+        let Some(sender) = &self.sender else {
+            return forward();
+        };
+        if let Err(
+            mpsc::error::TrySendError::Full(Record::Then(forward))
+            | mpsc::error::TrySendError::Closed(Record::Then(forward)),
+        ) = sender.try_send(Record::Then(forward))
+        {
+            forward();
         }
     }
 
@@ -224,12 +287,17 @@ impl Writer {
     async fn run(mut self, mut receiver: mpsc::Receiver<Record>) {
         let mut buffer = Vec::with_capacity(BATCH);
         let mut events = Vec::with_capacity(BATCH);
+        let mut forwards: Vec<AfterStored> = Vec::new();
         while receiver.recv_many(&mut buffer, BATCH).await > 0 {
             for record in buffer.drain(..) {
                 match record {
-                    Record::Event(event) => events.push(self.keyed(event)),
+                    Record::Event(event, forward) => {
+                        events.push(self.keyed(event));
+                        forwards.extend(forward);
+                    }
+                    Record::Then(forward) => forwards.push(forward),
                     Record::Command(command, committed) => {
-                        self.write_events(&mut events).await;
+                        self.write_events(&mut events, &mut forwards).await;
                         let stored = match self.store.append_command(&command).await {
                             Ok(_) => true,
                             Err(error) => {
@@ -243,11 +311,11 @@ impl Writer {
                         }
                     }
                     Record::Flush(done) => {
-                        self.write_events(&mut events).await;
+                        self.write_events(&mut events, &mut forwards).await;
                         let _ = done.send(());
                     }
                     Record::Close(done) => {
-                        self.write_events(&mut events).await;
+                        self.write_events(&mut events, &mut forwards).await;
                         if let Err(error) = self.store.close().await {
                             tracing::warn!(%error, "the store did not close cleanly");
                         }
@@ -257,7 +325,7 @@ impl Writer {
                     }
                 }
             }
-            self.write_events(&mut events).await;
+            self.write_events(&mut events, &mut forwards).await;
         }
     }
 
@@ -270,7 +338,29 @@ impl Writer {
         event
     }
 
-    async fn write_events(&self, events: &mut Vec<EventRecord>) {
+    /// Writes the events, then runs the forwards waiting for them (in order); a write
+    /// that takes longer than [`FORWARD_DEADLINE`] lets them go first.
+    async fn write_events(&self, events: &mut Vec<EventRecord>, forwards: &mut Vec<AfterStored>) {
+        if forwards.is_empty() {
+            return self.write(events).await;
+        }
+        let write = self.write(events);
+        tokio::pin!(write);
+        tokio::select! {
+            () = &mut write => {}
+            () = tokio::time::sleep(FORWARD_DEADLINE) => {
+                tracing::warn!(
+                    waiting = forwards.len(),
+                    "the event store has not committed in {FORWARD_DEADLINE:?}: forwarding before the commit"
+                );
+                forwards.drain(..).for_each(|forward| forward());
+                write.await;
+            }
+        }
+        forwards.drain(..).for_each(|forward| forward());
+    }
+
+    async fn write(&self, events: &mut Vec<EventRecord>) {
         if events.is_empty() {
             return;
         }

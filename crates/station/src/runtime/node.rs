@@ -1,9 +1,12 @@
 //! A node's shared state: its point database, the server that publishes it and the path
 //! to the store. The simulation thread (PLC-sourced points), the link tasks (points of
 //! lower nodes) and the command handler all change points through [`NodePoints`], which
-//! keeps the three in step: a change reported by the database goes to the server (sent
-//! or only imaged, by the point's transmission) and to the store, under one lock so that
-//! clients and the store see changes in the order the database took them.
+//! keeps the three in step: a change reported by the database goes to the store and, once
+//! committed there, to the server (sent or only imaged, by the point's transmission). It
+//! is handed to the recorder under the node's lock and forwarded by the recorder's writer
+//! in the order it was handed over, so that clients and the store see changes in the
+//! order the database took them, and a process killed at any instant has stored all that
+//! its clients received (store, then forward: [`Recorder::event_then`]).
 //!
 //! A command's return information: the command handler asks for the next change of the
 //! command's feedback point ([`NodePoints::expect_return`]); that change goes out with
@@ -32,8 +35,9 @@ use crate::store::{EventRecord, Recorder};
 pub struct NodePoints {
     name: String,
     db: Mutex<PointDb>,
-    /// The protocols serving the points upward (see [`super::sink`]).
-    sinks: std::sync::RwLock<Vec<Arc<dyn PointSink>>>,
+    /// The protocols serving the points upward (see [`super::sink`]); shared with the
+    /// forwards waiting in the recorder for their event's commit.
+    sinks: Arc<std::sync::RwLock<Vec<Arc<dyn PointSink>>>>,
     zone: TimeZonePolicy,
     recorder: Recorder,
     clock: Arc<NodeClock>,
@@ -64,7 +68,7 @@ impl NodePoints {
             storage_rules,
             stored: Mutex::new(StorageFilter::new()),
             db: Mutex::new(db),
-            sinks: std::sync::RwLock::new(Vec::new()),
+            sinks: Arc::default(),
             zone,
             recorder,
             clock,
@@ -269,34 +273,42 @@ impl NodePoints {
         }
     }
 
+    /// Stores the change (unless its storage rule leaves it out) and then forwards it to
+    /// the sinks and tells the commands waiting for it: store, then forward (see
+    /// [`Recorder::event_then`]), so that a process killed at any instant never sent
+    /// dispatch an event its store lacks.
     fn publish(&self, change: &PointChange, origin: &str) {
         let waiters = self.take_return_waiters(&change.name);
-        let returned;
         let change = if waiters.is_empty() {
-            change
+            change.clone()
         } else {
-            returned = PointChange {
+            PointChange {
                 cause: EventCause::ReturnRemote,
                 ..change.clone()
-            };
-            &returned
-        };
-        for sink in self
-            .sinks
-            .read()
-            .unwrap_or_else(|poison| poison.into_inner())
-            .iter()
-        {
-            if let Err(error) = sink.publish(change) {
-                tracing::warn!(node = %self.name, point = %change.name, sink = %sink.describe(), %error, "not published");
             }
-        }
-        if self.to_store(change) {
-            self.recorder
-                .event(EventRecord::of_change(change, &self.name, origin));
-        }
-        for waiter in waiters {
-            let _ = waiter.send(());
+        };
+        let record = self
+            .to_store(&change)
+            .then(|| EventRecord::of_change(&change, &self.name, origin));
+        let node = self.name.clone();
+        let sinks = Arc::clone(&self.sinks);
+        let forward = Box::new(move || {
+            for sink in sinks
+                .read()
+                .unwrap_or_else(|poison| poison.into_inner())
+                .iter()
+            {
+                if let Err(error) = sink.publish(&change) {
+                    tracing::warn!(%node, point = %change.name, sink = %sink.describe(), %error, "not published");
+                }
+            }
+            for waiter in waiters {
+                let _ = waiter.send(());
+            }
+        });
+        match record {
+            Some(record) => self.recorder.event_then(record, forward),
+            None => self.recorder.then(forward),
         }
     }
 }

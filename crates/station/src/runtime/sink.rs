@@ -2,7 +2,8 @@
 //! the levels above. Today each node with a `[node.server]` has one, its IEC 104 server;
 //! an IEC 101 slave on a serial line, an MQTT publisher or a gateway's 104 server are
 //! further sinks of the same node, attached with [`NodePoints::attach_sink`]. Each gets
-//! every change in the order the point database took it (the node's lock is held).
+//! every change in the order the point database took it, once the store has committed
+//! it (the recorder's writer calls them: a sink must not block).
 //!
 //! [`NodePoints::attach_sink`]: super::NodePoints::attach_sink
 

@@ -1,5 +1,6 @@
 //! The recorder's bounded channel: a store that does not keep up makes events drop,
 //! counted and reported, while the process does not grow and commands are never lost.
+//! Store, then forward: what a node hands over with an event runs once it is committed.
 
 use std::sync::Arc;
 
@@ -10,7 +11,7 @@ use store::{
     EventStore, LiftFaultArchive, LiftFaultQuery, LiftFaultRecord, NotificationLog,
     NotificationQuery, NotificationRecord, Page, PointValue, RecordId, StoreFuture, StoreStats,
 };
-use tokio::sync::Semaphore;
+use tokio::sync::{Notify, Semaphore};
 
 use crate::suite::ev;
 
@@ -18,6 +19,18 @@ use crate::suite::ev;
 struct Stalled {
     inner: Box<dyn EventStore>,
     gate: Semaphore,
+    /// Told when an append of events begins waiting at the gate.
+    entered: Notify,
+}
+
+impl Stalled {
+    async fn closed() -> Arc<Stalled> {
+        Arc::new(Stalled {
+            inner: open_store("sqlite::memory:").await.unwrap(),
+            gate: Semaphore::new(0),
+            entered: Notify::new(),
+        })
+    }
 }
 
 impl EventStore for Stalled {
@@ -26,6 +39,7 @@ impl EventStore for Stalled {
     }
     fn append_events<'a>(&'a self, events: &'a [EventRecord]) -> StoreFuture<'a, Vec<RecordId>> {
         Box::pin(async move {
+            self.entered.notify_one();
             let _pass = self.gate.acquire().await;
             self.inner.append_events(events).await
         })
@@ -89,10 +103,7 @@ impl NotificationLog for Stalled {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_stalled_store_drops_counted_events_but_keeps_every_command() {
-    let store = Arc::new(Stalled {
-        inner: open_store("sqlite::memory:").await.unwrap(),
-        gate: Semaphore::new(0),
-    });
+    let store = Stalled::closed().await;
     let recorder = Recorder::spawn_with_capacity(store.clone(), 16);
     for index in 0..1000 {
         recorder.event(ev("P", PointValue::Int(index), index));
@@ -168,4 +179,99 @@ async fn every_event_gets_a_key() {
     numbers.sort_unstable();
     assert_eq!(numbers, (0..2 * 7200).collect::<Vec<_>>());
     recorder.close().await;
+}
+
+/// What was forwarded, in order, and a way to wait for the next one.
+#[derive(Default)]
+struct Forwarded {
+    names: std::sync::Mutex<Vec<&'static str>>,
+    told: Notify,
+}
+
+impl Forwarded {
+    fn forward(self: &Arc<Self>, name: &'static str) -> store::AfterStored {
+        let forwarded = Arc::clone(self);
+        Box::new(move || {
+            forwarded.names.lock().unwrap().push(name);
+            forwarded.told.notify_one();
+        })
+    }
+
+    fn names(&self) -> Vec<&'static str> {
+        self.names.lock().unwrap().clone()
+    }
+
+    async fn wait_for(&self, count: usize) {
+        tokio::time::timeout(std::time::Duration::from_secs(30), async {
+            while self.names.lock().unwrap().len() < count {
+                self.told.notified().await;
+            }
+        })
+        .await
+        .expect("forwarded in time");
+    }
+}
+
+/// A change handed over with its event leaves only once the event is committed, and a
+/// change the store leaves out keeps its place behind it.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_change_is_forwarded_once_its_event_is_committed() {
+    let store = Stalled::closed().await;
+    let recorder = Recorder::spawn(store.clone());
+    let forwarded = Arc::new(Forwarded::default());
+    // Registered before the events, so that the writer's first append is seen.
+    let entered = store.entered.notified();
+    recorder.event_then(ev("A", PointValue::Int(1), 1), forwarded.forward("A"));
+    recorder.then(forwarded.forward("not stored"));
+    recorder.event_then(ev("B", PointValue::Int(2), 2), forwarded.forward("B"));
+    entered.await;
+    // The writer holds the batch at the gate: nothing has gone up yet.
+    assert_eq!(forwarded.names(), Vec::<&str>::new());
+    store.gate.add_permits(1_000);
+    forwarded.wait_for(3).await;
+    assert_eq!(forwarded.names(), ["A", "not stored", "B"]);
+    // Each was forwarded after its event was in the store.
+    assert_eq!(store.stats().await.unwrap().events, 2);
+}
+
+/// A store that does not commit holds the changes back for at most the deadline: the
+/// historian does not stop the station's telecontrol. (Paused time: the runtime moves the
+/// clock on when every task waits.)
+#[tokio::test(start_paused = true)]
+async fn a_store_that_does_not_commit_holds_changes_back_for_at_most_the_deadline() {
+    let store = Stalled::closed().await;
+    let recorder = Recorder::spawn(store.clone());
+    let forwarded = Arc::new(Forwarded::default());
+    let started = tokio::time::Instant::now();
+    recorder.event_then(ev("A", PointValue::Int(1), 1), forwarded.forward("A"));
+    forwarded.wait_for(1).await;
+    assert_eq!(started.elapsed(), store::FORWARD_DEADLINE);
+    assert_eq!(store.stats().await.unwrap().events, 0, "not committed yet");
+    store.gate.add_permits(1_000);
+    recorder.flush().await;
+    assert_eq!(
+        store.stats().await.unwrap().events,
+        1,
+        "committed after all"
+    );
+}
+
+/// Without a store, or when the channel is full, a change is forwarded at once.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn without_room_or_store_a_change_is_forwarded_at_once() {
+    let forwarded = Arc::new(Forwarded::default());
+    Recorder::disabled().event_then(ev("A", PointValue::Int(1), 1), forwarded.forward("none"));
+    assert_eq!(forwarded.names(), ["none"]);
+
+    let store = Stalled::closed().await;
+    let recorder = Recorder::spawn_with_capacity(store.clone(), 1);
+    for _ in 0..4 {
+        recorder.event_then(ev("A", PointValue::Int(1), 1), forwarded.forward("full"));
+    }
+    // The writer took at most one and the channel holds one: the others were dropped
+    // from the store but went up.
+    assert!(forwarded.names().len() >= 3, "{:?}", forwarded.names());
+    assert!(recorder.overflowed() >= 2);
+    store.gate.add_permits(1_000);
+    forwarded.wait_for(5).await;
 }
