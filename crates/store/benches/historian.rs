@@ -12,7 +12,8 @@
 //! `STANICE_BENCH_EVENTS` sets the size of the large table (default 2,000,000: the issue's
 //! 100 million take hours and about 30 GB per backend on the 2-core machine); the figure
 //! printed says how many events the table held. Without `STANICE_TEST_POSTGRES_URL` only
-//! SQLite runs. Durability: SQLite WAL with synchronous=NORMAL; the PostgreSQL of
+//! SQLite runs; `STANICE_BENCH_BACKENDS=postgres` (or `sqlite`) runs one backend of the
+//! two, for a large table whose other half was measured before. Durability: SQLite WAL with synchronous=NORMAL; the PostgreSQL of
 //! `scripts/with-postgres.sh` runs with synchronous_commit=off, fsync on (a crash of the
 //! machine may lose the last commits, never consistency).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
@@ -217,14 +218,21 @@ fn main() {
         .build()
         .unwrap();
     rt.block_on(async {
+        let backends = std::env::var("STANICE_BENCH_BACKENDS")
+            .unwrap_or_else(|_| "sqlite,postgres".to_owned());
+        let wanted = |name: &str| backends.split(',').any(|b| b.trim() == name);
         let dir = tempfile::tempdir().unwrap();
-        let sqlite = open_store(&format!("sqlite:{}", dir.path().join("bench.db").display()))
-            .await
-            .unwrap();
-        eprintln!("sqlite ...");
-        let s = run(&*sqlite, large).await;
-        drop(sqlite);
+        let s = if wanted("sqlite") {
+            let sqlite = open_store(&format!("sqlite:{}", dir.path().join("bench.db").display()))
+                .await
+                .unwrap();
+            eprintln!("sqlite ...");
+            Some(run(&*sqlite, large).await)
+        } else {
+            None
+        };
         let p = match std::env::var("STANICE_TEST_POSTGRES_URL") {
+            Ok(_) if !wanted("postgres") => None,
             Ok(url) if !url.is_empty() => {
                 eprintln!("postgres ...");
                 let pg = postgres_store(&url).await;
@@ -281,8 +289,9 @@ fn main() {
             Box::new(|f| format!("{:.2}", f.ends_p99_ms)),
         ));
         for (name, get) in rows {
+            let sv = s.as_ref().map_or_else(|| "-".to_owned(), &get);
             let pv = p.as_ref().map_or_else(|| "-".to_owned(), &get);
-            println!("{name:<46} {:>14} {:>14}", get(&s), pv);
+            println!("{name:<46} {sv:>14} {pv:>14}");
         }
     });
 }
