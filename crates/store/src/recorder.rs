@@ -11,9 +11,10 @@
 //! those the clients read by interrogation after the restart). Changes not stored (left
 //! out by a deadband) pass the same queue ([`Recorder::then`]), so that all leave in the
 //! order the node took them. A store that is slow or gone holds them back for at most
-//! [`FORWARD_DEADLINE`]: the historian must not stop a station's telecontrol. A commit
-//! costs milliseconds (SQLite in WAL mode without a sync per commit; one round trip to
-//! PostgreSQL), well inside IEC 104's timings.
+//! [`FORWARD_DEADLINE`] (then they go up before their commit, in order, until the store
+//! answers again: `Inbox::while_slow`): the historian must not stop a station's
+//! telecontrol. A commit costs milliseconds (SQLite in WAL mode without a sync per
+//! commit; one round trip to PostgreSQL), well inside IEC 104's timings.
 //!
 //! The channel is bounded ([`CHANNEL_CAPACITY`]): a store that cannot keep up (a
 //! PostgreSQL server gone away) must not grow the process without limit. Events that do
@@ -26,6 +27,7 @@
 //! recorder stores what it is given: which changes are worth a row (deadbands, storage
 //! rate limits) the point's own storage rule decides before ([`points::StorageFilter`]).
 
+use std::collections::VecDeque;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
@@ -275,6 +277,83 @@ impl Recorder {
     }
 }
 
+/// Where the writer takes its records from: the records taken from the channel and not
+/// yet handled, in order, then the channel.
+struct Inbox {
+    receiver: mpsc::Receiver<Record>,
+    queue: VecDeque<Record>,
+}
+
+impl Inbox {
+    /// Waits for records and takes what is queued (at most [`BATCH`]); `false` once the
+    /// channel is closed and empty.
+    async fn fill(&mut self) -> bool {
+        let mut taken = Vec::with_capacity(BATCH);
+        let received = self.receiver.recv_many(&mut taken, BATCH).await;
+        self.queue.extend(taken);
+        received > 0
+    }
+
+    /// Drives `work` (a write to the store) to its end, then runs `forwards` (in order).
+    /// When the store takes longer than [`FORWARD_DEADLINE`], `forwards` run at the
+    /// deadline, then those of the records taken and not yet handled, and until the store
+    /// answers what arrives is forwarded at once and queued for the writes after (at most
+    /// [`CHANNEL_CAPACITY`] records: beyond, the channel fills and the callers forward
+    /// themselves). A store that hangs (a PostgreSQL server gone: a connect timeout of
+    /// seconds, a retry per event) holds the station's changes back by the deadline, not
+    /// by its outage, and they still go up in the order they came.
+    async fn while_slow<T>(
+        &mut self,
+        work: impl std::future::Future<Output = T>,
+        forwards: &mut Vec<AfterStored>,
+    ) -> T {
+        tokio::pin!(work);
+        if let Ok(done) = tokio::time::timeout(FORWARD_DEADLINE, &mut work).await {
+            forwards.drain(..).for_each(|forward| forward());
+            return done;
+        }
+        tracing::warn!(
+            waiting = forwards.len() + self.queue.len(),
+            "the event store has not answered in {FORWARD_DEADLINE:?}: changes go up before \
+             their commit until it does"
+        );
+        forwards.drain(..).for_each(|forward| forward());
+        self.queue.retain_mut(|record| match record {
+            Record::Event(_, forward) => {
+                if let Some(forward) = forward.take() {
+                    forward();
+                }
+                true
+            }
+            Record::Then(forward) => {
+                // Run and dropped (a no-op closure in its place allocates nothing).
+                std::mem::replace(forward, Box::new(|| {}))();
+                false
+            }
+            _ => true,
+        });
+        loop {
+            tokio::select! {
+                biased;
+                done = &mut work => return done,
+                record = self.receiver.recv(), if self.queue.len() < CHANNEL_CAPACITY => {
+                    match record {
+                        Some(Record::Event(event, forward)) => {
+                            if let Some(forward) = forward {
+                                forward();
+                            }
+                            self.queue.push_back(Record::Event(event, None));
+                        }
+                        Some(Record::Then(forward)) => forward(),
+                        Some(other) => self.queue.push_back(other),
+                        None => return work.await,
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// The write task: the store and the next key of this run.
 struct Writer {
     store: Arc<dyn EventStore>,
@@ -284,48 +363,67 @@ struct Writer {
 }
 
 impl Writer {
-    async fn run(mut self, mut receiver: mpsc::Receiver<Record>) {
-        let mut buffer = Vec::with_capacity(BATCH);
+    async fn run(mut self, receiver: mpsc::Receiver<Record>) {
+        let mut inbox = Inbox {
+            receiver,
+            queue: VecDeque::with_capacity(BATCH),
+        };
         let mut events = Vec::with_capacity(BATCH);
         let mut forwards: Vec<AfterStored> = Vec::new();
-        while receiver.recv_many(&mut buffer, BATCH).await > 0 {
-            for record in buffer.drain(..) {
-                match record {
-                    Record::Event(event, forward) => {
-                        events.push(self.keyed(event));
-                        forwards.extend(forward);
-                    }
-                    Record::Then(forward) => forwards.push(forward),
-                    Record::Command(command, committed) => {
-                        self.write_events(&mut events, &mut forwards).await;
-                        let stored = match self.store.append_command(&command).await {
-                            Ok(_) => true,
-                            Err(error) => {
-                                self.counters.failed.fetch_add(1, Ordering::Relaxed);
-                                tracing::error!(%error, point = %command.point, "command record lost");
-                                false
-                            }
-                        };
-                        if let Some(committed) = committed {
-                            let _ = committed.send(stored);
+        loop {
+            let Some(record) = inbox.queue.pop_front() else {
+                // Everything taken: one transaction for the events gathered, then wait.
+                inbox
+                    .while_slow(self.write(&mut events), &mut forwards)
+                    .await;
+                if inbox.queue.is_empty() && !inbox.fill().await {
+                    return;
+                }
+                continue;
+            };
+            match record {
+                Record::Event(event, forward) => {
+                    events.push(self.keyed(event));
+                    forwards.extend(forward);
+                }
+                Record::Then(forward) => forwards.push(forward),
+                Record::Command(command, committed) => {
+                    inbox
+                        .while_slow(self.write(&mut events), &mut forwards)
+                        .await;
+                    let appended = inbox
+                        .while_slow(self.store.append_command(&command), &mut forwards)
+                        .await;
+                    let stored = match appended {
+                        Ok(_) => true,
+                        Err(error) => {
+                            self.counters.failed.fetch_add(1, Ordering::Relaxed);
+                            tracing::error!(%error, point = %command.point, "command record lost");
+                            false
                         }
-                    }
-                    Record::Flush(done) => {
-                        self.write_events(&mut events, &mut forwards).await;
-                        let _ = done.send(());
-                    }
-                    Record::Close(done) => {
-                        self.write_events(&mut events, &mut forwards).await;
-                        if let Err(error) = self.store.close().await {
-                            tracing::warn!(%error, "the store did not close cleanly");
-                        }
-                        let _ = done.send(());
-                        // The receiver goes: later records find the channel closed.
-                        return;
+                    };
+                    if let Some(committed) = committed {
+                        let _ = committed.send(stored);
                     }
                 }
+                Record::Flush(done) => {
+                    inbox
+                        .while_slow(self.write(&mut events), &mut forwards)
+                        .await;
+                    let _ = done.send(());
+                }
+                Record::Close(done) => {
+                    inbox
+                        .while_slow(self.write(&mut events), &mut forwards)
+                        .await;
+                    if let Err(error) = self.store.close().await {
+                        tracing::warn!(%error, "the store did not close cleanly");
+                    }
+                    let _ = done.send(());
+                    // The receiver goes: later records find the channel closed.
+                    return;
+                }
             }
-            self.write_events(&mut events, &mut forwards).await;
         }
     }
 
@@ -336,28 +434,6 @@ impl Writer {
             self.keys.sequence += 1;
         }
         event
-    }
-
-    /// Writes the events, then runs the forwards waiting for them (in order); a write
-    /// that takes longer than [`FORWARD_DEADLINE`] lets them go first.
-    async fn write_events(&self, events: &mut Vec<EventRecord>, forwards: &mut Vec<AfterStored>) {
-        if forwards.is_empty() {
-            return self.write(events).await;
-        }
-        let write = self.write(events);
-        tokio::pin!(write);
-        tokio::select! {
-            () = &mut write => {}
-            () = tokio::time::sleep(FORWARD_DEADLINE) => {
-                tracing::warn!(
-                    waiting = forwards.len(),
-                    "the event store has not committed in {FORWARD_DEADLINE:?}: forwarding before the commit"
-                );
-                forwards.drain(..).for_each(|forward| forward());
-                write.await;
-            }
-        }
-        forwards.drain(..).for_each(|forward| forward());
     }
 
     async fn write(&self, events: &mut Vec<EventRecord>) {

@@ -115,18 +115,7 @@ async fn a_stalled_store_drops_counted_events_but_keeps_every_command() {
         "{}",
         recorder.overflowed()
     );
-    let command = CommandRecord {
-        id: None,
-        time: crate::suite::at_ms(5),
-        actor: store::Actor::Remote("127.0.0.1:1".into()),
-        node: "RDRT".into(),
-        point: "QF1".into(),
-        ioa: Some(2021),
-        value: PointValue::Bool(true),
-        phase: store::CommandPhase::Execute,
-        outcome: store::CommandOutcome::Executed,
-        detail: String::new(),
-    };
+    let command = command_record();
     recorder.command(command.clone());
     let committed = {
         let recorder = recorder.clone();
@@ -234,9 +223,10 @@ async fn a_change_is_forwarded_once_its_event_is_committed() {
     assert_eq!(store.stats().await.unwrap().events, 2);
 }
 
-/// A store that does not commit holds the changes back for at most the deadline: the
-/// historian does not stop the station's telecontrol. (Paused time: the runtime moves the
-/// clock on when every task waits.)
+/// A store that does not commit holds the changes back for at most the deadline, and
+/// while it still does not answer, what comes after goes up at once, in order (a change
+/// handed over behind a command too); all of it is stored once the store answers.
+/// (Paused time: the runtime moves the clock on when every task waits.)
 #[tokio::test(start_paused = true)]
 async fn a_store_that_does_not_commit_holds_changes_back_for_at_most_the_deadline() {
     let store = Stalled::closed().await;
@@ -247,13 +237,56 @@ async fn a_store_that_does_not_commit_holds_changes_back_for_at_most_the_deadlin
     forwarded.wait_for(1).await;
     assert_eq!(started.elapsed(), store::FORWARD_DEADLINE);
     assert_eq!(store.stats().await.unwrap().events, 0, "not committed yet");
+
+    // The store still hangs: the next changes do not wait another deadline.
+    recorder.event_then(ev("B", PointValue::Int(2), 2), forwarded.forward("B"));
+    recorder.then(forwarded.forward("not stored"));
+    recorder.command(command_record());
+    recorder.event_then(ev("C", PointValue::Int(3), 3), forwarded.forward("C"));
+    forwarded.wait_for(4).await;
+    assert_eq!(
+        started.elapsed(),
+        store::FORWARD_DEADLINE,
+        "forwarded at once"
+    );
+    assert_eq!(forwarded.names(), ["A", "B", "not stored", "C"]);
+
     store.gate.add_permits(1_000);
     recorder.flush().await;
     assert_eq!(
         store.stats().await.unwrap().events,
-        1,
+        3,
         "committed after all"
     );
+    let commands = store
+        .query_commands(&CommandQuery::default())
+        .await
+        .unwrap();
+    assert_eq!(commands.items.len(), 1);
+    // The store answers again: a change waits for its commit once more.
+    let entered = store.entered.notified();
+    store.gate.forget_permits(1_000);
+    recorder.event_then(ev("D", PointValue::Int(4), 4), forwarded.forward("D"));
+    entered.await;
+    tokio::task::yield_now().await;
+    assert_eq!(forwarded.names().len(), 4, "D waits for its commit");
+    store.gate.add_permits(1);
+    forwarded.wait_for(5).await;
+}
+
+fn command_record() -> CommandRecord {
+    CommandRecord {
+        id: None,
+        time: crate::suite::at_ms(5),
+        actor: store::Actor::Remote("127.0.0.1:1".into()),
+        node: "RDRT".into(),
+        point: "QF1".into(),
+        ioa: Some(2021),
+        value: PointValue::Bool(true),
+        phase: store::CommandPhase::Execute,
+        outcome: store::CommandOutcome::Executed,
+        detail: String::new(),
+    }
 }
 
 /// Without a store, or when the channel is full, a change is forwarded at once.
