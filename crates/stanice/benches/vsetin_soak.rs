@@ -448,6 +448,8 @@ async fn soak(settings: Settings) {
     let mut next_sample = start;
     // Resident set per process life: (simulated hours since the soak's start, KB).
     let mut lives: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
+    // Every sample, over the process lives (simulated hour, resident KB).
+    let mut samples: Vec<(f64, f64)> = Vec::new();
     let mut life_start = start;
     let mut faults = 0;
     println!("  simulated time          resident    wall");
@@ -460,6 +462,7 @@ async fn soak(settings: Settings) {
         if now >= next_sample {
             if let Some((rss, _)) = resident_and_cpu(station.child.id()) {
                 let hour = (now - start).num_seconds() as f64 / 3600.0;
+                samples.push((hour, rss as f64));
                 if now - life_start >= chrono::Duration::days(1) {
                     lives.last_mut().unwrap().push((hour, rss as f64));
                 }
@@ -594,10 +597,31 @@ async fn soak(settings: Settings) {
             );
         }
     }
-    if !slopes.is_empty() {
+    if slopes.is_empty() {
+        println!(
+            "  none: no process life lasted long enough for one (its samples after the first \
+             simulated day; give --kill-every-hours more than 24)"
+        );
+    } else {
         println!(
             "  mean: {:.2} KB per simulated hour",
             slopes.iter().sum::<f64>() / slopes.len() as f64
+        );
+    }
+    let resident = samples.iter().map(|sample| sample.1);
+    if let (Some(least), Some(most)) =
+        (resident.clone().reduce(f64::min), resident.reduce(f64::max))
+    {
+        println!(
+            "resident memory over the whole run: {:.1} to {:.1} MB; slope over all {} samples \
+             (across restarts) {}",
+            least / 1024.0,
+            most / 1024.0,
+            samples.len(),
+            slope(&samples).map_or_else(
+                || "-".to_owned(),
+                |kb_per_hour| format!("{kb_per_hour:.2} KB per simulated hour")
+            )
         );
     }
     println!(
