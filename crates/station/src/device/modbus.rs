@@ -303,7 +303,9 @@ fn driver(
 }
 
 /// Neighbouring inputs of one table read together: (table, first address, count, the
-/// items in it).
+/// items in it). (The driver that polls them is the runtime's: a build without it, such
+/// as the fuzz targets', only checks the configuration.)
+#[cfg(any(feature = "runtime", test))]
 fn spans(inputs: &[(String, Item)]) -> Vec<(Table, u16, u16, Vec<usize>)> {
     /// A gap of up to this many unused entries is read rather than split.
     const GAP: u32 = 8;
