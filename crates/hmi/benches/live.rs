@@ -24,28 +24,19 @@
 
 #[path = "support/browser.rs"]
 mod browser;
+#[path = "../tests/support/outstation.rs"]
+mod outstation;
 use browser::{js, now_ms, report};
+use outstation::{float, float_outstation, hmi_of};
 
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use hmi::{Hmi, HmiOptions};
-use iec60870::asdu::{CommonAddress, Element, Ioa, Quality, TypeId};
-use iec60870::cs104::server::{
-    spawn_server, MonitorPoint, ProcessImage, ReadOnlyStation, ServerConfig,
-};
-use iec60870::time::TimeZonePolicy;
+use iec60870::asdu::Ioa;
 
 const POINTS: u32 = 10_000;
-
-fn float(value: f32) -> Element {
-    Element::Float {
-        value,
-        quality: Quality::GOOD,
-    }
-}
 
 fn screens(dir: &Path) {
     let mut csv = String::from("ioa,type,name,description\n");
@@ -93,42 +84,11 @@ fn main() {
 }
 
 async fn run(samples: usize) {
-    // The outstation.
-    let mut image = ProcessImage::new();
-    for i in 1..=POINTS {
-        image
-            .add_monitor(MonitorPoint {
-                ioa: Ioa::try_new(i).unwrap(),
-                event_type: TypeId::M_ME_NC_1,
-                groups: 0,
-                element: float(0.0),
-                time: None,
-            })
-            .unwrap();
-    }
-    let server = spawn_server(
-        ServerConfig::new("127.0.0.1:0".parse().unwrap(), CommonAddress::new(1)),
-        image,
-        Arc::new(ReadOnlyStation),
-    )
-    .await
-    .unwrap();
-    // The HMI.
+    // The outstation and the HMI.
+    let server = float_outstation(POINTS).await;
     let dir = tempfile::tempdir().unwrap();
     screens(dir.path());
-    let hmi = Hmi::start(HmiOptions {
-        screens: dir.path().to_path_buf(),
-        users: dir.path().join("users.toml"),
-        connect: vec![server.local_addr().to_string()],
-        common_address: CommonAddress::new(1),
-        listen: "127.0.0.1:0".parse().unwrap(),
-        store: None,
-        zone: TimeZonePolicy::Utc,
-        local_address: None,
-        archive: None,
-    })
-    .await
-    .unwrap();
+    let hmi = hmi_of(&server, dir.path()).await;
     let url = format!("http://{}", hmi.address);
     // The browser, logged in.
     let Some((_driver, client)) = browser::start().await else {

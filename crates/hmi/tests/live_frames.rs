@@ -13,51 +13,19 @@
 #[path = "support/http.rs"]
 mod http_client;
 use http_client::Client;
+#[path = "support/outstation.rs"]
+mod outstation;
+use outstation::{float, float_outstation, hmi_of};
 
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use futures_util::StreamExt as _;
-use hmi::{Hmi, HmiOptions};
-use iec60870::asdu::{CommonAddress, Element, Ioa, Quality, TypeId};
-use iec60870::cs104::server::{
-    spawn_server, MonitorPoint, ProcessImage, ReadOnlyStation, ServerConfig, ServerHandle,
-};
-use iec60870::time::TimeZonePolicy;
+use iec60870::asdu::Ioa;
 use serde_json::Value;
 
 const POINTS: u32 = 1_000;
 /// The HMI's least time between two batched frames (`web::live::PACE`).
 const PACE: Duration = Duration::from_millis(2);
-
-fn float(value: f32) -> Element {
-    Element::Float {
-        value,
-        quality: Quality::GOOD,
-    }
-}
-
-async fn outstation() -> ServerHandle {
-    let mut image = ProcessImage::new();
-    for i in 1..=POINTS {
-        image
-            .add_monitor(MonitorPoint {
-                ioa: Ioa::try_new(i).unwrap(),
-                event_type: TypeId::M_ME_NC_1,
-                groups: 0,
-                element: float(0.0),
-                time: None,
-            })
-            .unwrap();
-    }
-    spawn_server(
-        ServerConfig::new("127.0.0.1:0".parse().unwrap(), CommonAddress::new(1)),
-        image,
-        Arc::new(ReadOnlyStation),
-    )
-    .await
-    .unwrap()
-}
 
 fn screens(dir: &std::path::Path) {
     let mut csv = String::from("ioa,type,name,description\n");
@@ -88,22 +56,10 @@ fn points_in(frame: &Value) -> Vec<(String, f64)> {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_trickling_burst_arrives_in_few_frames_and_a_lone_change_at_once() {
-    let server = outstation().await;
+    let server = float_outstation(POINTS).await;
     let dir = tempfile::tempdir().unwrap();
     screens(dir.path());
-    let hmi = Hmi::start(HmiOptions {
-        screens: dir.path().to_path_buf(),
-        users: dir.path().join("users.toml"),
-        connect: vec![server.local_addr().to_string()],
-        common_address: CommonAddress::new(1),
-        listen: "127.0.0.1:0".parse().unwrap(),
-        store: None,
-        zone: TimeZonePolicy::Utc,
-        local_address: None,
-        archive: None,
-    })
-    .await
-    .unwrap();
+    let hmi = hmi_of(&server, dir.path()).await;
     let viewer = Client::login(hmi.address, "viewer", "viewer-password").await;
     let mut request =
         tokio_tungstenite::tungstenite::client::IntoClientRequest::into_client_request(format!(
