@@ -101,7 +101,12 @@
 //! PostgreSQL by a statement trigger on `events` over the INSERT's transition table (so
 //! every way of inserting keeps it). An aggregated trend of buckets four minutes wide or
 //! more reads the rollups ([`TrendQuery::rollup_span_ms`]). Retention deletes the rollups
-//! of the purged minutes (SQLite) or days (PostgreSQL).
+//! of the purged minutes (SQLite) or days (PostgreSQL). SQLite's table is WITHOUT ROWID:
+//! a point's minutes lie side by side in its B-tree. PostgreSQL's heap keeps rows in the
+//! order they were written (all points of a minute together), so since schema version 5
+//! its rollups are partitioned by day too (`trend_rollups_YYYYMMDD`, made and dropped with
+//! the event days) and each closed day is CLUSTERed on (point, minute) once
+//! ([`EventStore::compact_closed_days`], with every retention pass).
 //! A lift fault's board time has no zone: `lift_faults.board_ms` holds its wall-clock
 //! reading as if it were UTC (NULL when the board sent an impossible date), and
 //! `lift_faults.filed_ms` the time it is filtered and sorted by
@@ -168,7 +173,9 @@ pub use model::{
 };
 pub use notification::{NotificationOutcome, NotificationQuery, NotificationRecord};
 #[cfg(feature = "database")]
-pub use postgres::partitions::{DAYS_AHEAD, ON_DEMAND_FUTURE_DAYS, ON_DEMAND_PAST_DAYS};
+pub use postgres::partitions::{
+    CLOSED_DAY_GRACE_MS, DAYS_AHEAD, ON_DEMAND_FUTURE_DAYS, ON_DEMAND_PAST_DAYS,
+};
 #[cfg(feature = "database")]
 pub use postgres::{PostgresConfig, PostgresStore};
 pub use query::{
@@ -253,6 +260,18 @@ pub trait EventStore: LiftFaultArchive + NotificationLog + Send + Sync {
     fn prepare_partitions(&self, now: DateTime<Utc>) -> StoreFuture<'_, ()> {
         let _ = now;
         Box::pin(async { Ok(()) })
+    }
+
+    /// Rewrites the history that no longer changes in the order queries read it; returns
+    /// how many days it rewrote. On PostgreSQL each closed day's trend rollups (a day
+    /// partition, [`CLOSED_DAY_GRACE_MS`] after its end) are CLUSTERed on (point, minute)
+    /// once: a 60-day trend then reads a point's minutes from a few pages per day instead
+    /// of one page per minute. Only that day's rollups are locked while it is rewritten.
+    /// The retention task calls it with each pass; nothing to do on SQLite (its rollups
+    /// are kept in key order).
+    fn compact_closed_days(&self, now: DateTime<Utc>) -> StoreFuture<'_, u64> {
+        let _ = now;
+        Box::pin(async { Ok(0) })
     }
 
     /// A point's values over a time range, downsampled in the database: per slice of

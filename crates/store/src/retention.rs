@@ -1,5 +1,6 @@
 //! Retention: how long the store keeps history, and the background task that purges it
-//! and, on PostgreSQL, makes the coming days' partitions ahead.
+//! and, on PostgreSQL, makes the coming days' partitions ahead and rewrites the closed
+//! days' trend rollups in key order.
 
 use chrono::{DateTime, Utc};
 use std::sync::Arc;
@@ -106,6 +107,10 @@ where
                 Ok(0) => tracing::debug!(%cutoff, "retention: nothing to purge"),
                 Ok(n) => tracing::info!(%cutoff, rows = n, "retention: purged"),
                 Err(e) => tracing::warn!(%cutoff, error = %e, "retention: purge failed"),
+            }
+            // After the purge: no day about to be dropped is rewritten first.
+            if let Err(e) = store.compact_closed_days(now).await {
+                tracing::warn!(error = %e, "retention: rewriting the closed days failed");
             }
         }
     });

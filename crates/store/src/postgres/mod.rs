@@ -22,6 +22,7 @@ use deadpool_postgres::{HookError, Manager, ManagerConfig, Object, Pool, Recycli
 use std::str::FromStr;
 use std::time::Duration;
 use tokio_postgres::binary_copy::BinaryCopyInWriter;
+use tokio_postgres::error::SqlState;
 use tokio_postgres::types::{ToSql, Type};
 use tokio_postgres::{Client, NoTls, Row};
 
@@ -246,6 +247,10 @@ const COPY_STAGING: &str = "COPY events_staging (id, node, point, ioa, value_kin
      value_float, value_text, quality, source_ms, source_invalid, received_ms, event_ms, cause, \
      origin, source_id, source_seq) FROM STDIN (FORMAT binary)";
 
+const COPY_EVENTS: &str = "COPY events (id, node, point, ioa, value_kind, value_int, \
+     value_float, value_text, quality, source_ms, source_invalid, received_ms, event_ms, cause, \
+     origin, source_id, source_seq) FROM STDIN (FORMAT binary)";
+
 const MOVE_STAGED: &str = "INSERT INTO events (id, node, point, ioa, value_kind, value_int, \
      value_float, value_text, quality, source_ms, source_invalid, received_ms, event_ms, cause, \
      origin, source_id, source_seq) SELECT * FROM events_staging ON CONFLICT DO NOTHING";
@@ -315,29 +320,15 @@ async fn insert_one(conn: &Object, e: &EventRecord) -> Result<RecordId, StoreErr
     Ok(row.try_get(0)?)
 }
 
-/// Appends a batch in one transaction: ids from the sequence first, so they are known,
-/// increasing and in the order of `events`; the rows by binary COPY into the staging
-/// table; then into `events`, leaving out those whose key is already stored (their id is
-/// answered as the stored one's).
-async fn copy_events(
-    conn: &mut Object,
+/// Writes `events` with their `ids` to a COPY (into `events` or the staging table: the
+/// same columns in the same order, [`STAGING_TYPES`]).
+async fn write_copy(
+    writer: BinaryCopyInWriter,
     events: &[EventRecord],
-) -> Result<Vec<RecordId>, StoreError> {
-    let next_ids = conn.prepare_cached(NEXT_IDS).await?;
-    let copy = conn.prepare_cached(COPY_STAGING).await?;
-    let tx = conn.transaction().await?;
-    let n = i64::try_from(events.len()).unwrap_or(i64::MAX);
-    let mut ids: Vec<i64> = tx
-        .query(&next_ids, &[&n])
-        .await?
-        .iter()
-        .map(|r| r.try_get(0))
-        .collect::<Result<_, _>>()?;
-    ids.sort_unstable();
-    let sink = tx.copy_in(&copy).await?;
-    let writer = BinaryCopyInWriter::new(sink, &STAGING_TYPES);
+    ids: &[i64],
+) -> Result<u64, tokio_postgres::Error> {
     let mut writer = std::pin::pin!(writer);
-    for (e, id) in events.iter().zip(&ids) {
+    for (e, id) in events.iter().zip(ids) {
         let ioa = e.ioa.map(i64::from);
         let kind = value_kind_code(&e.value);
         let (int, float, text) = value_columns(&e.value);
@@ -372,7 +363,63 @@ async fn copy_events(
             ])
             .await?;
     }
-    writer.as_mut().finish().await?;
+    writer.as_mut().finish().await
+}
+
+/// `count` ids from the sequence, increasing (so in the order of the batch).
+async fn next_ids(conn: &Object, count: usize) -> Result<Vec<i64>, StoreError> {
+    let next_ids = conn.prepare_cached(NEXT_IDS).await?;
+    let n = i64::try_from(count).unwrap_or(i64::MAX);
+    let mut ids: Vec<i64> = conn
+        .query(&next_ids, &[&n])
+        .await?
+        .iter()
+        .map(|r| r.try_get(0))
+        .collect::<Result<_, _>>()?;
+    ids.sort_unstable();
+    Ok(ids)
+}
+
+/// Appends a batch in one transaction, with ids from the sequence taken first (so they
+/// are known, increasing and in the order of `events`). First by binary COPY straight
+/// into `events`: a batch is new but for a retry after a crash, and one pass over the
+/// rows is the cheapest. A key stored already makes that COPY fail as a whole (COPY has
+/// no ON CONFLICT); the batch is then written again the careful way: COPY into the
+/// staging table, then into `events` leaving out those whose key is stored (their id
+/// answered as the stored one's).
+async fn copy_events(
+    conn: &mut Object,
+    events: &[EventRecord],
+) -> Result<Vec<RecordId>, StoreError> {
+    let ids = next_ids(conn, events.len()).await?;
+    let direct = conn.prepare_cached(COPY_EVENTS).await?;
+    let tx = conn.transaction().await?;
+    let sink = tx.copy_in(&direct).await?;
+    let writer = BinaryCopyInWriter::new(sink, &STAGING_TYPES);
+    match write_copy(writer, events, &ids).await {
+        Ok(_) => {
+            tx.commit().await?;
+            return Ok(ids);
+        }
+        Err(error) if error.code() == Some(&SqlState::UNIQUE_VIOLATION) => {
+            tracing::debug!("a batch held stored keys: written again without them");
+            tx.rollback().await?;
+        }
+        Err(error) => return Err(error.into()),
+    }
+    copy_staged(conn, events, ids).await
+}
+
+/// [`copy_events`] for a batch holding events whose key is stored already.
+async fn copy_staged(
+    conn: &mut Object,
+    events: &[EventRecord],
+    mut ids: Vec<i64>,
+) -> Result<Vec<RecordId>, StoreError> {
+    let copy = conn.prepare_cached(COPY_STAGING).await?;
+    let tx = conn.transaction().await?;
+    let sink = tx.copy_in(&copy).await?;
+    write_copy(BinaryCopyInWriter::new(sink, &STAGING_TYPES), events, &ids).await?;
     let stored = tx.execute(MOVE_STAGED, &[]).await?;
     if stored < u64::try_from(events.len()).unwrap_or(u64::MAX) {
         for row in tx.query(DUPLICATES, &[]).await? {
@@ -489,9 +536,22 @@ impl Database for PostgresStore {
         })
     }
 
-    /// Whole days go (their partitions dropped): the rollups before the cutoff's day.
-    fn rollups_purged_before(&self, cutoff_ms: i64) -> i64 {
-        partitions::day_of(cutoff_ms)
+    /// Whole days go, as the events' (their partitions dropped).
+    fn purge_rollups(&self, cutoff_ms: i64) -> StoreFuture<'_, ()> {
+        Box::pin(async move {
+            let connection = checkout(&self.pool).await?;
+            self.partitions
+                .drop_before(&connection, History::Rollups, partitions::day_of(cutoff_ms))
+                .await?;
+            Ok(())
+        })
+    }
+
+    fn compact_closed_days(&self, now: DateTime<Utc>) -> StoreFuture<'_, u64> {
+        Box::pin(async move {
+            let connection = checkout(&self.pool).await?;
+            self.partitions.compact_closed_days(&connection, now).await
+        })
     }
 
     fn prepare_partitions(&self, now: DateTime<Utc>) -> StoreFuture<'_, ()> {

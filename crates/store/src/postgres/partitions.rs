@@ -11,6 +11,11 @@
 //! today, so a source clock gone wild fills the DEFAULT partition, not the catalogue with
 //! thousands of tables). Retention drops every partition whose whole day is older than its
 //! cutoff and deletes the DEFAULT partition's rows older than it.
+//!
+//! `trend_rollups` is partitioned by the day of its minutes (schema version 5): the day
+//! function makes an event day's rollup day with it, retention drops the rollup days with
+//! the event days, and [`Partitions::compact_closed_days`] rewrites each closed rollup day
+//! in key order once.
 
 use std::collections::HashSet;
 use std::sync::atomic::{AtomicI64, Ordering};
@@ -27,6 +32,12 @@ pub(crate) const DAY_MS: i64 = 86_400_000;
 /// Days after today whose partitions the store keeps made.
 pub const DAYS_AHEAD: i64 = 7;
 
+/// How long after its end a day counts as closed: its trend rollups are then rewritten in
+/// key order ([`Partitions::compact_closed_days`]). Events of the day arriving later (a
+/// node's buffer replayed after an outage) are still stored and folded, as ordinary
+/// updates.
+pub const CLOSED_DAY_GRACE_MS: i64 = 3_600_000;
+
 /// How many days before today an append's time may lie and still get a day partition.
 pub const ON_DEMAND_PAST_DAYS: i64 = 3_660;
 
@@ -40,6 +51,9 @@ pub(crate) enum History {
     Events,
     /// `commands` (the command audit), by `time_ms`.
     Commands,
+    /// `trend_rollups`, by `start_ms`: made with the event days (by the day function),
+    /// dropped with them.
+    Rollups,
 }
 
 impl History {
@@ -49,6 +63,7 @@ impl History {
         match self {
             History::Events => "events",
             History::Commands => "commands",
+            History::Rollups => "trend_rollups",
         }
     }
 
@@ -56,6 +71,7 @@ impl History {
         match self {
             History::Events => "event_ms",
             History::Commands => "time_ms",
+            History::Rollups => "start_ms",
         }
     }
 }
@@ -161,6 +177,50 @@ impl Partitions {
             self.make(client, history, &missing).await?;
         }
         Ok(())
+    }
+
+    /// CLUSTERs every rollup day that ended [`CLOSED_DAY_GRACE_MS`] before `now` and is not
+    /// clustered yet on its key (point, start_ms), packing its pages full first (a closed
+    /// day's minutes are not updated any more, so no room is kept for updates); returns
+    /// how many days it rewrote. A day is rewritten once: CLUSTER marks its key's index
+    /// as the table's clustering, which is what is checked.
+    pub(crate) async fn compact_closed_days(
+        &self,
+        client: &Client,
+        now: DateTime<Utc>,
+    ) -> Result<u64, StoreError> {
+        let open_after = day_of(now.timestamp_millis() - CLOSED_DAY_GRACE_MS) - DAY_MS;
+        let days = client
+            .query(
+                "SELECT c.relname::text, k.relname::text FROM pg_inherits i \
+                   JOIN pg_class c ON c.oid = i.inhrelid \
+                   JOIN pg_index x ON x.indrelid = c.oid AND x.indisprimary \
+                   JOIN pg_class k ON k.oid = x.indexrelid \
+                 WHERE i.inhparent = to_regclass('trend_rollups') AND NOT x.indisclustered \
+                 ORDER BY 1",
+                &[],
+            )
+            .await?;
+        let mut rewritten = 0;
+        for row in days {
+            let (name, key): (String, String) = (row.try_get(0)?, row.try_get(1)?);
+            match day_of_name(History::Rollups, &name) {
+                Some(day) if day <= open_after => {}
+                _ => continue,
+            }
+            let started = std::time::Instant::now();
+            // Both names are the database's for a partition the store made (checked
+            // above) and its key: letters, digits, '_'.
+            client
+                .batch_execute(&format!(
+                    "ALTER TABLE {name} SET (fillfactor = 100); CLUSTER {name} USING {key}"
+                ))
+                .await?;
+            tracing::info!(partition = %name, ms = started.elapsed().as_millis() as u64,
+                "rewrote a closed day's trend rollups in key order");
+            rewritten += 1;
+        }
+        Ok(rewritten)
     }
 
     /// Drops every partition of `history` whose day ends at or before `cutoff_ms` and

@@ -142,11 +142,24 @@ pub(crate) trait Database: Send + Sync {
     /// whole day partitions (so up to a day more than the cutoff stays).
     fn purge_history(&self, cutoff_ms: i64) -> StoreFuture<'_, u64>;
 
-    /// The start before which the trend rollups go when [`Database::purge_history`] is
-    /// given `cutoff_ms`: where the events it keeps begin, rounded down to a minute (a
-    /// minute before it ends before the cutoff).
-    fn rollups_purged_before(&self, cutoff_ms: i64) -> i64 {
-        cutoff_ms.div_euclid(ROLLUP_SPAN_MS) * ROLLUP_SPAN_MS
+    /// Deletes the trend rollups whose events [`Database::purge_history`] purged at
+    /// `cutoff_ms`: those of the minutes before the cutoff's (a minute before it ends
+    /// before the cutoff), by ranges of the key. PostgreSQL drops them by whole days.
+    fn purge_rollups(&self, cutoff_ms: i64) -> StoreFuture<'_, ()>
+    where
+        Self: Sized,
+    {
+        Box::pin(delete_rollups_before(
+            self,
+            cutoff_ms.div_euclid(ROLLUP_SPAN_MS) * ROLLUP_SPAN_MS,
+        ))
+    }
+
+    /// Rewrites what no longer changes in the order it is read
+    /// ([`EventStore::compact_closed_days`]); nothing to do by default.
+    fn compact_closed_days(&self, now: DateTime<Utc>) -> StoreFuture<'_, u64> {
+        let _ = now;
+        Box::pin(async { Ok(0) })
     }
 
     /// Before a command record of `time_ms` is appended (PostgreSQL makes its day's
@@ -229,7 +242,7 @@ fn trend_bucket_from_row(r: &dyn row::Columns) -> Result<TrendBucket, StoreError
 /// of the primary key (point, start_ms) deleted in chunks of
 /// [`PURGE_CHUNK`]; the points found by a loose scan of the key (one seek per point), so
 /// that no index on the start alone costs every append.
-async fn purge_rollups<D: Database>(db: &D, before_ms: i64) -> Result<(), StoreError> {
+async fn delete_rollups_before<D: Database>(db: &D, before_ms: i64) -> Result<(), StoreError> {
     let points = Statement {
         access: Access::Write,
         sql: "WITH RECURSIVE points (point) AS ( \
@@ -451,7 +464,7 @@ impl<D: Database> EventStore for D {
             total += delete_older(self, "notifications", "time_ms", cutoff).await?;
             // The trend rollups whose events are gone (not counted: they are not
             // records).
-            purge_rollups(self, self.rollups_purged_before(cutoff)).await?;
+            self.purge_rollups(cutoff).await?;
             // Refresh the planner's statistics with each (hourly) retention pass: they
             // decide between the point index and the time index for prefix filters.
             self.analyze().await?;
@@ -461,6 +474,10 @@ impl<D: Database> EventStore for D {
 
     fn prepare_partitions(&self, now: DateTime<Utc>) -> StoreFuture<'_, ()> {
         Database::prepare_partitions(self, now)
+    }
+
+    fn compact_closed_days(&self, now: DateTime<Utc>) -> StoreFuture<'_, u64> {
+        Database::compact_closed_days(self, now)
     }
 
     fn close(&self) -> StoreFuture<'_, ()> {

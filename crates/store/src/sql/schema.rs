@@ -12,7 +12,7 @@ struct Migration {
     version: i64,
     sql: &'static str,
     /// PostgreSQL's own text where the step differs in more than column types (the
-    /// partitioning of version 3); `None`: `sql` for both.
+    /// partitioning of versions 3 and 5); `None`: `sql` for both.
     postgres: Option<&'static str>,
 }
 
@@ -48,6 +48,13 @@ const MIGRATIONS: &[Migration] = &[
         version: 4,
         sql: include_str!("../../migrations/0004_rollups.sqlite.sql"),
         postgres: Some(include_str!("../../migrations/0004_rollups.postgres.sql")),
+    },
+    Migration {
+        version: 5,
+        sql: include_str!("../../migrations/0005_rollup_days.sqlite.sql"),
+        postgres: Some(include_str!(
+            "../../migrations/0005_rollup_days.postgres.sql"
+        )),
     },
 ];
 
@@ -153,7 +160,7 @@ mod tests {
     #[test]
     fn the_list_is_in_version_order() {
         assert!(MIGRATIONS.windows(2).all(|w| w[0].version < w[1].version));
-        assert_eq!(supported(), 4);
+        assert_eq!(supported(), 5);
     }
 
     #[test]
@@ -161,7 +168,7 @@ mod tests {
         let steps = pending(Backend::Sqlite, 1, 0).unwrap();
         assert_eq!(
             steps.iter().map(|s| s.version).collect::<Vec<_>>(),
-            [2, 3, 4]
+            [2, 3, 4, 5]
         );
         assert!(steps[0].sql.contains("CREATE TABLE lift_faults"));
         assert!(steps[1].sql.contains("events_key"));
@@ -169,7 +176,8 @@ mod tests {
         let steps = pending(Backend::Postgres, 2, 0).unwrap();
         assert!(steps[0].sql.contains("PARTITION BY RANGE (event_ms)"));
         assert!(steps[1].sql.contains("stanice_fold_rollups"));
-        assert!(pending(Backend::Postgres, 4, 0).unwrap().is_empty());
+        assert!(steps[2].sql.contains("PARTITION BY RANGE (start_ms)"));
+        assert!(pending(Backend::Postgres, 5, 0).unwrap().is_empty());
     }
 
     #[test]

@@ -175,3 +175,94 @@ async fn postgres_two_stores_make_the_same_days_at_once() {
         .await
         .unwrap();
 }
+
+/// The physical order of a rollup day's rows (a plain scan), as (point, minute).
+async fn rollup_rows(client: &tokio_postgres::Client, table: &str) -> Vec<(String, i64)> {
+    client
+        .query(&format!("SELECT point::text, start_ms FROM {table}"), &[])
+        .await
+        .unwrap()
+        .iter()
+        .map(|r| (r.get(0), r.get(1)))
+        .collect()
+}
+
+/// Schema version 5: the trend rollups are partitioned by day, written as the events
+/// come (all points of a minute together, so a point's minutes lie scattered) and
+/// rewritten in key order once a day is closed; trends answer the same before and
+/// after, a late event of a rewritten day is still folded, and retention drops the
+/// rollup days with the event days.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn postgres_closed_rollup_days_are_rewritten_in_key_order_once() {
+    let Some(url) = postgres_url("postgres_closed_rollup_days") else {
+        return;
+    };
+    let (schema, store_url) = postgres_schema(&url, "rollup_days").await;
+    let client = admin(&url).await.unwrap();
+    let store = open_store(&store_url).await.unwrap();
+
+    // Three days (2026-03-01 to 03), 12 points, a value per point every minute, one batch
+    // per minute as a station's recorder writes them.
+    const POINTS: i64 = 12;
+    let minutes = 3 * 1440;
+    let mut batch = Vec::new();
+    for minute in 0..minutes {
+        batch.clear();
+        for p in 0..POINTS {
+            let value = PointValue::Float(((minute * 7 + p * 13) % 101) as f64);
+            batch.push(ev(&format!("P{p:02}"), value, minute * 60_000 + p));
+        }
+        store.append_events(&batch).await.unwrap();
+    }
+    let day_one = format!("{schema}.trend_rollups_20260301");
+    let written = rollup_rows(&client, &day_one).await;
+    assert_eq!(written.len(), (1440 * POINTS) as usize);
+    let mut sorted = written.clone();
+    sorted.sort();
+    assert_ne!(
+        written, sorted,
+        "written in time order, all points of a minute together"
+    );
+    let trend = |point: &str| store::TrendQuery::new(point, at_ms(0), at_ms(3 * DAY), 72);
+    let before = store.query_trend(&trend("P05")).await.unwrap();
+    assert_eq!(before.len(), 72);
+
+    // At 03-03 01:00 the first two days are closed (an hour after their end), the third
+    // is not: two days rewritten, and only once.
+    let now = at_ms(2 * DAY + 3_600_000);
+    assert_eq!(store.compact_closed_days(now).await.unwrap(), 2);
+    assert_eq!(store.compact_closed_days(now).await.unwrap(), 0);
+    assert_eq!(rollup_rows(&client, &day_one).await, sorted);
+    let day_two = rollup_rows(&client, &format!("{schema}.trend_rollups_20260302")).await;
+    assert!(day_two.windows(2).all(|w| w[0] <= w[1]));
+    let day_three = rollup_rows(&client, &format!("{schema}.trend_rollups_20260303")).await;
+    assert!(!day_three.windows(2).all(|w| w[0] <= w[1]));
+    assert_eq!(store.query_trend(&trend("P05")).await.unwrap(), before);
+
+    // A late event of a rewritten day is folded as before.
+    store
+        .append_events(&[ev("P05", PointValue::Float(1000.0), 30)])
+        .await
+        .unwrap();
+    let after = store.query_trend(&trend("P05")).await.unwrap();
+    assert_eq!(after[0].max, 1000.0);
+    assert_eq!(after[0].count, before[0].count + 1);
+    assert_eq!(after[1..], before[1..]);
+
+    // Retention at 03-02 06:00 drops the first day's events and rollups together.
+    store.purge_older_than(at_ms(DAY + DAY / 4)).await.unwrap();
+    let rollup_days = partitions(&client, &schema, "trend_rollups").await;
+    assert_eq!(rows_of(&rollup_days, "trend_rollups_20260301"), None);
+    assert_eq!(
+        rows_of(&rollup_days, "trend_rollups_20260302"),
+        Some(1440 * POINTS)
+    );
+    let trend_now = store.query_trend(&trend("P05")).await.unwrap();
+    assert_eq!(trend_now.len(), 48);
+
+    drop(store);
+    client
+        .batch_execute(&format!("DROP SCHEMA {schema} CASCADE"))
+        .await
+        .unwrap();
+}

@@ -177,7 +177,7 @@ async fn sqlite_refuses_a_newer_schema() {
             err,
             StoreError::SchemaTooNew {
                 found: 99,
-                supported: 4
+                supported: 5
             }
         ),
         "{err}"
@@ -217,7 +217,7 @@ async fn postgres_persists_across_reopen_and_refuses_a_newer_schema() {
             err,
             StoreError::SchemaTooNew {
                 found: 42,
-                supported: 4
+                supported: 5
             }
         ),
         "{err}"
@@ -329,7 +329,7 @@ async fn sqlite_migrates_a_version_1_database() {
         .unwrap()
         .collect::<Result<_, _>>()
         .unwrap();
-    assert_eq!(versions, [1, 2, 3, 4]);
+    assert_eq!(versions, [1, 2, 3, 4, 5]);
     // Opening again migrates nothing.
     drop(conn);
     check_reopened(
@@ -390,6 +390,16 @@ async fn postgres_migrates_a_version_1_database() {
             .unwrap()
             .get(0);
         assert_eq!(old_day, 1);
+        // Version 5 partitioned the rollups by day: the old event's minute in its day.
+        let old_minutes: i64 = client
+            .query_one(
+                &format!("SELECT count(*) FROM {schema}.trend_rollups_19700101"),
+                &[],
+            )
+            .await
+            .unwrap()
+            .get(0);
+        assert_eq!(old_minutes, 1);
         let old = store.query_events(&EventQuery::default()).await.unwrap();
         let ids = store
             .append_events(&[ev("NEW", PointValue::Int(1), 0)])
@@ -407,7 +417,7 @@ async fn postgres_migrates_a_version_1_database() {
         .iter()
         .map(|r| r.get(0))
         .collect();
-    assert_eq!(versions, [1, 2, 3, 4]);
+    assert_eq!(versions, [1, 2, 3, 4, 5]);
     let reopened = open_store(&store_url).await.unwrap();
     let archive = reopened
         .query_lift_faults(&LiftFaultQuery::default())

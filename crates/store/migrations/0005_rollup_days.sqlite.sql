@@ -1,0 +1,3 @@
+-- Stanice event store, schema version 5 on SQLite: nothing to change. Version 5 partitions
+-- PostgreSQL's trend rollups by day so that closed days can be rewritten in key order;
+-- SQLite's rollup table (WITHOUT ROWID) is kept in key order by its B-tree already.
