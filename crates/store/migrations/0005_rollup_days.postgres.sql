@@ -1,5 +1,6 @@
 -- Stanice event store, schema version 5 on PostgreSQL: the trend rollups partitioned by
--- day like the events, so that a closed day can be rewritten in key order.
+-- day like the events, so that a closed day can be rewritten in key order, and each
+-- minute's first and last value.
 --
 -- Why: a trend reads one point's minutes, (point, start_ms) in key order. The statement
 -- trigger upserts each batch's minutes as the events come, all points of a minute
@@ -14,6 +15,11 @@
 -- `trend_rollups_YYYYMMDD` holds the minutes starting that UTC day; `trend_rollups_default`
 -- the minutes of days without a partition (as `events_default`). The day function makes a
 -- day's rollup partition with its events' day, and retention drops both.
+--
+-- A minute also keeps its first and last value (by event time, then id: the order the
+-- raw first/last query reads), so that a first/last trend of wide buckets reads the
+-- rollups too instead of two seeks per bucket into the events (534 ms at 100 million).
+-- The old minutes get theirs from the events by one seek each.
 
 CREATE OR REPLACE FUNCTION stanice_day_partition(parent TEXT, day_start BIGINT) RETURNS BOOLEAN
 LANGUAGE plpgsql AS $fn$
@@ -68,6 +74,8 @@ CREATE TABLE trend_rollups (
     sum_value DOUBLE PRECISION NOT NULL,
     samples   BIGINT NOT NULL,
     invalid   BIGINT NOT NULL,           -- 1: a value of the minute was invalid (IV)
+    first_value DOUBLE PRECISION,        -- the value at first_ms (the lowest id there)
+    last_value  DOUBLE PRECISION,        -- the value at last_ms (the highest id there)
     PRIMARY KEY (point, start_ms)
 ) PARTITION BY RANGE (start_ms);
 CREATE TABLE trend_rollups_default PARTITION OF trend_rollups DEFAULT WITH (fillfactor = 70);
@@ -76,8 +84,56 @@ CREATE TABLE trend_rollups_default PARTITION OF trend_rollups DEFAULT WITH (fill
 SELECT stanice_day_partition('trend_rollups',
            (extract(epoch FROM to_date(substr(c.relname, 8), 'YYYYMMDD')) * 1000)::BIGINT)
 FROM pg_inherits i JOIN pg_class c ON c.oid = i.inhrelid
-WHERE i.inhparent = 'events'::regclass AND c.relname ~ '^events_[0-9]{8}$';
+WHERE i.inhparent = 'events'::regclass AND c.relname ~ '^events_[0-9]+$' AND length(c.relname) = 15;
 
--- ... and the old rows in key order, so that every day starts out compact.
-INSERT INTO trend_rollups SELECT * FROM trend_rollups_v4 ORDER BY point, start_ms;
+-- ... and the old rows in key order, so that every day starts out compact, each with its
+-- first and last value.
+INSERT INTO trend_rollups
+SELECT r.*,
+       (SELECT COALESCE(e.value_float, CAST(e.value_int AS DOUBLE PRECISION)) FROM events e
+        WHERE e.point = r.point AND e.event_ms = r.first_ms AND e.value_kind IN (1, 3, 4)
+          AND (e.value_float IS NOT NULL OR e.value_int IS NOT NULL)
+        ORDER BY e.id LIMIT 1),
+       (SELECT COALESCE(e.value_float, CAST(e.value_int AS DOUBLE PRECISION)) FROM events e
+        WHERE e.point = r.point AND e.event_ms = r.last_ms AND e.value_kind IN (1, 3, 4)
+          AND (e.value_float IS NOT NULL OR e.value_int IS NOT NULL)
+        ORDER BY e.id DESC LIMIT 1)
+FROM trend_rollups_v4 r ORDER BY r.point, r.start_ms;
 DROP TABLE trend_rollups_v4;
+
+-- The fold keeps the first and last values: a batch's own per minute, and against a
+-- minute stored already the earlier first (on the same millisecond the stored one: it
+-- has the lower id) and the later last (on the same millisecond the batch's).
+CREATE OR REPLACE FUNCTION stanice_fold_rollups() RETURNS trigger
+LANGUAGE plpgsql AS $fn$
+BEGIN
+    INSERT INTO trend_rollups (point, start_ms, first_ms, last_ms, min_value, max_value,
+                               sum_value, samples, invalid, first_value, last_value)
+    SELECT point, event_ms - (event_ms % 60000 + 60000) % 60000 AS start_ms,
+           MIN(event_ms), MAX(event_ms), MIN(v), MAX(v), SUM(v), COUNT(*), MAX(quality & 1),
+           (array_agg(v ORDER BY event_ms, id))[1],
+           (array_agg(v ORDER BY event_ms DESC, id DESC))[1]
+    FROM (SELECT point, event_ms, id, quality,
+                 COALESCE(value_float, CAST(value_int AS DOUBLE PRECISION)) AS v
+          FROM stored
+          WHERE value_kind IN (1, 3, 4)
+            AND (value_float IS NOT NULL OR value_int IS NOT NULL)) AS numeric_events
+    GROUP BY point, 2
+    -- Rows locked in key order: two writers folding into the same minutes wait for each
+    -- other instead of deadlocking.
+    ORDER BY point, 2
+    ON CONFLICT (point, start_ms) DO UPDATE SET
+        first_ms  = LEAST(trend_rollups.first_ms, EXCLUDED.first_ms),
+        last_ms   = GREATEST(trend_rollups.last_ms, EXCLUDED.last_ms),
+        min_value = LEAST(trend_rollups.min_value, EXCLUDED.min_value),
+        max_value = GREATEST(trend_rollups.max_value, EXCLUDED.max_value),
+        sum_value = trend_rollups.sum_value + EXCLUDED.sum_value,
+        samples   = trend_rollups.samples + EXCLUDED.samples,
+        invalid   = GREATEST(trend_rollups.invalid, EXCLUDED.invalid),
+        first_value = CASE WHEN EXCLUDED.first_ms < trend_rollups.first_ms
+                           THEN EXCLUDED.first_value ELSE trend_rollups.first_value END,
+        last_value  = CASE WHEN EXCLUDED.last_ms >= trend_rollups.last_ms
+                           THEN EXCLUDED.last_value ELSE trend_rollups.last_value END;
+    RETURN NULL;
+END
+$fn$;

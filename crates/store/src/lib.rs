@@ -95,7 +95,8 @@
 //!
 //! `trend_rollups` (schema version 4) holds, per point with numeric values and per minute
 //! ([`ROLLUP_SPAN_MS`]) that has values, the first and last event time, the minimum,
-//! maximum, sum and count of the values and whether any was invalid. It is folded in the
+//! maximum, sum and count of the values and whether any was invalid, and (version 5) the
+//! first and last value. It is folded in the
 //! transaction that stores the events, from the rows actually stored (an event ignored for
 //! its key is not folded twice): on SQLite by the writer, one statement per batch; on
 //! PostgreSQL by a statement trigger on `events` over the INSERT's transition table (so

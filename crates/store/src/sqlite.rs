@@ -324,21 +324,30 @@ fn insert_rows(
     Ok(ids)
 }
 
-/// Folds the events with ids `?1..=?2` into the trend rollups (schema version 4): per
-/// point and minute, in one statement over the batch's rows, upserting in key order.
+/// Folds the events with ids `?1..=?2` into the trend rollups (schema versions 4 and 5):
+/// per point and minute, in one statement over the batch's rows, upserting in key order.
 /// One statement per batch rather than a trigger per row: each of the batch's minutes is
 /// upserted once, in key order, where a row trigger upserts once per event in the events'
-/// order. (`WHERE true`: SQLite's parser needs a WHERE before the ON CONFLICT of an
-/// INSERT ... SELECT.)
+/// order. A minute's first and last value are the batch's by (event time, id) (the
+/// windows), and against a minute stored already the earlier first (on the same
+/// millisecond the stored one: it has the lower id) and the later last (on the same
+/// millisecond the batch's). (`WHERE true`: SQLite's parser needs a WHERE before the ON
+/// CONFLICT of an INSERT ... SELECT.)
 const FOLD_ROLLUPS: &str = "INSERT INTO trend_rollups (point, start_ms, first_ms, last_ms, \
-     min_value, max_value, sum_value, samples, invalid) \
-     SELECT point, event_ms - (event_ms % 60000 + 60000) % 60000 AS start_ms, \
-            MIN(event_ms), MAX(event_ms), MIN(v), MAX(v), SUM(v), COUNT(*), MAX(quality & 1) \
-     FROM (SELECT point, event_ms, quality, \
-                  COALESCE(value_float, CAST(value_int AS REAL)) AS v \
-           FROM events \
-           WHERE id BETWEEN ?1 AND ?2 AND value_kind IN (1, 3, 4) \
-             AND (value_float IS NOT NULL OR value_int IS NOT NULL)) \
+     min_value, max_value, sum_value, samples, invalid, first_value, last_value) \
+     SELECT point, start_ms, MIN(event_ms), MAX(event_ms), MIN(v), MAX(v), SUM(v), COUNT(*), \
+            MAX(iv), MAX(opening), MAX(closing) \
+     FROM (SELECT point, start_ms, event_ms, v, iv, \
+                  first_value(v) OVER (PARTITION BY point, start_ms \
+                                       ORDER BY event_ms, id) AS opening, \
+                  first_value(v) OVER (PARTITION BY point, start_ms \
+                                       ORDER BY event_ms DESC, id DESC) AS closing \
+           FROM (SELECT point, event_ms - (event_ms % 60000 + 60000) % 60000 AS start_ms, \
+                        event_ms, id, quality & 1 AS iv, \
+                        COALESCE(value_float, CAST(value_int AS REAL)) AS v \
+                 FROM events \
+                 WHERE id BETWEEN ?1 AND ?2 AND value_kind IN (1, 3, 4) \
+                   AND (value_float IS NOT NULL OR value_int IS NOT NULL))) \
      WHERE true \
      GROUP BY point, start_ms \
      ORDER BY point, start_ms \
@@ -349,7 +358,11 @@ const FOLD_ROLLUPS: &str = "INSERT INTO trend_rollups (point, start_ms, first_ms
          max_value = max(max_value, excluded.max_value), \
          sum_value = sum_value + excluded.sum_value, \
          samples   = samples + excluded.samples, \
-         invalid   = max(invalid, excluded.invalid)";
+         invalid   = max(invalid, excluded.invalid), \
+         first_value = CASE WHEN excluded.first_ms < first_ms \
+                            THEN excluded.first_value ELSE first_value END, \
+         last_value  = CASE WHEN excluded.last_ms >= last_ms \
+                            THEN excluded.last_value ELSE last_value END";
 
 /// Appends events in one immediate transaction, leaving out those whose key is already
 /// stored (answered with the stored one's id); ids in their order. The columns are bound

@@ -29,9 +29,12 @@ pub enum TrendMode {
     /// ones from every event of the range.
     #[default]
     Aggregate,
-    /// The bucket's first and last value, found by two index seeks (a cost that grows
-    /// with the buckets only: 60 days of a value every few seconds in tens of
-    /// milliseconds), `min`/`max`/`avg` of those two; a spike between them is not seen.
+    /// The bucket's first and last value. Buckets of four minutes or more are read from
+    /// the rollups, which keep each minute's first and last value (schema version 5):
+    /// the bucket's `min`/`max`/`avg`/`count` are then exact as in
+    /// [`TrendMode::Aggregate`]. Narrower ones are found by two index seeks per bucket
+    /// (a cost that grows with the buckets only), `min`/`max`/`avg` of those two (a
+    /// spike between them is not seen) and a count of 1 or 2.
     FirstLast,
 }
 
@@ -74,16 +77,15 @@ impl TrendQuery {
         self
     }
 
-    /// The rollup span an aggregated trend is read from: [`ROLLUP_SPAN_MS`] when it fits
-    /// four times into a bucket; `None` (every event read) for narrower buckets and for
-    /// [`TrendMode::FirstLast`]. A minute is counted whole in the bucket its start falls
-    /// in, so with rollups a bucket covers whole minutes and its width varies by one (43
-    /// or 44 minutes for 60 days in 2,000 buckets); the range's ends stay exact (the
-    /// partial minutes there are read from the events), and each bucket's
-    /// `first_time`/`last_time` are its values' own.
+    /// The rollup span a trend is read from: [`ROLLUP_SPAN_MS`] when it fits four times
+    /// into a bucket; `None` for narrower buckets (every event read when aggregated, two
+    /// seeks per bucket for [`TrendMode::FirstLast`]). A minute is counted whole in the
+    /// bucket its start falls in, so with rollups a bucket covers whole minutes and its
+    /// width varies by one (43 or 44 minutes for 60 days in 2,000 buckets); the range's
+    /// ends stay exact (the partial minutes there are read from the events), and each
+    /// bucket's `first_time`/`last_time` (and first/last values) are its values' own.
     pub fn rollup_span_ms(&self) -> Option<i64> {
-        (self.mode == TrendMode::Aggregate && self.bucket_ms() >= SPANS_PER_BUCKET * ROLLUP_SPAN_MS)
-            .then_some(ROLLUP_SPAN_MS)
+        (self.bucket_ms() >= SPANS_PER_BUCKET * ROLLUP_SPAN_MS).then_some(ROLLUP_SPAN_MS)
     }
 
     /// The width of one bucket in milliseconds (at least 1).
@@ -113,10 +115,10 @@ pub struct TrendBucket {
     pub max: f64,
     /// The mean of the values.
     pub avg: f64,
-    /// How many values fell in the slice ([`TrendMode::FirstLast`]: how many were read,
-    /// 1 or 2).
+    /// How many values fell in the slice ([`TrendMode::FirstLast`] of narrow buckets:
+    /// how many were read, 1 or 2).
     pub count: u64,
-    /// Whether any value of the slice was invalid (IV) ([`TrendMode::FirstLast`]: the
-    /// first or the last).
+    /// Whether any value of the slice was invalid (IV) ([`TrendMode::FirstLast`] of
+    /// narrow buckets: the first or the last).
     pub invalid: bool,
 }

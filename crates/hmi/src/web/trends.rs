@@ -62,9 +62,9 @@ struct TrendParameters {
     width: Option<usize>,
     /// `json` (the default) or `csv`.
     format: Option<String>,
-    /// `minmax` (every value of a bucket: exact extremes, read from the store's minute
-    /// and hour rollups for long ranges) or `firstlast` (its first and last value);
-    /// default `minmax`.
+    /// `minmax` (every value of a bucket: exact extremes) or `firstlast` (its first and
+    /// last value); both read from the store's minute rollups for buckets of 4 minutes or
+    /// more; default `minmax`.
     mode: Option<String>,
 }
 

@@ -220,6 +220,17 @@ pub(crate) async fn delete_older<D: Database>(
     }
 }
 
+/// A bucket of a first/last trend read from the rollups: the aggregates, then its first
+/// and last value (NULL only for a minute folded before schema version 5 whose event was
+/// not found).
+fn trend_bucket_with_ends_from_row(r: &dyn row::Columns) -> Result<TrendBucket, StoreError> {
+    Ok(TrendBucket {
+        first: r.real(7)?,
+        last: r.real(8)?,
+        ..trend_bucket_from_row(r)?
+    })
+}
+
 fn trend_bucket_from_row(r: &dyn row::Columns) -> Result<TrendBucket, StoreError> {
     let real = |i: usize| -> Result<f64, StoreError> {
         r.real(i)?
@@ -495,12 +506,19 @@ impl<D: Database> EventStore for D {
             if query.to <= query.from {
                 return Ok(Vec::new());
             }
-            match query.mode {
-                TrendMode::Aggregate => {
+            match (query.mode, query.rollup_span_ms()) {
+                (TrendMode::Aggregate, _) => {
                     self.rows(trend_sql(query, D::BACKEND), trend_bucket_from_row)
                         .await
                 }
-                TrendMode::FirstLast => {
+                (TrendMode::FirstLast, Some(_)) => {
+                    self.rows(
+                        trend_sql(query, D::BACKEND),
+                        trend_bucket_with_ends_from_row,
+                    )
+                    .await
+                }
+                (TrendMode::FirstLast, None) => {
                     self.rows(trend_ends_sql(query, D::BACKEND), trend_ends_from_row)
                         .await
                 }

@@ -291,6 +291,15 @@ async fn check_migrated_to_2(store: &dyn EventStore) {
         trend.iter().map(|b| (b.min, b.count)).collect::<Vec<_>>(),
         [(42.0, 1)]
     );
+    // Its minute's first and last value, found by version 5 in the events.
+    let ends = store
+        .query_trend(&day.clone().with_mode(store::TrendMode::FirstLast))
+        .await
+        .unwrap();
+    assert_eq!(
+        ends.iter().map(|b| (b.first, b.last)).collect::<Vec<_>>(),
+        [(Some(42.0), Some(42.0))]
+    );
     let fault = LiftFaultRecord {
         id: None,
         node: "LIFTS".into(),

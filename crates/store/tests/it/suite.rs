@@ -1165,14 +1165,22 @@ fn trend_by_hand(events: &[EventRecord], query: &store::TrendQuery) -> Vec<(i64,
         let fold = folds.entry((at - from) / width).or_insert(TrendFold {
             first: t,
             last: t,
+            first_value: v,
+            last_value: v,
             min: v,
             max: v,
             sum: 0.0,
             count: 0,
             invalid: false,
         });
-        fold.first = fold.first.min(t);
-        fold.last = fold.last.max(t);
+        // `events` are in the order they are stored (their ids'): on the same millisecond
+        // the first is the earlier stored, the last the later.
+        if t < fold.first {
+            (fold.first, fold.first_value) = (t, v);
+        }
+        if t >= fold.last {
+            (fold.last, fold.last_value) = (t, v);
+        }
         fold.min = fold.min.min(v);
         fold.max = fold.max.max(v);
         fold.sum += v;
@@ -1186,6 +1194,8 @@ fn trend_by_hand(events: &[EventRecord], query: &store::TrendQuery) -> Vec<(i64,
 struct TrendFold {
     first: i64,
     last: i64,
+    first_value: f64,
+    last_value: f64,
     min: f64,
     max: f64,
     sum: f64,
@@ -1255,13 +1265,25 @@ pub(crate) async fn trend_reads_the_rollups(store: Arc<dyn EventStore>) {
         // Buckets of 2 minutes: every event read.
         (TrendQuery::new("RH2_P", at_ms(0), at_ms(hour), 30), None),
     ];
-    for (query, span) in queries {
+    // Each aggregated and as first/last: of buckets read from the rollups, the first and
+    // last value are the events' (by time, then as stored) and the rest is as aggregated.
+    let modes = queries.into_iter().flat_map(|(query, span)| {
+        let ends = query.clone().with_mode(TrendMode::FirstLast);
+        [(query, span), (ends, span)]
+    });
+    for (query, span) in modes.filter(|(q, span)| q.mode == TrendMode::Aggregate || span.is_some())
+    {
         assert_eq!(query.rollup_span_ms(), span, "{query:?}");
         let got = store.query_trend(&query).await.unwrap();
         let want = trend_by_hand(&events, &query);
         assert_eq!(got.len(), want.len(), "{query:?}: {got:?}");
         for (bucket, (index, fold)) in got.iter().zip(&want) {
             let context = format!("{query:?}, bucket {index}: {bucket:?} against {fold:?}");
+            let ends = match query.mode {
+                TrendMode::Aggregate => (None, None),
+                TrendMode::FirstLast => (Some(fold.first_value), Some(fold.last_value)),
+            };
+            assert_eq!((bucket.first, bucket.last), ends, "{context}");
             assert_eq!(
                 (
                     bucket.first_time.timestamp_millis(),
@@ -1282,9 +1304,9 @@ pub(crate) async fn trend_reads_the_rollups(store: Arc<dyn EventStore>) {
             );
         }
     }
-    // First and last are not read from rollups.
+    // Narrow first/last buckets are read by seeks.
     assert_eq!(
-        TrendQuery::new("RH2_P", at_ms(0), at_ms(6 * hour), 10)
+        TrendQuery::new("RH2_P", at_ms(0), at_ms(hour), 30)
             .with_mode(TrendMode::FirstLast)
             .rollup_span_ms(),
         None
