@@ -189,7 +189,7 @@ impl Partitions {
         client: &Client,
         now: DateTime<Utc>,
     ) -> Result<u64, StoreError> {
-        let open_after = day_of(now.timestamp_millis() - CLOSED_DAY_GRACE_MS) - DAY_MS;
+        let last_closed = day_of(now.timestamp_millis() - CLOSED_DAY_GRACE_MS) - DAY_MS;
         let days = client
             .query(
                 "SELECT c.relname::text, k.relname::text FROM pg_inherits i \
@@ -205,7 +205,7 @@ impl Partitions {
         for row in days {
             let (name, key): (String, String) = (row.try_get(0)?, row.try_get(1)?);
             match day_of_name(History::Rollups, &name) {
-                Some(day) if day <= open_after => {}
+                Some(day) if day <= last_closed => {}
                 _ => continue,
             }
             let started = std::time::Instant::now();
