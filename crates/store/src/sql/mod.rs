@@ -221,8 +221,8 @@ pub(crate) async fn delete_older<D: Database>(
 }
 
 /// A bucket of a first/last trend read from the rollups: the aggregates, then its first
-/// and last value (NULL only for a minute folded before schema version 5 whose event was
-/// not found).
+/// and last value (NULL only where neither the minute nor the events have it: events
+/// purged while their minute stayed).
 fn trend_bucket_with_ends_from_row(r: &dyn row::Columns) -> Result<TrendBucket, StoreError> {
     Ok(TrendBucket {
         first: r.real(7)?,

@@ -91,7 +91,8 @@ pub(crate) fn trend_sql(query: &TrendQuery, backend: Backend) -> Statement {
         TrendMode::FirstLast => {
             // The value at the bucket's first (last) time: its minute's kept value where
             // that minute's first (last) time is the bucket's, else (a partial minute at
-            // an end of the range) the event's, by one seek each.
+            // an end of the range, or a minute folded before schema version 5, which
+            // kept none) the event's, by one seek each.
             let end = |time: &str, kept: &str, order: &str| {
                 format!(
                     "COALESCE( \

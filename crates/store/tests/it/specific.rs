@@ -291,7 +291,8 @@ async fn check_migrated_to_2(store: &dyn EventStore) {
         trend.iter().map(|b| (b.min, b.count)).collect::<Vec<_>>(),
         [(42.0, 1)]
     );
-    // Its minute's first and last value, found by version 5 in the events.
+    // Its minute's first and last value: the minute, folded before version 5, kept none,
+    // so the trend finds them in the events.
     let ends = store
         .query_trend(&day.clone().with_mode(store::TrendMode::FirstLast))
         .await
