@@ -27,7 +27,11 @@ async fn a_link_cut_for_ten_minutes_loses_no_event_and_keeps_their_time_tags() {
     runtime.advance(Duration::from_secs(1)).await.unwrap();
     links_up(&runtime).await;
     let dispatch = Dispatch::connect(rdrt_address(&runtime), 1, true).await;
-    eventually("GI done", || dispatch.last(282).is_some()).await;
+    // RH2's value known (valid) at dispatch first, so that the IV below is the cut's.
+    eventually("RH2's value valid at dispatch", || {
+        dispatch.last(282).is_some_and(|r| !r.invalid())
+    })
+    .await;
 
     // The cable between RH1.1 and the RH2 board is pulled.
     runtime.operate("link-cut RH1.1/RH2").await.unwrap();

@@ -57,8 +57,14 @@ async fn a_command_opens_the_feeder_and_the_change_comes_back_up() {
     runtime.advance(Duration::from_secs(1)).await.unwrap();
     links_up(&runtime).await;
     let dispatch = Dispatch::connect(rdrt_address(&runtime), RDRT_CA, true).await;
-    eventually("GI done", || dispatch.last(291).is_some()).await;
-    assert_eq!(dispatch.last(291).unwrap().on(), Some(true));
+    // The GI may answer before RH1.1's link has brought RH2's values up: then the busbar
+    // voltage comes invalid (IV, not yet known) and its value follows; wait for it.
+    eventually("the busbar voltage live and valid at dispatch", || {
+        dispatch
+            .last(291)
+            .is_some_and(|r| r.on() == Some(true) && !r.invalid())
+    })
+    .await;
 
     // Open QF1 (IOA 2021): confirmed through RH1.1 and RH2, executed by the LOGO! logic.
     assert!(dispatch.single_command(2021, true, false).await);
@@ -154,7 +160,11 @@ async fn a_pulled_module_invalidates_its_points_up_to_dispatch() {
     runtime.advance(Duration::from_secs(1)).await.unwrap();
     links_up(&runtime).await;
     let dispatch = Dispatch::connect(rdrt_address(&runtime), RDRT_CA, true).await;
-    eventually("GI done", || dispatch.last(298).is_some()).await;
+    // RH2's values known (valid) at dispatch first, so that the IV below is the pull's.
+    eventually("RH2's values valid at dispatch", || {
+        (281..=298).all(|ioa| dispatch.last(ioa).is_some_and(|r| !r.invalid()))
+    })
+    .await;
     runtime.operate("module-pulled RH2_LOGO").await.unwrap();
     advance_until(
         &runtime,
