@@ -53,24 +53,26 @@ fn end() -> DateTime<Utc> {
     Utc.with_ymd_and_hms(2026, 5, 1, 0, 0, 0).unwrap()
 }
 
+/// Event `i` of `source` (its key's sequence), of point `p` of `node` at `at`: a boolean,
+/// float or integer point by `p`.
+fn keyed_event(node: String, p: usize, i: usize, at: DateTime<Utc>, source: &str) -> EventRecord {
+    let value = match p % 4 {
+        0 => PointValue::Bool(i % 2 == 0),
+        1 | 2 => PointValue::Float((i % 1000) as f64 * 0.25),
+        _ => PointValue::Int(i as i64),
+    };
+    let mut e = EventRecord::new(node.clone(), format!("{node}_P{p}"), value, at);
+    e.ioa = Some(p as u32);
+    e.with_key(EventKey::new(source, i as u64))
+}
+
 /// Event `i` of `total`, spread evenly over the last [`DAYS`] days.
 fn event(i: usize, total: usize, source: &str) -> EventRecord {
     let span_ms = DAYS * 86_400_000;
     let at = end() - Duration::milliseconds(span_ms)
         + Duration::milliseconds((i as i128 * span_ms as i128 / total.max(1) as i128) as i64);
     let p = i % POINTS;
-    let mut e = EventRecord::new(
-        format!("ROV{:02}", p % 12),
-        format!("ROV{:02}_P{p}", p % 12),
-        match p % 4 {
-            0 => PointValue::Bool(i % 2 == 0),
-            1 | 2 => PointValue::Float((i % 1000) as f64 * 0.25),
-            _ => PointValue::Int(i as i64),
-        },
-        at,
-    );
-    e.ioa = Some(p as u32);
-    e.with_key(EventKey::new(source, i as u64))
+    keyed_event(format!("ROV{:02}", p % 12), p, i, at, source)
 }
 
 /// Event `i` of a live system's stream ([`LIVE_POINTS`] points, [`LIVE_RATE`] events a
@@ -78,18 +80,7 @@ fn event(i: usize, total: usize, source: &str) -> EventRecord {
 fn live_event(i: usize, start: DateTime<Utc>, source: &str) -> EventRecord {
     let p = (i * 7919) % LIVE_POINTS; // every point in turn, not in name order
     let at = start + Duration::microseconds((i as i64 * 1_000_000) / LIVE_RATE as i64);
-    let mut e = EventRecord::new(
-        format!("N{:02}", p % 50),
-        format!("N{:02}_P{p:05}", p % 50),
-        match p % 4 {
-            0 => PointValue::Bool(i % 2 == 0),
-            1 | 2 => PointValue::Float((i % 1000) as f64 * 0.25),
-            _ => PointValue::Int(i as i64),
-        },
-        at,
-    );
-    e.ioa = Some(p as u32);
-    e.with_key(EventKey::new(source, i as u64))
+    keyed_event(format!("N{:02}", p % 50), p, i, at, source)
 }
 
 fn percentile(samples: &mut [f64], p: f64) -> f64 {
