@@ -145,6 +145,8 @@
 #![cfg_attr(not(test), deny(clippy::indexing_slicing))]
 
 mod error;
+#[cfg(feature = "database")]
+mod history;
 mod lift;
 mod model;
 mod notification;

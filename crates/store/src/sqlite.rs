@@ -10,15 +10,18 @@ use rusqlite::types::{ToSqlOutput, Value, ValueRef};
 use rusqlite::{params_from_iter, Connection, OpenFlags, Row, ToSql, TransactionBehavior};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
+use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use tokio::sync::oneshot;
 
-use crate::model::{quality_to_bits, value_kind_code};
-use crate::sql::row::{key_sequence, to_ms, value_columns, Columns, Decode, EVENT_INSERT};
+use crate::history::codec::NameId;
+use crate::history::write::{self, EventNames, HistoryWrite};
+use crate::history::History;
+use crate::sql::row::{event_from_row, Cell, Columns, Decode, OwnedRow, EVENT_COLUMNS};
 use crate::sql::schema::{self, CURRENT_VERSION, VERSION_TABLE};
 use crate::sql::{delete_older, insert_sql, Access, Database, Param, Statement};
-use crate::{Backend, EventRecord, RecordId, StoreError, StoreFuture};
+use crate::{Backend, RecordId, StoreError, StoreFuture};
 
 /// How long a connection waits for a lock held by another process before failing.
 const BUSY_TIMEOUT: Duration = Duration::from_secs(5);
@@ -118,6 +121,7 @@ pub struct SqliteStore {
     writer: Worker,
     readers: Worker,
     path: Option<PathBuf>,
+    history: History,
 }
 
 impl std::fmt::Debug for SqliteStore {
@@ -148,7 +152,7 @@ fn cache_kib(cache_mib: Option<u32>) -> (i64, i64) {
 }
 
 fn open_writer(path: &Path, cache_kib: i64) -> Result<Connection, StoreError> {
-    let conn = Connection::open(path)?;
+    let mut conn = Connection::open(path)?;
     configure(&conn)?;
     // WAL: readers never block the writer nor the writer the readers. NORMAL sync in WAL
     // mode keeps the database consistent on power loss and loses at most the last
@@ -169,6 +173,7 @@ fn open_writer(path: &Path, cache_kib: i64) -> Result<Connection, StoreError> {
     // the historian bench: 1.5x the events per second). The log file stays below ~64 MiB.
     conn.pragma_update(None, "wal_autocheckpoint", WAL_CHECKPOINT_PAGES)?;
     migrate(&conn)?;
+    move_rows_into_blocks(&mut conn)?;
     // Analyses what needs it at open (SQLite's advice for long-lived connections), with
     // a bounded sample so a large database still opens quickly.
     conn.execute_batch("PRAGMA analysis_limit = 1000; PRAGMA optimize = 0x10002")?;
@@ -229,6 +234,7 @@ impl SqliteStore {
             writer: Worker::spawn("sqlite-writer", vec![writer])?,
             readers: Worker::spawn("sqlite-reader", readers)?,
             path: Some(path),
+            history: History::default(),
         })
     }
 
@@ -246,6 +252,7 @@ impl SqliteStore {
             readers: writer.clone(),
             writer,
             path: None,
+            history: History::default(),
         })
     }
 
@@ -276,6 +283,9 @@ impl Columns for Row<'_> {
         Ok(self.get(i)?)
     }
     fn text(&self, i: usize) -> Result<Option<String>, StoreError> {
+        Ok(self.get(i)?)
+    }
+    fn blob(&self, i: usize) -> Result<Option<Vec<u8>>, StoreError> {
         Ok(self.get(i)?)
     }
 }
@@ -324,106 +334,239 @@ fn insert_rows(
     Ok(ids)
 }
 
-/// Folds the events with ids `?1..=?2` into the trend rollups (schema versions 4 and 5):
-/// per point and minute, in one statement over the batch's rows, upserting in key order.
-/// One statement per batch rather than a trigger per row: each of the batch's minutes is
-/// upserted once, in key order, where a row trigger upserts once per event in the events'
-/// order. A minute's first and last value are the batch's by (event time, id) (the
-/// windows), and against a minute stored already the earlier first (on the same
-/// millisecond the stored one: it has the lower id) and the later last (on the same
-/// millisecond the batch's). (`WHERE true`: SQLite's parser needs a WHERE before the ON
-/// CONFLICT of an INSERT ... SELECT.)
-const FOLD_ROLLUPS: &str = "INSERT INTO trend_rollups (point, start_ms, first_ms, last_ms, \
+/// Merges a pass's minute into `trend_rollups`: against a minute stored already the
+/// earlier first value (on the same millisecond the stored one: a pass holds only events
+/// with higher ids than the passes before) and the later last value (on the same
+/// millisecond the pass's).
+const MERGE_ROLLUP: &str = "INSERT INTO trend_rollups (point, start_ms, first_ms, last_ms, \
      min_value, max_value, sum_value, samples, invalid, first_value, last_value) \
-     SELECT point, start_ms, MIN(event_ms), MAX(event_ms), MIN(v), MAX(v), SUM(v), COUNT(*), \
-            MAX(iv), MAX(opening), MAX(closing) \
-     FROM (SELECT point, start_ms, event_ms, v, iv, \
-                  first_value(v) OVER (PARTITION BY point, start_ms \
-                                       ORDER BY event_ms, id) AS opening, \
-                  first_value(v) OVER (PARTITION BY point, start_ms \
-                                       ORDER BY event_ms DESC, id DESC) AS closing \
-           FROM (SELECT point, event_ms - (event_ms % 60000 + 60000) % 60000 AS start_ms, \
-                        event_ms, id, quality & 1 AS iv, \
-                        COALESCE(value_float, CAST(value_int AS REAL)) AS v \
-                 FROM events \
-                 WHERE id BETWEEN ?1 AND ?2 AND value_kind IN (1, 3, 4) \
-                   AND (value_float IS NOT NULL OR value_int IS NOT NULL))) \
-     WHERE true \
-     GROUP BY point, start_ms \
-     ORDER BY point, start_ms \
+     VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11) \
      ON CONFLICT (point, start_ms) DO UPDATE SET \
+         first_value = CASE WHEN excluded.first_ms < first_ms OR first_value IS NULL \
+                            THEN excluded.first_value ELSE first_value END, \
+         last_value  = CASE WHEN excluded.last_ms >= last_ms OR last_value IS NULL \
+                            THEN excluded.last_value ELSE last_value END, \
          first_ms  = min(first_ms, excluded.first_ms), \
          last_ms   = max(last_ms, excluded.last_ms), \
          min_value = min(min_value, excluded.min_value), \
          max_value = max(max_value, excluded.max_value), \
          sum_value = sum_value + excluded.sum_value, \
          samples   = samples + excluded.samples, \
-         invalid   = max(invalid, excluded.invalid), \
-         first_value = CASE WHEN excluded.first_ms < first_ms \
-                            THEN excluded.first_value ELSE first_value END, \
-         last_value  = CASE WHEN excluded.last_ms >= last_ms \
-                            THEN excluded.last_value ELSE last_value END";
+         invalid   = max(invalid, excluded.invalid)";
 
-/// Appends events in one immediate transaction, leaving out those whose key is already
-/// stored (answered with the stored one's id); ids in their order. The columns are bound
-/// straight from the records: no parameter list per row.
-fn insert_events(
-    conn: &mut Connection,
-    events: &[EventRecord],
-) -> Result<Vec<RecordId>, StoreError> {
-    let sql = format!(
-        "INSERT OR IGNORE INTO events ({EVENT_INSERT}) VALUES \
-         (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16)"
-    );
-    let tx = conn.transaction_with_behavior(TransactionBehavior::Immediate)?;
-    let mut ids = Vec::with_capacity(events.len());
-    // The ids this transaction stores: consecutive, as the writer is the only one.
-    let mut stored_ids: Option<(i64, i64)> = None;
+/// Writes one append of the history in the open transaction `tx`.
+fn write_history(tx: &rusqlite::Transaction<'_>, w: &HistoryWrite) -> Result<(), StoreError> {
     {
-        let mut stmt = tx.prepare_cached(&sql)?;
-        for e in events {
-            let (int, float, text) = value_columns(&e.value);
-            let key_source = e.key.as_ref().map(|k| k.source.as_str());
-            let key_seq = e.key.as_ref().map(|k| key_sequence(k.sequence));
-            let stored = stmt.execute(rusqlite::params![
-                e.node,
-                e.point,
-                e.ioa,
-                value_kind_code(&e.value),
-                int,
-                float,
-                text,
-                quality_to_bits(e.quality),
-                e.source_time.map(|s| to_ms(s.time)),
-                e.source_time.is_some_and(|s| s.invalid),
-                to_ms(e.received_time),
-                to_ms(e.event_time()),
-                e.cause.code(),
-                e.origin,
-                key_source,
-                key_seq,
+        let mut block = tx.prepare_cached(
+            "INSERT INTO event_blocks (id, events, first_ms, last_ms, first_received_ms, \
+             last_received_ms, node, causes, invalid, segmented, data) \
+             VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)",
+        )?;
+        for b in &w.blocks {
+            block.execute(rusqlite::params![
+                b.id,
+                b.events,
+                b.first_ms,
+                b.last_ms,
+                b.first_received_ms,
+                b.last_received_ms,
+                b.node,
+                b.causes,
+                b.invalid,
+                b.segmented,
+                b.data
             ])?;
-            if stored == 1 {
-                let id = tx.last_insert_rowid();
-                stored_ids = Some(stored_ids.map_or((id, id), |(first, _)| (first, id)));
-                ids.push(id);
-            } else {
-                // Ignored: its key is stored already.
-                let id = tx
-                    .prepare_cached(
-                        "SELECT id FROM events WHERE source_id = ?1 AND source_seq = ?2",
-                    )?
-                    .query_row(rusqlite::params![key_source, key_seq], |r| r.get(0))?;
-                ids.push(id);
-            }
+        }
+        let mut key = tx.prepare_cached(
+            "INSERT INTO event_keys (source, first_seq, last_seq, first_id) \
+             VALUES (?1, ?2, ?3, ?4)",
+        )?;
+        for k in &w.keys {
+            key.execute(rusqlite::params![k.source, k.first_seq, k.last_seq, k.first_id])?;
         }
     }
-    if let Some((first, last)) = stored_ids {
-        tx.prepare_cached(FOLD_ROLLUPS)?
-            .execute(rusqlite::params![first, last])?;
+    tx.prepare_cached("UPDATE event_counter SET next_id = max(next_id, ?1)")?
+        .execute([w.next_id])?;
+    let Some(pass) = &w.pass else {
+        return Ok(());
+    };
+    let mut segment = tx.prepare_cached(
+        "INSERT INTO event_segments (point, start_ms, part, first_ms, last_ms, events, data) \
+         VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)",
+    )?;
+    for g in &pass.segments {
+        segment.execute(rusqlite::params![
+            g.point, g.start_ms, g.part, g.first_ms, g.last_ms, g.events, g.data
+        ])?;
+    }
+    let mut rollup = tx.prepare_cached(MERGE_ROLLUP)?;
+    for r in &pass.rollups {
+        rollup.execute(rusqlite::params![
+            &*r.point,
+            r.start_ms,
+            r.first_ms,
+            r.last_ms,
+            r.min,
+            r.max,
+            r.sum,
+            r.samples,
+            r.invalid,
+            r.first_value,
+            r.last_value
+        ])?;
+    }
+    let mut segmented = tx.prepare_cached("UPDATE event_blocks SET segmented = 1 WHERE id = ?1")?;
+    for id in &pass.blocks {
+        segmented.execute([id])?;
+    }
+    Ok(())
+}
+
+/// Rows of `events` moved per transaction by [`move_rows_into_blocks`].
+const ROWS_PER_MOVE: i64 = 65_536;
+
+/// Moves the rows of `events` (schema version 5 and before) into blocks, segments and
+/// rollups, with their ids and keys, oldest id first, a chunk per transaction that also
+/// deletes the chunk's rows (an interrupted move goes on at the next open); the rollups
+/// are folded again from the events (the first chunk empties them), then the table goes.
+fn move_rows_into_blocks(conn: &mut Connection) -> Result<(), StoreError> {
+    let legacy: i64 = conn.query_row(
+        "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = 'events'",
+        [],
+        |r| r.get(0),
+    )?;
+    if legacy == 0 {
+        return Ok(());
+    }
+    let mut names: HashMap<String, NameId> = HashMap::new();
+    {
+        let mut stmt = conn.prepare("SELECT id, name FROM event_names")?;
+        let mut rows = stmt.query([])?;
+        while let Some(row) = rows.next()? {
+            let id: i64 = row.get(0)?;
+            names.insert(row.get(1)?, NameId::try_from(id).unwrap_or(0));
+        }
+    }
+    let mut moved = 0u64;
+    loop {
+        let tx = conn.transaction_with_behavior(TransactionBehavior::Immediate)?;
+        let blocks_stored: i64 =
+            tx.query_row("SELECT count(*) FROM event_blocks", [], |r| r.get(0))?;
+        if blocks_stored == 0 {
+            tx.execute("DELETE FROM trend_rollups", [])?;
+        }
+        let events = rows(
+            &tx,
+            &format!("SELECT {EVENT_COLUMNS} FROM events ORDER BY id LIMIT ?1"),
+            &[Param::int(ROWS_PER_MOVE)],
+            event_from_row,
+        )?;
+        if events.is_empty() {
+            tx.execute_batch("DROP TABLE events")?;
+            tx.commit()?;
+            if moved > 0 {
+                tracing::info!(events = moved, "moved the events into blocks (schema 6)");
+            }
+            return Ok(());
+        }
+        let mut number = |name: &str| -> Result<NameId, StoreError> {
+            if let Some(&id) = names.get(name) {
+                return Ok(id);
+            }
+            tx.execute("INSERT INTO event_names (name) VALUES (?1)", [name])?;
+            let id = NameId::try_from(tx.last_insert_rowid())
+                .map_err(|_| StoreError::Corrupt("name number beyond 32 bits".to_owned()))?;
+            names.insert(name.to_owned(), id);
+            Ok(id)
+        };
+        let mut coded = Vec::with_capacity(events.len());
+        let mut last_id = 0;
+        for e in &events {
+            let id = e.id.unwrap_or(0);
+            last_id = id;
+            let names = EventNames {
+                node: number(&e.node)?,
+                point: number(&e.point)?,
+                origin: number(&e.origin)?,
+                key_source: match &e.key {
+                    Some(k) => Some(number(&k.source)?),
+                    None => None,
+                },
+            };
+            let mut one = write::number(
+                std::slice::from_ref(e),
+                |_| EventNames { ..names },
+                &HashMap::new(),
+                id,
+            );
+            coded.append(&mut one.new);
+        }
+        let mut tail = write::Tail::default();
+        let mut block_rows = Vec::new();
+        for (row, events) in write::blocks(&coded) {
+            tail.add(row.id, &events);
+            block_rows.push(row);
+        }
+        let by_id: HashMap<NameId, Arc<str>> =
+            names.iter().map(|(n, &id)| (id, Arc::from(n.as_str()))).collect();
+        let write = HistoryWrite {
+            next_id: last_id + 1,
+            keys: write::runs_of(&coded),
+            blocks: block_rows,
+            pass: write::pass(&tail, |id| by_id.get(&id).cloned()),
+        };
+        write_history(&tx, &write)?;
+        tx.execute("DELETE FROM events WHERE id <= ?1", [last_id])?;
+        tx.commit()?;
+        moved += events.len() as u64;
+    }
+}
+
+/// The numbers of `names`, adding the missing ones.
+fn name_ids(conn: &mut Connection, names: &[String]) -> Result<Vec<(NameId, String)>, StoreError> {
+    let tx = conn.transaction_with_behavior(TransactionBehavior::Immediate)?;
+    let mut pairs = Vec::with_capacity(names.len());
+    {
+        let mut add = tx.prepare_cached("INSERT OR IGNORE INTO event_names (name) VALUES (?1)")?;
+        let mut get = tx.prepare_cached("SELECT id FROM event_names WHERE name = ?1")?;
+        for name in names {
+            add.execute([name])?;
+            let id: i64 = get.query_row([name], |r| r.get(0))?;
+            let id = NameId::try_from(id)
+                .map_err(|_| StoreError::Corrupt(format!("name number {id}")))?;
+            pairs.push((id, name.clone()));
+        }
     }
     tx.commit()?;
-    Ok(ids)
+    Ok(pairs)
+}
+
+/// Runs `statements` in one read transaction, rows into memory.
+fn snapshot(conn: &mut Connection, statements: &[Statement]) -> Result<Vec<Vec<OwnedRow>>, StoreError> {
+    let tx = conn.transaction_with_behavior(TransactionBehavior::Deferred)?;
+    let mut out = Vec::with_capacity(statements.len());
+    for run in statements {
+        let mut stmt = tx.prepare_cached(&run.sql)?;
+        let columns = stmt.column_count();
+        let mut rows = stmt.query(params_from_iter(&run.params))?;
+        let mut read = Vec::new();
+        while let Some(row) = rows.next()? {
+            let mut cells = Vec::with_capacity(columns);
+            for i in 0..columns {
+                cells.push(match row.get_ref(i)? {
+                    ValueRef::Null => Cell::Null,
+                    ValueRef::Integer(v) => Cell::Int(v),
+                    ValueRef::Real(v) => Cell::Real(v),
+                    ValueRef::Text(t) => Cell::Text(String::from_utf8_lossy(t).into_owned()),
+                    ValueRef::Blob(b) => Cell::Blob(b.to_vec()),
+                });
+            }
+            read.push(OwnedRow(cells));
+        }
+        out.push(read);
+    }
+    tx.commit()?;
+    Ok(out)
 }
 
 impl Database for SqliteStore {
@@ -444,9 +587,25 @@ impl Database for SqliteStore {
         }))
     }
 
-    fn insert_events<'a>(&'a self, events: &'a [EventRecord]) -> StoreFuture<'a, Vec<RecordId>> {
-        let events = events.to_vec();
-        Box::pin(self.writer.run(move |c| insert_events(c, &events)))
+    fn history(&self) -> Option<&History> {
+        Some(&self.history)
+    }
+
+    fn name_ids(&self, names: Vec<String>) -> StoreFuture<'_, Vec<(NameId, String)>> {
+        Box::pin(self.writer.run(move |c| name_ids(c, &names)))
+    }
+
+    fn write_history(&self, write: HistoryWrite) -> StoreFuture<'_, ()> {
+        Box::pin(self.writer.run(move |c| {
+            let tx = c.transaction_with_behavior(TransactionBehavior::Immediate)?;
+            write_history(&tx, &write)?;
+            tx.commit()?;
+            Ok(())
+        }))
+    }
+
+    fn snapshot(&self, statements: Vec<Statement>) -> StoreFuture<'_, Vec<Vec<OwnedRow>>> {
+        Box::pin(self.readers.run(move |c| snapshot(c, &statements)))
     }
 
     fn insert_rows(
@@ -463,8 +622,10 @@ impl Database for SqliteStore {
 
     fn purge_history(&self, cutoff_ms: i64) -> StoreFuture<'_, u64> {
         Box::pin(async move {
-            Ok(delete_older(self, "events", "event_ms", cutoff_ms).await?
-                + delete_older(self, "commands", "time_ms", cutoff_ms).await?)
+            Ok(
+                crate::history::purge::purge(self, &self.history, cutoff_ms).await?
+                    + delete_older(self, "commands", "time_ms", cutoff_ms).await?,
+            )
         })
     }
 

@@ -228,6 +228,9 @@ impl Columns for Row {
     fn text(&self, i: usize) -> Result<Option<String>, StoreError> {
         Ok(self.try_get(i)?)
     }
+    fn blob(&self, i: usize) -> Result<Option<Vec<u8>>, StoreError> {
+        Ok(self.try_get(i)?)
+    }
 }
 
 fn sql_params(params: &[Param]) -> Vec<&(dyn ToSql + Sync)> {

@@ -27,6 +27,10 @@ use row::{
     lift_fault_params, notification_from_row, notification_params, stats_from_row, to_ms, Decode,
     COMMAND_INSERT, LIFT_FAULT_INSERT, NOTIFICATION_INSERT, STATS,
 };
+use crate::history::codec::NameId;
+use crate::history::write::HistoryWrite;
+use crate::history::History;
+use row::OwnedRow;
 use select::{
     command_cursor, command_sql, event_cursor, event_sql, into_page, lift_fault_sql,
     notification_sql, trend_sql, Counted,
@@ -124,8 +128,13 @@ pub(crate) trait Database: Send + Sync {
     /// Runs a writing statement; returns how many rows it changed.
     fn execute(&self, sql: String, params: Vec<Param>) -> StoreFuture<'_, u64>;
 
-    /// Appends checked, non-empty `events` in one transaction; ids in their order.
-    fn insert_events<'a>(&'a self, events: &'a [EventRecord]) -> StoreFuture<'a, Vec<RecordId>>;
+    /// Appends checked, non-empty `events` in one transaction as rows of `events`; ids in
+    /// their order. (A backend keeping its events in blocks, [`Database::history`], has
+    /// none.)
+    fn insert_events<'a>(&'a self, events: &'a [EventRecord]) -> StoreFuture<'a, Vec<RecordId>> {
+        let _ = events;
+        Box::pin(async { Err(StoreError::Closed) })
+    }
 
     /// Appends checked, non-empty `rows` (parameters in the order of `columns`, all of
     /// one shape) to `table` in one transaction; ids in their order. For the small batches
@@ -177,6 +186,32 @@ pub(crate) trait Database: Send + Sync {
 
     /// Refreshes the query planner's statistics.
     fn analyze(&self) -> StoreFuture<'_, ()>;
+
+    /// The history in blocks ([`crate::history`]), where this backend keeps its events
+    /// so (SQLite since schema version 6); `None`: a row per event in `events`.
+    fn history(&self) -> Option<&History> {
+        None
+    }
+
+    /// The numbers of `names` in `event_names`, adding those missing; one pair per name.
+    fn name_ids(&self, names: Vec<String>) -> StoreFuture<'_, Vec<(NameId, String)>> {
+        let _ = names;
+        Box::pin(async { Err(StoreError::Closed) })
+    }
+
+    /// Writes one append of the history (blocks, key runs, the event counter and a
+    /// pass) in one transaction.
+    fn write_history(&self, write: HistoryWrite) -> StoreFuture<'_, ()> {
+        let _ = write;
+        Box::pin(async { Err(StoreError::Closed) })
+    }
+
+    /// Runs read statements in one snapshot (one read transaction): a write committed
+    /// meanwhile is seen by all of them or by none.
+    fn snapshot(&self, statements: Vec<Statement>) -> StoreFuture<'_, Vec<Vec<OwnedRow>>> {
+        let _ = statements;
+        Box::pin(async { Err(StoreError::Closed) })
+    }
 
     /// Closes the connections ([`EventStore::close`]).
     fn close(&self) -> StoreFuture<'_, ()>;
@@ -427,7 +462,10 @@ impl<D: Database> EventStore for D {
                 return Ok(Vec::new());
             }
             events.iter().try_for_each(check_event)?;
-            self.insert_events(events).await
+            match self.history() {
+                Some(history) => crate::history::append::append(self, history, events).await,
+                None => self.insert_events(events).await,
+            }
         })
     }
 
@@ -447,6 +485,9 @@ impl<D: Database> EventStore for D {
 
     fn query_events<'a>(&'a self, query: &'a EventQuery) -> StoreFuture<'a, Page<EventRecord>> {
         Box::pin(async move {
+            if let Some(history) = self.history() {
+                return crate::history::list::query_events(self, history, query).await;
+            }
             let items = self
                 .rows(event_sql(query, D::BACKEND)?, event_from_row)
                 .await?;
@@ -506,6 +547,9 @@ impl<D: Database> EventStore for D {
             if query.to <= query.from {
                 return Ok(Vec::new());
             }
+            if let Some(history) = self.history() {
+                return crate::history::trend::query_trend(self, history, query).await;
+            }
             match (query.mode, query.rollup_span_ms()) {
                 (TrendMode::Aggregate, _) => {
                     self.rows(trend_sql(query, D::BACKEND), trend_bucket_from_row)
@@ -528,9 +572,13 @@ impl<D: Database> EventStore for D {
 
     fn stats(&self) -> StoreFuture<'_, StoreStats> {
         Box::pin(async move {
+            let sql = match self.history() {
+                Some(_) => crate::history::STATS,
+                None => STATS,
+            };
             let run = Statement {
                 access: Access::Read,
-                sql: STATS.to_owned(),
+                sql: sql.to_owned(),
                 params: Vec::new(),
             };
             one(self, run, stats_from_row).await

@@ -1,7 +1,6 @@
 //! Records to columns and back: the one mapping both backends use.
 //!
-//! A record is written as a list of [`Param`]s in the order of [`EVENT_INSERT`],
-//! [`COMMAND_INSERT`], [`LIFT_FAULT_INSERT`] or [`NOTIFICATION_INSERT`] and read back from
+//! A record is written as a list of [`Param`]s in the order of [`COMMAND_INSERT`], [`LIFT_FAULT_INSERT`] or [`NOTIFICATION_INSERT`] and read back from
 //! a row of the matching `*_COLUMNS` through [`Columns`], which each driver implements in
 //! a few lines.
 
@@ -33,6 +32,8 @@ pub(crate) trait Columns {
     fn real(&self, i: usize) -> Result<Option<f64>, StoreError>;
     /// A text column; NULL is `None`.
     fn text(&self, i: usize) -> Result<Option<String>, StoreError>;
+    /// A bytes column (a packed block of events); NULL is `None`.
+    fn blob(&self, i: usize) -> Result<Option<Vec<u8>>, StoreError>;
 
     /// An integer column that is never NULL.
     fn need_int(&self, i: usize) -> Result<i64, StoreError> {
@@ -51,13 +52,56 @@ pub(crate) trait Columns {
     }
 }
 
+/// One column of a row read into memory ([`OwnedRow`]).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum Cell {
+    Null,
+    Int(i64),
+    Real(f64),
+    Text(String),
+    Blob(Vec<u8>),
+}
+
+/// A row read into memory: what a snapshot of several statements answers.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub(crate) struct OwnedRow(pub(crate) Vec<Cell>);
+
+impl Columns for OwnedRow {
+    fn int(&self, i: usize) -> Result<Option<i64>, StoreError> {
+        match self.0.get(i) {
+            Some(Cell::Int(v)) => Ok(Some(*v)),
+            Some(Cell::Null) => Ok(None),
+            other => Err(StoreError::Corrupt(format!("column {i}: {other:?}, not an integer"))),
+        }
+    }
+    fn real(&self, i: usize) -> Result<Option<f64>, StoreError> {
+        match self.0.get(i) {
+            Some(Cell::Real(v)) => Ok(Some(*v)),
+            // A database may answer an integral aggregate as an integer.
+            #[allow(clippy::cast_precision_loss)]
+            Some(Cell::Int(v)) => Ok(Some(*v as f64)),
+            Some(Cell::Null) => Ok(None),
+            other => Err(StoreError::Corrupt(format!("column {i}: {other:?}, not a number"))),
+        }
+    }
+    fn text(&self, i: usize) -> Result<Option<String>, StoreError> {
+        match self.0.get(i) {
+            Some(Cell::Text(v)) => Ok(Some(v.clone())),
+            Some(Cell::Null) => Ok(None),
+            other => Err(StoreError::Corrupt(format!("column {i}: {other:?}, not a text"))),
+        }
+    }
+    fn blob(&self, i: usize) -> Result<Option<Vec<u8>>, StoreError> {
+        match self.0.get(i) {
+            Some(Cell::Blob(v)) => Ok(Some(v.clone())),
+            Some(Cell::Null) => Ok(None),
+            other => Err(StoreError::Corrupt(format!("column {i}: {other:?}, not bytes"))),
+        }
+    }
+}
+
 /// Reads a row with this function (a record, an id, the stats).
 pub(crate) type Decode<T> = fn(&dyn Columns) -> Result<T, StoreError>;
-
-/// The columns an event is written to, in the order of [`event_params`].
-pub(crate) const EVENT_INSERT: &str = "node, point, ioa, value_kind, value_int, value_float, \
-     value_text, quality, source_ms, source_invalid, received_ms, event_ms, cause, origin, \
-     source_id, source_seq";
 
 /// The columns a command record is written to, in the order of [`command_params`].
 pub(crate) const COMMAND_INSERT: &str = "time_ms, actor_kind, actor, node, point, ioa, \

@@ -56,6 +56,11 @@ const MIGRATIONS: &[Migration] = &[
             "../../migrations/0005_rollup_days.postgres.sql"
         )),
     },
+    Migration {
+        version: 6,
+        sql: include_str!("../../migrations/0006_blocks.sqlite.sql"),
+        postgres: Some(include_str!("../../migrations/0006_blocks.postgres.sql")),
+    },
 ];
 
 /// The newest version this program knows.
@@ -160,7 +165,7 @@ mod tests {
     #[test]
     fn the_list_is_in_version_order() {
         assert!(MIGRATIONS.windows(2).all(|w| w[0].version < w[1].version));
-        assert_eq!(supported(), 5);
+        assert_eq!(supported(), 6);
     }
 
     #[test]
@@ -168,8 +173,9 @@ mod tests {
         let steps = pending(Backend::Sqlite, 1, 0).unwrap();
         assert_eq!(
             steps.iter().map(|s| s.version).collect::<Vec<_>>(),
-            [2, 3, 4, 5]
+            [2, 3, 4, 5, 6]
         );
+        assert!(steps[4].sql.contains("CREATE TABLE event_blocks"));
         assert!(steps[0].sql.contains("CREATE TABLE lift_faults"));
         assert!(steps[1].sql.contains("events_key"));
         assert!(!steps[1].sql.contains("PARTITION"));
@@ -177,7 +183,7 @@ mod tests {
         assert!(steps[0].sql.contains("PARTITION BY RANGE (event_ms)"));
         assert!(steps[1].sql.contains("stanice_fold_rollups"));
         assert!(steps[2].sql.contains("PARTITION BY RANGE (start_ms)"));
-        assert!(pending(Backend::Postgres, 5, 0).unwrap().is_empty());
+        assert!(pending(Backend::Postgres, 6, 0).unwrap().is_empty());
     }
 
     #[test]

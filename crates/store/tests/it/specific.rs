@@ -177,7 +177,7 @@ async fn sqlite_refuses_a_newer_schema() {
             err,
             StoreError::SchemaTooNew {
                 found: 99,
-                supported: 5
+                supported: 6
             }
         ),
         "{err}"
@@ -217,7 +217,7 @@ async fn postgres_persists_across_reopen_and_refuses_a_newer_schema() {
             err,
             StoreError::SchemaTooNew {
                 found: 42,
-                supported: 5
+                supported: 6
             }
         ),
         "{err}"
@@ -339,7 +339,7 @@ async fn sqlite_migrates_a_version_1_database() {
         .unwrap()
         .collect::<Result<_, _>>()
         .unwrap();
-    assert_eq!(versions, [1, 2, 3, 4, 5]);
+    assert_eq!(versions, [1, 2, 3, 4, 5, 6]);
     // Opening again migrates nothing.
     drop(conn);
     check_reopened(
@@ -427,7 +427,7 @@ async fn postgres_migrates_a_version_1_database() {
         .iter()
         .map(|r| r.get(0))
         .collect();
-    assert_eq!(versions, [1, 2, 3, 4, 5]);
+    assert_eq!(versions, [1, 2, 3, 4, 5, 6]);
     let reopened = open_store(&store_url).await.unwrap();
     let archive = reopened
         .query_lift_faults(&LiftFaultQuery::default())

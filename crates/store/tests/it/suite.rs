@@ -47,7 +47,7 @@ fn same<T: std::fmt::Debug>(a: &T, b: &T) -> bool {
     format!("{a:?}") == format!("{b:?}")
 }
 
-async fn all_events(store: &dyn EventStore, q: EventQuery) -> Vec<EventRecord> {
+pub(crate) async fn all_events(store: &dyn EventStore, q: EventQuery) -> Vec<EventRecord> {
     let mut out = Vec::new();
     let mut after = None;
     loop {
