@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # A short run of every cargo-fuzz target: builds them (so they keep compiling) and fuzzes
-# each for FUZZ_SECONDS (default 8: with seventeen targets the smoke stays a few minutes
+# each for FUZZ_SECONDS (default 8: with eighteen targets the smoke stays a few minutes
 # of a CI run that must stay under 30; longer campaigns set it). Any crash fails the run
 # and leaves the reproducer in fuzz/artifacts/. Needs the nightly toolchain (preinstalled
 # on the project's machine kind); cargo-fuzz is installed from crates.io when missing.
@@ -70,6 +70,10 @@ for target in $targets; do
             printf '+   2.345    \r\n' > "corpus/$target/b1"
             printf '+   3.091  g \r\n' > "corpus/$target/b3"
             printf '3.091  g \r\n+   ' > "corpus/$target/b4" ;;
+        # a block of two events as the event history packs them (history::codec):
+        # version 1, two events (a float with a source time, a text with a key)
+        event_*)
+            printf '\x01\x02\x14\x01\x02\x01\x00\x04\x00\x00\x00\x00\x00\x00\x24\x40\x00\x01\xd0\x0f\x01\x17\x00\x02\x01\x03\x01\x2b\x06\x02\x6f\x6b\x01\x03\x02\x00\x04\x07' > "corpus/$target/two" ;;
         # the teaching lab's shipped scenarios
         lab_*)
             cp ../examples/lab/scenarios/*.toml "corpus/$target/" ;;

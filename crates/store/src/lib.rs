@@ -145,7 +145,6 @@
 #![cfg_attr(not(test), deny(clippy::indexing_slicing))]
 
 mod error;
-#[cfg(feature = "database")]
 mod history;
 mod lift;
 mod model;
@@ -192,6 +191,13 @@ pub use retention::{spawn_retention, Retention, RetentionHandle};
 #[cfg(feature = "database")]
 pub use sqlite::SqliteStore;
 pub use trend::{TrendBucket, TrendMode, TrendQuery, MAX_TREND_BUCKETS, ROLLUP_SPAN_MS};
+
+/// Unpacks a block of the event history and answers how many events it held: the entry
+/// of the block format's fuzz target (the format itself is internal).
+#[doc(hidden)]
+pub fn decode_event_block(bytes: &[u8]) -> Result<usize, StoreError> {
+    history::codec::decode(bytes).map(|events| events.len())
+}
 
 /// A boxed future, so that [`EventStore`] can be used as `dyn EventStore`.
 pub type StoreFuture<'a, T> = Pin<Box<dyn Future<Output = Result<T, StoreError>> + Send + 'a>>;

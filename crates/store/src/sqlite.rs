@@ -8,9 +8,9 @@
 use chrono::Utc;
 use rusqlite::types::{ToSqlOutput, Value, ValueRef};
 use rusqlite::{params_from_iter, Connection, OpenFlags, Row, ToSql, TransactionBehavior};
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
-use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use tokio::sync::oneshot;
@@ -256,6 +256,15 @@ impl SqliteStore {
         })
     }
 
+    /// The store segmenting its tail after every append instead of every few thousand
+    /// events: slower appends, for tests that must read every event through the
+    /// segments and rollups.
+    #[doc(hidden)]
+    pub fn passing_after_every_append(mut self) -> SqliteStore {
+        self.history.pass_every_append = true;
+        self
+    }
+
     /// The database file, `None` for an in-memory store.
     pub fn path(&self) -> Option<&Path> {
         self.path.as_deref()
@@ -382,7 +391,12 @@ fn write_history(tx: &rusqlite::Transaction<'_>, w: &HistoryWrite) -> Result<(),
              VALUES (?1, ?2, ?3, ?4)",
         )?;
         for k in &w.keys {
-            key.execute(rusqlite::params![k.source, k.first_seq, k.last_seq, k.first_id])?;
+            key.execute(rusqlite::params![
+                k.source,
+                k.first_seq,
+                k.last_seq,
+                k.first_id
+            ])?;
         }
     }
     tx.prepare_cached("UPDATE event_counter SET next_id = max(next_id, ?1)")?
@@ -507,8 +521,10 @@ fn move_rows_into_blocks(conn: &mut Connection) -> Result<(), StoreError> {
             tail.add(row.id, &events);
             block_rows.push(row);
         }
-        let by_id: HashMap<NameId, Arc<str>> =
-            names.iter().map(|(n, &id)| (id, Arc::from(n.as_str()))).collect();
+        let by_id: HashMap<NameId, Arc<str>> = names
+            .iter()
+            .map(|(n, &id)| (id, Arc::from(n.as_str())))
+            .collect();
         let write = HistoryWrite {
             next_id: last_id + 1,
             keys: write::runs_of(&coded),
@@ -542,7 +558,10 @@ fn name_ids(conn: &mut Connection, names: &[String]) -> Result<Vec<(NameId, Stri
 }
 
 /// Runs `statements` in one read transaction, rows into memory.
-fn snapshot(conn: &mut Connection, statements: &[Statement]) -> Result<Vec<Vec<OwnedRow>>, StoreError> {
+fn snapshot(
+    conn: &mut Connection,
+    statements: &[Statement],
+) -> Result<Vec<Vec<OwnedRow>>, StoreError> {
     let tx = conn.transaction_with_behavior(TransactionBehavior::Deferred)?;
     let mut out = Vec::with_capacity(statements.len());
     for run in statements {

@@ -43,7 +43,7 @@ pub(crate) async fn append<D: Database>(
     for (row, events) in &new_blocks {
         state.tail.add(row.id, events);
     }
-    let pass = if state.tail.wants_pass() {
+    let pass = if history.pass_every_append || state.tail.wants_pass() {
         pass(&state.tail, |point| names.name(point))
     } else {
         None
@@ -64,7 +64,10 @@ pub(crate) async fn append<D: Database>(
     }
     state.next_id = numbered.next_id;
     for run in &numbered.keys {
-        let largest = state.largest_sequence.entry(run.source).or_insert(run.last_seq);
+        let largest = state
+            .largest_sequence
+            .entry(run.source)
+            .or_insert(run.last_seq);
         *largest = (*largest).max(run.last_seq);
     }
     if passed {
@@ -77,10 +80,9 @@ pub(crate) async fn append<D: Database>(
 async fn load<D: Database>(db: &D, history: &History) -> Result<WriterState, StoreError> {
     refresh_names(db, history).await?;
     let next_id = db
-        .rows(
-            read("SELECT next_id FROM event_counter", Vec::new()),
-            |r| r.need_int(0),
-        )
+        .rows(read("SELECT next_id FROM event_counter", Vec::new()), |r| {
+            r.need_int(0)
+        })
         .await?
         .into_iter()
         .next()
@@ -115,7 +117,10 @@ pub(crate) fn read(sql: &str, params: Vec<Param>) -> Statement {
 }
 
 /// Loads the names written since the copy was last refreshed.
-pub(crate) async fn refresh_names<D: Database>(db: &D, history: &History) -> Result<(), StoreError> {
+pub(crate) async fn refresh_names<D: Database>(
+    db: &D,
+    history: &History,
+) -> Result<(), StoreError> {
     let since = i64::from(history.names.largest());
     let pairs = db
         .rows(

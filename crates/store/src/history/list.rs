@@ -306,7 +306,11 @@ async fn through_blocks<D: Database>(
         bound.push(Param::int(rows));
         let blocks = db
             .rows(read(&sql, bound), |r| {
-                Ok((r.need_int(0)?, r.need_int(1)?, r.blob(2)?.unwrap_or_default()))
+                Ok((
+                    r.need_int(0)?,
+                    r.need_int(1)?,
+                    r.blob(2)?.unwrap_or_default(),
+                ))
             })
             .await?;
         let exhausted = i64::try_from(blocks.len()).unwrap_or(0) < rows;
@@ -368,7 +372,9 @@ async fn by_point<D: Database>(
     loop {
         let params = vec![
             Param::int(i64::from(point)),
-            Param::int(super::write::span_start(filter.low.max(i64::MIN + BLOCK_SPAN_MS))),
+            Param::int(super::write::span_start(
+                filter.low.max(i64::MIN + BLOCK_SPAN_MS),
+            )),
             Param::int(filter.high),
             Param::int(tail_start),
             Param::int(keyset.0),
@@ -377,7 +383,11 @@ async fn by_point<D: Database>(
         ];
         let segments = db
             .rows(read(&sql, params), |r| {
-                Ok((r.need_int(0)?, r.need_int(1)?, r.blob(2)?.unwrap_or_default()))
+                Ok((
+                    r.need_int(0)?,
+                    r.need_int(1)?,
+                    r.blob(2)?.unwrap_or_default(),
+                ))
             })
             .await?;
         let exhausted = i64::try_from(segments.len()).unwrap_or(0) < rows;

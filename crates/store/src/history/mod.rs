@@ -60,10 +60,13 @@
 //! snapshot.
 
 pub(crate) mod codec;
+#[cfg(feature = "database")]
 pub(crate) mod names;
+#[cfg(feature = "database")]
 pub(crate) mod write;
 
 /// What the stats read over the history: event count, received-time span, commands.
+#[cfg(feature = "database")]
 pub(crate) const STATS: &str = "SELECT \
      (SELECT CAST(COALESCE(SUM(events), 0) AS BIGINT) FROM event_blocks), \
      (SELECT MIN(first_received_ms) FROM event_blocks), \
@@ -72,32 +75,44 @@ pub(crate) const STATS: &str = "SELECT \
 
 /// A block holds events of one such span of event time (and one of received time),
 /// aligned to it: its first and last time are less than this apart.
+#[cfg(feature = "database")]
 pub(crate) const BLOCK_SPAN_MS: i64 = 60_000;
 
 /// A pass runs when the tail holds this many events a point on average (a point's
 /// segment then holds that many) ...
+#[cfg(feature = "database")]
 pub(crate) const PASS_EVENTS_PER_POINT: usize = 16;
 
 /// ... or this many events in all (the most a point's query or a trend unpacks from the
 /// tail: about 20 ms).
+#[cfg(feature = "database")]
 pub(crate) const PASS_EVENTS: usize = 262_144;
 
+#[cfg(feature = "database")]
 pub(crate) mod append;
+#[cfg(feature = "database")]
 pub(crate) mod list;
+#[cfg(feature = "database")]
 pub(crate) mod purge;
+#[cfg(feature = "database")]
 pub(crate) mod trend;
 
+#[cfg(feature = "database")]
 use std::collections::HashMap;
 
 /// A store's history: the name dictionary's copy and the writer's state.
+#[cfg(feature = "database")]
 #[derive(Debug, Default)]
 pub(crate) struct History {
     pub(crate) names: names::Names,
     /// `None` until the first append loads it (the counter and the tail).
     pub(crate) writer: tokio::sync::Mutex<Option<WriterState>>,
+    /// Segment the tail after every append (tests: every event through the segments).
+    pub(crate) pass_every_append: bool,
 }
 
 /// What the writer keeps between appends.
+#[cfg(feature = "database")]
 #[derive(Debug, Default)]
 pub(crate) struct WriterState {
     /// The id the next event gets.

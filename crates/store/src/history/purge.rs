@@ -56,7 +56,13 @@ pub(crate) async fn purge<D: Database>(
                     Param::int(cutoff_ms),
                 ],
             ),
-            |r| Ok((r.need_int(0)?, r.need_int(1)? != 0, r.blob(2)?.unwrap_or_default())),
+            |r| {
+                Ok((
+                    r.need_int(0)?,
+                    r.need_int(1)? != 0,
+                    r.blob(2)?.unwrap_or_default(),
+                ))
+            },
         )
         .await?;
     for (id, segmented, data) in straddling {

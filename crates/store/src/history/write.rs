@@ -373,10 +373,20 @@ mod tests {
 
     #[test]
     fn a_batch_of_one_source_is_one_run_and_repeats_answer_the_stored_ids() {
-        let batch: Vec<_> = (0..5).map(|i| event("A", 1_000 + i, Some(10 + i as u64))).collect();
+        let batch: Vec<_> = (0..5)
+            .map(|i| event("A", 1_000 + i, Some(10 + i as u64)))
+            .collect();
         let n = number(&batch, names, &HashMap::new(), 100);
         assert_eq!(n.ids, vec![100, 101, 102, 103, 104]);
-        assert_eq!(n.keys, vec![KeyRun { source: 4, first_seq: 10, last_seq: 14, first_id: 100 }]);
+        assert_eq!(
+            n.keys,
+            vec![KeyRun {
+                source: 4,
+                first_seq: 10,
+                last_seq: 14,
+                first_id: 100
+            }]
+        );
         assert_eq!(n.next_id, 105);
         // Written again with one new event and a repeat inside the batch.
         let stored: HashMap<_, _> = (0..5).map(|i| ((4, 10 + i), 100 + i)).collect();
@@ -387,7 +397,15 @@ mod tests {
         let n = number(&again, names, &stored, 105);
         assert_eq!(n.ids, vec![100, 101, 102, 103, 104, 105, 105, 106]);
         assert_eq!(n.new.len(), 2);
-        assert_eq!(n.keys, vec![KeyRun { source: 4, first_seq: 15, last_seq: 15, first_id: 105 }]);
+        assert_eq!(
+            n.keys,
+            vec![KeyRun {
+                source: 4,
+                first_seq: 15,
+                last_seq: 15,
+                first_id: 105
+            }]
+        );
     }
 
     #[test]
@@ -400,7 +418,10 @@ mod tests {
         ];
         let n = number(&batch, names, &HashMap::new(), 1);
         let blocks = blocks(&n.new);
-        let spans: Vec<_> = blocks.iter().map(|(b, _)| (b.id, b.first_ms, b.last_ms, b.events)).collect();
+        let spans: Vec<_> = blocks
+            .iter()
+            .map(|(b, _)| (b.id, b.first_ms, b.last_ms, b.events))
+            .collect();
         assert_eq!(spans, vec![(1, 1_000, 59_999, 2), (2, 60_000, 60_500, 2)]);
         let mut tail = Tail::default();
         for (row, events) in &blocks {
@@ -408,10 +429,22 @@ mod tests {
         }
         let pass = pass(&tail, |p| Some(Arc::from(format!("P{p}")))).unwrap();
         assert_eq!(pass.part, 1);
-        let keys: Vec<_> = pass.segments.iter().map(|s| (s.point, s.start_ms, s.events)).collect();
+        let keys: Vec<_> = pass
+            .segments
+            .iter()
+            .map(|s| (s.point, s.start_ms, s.events))
+            .collect();
         assert_eq!(keys, vec![(2, 0, 2), (2, 60_000, 1), (3, 60_000, 1)]);
         let first = &pass.rollups[0];
-        assert_eq!((first.first_ms, first.last_ms, first.first_value, first.last_value), (1_000, 59_999, 1_000.0, 59_999.0));
+        assert_eq!(
+            (
+                first.first_ms,
+                first.last_ms,
+                first.first_value,
+                first.last_value
+            ),
+            (1_000, 59_999, 1_000.0, 59_999.0)
+        );
         assert_eq!((first.samples, first.sum), (2, 60_999.0));
     }
 }

@@ -15,22 +15,22 @@ mod select;
 
 use chrono::{DateTime, Utc};
 
+use crate::history::codec::NameId;
+use crate::history::write::HistoryWrite;
+use crate::history::History;
 use crate::{
     Backend, CommandQuery, CommandRecord, CountedPage, EventQuery, EventRecord, EventStore,
     LiftFaultArchive, LiftFaultQuery, LiftFaultRecord, NotificationLog, NotificationQuery,
     NotificationRecord, Page, RecordId, StoreError, StoreFuture, StoreStats, TrendBucket,
     TrendMode, TrendQuery, MAX_TREND_BUCKETS, ROLLUP_SPAN_MS,
 };
+use row::OwnedRow;
 use row::{
     check_command, check_event, check_lift_fault, check_notification, command_from_row,
     command_params, count_from_row, event_from_row, id_from_row, lift_fault_from_row,
     lift_fault_params, notification_from_row, notification_params, stats_from_row, to_ms, Decode,
     COMMAND_INSERT, LIFT_FAULT_INSERT, NOTIFICATION_INSERT, STATS,
 };
-use crate::history::codec::NameId;
-use crate::history::write::HistoryWrite;
-use crate::history::History;
-use row::OwnedRow;
 use select::{
     command_cursor, command_sql, event_cursor, event_sql, into_page, lift_fault_sql,
     notification_sql, trend_sql, Counted,

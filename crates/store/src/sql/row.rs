@@ -71,7 +71,9 @@ impl Columns for OwnedRow {
         match self.0.get(i) {
             Some(Cell::Int(v)) => Ok(Some(*v)),
             Some(Cell::Null) => Ok(None),
-            other => Err(StoreError::Corrupt(format!("column {i}: {other:?}, not an integer"))),
+            other => Err(StoreError::Corrupt(format!(
+                "column {i}: {other:?}, not an integer"
+            ))),
         }
     }
     fn real(&self, i: usize) -> Result<Option<f64>, StoreError> {
@@ -81,21 +83,27 @@ impl Columns for OwnedRow {
             #[allow(clippy::cast_precision_loss)]
             Some(Cell::Int(v)) => Ok(Some(*v as f64)),
             Some(Cell::Null) => Ok(None),
-            other => Err(StoreError::Corrupt(format!("column {i}: {other:?}, not a number"))),
+            other => Err(StoreError::Corrupt(format!(
+                "column {i}: {other:?}, not a number"
+            ))),
         }
     }
     fn text(&self, i: usize) -> Result<Option<String>, StoreError> {
         match self.0.get(i) {
             Some(Cell::Text(v)) => Ok(Some(v.clone())),
             Some(Cell::Null) => Ok(None),
-            other => Err(StoreError::Corrupt(format!("column {i}: {other:?}, not a text"))),
+            other => Err(StoreError::Corrupt(format!(
+                "column {i}: {other:?}, not a text"
+            ))),
         }
     }
     fn blob(&self, i: usize) -> Result<Option<Vec<u8>>, StoreError> {
         match self.0.get(i) {
             Some(Cell::Blob(v)) => Ok(Some(v.clone())),
             Some(Cell::Null) => Ok(None),
-            other => Err(StoreError::Corrupt(format!("column {i}: {other:?}, not bytes"))),
+            other => Err(StoreError::Corrupt(format!(
+                "column {i}: {other:?}, not bytes"
+            ))),
         }
     }
 }

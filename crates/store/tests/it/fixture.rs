@@ -39,6 +39,22 @@ pub(crate) async fn sqlite() -> Fixture {
     }
 }
 
+/// A SQLite store on a temp file that segments its tail after every append, so that the
+/// suite reads every event through the segments and rollups as well as through the tail
+/// (a store of its own passes only every few thousand events).
+pub(crate) async fn sqlite_segmented() -> Fixture {
+    let dir = tempfile::tempdir().unwrap();
+    let store = store::SqliteStore::open(dir.path().join("events.db"))
+        .await
+        .unwrap()
+        .passing_after_every_append();
+    Fixture {
+        store: Arc::new(store),
+        _dir: Some(dir),
+        pg_schema: None,
+    }
+}
+
 /// A PostgreSQL store in a fresh schema, or `None` when the tests skip.
 pub(crate) async fn postgres(test: &str) -> Option<Fixture> {
     let url = postgres_url(test)?;

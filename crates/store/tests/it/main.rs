@@ -18,7 +18,8 @@ mod retention;
 mod specific;
 mod suite;
 
-/// Generates, for every suite function, a test on SQLite and one on PostgreSQL.
+/// Generates, for every suite function, a test on SQLite (as it is, and passing after
+/// every append) and one on PostgreSQL.
 macro_rules! on_both_backends {
     ($($name:ident),* $(,)?) => {
         mod sqlite {
@@ -26,6 +27,16 @@ macro_rules! on_both_backends {
                 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
                 async fn $name() {
                     let fx = crate::fixture::sqlite().await;
+                    crate::suite::$name(fx.store.clone()).await;
+                    fx.finish().await;
+                }
+            )*
+        }
+        mod sqlite_segmented {
+            $(
+                #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+                async fn $name() {
+                    let fx = crate::fixture::sqlite_segmented().await;
                     crate::suite::$name(fx.store.clone()).await;
                     fx.finish().await;
                 }

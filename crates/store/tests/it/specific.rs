@@ -441,3 +441,82 @@ async fn postgres_migrates_a_version_1_database() {
         .await
         .unwrap();
 }
+
+/// Schema version 6 moves a SQLite store's rows into blocks at open: every event with its
+/// id, key and values (more than one chunk of the move), the trends folded again from
+/// them, and ids going on after the largest.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn sqlite_moves_the_old_rows_into_blocks_with_their_ids() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("events.db");
+    let conn = rusqlite::Connection::open(&path).unwrap();
+    conn.execute_batch(&version_1(Backend::Sqlite)).unwrap();
+    // 100,000 events of 7 points, a second apart, every third one's id skipped (gaps as
+    // purges and ignored keys leave them), with a float value each.
+    conn.execute_batch(
+        "WITH RECURSIVE n (i) AS (SELECT 1 UNION ALL SELECT i + 1 FROM n WHERE i < 100000)
+         INSERT INTO events (id, node, point, value_kind, value_float, quality,
+             source_invalid, received_ms, event_ms, cause, origin)
+         SELECT 10 + i * 3 / 2, 'RH2', 'P' || (i % 7), 4, i * 0.5, i % 2, 0,
+                2000000 + i * 1000, 2000000 + i * 1000, 1, 'RH2'
+         FROM n;",
+    )
+    .unwrap();
+    drop(conn);
+    let store = SqliteStore::open(&path).await.unwrap();
+    let all = crate::suite::all_events(
+        &store,
+        EventQuery::default()
+            .with_order(store::Order::OldestFirst)
+            .with_limit(10_000),
+    )
+    .await;
+    assert_eq!(all.len(), 100_001); // and the version-1 fixture's own event
+    let moved: Vec<_> = all.iter().filter(|e| e.point != "OLD").collect();
+    for (k, e) in moved.iter().enumerate() {
+        let i = k as i64 + 1;
+        assert_eq!(e.id, Some(10 + i * 3 / 2), "event {i}");
+        assert_eq!(e.point, format!("P{}", i % 7));
+        assert_eq!(e.value, PointValue::Float(i as f64 * 0.5));
+        assert_eq!(e.quality.invalid, i % 2 == 1);
+    }
+    // One point's page through its segments, newest first.
+    let p3 = store
+        .query_events(&EventQuery::default().with_point("P3").with_limit(3))
+        .await
+        .unwrap();
+    let times: Vec<i64> = p3
+        .items
+        .iter()
+        .map(|e| e.event_time().timestamp_millis())
+        .collect();
+    // P3's newest: i = 99,998, 99,991, 99,984 (i % 7 == 3).
+    assert_eq!(
+        times,
+        [99_998, 99_991, 99_984].map(|i: i64| 2_000_000 + i * 1000)
+    );
+    let start = chrono::DateTime::<chrono::Utc>::UNIX_EPOCH;
+    let trend = store::TrendQuery::new("P0", start, start + chrono::Duration::days(2), 10);
+    let buckets = store.query_trend(&trend).await.unwrap();
+    let count: u64 = buckets.iter().map(|b| b.count).sum();
+    assert_eq!(count, 100_000 / 7);
+    let next = store
+        .append_events(&[ev("NEW", PointValue::Int(1), 1)])
+        .await
+        .unwrap();
+    assert!(next[0] > 10 + 100_000 * 3 / 2, "{next:?}");
+    // The table is gone; opening again moves nothing.
+    drop(store);
+    let conn = rusqlite::Connection::open(&path).unwrap();
+    let tables: i64 = conn
+        .query_row(
+            "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = 'events'",
+            [],
+            |r| r.get(0),
+        )
+        .unwrap();
+    assert_eq!(tables, 0);
+    drop(conn);
+    let again = SqliteStore::open(&path).await.unwrap();
+    assert_eq!(again.stats().await.unwrap().events, 100_002);
+}
