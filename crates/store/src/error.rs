@@ -58,6 +58,10 @@ pub enum StoreError {
     /// The connection pool failed (other than a database error or its closing).
     #[error("connection pool: {0}")]
     Pool(String),
+    /// Another writer of the same store got there first; nothing was written and the
+    /// write may be tried again.
+    #[error("write conflict: {0}")]
+    Conflict(String),
 }
 
 #[cfg(feature = "database")]

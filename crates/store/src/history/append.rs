@@ -27,6 +27,7 @@ pub(crate) async fn append<D: Database>(
     let names = &history.names;
     let id = |name: &str| names.id(name).unwrap_or(0);
     let stored = stored_keys(db, history, state, events).await?;
+    let first_id = db.reserve_ids(events.len()).await?.unwrap_or(state.next_id);
     let numbered = number(
         events,
         |e| EventNames {
@@ -36,10 +37,9 @@ pub(crate) async fn append<D: Database>(
             key_source: e.key.as_ref().map(|k| id(&k.source)),
         },
         &stored,
-        state.next_id,
+        first_id,
     );
     let new_blocks = blocks(&numbered.new);
-    let (tail_blocks, tail_events) = (state.tail.blocks.len(), state.tail.events.len());
     for (row, events) in &new_blocks {
         state.tail.add(row.id, events);
     }
@@ -56,13 +56,12 @@ pub(crate) async fn append<D: Database>(
         pass,
     };
     if let Err(error) = db.write_history(write).await {
-        // Nothing was stored: the tail is what it was.
-        state.tail.blocks.truncate(tail_blocks);
-        state.tail.events.truncate(tail_events);
-        state.tail.points = state.tail.events.iter().map(|e| e.point).collect();
+        // Nothing was stored: the state is read again at the next append (the tail as
+        // stored, and what another writer may have changed).
+        *writer = None;
         return Err(error);
     }
-    state.next_id = numbered.next_id;
+    state.next_id = state.next_id.max(numbered.next_id);
     for run in &numbered.keys {
         let largest = state
             .largest_sequence

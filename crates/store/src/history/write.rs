@@ -231,7 +231,10 @@ pub(crate) fn blocks(new: &[Coded]) -> Vec<(BlockRow, Vec<Coded>)> {
     }
     let mut out: Vec<(BlockRow, Vec<Coded>)> = by_span
         .into_values()
-        .filter_map(|events| Some((block_row(&events)?, events)))
+        .filter_map(|mut events| {
+            events.sort_by_key(|e| e.id);
+            Some((block_row(&events)?, events))
+        })
         .collect();
     out.sort_by_key(|(row, _)| row.id);
     out
@@ -241,7 +244,7 @@ pub(crate) fn blocks(new: &[Coded]) -> Vec<(BlockRow, Vec<Coded>)> {
 pub(crate) fn block_row(events: &[Coded]) -> Option<BlockRow> {
     let first = events.first()?;
     let mut row = BlockRow {
-        id: first.id,
+        id: events.iter().map(|e| e.id).min().unwrap_or(first.id),
         events: i64::try_from(events.len()).unwrap_or(i64::MAX),
         first_ms: i64::MAX,
         last_ms: i64::MIN,

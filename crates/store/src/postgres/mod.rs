@@ -14,6 +14,7 @@
 //! batch written twice (a crash or a lost connection between the commit and its
 //! acknowledgement, then the retry) store every event once.
 
+mod history;
 pub(crate) mod partitions;
 
 use chrono::DateTime;
@@ -21,16 +22,15 @@ use chrono::Utc;
 use deadpool_postgres::{HookError, Manager, ManagerConfig, Object, Pool, RecyclingMethod};
 use std::str::FromStr;
 use std::time::Duration;
-use tokio_postgres::binary_copy::BinaryCopyInWriter;
-use tokio_postgres::error::SqlState;
 use tokio_postgres::types::{ToSql, Type};
 use tokio_postgres::{Client, NoTls, Row};
 
-use crate::model::{quality_to_bits, value_kind_code};
-use crate::sql::row::{id_from_row, key_sequence, to_ms, value_columns, Columns, Decode};
+use crate::history::codec::NameId;
+use crate::history::write::HistoryWrite;
+use crate::sql::row::{id_from_row, Columns, Decode, OwnedRow};
 use crate::sql::schema::{self, CURRENT_VERSION, VERSION_TABLE};
 use crate::sql::{insert, Database, Param, Statement};
-use crate::{redact, Backend, EventRecord, RecordId, StoreError, StoreFuture};
+use crate::{redact, Backend, RecordId, StoreError, StoreFuture};
 use partitions::{History, Partitions};
 
 /// Advisory lock taken while migrating, so two processes never migrate at once.
@@ -38,35 +38,8 @@ const MIGRATION_LOCK: i64 = 0x5354_414E_4943_4531; // "STANICE1"
 
 /// What each connection of the pool is set up with: no JIT compilation (the event
 /// list's and the trends' queries span a plan node per day partition, and compiling them
-/// took seconds where running them takes milliseconds), and the staging table.
-const SESSION: &str = "SET jit = off; CREATE TEMP TABLE IF NOT EXISTS events_staging (
-     id int8, node text, point text, ioa int8, value_kind int2, value_int int8,
-     value_float float8, value_text text, quality int2, source_ms int8, source_invalid bool,
-     received_ms int8, event_ms int8, cause int2, origin text, source_id text,
-     source_seq int8) ON COMMIT DELETE ROWS";
-
-/// The staging table of event batches ([`SESSION`]): a temporary table of the
-/// connection (never written to the WAL), emptied at each commit. Its column types, in the
-/// order the COPY writes them:
-const STAGING_TYPES: [Type; 17] = [
-    Type::INT8,
-    Type::TEXT,
-    Type::TEXT,
-    Type::INT8,
-    Type::INT2,
-    Type::INT8,
-    Type::FLOAT8,
-    Type::TEXT,
-    Type::INT2,
-    Type::INT8,
-    Type::BOOL,
-    Type::INT8,
-    Type::INT8,
-    Type::INT2,
-    Type::TEXT,
-    Type::TEXT,
-    Type::INT8,
-];
+/// took seconds where running them takes milliseconds).
+const SESSION: &str = "SET jit = off";
 
 /// How to reach the PostgreSQL server.
 #[derive(Clone)]
@@ -144,6 +117,7 @@ pub struct PostgresStore {
     pool: Pool,
     url: String,
     partitions: Partitions,
+    history: crate::history::History,
 }
 
 impl std::fmt::Debug for PostgresStore {
@@ -174,6 +148,15 @@ async fn migrate(client: &mut Client) -> Result<(), StoreError> {
 }
 
 impl PostgresStore {
+    /// The store segmenting its tail after every append instead of every few thousand
+    /// events: slower appends, for tests that must read every event through the
+    /// segments and rollups.
+    #[doc(hidden)]
+    pub fn passing_after_every_append(mut self) -> PostgresStore {
+        self.history.pass_every_append = true;
+        self
+    }
+
     /// Connects (one connection at once, so a wrong address or password fails here) and
     /// migrates the schema.
     pub async fn connect(config: PostgresConfig) -> Result<PostgresStore, StoreError> {
@@ -203,11 +186,14 @@ impl PostgresStore {
         let partitions = Partitions::default();
         partitions.make_ahead(&connection, Utc::now()).await?;
         drop(connection);
-        Ok(PostgresStore {
+        let store = PostgresStore {
             pool,
             url: config.redacted_url,
             partitions,
-        })
+            history: crate::history::History::default(),
+        };
+        history::move_rows_into_blocks(&store).await?;
+        Ok(store)
     }
 }
 
@@ -242,198 +228,6 @@ fn sql_params(params: &[Param]) -> Vec<&(dyn ToSql + Sync)> {
             Param::Text(t) => t as &(dyn ToSql + Sync),
         })
         .collect()
-}
-
-const NEXT_IDS: &str = "SELECT nextval('event_ids') FROM generate_series(1, $1::int8)";
-
-const COPY_STAGING: &str = "COPY events_staging (id, node, point, ioa, value_kind, value_int, \
-     value_float, value_text, quality, source_ms, source_invalid, received_ms, event_ms, cause, \
-     origin, source_id, source_seq) FROM STDIN (FORMAT binary)";
-
-const COPY_EVENTS: &str = "COPY events (id, node, point, ioa, value_kind, value_int, \
-     value_float, value_text, quality, source_ms, source_invalid, received_ms, event_ms, cause, \
-     origin, source_id, source_seq) FROM STDIN (FORMAT binary)";
-
-const MOVE_STAGED: &str = "INSERT INTO events (id, node, point, ioa, value_kind, value_int, \
-     value_float, value_text, quality, source_ms, source_invalid, received_ms, event_ms, cause, \
-     origin, source_id, source_seq) SELECT * FROM events_staging ON CONFLICT DO NOTHING";
-
-/// The staged events that were already stored (same key): their staged id and the stored.
-const DUPLICATES: &str = "SELECT s.id, e.id FROM events_staging s JOIN events e \
-     ON e.source_id = s.source_id AND e.source_seq = s.source_seq AND e.event_ms = s.event_ms \
-     WHERE e.id <> s.id";
-
-/// One event, in one statement (the recorder's batches are single events when the
-/// station is quiet: no staging round trips for them).
-const INSERT_ONE: &str = "INSERT INTO events (node, point, ioa, value_kind, value_int, \
-     value_float, value_text, quality, source_ms, source_invalid, received_ms, event_ms, cause, \
-     origin, source_id, source_seq) VALUES ($1::text, $2::text, $3::int8, $4::int2, $5::int8, \
-     $6::float8, $7::text, $8::int2, $9::int8, $10::bool, $11::int8, $12::int8, $13::int2, \
-     $14::text, $15::text, $16::int8) ON CONFLICT DO NOTHING RETURNING id";
-
-/// The id of a stored event by its key.
-const ID_OF_KEY: &str = "SELECT id FROM events \
-     WHERE source_id = $1::text AND source_seq = $2::int8 AND event_ms = $3::int8";
-
-/// Appends one event; an event whose key is stored already answers the stored id.
-async fn insert_one(conn: &Object, e: &EventRecord) -> Result<RecordId, StoreError> {
-    let stmt = conn.prepare_cached(INSERT_ONE).await?;
-    let ioa = e.ioa.map(i64::from);
-    let kind = value_kind_code(&e.value);
-    let (int, float, text) = value_columns(&e.value);
-    let quality = i16::from(quality_to_bits(e.quality));
-    let source_ms = e.source_time.map(|s| to_ms(s.time));
-    let source_invalid = e.source_time.is_some_and(|s| s.invalid);
-    let received_ms = to_ms(e.received_time);
-    let event_ms = to_ms(e.event_time());
-    let cause = e.cause.code();
-    let key_source = e.key.as_ref().map(|k| k.source.as_str());
-    let key_seq = e.key.as_ref().map(|k| key_sequence(k.sequence));
-    let rows = conn
-        .query(
-            &stmt,
-            &[
-                &e.node,
-                &e.point,
-                &ioa,
-                &kind,
-                &int,
-                &float,
-                &text,
-                &quality,
-                &source_ms,
-                &source_invalid,
-                &received_ms,
-                &event_ms,
-                &cause,
-                &e.origin,
-                &key_source,
-                &key_seq,
-            ],
-        )
-        .await?;
-    let row = match rows.into_iter().next() {
-        Some(row) => row,
-        None => {
-            let lookup = conn.prepare_cached(ID_OF_KEY).await?;
-            conn.query_one(&lookup, &[&key_source, &key_seq, &event_ms])
-                .await?
-        }
-    };
-    Ok(row.try_get(0)?)
-}
-
-/// Writes `events` with their `ids` to a COPY (into `events` or the staging table: the
-/// same columns in the same order, [`STAGING_TYPES`]).
-async fn write_copy(
-    writer: BinaryCopyInWriter,
-    events: &[EventRecord],
-    ids: &[i64],
-) -> Result<u64, tokio_postgres::Error> {
-    let mut writer = std::pin::pin!(writer);
-    for (e, id) in events.iter().zip(ids) {
-        let ioa = e.ioa.map(i64::from);
-        let kind = value_kind_code(&e.value);
-        let (int, float, text) = value_columns(&e.value);
-        let quality = i16::from(quality_to_bits(e.quality));
-        let source_ms = e.source_time.map(|s| to_ms(s.time));
-        let source_invalid = e.source_time.is_some_and(|s| s.invalid);
-        let received_ms = to_ms(e.received_time);
-        let event_ms = to_ms(e.event_time());
-        let cause = e.cause.code();
-        let key_source = e.key.as_ref().map(|k| k.source.as_str());
-        let key_seq = e.key.as_ref().map(|k| key_sequence(k.sequence));
-        writer
-            .as_mut()
-            .write(&[
-                id,
-                &e.node,
-                &e.point,
-                &ioa,
-                &kind,
-                &int,
-                &float,
-                &text,
-                &quality,
-                &source_ms,
-                &source_invalid,
-                &received_ms,
-                &event_ms,
-                &cause,
-                &e.origin,
-                &key_source,
-                &key_seq,
-            ])
-            .await?;
-    }
-    writer.as_mut().finish().await
-}
-
-/// `count` ids from the sequence, increasing (so in the order of the batch).
-async fn next_ids(conn: &Object, count: usize) -> Result<Vec<i64>, StoreError> {
-    let next_ids = conn.prepare_cached(NEXT_IDS).await?;
-    let n = i64::try_from(count).unwrap_or(i64::MAX);
-    let mut ids: Vec<i64> = conn
-        .query(&next_ids, &[&n])
-        .await?
-        .iter()
-        .map(|r| r.try_get(0))
-        .collect::<Result<_, _>>()?;
-    ids.sort_unstable();
-    Ok(ids)
-}
-
-/// Appends a batch in one transaction, with ids from the sequence taken first (so they
-/// are known, increasing and in the order of `events`). First by binary COPY straight
-/// into `events`: a batch is new but for a retry after a crash, and one pass over the
-/// rows is the cheapest. A key stored already makes that COPY fail as a whole (COPY has
-/// no ON CONFLICT); the batch is then written again the careful way: COPY into the
-/// staging table, then into `events` leaving out those whose key is stored (their id
-/// answered as the stored one's).
-async fn copy_events(
-    conn: &mut Object,
-    events: &[EventRecord],
-) -> Result<Vec<RecordId>, StoreError> {
-    let ids = next_ids(conn, events.len()).await?;
-    let direct = conn.prepare_cached(COPY_EVENTS).await?;
-    let tx = conn.transaction().await?;
-    let sink = tx.copy_in(&direct).await?;
-    let writer = BinaryCopyInWriter::new(sink, &STAGING_TYPES);
-    match write_copy(writer, events, &ids).await {
-        Ok(_) => {
-            tx.commit().await?;
-            return Ok(ids);
-        }
-        Err(error) if error.code() == Some(&SqlState::UNIQUE_VIOLATION) => {
-            tracing::debug!("a batch held stored keys: written again without them");
-            tx.rollback().await?;
-        }
-        Err(error) => return Err(error.into()),
-    }
-    copy_staged(conn, events, ids).await
-}
-
-/// [`copy_events`] for a batch holding events whose key is stored already.
-async fn copy_staged(
-    conn: &mut Object,
-    events: &[EventRecord],
-    mut ids: Vec<i64>,
-) -> Result<Vec<RecordId>, StoreError> {
-    let copy = conn.prepare_cached(COPY_STAGING).await?;
-    let tx = conn.transaction().await?;
-    let sink = tx.copy_in(&copy).await?;
-    write_copy(BinaryCopyInWriter::new(sink, &STAGING_TYPES), events, &ids).await?;
-    let stored = tx.execute(MOVE_STAGED, &[]).await?;
-    if stored < u64::try_from(events.len()).unwrap_or(u64::MAX) {
-        for row in tx.query(DUPLICATES, &[]).await? {
-            let (staged, kept): (i64, i64) = (row.try_get(0)?, row.try_get(1)?);
-            if let Some(slot) = ids.iter_mut().find(|id| **id == staged) {
-                *slot = kept;
-            }
-        }
-    }
-    tx.commit().await?;
-    Ok(ids)
 }
 
 impl PostgresStore {
@@ -475,19 +269,73 @@ impl Database for PostgresStore {
         })
     }
 
-    fn insert_events<'a>(&'a self, events: &'a [EventRecord]) -> StoreFuture<'a, Vec<RecordId>> {
+    fn history(&self) -> Option<&crate::history::History> {
+        Some(&self.history)
+    }
+
+    fn name_ids(&self, names: Vec<String>) -> StoreFuture<'_, Vec<(NameId, String)>> {
+        Box::pin(async move {
+            let connection = checkout(&self.pool).await?;
+            connection
+                .execute(
+                    "INSERT INTO event_names (name) SELECT unnest($1::text[]) \
+                     ON CONFLICT (name) DO NOTHING",
+                    &[&names],
+                )
+                .await?;
+            connection
+                .query(
+                    "SELECT id, name FROM event_names WHERE name = ANY($1::text[])",
+                    &[&names],
+                )
+                .await?
+                .iter()
+                .map(|r| {
+                    let id: i64 = r.try_get(0)?;
+                    let id = NameId::try_from(id)
+                        .map_err(|_| StoreError::Corrupt(format!("name number {id}")))?;
+                    Ok((id, r.try_get(1)?))
+                })
+                .collect()
+        })
+    }
+
+    fn reserve_ids(&self, count: usize) -> StoreFuture<'_, Option<i64>> {
+        Box::pin(async move {
+            let connection = checkout(&self.pool).await?;
+            let n = i64::try_from(count).unwrap_or(i64::MAX);
+            let first: i64 = connection
+                .query_one(
+                    "UPDATE event_counter SET next_id = next_id + $1::int8 \
+                     RETURNING next_id - $1::int8",
+                    &[&n],
+                )
+                .await?
+                .try_get(0)?;
+            Ok(Some(first))
+        })
+    }
+
+    fn write_history(&self, write: HistoryWrite) -> StoreFuture<'_, ()> {
         Box::pin(async move {
             let mut connection = checkout(&self.pool).await?;
             self.make_days(
                 &connection,
                 History::Events,
-                events.iter().map(|e| to_ms(e.event_time())),
+                write.blocks.iter().map(|b| b.first_ms),
             )
             .await?;
-            match events {
-                [one] => Ok(vec![insert_one(&connection, one).await?]),
-                _ => copy_events(&mut connection, events).await,
-            }
+            let tx = connection.transaction().await?;
+            history::write_history(&tx, &write).await?;
+            tx.commit().await?;
+            Ok(())
+        })
+    }
+
+    fn snapshot(&self, statements: Vec<Statement>) -> StoreFuture<'_, Vec<Vec<OwnedRow>>> {
+        Box::pin(async move {
+            let mut connection = checkout(&self.pool).await?;
+            history::snapshot(&mut connection, &statements).await
         })
     }
 
@@ -527,6 +375,9 @@ impl Database for PostgresStore {
 
     fn purge_history(&self, cutoff_ms: i64) -> StoreFuture<'_, u64> {
         Box::pin(async move {
+            // The writer's tail may lose blocks: read again at the next append.
+            let mut writer = self.history.writer.lock().await;
+            *writer = None;
             let connection = checkout(&self.pool).await?;
             let mut gone = 0;
             for history in History::ALL {
@@ -535,6 +386,10 @@ impl Database for PostgresStore {
                     .drop_before(&connection, history, cutoff_ms)
                     .await?;
             }
+            // The days' segments go with their blocks (not counted: the same events).
+            self.partitions
+                .drop_before(&connection, History::Segments, cutoff_ms)
+                .await?;
             Ok(gone)
         })
     }
@@ -568,7 +423,10 @@ impl Database for PostgresStore {
         Box::pin(async move {
             let connection = checkout(&self.pool).await?;
             Ok(connection
-                .batch_execute("ANALYZE events, commands, lift_faults, notifications")
+                .batch_execute(
+                    "ANALYZE event_blocks, event_segments, trend_rollups, commands, \
+                     lift_faults, notifications",
+                )
                 .await?)
         })
     }

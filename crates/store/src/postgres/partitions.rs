@@ -47,13 +47,15 @@ pub const ON_DEMAND_FUTURE_DAYS: i64 = 366;
 /// A partitioned table.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub(crate) enum History {
-    /// `events`, by `event_ms`.
+    /// `event_blocks`, by `first_ms` (a block lies within one minute, so one day).
     Events,
     /// `commands` (the command audit), by `time_ms`.
     Commands,
     /// `trend_rollups`, by `start_ms`: made with the event days (by the day function),
     /// dropped with them.
     Rollups,
+    /// `event_segments`, by `start_ms`: made and dropped with the event days.
+    Segments,
 }
 
 impl History {
@@ -61,17 +63,26 @@ impl History {
 
     pub(crate) fn table(self) -> &'static str {
         match self {
-            History::Events => "events",
+            History::Events => "event_blocks",
             History::Commands => "commands",
             History::Rollups => "trend_rollups",
+            History::Segments => "event_segments",
+        }
+    }
+
+    /// What counts the records of its rows: a block holds many events.
+    fn count(self) -> &'static str {
+        match self {
+            History::Events => "CAST(COALESCE(SUM(events), 0) AS BIGINT)",
+            _ => "count(*)",
         }
     }
 
     fn key(self) -> &'static str {
         match self {
-            History::Events => "event_ms",
+            History::Events => "first_ms",
             History::Commands => "time_ms",
-            History::Rollups => "start_ms",
+            History::Rollups | History::Segments => "start_ms",
         }
     }
 }
@@ -250,7 +261,7 @@ impl Partitions {
             }
             // The name is one the store made (checked above): letters, digits, '_'.
             let rows: i64 = client
-                .query_one(&format!("SELECT count(*) FROM {name}"), &[])
+                .query_one(&format!("SELECT {} FROM {name}", history.count()), &[])
                 .await?
                 .try_get(0)?;
             client
@@ -263,16 +274,20 @@ impl Partitions {
             tracing::info!(table = history.table(), partition = %name, rows, "retention dropped a day");
             gone += u64::try_from(rows).unwrap_or(0);
         }
-        gone += client
-            .execute(
+        let rows: i64 = client
+            .query_one(
                 &format!(
-                    "DELETE FROM {}_default WHERE {} < $1::int8",
+                    "WITH gone AS (DELETE FROM {}_default WHERE {} < $1::int8 RETURNING *) \
+                     SELECT {} FROM gone",
                     history.table(),
-                    history.key()
+                    history.key(),
+                    history.count()
                 ),
                 &[&cutoff_ms],
             )
-            .await?;
+            .await?
+            .try_get(0)?;
+        gone += u64::try_from(rows).unwrap_or(0);
         Ok(gone)
     }
 }
@@ -292,9 +307,12 @@ mod tests {
             .with_ymd_and_hms(2026, 3, 1, 0, 0, 0)
             .unwrap()
             .timestamp_millis();
-        assert_eq!(day_of_name(History::Events, "events_20260301"), Some(t));
+        assert_eq!(
+            day_of_name(History::Events, "event_blocks_20260301"),
+            Some(t)
+        );
         assert_eq!(day_of_name(History::Commands, "commands_20260301"), Some(t));
-        assert_eq!(day_of_name(History::Events, "events_default"), None);
+        assert_eq!(day_of_name(History::Events, "event_blocks_default"), None);
         assert_eq!(day_of_name(History::Events, "commands_20260301"), None);
     }
 

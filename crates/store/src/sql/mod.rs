@@ -199,6 +199,14 @@ pub(crate) trait Database: Send + Sync {
         Box::pin(async { Err(StoreError::Closed) })
     }
 
+    /// Takes `count` event ids from the store's counter for an append (several writers
+    /// share it: PostgreSQL); `None`: the one writer counts them itself and stores the
+    /// count with each write (SQLite).
+    fn reserve_ids(&self, count: usize) -> StoreFuture<'_, Option<i64>> {
+        let _ = count;
+        Box::pin(async { Ok(None) })
+    }
+
     /// Writes one append of the history (blocks, key runs, the event counter and a
     /// pass) in one transaction.
     fn write_history(&self, write: HistoryWrite) -> StoreFuture<'_, ()> {

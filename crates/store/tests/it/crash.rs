@@ -167,8 +167,34 @@ fn kill_and_restart(url: &str, dir: &Path, stored: &dyn Fn() -> u64) {
 /// (rows, distinct sequence numbers, lowest, highest) of the source's events.
 type Tally = (i64, i64, i64, i64);
 
-const TALLY: &str = "SELECT count(*), count(DISTINCT source_seq), coalesce(min(source_seq), -1), \
-     coalesce(max(source_seq), -1) FROM events WHERE source_id = 'crash-test-source'";
+/// The tally of the store at `url`, read through the store itself (the events are packed
+/// in blocks): every event in time order, those of the test's source counted.
+fn tally_of(url: &str) -> Tally {
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .unwrap();
+    rt.block_on(async {
+        let store = open_store(url).await.unwrap();
+        let query = store::EventQuery::default()
+            .with_order(store::Order::OldestFirst)
+            .with_limit(10_000);
+        let events = crate::suite::all_events(&*store, query).await;
+        let seqs: Vec<i64> = events
+            .iter()
+            .filter_map(|e| e.key.as_ref())
+            .filter(|k| k.source == "crash-test-source")
+            .map(|k| k.sequence as i64)
+            .collect();
+        let distinct: std::collections::BTreeSet<i64> = seqs.iter().copied().collect();
+        (
+            seqs.len() as i64,
+            distinct.len() as i64,
+            distinct.first().copied().unwrap_or(-1),
+            distinct.last().copied().unwrap_or(-1),
+        )
+    })
+}
 
 fn check(tally: Tally) {
     let total = TOTAL as i64;
@@ -184,36 +210,12 @@ fn sqlite_kill_9_during_ingestion_loses_and_duplicates_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("events.db");
     let url = format!("sqlite:{}", path.display());
-    // SQLite keeps its events packed in blocks: counted through the store itself, every
-    // event read back in time order.
     let tally = || -> Tally {
-        if !path.exists() {
-            return (0, 0, -1, -1);
+        if path.exists() {
+            tally_of(&url)
+        } else {
+            (0, 0, -1, -1)
         }
-        let rt = tokio::runtime::Builder::new_current_thread()
-            .enable_all()
-            .build()
-            .unwrap();
-        rt.block_on(async {
-            let store = open_store(&url).await.unwrap();
-            let query = store::EventQuery::default()
-                .with_order(store::Order::OldestFirst)
-                .with_limit(10_000);
-            let events = crate::suite::all_events(&*store, query).await;
-            let seqs: Vec<i64> = events
-                .iter()
-                .filter_map(|e| e.key.as_ref())
-                .filter(|k| k.source == "crash-test-source")
-                .map(|k| k.sequence as i64)
-                .collect();
-            let distinct: std::collections::BTreeSet<i64> = seqs.iter().copied().collect();
-            (
-                seqs.len() as i64,
-                distinct.len() as i64,
-                distinct.first().copied().unwrap_or(-1),
-                distinct.last().copied().unwrap_or(-1),
-            )
-        })
     };
     kill_and_restart(&url, dir.path(), &|| tally().0 as u64);
     check(tally());
@@ -227,13 +229,7 @@ fn postgres_kill_9_during_ingestion_loses_and_duplicates_nothing() {
     let rt = tokio::runtime::Runtime::new().unwrap();
     let (schema, url) = rt.block_on(postgres_schema(&server, "crash"));
     let client = rt.block_on(admin(&server)).unwrap();
-    let sql = TALLY.replace("FROM events", &format!("FROM {schema}.events"));
-    let tally = || -> Tally {
-        match rt.block_on(client.query_one(&sql, &[])) {
-            Ok(r) => (r.get(0), r.get(1), r.get(2), r.get(3)),
-            Err(_) => (0, 0, -1, -1), // not created yet
-        }
-    };
+    let tally = || tally_of(&url);
     let dir = tempfile::tempdir().unwrap();
     kill_and_restart(&url, dir.path(), &|| tally().0 as u64);
     check(tally());

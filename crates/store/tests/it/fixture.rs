@@ -55,6 +55,23 @@ pub(crate) async fn sqlite_segmented() -> Fixture {
     }
 }
 
+/// A PostgreSQL store in a fresh schema that segments its tail after every append (see
+/// [`sqlite_segmented`]), or `None` when the tests skip.
+pub(crate) async fn postgres_segmented(test: &str) -> Option<Fixture> {
+    let url = postgres_url(test)?;
+    let (schema, store_url) = postgres_schema(&url, &format!("{test}_segmented")).await;
+    let config = store::PostgresConfig::from_url(&store_url).unwrap();
+    let store = store::PostgresStore::connect(config)
+        .await
+        .unwrap()
+        .passing_after_every_append();
+    Some(Fixture {
+        store: Arc::new(store),
+        _dir: None,
+        pg_schema: Some((url, schema)),
+    })
+}
+
 /// A PostgreSQL store in a fresh schema, or `None` when the tests skip.
 pub(crate) async fn postgres(test: &str) -> Option<Fixture> {
     let url = postgres_url(test)?;

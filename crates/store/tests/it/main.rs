@@ -18,8 +18,8 @@ mod retention;
 mod specific;
 mod suite;
 
-/// Generates, for every suite function, a test on SQLite (as it is, and passing after
-/// every append) and one on PostgreSQL.
+/// Generates, for every suite function, a test on SQLite and one on PostgreSQL, each as
+/// it is and passing after every append.
 macro_rules! on_both_backends {
     ($($name:ident),* $(,)?) => {
         mod sqlite {
@@ -47,6 +47,19 @@ macro_rules! on_both_backends {
                 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
                 async fn $name() {
                     let Some(fx) = crate::fixture::postgres(stringify!($name)).await else {
+                        return;
+                    };
+                    crate::suite::$name(fx.store.clone()).await;
+                    fx.finish().await;
+                }
+            )*
+        }
+        mod postgres_segmented {
+            $(
+                #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+                async fn $name() {
+                    let Some(fx) = crate::fixture::postgres_segmented(stringify!($name)).await
+                    else {
                         return;
                     };
                     crate::suite::$name(fx.store.clone()).await;

@@ -30,8 +30,14 @@ async fn partitions(
         .collect();
     let mut out = Vec::new();
     for name in names {
+        // A block holds many events: the events of a day of blocks are their sum.
+        let count = if table == "event_blocks" {
+            "CAST(COALESCE(SUM(events), 0) AS BIGINT)"
+        } else {
+            "count(*)"
+        };
         let rows: i64 = client
-            .query_one(&format!("SELECT count(*) FROM {schema}.{name}"), &[])
+            .query_one(&format!("SELECT {count} FROM {schema}.{name}"), &[])
             .await
             .unwrap()
             .get(0);
@@ -54,15 +60,15 @@ async fn postgres_days_are_partitions_made_ahead_on_demand_and_dropped_whole() {
     let store = open_store(&store_url).await.unwrap();
 
     // At open: today and DAYS_AHEAD days ahead, of both tables, plus the DEFAULT ones.
-    let parts = partitions(&client, &schema, "events").await;
+    let parts = partitions(&client, &schema, "event_blocks").await;
     for d in 0..=DAYS_AHEAD {
         let name = format!(
-            "events_{}",
+            "event_blocks_{}",
             (Utc::now() + Duration::days(d)).format("%Y%m%d")
         );
         assert_eq!(rows_of(&parts, &name), Some(0), "{name} in {parts:?}");
     }
-    assert_eq!(rows_of(&parts, "events_default"), Some(0));
+    assert_eq!(rows_of(&parts, "event_blocks_default"), Some(0));
     let name = format!(
         "commands_{}",
         (Utc::now() + Duration::days(DAYS_AHEAD)).format("%Y%m%d")
@@ -90,11 +96,14 @@ async fn postgres_days_are_partitions_made_ahead_on_demand_and_dropped_whole() {
     // A source clock years ahead: the DEFAULT partition, not a table of its own.
     let far = ev("P", PointValue::Int(-1), 3000 * DAY);
     store.append_events(&[far]).await.unwrap();
-    let parts = partitions(&client, &schema, "events").await;
+    let parts = partitions(&client, &schema, "event_blocks").await;
     for day in 1..=4 {
-        assert_eq!(rows_of(&parts, &format!("events_2026030{day}")), Some(100));
+        assert_eq!(
+            rows_of(&parts, &format!("event_blocks_2026030{day}")),
+            Some(100)
+        );
     }
-    assert_eq!(rows_of(&parts, "events_default"), Some(1));
+    assert_eq!(rows_of(&parts, "event_blocks_default"), Some(1));
     let commands = partitions(&client, &schema, "commands").await;
     assert_eq!(rows_of(&commands, "commands_20260302"), Some(1));
 
@@ -104,10 +113,13 @@ async fn postgres_days_are_partitions_made_ahead_on_demand_and_dropped_whole() {
         .prepare_partitions(far_day - Duration::days(2))
         .await
         .unwrap();
-    let parts = partitions(&client, &schema, "events").await;
-    assert_eq!(rows_of(&parts, "events_default"), Some(0));
+    let parts = partitions(&client, &schema, "event_blocks").await;
+    assert_eq!(rows_of(&parts, "event_blocks_default"), Some(0));
     assert_eq!(
-        rows_of(&parts, &format!("events_{}", far_day.format("%Y%m%d"))),
+        rows_of(
+            &parts,
+            &format!("event_blocks_{}", far_day.format("%Y%m%d"))
+        ),
         Some(1)
     );
 
@@ -118,10 +130,10 @@ async fn postgres_days_are_partitions_made_ahead_on_demand_and_dropped_whole() {
         .await
         .unwrap();
     assert_eq!(purged, 200 + 1);
-    let parts = partitions(&client, &schema, "events").await;
-    assert_eq!(rows_of(&parts, "events_20260301"), None);
-    assert_eq!(rows_of(&parts, "events_20260302"), None);
-    assert_eq!(rows_of(&parts, "events_20260303"), Some(100));
+    let parts = partitions(&client, &schema, "event_blocks").await;
+    assert_eq!(rows_of(&parts, "event_blocks_20260301"), None);
+    assert_eq!(rows_of(&parts, "event_blocks_20260302"), None);
+    assert_eq!(rows_of(&parts, "event_blocks_20260303"), Some(100));
     assert_eq!(store.stats().await.unwrap().events, 201);
     assert_eq!(
         rows_of(
@@ -136,9 +148,9 @@ async fn postgres_days_are_partitions_made_ahead_on_demand_and_dropped_whole() {
         .append_events(&[ev("P", PointValue::Int(7), 5)])
         .await
         .unwrap();
-    let parts = partitions(&client, &schema, "events").await;
-    assert_eq!(rows_of(&parts, "events_20260301"), None);
-    assert_eq!(rows_of(&parts, "events_default"), Some(1));
+    let parts = partitions(&client, &schema, "event_blocks").await;
+    assert_eq!(rows_of(&parts, "event_blocks_20260301"), None);
+    assert_eq!(rows_of(&parts, "event_blocks_default"), Some(1));
     assert_eq!(store.purge_older_than(at_ms(2 * DAY)).await.unwrap(), 1);
 
     drop(store);

@@ -377,23 +377,32 @@ async fn postgres_migrates_a_version_1_database() {
     {
         let store = open_store(&store_url).await.unwrap();
         check_migrated_to_2(&*store).await;
-        // Version 3 made `events` partitioned by day, the old row in its day, its id kept,
-        // and new ids after it.
+        // Version 6 moved the rows of `events` (partitioned by day since version 3) into
+        // blocks, partitioned by day too: the old event in its day's blocks, its id kept,
+        // new ids after it; `events` is gone.
         let partitioned: i64 = client
             .query_one(
                 &format!(
                     "SELECT count(*) FROM pg_partitioned_table \
-                     WHERE partrelid IN ('{schema}.events'::regclass, '{schema}.commands'::regclass)"
+                     WHERE partrelid IN ('{schema}.event_blocks'::regclass, \
+                                         '{schema}.event_segments'::regclass, \
+                                         '{schema}.commands'::regclass)"
                 ),
                 &[],
             )
             .await
             .unwrap()
             .get(0);
-        assert_eq!(partitioned, 2);
+        assert_eq!(partitioned, 3);
+        let events_table: Option<String> = client
+            .query_one(&format!("SELECT to_regclass('{schema}.events')::text"), &[])
+            .await
+            .unwrap()
+            .get(0);
+        assert_eq!(events_table, None);
         let old_day: i64 = client
             .query_one(
-                &format!("SELECT count(*) FROM {schema}.events_19700101"),
+                &format!("SELECT CAST(SUM(events) AS BIGINT) FROM {schema}.event_blocks_19700101"),
                 &[],
             )
             .await
@@ -519,4 +528,83 @@ async fn sqlite_moves_the_old_rows_into_blocks_with_their_ids() {
     drop(conn);
     let again = SqliteStore::open(&path).await.unwrap();
     assert_eq!(again.stats().await.unwrap().events, 100_002);
+}
+
+/// The same move on PostgreSQL: the rows of every day partition of `events` into blocks
+/// of their days, with their ids (read in time order through the day's index), then
+/// `events` dropped.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn postgres_moves_the_old_rows_into_blocks_with_their_ids() {
+    let Some(url) = postgres_url("postgres_moves_the_old_rows") else {
+        return;
+    };
+    let (schema, store_url) = postgres_schema(&url, "moves").await;
+    let client = admin(&url).await.unwrap();
+    client
+        .batch_execute(&format!(
+            "SET search_path TO {schema}; {}; \
+             INSERT INTO events (id, node, point, value_kind, value_float, quality, \
+                 source_invalid, received_ms, event_ms, cause, origin) \
+             SELECT 10 + i * 3 / 2, 'RH2', 'P' || (i % 7), 4, i * 0.5, i % 2, false, \
+                    2000000 + i * 5000, 2000000 + i * 5000, 1, 'RH2' \
+             FROM generate_series(1, 100000) AS i;",
+            version_1(Backend::Postgres)
+        ))
+        .await
+        .unwrap();
+    let store = open_store(&store_url).await.unwrap();
+    let all = crate::suite::all_events(
+        &*store,
+        EventQuery::default()
+            .with_order(store::Order::OldestFirst)
+            .with_limit(10_000),
+    )
+    .await;
+    assert_eq!(all.len(), 100_001);
+    let moved: Vec<_> = all.iter().filter(|e| e.point != "OLD").collect();
+    for (k, e) in moved.iter().enumerate() {
+        let i = k as i64 + 1;
+        assert_eq!(e.id, Some(10 + i * 3 / 2), "event {i}");
+        assert_eq!(e.value, PointValue::Float(i as f64 * 0.5));
+        assert_eq!(e.quality.invalid, i % 2 == 1);
+    }
+    let days: i64 = client
+        .query_one(
+            &format!(
+                "SELECT count(*) FROM pg_inherits i JOIN pg_class c ON c.oid = i.inhrelid \
+                 WHERE i.inhparent = '{schema}.event_blocks'::regclass \
+                   AND c.relname LIKE 'event_blocks_1970%'"
+            ),
+            &[],
+        )
+        .await
+        .unwrap()
+        .get(0);
+    assert_eq!(days, 6, "the days 1970-01-01 to 06");
+    let start = chrono::DateTime::<chrono::Utc>::UNIX_EPOCH;
+    let trend = store::TrendQuery::new("P0", start, start + chrono::Duration::days(7), 10);
+    let count: u64 = store
+        .query_trend(&trend)
+        .await
+        .unwrap()
+        .iter()
+        .map(|b| b.count)
+        .sum();
+    assert_eq!(count, 100_000 / 7);
+    let next = store
+        .append_events(&[ev("NEW", PointValue::Int(1), 1)])
+        .await
+        .unwrap();
+    assert!(next[0] > 10 + 100_000 * 3 / 2, "{next:?}");
+    let events_table: Option<String> = client
+        .query_one(&format!("SELECT to_regclass('{schema}.events')::text"), &[])
+        .await
+        .unwrap()
+        .get(0);
+    assert_eq!(events_table, None);
+    drop(store);
+    client
+        .batch_execute(&format!("DROP SCHEMA {schema} CASCADE"))
+        .await
+        .unwrap();
 }
