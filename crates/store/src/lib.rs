@@ -15,8 +15,9 @@
 //! | `trend`       | trends downsampled in the database: [`TrendQuery`], [`TrendBucket`] (min, max, mean per slice of the range) |
 //! | `notification` | the record of e-mails and webhook calls sent or suppressed: [`NotificationLog`] (a trait of its own), [`NotificationRecord`], [`NotificationQuery`] |
 //! | [`url`]       | store addresses: [`url::StoreUrl`] (`sqlite:PATH`, `sqlite::memory:`, `postgres://...`) |
+//! | `history`     | the event history in blocks: events packed many to a row (`history::codec`), an append's blocks, the writer's passes into per-point segments and trend rollups, the event list, trends and retention over them; why: its module doc |
 //! | `sql`         | what both backends share: the migrations, the queries' SQL, purge, stats, row mapping, and the `EventStore` behaviour itself |
-//! | `sqlite`, `postgres` | the backends: how they reach their database, how a batch of events goes in (SQLite: one prepared INSERT OR IGNORE per row; PostgreSQL: binary COPY into a staging table, then INSERT ... ON CONFLICT DO NOTHING), and retention (`postgres::partitions`: day partitions) |
+//! | `sqlite`, `postgres` | the backends: how they reach their database, how an append's blocks go in (SQLite: prepared inserts on the writer thread; PostgreSQL: binary COPY), snapshots for trends, and retention (`postgres::partitions`: day partitions) |
 //! | `recorder`    | [`Recorder`]: the bounded channel and batching writer in front of a store; gives every event an idempotent key ([`EventKey`]) |
 //! | `retention`   | [`spawn_retention`]: the periodic purge of old history |
 //!
@@ -37,6 +38,7 @@
 //!                                                       commands wait for room)
 //!                                                        | write task: an EventKey for each
 //!                                                        | event, one transaction per burst
+//!                                                        | (history: blocks, passes)
 //!                                                        v
 //!                      EventStore (SqliteStore | PostgresStore) --> query_events / query_commands
 //!                                                        ^              (HMI event list, CLI)
@@ -67,47 +69,39 @@
 //!
 //! # Schema
 //!
-//! Tables `events` and `commands` (migration 1), `lift_faults` and `notifications`
-//! (migration 2), the idempotent key of events and, on PostgreSQL, day partitions
-//! (migration 3), versioned by `schema_version`; the migrations are one
-//! list for both backends (SQL files under `migrations/`, column types filled in per
-//! backend; version 3 has a text of its own per backend), applied at open, so a database
-//! of an older version is brought up to date when a newer program opens it (on
-//! PostgreSQL, version 3 converts the old tables into partitioned ones, rows and ids
-//! kept). Times are
-//! milliseconds since the Unix epoch (UTC) in 64-bit integers; values are split into
-//! `value_kind` plus `value_int`/`value_float`/`value_text`; enums are stored as the stable
-//! codes of [`EventCause::code`], [`CommandOutcome::code`] and [`CommandPhase::code`].
-//! `events.event_ms` is the event time ([`EventRecord::event_time`]) that queries order by.
-//! `events.source_id`/`source_seq` hold the [`EventKey`] (NULL without one), unique per
-//! store: appending an event whose key is stored already stores nothing (and answers the
-//! stored event's id), so a batch written again after a crash between its commit and its
-//! acknowledgement is stored once.
+//! Tables `commands` (migration 1), `lift_faults` and `notifications` (migration 2) and
+//! the event history (migration 6, below), versioned by `schema_version`; the migrations
+//! are one list for both backends (SQL files under `migrations/`, column types filled in
+//! per backend; some versions have a text of their own per backend), applied at open, so
+//! a database of an older version is brought up to date when a newer program opens it.
+//! Times are milliseconds since the Unix epoch (UTC) in 64-bit integers; values are split
+//! into `value_kind` plus `value_int`/`value_float`/`value_text` in the command audit;
+//! enums are stored as the stable codes of [`EventCause::code`], [`CommandOutcome::code`]
+//! and [`CommandPhase::code`].
 //!
-//! On PostgreSQL `events` and `commands` are RANGE-partitioned by UTC day of the event
-//! time (`event_ms`, `commands.time_ms`): a table `events_YYYYMMDD` per day, made at open
-//! for today and [`DAYS_AHEAD`] days ahead, again with every retention pass, and for any
-//! day an append meets; a time years off (a source clock gone wild) lands in the DEFAULT
-//! partition until its day is made. The indexes of the event list (time, point, node,
-//! invalid only), the command audit (time, user, point, outcome) and the trends (point,
-//! time) are on the partitioned tables, so every day has them; a query with a time range
-//! reads only its days. Ids come from the sequences `event_ids` and `command_ids`.
+//! Events are kept in blocks (schema version 6; the `history` module says why and how):
+//! `event_blocks` holds an append's events of one minute packed into one row, with the
+//! time spans, node, causes and IV count a query filters by; `event_segments` the same
+//! events again per point and minute, packed by the writer's passes; `trend_rollups`
+//! (version 4) per point with numeric values and per minute ([`ROLLUP_SPAN_MS`]) the first
+//! and last event time and value, the minimum, maximum, sum and count of the values and
+//! whether any was invalid, folded by the same passes; `event_keys` the [`EventKey`]s as
+//! runs of sequences (appending an event whose key is stored already stores nothing and
+//! answers the stored event's id, so a batch written again after a crash between its
+//! commit and its acknowledgement is stored once); `event_names` the names as numbers.
+//! An event's time ([`EventRecord::event_time`]) is what queries order by. Opening a
+//! store of version 5 or before moves its rows of `events` into blocks, ids kept, and
+//! folds the rollups again from them.
 //!
-//! `trend_rollups` (schema version 4) holds, per point with numeric values and per minute
-//! ([`ROLLUP_SPAN_MS`]) that has values, the first and last event time, the minimum,
-//! maximum, sum and count of the values and whether any was invalid, and (version 5) the
-//! first and last value. It is folded in the
-//! transaction that stores the events, from the rows actually stored (an event ignored for
-//! its key is not folded twice): on SQLite by the writer, one statement per batch; on
-//! PostgreSQL by a statement trigger on `events` over the INSERT's transition table (so
-//! every way of inserting keeps it). An aggregated trend of buckets four minutes wide or
-//! more reads the rollups ([`TrendQuery::rollup_span_ms`]). Retention deletes the rollups
-//! of the purged minutes (SQLite) or days (PostgreSQL). SQLite's table is WITHOUT ROWID:
-//! a point's minutes lie side by side in its B-tree. PostgreSQL's heap keeps rows in the
-//! order they were written (all points of a minute together), so since schema version 5
-//! its rollups are partitioned by day too (`trend_rollups_YYYYMMDD`, made and dropped with
-//! the event days) and each closed day is CLUSTERed on (point, minute) once
-//! ([`EventStore::compact_closed_days`], with every retention pass).
+//! On PostgreSQL the history and `commands` are RANGE-partitioned by UTC day (a table
+//! `event_blocks_YYYYMMDD` per day, with its `event_segments_` and `trend_rollups_` days),
+//! made at open for today and [`DAYS_AHEAD`] days ahead, again with every retention pass,
+//! and for any day an append meets; a time years off (a source clock gone wild) lands in
+//! the DEFAULT partition until its day is made. Each closed day's rollups are CLUSTERed
+//! on (point, minute) once ([`EventStore::compact_closed_days`], with every retention
+//! pass). Ids come from `event_counter`, a range per writer at a time, and the sequence
+//! `command_ids`.
+//!
 //! A lift fault's board time has no zone: `lift_faults.board_ms` holds its wall-clock
 //! reading as if it were UTC (NULL when the board sent an impossible date), and
 //! `lift_faults.filed_ms` the time it is filtered and sorted by
@@ -118,8 +112,9 @@
 //! [`spawn_retention`] deletes events (by event time), command records and notification
 //! records older than its cutoff. On PostgreSQL events and command records go by whole
 //! days: a day's partition is dropped (not deleted row by row) once all of it is older
-//! than the cutoff, so up to a day more than the retention stays; SQLite deletes rows in
-//! chunks. (The notification record is an audit like the command audit, and grows
+//! than the cutoff, so up to a day more than the retention stays; SQLite deletes whole
+//! blocks and segments and writes the few holding the cutoff again without the old
+//! events, and deletes command records in chunks. (The notification record is an audit like the command audit, and grows
 //! with every suppressed repeat of a flapping lift's fault.) The lift fault archive is never
 //! purged: it is kept for years for the service figures (faults per year, MTBF), and it
 //! grows by a board's fault stack, a few records a day at worst.

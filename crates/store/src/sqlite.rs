@@ -606,8 +606,8 @@ impl Database for SqliteStore {
         }))
     }
 
-    fn history(&self) -> Option<&History> {
-        Some(&self.history)
+    fn history(&self) -> &History {
+        &self.history
     }
 
     fn name_ids(&self, names: Vec<String>) -> StoreFuture<'_, Vec<(NameId, String)>> {

@@ -8,9 +8,9 @@ use chrono::{DateTime, Utc};
 /// The most buckets one trend query may ask for.
 pub const MAX_TREND_BUCKETS: usize = 20_000;
 
-/// The span the store keeps rollups of: per point and minute, the first and last time,
-/// min, max, sum, count and IV of its values, kept in the transaction that stores the
-/// events (schema version 4). One span only: each rollup row costs every append that
+/// The span the store keeps rollups of: per point and minute, the first and last time and
+/// value, min, max, sum, count and IV of its values, folded by the history's passes
+/// (schema versions 4 to 6). One span only: each rollup row costs every append that
 /// opens it (a point changing every few minutes opens one per event), and a year of
 /// minutes (525,600 rows of a point changing every minute) still reads in a fraction of a
 /// second.
@@ -32,9 +32,8 @@ pub enum TrendMode {
     /// The bucket's first and last value. Buckets of four minutes or more are read from
     /// the rollups, which keep each minute's first and last value (schema version 5):
     /// the bucket's `min`/`max`/`avg`/`count` are then exact as in
-    /// [`TrendMode::Aggregate`]. Narrower ones are found by two index seeks per bucket
-    /// (a cost that grows with the buckets only), `min`/`max`/`avg` of those two (a
-    /// spike between them is not seen) and a count of 1 or 2.
+    /// [`TrendMode::Aggregate`]. Narrower ones are folded from every event of the range,
+    /// exact as well.
     FirstLast,
 }
 
@@ -78,8 +77,7 @@ impl TrendQuery {
     }
 
     /// The rollup span a trend is read from: [`ROLLUP_SPAN_MS`] when it fits four times
-    /// into a bucket; `None` for narrower buckets (every event read when aggregated, two
-    /// seeks per bucket for [`TrendMode::FirstLast`]). A minute is counted whole in the
+    /// into a bucket; `None` for narrower buckets (every event of the range read). A minute is counted whole in the
     /// bucket its start falls in, so with rollups a bucket covers whole minutes and its
     /// width varies by one (43 or 44 minutes for 60 days in 2,000 buckets); the range's
     /// ends stay exact (the partial minutes there are read from the events), and each
@@ -115,10 +113,8 @@ pub struct TrendBucket {
     pub max: f64,
     /// The mean of the values.
     pub avg: f64,
-    /// How many values fell in the slice ([`TrendMode::FirstLast`] of narrow buckets:
-    /// how many were read, 1 or 2).
+    /// How many values fell in the slice.
     pub count: u64,
-    /// Whether any value of the slice was invalid (IV) ([`TrendMode::FirstLast`] of
-    /// narrow buckets: the first or the last).
+    /// Whether any value of the slice was invalid (IV).
     pub invalid: bool,
 }

@@ -27,7 +27,19 @@ pub(crate) async fn append<D: Database>(
     let names = &history.names;
     let id = |name: &str| names.id(name).unwrap_or(0);
     let stored = stored_keys(db, history, state, events).await?;
-    let first_id = db.reserve_ids(events.len()).await?.unwrap_or(state.next_id);
+    let first_id = match state.reserved {
+        Some((next, end)) if end - next >= events.len() as i64 => next,
+        _ => {
+            let count = events.len().max(super::ID_RANGE);
+            match db.reserve_ids(count).await? {
+                Some(first) => {
+                    state.reserved = Some((first, first + count as i64));
+                    first
+                }
+                None => state.next_id,
+            }
+        }
+    };
     let numbered = number(
         events,
         |e| EventNames {
@@ -62,6 +74,9 @@ pub(crate) async fn append<D: Database>(
         return Err(error);
     }
     state.next_id = state.next_id.max(numbered.next_id);
+    if let Some((_, end)) = state.reserved {
+        state.reserved = Some((numbered.next_id, end));
+    }
     for run in &numbered.keys {
         let largest = state
             .largest_sequence
@@ -92,6 +107,7 @@ async fn load<D: Database>(db: &D, history: &History) -> Result<WriterState, Sto
     }
     Ok(WriterState {
         next_id,
+        reserved: None,
         tail,
         largest_sequence: HashMap::new(),
     })

@@ -5,7 +5,7 @@
 //!
 //! - **By point** (one point, event time): the tail's events of the point (the blocks not
 //!   segmented, read whole first), then the point's segments minute by minute in the
-//!   page's direction, leaving out the parts written after the tail was read.
+//!   page's direction (an event segmented between the two reads is listed once).
 //! - **Through the blocks** (everything else): blocks in the page's direction, by their
 //!   last time newest first (their first time oldest first), a few at a time; a block's
 //!   node, causes and IV count skip it unread where the filter rules it out.
@@ -216,7 +216,8 @@ impl Merge<'_> {
                 break;
             }
             if let Some(e) = self.pending.pop() {
-                // A block read twice (never expected) must not list an event twice.
+                // An event read from the tail and again from its segment (a pass committed
+                // between the two reads): the copies rank alike, so they come together.
                 if self.out.last().is_none_or(|last| last.id != e.id) {
                     self.out.push(e);
                 }
@@ -340,9 +341,10 @@ async fn by_point<D: Database>(
         out: Vec::new(),
         wanted,
     };
+    // The tail first: an event segmented meanwhile is read again from its segment (and
+    // listed once: the merge drops an id it just handed out), none is missed (segments
+    // are never removed but by retention).
     let tail = db.rows(read(TAIL_BLOCKS, Vec::new()), id_and_data).await?;
-    // Segments of parts at or after the tail's first block hold events read here already.
-    let tail_start = tail.iter().map(|(id, _)| *id).min().unwrap_or(i64::MAX);
     for (_, data) in tail {
         merge.add(decode(&data)?);
     }
@@ -353,7 +355,7 @@ async fn by_point<D: Database>(
     };
     let sql = format!(
         "SELECT start_ms, part, data FROM event_segments \
-         WHERE point = {} AND start_ms >= {} AND start_ms <= {} AND part < {} \
+         WHERE point = {} AND start_ms >= {} AND start_ms <= {} \
            AND (start_ms, part) {compare} ({}, {}) \
          ORDER BY start_ms {direction}, part {direction} LIMIT {}",
         p(1),
@@ -361,8 +363,7 @@ async fn by_point<D: Database>(
         p(3),
         p(4),
         p(5),
-        p(6),
-        p(7)
+        p(6)
     );
     let mut keyset = match filter.order {
         Order::NewestFirst => (i64::MAX, i64::MAX),
@@ -376,7 +377,6 @@ async fn by_point<D: Database>(
                 filter.low.max(i64::MIN + BLOCK_SPAN_MS),
             )),
             Param::int(filter.high),
-            Param::int(tail_start),
             Param::int(keyset.0),
             Param::int(keyset.1),
             Param::int(rows),

@@ -52,12 +52,16 @@
 //! # Consistency
 //!
 //! A block is written once and changes only by retention. A pass turns blocks'
-//! `segmented` on in the transaction that writes their segments and rollups, and every
-//! segment of a pass is numbered (`part`) by the pass's smallest block id: a query that
-//! read the tail (the blocks not segmented) leaves out the segments of parts at or after
-//! the tail's smallest block, so an event is read once even when a pass commits between
-//! its statements, and a trend reads the tail, the rollups and the segments in one
-//! snapshot.
+//! `segmented` on in the transaction that writes their segments and rollups (each
+//! segment numbered, `part`, by the pass's smallest block id). A point's event list reads
+//! the tail (the blocks not segmented) before the segments: an event segmented between
+//! the two reads is read twice and listed once (by id), none is missed. A trend reads the
+//! tail, the rollups and the segments in one snapshot (a read transaction), since a
+//! rollup has no ids to tell a second reading by.
+//!
+//! Several writers may share a PostgreSQL store (ids are taken from `event_counter` a
+//! range at a time, [`ID_RANGE`]; a pass flips only blocks still unsegmented, under an
+//! advisory lock): ids then grow with insertion order within each writer.
 
 pub(crate) mod codec;
 #[cfg(feature = "database")]
@@ -111,12 +115,19 @@ pub(crate) struct History {
     pub(crate) pass_every_append: bool,
 }
 
+/// Ids a writer takes from a shared counter at once (PostgreSQL): one round trip per
+/// this many events.
+#[cfg(feature = "database")]
+pub(crate) const ID_RANGE: usize = 65_536;
+
 /// What the writer keeps between appends.
 #[cfg(feature = "database")]
 #[derive(Debug, Default)]
 pub(crate) struct WriterState {
-    /// The id the next event gets.
+    /// The id the next event gets (SQLite: the store's counter).
     pub(crate) next_id: i64,
+    /// Ids taken from a shared counter and not yet used, `next..end` (PostgreSQL).
+    pub(crate) reserved: Option<(i64, i64)>,
     /// The events not yet segmented.
     pub(crate) tail: write::Tail,
     /// Per key source, the largest sequence stored (looked up once): a batch whose

@@ -12,14 +12,14 @@ use crate::sql::row::{from_ms, to_ms, Columns, OwnedRow};
 use crate::sql::{Database, Param};
 use crate::{StoreError, TrendBucket, TrendMode, TrendQuery};
 
-/// One bucket being folded. Its ends are ranked by (time, id) and keep their value and
-/// IV; a rollup's minute has no id and ranks before the events of its millisecond, for
+/// One bucket being folded. Its ends are ranked by (time, id) and keep their value; a
+/// rollup's minute has no id and ranks before the events of its millisecond, for
 /// the first and the last value alike (a pass holds only events with higher ids than
 /// the passes before it, so the tail's are newer).
 #[derive(Debug, Clone, Copy)]
 struct Fold {
-    first: (i64, i64, f64, bool),
-    last: (i64, i64, f64, bool),
+    first: (i64, i64, f64),
+    last: (i64, i64, f64),
     min: f64,
     max: f64,
     sum: f64,
@@ -45,8 +45,8 @@ impl Fold {
     fn of_event(e: &Coded, v: f64) -> Fold {
         let t = e.event_ms();
         Fold {
-            first: (t, e.id, v, e.invalid()),
-            last: (t, e.id, v, e.invalid()),
+            first: (t, e.id, v),
+            last: (t, e.id, v),
             min: v,
             max: v,
             sum: v,
@@ -155,7 +155,7 @@ pub(crate) async fn query_trend<D: Database>(
     }
     buckets
         .into_values()
-        .map(|f| bucket(f, query.mode, rollups.is_some()))
+        .map(|f| bucket(f, query.mode))
         .collect()
 }
 
@@ -222,8 +222,8 @@ fn rollup_fold(r: &OwnedRow) -> Result<(i64, Fold), StoreError> {
     Ok((
         r.need_int(0)?,
         Fold {
-            first: (first_ms, i64::MIN, first, invalid),
-            last: (last_ms, i64::MIN, last, invalid),
+            first: (first_ms, i64::MIN, first),
+            last: (last_ms, i64::MIN, last),
             min,
             max,
             sum: real(5)?,
@@ -233,49 +233,20 @@ fn rollup_fold(r: &OwnedRow) -> Result<(i64, Fold), StoreError> {
     ))
 }
 
-/// The bucket a fold answers: with [`TrendMode::FirstLast`] of narrow buckets only what
-/// its first and last value say (as documented there).
-fn bucket(f: Fold, mode: TrendMode, rollups: bool) -> Result<TrendBucket, StoreError> {
-    let (first_time, last_time) = (from_ms(f.first.0)?, from_ms(f.last.0)?);
+/// The bucket a fold answers (the first and last value with [`TrendMode::FirstLast`]).
+fn bucket(f: Fold, mode: TrendMode) -> Result<TrendBucket, StoreError> {
     #[allow(clippy::cast_precision_loss)]
     let avg = f.sum / f.count.max(1) as f64;
-    Ok(match (mode, rollups) {
-        (TrendMode::Aggregate, _) => TrendBucket {
-            first_time,
-            last_time,
-            first: None,
-            last: None,
-            min: f.min,
-            max: f.max,
-            avg,
-            count: f.count,
-            invalid: f.invalid,
-        },
-        (TrendMode::FirstLast, true) => TrendBucket {
-            first_time,
-            last_time,
-            first: Some(f.first.2),
-            last: Some(f.last.2),
-            min: f.min,
-            max: f.max,
-            avg,
-            count: f.count,
-            invalid: f.invalid,
-        },
-        (TrendMode::FirstLast, false) => {
-            let (first, last) = (f.first.2, f.last.2);
-            let one = f.count == 1;
-            TrendBucket {
-                first_time,
-                last_time,
-                first: Some(first),
-                last: Some(last),
-                min: first.min(last),
-                max: first.max(last),
-                avg: if one { first } else { (first + last) / 2.0 },
-                count: if one { 1 } else { 2 },
-                invalid: f.first.3 || f.last.3,
-            }
-        }
+    let ends = mode == TrendMode::FirstLast;
+    Ok(TrendBucket {
+        first_time: from_ms(f.first.0)?,
+        last_time: from_ms(f.last.0)?,
+        first: ends.then_some(f.first.2),
+        last: ends.then_some(f.last.2),
+        min: f.min,
+        max: f.max,
+        avg,
+        count: f.count,
+        invalid: f.invalid,
     })
 }

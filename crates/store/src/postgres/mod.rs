@@ -7,12 +7,11 @@
 //! recycled on the next checkout, so the store survives a server restart, and each
 //! connection caches the statements prepared on it.
 //!
-//! `events` and `commands` are partitioned by day ([`partitions`]). Event batches go in
-//! by binary COPY into a temporary staging table (one per connection, made when the pool
-//! opens the connection) and from there by `INSERT ... SELECT ... ON CONFLICT DO NOTHING`
-//! into `events`, in one transaction: the idempotent key ([`crate::EventKey`]) makes a
-//! batch written twice (a crash or a lost connection between the commit and its
-//! acknowledgement, then the retry) store every event once.
+//! The event history's tables and `commands` are partitioned by day ([`partitions`]).
+//! An append's blocks (and a pass's segments) go in by binary COPY, in one transaction
+//! with the runs of its keys ([`history`]); the keys stored already are looked up before
+//! (`crate::history`), so a batch written twice (a crash or a lost connection between
+//! the commit and its acknowledgement, then the retry) stores every event once.
 
 mod history;
 pub(crate) mod partitions;
@@ -269,8 +268,8 @@ impl Database for PostgresStore {
         })
     }
 
-    fn history(&self) -> Option<&crate::history::History> {
-        Some(&self.history)
+    fn history(&self) -> &crate::history::History {
+        &self.history
     }
 
     fn name_ids(&self, names: Vec<String>) -> StoreFuture<'_, Vec<(NameId, String)>> {

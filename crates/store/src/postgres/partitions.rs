@@ -1,21 +1,22 @@
-//! The day partitions of `events` and `commands` on PostgreSQL (schema version 3): making
-//! the days an append or the calendar needs, and dropping the days retention no longer
-//! keeps.
+//! The day partitions of the event history and `commands` on PostgreSQL (schema version
+//! 3, the history's tables since 6): making the days an append or the calendar needs,
+//! and dropping the days retention no longer keeps.
 //!
-//! A partition is one UTC day of the table's time (`events.event_ms`, `commands.time_ms`),
-//! named `events_YYYYMMDD`; times without a day partition go to the DEFAULT partition
-//! (`events_default`). The database function `stanice_day_partition` (migration 3) makes a
-//! day, moving that day's rows out of the DEFAULT partition first. The store makes today
+//! A partition is one UTC day of the table's time (`event_blocks.first_ms`,
+//! `event_segments.start_ms`, `commands.time_ms`), named `event_blocks_YYYYMMDD`; times
+//! without a day partition go to the DEFAULT partition (`event_blocks_default`). The
+//! database function `stanice_day_partition` (migrations 3, 5 and 6) makes a day, moving
+//! that day's rows out of the DEFAULT partition first; a day of blocks comes with its
+//! day of segments and of trend rollups. The store makes today
 //! and [`DAYS_AHEAD`] days ahead at open and with each retention pass, and any other day an
 //! append meets (within [`ON_DEMAND_PAST_DAYS`] back and [`ON_DEMAND_FUTURE_DAYS`] ahead of
 //! today, so a source clock gone wild fills the DEFAULT partition, not the catalogue with
 //! thousands of tables). Retention drops every partition whose whole day is older than its
 //! cutoff and deletes the DEFAULT partition's rows older than it.
 //!
-//! `trend_rollups` is partitioned by the day of its minutes (schema version 5): the day
-//! function makes an event day's rollup day with it, retention drops the rollup days with
-//! the event days, and [`Partitions::compact_closed_days`] rewrites each closed rollup day
-//! in key order once.
+//! `trend_rollups` is partitioned by the day of its minutes (schema version 5): retention
+//! drops the rollup days with the event days, and [`Partitions::compact_closed_days`]
+//! rewrites each closed rollup day in key order once.
 
 use std::collections::HashSet;
 use std::sync::atomic::{AtomicI64, Ordering};
@@ -33,7 +34,7 @@ pub(crate) const DAY_MS: i64 = 86_400_000;
 pub const DAYS_AHEAD: i64 = 7;
 
 /// How long after its end a day counts as closed: its trend rollups are then rewritten in
-/// key order ([`Partitions::compact_closed_days`]). Events of the day arriving later (a
+/// key order ([`crate::EventStore::compact_closed_days`]). Events of the day arriving later (a
 /// node's buffer replayed after an outage) are still stored and folded, as ordinary
 /// updates.
 pub const CLOSED_DAY_GRACE_MS: i64 = 3_600_000;

@@ -22,19 +22,16 @@ use crate::{
     Backend, CommandQuery, CommandRecord, CountedPage, EventQuery, EventRecord, EventStore,
     LiftFaultArchive, LiftFaultQuery, LiftFaultRecord, NotificationLog, NotificationQuery,
     NotificationRecord, Page, RecordId, StoreError, StoreFuture, StoreStats, TrendBucket,
-    TrendMode, TrendQuery, MAX_TREND_BUCKETS, ROLLUP_SPAN_MS,
+    TrendQuery, MAX_TREND_BUCKETS, ROLLUP_SPAN_MS,
 };
 use row::OwnedRow;
 use row::{
     check_command, check_event, check_lift_fault, check_notification, command_from_row,
-    command_params, count_from_row, event_from_row, id_from_row, lift_fault_from_row,
-    lift_fault_params, notification_from_row, notification_params, stats_from_row, to_ms, Decode,
-    COMMAND_INSERT, LIFT_FAULT_INSERT, NOTIFICATION_INSERT, STATS,
+    command_params, count_from_row, id_from_row, lift_fault_from_row, lift_fault_params,
+    notification_from_row, notification_params, stats_from_row, to_ms, Decode, COMMAND_INSERT,
+    LIFT_FAULT_INSERT, NOTIFICATION_INSERT,
 };
-use select::{
-    command_cursor, command_sql, event_cursor, event_sql, into_page, lift_fault_sql,
-    notification_sql, trend_sql, Counted,
-};
+use select::{command_cursor, command_sql, into_page, lift_fault_sql, notification_sql, Counted};
 
 /// Rows one purge statement deletes, so appends interleave with a large purge.
 const PURGE_CHUNK: i64 = 10_000;
@@ -128,14 +125,6 @@ pub(crate) trait Database: Send + Sync {
     /// Runs a writing statement; returns how many rows it changed.
     fn execute(&self, sql: String, params: Vec<Param>) -> StoreFuture<'_, u64>;
 
-    /// Appends checked, non-empty `events` in one transaction as rows of `events`; ids in
-    /// their order. (A backend keeping its events in blocks, [`Database::history`], has
-    /// none.)
-    fn insert_events<'a>(&'a self, events: &'a [EventRecord]) -> StoreFuture<'a, Vec<RecordId>> {
-        let _ = events;
-        Box::pin(async { Err(StoreError::Closed) })
-    }
-
     /// Appends checked, non-empty `rows` (parameters in the order of `columns`, all of
     /// one shape) to `table` in one transaction; ids in their order. For the small batches
     /// of other tables than `events`.
@@ -187,11 +176,8 @@ pub(crate) trait Database: Send + Sync {
     /// Refreshes the query planner's statistics.
     fn analyze(&self) -> StoreFuture<'_, ()>;
 
-    /// The history in blocks ([`crate::history`]), where this backend keeps its events
-    /// so (SQLite since schema version 6); `None`: a row per event in `events`.
-    fn history(&self) -> Option<&History> {
-        None
-    }
+    /// The event history's state ([`crate::history`]: names, the writer).
+    fn history(&self) -> &History;
 
     /// The numbers of `names` in `event_names`, adding those missing; one pair per name.
     fn name_ids(&self, names: Vec<String>) -> StoreFuture<'_, Vec<(NameId, String)>> {
@@ -266,36 +252,6 @@ pub(crate) async fn delete_older<D: Database>(
 /// A bucket of a first/last trend read from the rollups: the aggregates, then its first
 /// and last value (NULL only where neither the minute nor the events have it: events
 /// purged while their minute stayed).
-fn trend_bucket_with_ends_from_row(r: &dyn row::Columns) -> Result<TrendBucket, StoreError> {
-    Ok(TrendBucket {
-        first: r.real(7)?,
-        last: r.real(8)?,
-        ..trend_bucket_from_row(r)?
-    })
-}
-
-fn trend_bucket_from_row(r: &dyn row::Columns) -> Result<TrendBucket, StoreError> {
-    let real = |i: usize| -> Result<f64, StoreError> {
-        r.real(i)?
-            .ok_or_else(|| StoreError::Corrupt("a trend bucket without values".to_owned()))
-    };
-    Ok(TrendBucket {
-        first_time: row::from_ms(r.need_int(0)?)?,
-        last_time: row::from_ms(r.need_int(1)?)?,
-        first: None,
-        last: None,
-        min: real(2)?,
-        max: real(3)?,
-        avg: real(4)?,
-        count: u64::try_from(r.need_int(5)?).unwrap_or(0),
-        invalid: r.need_int(6)? != 0,
-    })
-}
-
-/// Deletes the trend rollups that start before `before_ms`: point by point, each a range
-/// of the primary key (point, start_ms) deleted in chunks of
-/// [`PURGE_CHUNK`]; the points found by a loose scan of the key (one seek per point), so
-/// that no index on the start alone costs every append.
 async fn delete_rollups_before<D: Database>(db: &D, before_ms: i64) -> Result<(), StoreError> {
     let points = Statement {
         access: Access::Write,
@@ -344,111 +300,7 @@ async fn delete_rollups_before<D: Database>(db: &D, before_ms: i64) -> Result<()
     Ok(())
 }
 
-/// The first and last value of each bucket, by two index seeks per bucket on (point,
-/// event_ms, id): the buckets are counted by a recursive query, each picks the ids of
-/// its ends, and the ends' rows are joined. Empty buckets are left out (no id).
-fn trend_ends_sql(query: &TrendQuery, backend: Backend) -> Statement {
-    let span = (to_ms(query.to) - to_ms(query.from)).max(1);
-    let width = query.bucket_ms();
-    let slices = (span + width - 1) / width;
-    let params = vec![
-        Param::text(query.point.as_str()),
-        Param::int(to_ms(query.from)),
-        Param::int(to_ms(query.to)),
-        Param::int(width),
-        Param::int(slices),
-    ];
-    let point = Param::text("").placeholder(backend, 1);
-    let from = Param::int(0).placeholder(backend, 2);
-    let to = Param::int(0).placeholder(backend, 3);
-    let width = Param::int(0).placeholder(backend, 4);
-    let slices = Param::int(0).placeholder(backend, 5);
-    let end = |direction: &str| {
-        format!(
-            "(SELECT id FROM events \
-              WHERE point = {point} AND event_ms >= {from} + i * {width} \
-                AND event_ms < {from} + (i + 1) * {width} AND event_ms < {to} \
-                AND value_kind IN (1, 3, 4) \
-                AND (value_float IS NOT NULL OR value_int IS NOT NULL) \
-              ORDER BY event_ms {direction}, id {direction} LIMIT 1)"
-        )
-    };
-    let (first, last) = (end("ASC"), end("DESC"));
-    let value =
-        |t: &str| format!("COALESCE({t}.value_float, CAST({t}.value_int AS DOUBLE PRECISION))");
-    let (first_value, last_value) = (value("f"), value("l"));
-    if backend == Backend::Postgres {
-        // Each end's row straight from its index seek (LATERAL), not by id afterwards: ids
-        // are not indexed on the day partitions. The plain bounds of the range let the
-        // planner leave out the days outside it; the slice's bounds prune the rest at
-        // run time.
-        let end = |direction: &str| {
-            format!(
-                "(SELECT id, event_ms, quality, value_float, value_int FROM events \
-                  WHERE point = {point} AND event_ms >= {from} AND event_ms >= {from} + i * {width} \
-                    AND event_ms < {from} + (i + 1) * {width} AND event_ms < {to} \
-                    AND value_kind IN (1, 3, 4) \
-                    AND (value_float IS NOT NULL OR value_int IS NOT NULL) \
-                  ORDER BY event_ms {direction}, id {direction} LIMIT 1)"
-            )
-        };
-        let (first, last) = (end("ASC"), end("DESC"));
-        let sql = format!(
-            "SELECT f.event_ms, {first_value}, CAST(f.quality & 1 AS BIGINT), \
-                    l.event_ms, {last_value}, CAST(l.quality & 1 AS BIGINT), \
-                    CAST(CASE WHEN f.id = l.id THEN 1 ELSE 2 END AS BIGINT) \
-             FROM generate_series(CAST(0 AS BIGINT), {slices} - 1) AS i \
-             CROSS JOIN LATERAL {first} AS f CROSS JOIN LATERAL {last} AS l \
-             ORDER BY i"
-        );
-        return Statement {
-            access: Access::Read,
-            sql,
-            params,
-        };
-    }
-    let sql = format!(
-        "WITH RECURSIVE slices (i) AS ( \
-             SELECT CAST(0 AS BIGINT) UNION ALL SELECT i + 1 FROM slices WHERE i + 1 < {slices}), \
-         picks AS (SELECT i, {first} AS first_id, {last} AS last_id FROM slices) \
-         SELECT f.event_ms, {first_value}, CAST(f.quality & 1 AS BIGINT), \
-                l.event_ms, {last_value}, CAST(l.quality & 1 AS BIGINT), \
-                CAST(CASE WHEN p.first_id = p.last_id THEN 1 ELSE 2 END AS BIGINT) \
-         FROM picks p JOIN events f ON f.id = p.first_id JOIN events l ON l.id = p.last_id \
-         ORDER BY p.i"
-    );
-    Statement {
-        access: Access::Read,
-        sql,
-        params,
-    }
-}
-
-fn trend_ends_from_row(r: &dyn row::Columns) -> Result<TrendBucket, StoreError> {
-    let real = |i: usize| -> Result<f64, StoreError> {
-        r.real(i)?
-            .ok_or_else(|| StoreError::Corrupt("a trend bucket without values".to_owned()))
-    };
-    let (first, last) = (real(1)?, real(4)?);
-    let count = u64::try_from(r.need_int(6)?).unwrap_or(1);
-    Ok(TrendBucket {
-        first_time: row::from_ms(r.need_int(0)?)?,
-        last_time: row::from_ms(r.need_int(3)?)?,
-        first: Some(first),
-        last: Some(last),
-        min: first.min(last),
-        max: first.max(last),
-        avg: if count == 1 {
-            first
-        } else {
-            (first + last) / 2.0
-        },
-        count,
-        invalid: r.need_int(2)? != 0 || r.need_int(5)? != 0,
-    })
-}
-
-/// The count and the page of an offset-paged query.
+/// An offset page and the number of rows its filter matches.
 async fn counted<D: Database, T: Send + 'static>(
     db: &D,
     run: Counted,
@@ -470,10 +322,7 @@ impl<D: Database> EventStore for D {
                 return Ok(Vec::new());
             }
             events.iter().try_for_each(check_event)?;
-            match self.history() {
-                Some(history) => crate::history::append::append(self, history, events).await,
-                None => self.insert_events(events).await,
-            }
+            crate::history::append::append(self, self.history(), events).await
         })
     }
 
@@ -492,16 +341,9 @@ impl<D: Database> EventStore for D {
     }
 
     fn query_events<'a>(&'a self, query: &'a EventQuery) -> StoreFuture<'a, Page<EventRecord>> {
-        Box::pin(async move {
-            if let Some(history) = self.history() {
-                return crate::history::list::query_events(self, history, query).await;
-            }
-            let items = self
-                .rows(event_sql(query, D::BACKEND)?, event_from_row)
-                .await?;
-            let basis = query.time_basis;
-            Ok(into_page(items, query.limit, |e| event_cursor(e, basis)))
-        })
+        Box::pin(
+            async move { crate::history::list::query_events(self, self.history(), query).await },
+        )
     }
 
     fn query_commands<'a>(
@@ -555,38 +397,15 @@ impl<D: Database> EventStore for D {
             if query.to <= query.from {
                 return Ok(Vec::new());
             }
-            if let Some(history) = self.history() {
-                return crate::history::trend::query_trend(self, history, query).await;
-            }
-            match (query.mode, query.rollup_span_ms()) {
-                (TrendMode::Aggregate, _) => {
-                    self.rows(trend_sql(query, D::BACKEND), trend_bucket_from_row)
-                        .await
-                }
-                (TrendMode::FirstLast, Some(_)) => {
-                    self.rows(
-                        trend_sql(query, D::BACKEND),
-                        trend_bucket_with_ends_from_row,
-                    )
-                    .await
-                }
-                (TrendMode::FirstLast, None) => {
-                    self.rows(trend_ends_sql(query, D::BACKEND), trend_ends_from_row)
-                        .await
-                }
-            }
+            crate::history::trend::query_trend(self, self.history(), query).await
         })
     }
 
     fn stats(&self) -> StoreFuture<'_, StoreStats> {
         Box::pin(async move {
-            let sql = match self.history() {
-                Some(_) => crate::history::STATS,
-                None => STATS,
-            };
             let run = Statement {
                 access: Access::Read,
-                sql: sql.to_owned(),
+                sql: crate::history::STATS.to_owned(),
                 params: Vec::new(),
             };
             one(self, run, stats_from_row).await

@@ -143,11 +143,6 @@ pub(crate) const NOTIFICATION_INSERT: &str =
 pub(crate) const NOTIFICATION_COLUMNS: &str =
     "id, time_ms, rule, channel, recipient, source, subject, outcome, detail";
 
-/// What the stats read: row counts and the received-time span, one row.
-pub(crate) const STATS: &str = "SELECT (SELECT count(*) FROM events), \
-     (SELECT min(received_ms) FROM events), (SELECT max(received_ms) FROM events), \
-     (SELECT count(*) FROM commands)";
-
 /// A key's sequence number as stored (checked by [`check_event`] to fit).
 pub(crate) fn key_sequence(sequence: u64) -> i64 {
     i64::try_from(sequence).unwrap_or(i64::MAX)

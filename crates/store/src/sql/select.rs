@@ -4,123 +4,13 @@
 
 use chrono::{DateTime, NaiveDateTime, Utc};
 
-use super::row::{
-    naive_to_ms, to_ms, COMMAND_COLUMNS, EVENT_COLUMNS, LIFT_FAULT_COLUMNS, NOTIFICATION_COLUMNS,
-};
+use super::row::{naive_to_ms, to_ms, COMMAND_COLUMNS, LIFT_FAULT_COLUMNS, NOTIFICATION_COLUMNS};
 use super::{Access, Param, Statement};
-use crate::query::{Cursor, Order, PointFilter, TimeBasis, MAX_PAGE_SIZE};
+use crate::query::{Cursor, Order, PointFilter, MAX_PAGE_SIZE};
 use crate::{
-    Backend, CommandQuery, CommandRecord, EventQuery, EventRecord, LiftFaultOrder, LiftFaultQuery,
-    NotificationQuery, Page, StoreError, TrendMode, TrendQuery,
+    Backend, CommandQuery, CommandRecord, LiftFaultOrder, LiftFaultQuery, NotificationQuery, Page,
+    StoreError,
 };
-
-/// The aggregation of a trend: one row per non-empty bucket of the range, oldest first,
-/// with the first and last time, min, max, mean, count and IV of its values (booleans,
-/// integers and floats: value kinds 1, 3, 4).
-///
-/// Where the query has a rollup span ([`TrendQuery::rollup_span_ms`]), the whole minutes
-/// inside the range are read from `trend_rollups` (each counted in the bucket its start
-/// falls in, so a bucket's edges move to a minute's) and only the partial minutes at the
-/// range's two ends from `events`: 60 days of a point are 86,400 minute rows, however
-/// many events they hold. Otherwise every event of the range is read, through the index
-/// on (point, event_ms).
-///
-/// A [`TrendMode::FirstLast`] query adds each bucket's first and last value, by two key
-/// lookups per bucket: the kept first (last) value of the minute holding the bucket's
-/// first (last) time, or, for a partial minute at an end of the range, the event's (by
-/// (time, id) as the raw seeks read them). (Window functions over the slices, the plain
-/// SQL for "the value of the row with the least time", took 268 ms on SQLite for 60
-/// days: the lookups add a few milliseconds to the aggregation.)
-pub(crate) fn trend_sql(query: &TrendQuery, backend: Backend) -> Statement {
-    let (from_ms, to_ms) = (to_ms(query.from), to_ms(query.to));
-    let mut b = SelectBuilder::new(backend);
-    let point = b.bind(Param::text(query.point.as_str()));
-    let from = b.bind(Param::int(from_ms));
-    let width = b.bind(Param::int(query.bucket_ms()));
-    let mut parts = Vec::new();
-    let raw = |b: &mut SelectBuilder, start: i64, end: i64| {
-        let (start, end) = (b.bind(Param::int(start)), b.bind(Param::int(end)));
-        format!(
-            "SELECT CAST((event_ms - {from}) / {width} AS BIGINT) AS bucket, \
-                    event_ms AS first_ms, event_ms AS last_ms, v AS min_v, v AS max_v, \
-                    v AS sum_v, 1 AS n, iv \
-             FROM (SELECT event_ms, (quality & 1) AS iv, \
-                          COALESCE(value_float, CAST(value_int AS DOUBLE PRECISION)) AS v \
-                   FROM events \
-                   WHERE point = {point} AND event_ms >= {start} AND event_ms < {end} \
-                     AND value_kind IN (1, 3, 4) \
-                     AND (value_float IS NOT NULL OR value_int IS NOT NULL)) AS raw"
-        )
-    };
-    match query.rollup_span_ms() {
-        Some(span) => {
-            // The whole spans of the range, and the partial ones at its two ends.
-            let inner_from = (from_ms + span - 1).div_euclid(span) * span;
-            let inner_to = (to_ms.div_euclid(span) * span).max(inner_from);
-            let (start, end) = (b.bind(Param::int(inner_from)), b.bind(Param::int(inner_to)));
-            parts.push(format!(
-                "SELECT CAST((start_ms - {from}) / {width} AS BIGINT) AS bucket, first_ms, \
-                        last_ms, min_value AS min_v, max_value AS max_v, sum_value AS sum_v, \
-                        samples AS n, invalid AS iv \
-                 FROM trend_rollups \
-                 WHERE point = {point} AND start_ms >= {start} \
-                   AND start_ms < {end}"
-            ));
-            if from_ms < inner_from {
-                parts.push(raw(&mut b, from_ms, inner_from.min(to_ms)));
-            }
-            if inner_to < to_ms {
-                parts.push(raw(&mut b, inner_to, to_ms));
-            }
-        }
-        None => parts.push(raw(&mut b, from_ms, to_ms)),
-    }
-    let aggregates = format!(
-        "SELECT bucket, CAST(MIN(first_ms) AS BIGINT) AS first_ms, \
-                CAST(MAX(last_ms) AS BIGINT) AS last_ms, MIN(min_v) AS min_v, \
-                MAX(max_v) AS max_v, SUM(sum_v) / CAST(SUM(n) AS DOUBLE PRECISION) AS avg_v, \
-                CAST(SUM(n) AS BIGINT) AS n, CAST(MAX(iv) AS BIGINT) AS iv \
-         FROM ({}) AS slice GROUP BY bucket",
-        parts.join(" UNION ALL ")
-    );
-    let columns = "first_ms, last_ms, min_v, max_v, avg_v, n, iv";
-    let sql = match query.mode {
-        TrendMode::Aggregate => {
-            format!("SELECT {columns} FROM ({aggregates}) AS agg ORDER BY bucket")
-        }
-        TrendMode::FirstLast => {
-            // The value at the bucket's first (last) time: its minute's kept value where
-            // that minute's first (last) time is the bucket's, else (a partial minute at
-            // an end of the range, or a minute folded before schema version 5, which
-            // kept none) the event's, by one seek each.
-            let end = |time: &str, kept: &str, order: &str| {
-                format!(
-                    "COALESCE( \
-                       (SELECT r.{kept} FROM trend_rollups r \
-                        WHERE r.point = {point} \
-                          AND r.start_ms = agg.{time} - (agg.{time} % 60000 + 60000) % 60000 \
-                          AND r.{time} = agg.{time}), \
-                       (SELECT COALESCE(e.value_float, CAST(e.value_int AS DOUBLE PRECISION)) \
-                        FROM events e \
-                        WHERE e.point = {point} AND e.event_ms = agg.{time} \
-                          AND e.value_kind IN (1, 3, 4) \
-                          AND (e.value_float IS NOT NULL OR e.value_int IS NOT NULL) \
-                        ORDER BY e.id {order} LIMIT 1))"
-                )
-            };
-            format!(
-                "SELECT {columns}, {}, {} FROM ({aggregates}) AS agg ORDER BY bucket",
-                end("first_ms", "first_value", "ASC"),
-                end("last_ms", "last_value", "DESC"),
-            )
-        }
-    };
-    Statement {
-        access: Access::Read,
-        sql,
-        params: b.params,
-    }
-}
 
 /// A `SELECT` under construction: a WHERE clause with its parameters.
 struct SelectBuilder {
@@ -302,27 +192,6 @@ fn check_limit(limit: usize) -> Result<(), StoreError> {
     Ok(())
 }
 
-/// The SQL and parameters of an event query.
-pub(crate) fn event_sql(q: &EventQuery, backend: Backend) -> Result<Statement, StoreError> {
-    check_limit(q.limit)?;
-    let mut b = SelectBuilder::new(backend);
-    let time_col = match q.time_basis {
-        TimeBasis::Source => "event_ms",
-        TimeBasis::Received => "received_ms",
-    };
-    b.time_range(time_col, q.from, q.to);
-    b.point(&q.point);
-    b.text_eq("node", &q.node);
-    let causes: Vec<i16> = q.causes.iter().map(|c| c.code()).collect();
-    b.codes_in("cause", &causes);
-    if q.invalid_only {
-        // Written exactly as the partial index's predicate so the planner matches them.
-        b.cond("(quality & 1) <> 0".to_owned());
-    }
-    let dir = b.keyset(time_col, q.order, q.after);
-    Ok(b.finish(EVENT_COLUMNS, "events", time_col, dir, q.limit))
-}
-
 /// The SQL and parameters of a command query.
 pub(crate) fn command_sql(q: &CommandQuery, backend: Backend) -> Result<Statement, StoreError> {
     check_limit(q.limit)?;
@@ -409,15 +278,6 @@ pub(crate) fn into_page<T>(
         None
     };
     Page { items, next }
-}
-
-/// The cursor after an event, by the query's time basis.
-pub(crate) fn event_cursor(e: &EventRecord, basis: TimeBasis) -> Option<Cursor> {
-    let t = match basis {
-        TimeBasis::Source => e.event_time(),
-        TimeBasis::Received => e.received_time,
-    };
-    e.id.map(|id| Cursor::new(to_ms(t), id))
 }
 
 /// The cursor after a command record.

@@ -1110,7 +1110,9 @@ pub(crate) async fn trend_first_and_last_per_bucket(store: Arc<dyn EventStore>) 
         (at_ms(0), at_ms(9_000))
     );
     assert_eq!((first.first, first.last), (Some(0.0), Some(9.0)));
-    assert_eq!((first.min, first.max, first.count), (0.0, 9.0, 2));
+    // Every value of the bucket counts (the ten floats 0 to 9), not only its two ends.
+    assert_eq!((first.min, first.max, first.count), (0.0, 9.0, 10));
+    assert_eq!(first.avg, 4.5);
     assert!(!first.invalid);
     let second = buckets[1];
     assert_eq!((second.first, second.last), (Some(40.0), Some(1.0)));
