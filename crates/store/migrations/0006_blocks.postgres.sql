@@ -1,7 +1,7 @@
 -- Stanice event store, schema version 6 on PostgreSQL: the event history in blocks, as
 -- on SQLite (0006_blocks.sqlite.sql; the crate's `history` module says why and how),
 -- partitioned by UTC day like the rest: `event_blocks` on the block's first event time
--- (a block lies within one minute, so within one day), `event_segments` on the minute.
+-- (a block lies within one minute, so within one day), `event_segments` on the hour.
 -- The day function makes a day of blocks with its segments and rollups, and retention
 -- drops the three together.
 --
@@ -40,7 +40,7 @@ CREATE INDEX event_blocks_tail           ON event_blocks (id) WHERE segmented = 
 
 CREATE TABLE event_segments (
     point    BIGINT  NOT NULL,
-    start_ms BIGINT  NOT NULL,  -- the minute
+    start_ms BIGINT  NOT NULL,  -- the hour
     part     BIGINT  NOT NULL,  -- the pass: its smallest block id
     first_ms BIGINT  NOT NULL,
     last_ms  BIGINT  NOT NULL,
@@ -49,6 +49,9 @@ CREATE TABLE event_segments (
     PRIMARY KEY (point, start_ms, part)
 ) PARTITION BY RANGE (start_ms);
 CREATE TABLE event_segments_default PARTITION OF event_segments DEFAULT;
+
+CREATE INDEX event_segments_last  ON event_segments (point, last_ms, start_ms, part);
+CREATE INDEX event_segments_first ON event_segments (point, first_ms, start_ms, part);
 
 CREATE TABLE event_keys (
     source    BIGINT NOT NULL,  -- the key source's name

@@ -1,6 +1,6 @@
 -- Stanice event store, schema version 6 on SQLite: the event history in blocks (the
 -- crate's `history` module says why and how). Events are packed many to a row: a block
--- per minute of an append (event_blocks), and again per point and minute by the writer's
+-- per minute of an append (event_blocks), and again per point and hour by the writer's
 -- passes (event_segments); the idempotent keys are kept as runs of sequences
 -- (event_keys); names are numbered (event_names). trend_rollups stays as it is, folded by
 -- the passes.
@@ -42,7 +42,7 @@ CREATE INDEX event_blocks_tail     ON event_blocks (id) WHERE segmented = 0;
 
 CREATE TABLE event_segments (
     point    INTEGER NOT NULL,
-    start_ms INTEGER NOT NULL,  -- the minute
+    start_ms INTEGER NOT NULL,  -- the hour
     part     INTEGER NOT NULL,  -- the pass: its smallest block id
     first_ms INTEGER NOT NULL,
     last_ms  INTEGER NOT NULL,
@@ -50,6 +50,11 @@ CREATE TABLE event_segments (
     data     BLOB    NOT NULL,
     PRIMARY KEY (point, start_ms, part)
 ) WITHOUT ROWID;
+
+-- A point's event list reads its segments by their last time, newest first, or by their
+-- first time, oldest first.
+CREATE INDEX event_segments_last  ON event_segments (point, last_ms);
+CREATE INDEX event_segments_first ON event_segments (point, first_ms);
 
 CREATE TABLE event_keys (
     source    INTEGER NOT NULL,  -- the key source's name

@@ -82,7 +82,7 @@
 //! Events are kept in blocks (schema version 6; the `history` module says why and how):
 //! `event_blocks` holds an append's events of one minute packed into one row, with the
 //! time spans, node, causes and IV count a query filters by; `event_segments` the same
-//! events again per point and minute, packed by the writer's passes; `trend_rollups`
+//! events again per point and hour, packed by the writer's passes; `trend_rollups`
 //! (version 4) per point with numeric values and per minute ([`ROLLUP_SPAN_MS`]) the first
 //! and last event time and value, the minimum, maximum, sum and count of the values and
 //! whether any was invalid, folded by the same passes; `event_keys` the [`EventKey`]s as

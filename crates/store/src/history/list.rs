@@ -4,14 +4,15 @@
 //! Two ways to a page, by the filter:
 //!
 //! - **By point** (one point, event time): the tail's events of the point (the blocks not
-//!   segmented, read whole first), then the point's segments minute by minute in the
-//!   page's direction (an event segmented between the two reads is listed once).
+//!   segmented, read whole first), then the point's segments by their last time newest
+//!   first (their first time oldest first), a few at a time (an event segmented between
+//!   the two reads is listed once).
 //! - **Through the blocks** (everything else): blocks in the page's direction, by their
 //!   last time newest first (their first time oldest first), a few at a time; a block's
 //!   node, causes and IV count skip it unread where the filter rules it out.
 //!
-//! Either way rows come in the order of a bound on the times they can hold (a block's
-//! last time, a segment's minute), so an unpacked event is final, and handed out, once
+//! Either way rows come in the order of a bound on the times they can hold (their last
+//! time newest first, their first time oldest first), so an unpacked event is final, and handed out, once
 //! no row still to read can hold an event before it in the page's order.
 
 use std::cmp::Reverse;
@@ -20,7 +21,7 @@ use std::collections::HashSet;
 use super::append::{id_and_data, read, refresh_names, TAIL_BLOCKS};
 use super::codec::{decode, Coded, NameId};
 use super::History;
-use super::BLOCK_SPAN_MS;
+use super::{BLOCK_SPAN_MS, SEGMENT_SPAN_MS};
 use crate::model::{quality_from_bits, EventKey, SourceTime};
 use crate::query::{Cursor, Order, PointFilter, TimeBasis, MAX_PAGE_SIZE};
 use crate::sql::row::{from_ms, to_ms};
@@ -348,58 +349,59 @@ async fn by_point<D: Database>(
     for (_, data) in tail {
         merge.add(decode(&data)?);
     }
+    // Newest first by the last time (a segment holds nothing after it), oldest first by
+    // the first time; a segment's times lie within one aligned span.
     let p = |n: usize| Param::int(0).placeholder(D::BACKEND, n);
-    let (direction, compare) = match filter.order {
-        Order::NewestFirst => ("DESC", "<"),
-        Order::OldestFirst => ("ASC", ">"),
+    let (key, direction, compare) = match filter.order {
+        Order::NewestFirst => ("last_ms", "DESC", "<"),
+        Order::OldestFirst => ("first_ms", "ASC", ">"),
     };
     let sql = format!(
-        "SELECT start_ms, part, data FROM event_segments \
-         WHERE point = {} AND start_ms >= {} AND start_ms <= {} \
-           AND (start_ms, part) {compare} ({}, {}) \
-         ORDER BY start_ms {direction}, part {direction} LIMIT {}",
+        "SELECT {key}, start_ms, part, data FROM event_segments \
+         WHERE point = {} AND {key} >= {} AND {key} <= {} AND last_ms >= {} AND first_ms <= {} \
+           AND ({key}, start_ms, part) {compare} ({}, {}, {}) \
+         ORDER BY {key} {direction}, start_ms {direction}, part {direction} LIMIT {}",
         p(1),
         p(2),
         p(3),
         p(4),
         p(5),
-        p(6)
+        p(6),
+        p(7),
+        p(8),
+        p(9)
     );
     let mut keyset = match filter.order {
-        Order::NewestFirst => (i64::MAX, i64::MAX),
-        Order::OldestFirst => (i64::MIN, i64::MIN),
+        Order::NewestFirst => (i64::MAX, i64::MAX, i64::MAX),
+        Order::OldestFirst => (i64::MIN, i64::MIN, i64::MIN),
     };
     let mut rows = FIRST_ROWS;
     loop {
         let params = vec![
             Param::int(i64::from(point)),
-            Param::int(super::write::span_start(
-                filter.low.max(i64::MIN + BLOCK_SPAN_MS),
-            )),
+            Param::int(filter.low.saturating_sub(SEGMENT_SPAN_MS)),
+            Param::int(filter.high.saturating_add(SEGMENT_SPAN_MS)),
+            Param::int(filter.low),
             Param::int(filter.high),
             Param::int(keyset.0),
             Param::int(keyset.1),
+            Param::int(keyset.2),
             Param::int(rows),
         ];
         let segments = db
             .rows(read(&sql, params), |r| {
                 Ok((
-                    r.need_int(0)?,
-                    r.need_int(1)?,
-                    r.blob(2)?.unwrap_or_default(),
+                    (r.need_int(0)?, r.need_int(1)?, r.need_int(2)?),
+                    r.blob(3)?.unwrap_or_default(),
                 ))
             })
             .await?;
         let exhausted = i64::try_from(segments.len()).unwrap_or(0) < rows;
-        for (start, part, data) in segments {
-            keyset = (start, part);
+        for (key, data) in segments {
+            keyset = key;
             merge.add(decode(&data)?);
         }
-        // The segments still to read hold events of the last minute read or beyond it.
-        let bound = (!exhausted).then(|| match filter.order {
-            Order::NewestFirst => rank_at(filter, keyset.0.saturating_add(BLOCK_SPAN_MS - 1)),
-            Order::OldestFirst => rank_at(filter, keyset.0),
-        });
+        let bound = (!exhausted).then(|| rank_at(filter, keyset.0));
         if merge.settle(bound) || exhausted {
             break;
         }

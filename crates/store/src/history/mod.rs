@@ -17,10 +17,10 @@
 //!  append (a batch)                                   every pass (the tail holds 16
 //!    | names -> numbers (event_names)                  events a point, or 262,144)
 //!    | keys stored? (event_keys: runs of sequences)         |
-//!    | ids (event_ids counter)                               v
+//!    | ids (event_counter)                                   v
 //!    v                                              event_segments: one point's events
-//!  event_blocks: the batch's events of one minute,    of one minute from one pass, packed
-//!  packed (codec), with their time spans, node,       (point, minute, part) -> aggregates
+//!  event_blocks: the batch's events of one minute,    of one hour from one pass, packed
+//!  packed (codec), with their time spans, node,       (point, hour, part)
 //!  causes and IV count; `segmented` = 0 (the tail)    trend_rollups: per point and minute
 //!    one transaction: blocks + key runs                 (the same transaction: segments,
 //!                                                        rollups, blocks segmented = 1)
@@ -34,11 +34,12 @@
 //!   ([`list`]): a page of the newest events reads a block or two. The block's node (when
 //!   all its events are one node's), its causes (a bit each) and its IV count let a
 //!   filtered list skip blocks without unpacking them.
-//! - **`event_segments`**: the same events again, by point: every few hundred thousand
-//!   events (or when the unsegmented blocks hold 16 events a point) the writer packs the
-//!   tail per point and minute. A point's event list reads its segments and the tail; a
-//!   trend reads the rollups, the segments of the partial minutes at its ends, and the
-//!   tail.
+//! - **`event_segments`**: the same events again, by point: when the unsegmented blocks
+//!   hold 16 events a point (or 262,144 in all) the writer packs the tail per point and
+//!   hour ([`SEGMENT_SPAN_MS`]: a point changing once a minute still fills a segment). A
+//!   point's event list reads its segments (by their last time, like the blocks) and the
+//!   tail; a trend reads the rollups, the segments holding the partial minutes at its
+//!   ends, and the tail.
 //! - **`trend_rollups`**: as before (schema version 4 and 5), folded by the pass in Rust
 //!   from the same events instead of by a statement per batch.
 //! - **`event_keys`**: the idempotent keys as runs (source, first and last sequence,
@@ -81,6 +82,11 @@ pub(crate) const STATS: &str = "SELECT \
 /// aligned to it: its first and last time are less than this apart.
 #[cfg(feature = "database")]
 pub(crate) const BLOCK_SPAN_MS: i64 = 60_000;
+
+/// A segment holds one point's events of one such span (aligned) from one pass: a point
+/// that changes once a minute still fills a segment with a pass's worth of its events.
+#[cfg(feature = "database")]
+pub(crate) const SEGMENT_SPAN_MS: i64 = 3_600_000;
 
 /// A pass runs when the tail holds this many events a point on average (a point's
 /// segment then holds that many) ...

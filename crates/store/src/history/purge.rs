@@ -1,14 +1,14 @@
 //! Retention over the history: the events before a cutoff go, exactly.
 //!
-//! Whole blocks and whole minutes of segments before it are deleted; the few that hold
-//! events on both sides (a block's or segment's minute holding the cutoff) are written
+//! Whole blocks and segments before it are deleted; the few that hold events on both
+//! sides (a block's minute or a segment's hour holding the cutoff) are written
 //! again without the old ones. The writer's state is dropped and read again at the next
 //! append (a block of its tail may have gone or changed).
 
 use super::append::read;
 use super::codec::decode;
 use super::write::{block_row, span_start, HistoryWrite, Pass, SegmentRow};
-use super::{History, BLOCK_SPAN_MS};
+use super::{History, BLOCK_SPAN_MS, SEGMENT_SPAN_MS};
 use crate::sql::{delete_older, Database, Param};
 use crate::StoreError;
 
@@ -108,7 +108,7 @@ async fn purge_segments<D: Database>(db: &D, cutoff_ms: i64) -> Result<(), Store
             |r| r.need_int(0),
         )
         .await?;
-    let minute = span_start(cutoff_ms);
+    let hour = span_start(cutoff_ms, SEGMENT_SPAN_MS);
     let p = |n: usize| Param::int(0).placeholder(D::BACKEND, n);
     for point in points {
         db.execute(
@@ -117,10 +117,10 @@ async fn purge_segments<D: Database>(db: &D, cutoff_ms: i64) -> Result<(), Store
                 p(1),
                 p(2)
             ),
-            vec![Param::int(point), Param::int(minute)],
+            vec![Param::int(point), Param::int(hour)],
         )
         .await?;
-        if minute == cutoff_ms {
+        if hour == cutoff_ms {
             continue;
         }
         let straddling = db
@@ -132,7 +132,7 @@ async fn purge_segments<D: Database>(db: &D, cutoff_ms: i64) -> Result<(), Store
                         p(1),
                         p(2)
                     ),
-                    vec![Param::int(point), Param::int(minute)],
+                    vec![Param::int(point), Param::int(hour)],
                 ),
                 |r| Ok((r.need_int(0)?, r.blob(1)?.unwrap_or_default())),
             )
@@ -154,13 +154,13 @@ async fn purge_segments<D: Database>(db: &D, cutoff_ms: i64) -> Result<(), Store
                     p(2),
                     p(3)
                 ),
-                vec![Param::int(point), Param::int(minute), Param::int(part)],
+                vec![Param::int(point), Param::int(hour), Param::int(part)],
             )
             .await?;
             if let (Some(first), Some(last)) = (kept.first(), kept.last()) {
                 let segment = SegmentRow {
                     point: u32::try_from(point).unwrap_or(0),
-                    start_ms: minute,
+                    start_ms: hour,
                     part,
                     first_ms: first.event_ms(),
                     last_ms: last.event_ms(),

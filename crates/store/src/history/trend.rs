@@ -7,10 +7,10 @@ use std::collections::BTreeMap;
 use super::append::{read, refresh_names, TAIL_BLOCKS};
 use super::codec::{decode, Coded};
 use super::write::span_start;
-use super::History;
+use super::{History, SEGMENT_SPAN_MS};
 use crate::sql::row::{from_ms, to_ms, Columns, OwnedRow};
 use crate::sql::{Database, Param};
-use crate::{StoreError, TrendBucket, TrendMode, TrendQuery};
+use crate::{StoreError, TrendBucket, TrendMode, TrendQuery, ROLLUP_SPAN_MS};
 
 /// One bucket being folded. Its ends are ranked by (time, id) and keep their value; a
 /// rollup's minute has no id and ranks before the events of its millisecond, for
@@ -87,7 +87,10 @@ pub(crate) async fn query_trend<D: Database>(
             p(2 + 2 * i),
             p(3 + 2 * i)
         ));
-        segment_params.extend([Param::int(span_start(start)), Param::int(end)]);
+        segment_params.extend([
+            Param::int(span_start(start, SEGMENT_SPAN_MS)),
+            Param::int(end),
+        ]);
     }
     let mut statements = vec![
         read(TAIL_BLOCKS, Vec::new()),
@@ -123,7 +126,7 @@ pub(crate) async fn query_trend<D: Database>(
         // Inside the whole minutes a value counts where its minute's start does, as the
         // minute's rollup would.
         Some((inner_from, inner_to)) if t >= inner_from && t < inner_to => {
-            (span_start(t) - from) / width
+            (span_start(t, ROLLUP_SPAN_MS) - from) / width
         }
         _ => (t - from) / width,
     };

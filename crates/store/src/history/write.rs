@@ -8,10 +8,11 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 use std::sync::Arc;
 
 use super::codec::{encode, Coded, NameId};
-use super::{BLOCK_SPAN_MS, PASS_EVENTS, PASS_EVENTS_PER_POINT};
+use super::{BLOCK_SPAN_MS, PASS_EVENTS, PASS_EVENTS_PER_POINT, SEGMENT_SPAN_MS};
 use crate::model::quality_to_bits;
 use crate::sql::row::{key_sequence, to_ms};
 use crate::EventRecord;
+use crate::ROLLUP_SPAN_MS;
 
 /// A row of `event_blocks`.
 #[derive(Debug, Clone, PartialEq)]
@@ -43,7 +44,7 @@ pub(crate) struct KeyRun {
     pub(crate) first_id: i64,
 }
 
-/// A row of `event_segments`: one point's events of one minute from one pass.
+/// A row of `event_segments`: one point's events of one hour from one pass.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct SegmentRow {
     pub(crate) point: NameId,
@@ -214,9 +215,9 @@ pub(crate) fn runs_of(new: &[Coded]) -> Vec<KeyRun> {
     keys
 }
 
-/// The start of the span of [`BLOCK_SPAN_MS`] holding `ms`.
-pub(crate) fn span_start(ms: i64) -> i64 {
-    ms - ms.rem_euclid(BLOCK_SPAN_MS)
+/// The start of the aligned `span` (a block's, a segment's, a rollup's) holding `ms`.
+pub(crate) fn span_start(ms: i64, span: i64) -> i64 {
+    ms - ms.rem_euclid(span)
 }
 
 /// The new events cut into blocks: one per minute of event time and minute of received
@@ -225,7 +226,10 @@ pub(crate) fn blocks(new: &[Coded]) -> Vec<(BlockRow, Vec<Coded>)> {
     let mut by_span: BTreeMap<(i64, i64), Vec<Coded>> = BTreeMap::new();
     for e in new {
         by_span
-            .entry((span_start(e.event_ms()), span_start(e.received_ms)))
+            .entry((
+                span_start(e.event_ms(), BLOCK_SPAN_MS),
+                span_start(e.received_ms, BLOCK_SPAN_MS),
+            ))
             .or_default()
             .push(e.clone());
     }
@@ -271,28 +275,36 @@ pub(crate) fn block_row(events: &[Coded]) -> Option<BlockRow> {
     Some(row)
 }
 
-/// A pass over the tail: its events by point and minute, segments and rollups
-/// (`name_of` gives a point's name).
+/// A pass over the tail: its events by point and hour ([`SEGMENT_SPAN_MS`]) into
+/// segments, by point and minute into rollups (`name_of` gives a point's name).
 pub(crate) fn pass(tail: &Tail, name_of: impl Fn(NameId) -> Option<Arc<str>>) -> Option<Pass> {
     let part = *tail.blocks.iter().min()?;
-    let mut by_minute: BTreeMap<(NameId, i64), Vec<&Coded>> = BTreeMap::new();
+    let mut by_hour: BTreeMap<(NameId, i64), Vec<&Coded>> = BTreeMap::new();
     for e in &tail.events {
-        by_minute
-            .entry((e.point, span_start(e.event_ms())))
+        by_hour
+            .entry((e.point, span_start(e.event_ms(), SEGMENT_SPAN_MS)))
             .or_default()
             .push(e);
     }
-    let mut segments = Vec::with_capacity(by_minute.len());
+    let mut segments = Vec::with_capacity(by_hour.len());
     let mut rollups = Vec::new();
-    for ((point, start_ms), mut events) in by_minute {
+    for ((point, start_ms), mut events) in by_hour {
         events.sort_by_key(|e| (e.event_ms(), e.id));
         let owned: Vec<Coded> = events.iter().map(|&e| e.clone()).collect();
         let (first_ms, last_ms) = (
             owned.first().map_or(start_ms, Coded::event_ms),
             owned.last().map_or(start_ms, Coded::event_ms),
         );
-        if let Some(rollup) = name_of(point).and_then(|name| rollup(name, start_ms, &owned)) {
-            rollups.push(rollup);
+        if let Some(name) = name_of(point) {
+            // Sorted by time: a minute's events lie together.
+            for minute in owned.chunk_by(|a, b| {
+                span_start(a.event_ms(), ROLLUP_SPAN_MS) == span_start(b.event_ms(), ROLLUP_SPAN_MS)
+            }) {
+                let start = minute
+                    .first()
+                    .map_or(start_ms, |e| span_start(e.event_ms(), ROLLUP_SPAN_MS));
+                rollups.extend(rollup(Arc::clone(&name), start, minute));
+            }
         }
         segments.push(SegmentRow {
             point,
@@ -412,7 +424,7 @@ mod tests {
     }
 
     #[test]
-    fn blocks_hold_one_minute_each_and_a_pass_one_point_minute_per_segment() {
+    fn blocks_hold_one_minute_each_and_a_pass_one_point_hour_per_segment() {
         let batch = vec![
             event("A", 59_999, None),
             event("B", 60_000, None),
@@ -437,7 +449,20 @@ mod tests {
             .iter()
             .map(|s| (s.point, s.start_ms, s.events))
             .collect();
-        assert_eq!(keys, vec![(2, 0, 2), (2, 60_000, 1), (3, 60_000, 1)]);
+        assert_eq!(keys, vec![(2, 0, 3), (3, 0, 1)]);
+        let minutes: Vec<_> = pass
+            .rollups
+            .iter()
+            .map(|r| (r.point.to_string(), r.start_ms, r.samples))
+            .collect();
+        assert_eq!(
+            minutes,
+            [
+                ("P2".to_owned(), 0, 2),
+                ("P2".to_owned(), 60_000, 1),
+                ("P3".to_owned(), 60_000, 1)
+            ]
+        );
         let first = &pass.rollups[0];
         assert_eq!(
             (
