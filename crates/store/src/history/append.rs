@@ -61,6 +61,7 @@ pub(crate) async fn append<D: Database>(
         None
     };
     let passed = pass.is_some();
+    let newest = new_blocks.iter().map(|(row, _)| row.first_ms).max();
     let write = HistoryWrite {
         next_id: numbered.next_id,
         blocks: new_blocks.into_iter().map(|(row, _)| row).collect(),
@@ -73,6 +74,7 @@ pub(crate) async fn append<D: Database>(
         *writer = None;
         return Err(error);
     }
+    history.saw_blocks(newest);
     state.next_id = state.next_id.max(numbered.next_id);
     if let Some((_, end)) = state.reserved {
         state.reserved = Some((numbered.next_id, end));

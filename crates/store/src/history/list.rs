@@ -26,10 +26,10 @@ use crate::model::{quality_from_bits, EventKey, SourceTime};
 use crate::query::{Cursor, Order, PointFilter, TimeBasis, MAX_PAGE_SIZE};
 use crate::sql::row::{from_ms, to_ms};
 use crate::sql::{Database, Param};
-use crate::{EventCause, EventQuery, EventRecord, Page, StoreError};
+use crate::{Backend, EventCause, EventQuery, EventRecord, Page, StoreError};
 
-/// Rows read by the first statement of a page; each next one reads twice as many, up to
-/// [`MOST_ROWS`].
+/// Rows read by the first statement of a page; the next ones read what the rows read so
+/// far say the rest of the page needs, up to [`MOST_ROWS`].
 const FIRST_ROWS: i64 = 2;
 const MOST_ROWS: i64 = 512;
 
@@ -45,17 +45,39 @@ pub(crate) async fn query_events<D: Database>(
             query.limit
         )));
     }
-    refresh_names(db, history).await?;
+    // Names another process stored since the copy was refreshed: only a filter that
+    // names one needs them (an event's names are looked up as it is handed out).
+    let names = &history.names;
+    let unknown = |name: &String| names.id(name).is_none();
+    let stale = match &query.point {
+        Some(PointFilter::Prefix(prefix)) => !prefix.is_empty(),
+        Some(PointFilter::Exact(name)) => unknown(name),
+        None => false,
+    } || query.node.as_ref().is_some_and(unknown);
+    if stale {
+        refresh_names(db, history).await?;
+    }
     let Some(filter) = Filter::of(query, history) else {
         return Ok(Page {
             items: Vec::new(),
             next: None,
         });
     };
+    if D::BACKEND == Backend::Postgres && history.newest_day().is_none() {
+        let newest = db
+            .rows(
+                read("SELECT max(first_ms) FROM event_blocks", Vec::new()),
+                |r| r.int(0),
+            )
+            .await?;
+        history.saw_blocks(newest.into_iter().flatten());
+    }
     let wanted = query.limit + 1;
     let events = match (&filter.points, query.time_basis) {
-        (Points::One(point), TimeBasis::Source) => by_point(db, &filter, *point, wanted).await?,
-        _ => through_blocks(db, &filter, wanted).await?,
+        (Points::One(point), TimeBasis::Source) => {
+            by_point(db, history, &filter, *point, wanted).await?
+        }
+        _ => through_blocks(db, history, &filter, wanted).await?,
     };
     let mut items = Vec::with_capacity(events.len());
     for e in events {
@@ -197,12 +219,45 @@ struct Merge<'a> {
     pending: Vec<Coded>,
     out: Vec<Coded>,
     wanted: usize,
+    /// Rows unpacked and events of them the filter admitted, for the size of the next
+    /// read.
+    rows: usize,
+    admitted: usize,
 }
 
-impl Merge<'_> {
+impl<'a> Merge<'a> {
+    fn new(filter: &'a Filter, wanted: usize) -> Merge<'a> {
+        Merge {
+            filter,
+            pending: Vec::new(),
+            out: Vec::new(),
+            wanted,
+            rows: 0,
+            admitted: 0,
+        }
+    }
+
     fn add(&mut self, events: Vec<Coded>) {
+        let before = self.pending.len();
         self.pending
             .extend(events.into_iter().filter(|e| self.filter.admits(e)));
+        self.admitted += self.pending.len() - before;
+    }
+
+    /// How many rows the next read asks for: enough for the rest of the page by the
+    /// rows read so far (twice that), at least twice the last read when they gave
+    /// nothing.
+    fn next_rows(&self, last: i64) -> i64 {
+        let missing = self
+            .wanted
+            .saturating_sub(self.out.len() + self.pending.len())
+            .max(1);
+        let guess = if self.admitted == 0 {
+            last.saturating_mul(4)
+        } else {
+            i64::try_from(2 * missing * self.rows / self.admitted + 1).unwrap_or(MOST_ROWS)
+        };
+        guess.clamp(FIRST_ROWS, MOST_ROWS)
     }
 
     /// Hands out the pending events that come before every event of the rows still to
@@ -237,9 +292,27 @@ fn rank_at(filter: &Filter, t: i64) -> (i64, i64) {
     }
 }
 
+/// The ranges of a partition key (a block's first time, a segment's hour) a newest-first
+/// page reads one after the other: on PostgreSQL first the days from the newest block's
+/// (by the hint; newer ones are read too, the range is open above), so that a page of
+/// the recent past reads a few day partitions instead of starting a scan in every one,
+/// then the rest. One open range elsewhere (SQLite has no partitions).
+fn windows<D: Database>(history: &History, filter: &Filter) -> Vec<(i64, i64)> {
+    let floor = history.newest_day();
+    let windowed = D::BACKEND == Backend::Postgres
+        && filter.order == Order::NewestFirst
+        && filter.basis == TimeBasis::Source
+        && floor.is_some_and(|f| f <= filter.high && f > filter.low);
+    match floor {
+        Some(floor) if windowed => vec![(floor, i64::MAX), (i64::MIN, floor - 1)],
+        _ => vec![(i64::MIN, i64::MAX)],
+    }
+}
+
 /// A page through the blocks.
 async fn through_blocks<D: Database>(
     db: &D,
+    history: &History,
     filter: &Filter,
     wanted: usize,
 ) -> Result<Vec<Coded>, StoreError> {
@@ -254,77 +327,83 @@ async fn through_blocks<D: Database>(
         Order::OldestFirst => (first, "ASC", ">"),
     };
     let p = |n: usize| Param::int(0).placeholder(D::BACKEND, n);
+    // A block's times lie within one span: its key is within a span of the range.
+    let mut fixed = vec![
+        filter.low,
+        filter.high,
+        filter.low.saturating_sub(BLOCK_SPAN_MS),
+    ];
+    fixed.push(filter.high.saturating_add(BLOCK_SPAN_MS));
     let mut conditions = vec![
         format!("{last} >= {}", p(1)),
         format!("{first} <= {}", p(2)),
         format!("{key} >= {}", p(3)),
         format!("{key} <= {}", p(4)),
-        format!("({key}, id) {compare} ({}, {})", p(5), p(6)),
-    ];
-    let params = vec![
-        Param::int(filter.low),
-        Param::int(filter.high),
-        // A block's times lie within one span: the key is within a span of the range.
-        Param::int(filter.low.saturating_sub(BLOCK_SPAN_MS)),
-        Param::int(filter.high.saturating_add(BLOCK_SPAN_MS)),
     ];
     if filter.invalid_only {
         conditions.push("invalid > 0".to_owned());
     }
-    if filter.node.is_some() {
-        conditions.push(format!("(node = {} OR node IS NULL)", p(7)));
+    if let Some(node) = filter.node {
+        // (a block of several nodes' events has none: unpacked and filtered)
+        fixed.push(i64::from(node));
+        conditions.push(format!("(node = {} OR node IS NULL)", p(fixed.len())));
     }
     if filter.causes != 0 {
-        let n = if filter.node.is_some() { 8 } else { 7 };
-        conditions.push(format!("(causes & {}) <> 0", p(n)));
+        fixed.push(filter.causes);
+        conditions.push(format!("(causes & {}) <> 0", p(fixed.len())));
     }
-    let limit_at = 7 + usize::from(filter.node.is_some()) + usize::from(filter.causes != 0);
+    let n = fixed.len();
+    let (w_lo, w_hi, k_time, k_id, limit) = (p(n + 1), p(n + 2), p(n + 3), p(n + 4), p(n + 5));
+    conditions.push(format!("first_ms >= {w_lo} AND first_ms <= {w_hi}"));
+    conditions.push(format!("({key}, id) {compare} ({k_time}, {k_id})"));
     let sql = format!(
         "SELECT id, {key}, data FROM event_blocks WHERE {} \
-         ORDER BY {key} {direction}, id {direction} LIMIT {}",
+         ORDER BY {key} {direction}, id {direction} LIMIT {limit}",
         conditions.join(" AND "),
-        p(limit_at)
     );
-    let mut merge = Merge {
-        filter,
-        pending: Vec::new(),
-        out: Vec::new(),
-        wanted,
-    };
-    let mut keyset = match filter.order {
-        Order::NewestFirst => (i64::MAX, i64::MAX),
-        Order::OldestFirst => (i64::MIN, i64::MIN),
-    };
+    let mut merge = Merge::new(filter, wanted);
     let mut rows = FIRST_ROWS;
-    loop {
-        let mut bound = params.clone();
-        bound.extend([Param::int(keyset.0), Param::int(keyset.1)]);
-        if let Some(node) = filter.node {
-            bound.push(Param::int(i64::from(node)));
+    let windows = windows::<D>(history, filter);
+    for (w, &(low, high)) in windows.iter().enumerate() {
+        let mut keyset = match filter.order {
+            Order::NewestFirst => (i64::MAX, i64::MAX),
+            Order::OldestFirst => (i64::MIN, i64::MIN),
+        };
+        loop {
+            let mut bound: Vec<Param> = fixed.iter().copied().map(Param::int).collect();
+            bound.extend([low, high, keyset.0, keyset.1, rows].map(Param::int));
+            let blocks = db
+                .rows(read(&sql, bound), |r| {
+                    Ok((
+                        r.need_int(0)?,
+                        r.need_int(1)?,
+                        r.blob(2)?.unwrap_or_default(),
+                    ))
+                })
+                .await?;
+            let exhausted = i64::try_from(blocks.len()).unwrap_or(0) < rows;
+            for (id, time, data) in blocks {
+                keyset = (time, id);
+                merge.rows += 1;
+                merge.add(decode(&data)?);
+            }
+            // What is still to read: the rest of this window, or the windows after it
+            // (first times at most the next one's top: last times a span above).
+            let bound = match (exhausted, windows.get(w + 1)) {
+                (false, _) => Some(rank_at(filter, keyset.0)),
+                (true, Some(&(_, next_high))) => {
+                    Some(rank_at(filter, next_high.saturating_add(BLOCK_SPAN_MS - 1)))
+                }
+                (true, None) => None,
+            };
+            if merge.settle(bound) {
+                return Ok(merge.out);
+            }
+            rows = merge.next_rows(rows);
+            if exhausted {
+                break;
+            }
         }
-        if filter.causes != 0 {
-            bound.push(Param::int(filter.causes));
-        }
-        bound.push(Param::int(rows));
-        let blocks = db
-            .rows(read(&sql, bound), |r| {
-                Ok((
-                    r.need_int(0)?,
-                    r.need_int(1)?,
-                    r.blob(2)?.unwrap_or_default(),
-                ))
-            })
-            .await?;
-        let exhausted = i64::try_from(blocks.len()).unwrap_or(0) < rows;
-        for (id, time, data) in blocks {
-            keyset = (time, id);
-            merge.add(decode(&data)?);
-        }
-        let bound = (!exhausted).then(|| rank_at(filter, keyset.0));
-        if merge.settle(bound) || exhausted {
-            break;
-        }
-        rows = (rows * 2).min(MOST_ROWS);
     }
     Ok(merge.out)
 }
@@ -332,16 +411,12 @@ async fn through_blocks<D: Database>(
 /// A page of one point's events by event time: the tail, then its segments.
 async fn by_point<D: Database>(
     db: &D,
+    history: &History,
     filter: &Filter,
     point: NameId,
     wanted: usize,
 ) -> Result<Vec<Coded>, StoreError> {
-    let mut merge = Merge {
-        filter,
-        pending: Vec::new(),
-        out: Vec::new(),
-        wanted,
-    };
+    let mut merge = Merge::new(filter, wanted);
     // The tail first: an event segmented meanwhile is read again from its segment (and
     // listed once: the merge drops an id it just handed out), none is missed (segments
     // are never removed but by retention).
@@ -349,8 +424,9 @@ async fn by_point<D: Database>(
     for (_, data) in tail {
         merge.add(decode(&data)?);
     }
-    // Newest first by the last time (a segment holds nothing after it), oldest first by
-    // the first time; a segment's times lie within one aligned span.
+    merge.admitted = 0; // the tail says nothing of the segments' events a row
+                        // Newest first by the last time (a segment holds nothing after it), oldest first by
+                        // the first time; a segment's times lie within one aligned span.
     let p = |n: usize| Param::int(0).placeholder(D::BACKEND, n);
     let (key, direction, compare) = match filter.order {
         Order::NewestFirst => ("last_ms", "DESC", "<"),
@@ -359,6 +435,7 @@ async fn by_point<D: Database>(
     let sql = format!(
         "SELECT {key}, start_ms, part, data FROM event_segments \
          WHERE point = {} AND {key} >= {} AND {key} <= {} AND last_ms >= {} AND first_ms <= {} \
+           AND start_ms >= {} AND start_ms <= {} \
            AND ({key}, start_ms, part) {compare} ({}, {}, {}) \
          ORDER BY {key} {direction}, start_ms {direction}, part {direction} LIMIT {}",
         p(1),
@@ -369,43 +446,61 @@ async fn by_point<D: Database>(
         p(6),
         p(7),
         p(8),
-        p(9)
+        p(9),
+        p(10),
+        p(11)
     );
-    let mut keyset = match filter.order {
-        Order::NewestFirst => (i64::MAX, i64::MAX, i64::MAX),
-        Order::OldestFirst => (i64::MIN, i64::MIN, i64::MIN),
-    };
     let mut rows = FIRST_ROWS;
-    loop {
-        let params = vec![
-            Param::int(i64::from(point)),
-            Param::int(filter.low.saturating_sub(SEGMENT_SPAN_MS)),
-            Param::int(filter.high.saturating_add(SEGMENT_SPAN_MS)),
-            Param::int(filter.low),
-            Param::int(filter.high),
-            Param::int(keyset.0),
-            Param::int(keyset.1),
-            Param::int(keyset.2),
-            Param::int(rows),
-        ];
-        let segments = db
-            .rows(read(&sql, params), |r| {
-                Ok((
-                    (r.need_int(0)?, r.need_int(1)?, r.need_int(2)?),
-                    r.blob(3)?.unwrap_or_default(),
-                ))
-            })
-            .await?;
-        let exhausted = i64::try_from(segments.len()).unwrap_or(0) < rows;
-        for (key, data) in segments {
-            keyset = key;
-            merge.add(decode(&data)?);
+    let windows = windows::<D>(history, filter);
+    for (w, &(low, high)) in windows.iter().enumerate() {
+        let mut keyset = match filter.order {
+            Order::NewestFirst => (i64::MAX, i64::MAX, i64::MAX),
+            Order::OldestFirst => (i64::MIN, i64::MIN, i64::MIN),
+        };
+        loop {
+            let params = vec![
+                Param::int(i64::from(point)),
+                Param::int(filter.low.saturating_sub(SEGMENT_SPAN_MS)),
+                Param::int(filter.high.saturating_add(SEGMENT_SPAN_MS)),
+                Param::int(filter.low),
+                Param::int(filter.high),
+                Param::int(low),
+                Param::int(high),
+                Param::int(keyset.0),
+                Param::int(keyset.1),
+                Param::int(keyset.2),
+                Param::int(rows),
+            ];
+            let segments = db
+                .rows(read(&sql, params), |r| {
+                    Ok((
+                        (r.need_int(0)?, r.need_int(1)?, r.need_int(2)?),
+                        r.blob(3)?.unwrap_or_default(),
+                    ))
+                })
+                .await?;
+            let exhausted = i64::try_from(segments.len()).unwrap_or(0) < rows;
+            for (key, data) in segments {
+                keyset = key;
+                merge.rows += 1;
+                merge.add(decode(&data)?);
+            }
+            let bound = match (exhausted, windows.get(w + 1)) {
+                (false, _) => Some(rank_at(filter, keyset.0)),
+                (true, Some(&(_, next_high))) => Some(rank_at(
+                    filter,
+                    next_high.saturating_add(SEGMENT_SPAN_MS - 1),
+                )),
+                (true, None) => None,
+            };
+            if merge.settle(bound) {
+                return Ok(merge.out);
+            }
+            rows = merge.next_rows(rows);
+            if exhausted {
+                break;
+            }
         }
-        let bound = (!exhausted).then(|| rank_at(filter, keyset.0));
-        if merge.settle(bound) || exhausted {
-            break;
-        }
-        rows = (rows * 2).min(MOST_ROWS);
     }
     Ok(merge.out)
 }

@@ -112,13 +112,47 @@ use std::collections::HashMap;
 
 /// A store's history: the name dictionary's copy and the writer's state.
 #[cfg(feature = "database")]
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub(crate) struct History {
     pub(crate) names: names::Names,
     /// `None` until the first append loads it (the counter and the tail).
     pub(crate) writer: tokio::sync::Mutex<Option<WriterState>>,
     /// Segment the tail after every append (tests: every event through the segments).
     pub(crate) pass_every_append: bool,
+    /// The newest block's first time this store has seen (appended or read at the first
+    /// query), `i64::MIN` before: where a newest-first page starts on PostgreSQL.
+    pub(crate) newest_block_ms: std::sync::atomic::AtomicI64,
+}
+
+#[cfg(feature = "database")]
+impl Default for History {
+    fn default() -> History {
+        History {
+            names: names::Names::default(),
+            writer: tokio::sync::Mutex::new(None),
+            pass_every_append: false,
+            newest_block_ms: std::sync::atomic::AtomicI64::new(i64::MIN),
+        }
+    }
+}
+
+#[cfg(feature = "database")]
+impl History {
+    /// The start of the UTC day of the newest block seen, if any.
+    pub(crate) fn newest_day(&self) -> Option<i64> {
+        let ms = self
+            .newest_block_ms
+            .load(std::sync::atomic::Ordering::Relaxed);
+        (ms != i64::MIN).then(|| ms - ms.rem_euclid(86_400_000))
+    }
+
+    /// Notes blocks' first times seen.
+    pub(crate) fn saw_blocks(&self, first_ms: impl IntoIterator<Item = i64>) {
+        if let Some(newest) = first_ms.into_iter().max() {
+            self.newest_block_ms
+                .fetch_max(newest, std::sync::atomic::Ordering::Relaxed);
+        }
+    }
 }
 
 /// Ids a writer takes from a shared counter at once (PostgreSQL): one round trip per

@@ -62,7 +62,9 @@ pub(crate) async fn query_trend<D: Database>(
     history: &History,
     query: &TrendQuery,
 ) -> Result<Vec<TrendBucket>, StoreError> {
-    refresh_names(db, history).await?;
+    if history.names.id(&query.point).is_none() {
+        refresh_names(db, history).await?;
+    }
     let Some(point) = history.names.id(&query.point) else {
         return Ok(Vec::new());
     };

@@ -38,7 +38,7 @@ const MIGRATION_LOCK: i64 = 0x5354_414E_4943_4531; // "STANICE1"
 /// What each connection of the pool is set up with: no JIT compilation (the event
 /// list's and the trends' queries span a plan node per day partition, and compiling them
 /// took seconds where running them takes milliseconds).
-const SESSION: &str = "SET jit = off";
+const SESSION: &str = "SET jit = off; SET plan_cache_mode = force_generic_plan";
 
 /// How to reach the PostgreSQL server.
 #[derive(Clone)]

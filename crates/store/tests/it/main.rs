@@ -79,6 +79,7 @@ on_both_backends!(
     filters_node_cause_and_invalid,
     ordering_by_event_time,
     pagination_with_equal_timestamps,
+    pagination_across_days_and_late_batches,
     pagination_while_appending,
     command_audit_round_trip_and_queries,
     command_pagination,

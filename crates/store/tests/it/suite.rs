@@ -382,6 +382,68 @@ pub(crate) async fn ordering_by_event_time(store: Arc<dyn EventStore>) {
     assert_eq!(points(&received), ["A", "C", "B", "D"]);
 }
 
+/// Pages across days and across appends that reach back: 3 points over 5 days, a batch
+/// of the newest day first, then batches reaching back into the older days (a source's
+/// buffer sent late), each listed whole and in order, newest and oldest first, through
+/// the blocks (all points, a prefix) and through one point's segments.
+pub(crate) async fn pagination_across_days_and_late_batches(store: Arc<dyn EventStore>) {
+    let day = 86_400_000i64;
+    let at = |i: i64| (i * 7_777_777) % (5 * day);
+    let all: Vec<_> = (0..3_000i64)
+        .map(|i| {
+            let mut e = ev(
+                &format!("D{}", i % 3),
+                PointValue::Int(i),
+                4 * day + at(i) % day,
+            );
+            e.source_time = Some(SourceTime::at(at_ms(at(i))));
+            e
+        })
+        .collect();
+    let (newest, older): (Vec<_>, Vec<_>) = all
+        .iter()
+        .cloned()
+        .partition(|e| e.event_time() >= at_ms(4 * day));
+    store.append_events(&newest).await.unwrap();
+    for chunk in older.chunks(400) {
+        store.append_events(chunk).await.unwrap();
+    }
+    let expect = |events: &[&EventRecord], order: Order| {
+        let mut keys: Vec<_> = events.iter().map(|e| e.event_time()).collect();
+        keys.sort();
+        if order == Order::NewestFirst {
+            keys.reverse();
+        }
+        keys
+    };
+    for order in [Order::NewestFirst, Order::OldestFirst] {
+        for (filter, points) in [(None, "D"), (Some("D*"), "D"), (Some("D1"), "D1")] {
+            for limit in [7, 250] {
+                let mut query = EventQuery::default().with_order(order).with_limit(limit);
+                if let Some(f) = filter {
+                    query.point = Some(store::PointFilter::parse(f));
+                }
+                let got = all_events(&*store, query).await;
+                let wanted: Vec<&EventRecord> =
+                    all.iter().filter(|e| e.point.starts_with(points)).collect();
+                assert_eq!(got.len(), wanted.len(), "{order:?} {filter:?} {limit}");
+                let times: Vec<_> = got.iter().map(|e| e.event_time()).collect();
+                assert_eq!(
+                    times,
+                    expect(&wanted, order),
+                    "{order:?} {filter:?} {limit}"
+                );
+                let ids: HashSet<_> = got.iter().map(|e| e.id.unwrap()).collect();
+                assert_eq!(
+                    ids.len(),
+                    got.len(),
+                    "duplicates: {order:?} {filter:?} {limit}"
+                );
+            }
+        }
+    }
+}
+
 pub(crate) async fn pagination_with_equal_timestamps(store: Arc<dyn EventStore>) {
     // 1000 events on only 7 distinct times, appended in shuffled batches.
     let mut events: Vec<_> = (0..1000i64)
