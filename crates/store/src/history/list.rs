@@ -252,10 +252,9 @@ impl<'a> Merge<'a> {
             .wanted
             .saturating_sub(self.out.len() + self.pending.len())
             .max(1);
-        let guess = if self.admitted == 0 {
-            last.saturating_mul(4)
-        } else {
-            i64::try_from(2 * missing * self.rows / self.admitted + 1).unwrap_or(MOST_ROWS)
+        let guess = match (2 * missing * self.rows).checked_div(self.admitted) {
+            Some(rows) => i64::try_from(rows + 1).unwrap_or(MOST_ROWS),
+            None => last.saturating_mul(4),
         };
         guess.clamp(FIRST_ROWS, MOST_ROWS)
     }
