@@ -1,5 +1,6 @@
-//! The event history on PostgreSQL: an append's blocks and a pass's segments by binary
-//! COPY, key runs and rollups by one statement each over arrays, snapshots as
+//! The event history on PostgreSQL: an append's key runs and blocks by one statement
+//! over arrays, a pass's segments by binary COPY and its rollups by one statement over
+//! arrays, snapshots as
 //! REPEATABLE READ transactions, and the move of the rows of schema version 5 into
 //! blocks.
 //!
@@ -15,7 +16,7 @@ use std::sync::Arc;
 use deadpool_postgres::{Object, Transaction};
 use tokio_postgres::binary_copy::BinaryCopyInWriter;
 use tokio_postgres::types::Type;
-use tokio_postgres::IsolationLevel;
+use tokio_postgres::{GenericClient, IsolationLevel};
 
 use super::partitions::History as Day;
 use super::PostgresStore;
@@ -31,23 +32,15 @@ const PASS_LOCK: i64 = 0x5354_414E_4943_4532; // "STANICE2"
 /// Rows of a day of `events` moved per pass by [`move_rows_into_blocks`].
 const ROWS_PER_MOVE: i64 = 65_536;
 
-const COPY_BLOCKS: &str = "COPY event_blocks (id, events, first_ms, last_ms, \
-     first_received_ms, last_received_ms, node, causes, invalid, segmented, data) \
-     FROM STDIN (FORMAT binary)";
-
-const BLOCK_TYPES: [Type; 11] = [
-    Type::INT8,
-    Type::INT4,
-    Type::INT8,
-    Type::INT8,
-    Type::INT8,
-    Type::INT8,
-    Type::INT8,
-    Type::INT8,
-    Type::INT4,
-    Type::INT2,
-    Type::BYTEA,
-];
+/// An append's key runs and blocks, in one statement over arrays: a live append is one
+/// round trip (a COPY in a transaction took four: BEGIN, COPY, the keys, COMMIT).
+pub(super) const INSERT_BLOCKS: &str = "WITH keys AS ( \
+         INSERT INTO event_keys (source, first_seq, last_seq, first_id) \
+         SELECT * FROM unnest($1::int8[], $2::int8[], $3::int8[], $4::int8[])) \
+     INSERT INTO event_blocks (id, events, first_ms, last_ms, first_received_ms, \
+         last_received_ms, node, causes, invalid, segmented, data) \
+     SELECT * FROM unnest($5::int8[], $6::int4[], $7::int8[], $8::int8[], $9::int8[], \
+         $10::int8[], $11::int8[], $12::int8[], $13::int4[], $14::int2[], $15::bytea[])";
 
 const COPY_SEGMENTS: &str = "COPY event_segments (point, start_ms, part, first_ms, last_ms, \
      events, data) FROM STDIN (FORMAT binary)";
@@ -61,9 +54,6 @@ const SEGMENT_TYPES: [Type; 7] = [
     Type::INT4,
     Type::BYTEA,
 ];
-
-const INSERT_KEYS: &str = "INSERT INTO event_keys (source, first_seq, last_seq, first_id) \
-     SELECT * FROM unnest($1::int8[], $2::int8[], $3::int8[], $4::int8[])";
 
 /// Merges a pass's minutes into `trend_rollups`, in key order (two writers wait for each
 /// other instead of deadlocking): against a minute stored already the earlier first value
@@ -90,49 +80,51 @@ const MERGE_ROLLUPS: &str = "INSERT INTO trend_rollups (point, start_ms, first_m
                               OR trend_rollups.last_value IS NULL \
                             THEN EXCLUDED.last_value ELSE trend_rollups.last_value END";
 
-/// Writes one append of the history in the open transaction `tx`.
-pub(super) async fn write_history(
-    tx: &Transaction<'_>,
+/// Writes an append's blocks and key runs: one statement (one round trip, atomic alone).
+pub(super) async fn write_blocks(
+    client: &impl GenericClient,
+    statement: &tokio_postgres::Statement,
     w: &HistoryWrite,
 ) -> Result<(), StoreError> {
-    if !w.blocks.is_empty() {
-        let sink = tx.copy_in(COPY_BLOCKS).await?;
-        let mut writer = std::pin::pin!(BinaryCopyInWriter::new(sink, &BLOCK_TYPES));
-        for b in &w.blocks {
-            let events = i32::try_from(b.events).unwrap_or(i32::MAX);
-            let node = b.node.map(i64::from);
-            let invalid = i32::try_from(b.invalid).unwrap_or(i32::MAX);
-            let segmented = i16::from(b.segmented);
-            writer
-                .as_mut()
-                .write(&[
-                    &b.id,
-                    &events,
-                    &b.first_ms,
-                    &b.last_ms,
-                    &b.first_received_ms,
-                    &b.last_received_ms,
-                    &node,
-                    &b.causes,
-                    &invalid,
-                    &segmented,
-                    &b.data,
-                ])
-                .await?;
-        }
-        writer.as_mut().finish().await?;
-    }
-    if !w.keys.is_empty() {
-        let column = |f: fn(&write::KeyRun) -> i64| w.keys.iter().map(f).collect::<Vec<i64>>();
-        let (sources, firsts, lasts, ids) = (
-            column(|k| i64::from(k.source)),
-            column(|k| k.first_seq),
-            column(|k| k.last_seq),
-            column(|k| k.first_id),
-        );
-        tx.execute(INSERT_KEYS, &[&sources, &firsts, &lasts, &ids])
-            .await?;
-    }
+    let keys = |f: fn(&write::KeyRun) -> i64| w.keys.iter().map(f).collect::<Vec<i64>>();
+    let blocks = |f: fn(&write::BlockRow) -> i64| w.blocks.iter().map(f).collect::<Vec<i64>>();
+    let small = |f: fn(&write::BlockRow) -> i64| {
+        w.blocks
+            .iter()
+            .map(|b| i32::try_from(f(b)).unwrap_or(i32::MAX))
+            .collect::<Vec<i32>>()
+    };
+    let nodes: Vec<Option<i64>> = w.blocks.iter().map(|b| b.node.map(i64::from)).collect();
+    let segmented: Vec<i16> = w.blocks.iter().map(|b| i16::from(b.segmented)).collect();
+    let data: Vec<&[u8]> = w.blocks.iter().map(|b| b.data.as_slice()).collect();
+    client
+        .execute(
+            statement,
+            &[
+                &keys(|k| i64::from(k.source)),
+                &keys(|k| k.first_seq),
+                &keys(|k| k.last_seq),
+                &keys(|k| k.first_id),
+                &blocks(|b| b.id),
+                &small(|b| b.events),
+                &blocks(|b| b.first_ms),
+                &blocks(|b| b.last_ms),
+                &blocks(|b| b.first_received_ms),
+                &blocks(|b| b.last_received_ms),
+                &nodes,
+                &blocks(|b| b.causes),
+                &small(|b| b.invalid),
+                &segmented,
+                &data,
+            ],
+        )
+        .await?;
+    Ok(())
+}
+
+/// Writes a pass (segments, rollups, its blocks turned segmented) in the open
+/// transaction `tx`.
+pub(super) async fn write_pass(tx: &Transaction<'_>, w: &HistoryWrite) -> Result<(), StoreError> {
     let Some(pass) = &w.pass else {
         return Ok(());
     };
@@ -155,7 +147,8 @@ pub(super) async fn write_history(
         }
     }
     if !pass.segments.is_empty() {
-        let sink = tx.copy_in(COPY_SEGMENTS).await?;
+        let copy = tx.prepare_cached(COPY_SEGMENTS).await?;
+        let sink = tx.copy_in(&copy).await?;
         let mut writer = std::pin::pin!(BinaryCopyInWriter::new(sink, &SEGMENT_TYPES));
         for g in &pass.segments {
             let point = i64::from(g.point);
@@ -180,8 +173,9 @@ pub(super) async fn write_history(
         let points: Vec<&str> = r.iter().map(|r| &*r.point).collect();
         let ints = |f: fn(&write::RollupRow) -> i64| r.iter().map(f).collect::<Vec<i64>>();
         let reals = |f: fn(&write::RollupRow) -> f64| r.iter().map(f).collect::<Vec<f64>>();
+        let merge = tx.prepare_cached(MERGE_ROLLUPS).await?;
         tx.execute(
-            MERGE_ROLLUPS,
+            &merge,
             &[
                 &points,
                 &ints(|r| r.start_ms),
@@ -382,7 +376,9 @@ async fn move_day(store: &PostgresStore, conn: &mut Object, day: &str) -> Result
             blocks,
             pass: write::pass(&tail, |id| by_id.get(&id).cloned()),
         };
-        write_history(&tx, &write).await?;
+        let insert = tx.prepare_cached(INSERT_BLOCKS).await?;
+        write_blocks(&*tx, &insert, &write).await?;
+        write_pass(&tx, &write).await?;
         moved += events.len() as u64;
     }
     tx.batch_execute(&format!("DROP TABLE {day}")).await?;

@@ -324,8 +324,13 @@ impl Database for PostgresStore {
                 write.blocks.iter().map(|b| b.first_ms),
             )
             .await?;
+            let insert = connection.prepare_cached(history::INSERT_BLOCKS).await?;
+            if write.pass.is_none() {
+                return history::write_blocks(&**connection, &insert, &write).await;
+            }
             let tx = connection.transaction().await?;
-            history::write_history(&tx, &write).await?;
+            history::write_blocks(&*tx, &insert, &write).await?;
+            history::write_pass(&tx, &write).await?;
             tx.commit().await?;
             Ok(())
         })
