@@ -119,6 +119,21 @@ async fn load<D: Database>(db: &D, history: &History) -> Result<WriterState, Sto
 pub(crate) const TAIL_BLOCKS: &str =
     "SELECT id, data FROM event_blocks WHERE segmented = 0 ORDER BY id";
 
+/// The blocks not yet segmented holding event times in `low..=high`: what a query of
+/// those times reads of the tail (a trend of last month reads none of today's tail).
+pub(crate) fn tail_between<D: Database>(low: i64, high: i64) -> Statement {
+    let p = |n: usize| Param::int(0).placeholder(D::BACKEND, n);
+    read(
+        &format!(
+            "SELECT id, data FROM event_blocks \
+             WHERE segmented = 0 AND last_ms >= {} AND first_ms <= {} ORDER BY id",
+            p(1),
+            p(2)
+        ),
+        vec![Param::int(low), Param::int(high)],
+    )
+}
+
 /// A block's (or segment's) id and packed events.
 pub(crate) fn id_and_data(r: &dyn crate::sql::row::Columns) -> Result<(i64, Vec<u8>), StoreError> {
     Ok((r.need_int(0)?, r.blob(1)?.unwrap_or_default()))

@@ -18,7 +18,7 @@
 use std::cmp::Reverse;
 use std::collections::HashSet;
 
-use super::append::{id_and_data, read, refresh_names, TAIL_BLOCKS};
+use super::append::{id_and_data, read, refresh_names, tail_between};
 use super::codec::{decode, Coded, NameId};
 use super::History;
 use super::{BLOCK_SPAN_MS, SEGMENT_SPAN_MS};
@@ -419,7 +419,9 @@ async fn by_point<D: Database>(
     // The tail first: an event segmented meanwhile is read again from its segment (and
     // listed once: the merge drops an id it just handed out), none is missed (segments
     // are never removed but by retention).
-    let tail = db.rows(read(TAIL_BLOCKS, Vec::new()), id_and_data).await?;
+    let tail = db
+        .rows(tail_between::<D>(filter.low, filter.high), id_and_data)
+        .await?;
     for (_, data) in tail {
         merge.add(decode(&data)?);
     }
