@@ -429,9 +429,16 @@ fn write_history(tx: &rusqlite::Transaction<'_>, w: &HistoryWrite) -> Result<(),
             r.last_value
         ])?;
     }
-    let mut segmented = tx.prepare_cached("UPDATE event_blocks SET segmented = 1 WHERE id = ?1")?;
+    // Only blocks still unsegmented: another store on the same file (a tool appending to
+    // the station's database) may have segmented them as its own tail.
+    let mut segmented =
+        tx.prepare_cached("UPDATE event_blocks SET segmented = 1 WHERE id = ?1 AND segmented = 0")?;
     for id in &pass.blocks {
-        segmented.execute([id])?;
+        if segmented.execute([id])? != 1 {
+            return Err(StoreError::Conflict(format!(
+                "block {id} of a pass was segmented by another writer"
+            )));
+        }
     }
     Ok(())
 }
@@ -612,6 +619,22 @@ impl Database for SqliteStore {
 
     fn name_ids(&self, names: Vec<String>) -> StoreFuture<'_, Vec<(NameId, String)>> {
         Box::pin(self.writer.run(move |c| name_ids(c, &names)))
+    }
+
+    /// Ids come from `event_counter` a range at a time, so that two stores on one file
+    /// (the station's and a tool's) never hand out the same ids.
+    fn reserve_ids(&self, count: usize) -> StoreFuture<'_, Option<i64>> {
+        Box::pin(self.writer.run(move |c| {
+            let n = i64::try_from(count).unwrap_or(i64::MAX);
+            let tx = c.transaction_with_behavior(TransactionBehavior::Immediate)?;
+            let first: i64 = tx.query_row(
+                "UPDATE event_counter SET next_id = next_id + ?1 RETURNING next_id - ?1",
+                [n],
+                |r| r.get(0),
+            )?;
+            tx.commit()?;
+            Ok(Some(first))
+        }))
     }
 
     fn write_history(&self, write: HistoryWrite) -> StoreFuture<'_, ()> {

@@ -17,6 +17,24 @@ pub(crate) async fn append<D: Database>(
     events: &[EventRecord],
 ) -> Result<Vec<RecordId>, StoreError> {
     let mut writer = history.writer.lock().await;
+    match append_once(db, history, &mut writer, events).await {
+        // Another writer of the same database segmented part of this one's tail: the
+        // tail is read again and the batch written once more (nothing of it was stored).
+        Err(StoreError::Conflict(what)) => {
+            tracing::debug!(%what, "an append met another writer's pass: written again");
+            append_once(db, history, &mut writer, events).await
+        }
+        done => done,
+    }
+}
+
+/// One try of [`append`], under the writer's lock.
+async fn append_once<D: Database>(
+    db: &D,
+    history: &History,
+    writer: &mut Option<WriterState>,
+    events: &[EventRecord],
+) -> Result<Vec<RecordId>, StoreError> {
     if writer.is_none() {
         *writer = Some(load(db, history).await?);
     }
@@ -148,28 +166,20 @@ pub(crate) fn read(sql: &str, params: Vec<Param>) -> Statement {
     }
 }
 
-/// Loads the names written since the copy was last refreshed.
+/// Loads the names the copy does not know.
 pub(crate) async fn refresh_names<D: Database>(
     db: &D,
     history: &History,
 ) -> Result<(), StoreError> {
-    let since = i64::from(history.names.largest());
+    // All of them, not those above the largest known: another writer's names may have
+    // numbers below ours (names are a few thousand rows at most).
     let pairs = db
-        .rows(
-            read(
-                &format!(
-                    "SELECT id, name FROM event_names WHERE id > {} ORDER BY id",
-                    Param::int(0).placeholder(D::BACKEND, 1)
-                ),
-                vec![Param::int(since)],
-            ),
-            |r| {
-                let id = r.need_int(0)?;
-                let id = NameId::try_from(id)
-                    .map_err(|_| StoreError::Corrupt(format!("name number {id}")))?;
-                Ok((id, r.need_text(1)?))
-            },
-        )
+        .rows(read("SELECT id, name FROM event_names", Vec::new()), |r| {
+            let id = r.need_int(0)?;
+            let id = NameId::try_from(id)
+                .map_err(|_| StoreError::Corrupt(format!("name number {id}")))?;
+            Ok((id, r.need_text(1)?))
+        })
         .await?;
     history.names.learn(pairs);
     Ok(())

@@ -57,11 +57,6 @@ impl Names {
         }
     }
 
-    /// The largest known number (0 when none).
-    pub(crate) fn largest(&self) -> NameId {
-        self.read(|d| d.by_id.keys().copied().max().unwrap_or(0))
-    }
-
     fn read<T>(&self, f: impl FnOnce(&Dictionary) -> T) -> T {
         // A panic elsewhere while holding the lock leaves a dictionary that is still
         // whole (each insert is one map operation): keep using it.

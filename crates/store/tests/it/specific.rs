@@ -608,3 +608,47 @@ async fn postgres_moves_the_old_rows_into_blocks_with_their_ids() {
         .await
         .unwrap();
 }
+
+/// Two stores on one SQLite file (the station's and a tool's) appending at once, each
+/// passing after every append: ids never collide (they come from the file's counter a
+/// range at a time), a pass that meets blocks the other segmented writes again, and
+/// every event is listed once.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn sqlite_two_stores_on_one_file_append_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("events.db");
+    let a = SqliteStore::open(&path)
+        .await
+        .unwrap()
+        .passing_after_every_append();
+    let b = SqliteStore::open(&path)
+        .await
+        .unwrap()
+        .passing_after_every_append();
+    let batch = |who: &str, round: i64| -> Vec<_> {
+        (0..50)
+            .map(|i| {
+                ev(
+                    &format!("{who}{}", i % 5),
+                    PointValue::Int(i),
+                    round * 1000 + i,
+                )
+            })
+            .collect()
+    };
+    let (mut ids_a, mut ids_b) = (Vec::new(), Vec::new());
+    for round in 0..20 {
+        let (for_a, for_b) = (batch("A", round), batch("B", round));
+        let (x, y) = tokio::join!(a.append_events(&for_a), b.append_events(&for_b));
+        ids_a.extend(x.unwrap());
+        ids_b.extend(y.unwrap());
+    }
+    let mut all: Vec<i64> = ids_a.iter().chain(&ids_b).copied().collect();
+    all.sort_unstable();
+    all.dedup();
+    assert_eq!(all.len(), 2_000, "ids handed out twice");
+    let listed = crate::suite::all_events(&a, EventQuery::default().with_limit(500)).await;
+    assert_eq!(listed.len(), 2_000);
+    let one = crate::suite::all_events(&b, EventQuery::default().with_point("A3")).await;
+    assert_eq!(one.len(), 200);
+}
